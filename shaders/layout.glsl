@@ -1,0 +1,62 @@
+// Mirror of src/layout/mod.rs: same names, same order. tests/layout.rs checks every offset.
+#include "constants.glsl"
+
+struct BvhNode {
+    float aabb_min[3];
+    uint left_or_first;
+    float aabb_max[3];
+    uint count;
+};
+
+struct Primitive {
+    float p0[3];
+    uint kind;
+    float p1[3];
+    uint material;
+    float p2[3];
+    uint light;
+};
+
+struct Material {
+    float reflectance[3];
+    uint kind;
+    float emission[3];
+    float ior;
+};
+
+struct Light {
+    float p0[3];
+    uint kind;
+    float p1[3];
+    float pick_probability;
+    float p2[3];
+    float area;
+    float radiance[3];
+    float cdf;
+};
+
+struct FrameParams {
+    float camera_position[3];
+    uint width;
+    float camera_forward[3];
+    uint height;
+    float camera_right[3];
+    uint max_depth;
+    float camera_up[3];
+    uint seed;
+    uint light_count;
+    float ray_epsilon;
+    uint primitive_count;
+    uint node_count;
+    float total_light_power;
+    uint _pad[3];
+};
+
+struct DispatchRange {
+    uint row_begin;
+    uint row_count;
+    uint sample_begin;
+    uint sample_count;
+};
+
+vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }

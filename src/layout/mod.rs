@@ -1,0 +1,102 @@
+//! Structs the GPU sees. This module is the source of truth: `shaders/layout.glsl` mirrors it and
+//! `tests/layout.rs` proves, from the compiled SPIR-V, that every offset and stride agrees.
+
+pub mod constants;
+
+use bytemuck::{Pod, Zeroable};
+
+/// A node of the flattened BVH, 32 bytes. Nodes are stored depth-first: an interior node's left
+/// child is the next node and `left_or_first` is its right child; a leaf (`count > 0`) covers the
+/// primitives `left_or_first .. left_or_first + count`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub aabb_min: [f32; 3],
+    pub left_or_first: u32,
+    pub aabb_max: [f32; 3],
+    pub count: u32,
+}
+
+/// One triangle or sphere, in BVH leaf order, 48 bytes.
+/// Triangle: vertices `p0`, `p1`, `p2`. Sphere: centre `p0`, radius `p1[0]`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Primitive {
+    pub p0: [f32; 3],
+    pub kind: u32,
+    pub p1: [f32; 3],
+    pub material: u32,
+    pub p2: [f32; 3],
+    /// Index into the light array when the primitive emits, else `NO_LIGHT`.
+    pub light: u32,
+}
+
+/// A material, 32 bytes. `reflectance` is the diffuse albedo or the mirror tint; `emission` is
+/// the radiance leaving the front face (triangles: the winding side; spheres: outward).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    pub reflectance: [f32; 3],
+    pub kind: u32,
+    pub emission: [f32; 3],
+    pub ior: f32,
+}
+
+/// A light, 64 bytes. Triangle: vertices `p0..p2`. Sphere: centre `p0`, radius `p1[0]`.
+/// Point: position `p0`. `radiance` is emitted radiance, or intensity (W/sr) for a point light.
+/// `cdf` is the running sum of the normalised light powers up to and including this light, so
+/// lights are picked in proportion to their power by a binary search.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub p0: [f32; 3],
+    pub kind: u32,
+    pub p1: [f32; 3],
+    /// Probability of picking this light.
+    pub pick_probability: f32,
+    pub p2: [f32; 3],
+    /// Surface area (scene units squared); 0 for point lights.
+    pub area: f32,
+    pub radiance: [f32; 3],
+    pub cdf: f32,
+}
+
+/// Per-render constants of the camera kernels, 96 bytes.
+/// A primary ray through film position (sx, sy) in [-1, 1]^2 has direction
+/// `forward + sx * right + sy * up` (not normalised): `right` and `up` carry the field of view.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct FrameParams {
+    pub camera_position: [f32; 3],
+    pub width: u32,
+    pub camera_forward: [f32; 3],
+    pub height: u32,
+    pub camera_right: [f32; 3],
+    pub max_depth: u32,
+    pub camera_up: [f32; 3],
+    pub seed: u32,
+    pub light_count: u32,
+    /// Offset for secondary ray origins, in scene units.
+    pub ray_epsilon: f32,
+    pub primitive_count: u32,
+    pub node_count: u32,
+    /// Sum of all light powers (luminance-weighted); 0 when the scene has no light.
+    pub total_light_power: f32,
+    pub _pad: [u32; 3],
+}
+
+/// Push constants of one camera-kernel dispatch: which rows and which samples it renders.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct DispatchRange {
+    pub row_begin: u32,
+    pub row_count: u32,
+    pub sample_begin: u32,
+    pub sample_count: u32,
+}
+
+const _: () = assert!(size_of::<BvhNode>() == 32);
+const _: () = assert!(size_of::<Primitive>() == 48);
+const _: () = assert!(size_of::<Material>() == 32);
+const _: () = assert!(size_of::<Light>() == 64);
+const _: () = assert!(size_of::<FrameParams>() % 16 == 0);

@@ -1,0 +1,4 @@
+//! Photonix: physically based photon mapping on Vulkan compute shaders, with a CPU twin.
+
+pub mod layout;
+pub mod shaders;
