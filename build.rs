@@ -51,7 +51,7 @@ fn main() {
 fn compile(kernel: &Path, spv: &Path, include_dir: &Path) -> Result<(), String> {
     let depfile = spv.with_extension("d");
     let output = Command::new("glslangValidator")
-        .args(["-V", "--target-env", "vulkan1.2", "-g0"])
+        .args(["-V", "--target-env", "vulkan1.2"])
         .arg(format!("-I{}", include_dir.display()))
         .arg("-Ishaders")
         .arg("--depfile")

@@ -2,3 +2,8 @@
 
 pub mod layout;
 pub mod shaders;
+pub mod accel;
+pub mod cpu;
+pub mod io;
+pub mod render;
+pub mod scene;

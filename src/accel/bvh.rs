@@ -1,0 +1,252 @@
+//! Binned-SAH bounding volume hierarchy, flattened depth-first into the array the kernels traverse.
+//! The CPU reference (`cpu::trace`) walks the very same `BvhNode` array.
+
+use glam::Vec3;
+
+use crate::layout::constants::{BVH_STACK_SIZE, PRIMITIVE_SPHERE};
+use crate::layout::{BvhNode, Primitive};
+
+/// SAH bins per axis; 16 is the usual sweet spot between build time and tree quality.
+const BINS: usize = 16;
+/// A leaf never holds more primitives than this unless they cannot be separated at all.
+const MAX_LEAF_SIZE: usize = 4;
+/// Cost of visiting a node relative to one primitive test.
+const TRAVERSAL_COST: f32 = 1.0;
+
+/// The flattened hierarchy and the primitives reordered so that every leaf covers a contiguous range.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    pub primitives: Vec<Primitive>,
+    /// Deepest leaf (root = 1); traversal stacks never need more than this many entries.
+    pub depth: u32,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BvhError {
+    #[error("the BVH is {depth} levels deep, more than the {limit} a traversal stack holds; the scene has too many overlapping primitives")]
+    TooDeep { depth: u32, limit: u32 },
+}
+
+#[derive(Clone, Copy)]
+struct Bounds {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Bounds {
+    const EMPTY: Bounds = Bounds { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+
+    fn grow(&mut self, other: &Bounds) {
+        self.min = self.min.min(other.min);
+        self.max = self.max.max(other.max);
+    }
+
+    fn grow_point(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    fn half_area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3::ZERO);
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+}
+
+/// Bounds of one primitive.
+pub fn primitive_bounds(p: &Primitive) -> (Vec3, Vec3) {
+    let b = bounds_of(p);
+    (b.min, b.max)
+}
+
+fn bounds_of(p: &Primitive) -> Bounds {
+    let p0 = Vec3::from(p.p0);
+    if p.kind == PRIMITIVE_SPHERE {
+        let r = Vec3::splat(p.p1[0]);
+        return Bounds { min: p0 - r, max: p0 + r };
+    }
+    let mut b = Bounds::EMPTY;
+    for v in [p.p0, p.p1, p.p2] {
+        b.grow_point(Vec3::from(v));
+    }
+    b
+}
+
+struct Item {
+    bounds: Bounds,
+    centroid: Vec3,
+    index: u32,
+}
+
+/// Builds the hierarchy over `primitives` (any order) and returns it with the primitives reordered.
+pub fn build_bvh(primitives: &[Primitive]) -> Result<Bvh, BvhError> {
+    let mut items: Vec<Item> = primitives
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let bounds = bounds_of(p);
+            Item { bounds, centroid: (bounds.min + bounds.max) * 0.5, index: i as u32 }
+        })
+        .collect();
+    let mut nodes = Vec::with_capacity(2 * primitives.len().max(1));
+    let mut depth = 0;
+    if items.is_empty() {
+        // One leaf over one zero-area triangle, which no ray can hit: traversal needs no special case.
+        let never_hit = Primitive { light: crate::layout::constants::NO_LIGHT, ..Default::default() };
+        nodes.push(BvhNode { count: 1, ..Default::default() });
+        return Ok(Bvh { nodes, primitives: vec![never_hit], depth: 1 });
+    }
+    build_node(&mut items, 0, &mut nodes, 1, &mut depth);
+    if depth > BVH_STACK_SIZE {
+        return Err(BvhError::TooDeep { depth, limit: BVH_STACK_SIZE });
+    }
+    let ordered = items.iter().map(|it| primitives[it.index as usize]).collect();
+    Ok(Bvh { nodes, primitives: ordered, depth })
+}
+
+/// Appends the subtree over `items` (which start at primitive `first`) in depth-first order.
+fn build_node(items: &mut [Item], first: usize, nodes: &mut Vec<BvhNode>, level: u32, depth: &mut u32) {
+    *depth = (*depth).max(level);
+    let mut bounds = Bounds::EMPTY;
+    let mut centroid_bounds = Bounds::EMPTY;
+    for it in items.iter() {
+        bounds.grow(&it.bounds);
+        centroid_bounds.grow_point(it.centroid);
+    }
+    let node_index = nodes.len();
+    nodes.push(BvhNode {
+        aabb_min: bounds.min.into(),
+        aabb_max: bounds.max.into(),
+        left_or_first: first as u32,
+        count: items.len() as u32,
+    });
+    if items.len() == 1 {
+        return;
+    }
+    let Some(mid) = choose_split(items, &bounds, &centroid_bounds) else {
+        return; // stays a leaf
+    };
+    let (left, right) = items.split_at_mut(mid);
+    build_node(left, first, nodes, level + 1, depth);
+    let right_index = nodes.len() as u32;
+    build_node(right, first + mid, nodes, level + 1, depth);
+    nodes[node_index].left_or_first = right_index;
+    nodes[node_index].count = 0;
+}
+
+/// Partitions `items` and returns the split position, or `None` when a leaf is cheaper.
+fn choose_split(items: &mut [Item], bounds: &Bounds, centroid_bounds: &Bounds) -> Option<usize> {
+    let n = items.len();
+    let extent = centroid_bounds.max - centroid_bounds.min;
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin boundary)
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        let scale = BINS as f32 / extent[axis];
+        let bin_of = |c: Vec3| (((c[axis] - centroid_bounds.min[axis]) * scale) as usize).min(BINS - 1);
+        let mut bin_bounds = [Bounds::EMPTY; BINS];
+        let mut bin_count = [0usize; BINS];
+        for it in items.iter() {
+            let b = bin_of(it.centroid);
+            bin_bounds[b].grow(&it.bounds);
+            bin_count[b] += 1;
+        }
+        // Sweep from the right to get the cost of every right-hand side, then from the left.
+        let mut right_area = [0.0f32; BINS];
+        let mut right_count = [0usize; BINS];
+        let mut acc = Bounds::EMPTY;
+        let mut count = 0;
+        for b in (1..BINS).rev() {
+            acc.grow(&bin_bounds[b]);
+            count += bin_count[b];
+            right_area[b] = acc.half_area();
+            right_count[b] = count;
+        }
+        let mut acc = Bounds::EMPTY;
+        let mut count = 0;
+        for b in 0..BINS - 1 {
+            acc.grow(&bin_bounds[b]);
+            count += bin_count[b];
+            if count == 0 || right_count[b + 1] == 0 {
+                continue;
+            }
+            let cost = acc.half_area() * count as f32 + right_area[b + 1] * right_count[b + 1] as f32;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b + 1));
+            }
+        }
+    }
+    let leaf_cost = n as f32;
+    match best {
+        Some((cost, axis, boundary)) => {
+            let split_cost = TRAVERSAL_COST + cost / bounds.half_area().max(f32::MIN_POSITIVE);
+            if split_cost >= leaf_cost && n <= MAX_LEAF_SIZE {
+                return None;
+            }
+            let scale = BINS as f32 / extent[axis];
+            let mid = partition(items, |it| {
+                ((((it.centroid[axis] - centroid_bounds.min[axis]) * scale) as usize).min(BINS - 1)) < boundary
+            });
+            Some(mid)
+        }
+        // All centroids coincide: no plane separates them. Split in the middle so leaves stay
+        // small; the two halves overlap completely, which costs time but stays correct.
+        None if n > MAX_LEAF_SIZE => Some(n / 2),
+        None => None,
+    }
+}
+
+fn partition(items: &mut [Item], goes_left: impl Fn(&Item) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..items.len() {
+        if goes_left(&items[j]) {
+            items.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::layout::constants::PRIMITIVE_TRIANGLE;
+
+    fn triangle(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Primitive {
+        Primitive { p0: a, p1: b, p2: c, kind: PRIMITIVE_TRIANGLE, ..Default::default() }
+    }
+
+    #[test]
+    fn every_primitive_lands_in_exactly_one_leaf_inside_its_node_box() {
+        let prims: Vec<Primitive> = (0..1000)
+            .map(|i| {
+                let x = (i % 10) as f32;
+                let y = ((i / 10) % 10) as f32;
+                let z = (i / 100) as f32;
+                triangle([x, y, z], [x + 0.5, y, z], [x, y + 0.5, z + 0.2])
+            })
+            .collect();
+        let bvh = build_bvh(&prims).unwrap();
+        let mut covered = vec![0u32; prims.len()];
+        for node in &bvh.nodes {
+            if node.count > 0 {
+                for i in node.left_or_first..node.left_or_first + node.count {
+                    covered[i as usize] += 1;
+                    let (lo, hi) = primitive_bounds(&bvh.primitives[i as usize]);
+                    assert!(lo.cmpge(Vec3::from(node.aabb_min)).all() && hi.cmple(Vec3::from(node.aabb_max)).all());
+                }
+            }
+        }
+        assert!(covered.iter().all(|&c| c == 1));
+        assert!(bvh.depth < 30, "depth {}", bvh.depth);
+    }
+
+    #[test]
+    fn identical_primitives_still_build() {
+        let prims = vec![triangle([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]); 100];
+        let bvh = build_bvh(&prims).unwrap();
+        assert_eq!(bvh.primitives.len(), 100);
+        assert!(bvh.nodes.iter().filter(|n| n.count > 0).all(|n| n.count as usize <= MAX_LEAF_SIZE));
+    }
+}

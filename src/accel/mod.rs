@@ -1,0 +1,5 @@
+//! Acceleration structures built on the host and uploaded as flat arrays.
+
+pub mod bvh;
+
+pub use bvh::{build_bvh, Bvh, BvhError};

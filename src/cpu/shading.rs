@@ -1,0 +1,142 @@
+//! Camera rays, light sampling and specular scattering; twin of `shaders/shading.glsl`.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::rng::{rand1, rand2};
+use super::trace::trace_ray;
+use super::SceneView;
+use crate::layout::constants::*;
+
+/// Primary ray direction through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row.
+pub fn camera_direction(s: &SceneView, sx: f32, sy: f32) -> Vec3 {
+    let f = s.frame;
+    (Vec3::from(f.camera_forward) + sx * Vec3::from(f.camera_right) + sy * Vec3::from(f.camera_up)).normalize()
+}
+
+/// Geometric normal at `x` of primitive `i`: triangle winding normal, sphere outward normal.
+pub fn primitive_normal(s: &SceneView, i: u32, x: Vec3) -> Vec3 {
+    let p = &s.primitives[i as usize];
+    if p.kind == PRIMITIVE_SPHERE {
+        return (x - Vec3::from(p.p0)).normalize();
+    }
+    (Vec3::from(p.p1) - Vec3::from(p.p0)).cross(Vec3::from(p.p2) - Vec3::from(p.p0)).normalize()
+}
+
+/// Index of the light whose cdf interval holds `u`: lights are picked in proportion to power.
+pub fn pick_light(s: &SceneView, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, s.frame.light_count - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if u < s.lights[mid as usize].cdf {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
+}
+
+/// GLSL's `reflect`: `d` mirrored about the plane of unit normal `n`.
+pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * n.dot(d) * n
+}
+
+/// Radiance reflected at `x` toward the viewer from one sampled light: a one-sample estimate of
+/// direct light for a Lambertian surface of albedo `albedo`; `n` faces the viewer. Counts the
+/// shadow ray it casts in `rays`.
+#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
+pub fn direct_light(
+    s: &SceneView,
+    x: Vec3,
+    n: Vec3,
+    albedo: Vec3,
+    stream: u32,
+    sample: u32,
+    dim: u32,
+    rays: &mut u32,
+) -> Vec3 {
+    let f = s.frame;
+    if f.light_count == 0 {
+        return Vec3::ZERO;
+    }
+    let li = pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK));
+    let l = &s.lights[li as usize];
+    let u = rand2(stream, sample, f.seed, dim + RNG_LIGHT_U);
+    let (target, ln) = match l.kind {
+        LIGHT_TRIANGLE => {
+            // Uniform point on the triangle (Turk 1990).
+            let su = u[0].sqrt();
+            let b0 = 1.0 - su;
+            let b1 = u[1] * su;
+            let (p0, p1, p2) = (Vec3::from(l.p0), Vec3::from(l.p1), Vec3::from(l.p2));
+            (b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2, (p1 - p0).cross(p2 - p0).normalize())
+        }
+        LIGHT_SPHERE => {
+            let z = 1.0 - 2.0 * u[0];
+            let rho = (1.0 - z * z).max(0.0).sqrt();
+            let phi = 2.0 * PI * u[1];
+            let ln = Vec3::new(rho * phi.cos(), rho * phi.sin(), z);
+            (Vec3::from(l.p0) + l.p1[0] * ln, ln)
+        }
+        _ => (Vec3::from(l.p0), Vec3::ZERO),
+    };
+    let to_light = target - x;
+    let dist2 = to_light.dot(to_light);
+    let dist = dist2.sqrt();
+    let wi = to_light / dist;
+    let cos_x = n.dot(wi);
+    if cos_x <= 0.0 {
+        return Vec3::ZERO;
+    }
+    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 times area (uniform-area pdf).
+    let mut geometry = cos_x / dist2;
+    if l.kind != LIGHT_POINT {
+        let cos_l = -ln.dot(wi);
+        if cos_l <= 0.0 {
+            return Vec3::ZERO;
+        }
+        geometry *= cos_l * l.area;
+    }
+    let origin = x + n * f.ray_epsilon;
+    *rays += 1;
+    let (blocker, _) = trace_ray(s.nodes, s.primitives, origin, wi, dist - 2.0 * f.ray_epsilon, true);
+    if blocker != NO_LIGHT {
+        return Vec3::ZERO;
+    }
+    albedo * (1.0 / PI) * Vec3::from(l.radiance) * (geometry / l.pick_probability)
+}
+
+/// Unpolarised Fresnel reflectance for a ray meeting the interface with `cos_i > 0`, going from
+/// index `eta_i` into `eta_t`; returns (reflectance, cos_t), reflectance 1 under total internal
+/// reflection.
+pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
+    let eta = eta_i / eta_t;
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return (1.0, 0.0);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    let rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    (0.5 * (rs * rs + rp * rp), cos_t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fresnel_matches_known_values() {
+        // Normal incidence on glass: ((1.5 - 1) / (1.5 + 1))^2 = 0.04.
+        let (f, cos_t) = fresnel_dielectric(1.0, 1.0, 1.5);
+        assert!((f - 0.04).abs() < 1e-6 && (cos_t - 1.0).abs() < 1e-6);
+        // Brewster's angle, atan(1.5): p-polarised reflectance vanishes, so F = rs^2 / 2.
+        let theta = 1.5f32.atan();
+        let (f, _) = fresnel_dielectric(theta.cos(), 1.0, 1.5);
+        assert!((f - 0.0739).abs() < 1e-3, "{f}");
+        // Total internal reflection beyond the critical angle asin(1/1.5) = 41.8 degrees.
+        assert_eq!(fresnel_dielectric(45f32.to_radians().cos(), 1.5, 1.0).0, 1.0);
+    }
+}

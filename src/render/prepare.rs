@@ -1,0 +1,153 @@
+//! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
+
+use glam::Vec3;
+
+use crate::accel::{build_bvh, BvhError};
+use crate::cpu::SceneView;
+use crate::layout::constants::*;
+use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive};
+use crate::scene::Scene;
+
+/// Everything a render dispatch binds, owned.
+#[derive(Clone, Debug)]
+pub struct SceneBuffers {
+    pub frame: FrameParams,
+    pub nodes: Vec<BvhNode>,
+    pub primitives: Vec<Primitive>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    /// Centre and radius of a sphere around the whole scene (for default radii and epsilons).
+    pub bounding_center: Vec3,
+    pub bounding_radius: f32,
+}
+
+impl SceneBuffers {
+    pub fn view(&self) -> SceneView<'_> {
+        SceneView {
+            frame: &self.frame,
+            nodes: &self.nodes,
+            primitives: &self.primitives,
+            materials: &self.materials,
+            lights: &self.lights,
+        }
+    }
+}
+
+/// Render settings that the command line may override.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameSettings {
+    pub width: u32,
+    pub height: u32,
+    pub max_depth: u32,
+    pub seed: u32,
+}
+
+/// Power used to pick lights: luminous-agnostic mean of the three channels.
+fn channel_mean(v: [f32; 3]) -> f32 {
+    (v[0] + v[1] + v[2]) / 3.0
+}
+
+pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
+    // Primitives, each emitter tagged with its future light index
+    let mut primitives = Vec::with_capacity(scene.triangles.len() + scene.spheres.len());
+    for t in &scene.triangles {
+        primitives.push(Primitive {
+            p0: t.vertices[0].into(),
+            p1: t.vertices[1].into(),
+            p2: t.vertices[2].into(),
+            kind: PRIMITIVE_TRIANGLE,
+            material: t.material,
+            light: NO_LIGHT,
+        });
+    }
+    for s in &scene.spheres {
+        primitives.push(Primitive {
+            p0: s.center.into(),
+            p1: [s.radius, 0.0, 0.0],
+            p2: [0.0; 3],
+            kind: PRIMITIVE_SPHERE,
+            material: s.material,
+            light: NO_LIGHT,
+        });
+    }
+    let bvh = build_bvh(&primitives)?;
+    let mut primitives = bvh.primitives;
+
+    // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
+    let mut lights = Vec::new();
+    let mut powers = Vec::new();
+    for p in primitives.iter_mut() {
+        let Some(emission) = scene.materials.get(p.material as usize).map(|m| m.emission) else { continue };
+        if channel_mean(emission) <= 0.0 {
+            continue;
+        }
+        let (kind, area, p1) = if p.kind == PRIMITIVE_SPHERE {
+            (LIGHT_SPHERE, 4.0 * std::f32::consts::PI * p.p1[0] * p.p1[0], p.p1)
+        } else {
+            let e1 = Vec3::from(p.p1) - Vec3::from(p.p0);
+            let e2 = Vec3::from(p.p2) - Vec3::from(p.p0);
+            (LIGHT_TRIANGLE, 0.5 * e1.cross(e2).length(), p.p1)
+        };
+        if area <= 0.0 {
+            continue;
+        }
+        p.light = lights.len() as u32;
+        // A Lambertian emitter of radiance L and area A emits power pi * A * L.
+        powers.push(std::f32::consts::PI * area * channel_mean(emission));
+        lights.push(Light { p0: p.p0, kind, p1, p2: p.p2, area, radiance: emission, ..Default::default() });
+    }
+    for pl in &scene.point_lights {
+        // An isotropic point light of intensity I emits power 4 pi I.
+        powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
+        lights.push(Light { p0: pl.position.into(), kind: LIGHT_POINT, radiance: pl.intensity.into(), ..Default::default() });
+    }
+    let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
+    let mut running = 0.0f64;
+    for (light, &power) in lights.iter_mut().zip(&powers) {
+        running += power as f64;
+        light.pick_probability = (power as f64 / total_power) as f32;
+        light.cdf = (running / total_power) as f32;
+    }
+    if let Some(last) = lights.last_mut() {
+        last.cdf = 1.0; // so a pick of u close to 1 never falls past the end
+    }
+
+    // Bounds and camera
+    let root = &bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
+    let (bounding_center, bounding_radius) =
+        if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    let cam = &scene.camera;
+    let forward = (cam.look_at - cam.position).normalize();
+    // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
+    let right = forward.cross(cam.up).normalize();
+    let up = right.cross(forward);
+    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
+    let aspect = settings.width as f32 / settings.height as f32;
+    let scale = bounding_radius.max(cam.position.distance(bounding_center));
+    let frame = FrameParams {
+        camera_position: cam.position.into(),
+        width: settings.width,
+        camera_forward: forward.into(),
+        height: settings.height,
+        camera_right: (right * tan_half * aspect).into(),
+        max_depth: settings.max_depth,
+        camera_up: (up * tan_half).into(),
+        seed: settings.seed,
+        light_count: lights.len() as u32,
+        ray_epsilon: scale * RAY_EPSILON_SCALE,
+        primitive_count: primitives.len() as u32,
+        node_count: bvh.nodes.len() as u32,
+        total_light_power: total_power as f32,
+        _pad: [0; 3],
+    };
+    Ok(SceneBuffers {
+        frame,
+        nodes: bvh.nodes,
+        primitives,
+        materials: scene.materials.clone(),
+        lights,
+        bounding_center,
+        bounding_radius,
+    })
+}
