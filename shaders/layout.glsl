@@ -59,4 +59,19 @@ struct DispatchRange {
     uint sample_count;
 };
 
+struct Photon {
+    float position[3];
+    uint flux_rg;
+    uint flux_b_dir;
+};
+
+struct GridParams {
+    float cell_size;
+    float radius;
+    uint table_mask;
+    uint photon_count;
+    float flux_scale;
+    uint _pad[3];
+};
+
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }

@@ -4,6 +4,7 @@ pub mod layout;
 pub mod shaders;
 pub mod accel;
 pub mod cpu;
+pub mod gpu;
 pub mod io;
 pub mod render;
 pub mod scene;

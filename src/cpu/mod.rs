@@ -1,6 +1,9 @@
 //! The CPU reference: each file is the twin of the shader of the same name and reads the same
 //! flattened arrays, so GPU and CPU results can be compared sample for sample.
 
+pub mod grid;
+pub mod grid_build;
+pub mod photon;
 pub mod render;
 pub mod rng;
 pub mod shading;

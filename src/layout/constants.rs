@@ -53,6 +53,11 @@ shared_constants! {
     RNG_LIGHT_V: u32 = 4;
     RNG_FRESNEL: u32 = 5;
 
+    /// Photon flag: stored at the first surface its path met (direct light).
+    PHOTON_FLAG_DIRECT: u32 = 1;
+    /// Photon flag: its path reached this diffuse surface through mirrors and glass only (L S+ D).
+    PHOTON_FLAG_CAUSTIC: u32 = 2;
+
     /// Relative offset of secondary ray origins, scaled by the scene's extent (avoids self-hits).
     RAY_EPSILON_SCALE: f32 = 1.0e-5;
 }

@@ -95,6 +95,34 @@ pub struct DispatchRange {
     pub sample_count: u32,
 }
 
+/// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).
+/// Position in scene units; flux as three half floats relative to the map's flux scale; the
+/// direction toward the light in 14 octahedral bits and two `PHOTON_FLAG_*` bits. Packing lives in
+/// `shaders/photon.glsl` and its twin `cpu::photon`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Photon {
+    pub position: [f32; 3], // scalars only: align 4, no padding
+    pub flux_rg: u32,
+    pub flux_b_dir: u32,
+}
+
+/// A hashed spatial grid over one photon map, 32 bytes. Cells are cubes of `cell_size` = 2 x
+/// `radius`, so a lookup of that radius touches at most 2x2x2 cells; cell coordinates are hashed
+/// into `table_mask + 1` buckets (a power of two about twice the photon count).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GridParams {
+    pub cell_size: f32,
+    pub radius: f32,
+    pub table_mask: u32,
+    pub photon_count: u32,
+    /// Stored flux is relative to this (see `Photon`).
+    pub flux_scale: f32,
+    pub _pad: [u32; 3],
+}
+
+const _: () = assert!(size_of::<Photon>() == 20);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 48);
 const _: () = assert!(size_of::<Material>() == 32);

@@ -2,7 +2,8 @@
 //! into the same work units (bands of rows x runs of samples), so both report progress alike and
 //! no GPU dispatch runs long enough to trip a driver watchdog.
 
-// pub mod gpu; (enabled once src/gpu lands)
+pub mod bench;
+pub mod gpu;
 pub mod prepare;
 
 use std::time::{Duration, Instant};
@@ -34,6 +35,8 @@ impl Backend {
 pub enum RenderError {
     #[error(transparent)]
     Bvh(#[from] crate::accel::BvhError),
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::GpuError),
 }
 
 /// What a render measured.

@@ -1,0 +1,36 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)] // each test binary uses a different subset
+
+use std::path::{Path, PathBuf};
+
+use photonix::gpu::{GpuContext, GpuOptions};
+use photonix::io::Image;
+use photonix::render::{gpu::render_gpu, prepare, render_cpu, FrameSettings, SceneBuffers};
+use photonix::scene::Scene;
+
+pub fn repo_path(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// The shared ground-truth folder, next to the repository.
+pub fn reference_path(scene: &str) -> PathBuf {
+    repo_path("..").join("shared/reference").join(scene).join("reference.exr")
+}
+
+/// A device context with the validation layer on: every test on the GPU runs with it.
+pub fn gpu() -> GpuContext {
+    GpuContext::new(&GpuOptions { device: None, validation: true }).expect("a Vulkan device (lavapipe) with validation")
+}
+
+pub fn buffers(scene: &Scene, width: u32, height: u32) -> SceneBuffers {
+    let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
+    prepare(scene, &settings).expect("scene prepares")
+}
+
+pub fn cpu_image(buffers: &SceneBuffers, spp: u32) -> Image {
+    render_cpu(buffers, spp, &mut |_, _| {}).image
+}
+
+pub fn gpu_image(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32) -> Image {
+    render_gpu(ctx, buffers, spp, &mut |_, _| {}).expect("gpu render succeeds").image
+}
