@@ -1,4 +1,5 @@
 //! Photonix: physically based photon mapping on Vulkan compute shaders, with a CPU twin.
 
 pub mod layout;
+pub mod scene;
 pub mod shaders;
