@@ -7,7 +7,9 @@ use photonix::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_MIRROR};
 use photonix::scene::{load_scene, Scene};
 
 fn load(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
     load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -58,7 +60,11 @@ fn cornell_quads_keep_their_vertex_order() {
     assert_eq!(scene.triangles[1].vertices, [v0, v2, v3]);
     assert!(winding_normal(&scene.triangles[0].vertices).abs_diff_eq(Vec3::Y, 1e-6));
     // The red wall's normal points into the box (-x), per the reference.
-    let red = scene.material_names.iter().position(|n| n == "red").unwrap() as u32;
+    let red = scene
+        .material_names
+        .iter()
+        .position(|n| n == "red")
+        .unwrap() as u32;
     let wall = scene.triangles.iter().find(|t| t.material == red).unwrap();
     assert!(winding_normal(&wall.vertices).x < -0.99);
 }
@@ -88,7 +94,11 @@ fn showcase_uses_every_feature() {
     assert_eq!(scene.point_lights.len(), 1);
     assert_eq!(scene.material_names.last().unwrap(), "light 0");
     // The icosahedron (circumradius 1, scaled 0.4) stays outward-facing after its transform.
-    let copper = scene.material_names.iter().position(|n| n == "copper").unwrap() as u32;
+    let copper = scene
+        .material_names
+        .iter()
+        .position(|n| n == "copper")
+        .unwrap() as u32;
     let center = Vec3::new(0.9, 0.4, -0.9);
     for t in scene.triangles.iter().filter(|t| t.material == copper) {
         let centroid = (t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0;

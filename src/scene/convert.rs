@@ -1001,7 +1001,8 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
         .max(e1.length_squared())
         .max(e2.length_squared());
     let twice_area = e0.cross(e1).length();
-    !(twice_area > 1e-7 * longest) || !twice_area.is_finite()
+    let has_area = twice_area.is_finite() && twice_area > 1e-7 * longest;
+    !has_area
 }
 
 /// The six faces of an axis-aligned box as quads whose winding normal points outward.

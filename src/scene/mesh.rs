@@ -61,6 +61,8 @@ pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, ObjError
 }
 
 fn parse(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
+    // `..Default::default()` covers fields that only exist with tobj's optional features.
+    #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
