@@ -99,3 +99,52 @@ pub fn parse_scene(source: &str, path: &Path) -> Result<Scene, SceneError> {
     let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
     convert::convert(file, &src)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_light_and_transform_table_parse_as_documented() {
+        let text = r#"
+[camera]
+position = [0, 1, 5]
+look_at = [0, 1, 0]
+fov = 40
+
+[materials.white]
+type = "diffuse"
+
+[[shapes]]
+type = "sphere"
+material = "white"
+center = [1, 0, 0]
+radius = 1
+[shapes.transform]
+scale = 2
+rotate = [0, 0, 90]
+translate = [0, 1, 0]
+
+[[lights]]
+type = "area"
+shape = "sphere"
+center = [0, 3, 0]
+radius = 0.25
+radiance = 20
+"#;
+        let scene = parse_scene(text, Path::new("doc.toml")).unwrap();
+        assert_eq!(scene.spheres.len(), 2);
+        // Scale 2 then rotate 90 degrees about z: (1,0,0) -> (2,0,0) -> (0,2,0), then +y.
+        let s = &scene.spheres[0];
+        assert!(
+            s.center.abs_diff_eq(Vec3::new(0.0, 3.0, 0.0), 1e-5),
+            "{}",
+            s.center
+        );
+        assert_eq!(s.radius, 2.0);
+        let light = &scene.materials[scene.spheres[1].material as usize];
+        assert_eq!(light.emission, [20.0; 3]);
+        assert_eq!(scene.material_names[1], "light 0");
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    }
+}
