@@ -1,6 +1,7 @@
 //! Photonix: physically based photon mapping on Vulkan compute shaders, with a CPU twin.
 
 pub mod layout;
+pub mod scene;
 pub mod shaders;
 pub mod accel;
 pub mod cpu;

@@ -1,0 +1,1091 @@
+//! From the file as written (`format`) to the `Scene` the renderer uses: checks every value,
+//! applies defaults, turns quads, boxes, meshes and area lights into triangles and materials.
+
+use std::ops::Range;
+use std::path::Path;
+
+use glam::{Affine3A, Mat3, Vec3};
+use toml::Spanned;
+
+use super::error::{backticked, object_name, suggest, SceneError, Source};
+use super::format::{LightDef, MaterialDef, SceneFile, ShapeDef, TransformDef, Vec3Def};
+use super::mesh::{load_obj_triangles, ObjError};
+use super::{Camera, PointLight, RenderSettings, Scene, Sphere, Triangle};
+use crate::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR};
+use crate::layout::Material;
+
+type Result<T> = std::result::Result<T, SceneError>;
+
+/// Defaults of the format; `docs/scene-format.md` lists the same numbers.
+const DEFAULT_UP: Vec3 = Vec3::Y;
+const DEFAULT_RESOLUTION: [u32; 2] = [512, 512];
+const DEFAULT_SPP: u32 = 16;
+const DEFAULT_MAX_DEPTH: u32 = 16;
+const DEFAULT_REFLECTANCE: f32 = 0.8;
+const DEFAULT_IOR: f32 = 1.5;
+
+const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric"];
+const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
+const LIGHT_TYPES: &[&str] = &["area", "point"];
+const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
+
+pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
+    let mut builder = Builder {
+        src,
+        materials: Vec::new(),
+        material_names: Vec::new(),
+        material_used: Vec::new(),
+        triangles: Vec::new(),
+        spheres: Vec::new(),
+        point_lights: Vec::new(),
+        warnings: Vec::new(),
+    };
+
+    let Some(camera) = &file.camera else {
+        return Err(SceneError::MissingCamera {
+            location: src.path.display().to_string(),
+        });
+    };
+    let camera = builder.camera(camera)?;
+    let render = builder.render(file.render.as_ref())?;
+
+    // Materials in file order, so ids follow the file.
+    let mut materials: Vec<_> = file.materials.iter().collect();
+    materials.sort_by_key(|(key, _)| key.span().start);
+    for (key, def) in materials {
+        builder.material(key, def)?;
+    }
+
+    for (index, shape) in file.shapes.iter().enumerate() {
+        builder.shape(index, shape)?;
+    }
+    for (index, light) in file.lights.iter().enumerate() {
+        builder.light(index, light)?;
+    }
+
+    // Warnings
+    for (name, used) in builder.material_names.iter().zip(&builder.material_used) {
+        if !used {
+            builder.warnings.push(format!(
+                "material \"{name}\" is defined but no shape uses it"
+            ));
+        }
+    }
+    let emits = |m: u32| {
+        let e = builder.materials[m as usize].emission;
+        e.iter().any(|&c| c > 0.0)
+    };
+    let has_light = builder.triangles.iter().any(|t| emits(t.material))
+        || builder.spheres.iter().any(|s| emits(s.material))
+        || builder
+            .point_lights
+            .iter()
+            .any(|p| p.intensity.max_element() > 0.0);
+    if !has_light {
+        builder
+            .warnings
+            .push("scene has no lights; the image will be black".to_string());
+    }
+
+    let name = src
+        .path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    Ok(Scene {
+        name,
+        path: src.path.to_path_buf(),
+        camera,
+        render,
+        materials: builder.materials,
+        material_names: builder.material_names,
+        triangles: builder.triangles,
+        spheres: builder.spheres,
+        point_lights: builder.point_lights,
+        warnings: builder.warnings,
+    })
+}
+
+struct Builder<'a> {
+    src: &'a Source<'a>,
+    materials: Vec<Material>,
+    material_names: Vec<String>,
+    material_used: Vec<bool>,
+    triangles: Vec<Triangle>,
+    spheres: Vec<Sphere>,
+    point_lights: Vec<PointLight>,
+    warnings: Vec<String>,
+}
+
+/// A field as written: its name, and its span when present.
+type Present<'f> = (&'static str, Option<Range<usize>>);
+
+fn span_of<T>(field: &Option<Spanned<T>>) -> Option<Range<usize>> {
+    field.as_ref().map(|f| f.span())
+}
+
+impl Builder<'_> {
+    fn invalid(&self, span: &Range<usize>, object: &str, message: String) -> SceneError {
+        self.src.invalid(span, object, message)
+    }
+
+    /// The field, or an error at the table's line saying what to add.
+    fn require<'f, T>(
+        &self,
+        field: &'f Option<Spanned<T>>,
+        table: &Range<usize>,
+        object: &str,
+        name: &str,
+        example: &str,
+    ) -> Result<&'f Spanned<T>> {
+        field.as_ref().ok_or_else(|| {
+            self.invalid(
+                table,
+                object,
+                format!("missing field `{name}`; add it, e.g. `{example}`"),
+            )
+        })
+    }
+
+    /// Rejects fields that exist in the format but not for this `type`.
+    fn only_fields(
+        &self,
+        object: &str,
+        what: &str,
+        present: &[Present<'_>],
+        allowed: &[&str],
+    ) -> Result<()> {
+        for (name, span) in present {
+            if let Some(span) = span {
+                if !allowed.contains(name) {
+                    return Err(self.invalid(
+                        span,
+                        object,
+                        format!(
+                            "`{name}` does not apply to {what} (it takes {})",
+                            backticked(allowed)
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A `type` (or `shape`) value that must be one of `valid`.
+    fn one_of<'v>(
+        &self,
+        value: &Spanned<String>,
+        object: &str,
+        field: &str,
+        valid: &[&'v str],
+    ) -> Result<&'v str> {
+        let given = value.get_ref().as_str();
+        if let Some(hit) = valid.iter().find(|v| **v == given) {
+            return Ok(hit);
+        }
+        let hint = match suggest(given, valid) {
+            Some(best) => format!("did you mean \"{best}\"?"),
+            None => format!(
+                "use one of {}",
+                valid
+                    .iter()
+                    .map(|v| format!("\"{v}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        Err(self.invalid(
+            &value.span(),
+            object,
+            format!("unknown {field} \"{given}\" ({hint})"),
+        ))
+    }
+
+    fn number(&self, value: &Spanned<f64>, object: &str, field: &str) -> Result<f32> {
+        let v = *value.get_ref();
+        if !v.is_finite() || !(v as f32).is_finite() {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is {v}; give a finite number"),
+            ));
+        }
+        Ok(v as f32)
+    }
+
+    /// A point or direction: three finite numbers, never a single number.
+    fn point(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
+        if value.get_ref().scalar {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` must be an array of 3 numbers [x, y, z]"),
+            ));
+        }
+        self.vector(value, object, field)
+    }
+
+    /// Three finite numbers; a single number `v` means `[v, v, v]`.
+    fn vector(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
+        let v = value.get_ref().value;
+        if let Some(bad) = v
+            .iter()
+            .find(|c| !c.is_finite() || !(**c as f32).is_finite())
+        {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` contains {bad}; give finite numbers"),
+            ));
+        }
+        Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
+    }
+
+    /// An RGB triple that must be >= 0, and <= 1 when `at_most_one` (albedos and tints).
+    fn color(
+        &self,
+        value: &Spanned<Vec3Def>,
+        object: &str,
+        field: &str,
+        at_most_one: bool,
+    ) -> Result<[f32; 3]> {
+        let c = self.vector(value, object, field)?;
+        if c.min_element() < 0.0 {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is negative ({c}); it must be >= 0 in every channel"),
+            ));
+        }
+        if at_most_one && c.max_element() > 1.0 {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!(
+                    "`{field}` is above 1 ({c}); it is a fraction of light, in [0, 1] per channel"
+                ),
+            ));
+        }
+        Ok(c.to_array())
+    }
+
+    fn integer(
+        &self,
+        value: &Spanned<i64>,
+        object: &str,
+        field: &str,
+        min: i64,
+        what: &str,
+    ) -> Result<u32> {
+        let v = *value.get_ref();
+        if v < min || v > u32::MAX as i64 {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is {v}; it must be {what}"),
+            ));
+        }
+        Ok(v as u32)
+    }
+
+    // Camera and render settings
+
+    fn camera(&self, def: &Spanned<super::format::CameraDef>) -> Result<Camera> {
+        let object = "[camera]";
+        let table = def.span();
+        let c = def.get_ref();
+        let position = self.require(
+            &c.position,
+            &table,
+            object,
+            "position",
+            "position = [0, 1, 5]",
+        )?;
+        let position = self.point(position, object, "position")?;
+        let look_at_def =
+            self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
+        let look_at = self.point(look_at_def, object, "look_at")?;
+        if look_at == position {
+            return Err(self.invalid(
+                &look_at_def.span(),
+                object,
+                "`look_at` equals `position`; the camera needs a direction to look in".to_string(),
+            ));
+        }
+        let up = match &c.up {
+            Some(up_def) => {
+                let up = self.point(up_def, object, "up")?;
+                let forward = (look_at - position).normalize();
+                if up.cross(forward).length() <= 1e-6 * up.length() {
+                    return Err(self.invalid(
+                        &up_def.span(),
+                        object,
+                        "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it".to_string(),
+                    ));
+                }
+                up
+            }
+            None => DEFAULT_UP,
+        };
+        let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
+        let fov_deg = self.number(fov_def, object, "fov")?;
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(self.invalid(
+                &fov_def.span(),
+                object,
+                format!("`fov` is {fov_deg}; the vertical field of view must be between 0 and 180 degrees"),
+            ));
+        }
+        let [width, height] = match &c.resolution {
+            Some(res) => {
+                let values = res.get_ref();
+                if values.len() != 2 {
+                    return Err(self.invalid(
+                        &res.span(),
+                        object,
+                        format!(
+                            "`resolution` has {} numbers; give [width, height]",
+                            values.len()
+                        ),
+                    ));
+                }
+                let mut wh = [0; 2];
+                for (out, &v) in wh.iter_mut().zip(values) {
+                    if v < 1 || v > u32::MAX as i64 {
+                        return Err(self.invalid(
+                            &res.span(),
+                            object,
+                            format!(
+                                "`resolution` is {values:?}; width and height must be at least 1"
+                            ),
+                        ));
+                    }
+                    *out = v as u32;
+                }
+                wh
+            }
+            None => DEFAULT_RESOLUTION,
+        };
+        Ok(Camera {
+            position,
+            look_at,
+            up,
+            fov_deg,
+            width,
+            height,
+        })
+    }
+
+    fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
+        let object = "[render]";
+        let mut settings = RenderSettings {
+            spp: DEFAULT_SPP,
+            max_depth: DEFAULT_MAX_DEPTH,
+            seed: 0,
+        };
+        let Some(def) = def else {
+            return Ok(settings);
+        };
+        let r = def.get_ref();
+        if let Some(spp) = &r.spp {
+            settings.spp = self.integer(spp, object, "spp", 1, "at least 1 sample per pixel")?;
+        }
+        if let Some(depth) = &r.max_depth {
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+        }
+        if let Some(seed) = &r.seed {
+            settings.seed = self.integer(seed, object, "seed", 0, "between 0 and 4294967295")?;
+        }
+        Ok(settings)
+    }
+
+    // Materials
+
+    fn material(&mut self, key: &Spanned<String>, def: &Spanned<MaterialDef>) -> Result<()> {
+        let name = key.get_ref().clone();
+        let object = format!("material \"{name}\"");
+        let m = def.get_ref();
+        let kind_def = self.require(
+            &m.r#type,
+            &def.span(),
+            &object,
+            "type",
+            "type = \"diffuse\"",
+        )?;
+        let kind = self.one_of(kind_def, &object, "type", MATERIAL_TYPES)?;
+        let present = [
+            ("type", span_of(&m.r#type)),
+            ("reflectance", span_of(&m.reflectance)),
+            ("tint", span_of(&m.tint)),
+            ("ior", span_of(&m.ior)),
+            ("emission", span_of(&m.emission)),
+        ];
+        let emission = match &m.emission {
+            Some(e) => self.color(e, &object, "emission", false)?,
+            None => [0.0; 3],
+        };
+        let material = match kind {
+            "diffuse" => {
+                self.only_fields(
+                    &object,
+                    "a diffuse material",
+                    &present,
+                    &["type", "reflectance", "emission"],
+                )?;
+                let reflectance = match &m.reflectance {
+                    Some(r) => self.color(r, &object, "reflectance", true)?,
+                    None => [DEFAULT_REFLECTANCE; 3],
+                };
+                Material {
+                    reflectance,
+                    kind: MATERIAL_DIFFUSE,
+                    emission,
+                    ior: 1.0,
+                }
+            }
+            "mirror" => {
+                self.only_fields(
+                    &object,
+                    "a mirror material",
+                    &present,
+                    &["type", "tint", "emission"],
+                )?;
+                let tint = match &m.tint {
+                    Some(t) => self.color(t, &object, "tint", true)?,
+                    None => [1.0; 3],
+                };
+                Material {
+                    reflectance: tint,
+                    kind: MATERIAL_MIRROR,
+                    emission,
+                    ior: 1.0,
+                }
+            }
+            _ => {
+                self.only_fields(
+                    &object,
+                    "a dielectric material",
+                    &present,
+                    &["type", "ior", "emission"],
+                )?;
+                let ior = match &m.ior {
+                    Some(ior_def) => {
+                        let ior = self.number(ior_def, &object, "ior")?;
+                        if ior <= 0.0 {
+                            return Err(self.invalid(
+                                &ior_def.span(),
+                                &object,
+                                format!("`ior` is {ior}; the index of refraction must be > 0 (glass is about 1.5)"),
+                            ));
+                        }
+                        ior
+                    }
+                    None => DEFAULT_IOR,
+                };
+                Material {
+                    reflectance: [1.0; 3],
+                    kind: MATERIAL_DIELECTRIC,
+                    emission,
+                    ior,
+                }
+            }
+        };
+        self.add_material(name, material);
+        Ok(())
+    }
+
+    fn add_material(&mut self, name: String, material: Material) -> u32 {
+        self.materials.push(material);
+        self.material_names.push(name);
+        self.material_used.push(false);
+        (self.materials.len() - 1) as u32
+    }
+
+    fn material_id(&mut self, value: &Spanned<String>, object: &str) -> Result<u32> {
+        let name = value.get_ref();
+        if let Some(id) = self.material_names.iter().position(|n| n == name) {
+            self.material_used[id] = true;
+            return Ok(id as u32);
+        }
+        let hint = match suggest(name, &self.material_names) {
+            Some(best) => format!("did you mean \"{best}\"?"),
+            None if self.material_names.is_empty() => {
+                format!("define it with a [materials.{name}] table")
+            }
+            None => format!(
+                "defined materials: {}; or add a [materials.{name}] table",
+                self.material_names
+                    .iter()
+                    .map(|n| format!("\"{n}\""))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        Err(self.invalid(
+            &value.span(),
+            object,
+            format!("unknown material \"{name}\" ({hint})"),
+        ))
+    }
+
+    // Shapes
+
+    fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
+        let s = def.get_ref();
+        let object = object_name(
+            "shape",
+            index,
+            s.name.as_ref().map(|n| n.get_ref().as_str()),
+        );
+        let table = def.span();
+        let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
+        let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;
+        let present = [
+            ("name", span_of(&s.name)),
+            ("type", span_of(&s.r#type)),
+            ("material", span_of(&s.material)),
+            ("vertices", span_of(&s.vertices)),
+            ("center", span_of(&s.center)),
+            ("radius", span_of(&s.radius)),
+            ("min", span_of(&s.min)),
+            ("max", span_of(&s.max)),
+            ("file", span_of(&s.file)),
+            ("transform", span_of(&s.transform)),
+        ];
+        let (what, fields): (&str, &[&str]) = match kind {
+            "quad" | "triangle" => (
+                if kind == "quad" {
+                    "a quad"
+                } else {
+                    "a triangle"
+                },
+                &["vertices"],
+            ),
+            "sphere" => ("a sphere", &["center", "radius"]),
+            "box" => ("a box", &["min", "max"]),
+            _ => ("a mesh", &["file"]),
+        };
+        let mut allowed = vec!["name", "type", "material", "transform"];
+        allowed.extend_from_slice(fields);
+        self.only_fields(&object, what, &present, &allowed)?;
+
+        let material_def = self.require(
+            &s.material,
+            &table,
+            &object,
+            "material",
+            "material = \"white\"",
+        )?;
+        let material = self.material_id(material_def, &object)?;
+        let transform = self.transform(s.transform.as_ref(), &object)?;
+
+        match kind {
+            "quad" | "triangle" => {
+                let count = if kind == "quad" { 4 } else { 3 };
+                let vertices = self.vertices(&s.vertices, &table, &object, count)?;
+                self.polygon(
+                    &vertices,
+                    s.vertices.as_ref().map(|v| v.span()).unwrap_or(table),
+                    &object,
+                    material,
+                    transform,
+                )
+            }
+            "sphere" => {
+                let center =
+                    self.require(&s.center, &table, &object, "center", "center = [0, 1, 0]")?;
+                let radius = self.require(&s.radius, &table, &object, "radius", "radius = 1.0")?;
+                self.sphere(center, radius, &object, material, transform)
+            }
+            "box" => {
+                let min_def = self.require(&s.min, &table, &object, "min", "min = [0, 0, 0]")?;
+                let max_def = self.require(&s.max, &table, &object, "max", "max = [1, 1, 1]")?;
+                let min = self.point(min_def, &object, "min")?;
+                let max = self.point(max_def, &object, "max")?;
+                if !min.cmplt(max).all() {
+                    return Err(self.invalid(
+                        &max_def.span(),
+                        &object,
+                        format!("`max` ({max}) must be greater than `min` ({min}) in x, y and z"),
+                    ));
+                }
+                for corners in box_faces(min, max) {
+                    self.quad_triangles(&corners, &max_def.span(), &object, material, transform)?;
+                }
+                Ok(())
+            }
+            _ => {
+                let file = self.require(
+                    &s.file,
+                    &table,
+                    &object,
+                    "file",
+                    "file = \"meshes/bunny.obj\"",
+                )?;
+                self.mesh(file, &object, material, transform)
+            }
+        }
+    }
+
+    /// `count` vertices from a `vertices` field.
+    fn vertices(
+        &self,
+        field: &Option<Spanned<Vec<Vec3Def>>>,
+        table: &Range<usize>,
+        object: &str,
+        count: usize,
+    ) -> Result<Vec<Vec3>> {
+        let example = "vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]";
+        let field = self.require(field, table, object, "vertices", example)?;
+        let list = field.get_ref();
+        if list.len() != count {
+            return Err(self.invalid(
+                &field.span(),
+                object,
+                format!(
+                    "`vertices` has {} points; this shape needs {count}",
+                    list.len()
+                ),
+            ));
+        }
+        list.iter()
+            .map(|v| {
+                let spanned = Spanned::new(field.span(), *v);
+                self.point(&spanned, object, "vertices")
+            })
+            .collect()
+    }
+
+    /// A triangle (3 vertices) or a quad (4 vertices, split into (v0,v1,v2), (v0,v2,v3)).
+    fn polygon(
+        &mut self,
+        vertices: &[Vec3],
+        span: Range<usize>,
+        object: &str,
+        material: u32,
+        transform: Option<Affine3A>,
+    ) -> Result<()> {
+        if vertices.len() == 3 {
+            let t = [vertices[0], vertices[1], vertices[2]];
+            self.explicit_triangle(t, &span, object, "the triangle", material, transform)
+        } else {
+            let q = [vertices[0], vertices[1], vertices[2], vertices[3]];
+            self.quad_triangles(&q, &span, object, material, transform)
+        }
+    }
+
+    fn quad_triangles(
+        &mut self,
+        q: &[Vec3; 4],
+        span: &Range<usize>,
+        object: &str,
+        material: u32,
+        transform: Option<Affine3A>,
+    ) -> Result<()> {
+        // The split the Cornell data prescribes; some of its walls are not planar.
+        let first = [q[0], q[1], q[2]];
+        let second = [q[0], q[2], q[3]];
+        self.explicit_triangle(
+            first,
+            span,
+            object,
+            "triangle (v0, v1, v2) of the quad",
+            material,
+            transform,
+        )?;
+        self.explicit_triangle(
+            second,
+            span,
+            object,
+            "triangle (v0, v2, v3) of the quad",
+            material,
+            transform,
+        )
+    }
+
+    /// A triangle written in the scene file: zero area is an error.
+    fn explicit_triangle(
+        &mut self,
+        vertices: [Vec3; 3],
+        span: &Range<usize>,
+        object: &str,
+        which: &str,
+        material: u32,
+        transform: Option<Affine3A>,
+    ) -> Result<()> {
+        let vertices = apply(transform, vertices);
+        if is_degenerate(&vertices) {
+            return Err(self.invalid(
+                span,
+                object,
+                format!("`vertices`: {which} has zero area (its points are equal or on a line); fix the points"),
+            ));
+        }
+        self.triangles.push(Triangle { vertices, material });
+        Ok(())
+    }
+
+    fn sphere(
+        &mut self,
+        center: &Spanned<Vec3Def>,
+        radius: &Spanned<f64>,
+        object: &str,
+        material: u32,
+        transform: Option<Affine3A>,
+    ) -> Result<()> {
+        let mut c = self.point(center, object, "center")?;
+        let mut r = self.number(radius, object, "radius")?;
+        if r <= 0.0 {
+            return Err(self.invalid(
+                &radius.span(),
+                object,
+                format!("`radius` is {r}; it must be > 0"),
+            ));
+        }
+        if let Some(t) = transform {
+            // Columns of the linear part have the scale's lengths (rotation keeps lengths).
+            let lengths = Vec3::new(
+                t.matrix3.x_axis.length(),
+                t.matrix3.y_axis.length(),
+                t.matrix3.z_axis.length(),
+            );
+            if lengths.max_element() - lengths.min_element() > 1e-5 * lengths.max_element() {
+                return Err(self.invalid(
+                    &radius.span(),
+                    object,
+                    "`transform`: a sphere can only be scaled uniformly; give `scale` as one number".to_string(),
+                ));
+            }
+            c = t.transform_point3(c);
+            r *= lengths.x;
+        }
+        self.spheres.push(Sphere {
+            center: c,
+            radius: r,
+            material,
+        });
+        Ok(())
+    }
+
+    fn mesh(
+        &mut self,
+        file: &Spanned<String>,
+        object: &str,
+        material: u32,
+        transform: Option<Affine3A>,
+    ) -> Result<()> {
+        let base = self.src.path.parent().unwrap_or(Path::new(""));
+        let obj_path = base.join(file.get_ref());
+        let location = self.src.at(&file.span());
+        let triangles = load_obj_triangles(&obj_path).map_err(|e| match e {
+            ObjError::NotFound => SceneError::MeshNotFound {
+                location: location.clone(),
+                object: object.to_string(),
+                looked_for: obj_path.clone(),
+            },
+            ObjError::Malformed { line, message } => SceneError::Obj {
+                obj_location: match line {
+                    Some(line) => format!("{}:{line}", obj_path.display()),
+                    None => obj_path.display().to_string(),
+                },
+                message,
+                object: object.to_string(),
+                location: location.clone(),
+            },
+        })?;
+        let total = triangles.len();
+        let mut skipped = 0;
+        for t in triangles {
+            let vertices = apply(transform, t);
+            // Zero-area triangles are common in exported meshes and harmless to skip.
+            if is_degenerate(&vertices) {
+                skipped += 1;
+                continue;
+            }
+            self.triangles.push(Triangle { vertices, material });
+        }
+        if skipped == total {
+            return Err(SceneError::Obj {
+                obj_location: obj_path.display().to_string(),
+                message: format!("all {total} triangles have zero area"),
+                object: object.to_string(),
+                location,
+            });
+        }
+        if skipped > 0 {
+            self.warnings.push(format!(
+                "{location}: {object}: skipped {skipped} of {total} triangles of {} with zero area",
+                obj_path.display()
+            ));
+        }
+        Ok(())
+    }
+
+    /// `world_from_object` = translate · rotate Z · rotate Y · rotate X · scale.
+    fn transform(
+        &self,
+        def: Option<&Spanned<TransformDef>>,
+        object: &str,
+    ) -> Result<Option<Affine3A>> {
+        let Some(def) = def else {
+            return Ok(None);
+        };
+        let t = def.get_ref();
+        let scale = match &t.scale {
+            Some(s) => {
+                let scale = self.vector(s, object, "transform.scale")?;
+                if scale.abs().min_element() == 0.0 {
+                    return Err(self.invalid(
+                        &s.span(),
+                        object,
+                        "`transform.scale` is 0 along an axis, which flattens the shape; give non-zero factors".to_string(),
+                    ));
+                }
+                scale
+            }
+            None => Vec3::ONE,
+        };
+        let rotate = match &t.rotate {
+            Some(r) => self.point(r, object, "transform.rotate")?,
+            None => Vec3::ZERO,
+        };
+        let translate = match &t.translate {
+            Some(tr) => self.point(tr, object, "transform.translate")?,
+            None => Vec3::ZERO,
+        };
+        let r = rotate * (std::f32::consts::PI / 180.0);
+        let rotation =
+            Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
+        Ok(Some(Affine3A::from_mat3_translation(
+            rotation * Mat3::from_diagonal(scale),
+            translate,
+        )))
+    }
+
+    // Lights
+
+    fn light(&mut self, index: usize, def: &Spanned<LightDef>) -> Result<()> {
+        let l = def.get_ref();
+        let object = object_name(
+            "light",
+            index,
+            l.name.as_ref().map(|n| n.get_ref().as_str()),
+        );
+        let table = def.span();
+        let kind_def = self.require(&l.r#type, &table, &object, "type", "type = \"area\"")?;
+        let kind = self.one_of(kind_def, &object, "type", LIGHT_TYPES)?;
+        let present = [
+            ("name", span_of(&l.name)),
+            ("type", span_of(&l.r#type)),
+            ("shape", span_of(&l.shape)),
+            ("vertices", span_of(&l.vertices)),
+            ("center", span_of(&l.center)),
+            ("radius", span_of(&l.radius)),
+            ("radiance", span_of(&l.radiance)),
+            ("position", span_of(&l.position)),
+            ("intensity", span_of(&l.intensity)),
+            ("transform", span_of(&l.transform)),
+        ];
+
+        if kind == "point" {
+            self.only_fields(
+                &object,
+                "a point light",
+                &present,
+                &["name", "type", "position", "intensity"],
+            )?;
+            let position = self.require(
+                &l.position,
+                &table,
+                &object,
+                "position",
+                "position = [0, 5, 0]",
+            )?;
+            let intensity = self.require(
+                &l.intensity,
+                &table,
+                &object,
+                "intensity",
+                "intensity = [10, 10, 10]",
+            )?;
+            let position = self.point(position, &object, "position")?;
+            let intensity = Vec3::from(self.color(intensity, &object, "intensity", false)?);
+            self.point_lights.push(PointLight {
+                position,
+                intensity,
+            });
+            return Ok(());
+        }
+
+        let shape_def = self.require(&l.shape, &table, &object, "shape", "shape = \"quad\"")?;
+        let shape = self.one_of(shape_def, &object, "shape", AREA_LIGHT_SHAPES)?;
+        let mut allowed = vec!["name", "type", "shape", "radiance", "transform"];
+        let what = if shape == "quad" {
+            allowed.push("vertices");
+            "a quad area light"
+        } else {
+            allowed.extend_from_slice(&["center", "radius"]);
+            "a sphere area light"
+        };
+        self.only_fields(&object, what, &present, &allowed)?;
+        let radiance_def = self.require(
+            &l.radiance,
+            &table,
+            &object,
+            "radiance",
+            "radiance = [10, 10, 10]",
+        )?;
+        let radiance = self.color(radiance_def, &object, "radiance", false)?;
+
+        // Each area light gets its own black, emitting material named after the light's index.
+        let material_name = format!("light {index}");
+        if self.material_names.contains(&material_name) {
+            return Err(self.invalid(
+                &table,
+                &object,
+                format!("the material name \"{material_name}\" is reserved for this area light; rename that material"),
+            ));
+        }
+        let material = self.add_material(
+            material_name,
+            Material {
+                reflectance: [0.0; 3],
+                kind: MATERIAL_DIFFUSE,
+                emission: radiance,
+                ior: 1.0,
+            },
+        );
+        self.material_used[material as usize] = true;
+        let transform = self.transform(l.transform.as_ref(), &object)?;
+        if shape == "quad" {
+            let vertices = self.vertices(&l.vertices, &table, &object, 4)?;
+            self.polygon(
+                &vertices,
+                span_of(&l.vertices).unwrap_or(table),
+                &object,
+                material,
+                transform,
+            )
+        } else {
+            let center =
+                self.require(&l.center, &table, &object, "center", "center = [0, 5, 0]")?;
+            let radius = self.require(&l.radius, &table, &object, "radius", "radius = 0.5")?;
+            self.sphere(center, radius, &object, material, transform)
+        }
+    }
+}
+
+fn apply(transform: Option<Affine3A>, vertices: [Vec3; 3]) -> [Vec3; 3] {
+    let Some(t) = transform else {
+        return vertices;
+    };
+    let [a, b, c] = vertices.map(|v| t.transform_point3(v));
+    // A mirroring transform flips the winding normal; swap two vertices so the front face stays
+    // on the same side of the surface (outward stays outward).
+    if t.matrix3.determinant() < 0.0 {
+        [a, c, b]
+    } else {
+        [a, b, c]
+    }
+}
+
+/// Zero area, to f32 precision: |cross| is tiny next to the longest edge squared. Also catches
+/// non-finite vertices (a huge scale).
+fn is_degenerate(v: &[Vec3; 3]) -> bool {
+    let e0 = v[1] - v[0];
+    let e1 = v[2] - v[0];
+    let e2 = v[2] - v[1];
+    let longest = e0
+        .length_squared()
+        .max(e1.length_squared())
+        .max(e2.length_squared());
+    let twice_area = e0.cross(e1).length();
+    let has_area = twice_area.is_finite() && twice_area > 1e-7 * longest;
+    !has_area
+}
+
+/// The six faces of an axis-aligned box as quads whose winding normal points outward.
+fn box_faces(min: Vec3, max: Vec3) -> [[Vec3; 4]; 6] {
+    let p = |x: bool, y: bool, z: bool| {
+        Vec3::new(
+            if x { max.x } else { min.x },
+            if y { max.y } else { min.y },
+            if z { max.z } else { min.z },
+        )
+    };
+    // Each face listed counter-clockwise seen from outside, so (v1-v0)x(v2-v0) points out.
+    [
+        [
+            p(false, false, false),
+            p(false, false, true),
+            p(false, true, true),
+            p(false, true, false),
+        ], // -x
+        [
+            p(true, false, false),
+            p(true, true, false),
+            p(true, true, true),
+            p(true, false, true),
+        ], // +x
+        [
+            p(false, false, false),
+            p(true, false, false),
+            p(true, false, true),
+            p(false, false, true),
+        ], // -y
+        [
+            p(false, true, false),
+            p(false, true, true),
+            p(true, true, true),
+            p(true, true, false),
+        ], // +y
+        [
+            p(false, false, false),
+            p(false, true, false),
+            p(true, true, false),
+            p(true, false, false),
+        ], // -z
+        [
+            p(false, false, true),
+            p(true, false, true),
+            p(true, true, true),
+            p(false, true, true),
+        ], // +z
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn box_face_normals_point_outward() {
+        let (min, max) = (Vec3::new(-1.0, 0.0, 2.0), Vec3::new(1.0, 3.0, 5.0));
+        let center = (min + max) / 2.0;
+        for face in box_faces(min, max) {
+            let n = (face[1] - face[0]).cross(face[2] - face[0]);
+            let face_center = (face[0] + face[1] + face[2] + face[3]) / 4.0;
+            assert!(
+                n.dot(face_center - center) > 0.0,
+                "face {face:?} normal {n}"
+            );
+        }
+    }
+
+    #[test]
+    fn mirroring_transform_keeps_the_front_face_outward() {
+        let t = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        let triangle = [Vec3::ZERO, Vec3::X, Vec3::Y]; // normal +z
+        let out = apply(Some(t), triangle);
+        let n = (out[1] - out[0]).cross(out[2] - out[0]);
+        assert!(n.z > 0.0, "mirror in x keeps a +z normal: {n}");
+    }
+
+    #[test]
+    fn degenerate_catches_collinear_and_equal_points() {
+        assert!(is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::X * 2.0]));
+        assert!(is_degenerate(&[Vec3::ONE, Vec3::ONE, Vec3::ONE]));
+        assert!(!is_degenerate(&[Vec3::ZERO, Vec3::X, Vec3::Y]));
+    }
+}

@@ -1,0 +1,161 @@
+//! The scene file as written: serde structs that mirror the TOML tables one to one. Every field is
+//! optional and spanned, so `convert` can check it, apply defaults and point at its line.
+//! `deny_unknown_fields` turns typos into errors; `error.rs` adds the suggestion.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::Deserialize;
+use toml::Spanned;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SceneFile {
+    pub camera: Option<Spanned<CameraDef>>,
+    pub render: Option<Spanned<RenderDef>>,
+    #[serde(default)]
+    pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
+    #[serde(default)]
+    pub shapes: Vec<Spanned<ShapeDef>>,
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CameraDef {
+    pub position: Option<Spanned<Vec3Def>>,
+    pub look_at: Option<Spanned<Vec3Def>>,
+    pub up: Option<Spanned<Vec3Def>>,
+    pub fov: Option<Spanned<f64>>,
+    pub resolution: Option<Spanned<Vec<i64>>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RenderDef {
+    pub spp: Option<Spanned<i64>>,
+    pub max_depth: Option<Spanned<i64>>,
+    pub seed: Option<Spanned<i64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MaterialDef {
+    pub r#type: Option<Spanned<String>>,
+    pub reflectance: Option<Spanned<Vec3Def>>,
+    pub tint: Option<Spanned<Vec3Def>>,
+    pub ior: Option<Spanned<f64>>,
+    pub emission: Option<Spanned<Vec3Def>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ShapeDef {
+    pub name: Option<Spanned<String>>,
+    pub r#type: Option<Spanned<String>>,
+    pub material: Option<Spanned<String>>,
+    pub vertices: Option<Spanned<Vec<Vec3Def>>>,
+    pub center: Option<Spanned<Vec3Def>>,
+    pub radius: Option<Spanned<f64>>,
+    pub min: Option<Spanned<Vec3Def>>,
+    pub max: Option<Spanned<Vec3Def>>,
+    pub file: Option<Spanned<String>>,
+    pub transform: Option<Spanned<TransformDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct LightDef {
+    pub name: Option<Spanned<String>>,
+    pub r#type: Option<Spanned<String>>,
+    pub shape: Option<Spanned<String>>,
+    pub vertices: Option<Spanned<Vec<Vec3Def>>>,
+    pub center: Option<Spanned<Vec3Def>>,
+    pub radius: Option<Spanned<f64>>,
+    pub radiance: Option<Spanned<Vec3Def>>,
+    pub position: Option<Spanned<Vec3Def>>,
+    pub intensity: Option<Spanned<Vec3Def>>,
+    pub transform: Option<Spanned<TransformDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TransformDef {
+    pub scale: Option<Spanned<Vec3Def>>,
+    pub rotate: Option<Spanned<Vec3Def>>,
+    pub translate: Option<Spanned<Vec3Def>>,
+}
+
+/// `[x, y, z]`, or a single number meaning `[v, v, v]` (grey, or uniform scale). `scalar`
+/// remembers which, so fields that are points can refuse the single number.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Vec3Def {
+    pub value: [f64; 3],
+    pub scalar: bool,
+}
+
+impl<'de> Deserialize<'de> for Vec3Def {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Vec3Visitor;
+        impl<'de> Visitor<'de> for Vec3Visitor {
+            type Value = Vec3Def;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("an array of 3 numbers [x, y, z] or a single number")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Vec3Def, E> {
+                Ok(Vec3Def {
+                    value: [v; 3],
+                    scalar: true,
+                })
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Vec3Def, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Vec3Def, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Vec3Def, A::Error> {
+                let mut value = [0.0; 3];
+                let mut count = 0;
+                while let Some(x) = seq.next_element::<f64>()? {
+                    if count < 3 {
+                        value[count] = x;
+                    }
+                    count += 1;
+                }
+                if count != 3 {
+                    return Err(de::Error::invalid_length(count, &"an array of 3 numbers"));
+                }
+                Ok(Vec3Def {
+                    value,
+                    scalar: false,
+                })
+            }
+        }
+        deserializer.deserialize_any(Vec3Visitor)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Deserialize)]
+    struct Holder {
+        v: Vec3Def,
+    }
+
+    #[test]
+    fn vec3_accepts_arrays_integers_and_scalars() {
+        let h: Holder = toml::from_str("v = [1, 2.5, -3]").unwrap();
+        assert_eq!(h.v.value, [1.0, 2.5, -3.0]);
+        assert!(!h.v.scalar);
+        let h: Holder = toml::from_str("v = 0.5").unwrap();
+        assert_eq!(h.v.value, [0.5; 3]);
+        assert!(h.v.scalar);
+        assert!(toml::from_str::<Holder>("v = [1, 2]").is_err());
+        assert!(toml::from_str::<Holder>("v = \"red\"").is_err());
+    }
+}

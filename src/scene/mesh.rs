@@ -1,0 +1,151 @@
+//! Wavefront OBJ meshes, read with `tobj`: positions and faces only (materials, normals and
+//! texture coordinates are ignored; the scene file assigns the material).
+
+use std::io::BufReader;
+use std::path::Path;
+
+use glam::Vec3;
+
+/// Why an OBJ file could not be used.
+#[derive(Debug)]
+pub(crate) enum ObjError {
+    NotFound,
+    /// `line` is 1-based, when known.
+    Malformed {
+        line: Option<usize>,
+        message: String,
+    },
+}
+
+/// Every triangle of every object in the OBJ file, in object space, in file order. Polygons are
+/// fanned into triangles by `tobj`, keeping their winding.
+pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, ObjError> {
+    let bytes = match std::fs::read(path) {
+        Ok(bytes) => bytes,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(ObjError::NotFound),
+        Err(e) => {
+            return Err(ObjError::Malformed {
+                line: None,
+                message: format!("cannot read the OBJ file: {e}"),
+            })
+        }
+    };
+    let models = parse(&bytes).map_err(|error| ObjError::Malformed {
+        line: find_error_line(&bytes, &error),
+        message: describe(&error),
+    })?;
+
+    let mut triangles = Vec::new();
+    for model in &models {
+        let mesh = &model.mesh;
+        let position = |i: u32| {
+            let i = i as usize * 3;
+            Vec3::new(
+                mesh.positions[i],
+                mesh.positions[i + 1],
+                mesh.positions[i + 2],
+            )
+        };
+        for face in mesh.indices.chunks_exact(3) {
+            triangles.push([position(face[0]), position(face[1]), position(face[2])]);
+        }
+    }
+    if triangles.is_empty() {
+        return Err(ObjError::Malformed {
+            line: None,
+            message: "the OBJ file has no triangles (it needs `v` lines and `f` lines with 3 or more vertices)"
+                .to_string(),
+        });
+    }
+    Ok(triangles)
+}
+
+fn parse(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
+    // `..Default::default()` covers fields that only exist with tobj's optional features.
+    #[allow(clippy::needless_update)]
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Materials are not used, so `mtllib` lines load nothing (and a missing .mtl is no error).
+    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })?;
+    Ok(models)
+}
+
+/// `tobj` does not report lines. Parse ever longer prefixes (binary search) to find the first
+/// line whose prefix fails with the same error: a bad line makes every longer prefix fail too.
+fn find_error_line(bytes: &[u8], error: &tobj::LoadError) -> Option<usize> {
+    let line_ends: Vec<usize> = bytes
+        .iter()
+        .enumerate()
+        .filter(|(_, &b)| b == b'\n')
+        .map(|(i, _)| i + 1)
+        .chain(std::iter::once(bytes.len()))
+        .collect();
+    let fails = |lines: usize| parse(&bytes[..line_ends[lines - 1]]).err();
+    let (mut good, mut bad) = (0, line_ends.len());
+    if fails(bad).as_ref() != Some(error) {
+        return None;
+    }
+    while bad - good > 1 {
+        let mid = (good + bad) / 2;
+        if fails(mid).as_ref() == Some(error) {
+            bad = mid;
+        } else {
+            good = mid;
+        }
+    }
+    Some(bad)
+}
+
+fn describe(error: &tobj::LoadError) -> String {
+    use tobj::LoadError as E;
+    match error {
+        E::PositionParseError => "cannot parse a vertex position; `v` needs 3 numbers".to_string(),
+        E::NormalParseError => "cannot parse a normal; `vn` needs 3 numbers".to_string(),
+        E::TexcoordParseError => "cannot parse a texture coordinate (`vt`)".to_string(),
+        E::FaceParseError => "cannot parse a face; `f` needs 3 or more vertex indices".to_string(),
+        E::FaceVertexOutOfBounds => {
+            "a face refers to a vertex that does not exist (indices start at 1)".to_string()
+        }
+        E::ReadError => "cannot read the OBJ file (is it UTF-8 text?)".to_string(),
+        other => format!("malformed OBJ file: {other}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn obj_file(text: &str) -> tempfile::NamedTempFile {
+        let mut file = tempfile::Builder::new().suffix(".obj").tempfile().unwrap();
+        file.write_all(text.as_bytes()).unwrap();
+        file
+    }
+
+    #[test]
+    fn quad_face_fans_into_two_triangles_keeping_winding() {
+        let file = obj_file("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+        let triangles = load_obj_triangles(file.path()).unwrap();
+        assert_eq!(triangles.len(), 2);
+        for t in &triangles {
+            let normal = (t[1] - t[0]).cross(t[2] - t[0]);
+            assert!(normal.z > 0.0, "winding kept: {normal}");
+        }
+    }
+
+    #[test]
+    fn bad_position_reports_its_line() {
+        let file = obj_file("v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n");
+        match load_obj_triangles(file.path()) {
+            Err(ObjError::Malformed { line, .. }) => assert_eq!(line, Some(3)),
+            other => panic!("expected a malformed OBJ, got {other:?}"),
+        }
+    }
+}

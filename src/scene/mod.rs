@@ -1,0 +1,150 @@
+//! Scene format v1: TOML scene files (documented in `docs/scene-format.md`), checked and turned
+//! into triangles, analytic spheres, point lights and a material table.
+//!
+//! Light sources are every triangle or sphere whose material has `emission` > 0, plus the point
+//! lights; the renderer builds its light list from those. An area light of the file becomes
+//! ordinary shapes with its own material, named `light <index>` (diffuse, reflectance 0,
+//! emission = its radiance).
+
+mod convert;
+mod error;
+mod format;
+mod mesh;
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+
+pub use error::SceneError;
+
+/// A loaded, validated scene. Right-handed, y up, lengths in scene units.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The file stem, e.g. "cornell-box".
+    pub name: String,
+    /// The file it came from.
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub render: RenderSettings,
+    /// Index = material id. Materials of the file in file order, then one per area light.
+    pub materials: Vec<crate::layout::Material>,
+    /// Name of each material, same index as `materials`.
+    pub material_names: Vec<String>,
+    pub triangles: Vec<Triangle>,
+    pub spheres: Vec<Sphere>,
+    pub point_lights: Vec<PointLight>,
+    /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
+    pub warnings: Vec<String>,
+}
+
+/// A pinhole camera.
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub position: Vec3,
+    pub look_at: Vec3,
+    /// Not necessarily perpendicular to the view direction, nor normalised; never parallel to it.
+    pub up: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    pub fov_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    /// Samples per pixel, >= 1.
+    pub spp: u32,
+    /// Most specular bounces of a path, >= 1.
+    pub max_depth: u32,
+    pub seed: u32,
+}
+
+/// A triangle with non-zero area. Its front face is the side (v1-v0)x(v2-v0) points to.
+#[derive(Clone, Debug)]
+pub struct Triangle {
+    pub vertices: [Vec3; 3],
+    pub material: u32,
+}
+
+/// An analytic sphere; its front face is outward.
+#[derive(Clone, Debug)]
+pub struct Sphere {
+    pub center: Vec3,
+    /// Scene units, > 0.
+    pub radius: f32,
+    pub material: u32,
+}
+
+/// An isotropic point light.
+#[derive(Clone, Debug)]
+pub struct PointLight {
+    pub position: Vec3,
+    /// W/sr per channel, >= 0.
+    pub intensity: Vec3,
+}
+
+/// Reads and parses a scene file; mesh paths in it are relative to the file's folder.
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let source = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    parse_scene(&source, path)
+}
+
+/// Parses scene text. `path` names the file in messages, gives the scene its name, and is the
+/// base for relative mesh paths.
+pub fn parse_scene(source: &str, path: &Path) -> Result<Scene, SceneError> {
+    let src = error::Source { text: source, path };
+    let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
+    convert::convert(file, &src)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_light_and_transform_table_parse_as_documented() {
+        let text = r#"
+[camera]
+position = [0, 1, 5]
+look_at = [0, 1, 0]
+fov = 40
+
+[materials.white]
+type = "diffuse"
+
+[[shapes]]
+type = "sphere"
+material = "white"
+center = [1, 0, 0]
+radius = 1
+[shapes.transform]
+scale = 2
+rotate = [0, 0, 90]
+translate = [0, 1, 0]
+
+[[lights]]
+type = "area"
+shape = "sphere"
+center = [0, 3, 0]
+radius = 0.25
+radiance = 20
+"#;
+        let scene = parse_scene(text, Path::new("doc.toml")).unwrap();
+        assert_eq!(scene.spheres.len(), 2);
+        // Scale 2 then rotate 90 degrees about z: (1,0,0) -> (2,0,0) -> (0,2,0), then +y.
+        let s = &scene.spheres[0];
+        assert!(
+            s.center.abs_diff_eq(Vec3::new(0.0, 3.0, 0.0), 1e-5),
+            "{}",
+            s.center
+        );
+        assert_eq!(s.radius, 2.0);
+        let light = &scene.materials[scene.spheres[1].material as usize];
+        assert_eq!(light.emission, [20.0; 3]);
+        assert_eq!(scene.material_names[1], "light 0");
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    }
+}

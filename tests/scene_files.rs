@@ -1,0 +1,110 @@
+//! The scene files in `scenes/` load with the geometry their references describe.
+
+use std::path::Path;
+
+use glam::Vec3;
+use photonix::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_MIRROR};
+use photonix::scene::{load_scene, Scene};
+
+fn load(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn winding_normal(v: &[Vec3; 3]) -> Vec3 {
+    (v[1] - v[0]).cross(v[2] - v[0]).normalize()
+}
+
+#[test]
+fn cornell_box_has_16_quads_and_its_light() {
+    let scene = load("cornell-box.toml");
+    assert_eq!(scene.name, "cornell-box");
+    assert_eq!(scene.triangles.len(), 32, "16 quads, light included");
+    assert!(scene.spheres.is_empty());
+    assert!(scene.point_lights.is_empty());
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!((scene.camera.width, scene.camera.height), (256, 256));
+    assert_eq!(scene.camera.fov_deg, 39.307648);
+    assert_eq!(scene.camera.position, Vec3::new(278.0, 273.0, -800.0));
+    assert_eq!((scene.render.spp, scene.render.max_depth), (64, 16));
+
+    // The light is the last quad: black, emitting (17, 12, 4), facing down.
+    let emitting: Vec<_> = scene
+        .triangles
+        .iter()
+        .filter(|t| scene.materials[t.material as usize].emission != [0.0; 3])
+        .collect();
+    assert_eq!(emitting.len(), 2);
+    for t in emitting {
+        let m = &scene.materials[t.material as usize];
+        assert_eq!(m.emission, [17.0, 12.0, 4.0]);
+        assert_eq!(m.reflectance, [0.0; 3]);
+        assert!(winding_normal(&t.vertices).abs_diff_eq(Vec3::NEG_Y, 1e-6));
+    }
+}
+
+#[test]
+fn cornell_quads_keep_their_vertex_order() {
+    let scene = load("cornell-box.toml");
+    // Floor [v0..v3] = (552.8,0,0) (0,0,0) (0,0,559.2) (549.6,0,559.2): triangles (v0,v1,v2),
+    // (v0,v2,v3), winding normal +y (into the box).
+    let (v0, v1, v2, v3) = (
+        Vec3::new(552.8, 0.0, 0.0),
+        Vec3::ZERO,
+        Vec3::new(0.0, 0.0, 559.2),
+        Vec3::new(549.6, 0.0, 559.2),
+    );
+    assert_eq!(scene.triangles[0].vertices, [v0, v1, v2]);
+    assert_eq!(scene.triangles[1].vertices, [v0, v2, v3]);
+    assert!(winding_normal(&scene.triangles[0].vertices).abs_diff_eq(Vec3::Y, 1e-6));
+    // The red wall's normal points into the box (-x), per the reference.
+    let red = scene
+        .material_names
+        .iter()
+        .position(|n| n == "red")
+        .unwrap() as u32;
+    let wall = scene.triangles.iter().find(|t| t.material == red).unwrap();
+    assert!(winding_normal(&wall.vertices).x < -0.99);
+}
+
+#[test]
+fn cornell_caustics_has_6_quads_and_2_spheres() {
+    let scene = load("cornell-caustics.toml");
+    assert_eq!(scene.triangles.len(), 12);
+    assert_eq!(scene.spheres.len(), 2);
+    let kind = |s: usize| scene.materials[scene.spheres[s].material as usize];
+    assert_eq!(kind(0).kind, MATERIAL_DIELECTRIC);
+    assert_eq!(kind(0).ior, 1.5);
+    assert_eq!(kind(1).kind, MATERIAL_MIRROR);
+    assert_eq!(kind(1).reflectance, [1.0; 3]);
+    assert_eq!(scene.spheres[0].center, Vec3::new(370.0, 90.0, 170.0));
+    assert_eq!(scene.spheres[1].radius, 90.0);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+}
+
+#[test]
+fn showcase_uses_every_feature() {
+    let scene = load("showcase.toml");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    // floor 2 + wall 2 + mirror 2 + box 12 + icosahedron 20 + triangle 1 + light 2
+    assert_eq!(scene.triangles.len(), 41);
+    assert_eq!(scene.spheres.len(), 1);
+    assert_eq!(scene.point_lights.len(), 1);
+    assert_eq!(scene.material_names.last().unwrap(), "light 0");
+    // The icosahedron (circumradius 1, scaled 0.4) stays outward-facing after its transform.
+    let copper = scene
+        .material_names
+        .iter()
+        .position(|n| n == "copper")
+        .unwrap() as u32;
+    let center = Vec3::new(0.9, 0.4, -0.9);
+    for t in scene.triangles.iter().filter(|t| t.material == copper) {
+        let centroid = (t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0;
+        assert!(winding_normal(&t.vertices).dot(centroid - center) > 0.0);
+        for v in t.vertices {
+            assert!(((v - center).length() - 0.4).abs() < 1e-5);
+        }
+    }
+}
