@@ -20,8 +20,8 @@ pub(crate) fn mib(bytes: u64) -> String {
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     #[error(
-        "no Vulkan loader found (libvulkan.so.1): {reason}; install libvulkan1 and \
-         mesa-vulkan-drivers, or use --backend cpu"
+        "no Vulkan loader found (libvulkan.so.1); install libvulkan1 and mesa-vulkan-drivers, or \
+         use --backend cpu (loader error: {reason})"
     )]
     NoLoader { reason: String },
 

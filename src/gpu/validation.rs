@@ -69,6 +69,8 @@ pub(crate) fn messenger_info(
 }
 
 /// Records one message as "severity: text (object names)". Never panics and never unwinds.
+// SAFETY: only the loader calls this, with the pointers described in the Vulkan spec for
+// PFN_vkDebugUtilsMessengerCallbackEXT and the user data set in `messenger_info`.
 unsafe extern "system" fn callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     _types: vk::DebugUtilsMessageTypeFlagsEXT,
