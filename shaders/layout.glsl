@@ -49,7 +49,9 @@ struct FrameParams {
     uint primitive_count;
     uint node_count;
     float total_light_power;
-    uint _pad[3];
+    uint photon_mapping;
+    uint gather_rays;
+    uint _pad;
 };
 
 struct DispatchRange {
@@ -72,6 +74,17 @@ struct GridParams {
     uint photon_count;
     float flux_scale;
     uint _pad[3];
+};
+
+struct EmitParams {
+    uint path_begin;
+    uint path_count;
+    uint total_paths;
+    uint max_depth;
+    uint global_capacity;
+    uint caustic_capacity;
+    uint pass;
+    uint caustics_only;
 };
 
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }

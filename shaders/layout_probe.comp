@@ -13,6 +13,9 @@ layout(std430, binding = 2) buffer Materials { Material materials[]; };
 layout(std430, binding = 3) buffer Lights { Light lights[]; };
 layout(std430, binding = 4) buffer Frames { FrameParams frames[]; };
 layout(std430, binding = 5) buffer Ranges { DispatchRange ranges[]; };
+layout(std430, binding = 6) buffer Photons { Photon photons[]; };
+layout(std430, binding = 7) buffer Grids { GridParams grids[]; };
+layout(std430, binding = 8) buffer Emits { EmitParams emits[]; };
 
 void main() {
     // Element 1 of each buffer becomes a field-by-field copy of element 0.
@@ -22,4 +25,7 @@ void main() {
     lights[1] = lights[0];
     frames[1] = frames[0];
     ranges[1] = ranges[0];
+    photons[1] = photons[0];
+    grids[1] = grids[0];
+    emits[1] = emits[0];
 }

@@ -17,6 +17,51 @@ vec3 primitive_normal(uint i, vec3 x) {
     return normalize(cross(load3(p.p1) - load3(p.p0), load3(p.p2) - load3(p.p0)));
 }
 
+// Orthonormal basis around unit n (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+void onb(vec3 n, out vec3 t, out vec3 b) {
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float c = n.x * n.y * a;
+    t = vec3(1.0 + s * n.x * n.x * a, s * c, -s * n.x);
+    b = vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+// Cosine-distributed direction around unit n (Malley's method): pdf cos(theta) / pi.
+vec3 cosine_direction(vec3 n, vec2 u) {
+    float r = sqrt(u.x);
+    float phi = 2.0 * PI * u.y;
+    vec3 t, b;
+    onb(n, t, b);
+    return normalize(r * cos(phi) * t + r * sin(phi) * b + sqrt(max(0.0, 1.0 - u.x)) * n);
+}
+
+// Uniform direction on the unit sphere.
+vec3 sphere_direction(vec2 u) {
+    float z = 1.0 - 2.0 * u.x;
+    float rho = sqrt(max(0.0, 1.0 - z * z));
+    float phi = 2.0 * PI * u.y;
+    return vec3(rho * cos(phi), rho * sin(phi), z);
+}
+
+// A point on light l, uniform by area (Turk 1990 for triangles), and the light's normal there;
+// a point light returns its position and a zero normal.
+vec3 sample_light_point(Light l, vec2 u, out vec3 normal) {
+    if (l.kind == LIGHT_TRIANGLE) {
+        float su = sqrt(u.x);
+        float b0 = 1.0 - su;
+        float b1 = u.y * su;
+        vec3 p0 = load3(l.p0), p1 = load3(l.p1), p2 = load3(l.p2);
+        normal = normalize(cross(p1 - p0, p2 - p0));
+        return b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2;
+    }
+    if (l.kind == LIGHT_SPHERE) {
+        normal = sphere_direction(u);
+        return load3(l.p0) + l.p1[0] * normal;
+    }
+    normal = vec3(0.0);
+    return load3(l.p0);
+}
+
 // Index of the light whose cdf interval holds u: lights are picked in proportion to power.
 uint pick_light(float u) {
     uint lo = 0u;
@@ -36,25 +81,8 @@ vec3 direct_light(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, u
     uint li = pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK));
     Light l = lights[li];
     vec2 u = rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
-    vec3 target;
-    vec3 ln = vec3(0.0);
-    if (l.kind == LIGHT_TRIANGLE) {
-        // Uniform point on the triangle (Turk 1990).
-        float su = sqrt(u.x);
-        float b0 = 1.0 - su;
-        float b1 = u.y * su;
-        vec3 p0 = load3(l.p0), p1 = load3(l.p1), p2 = load3(l.p2);
-        target = b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2;
-        ln = normalize(cross(p1 - p0, p2 - p0));
-    } else if (l.kind == LIGHT_SPHERE) {
-        float z = 1.0 - 2.0 * u.x;
-        float rho = sqrt(max(0.0, 1.0 - z * z));
-        float phi = 2.0 * PI * u.y;
-        ln = vec3(rho * cos(phi), rho * sin(phi), z);
-        target = load3(l.p0) + l.p1[0] * ln;
-    } else {
-        target = load3(l.p0);
-    }
+    vec3 ln;
+    vec3 target = sample_light_point(l, u, ln);
     vec3 to_light = target - x;
     float dist2 = dot(to_light, to_light);
     float dist = sqrt(dist2);

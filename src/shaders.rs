@@ -6,10 +6,5 @@ include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
 pub fn spirv(name: &str) -> Option<Vec<u32>> {
     let bytes = KERNELS.iter().find(|(n, _)| *n == name)?.1;
     // SPIR-V is a stream of little-endian words; copying avoids any alignment assumption.
-    Some(
-        bytes
-            .chunks_exact(4)
-            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
-            .collect(),
-    )
+    Some(bytes.chunks_exact(4).map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]])).collect())
 }

@@ -4,10 +4,7 @@
 use photonix::gpu::{list_devices, Buffer, GpuContext, GpuError, GpuOptions};
 
 fn gpu() -> GpuContext {
-    let options = GpuOptions {
-        device: None,
-        validation: true,
-    };
+    let options = GpuOptions { device: None, validation: true };
     GpuContext::new(&options).unwrap_or_else(|e| panic!("cannot open the GPU: {e}"))
 }
 
@@ -24,10 +21,8 @@ fn random_u32s(n: usize, mut state: u64) -> Vec<u32> {
 }
 
 fn test_add(gpu: &GpuContext) -> photonix::gpu::Kernel {
-    let spirv =
-        photonix::shaders::spirv("test_add").expect("build.rs compiles shaders/test_add.comp");
-    gpu.create_kernel("test_add", &spirv, 1, 8)
-        .expect("test_add matches its declared layout")
+    let spirv = photonix::shaders::spirv("test_add").expect("build.rs compiles shaders/test_add.comp");
+    gpu.create_kernel("test_add", &spirv, 1, 8).expect("test_add matches its declared layout")
 }
 
 fn add_push(count: u32, add: u32) -> Vec<u8> {
@@ -35,11 +30,7 @@ fn add_push(count: u32, add: u32) -> Vec<u8> {
 }
 
 fn groups_for(count: u32) -> [u32; 3] {
-    [
-        count.div_ceil(photonix::layout::constants::WORKGROUP_SIZE),
-        1,
-        1,
-    ]
+    [count.div_ceil(photonix::layout::constants::WORKGROUP_SIZE), 1, 1]
 }
 
 #[test]
@@ -60,25 +51,13 @@ fn upload_download_round_trips_random_data() {
             let ints = random_u32s(n, seed as u64 + 1);
             let buffer = gpu.upload("ints", &ints).unwrap();
             assert_eq!(buffer.size(), 4 * n as u64);
-            assert_eq!(
-                gpu.download::<u32>(&buffer).unwrap(),
-                ints,
-                "u32, n = {n}, staging {staging}"
-            );
+            assert_eq!(gpu.download::<u32>(&buffer).unwrap(), ints, "u32, n = {n}, staging {staging}");
 
             // Any bit pattern is an f32; compare bits so NaNs compare equal too.
-            let floats: Vec<f32> = random_u32s(n, seed as u64 + 100)
-                .into_iter()
-                .map(f32::from_bits)
-                .collect();
+            let floats: Vec<f32> = random_u32s(n, seed as u64 + 100).into_iter().map(f32::from_bits).collect();
             let buffer = gpu.upload("floats", &floats).unwrap();
             let back: Vec<f32> = gpu.download(&buffer).unwrap();
-            assert!(
-                back.iter()
-                    .map(|f| f.to_bits())
-                    .eq(floats.iter().map(|f| f.to_bits())),
-                "f32, n = {n}"
-            );
+            assert!(back.iter().map(|f| f.to_bits()).eq(floats.iter().map(|f| f.to_bits())), "f32, n = {n}");
         }
     }
 }
@@ -91,10 +70,7 @@ fn create_write_and_fill_zero_behave() {
         let buffer = gpu.create_buffer("scratch", 40).unwrap();
         assert_eq!(gpu.download::<u32>(&buffer).unwrap(), vec![0; 10]);
         gpu.write(&buffer, &[7u32, 8, 9]).unwrap();
-        assert_eq!(
-            gpu.download::<u32>(&buffer).unwrap(),
-            [7, 8, 9, 0, 0, 0, 0, 0, 0, 0]
-        );
+        assert_eq!(gpu.download::<u32>(&buffer).unwrap(), [7, 8, 9, 0, 0, 0, 0, 0, 0, 0]);
         gpu.fill_zero(&buffer).unwrap();
         assert_eq!(gpu.download::<u32>(&buffer).unwrap(), vec![0; 10]);
 
@@ -110,10 +86,7 @@ fn batched_dispatches_see_each_others_writes() {
     let gpu = gpu();
     let add = test_add(&gpu);
     let n = 10_000u32;
-    let start = random_u32s(n as usize, 7)
-        .into_iter()
-        .map(|v| v >> 4)
-        .collect::<Vec<_>>();
+    let start = random_u32s(n as usize, 7).into_iter().map(|v| v >> 4).collect::<Vec<_>>();
     let values = gpu.upload("values", &start).unwrap();
     let other = gpu.create_buffer("other", u64::from(n) * 4).unwrap();
     gpu.take_timings();
@@ -153,17 +126,7 @@ fn a_failing_recorder_submits_nothing() {
             r.dispatch(&add, &[], &add_push(2, 5), [1, 1, 1])
         })
         .unwrap_err();
-    assert!(
-        matches!(
-            err,
-            GpuError::BindingCount {
-                given: 0,
-                expected: 1,
-                ..
-            }
-        ),
-        "{err}"
-    );
+    assert!(matches!(err, GpuError::BindingCount { given: 0, expected: 1, .. }), "{err}");
     assert!(err.to_string().contains("`test_add`"), "{err}");
     assert_eq!(gpu.download::<u32>(&values).unwrap(), [1, 2]);
 }
@@ -173,29 +136,11 @@ fn dispatch_arguments_are_checked_against_the_kernel_and_device() {
     let gpu = gpu();
     let add = test_add(&gpu);
     let values = gpu.upload("values", &[1u32]).unwrap();
-    let err = gpu
-        .run("short push", |r| {
-            r.dispatch(&add, &[&values], &[0u8; 4], [1, 1, 1])
-        })
-        .unwrap_err();
-    assert!(
-        matches!(
-            err,
-            GpuError::PushConstantSize {
-                given: 4,
-                expected: 8,
-                ..
-            }
-        ),
-        "{err}"
-    );
+    let err = gpu.run("short push", |r| r.dispatch(&add, &[&values], &[0u8; 4], [1, 1, 1])).unwrap_err();
+    assert!(matches!(err, GpuError::PushConstantSize { given: 4, expected: 8, .. }), "{err}");
 
     let [max_x, _, _] = gpu.info().max_compute_workgroup_count;
-    let err = gpu
-        .run("huge", |r| {
-            r.dispatch(&add, &[&values], &add_push(1, 1), [max_x + 1, 1, 1])
-        })
-        .unwrap_err();
+    let err = gpu.run("huge", |r| r.dispatch(&add, &[&values], &add_push(1, 1), [max_x + 1, 1, 1])).unwrap_err();
     assert!(matches!(err, GpuError::TooManyGroups { .. }), "{err}");
     println!("{err}");
 
@@ -213,17 +158,8 @@ fn buffer_beyond_max_storage_buffer_range_is_refused() {
     let err = gpu.create_buffer("photons", limit + 1).unwrap_err();
     let message = err.to_string();
     println!("{message}");
-    assert!(matches!(
-        err,
-        GpuError::BufferTooLarge {
-            limit_name: "maxStorageBufferRange",
-            ..
-        }
-    ));
-    assert!(
-        message.contains("`photons`") && message.contains(&limit.to_string()),
-        "{message}"
-    );
+    assert!(matches!(err, GpuError::BufferTooLarge { limit_name: "maxStorageBufferRange", .. }));
+    assert!(message.contains("`photons`") && message.contains(&limit.to_string()), "{message}");
     // Exactly at the limit is fine (lavapipe: 128 MiB).
     if limit <= 256 << 20 {
         let buffer = gpu.create_buffer("photons", limit).unwrap();
@@ -237,12 +173,8 @@ fn validation_layer_reports_a_kernel_layout_mismatch() {
     let spirv = photonix::shaders::spirv("test_add").unwrap();
     // The shader declares 8 bytes of push constants; a layout without them is invalid, and only
     // the validation layer can tell.
-    let err = gpu
-        .create_kernel("test_add_no_push", &spirv, 1, 0)
-        .unwrap_err();
-    let GpuError::Validation(messages) = &err else {
-        panic!("expected a validation error, got {err}")
-    };
+    let err = gpu.create_kernel("test_add_no_push", &spirv, 1, 0).unwrap_err();
+    let GpuError::Validation(messages) = &err else { panic!("expected a validation error, got {err}") };
     println!("{err}");
     assert!(!messages.is_empty());
     // The kernel's debug name reaches the message.
@@ -257,12 +189,7 @@ fn validation_layer_reports_a_kernel_layout_mismatch() {
 fn unknown_device_name_lists_the_devices() {
     let devices = list_devices().unwrap();
     assert!(!devices.is_empty());
-    let err = GpuContext::new(&GpuOptions {
-        device: Some("no-such-gpu".into()),
-        validation: true,
-    })
-    .err()
-    .unwrap();
+    let err = GpuContext::new(&GpuOptions { device: Some("no-such-gpu".into()), validation: true }).err().unwrap();
     let message = err.to_string();
     println!("{message}");
     assert!(matches!(err, GpuError::DeviceNotFound { .. }), "{message}");
@@ -276,32 +203,16 @@ fn devices_can_be_chosen_by_index_or_name() {
     let devices = list_devices().unwrap();
     for d in &devices {
         println!("{}", d.describe());
-        assert!(
-            d.max_storage_buffer_range > 0
-                && d.subgroup_size > 0
-                && d.max_push_constants_size >= 128
-        );
+        assert!(d.max_storage_buffer_range > 0 && d.subgroup_size > 0 && d.max_push_constants_size >= 128);
         if d.api_version.starts_with("1.0") || d.api_version.starts_with("1.1") {
             continue;
         }
-        let by_index = GpuContext::new(&GpuOptions {
-            device: Some(d.index.to_string()),
-            validation: true,
-        })
-        .unwrap();
+        let by_index = GpuContext::new(&GpuOptions { device: Some(d.index.to_string()), validation: true }).unwrap();
         assert_eq!(by_index.info(), d);
         drop(by_index);
         let part = d.name.split_whitespace().next().unwrap().to_uppercase();
-        let by_name = GpuContext::new(&GpuOptions {
-            device: Some(part),
-            validation: true,
-        })
-        .unwrap();
-        assert!(by_name
-            .info()
-            .name
-            .to_lowercase()
-            .contains(&d.name.split_whitespace().next().unwrap().to_lowercase()));
+        let by_name = GpuContext::new(&GpuOptions { device: Some(part), validation: true }).unwrap();
+        assert!(by_name.info().name.to_lowercase().contains(&d.name.split_whitespace().next().unwrap().to_lowercase()));
     }
 }
 
@@ -331,9 +242,7 @@ fn objects_of_another_context_are_refused() {
 fn missing_driver_is_reported() {
     const CHILD: &str = "PHOTONIX_TEST_NO_DRIVER_CHILD";
     if std::env::var_os(CHILD).is_some() {
-        let err = GpuContext::new(&GpuOptions::default())
-            .err()
-            .expect("no driver is visible");
+        let err = GpuContext::new(&GpuOptions::default()).err().expect("no driver is visible");
         assert!(matches!(err, GpuError::NoDriver), "{err}");
         assert_eq!(
             err.to_string(),
@@ -343,12 +252,7 @@ fn missing_driver_is_reported() {
         return;
     }
     let output = std::process::Command::new(std::env::current_exe().unwrap())
-        .args([
-            "missing_driver_is_reported",
-            "--exact",
-            "--nocapture",
-            "--test-threads=1",
-        ])
+        .args(["missing_driver_is_reported", "--exact", "--nocapture", "--test-threads=1"])
         .env(CHILD, "1")
         .env("VK_DRIVER_FILES", "/nonexistent.json")
         .env("VK_ICD_FILENAMES", "/nonexistent.json")
@@ -356,8 +260,5 @@ fn missing_driver_is_reported() {
         .unwrap();
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success() && stdout.contains("1 passed"),
-        "child failed:\n{stdout}\n{stderr}"
-    );
+    assert!(output.status.success() && stdout.contains("1 passed"), "child failed:\n{stdout}\n{stderr}");
 }

@@ -101,9 +101,23 @@ fn glsl_struct_layouts_match_rust() {
             primitive_count,
             node_count,
             total_light_power,
+            photon_mapping,
+            gather_rays,
             _pad,
         }),
         rust_layout!(DispatchRange { row_begin, row_count, sample_begin, sample_count }),
+        rust_layout!(Photon { position, flux_rg, flux_b_dir }),
+        rust_layout!(GridParams { cell_size, radius, table_mask, photon_count, flux_scale, _pad }),
+        rust_layout!(EmitParams {
+            path_begin,
+            path_count,
+            total_paths,
+            max_depth,
+            global_capacity,
+            caustic_capacity,
+            pass,
+            caustics_only,
+        }),
     ];
     for (name, fields, size) in rust {
         let g = glsl.get(name).unwrap_or_else(|| panic!("struct {name} is missing from layout_probe.comp"));

@@ -25,21 +25,14 @@ fn pattern<T: Pod>(struct_index: u32) -> [T; 2] {
 fn check<T: Pod + PartialEq + std::fmt::Debug>(name: &str, sent: &[T; 2], back: &[T]) {
     assert_eq!(back.len(), 2, "{name}");
     assert_eq!(back[0], sent[0], "{name}: element 0 changed on the device");
-    assert_eq!(
-        back[1], back[0],
-        "{name}: the GLSL copy of element 0 differs, so the layouts disagree"
-    );
+    assert_eq!(back[1], back[0], "{name}: the GLSL copy of element 0 differs, so the layouts disagree");
 }
 
 #[test]
 fn gpu_copies_every_shared_struct_field_by_field() {
-    let gpu = GpuContext::new(&GpuOptions {
-        device: None,
-        validation: true,
-    })
-    .unwrap_or_else(|e| panic!("cannot open the GPU: {e}"));
-    let spirv = photonix::shaders::spirv("layout_probe")
-        .expect("build.rs compiles shaders/layout_probe.comp");
+    let gpu = GpuContext::new(&GpuOptions { device: None, validation: true })
+        .unwrap_or_else(|e| panic!("cannot open the GPU: {e}"));
+    let spirv = photonix::shaders::spirv("layout_probe").expect("build.rs compiles shaders/layout_probe.comp");
     let probe = gpu.create_kernel("layout_probe", &spirv, 6, 0).unwrap();
 
     let nodes = pattern::<BvhNode>(1);
@@ -57,39 +50,12 @@ fn gpu_copies_every_shared_struct_field_by_field() {
         gpu.upload("ranges", &ranges).unwrap(),
     ];
     let bound: Vec<_> = buffers.iter().collect();
-    gpu.run("layout_probe", |r| {
-        r.dispatch(&probe, &bound, &[], [1, 1, 1])
-    })
-    .unwrap();
+    gpu.run("layout_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
 
-    check(
-        "BvhNode",
-        &nodes,
-        &gpu.download::<BvhNode>(&buffers[0]).unwrap(),
-    );
-    check(
-        "Primitive",
-        &primitives,
-        &gpu.download::<Primitive>(&buffers[1]).unwrap(),
-    );
-    check(
-        "Material",
-        &materials,
-        &gpu.download::<Material>(&buffers[2]).unwrap(),
-    );
-    check(
-        "Light",
-        &lights,
-        &gpu.download::<Light>(&buffers[3]).unwrap(),
-    );
-    check(
-        "FrameParams",
-        &frames,
-        &gpu.download::<FrameParams>(&buffers[4]).unwrap(),
-    );
-    check(
-        "DispatchRange",
-        &ranges,
-        &gpu.download::<DispatchRange>(&buffers[5]).unwrap(),
-    );
+    check("BvhNode", &nodes, &gpu.download::<BvhNode>(&buffers[0]).unwrap());
+    check("Primitive", &primitives, &gpu.download::<Primitive>(&buffers[1]).unwrap());
+    check("Material", &materials, &gpu.download::<Material>(&buffers[2]).unwrap());
+    check("Light", &lights, &gpu.download::<Light>(&buffers[3]).unwrap());
+    check("FrameParams", &frames, &gpu.download::<FrameParams>(&buffers[4]).unwrap());
+    check("DispatchRange", &ranges, &gpu.download::<DispatchRange>(&buffers[5]).unwrap());
 }

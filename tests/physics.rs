@@ -29,7 +29,12 @@ fn quad(v: [Vec3; 4], material: u32) -> [Triangle; 2] {
 /// A square Lambertian light of radiance 10 one unit above a large diffuse plane of albedo 0.5,
 /// seen from straight above.
 fn light_over_plane() -> Scene {
-    let plane = [Vec3::new(-50.0, 0.0, -50.0), Vec3::new(-50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, 50.0), Vec3::new(50.0, 0.0, -50.0)];
+    let plane = [
+        Vec3::new(-50.0, 0.0, -50.0),
+        Vec3::new(-50.0, 0.0, 50.0),
+        Vec3::new(50.0, 0.0, 50.0),
+        Vec3::new(50.0, 0.0, -50.0),
+    ];
     let light = light_corners().map(|v| v.as_vec3());
     let mut triangles = quad(plane, 0).to_vec();
     triangles.extend(quad(light, 1));
@@ -97,7 +102,10 @@ fn check_against_lambert(image: &Image, backend: &str) {
     for (bx, by) in [(0, 0), (1, 3), (2, 6), (5, 1), (7, 7), (3, 0), (6, 4)] {
         let (rendered, analytic) = block_means(image, bx, by);
         let error = rendered / analytic - 1.0;
-        println!("{backend}: block ({bx}, {by}): rendered {rendered:.5}, Lambert {analytic:.5}, error {:+.3}%", 100.0 * error);
+        println!(
+            "{backend}: block ({bx}, {by}): rendered {rendered:.5}, Lambert {analytic:.5}, error {:+.3}%",
+            100.0 * error
+        );
         // 32768 light samples per block give a standard error near 0.2%; 1% is the target.
         assert!(error.abs() < 0.01, "{backend}: block ({bx}, {by}) off by {:.3}%", 100.0 * error);
     }
@@ -124,7 +132,9 @@ fn point_light_follows_inverse_square_law() {
     // cos(theta) = h / d, so L = rho / pi * I h / d^3.
     let mut scene = light_over_plane();
     scene.triangles.truncate(2);
-    scene.point_lights.push(photonix::scene::PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(30.0) });
+    scene
+        .point_lights
+        .push(photonix::scene::PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(30.0) });
     let buffers = common::buffers(&scene, SIZE, SIZE);
     let image = common::cpu_image(&buffers, 64);
     for (px, py) in [(5, 5), (32, 32), (60, 10), (20, 45)] {

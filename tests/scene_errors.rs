@@ -14,10 +14,7 @@ const LIGHT: &str = "[[lights]]\ntype = \"point\"\nposition = [0, 5, 0]\nintensi
 fn write_scene(text: &str) -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.toml");
-    std::fs::File::create(&path)
-        .unwrap()
-        .write_all(text.as_bytes())
-        .unwrap();
+    std::fs::File::create(&path).unwrap().write_all(text.as_bytes()).unwrap();
     (dir, path)
 }
 
@@ -54,60 +51,36 @@ fn unknown_field_names_it_and_suggests_the_closest() {
     let message = error_of(&text);
     assert_mentions(
         &message,
-        &[
-            "bad.toml:7:1:",
-            "unknown field `colour`",
-            "material \"wall\"",
-            "did you mean `reflectance`?",
-        ],
+        &["bad.toml:7:1:", "unknown field `colour`", "material \"wall\"", "did you mean `reflectance`?"],
     );
 
     let text = format!("{CAMERA}{WHITE}[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradious = 1\n");
     let message = error_of(&text);
-    assert_mentions(
-        &message,
-        &[
-            "bad.toml:12:1:",
-            "`radious`",
-            "shape 0 (\"ball\")",
-            "did you mean `radius`?",
-        ],
-    );
+    assert_mentions(&message, &["bad.toml:12:1:", "`radious`", "shape 0 (\"ball\")", "did you mean `radius`?"]);
 }
 
 #[test]
 fn unknown_field_in_a_transform_is_found() {
     let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"box\"\nmaterial = \"white\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\ntransform = {{ rotation = [0, 90, 0] }}\n");
     let message = error_of(&text);
-    assert_mentions(
-        &message,
-        &[
-            "bad.toml:12:",
-            "`rotation`",
-            "`transform` of shape 0",
-            "did you mean `rotate`?",
-        ],
-    );
+    assert_mentions(&message, &["bad.toml:12:", "`rotation`", "`transform` of shape 0", "did you mean `rotate`?"]);
 }
 
 #[test]
 fn wrong_value_type_names_the_field() {
-    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = \"big\"\n");
-    let message = error_of(&text);
-    assert_mentions(
-        &message,
-        &["bad.toml:11:", "shape 0", "`radius`", "expected a number"],
+    let text = format!(
+        "{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = \"big\"\n"
     );
+    let message = error_of(&text);
+    assert_mentions(&message, &["bad.toml:11:", "shape 0", "`radius`", "expected a number"]);
 }
 
 #[test]
 fn missing_mesh_file_says_where_it_looked() {
-    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"mesh\"\nmaterial = \"white\"\nfile = \"meshes/nope.obj\"\n");
+    let text =
+        format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"mesh\"\nmaterial = \"white\"\nfile = \"meshes/nope.obj\"\n");
     let message = error_of(&text);
-    assert_mentions(
-        &message,
-        &["bad.toml:10", "shape 0", "not found", "meshes/nope.obj"],
-    );
+    assert_mentions(&message, &["bad.toml:10", "shape 0", "not found", "meshes/nope.obj"]);
 }
 
 fn mesh_scene(obj: &str) -> String {
@@ -124,10 +97,7 @@ fn mesh_scene(obj: &str) -> String {
 #[test]
 fn malformed_obj_gives_the_obj_path_and_line() {
     let message = mesh_scene("v 0 0 0\nv 1 0 0\nv 0 one 0\nf 1 2 3\n");
-    assert_mentions(
-        &message,
-        &["thing.obj:3:", "vertex position", "bad.toml:10", "shape 0"],
-    );
+    assert_mentions(&message, &["thing.obj:3:", "vertex position", "bad.toml:10", "shape 0"]);
 
     let message = mesh_scene("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
     assert_mentions(&message, &["thing.obj", "does not exist", "bad.toml:10"]);
@@ -141,16 +111,12 @@ fn obj_without_triangles_is_an_error() {
 
 #[test]
 fn nan_and_infinity_are_rejected() {
-    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, nan, 0]\nradius = 1\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:10:", "`center`", "NaN", "finite"],
+    let text = format!(
+        "{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, nan, 0]\nradius = 1\n"
     );
+    assert_mentions(&error_of(&text), &["bad.toml:10:", "`center`", "NaN", "finite"]);
     let text = format!("{CAMERA}[materials.hot]\ntype = \"diffuse\"\nemission = [inf, 0, 0]\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:7:", "material \"hot\"", "`emission`", "inf"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"hot\"", "`emission`", "inf"]);
     let text = "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\nfov = -inf\n";
     assert_mentions(&error_of(text), &["bad.toml:4:", "[camera]", "`fov`"]);
 }
@@ -159,131 +125,69 @@ fn nan_and_infinity_are_rejected() {
 fn zero_or_negative_radius_is_rejected() {
     for radius in ["0", "-2.5"] {
         let text = format!("{CAMERA}{WHITE}[[shapes]]\nname = \"ball\"\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = {radius}\n");
-        assert_mentions(
-            &error_of(&text),
-            &["bad.toml:12:", "shape 0 (\"ball\")", "`radius`", "> 0"],
-        );
+        assert_mentions(&error_of(&text), &["bad.toml:12:", "shape 0 (\"ball\")", "`radius`", "> 0"]);
     }
 }
 
 #[test]
 fn ior_at_most_zero_is_rejected() {
     let text = format!("{CAMERA}[materials.glass]\ntype = \"dielectric\"\nior = 0\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:7:", "material \"glass\"", "`ior`", "> 0"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"glass\"", "`ior`", "> 0"]);
 }
 
 #[test]
 fn fov_outside_0_180_is_rejected() {
     for fov in ["0", "180", "200"] {
         let text = format!("[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\nfov = {fov}\n");
-        assert_mentions(
-            &error_of(&text),
-            &["bad.toml:4:", "[camera]", "`fov`", "between 0 and 180"],
-        );
+        assert_mentions(&error_of(&text), &["bad.toml:4:", "[camera]", "`fov`", "between 0 and 180"]);
     }
 }
 
 #[test]
 fn zero_resolution_is_rejected() {
     let text = format!("{CAMERA}resolution = [0, 256]\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:5:", "[camera]", "`resolution`", "at least 1"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:5:", "[camera]", "`resolution`", "at least 1"]);
 }
 
 #[test]
 fn zero_spp_is_rejected() {
     let text = format!("{CAMERA}\n[render]\nmax_depth = 4\nspp = 0\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:8:", "[render]", "`spp`", "at least 1"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:8:", "[render]", "`spp`", "at least 1"]);
 }
 
 #[test]
 fn reflectance_outside_0_1_is_rejected() {
-    let text =
-        format!("{CAMERA}[materials.wall]\ntype = \"diffuse\"\nreflectance = [0.5, 1.2, 0.5]\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:7:",
-            "material \"wall\"",
-            "`reflectance`",
-            "[0, 1]",
-        ],
-    );
+    let text = format!("{CAMERA}[materials.wall]\ntype = \"diffuse\"\nreflectance = [0.5, 1.2, 0.5]\n");
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"wall\"", "`reflectance`", "[0, 1]"]);
     let text = format!("{CAMERA}[materials.mirror]\ntype = \"mirror\"\ntint = -0.1\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:7:", "material \"mirror\"", "`tint`", "negative"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"mirror\"", "`tint`", "negative"]);
 }
 
 #[test]
 fn negative_emission_radiance_and_intensity_are_rejected() {
     let text = format!("{CAMERA}[materials.lamp]\ntype = \"diffuse\"\nemission = [1, -1, 1]\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:7:", "material \"lamp\"", "`emission`", "negative"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"lamp\"", "`emission`", "negative"]);
     let text = format!("{CAMERA}[[lights]]\ntype = \"area\"\nshape = \"sphere\"\ncenter = [0, 3, 0]\nradius = 0.5\nradiance = [-1, 0, 0]\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:10:", "light 0", "`radiance`", "negative"],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:10:", "light 0", "`radiance`", "negative"]);
     let text = format!("{CAMERA}[[lights]]\nname = \"bulb\"\ntype = \"point\"\nposition = [0, 3, 0]\nintensity = -5\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:9:",
-            "light 0 (\"bulb\")",
-            "`intensity`",
-            "negative",
-        ],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:9:", "light 0 (\"bulb\")", "`intensity`", "negative"]);
 }
 
 #[test]
 fn degenerate_triangles_and_quads_are_rejected() {
     let text = format!("{CAMERA}{WHITE}[[shapes]]\nname = \"sliver\"\ntype = \"triangle\"\nmaterial = \"white\"\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:11:",
-            "shape 0 (\"sliver\")",
-            "`vertices`",
-            "zero area",
-        ],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:11:", "shape 0 (\"sliver\")", "`vertices`", "zero area"]);
     let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 0]]\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:10:",
-            "shape 0",
-            "`vertices`",
-            "(v0, v2, v3)",
-            "zero area",
-        ],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:10:", "shape 0", "`vertices`", "(v0, v2, v3)", "zero area"]);
 }
 
 #[test]
 fn unknown_material_name_is_rejected_with_a_suggestion() {
-    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"whtie\"\ncenter = [0, 0, 0]\nradius = 1\n");
+    let text =
+        format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"whtie\"\ncenter = [0, 0, 0]\nradius = 1\n");
     assert_mentions(
         &error_of(&text),
-        &[
-            "bad.toml:9:",
-            "shape 0",
-            "unknown material \"whtie\"",
-            "did you mean \"white\"?",
-        ],
+        &["bad.toml:9:", "shape 0", "unknown material \"whtie\"", "did you mean \"white\"?"],
     );
 }
 
@@ -292,83 +196,46 @@ fn unknown_type_is_rejected_with_a_suggestion() {
     let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphear\"\nmaterial = \"white\"\n");
     assert_mentions(
         &error_of(&text),
-        &[
-            "bad.toml:8:",
-            "shape 0",
-            "unknown type \"sphear\"",
-            "did you mean \"sphere\"?",
-        ],
+        &["bad.toml:8:", "shape 0", "unknown type \"sphear\"", "did you mean \"sphere\"?"],
     );
     let text = format!("{CAMERA}[materials.m]\ntype = \"metal\"\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:6:",
-            "material \"m\"",
-            "unknown type \"metal\"",
-            "\"mirror\"",
-        ],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:6:", "material \"m\"", "unknown type \"metal\"", "\"mirror\""]);
     let text = format!("{CAMERA}[[lights]]\ntype = \"spot\"\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:6:", "light 0", "unknown type \"spot\""],
-    );
+    assert_mentions(&error_of(&text), &["bad.toml:6:", "light 0", "unknown type \"spot\""]);
 }
 
 #[test]
 fn field_of_another_type_is_rejected() {
-    let text =
-        format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\nradius = 1\n");
-    assert_mentions(
-        &error_of(&text),
-        &[
-            "bad.toml:10:",
-            "shape 0",
-            "`radius` does not apply to a quad",
-            "`vertices`",
-        ],
-    );
+    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\nradius = 1\n");
+    assert_mentions(&error_of(&text), &["bad.toml:10:", "shape 0", "`radius` does not apply to a quad", "`vertices`"]);
 }
 
 #[test]
 fn missing_field_points_at_its_table() {
-    let text =
-        format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\nradius = 1\n");
-    assert_mentions(
-        &error_of(&text),
-        &["bad.toml:7:", "shape 0", "missing field `center`"],
-    );
+    let text = format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\nradius = 1\n");
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "shape 0", "missing field `center`"]);
 }
 
 #[test]
 fn missing_camera_says_what_to_add() {
     let message = error_of(&format!("{WHITE}{LIGHT}"));
-    assert_mentions(
-        &message,
-        &["bad.toml", "no [camera]", "position", "look_at", "fov"],
-    );
+    assert_mentions(&message, &["bad.toml", "no [camera]", "position", "look_at", "fov"]);
 }
 
 #[test]
 fn unreadable_file_names_it() {
     let error = load_scene(Path::new("/nonexistent/scene.toml")).unwrap_err();
     assert!(matches!(error, SceneError::Read { .. }));
-    assert_mentions(
-        &error.to_string(),
-        &["/nonexistent/scene.toml", "cannot read"],
-    );
+    assert_mentions(&error.to_string(), &["/nonexistent/scene.toml", "cannot read"]);
 }
 
 #[test]
 fn scene_without_lights_loads_with_a_warning() {
-    let scene = ok_scene(&format!("{CAMERA}{WHITE}[[shapes]]\ntype = \"box\"\nmaterial = \"white\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n"));
+    let scene = ok_scene(&format!(
+        "{CAMERA}{WHITE}[[shapes]]\ntype = \"box\"\nmaterial = \"white\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n"
+    ));
     assert_eq!(scene.triangles.len(), 12);
-    assert!(
-        scene.warnings.iter().any(|w| w.contains("no lights")),
-        "{:?}",
-        scene.warnings
-    );
+    assert!(scene.warnings.iter().any(|w| w.contains("no lights")), "{:?}", scene.warnings);
     let lit = ok_scene(&format!("{CAMERA}{LIGHT}"));
     assert!(!lit.warnings.iter().any(|w| w.contains("no lights")));
 }
@@ -378,10 +245,7 @@ fn defaults_apply_when_fields_are_left_out() {
     let scene = ok_scene(&format!("{CAMERA}{WHITE}{LIGHT}"));
     assert_eq!((scene.camera.width, scene.camera.height), (512, 512));
     assert_eq!(scene.camera.up, glam::Vec3::Y);
-    assert_eq!(
-        (scene.render.spp, scene.render.max_depth, scene.render.seed),
-        (16, 16, 0)
-    );
+    assert_eq!((scene.render.spp, scene.render.max_depth, scene.render.seed), (16, 16, 0));
     assert_eq!(scene.materials[0].reflectance, [0.8; 3]);
     assert_eq!(scene.name, "ok");
 }

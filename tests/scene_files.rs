@@ -7,9 +7,7 @@ use photonix::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_MIRROR};
 use photonix::scene::{load_scene, Scene};
 
 fn load(name: &str) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenes")
-        .join(name);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
     load_scene(&path).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -31,11 +29,8 @@ fn cornell_box_has_16_quads_and_its_light() {
     assert_eq!((scene.render.spp, scene.render.max_depth), (64, 16));
 
     // The light is the last quad: black, emitting (17, 12, 4), facing down.
-    let emitting: Vec<_> = scene
-        .triangles
-        .iter()
-        .filter(|t| scene.materials[t.material as usize].emission != [0.0; 3])
-        .collect();
+    let emitting: Vec<_> =
+        scene.triangles.iter().filter(|t| scene.materials[t.material as usize].emission != [0.0; 3]).collect();
     assert_eq!(emitting.len(), 2);
     for t in emitting {
         let m = &scene.materials[t.material as usize];
@@ -50,21 +45,13 @@ fn cornell_quads_keep_their_vertex_order() {
     let scene = load("cornell-box.toml");
     // Floor [v0..v3] = (552.8,0,0) (0,0,0) (0,0,559.2) (549.6,0,559.2): triangles (v0,v1,v2),
     // (v0,v2,v3), winding normal +y (into the box).
-    let (v0, v1, v2, v3) = (
-        Vec3::new(552.8, 0.0, 0.0),
-        Vec3::ZERO,
-        Vec3::new(0.0, 0.0, 559.2),
-        Vec3::new(549.6, 0.0, 559.2),
-    );
+    let (v0, v1, v2, v3) =
+        (Vec3::new(552.8, 0.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, 559.2), Vec3::new(549.6, 0.0, 559.2));
     assert_eq!(scene.triangles[0].vertices, [v0, v1, v2]);
     assert_eq!(scene.triangles[1].vertices, [v0, v2, v3]);
     assert!(winding_normal(&scene.triangles[0].vertices).abs_diff_eq(Vec3::Y, 1e-6));
     // The red wall's normal points into the box (-x), per the reference.
-    let red = scene
-        .material_names
-        .iter()
-        .position(|n| n == "red")
-        .unwrap() as u32;
+    let red = scene.material_names.iter().position(|n| n == "red").unwrap() as u32;
     let wall = scene.triangles.iter().find(|t| t.material == red).unwrap();
     assert!(winding_normal(&wall.vertices).x < -0.99);
 }
@@ -94,11 +81,7 @@ fn showcase_uses_every_feature() {
     assert_eq!(scene.point_lights.len(), 1);
     assert_eq!(scene.material_names.last().unwrap(), "light 0");
     // The icosahedron (circumradius 1, scaled 0.4) stays outward-facing after its transform.
-    let copper = scene
-        .material_names
-        .iter()
-        .position(|n| n == "copper")
-        .unwrap() as u32;
+    let copper = scene.material_names.iter().position(|n| n == "copper").unwrap() as u32;
     let center = Vec3::new(0.9, 0.4, -0.9);
     for t in scene.triangles.iter().filter(|t| t.material == copper) {
         let centroid = (t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0;

@@ -13,7 +13,9 @@ pub fn grid_cell(p: Vec3, cell_size: f32) -> IVec3 {
 
 /// Spatial hash of Teschner et al. 2003; the three primes are theirs.
 pub fn grid_hash(c: IVec3, table_mask: u32) -> u32 {
-    ((c.x as u32).wrapping_mul(73_856_093) ^ (c.y as u32).wrapping_mul(19_349_663) ^ (c.z as u32).wrapping_mul(83_492_791))
+    ((c.x as u32).wrapping_mul(73_856_093)
+        ^ (c.y as u32).wrapping_mul(19_349_663)
+        ^ (c.z as u32).wrapping_mul(83_492_791))
         & table_mask
 }
 
@@ -29,11 +31,8 @@ pub fn grid_lookup_buckets(x: Vec3, g: &GridParams) -> ([u32; 8], usize) {
     let q = x / g.cell_size;
     let c = q.floor().as_ivec3();
     let f = q - c.as_vec3();
-    let step = IVec3::new(
-        if f.x >= 0.5 { 1 } else { -1 },
-        if f.y >= 0.5 { 1 } else { -1 },
-        if f.z >= 0.5 { 1 } else { -1 },
-    );
+    let step =
+        IVec3::new(if f.x >= 0.5 { 1 } else { -1 }, if f.y >= 0.5 { 1 } else { -1 }, if f.z >= 0.5 { 1 } else { -1 });
     let mut buckets = [0u32; 8];
     let mut n = 0;
     for k in 0..8u32 {

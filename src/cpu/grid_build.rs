@@ -8,9 +8,10 @@ use super::grid::{grid_cell, grid_hash, photon_order};
 use crate::layout::{GridParams, Photon};
 
 /// Buckets for `photon_count` photons: a power of two at least twice the count (load factor
-/// at most 1/2 keeps collisions rare), and at least 1024.
+/// at most 1/2 keeps collisions rare), at least 1024, and at most 2^24 so that the bucket starts
+/// (4 bytes each) fit one 128 MiB storage binding; past 8 M photons the load factor grows.
 pub fn table_size_for(photon_count: u32) -> u32 {
-    (photon_count.max(512) as u64 * 2).next_power_of_two().min(1 << 31) as u32
+    (photon_count.max(512) as u64 * 2).next_power_of_two().min(1 << 24) as u32
 }
 
 pub fn grid_params(radius: f32, photon_count: u32, flux_scale: f32) -> GridParams {
@@ -99,7 +100,8 @@ mod tests {
         for (case, (radius, table_mask)) in
             [(0.05, 16383u32), (0.3, 16383), (1.0, 1023), (0.5, 0), (0.2, 7), (2.5, 65535)].into_iter().enumerate()
         {
-            let g = GridParams { cell_size: 2.0 * radius, radius, table_mask, photon_count: 5000, ..Default::default() };
+            let g =
+                GridParams { cell_size: 2.0 * radius, radius, table_mask, photon_count: 5000, ..Default::default() };
             let (sorted, starts) = build_grid(&photons, &g);
             assert_eq!(*starts.last().unwrap(), 5000);
             for q in 0..300u32 {

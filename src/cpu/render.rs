@@ -1,8 +1,10 @@
-//! Radiance of camera paths, accumulated per pixel; twin of `shaders/render.comp`.
+//! The four terms of each pixel, accumulated over rows and samples; twin of
+//! `shaders/render.comp`.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::gather::{caustic_light, indirect_light};
 use super::rng::{rand1, rand2};
 use super::shading::{camera_direction, direct_light, fresnel_dielectric, primitive_normal, reflect};
 use super::trace::trace_ray;
@@ -10,9 +12,9 @@ use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::DispatchRange;
 
-/// Radiance carried by the camera path of `sample` through pixel (`px`, `py`); adds the rays it
-/// casts (closest-hit and shadow) to `rays`.
-pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, rays: &mut u32) -> Vec3 {
+/// Adds the four terms of the camera path of `sample` through pixel (`px`, `py`) to `terms`
+/// (indexed by `LAYER_*`) and the rays it casts to `rays`.
+pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
     let jitter = rand2(stream, sample, f.seed, RNG_PIXEL_X);
@@ -21,7 +23,6 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, rays: &mut u32) ->
     let mut o = Vec3::from(f.camera_position);
     let mut d = camera_direction(s, sx, sy);
     let mut throughput = Vec3::ONE;
-    let mut result = Vec3::ZERO;
     for depth in 0..f.max_depth {
         *rays += 1;
         let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
@@ -32,17 +33,27 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, rays: &mut u32) ->
         let n = primitive_normal(s, prim, x);
         let m = &s.materials[s.primitives[prim as usize].material as usize];
         let front = n.dot(d) < 0.0;
-        // Emission leaves the front face only; diffuse vertices end the path and light
-        // sampling covers them, so emission met by a camera path is always counted.
+        // Everything a mirror or glass shows is the specular term.
+        let layer = |own: u32| (if depth > 0 { LAYER_SPECULAR } else { own }) as usize;
+        // Emission leaves the front face only; it counts wherever a camera path meets it, since
+        // diffuse vertices end the path and light sampling covers them.
         if front {
-            result += throughput * Vec3::from(m.emission);
+            terms[layer(LAYER_DIRECT)] += throughput * Vec3::from(m.emission);
         }
         let nf = if front { n } else { -n };
         let dim = depth * RNG_DIMS_PER_BOUNCE;
         if m.kind == MATERIAL_DIFFUSE {
             let albedo = Vec3::from(m.reflectance);
-            if albedo != Vec3::ZERO && f.light_count > 0 {
-                result += throughput * direct_light(s, x, nf, albedo, stream, sample, dim, rays);
+            if albedo == Vec3::ZERO {
+                break;
+            }
+            let direct = direct_light(s, x, nf, albedo, stream, sample, dim, rays);
+            terms[layer(LAYER_DIRECT)] += throughput * direct;
+            if f.photon_mapping != 0 {
+                let caustics = caustic_light(s, x, nf, albedo);
+                let indirect = indirect_light(s, x, nf, albedo, stream, sample, rays);
+                terms[layer(LAYER_CAUSTICS)] += throughput * caustics;
+                terms[layer(LAYER_INDIRECT)] += throughput * indirect;
             }
             break;
         }
@@ -65,25 +76,26 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, rays: &mut u32) ->
             o = x - nf * f.ray_epsilon;
         }
     }
-    result
 }
 
-/// Adds the samples of `range` to `accumulation` (one `[r, g, b, rays]` per pixel of the band),
-/// exactly as one dispatch of the `render` kernel does.
+/// Adds the samples of `range` to `accumulation` (`LAYER_COUNT` `[r, g, b, w]` per pixel of the
+/// band; w of the direct layer counts rays), exactly as one dispatch of the kernel does.
 pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]]) {
-    let width = s.frame.width as usize;
-    accumulation.par_chunks_mut(width).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
+    let row_len = (s.frame.width * LAYER_COUNT) as usize;
+    accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
         let py = range.row_begin + row as u32;
-        for (px, acc) in pixels.iter_mut().enumerate() {
-            let mut sum = Vec3::ZERO;
+        for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
+            let mut terms = [Vec3::ZERO; 4];
             let mut rays = 0;
             for sample in range.sample_begin..range.sample_begin + range.sample_count {
-                sum += radiance(s, px as u32, py, sample, &mut rays);
+                radiance(s, px as u32, py, sample, &mut terms, &mut rays);
             }
-            acc[0] += sum.x;
-            acc[1] += sum.y;
-            acc[2] += sum.z;
-            acc[3] += rays as f32;
+            for (layer, term) in acc.iter_mut().zip(terms) {
+                layer[0] += term.x;
+                layer[1] += term.y;
+                layer[2] += term.z;
+            }
+            acc[LAYER_DIRECT as usize][3] += rays as f32;
         }
     });
 }

@@ -8,6 +8,7 @@ use super::rng::{rand1, rand2};
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
+use crate::layout::Light;
 
 /// Primary ray direction through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row.
 pub fn camera_direction(s: &SceneView, sx: f32, sy: f32) -> Vec3 {
@@ -22,6 +23,49 @@ pub fn primitive_normal(s: &SceneView, i: u32, x: Vec3) -> Vec3 {
         return (x - Vec3::from(p.p0)).normalize();
     }
     (Vec3::from(p.p1) - Vec3::from(p.p0)).cross(Vec3::from(p.p2) - Vec3::from(p.p0)).normalize()
+}
+
+/// Orthonormal basis around unit `n` (Duff et al. 2017, "Building an Orthonormal Basis, Revisited").
+pub fn onb(n: Vec3) -> (Vec3, Vec3) {
+    let s = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (s + n.z);
+    let c = n.x * n.y * a;
+    (Vec3::new(1.0 + s * n.x * n.x * a, s * c, -s * n.x), Vec3::new(c, s + n.y * n.y * a, -n.y))
+}
+
+/// Cosine-distributed direction around unit `n` (Malley's method): pdf cos(theta) / pi.
+pub fn cosine_direction(n: Vec3, u: [f32; 2]) -> Vec3 {
+    let r = u[0].sqrt();
+    let phi = 2.0 * PI * u[1];
+    let (t, b) = onb(n);
+    (r * phi.cos() * t + r * phi.sin() * b + (1.0 - u[0]).max(0.0).sqrt() * n).normalize()
+}
+
+/// Uniform direction on the unit sphere.
+pub fn sphere_direction(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let rho = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(rho * phi.cos(), rho * phi.sin(), z)
+}
+
+/// A point on light `l`, uniform by area (Turk 1990 for triangles), and the light's normal
+/// there; a point light gives its position and a zero normal.
+pub fn sample_light_point(l: &Light, u: [f32; 2]) -> (Vec3, Vec3) {
+    match l.kind {
+        LIGHT_TRIANGLE => {
+            let su = u[0].sqrt();
+            let b0 = 1.0 - su;
+            let b1 = u[1] * su;
+            let (p0, p1, p2) = (Vec3::from(l.p0), Vec3::from(l.p1), Vec3::from(l.p2));
+            (b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2, (p1 - p0).cross(p2 - p0).normalize())
+        }
+        LIGHT_SPHERE => {
+            let n = sphere_direction(u);
+            (Vec3::from(l.p0) + l.p1[0] * n, n)
+        }
+        _ => (Vec3::from(l.p0), Vec3::ZERO),
+    }
 }
 
 /// Index of the light whose cdf interval holds `u`: lights are picked in proportion to power.
@@ -64,24 +108,7 @@ pub fn direct_light(
     let li = pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK));
     let l = &s.lights[li as usize];
     let u = rand2(stream, sample, f.seed, dim + RNG_LIGHT_U);
-    let (target, ln) = match l.kind {
-        LIGHT_TRIANGLE => {
-            // Uniform point on the triangle (Turk 1990).
-            let su = u[0].sqrt();
-            let b0 = 1.0 - su;
-            let b1 = u[1] * su;
-            let (p0, p1, p2) = (Vec3::from(l.p0), Vec3::from(l.p1), Vec3::from(l.p2));
-            (b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2, (p1 - p0).cross(p2 - p0).normalize())
-        }
-        LIGHT_SPHERE => {
-            let z = 1.0 - 2.0 * u[0];
-            let rho = (1.0 - z * z).max(0.0).sqrt();
-            let phi = 2.0 * PI * u[1];
-            let ln = Vec3::new(rho * phi.cos(), rho * phi.sin(), z);
-            (Vec3::from(l.p0) + l.p1[0] * ln, ln)
-        }
-        _ => (Vec3::from(l.p0), Vec3::ZERO),
-    };
+    let (target, ln) = sample_light_point(l, u);
     let to_light = target - x;
     let dist2 = to_light.dot(to_light);
     let dist = dist2.sqrt();

@@ -64,29 +64,18 @@ impl Buffer {
             });
         }
         let device = &shared.device;
-        let info = vk::BufferCreateInfo::default()
-            .size(vk_size)
-            .usage(usage)
-            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        let info = vk::BufferCreateInfo::default().size(vk_size).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
         // SAFETY: `info` is a valid create info and the device outlives the buffer (`shared`).
         let handle = unsafe { device.create_buffer(&info, None) }
             .map_err(|e| GpuError::vk_alloc("vkCreateBuffer", name, size, e))?;
         // From here on, `buffer`'s Drop cleans up whatever part was made.
-        let mut buffer = Buffer {
-            name: name.to_string(),
-            size,
-            vk_size,
-            handle,
-            allocation: None,
-            shared: shared.clone(),
-        };
+        let mut buffer =
+            Buffer { name: name.to_string(), size, vk_size, handle, allocation: None, shared: shared.clone() };
         // SAFETY: `handle` is a live buffer of this device.
         let requirements = unsafe { device.get_buffer_memory_requirements(handle) };
         let allocation = {
             let mut guard = shared.allocator();
-            let allocator = guard
-                .as_mut()
-                .expect("the allocator lives as long as any Arc of Shared");
+            let allocator = guard.as_mut().expect("the allocator lives as long as any Arc of Shared");
             allocator
                 .allocate(&AllocationCreateDesc {
                     name,
@@ -99,8 +88,7 @@ impl Buffer {
         };
         // SAFETY: the memory range comes from the allocator for exactly these requirements and
         // the buffer has no memory bound yet.
-        let bound =
-            unsafe { device.bind_buffer_memory(handle, allocation.memory(), allocation.offset()) };
+        let bound = unsafe { device.bind_buffer_memory(handle, allocation.memory(), allocation.offset()) };
         buffer.allocation = Some(allocation);
         bound.map_err(|e| GpuError::vk_alloc("vkBindBufferMemory", name, size, e))?;
         shared.set_name(handle, name);
@@ -110,8 +98,7 @@ impl Buffer {
     /// The host address of the buffer's memory, when it is mapped and coherent.
     fn host_ptr(&self) -> Option<*mut u8> {
         let allocation = self.allocation.as_ref()?;
-        let coherent =
-            vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+        let coherent = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
         if !allocation.memory_properties().contains(coherent) {
             return None;
         }
@@ -132,21 +119,14 @@ impl Buffer {
         unsafe {
             std::ptr::copy_nonoverlapping(bytes.as_ptr(), ptr, bytes.len());
             if zero_to > bytes.len() as u64 {
-                std::ptr::write_bytes(
-                    ptr.add(bytes.len()),
-                    0,
-                    (zero_to - bytes.len() as u64) as usize,
-                );
+                std::ptr::write_bytes(ptr.add(bytes.len()), 0, (zero_to - bytes.len() as u64) as usize);
             }
         }
     }
 
     /// Copies the first `out.len()` bytes of the buffer through the mapping.
     fn read_mapped(&self, ptr: *const u8, out: &mut [u8]) {
-        assert!(
-            out.len() as u64 <= self.vk_size,
-            "callers check sizes against the buffer"
-        );
+        assert!(out.len() as u64 <= self.vk_size, "callers check sizes against the buffer");
         // SAFETY: as in `write_mapped`; the GPU's writes were made visible to the host by the
         // barrier at the end of every submission and the fence wait.
         unsafe { std::ptr::copy_nonoverlapping(ptr, out.as_mut_ptr(), out.len()) };
@@ -155,10 +135,7 @@ impl Buffer {
 
 impl std::fmt::Debug for Buffer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Buffer")
-            .field("name", &self.name)
-            .field("size", &self.size)
-            .finish()
+        f.debug_struct("Buffer").field("name", &self.name).field("size", &self.size).finish()
     }
 }
 
@@ -243,11 +220,7 @@ impl GpuContext {
             return Ok(Vec::new());
         }
         if !buffer.size.is_multiple_of(element_size as u64) {
-            return Err(GpuError::ElementSizeMismatch {
-                name: buffer.name.clone(),
-                size: buffer.size,
-                element_size,
-            });
+            return Err(GpuError::ElementSizeMismatch { name: buffer.name.clone(), size: buffer.size, element_size });
         }
         let mut out = vec![T::zeroed(); (buffer.size / element_size as u64) as usize];
         if out.is_empty() {
@@ -272,9 +245,7 @@ impl GpuContext {
                 // buffer is recording.
                 unsafe { device.cmd_copy_buffer(cb, buffer.handle, readback.handle, &region) };
             })?;
-            let ptr = readback
-                .host_ptr()
-                .expect("GpuToCpu memory is host-visible, coherent and mapped");
+            let ptr = readback.host_ptr().expect("GpuToCpu memory is host-visible, coherent and mapped");
             readback.read_mapped(ptr, dst);
         }
         self.shared.check_validation()?;
@@ -302,13 +273,7 @@ impl GpuContext {
     }
 
     /// Writes `bytes` at offset 0 and zeroes the buffer from there up to `zero_to` bytes.
-    fn write_bytes(
-        &self,
-        buffer: &Buffer,
-        bytes: &[u8],
-        zero_to: u64,
-        label: &str,
-    ) -> Result<(), GpuError> {
+    fn write_bytes(&self, buffer: &Buffer, bytes: &[u8], zero_to: u64, label: &str) -> Result<(), GpuError> {
         if let Some(ptr) = self.direct_ptr(buffer) {
             let _submitter = self.lock_submitter();
             buffer.write_mapped(ptr, bytes, zero_to);
@@ -325,9 +290,7 @@ impl GpuContext {
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
         )?;
-        let ptr = staging
-            .host_ptr()
-            .expect("CpuToGpu memory is host-visible, coherent and mapped");
+        let ptr = staging.host_ptr().expect("CpuToGpu memory is host-visible, coherent and mapped");
         staging.write_mapped(ptr, bytes, copy_size);
         let region = [vk::BufferCopy::default().size(copy_size)];
         self.one_shot(label, |device, cb| {

@@ -49,9 +49,7 @@ impl InstanceOwner {
     /// debug messenger when `validation` is on.
     pub(crate) fn new(validation: bool) -> Result<InstanceOwner, GpuError> {
         // SAFETY: loading libvulkan.so.1 runs its initialisers; the system loader is trusted.
-        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::NoLoader {
-            reason: e.to_string(),
-        })?;
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| GpuError::NoLoader { reason: e.to_string() })?;
         // SAFETY: the entry holds a loaded loader; vkEnumerateInstanceVersion has no preconditions.
         let loader_version = match unsafe { entry.try_enumerate_instance_version() } {
             Ok(Some(v)) => v,
@@ -59,19 +57,13 @@ impl InstanceOwner {
             Err(e) => return Err(GpuError::vk("vkEnumerateInstanceVersion", "startup", e)),
         };
         if loader_version < vk::API_VERSION_1_1 {
-            return Err(GpuError::LoaderTooOld {
-                found: version_string(loader_version),
-            });
+            return Err(GpuError::LoaderTooOld { found: version_string(loader_version) });
         }
 
         // SAFETY: as above; `None` asks for the extensions of the loader and implicit layers.
-        let available =
-            unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
-        let has_extension = |name: &CStr| {
-            available
-                .iter()
-                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
-        };
+        let available = unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+        let has_extension =
+            |name: &CStr| available.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
 
         let mut layers = Vec::new();
         let mut extensions = Vec::new();
@@ -106,21 +98,13 @@ impl InstanceOwner {
         }
         // SAFETY: every pointer in `create_info` refers to locals that outlive the call, and the
         // messenger's user data is `log`, which the returned owner keeps alive.
-        let instance =
-            unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
-                vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => {
-                    GpuError::NoDriver
-                }
-                vk::Result::ERROR_LAYER_NOT_PRESENT => GpuError::ValidationLayerMissing,
-                e => GpuError::vk("vkCreateInstance", "startup", e),
-            })?;
+        let instance = unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => GpuError::NoDriver,
+            vk::Result::ERROR_LAYER_NOT_PRESENT => GpuError::ValidationLayerMissing,
+            e => GpuError::vk("vkCreateInstance", "startup", e),
+        })?;
 
-        let mut owner = InstanceOwner {
-            entry,
-            instance,
-            messenger: None,
-            log,
-        };
+        let mut owner = InstanceOwner { entry, instance, messenger: None, log };
         if validation {
             let loader = ash::ext::debug_utils::Instance::new(&owner.entry, &owner.instance);
             let info = validation::messenger_info(&owner.log);
@@ -136,13 +120,10 @@ impl InstanceOwner {
     /// The physical devices, in the loader's order; none at all is [`GpuError::NoDriver`].
     pub(crate) fn physical_devices(&self) -> Result<Vec<vk::PhysicalDevice>, GpuError> {
         // SAFETY: the instance is valid for the lifetime of `self`.
-        let devices =
-            unsafe { self.instance.enumerate_physical_devices() }.map_err(|e| match e {
-                vk::Result::ERROR_INITIALIZATION_FAILED | vk::Result::ERROR_INCOMPATIBLE_DRIVER => {
-                    GpuError::NoDriver
-                }
-                e => GpuError::vk("vkEnumeratePhysicalDevices", "startup", e),
-            })?;
+        let devices = unsafe { self.instance.enumerate_physical_devices() }.map_err(|e| match e {
+            vk::Result::ERROR_INITIALIZATION_FAILED | vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDriver,
+            e => GpuError::vk("vkEnumeratePhysicalDevices", "startup", e),
+        })?;
         if devices.is_empty() {
             return Err(GpuError::NoDriver);
         }
@@ -196,14 +177,8 @@ impl Features {
             (self.storage_buffer8_bit_access, "storageBuffer8BitAccess"),
             (self.scalar_block_layout, "scalarBlockLayout"),
             (self.shader_buffer_int64_atomics, "shaderBufferInt64Atomics"),
-            (
-                self.shader_buffer_float32_atomic_add,
-                "shaderBufferFloat32AtomicAdd",
-            ),
-            (
-                self.shader_shared_float32_atomic_add,
-                "shaderSharedFloat32AtomicAdd",
-            ),
+            (self.shader_buffer_float32_atomic_add, "shaderBufferFloat32AtomicAdd"),
+            (self.shader_shared_float32_atomic_add, "shaderSharedFloat32AtomicAdd"),
             (self.host_query_reset, "hostQueryReset"),
             (self.timeline_semaphore, "timelineSemaphore"),
         ]
@@ -226,11 +201,7 @@ pub(crate) struct Candidate {
 }
 
 /// Reads the properties, limits, features and queues of `physical`.
-pub(crate) fn describe_device(
-    instance: &ash::Instance,
-    physical: vk::PhysicalDevice,
-    index: usize,
-) -> Candidate {
+pub(crate) fn describe_device(instance: &ash::Instance, physical: vk::PhysicalDevice, index: usize) -> Candidate {
     // SAFETY (all calls below): `physical` came from this instance's device list; the structure
     // chains point at locals that outlive each call.
     let base = unsafe { instance.get_physical_device_properties(physical) };
@@ -240,9 +211,7 @@ pub(crate) fn describe_device(
     let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
     let mut maintenance3 = vk::PhysicalDeviceMaintenance3Properties::default();
     let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default()
-        .push_next(&mut subgroup)
-        .push_next(&mut maintenance3);
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut subgroup).push_next(&mut maintenance3);
     if is_1_2 {
         props2 = props2.push_next(&mut driver);
     }
@@ -251,13 +220,8 @@ pub(crate) fn describe_device(
     let props = props2.properties;
 
     // SAFETY: see above.
-    let extensions =
-        unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
-    let has_extension = |name: &CStr| {
-        extensions
-            .iter()
-            .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name))
-    };
+    let extensions = unsafe { instance.enumerate_device_extension_properties(physical) }.unwrap_or_default();
+    let has_extension = |name: &CStr| extensions.iter().any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == name));
     let atomic_float_extension = has_extension(ash::ext::shader_atomic_float::NAME);
 
     let mut v11 = vk::PhysicalDeviceVulkan11Features::default();
@@ -298,11 +262,7 @@ pub(crate) fn describe_device(
         .filter(|(_, f)| f.queue_flags.contains(vk::QueueFlags::COMPUTE) && f.queue_count > 0)
         .map(|(i, f)| (i as u32, f.timestamp_valid_bits))
         .collect();
-    let queue_family = compute
-        .iter()
-        .copied()
-        .find(|(_, bits)| *bits > 0)
-        .or(compute.first().copied());
+    let queue_family = compute.iter().copied().find(|(_, bits)| *bits > 0).or(compute.first().copied());
 
     // SAFETY: see above.
     let memory = unsafe { instance.get_physical_device_memory_properties(physical) };
@@ -313,19 +273,10 @@ pub(crate) fn describe_device(
         .map(|h| h.size)
         .sum();
 
-    let name = props
-        .device_name_as_c_str()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = props.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let driver_text = if is_1_2 {
-        let driver_name = driver
-            .driver_name_as_c_str()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let driver_info = driver
-            .driver_info_as_c_str()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let driver_name = driver.driver_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let driver_info = driver.driver_info_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         if driver_info.is_empty() {
             driver_name
         } else {
@@ -351,37 +302,21 @@ pub(crate) fn describe_device(
         device_local_heap_bytes,
         features: features.names(),
     };
-    Candidate {
-        physical,
-        info,
-        api_version,
-        device_type: props.device_type,
-        features,
-        queue_family,
-    }
+    Candidate { physical, info, api_version, device_type: props.device_type, features, queue_family }
 }
 
 /// Every Vulkan device the loader finds, for `photonix devices`.
 pub fn list_devices() -> Result<Vec<DeviceInfo>, GpuError> {
     let owner = InstanceOwner::new(false)?;
     let devices = owner.physical_devices()?;
-    Ok(devices
-        .into_iter()
-        .enumerate()
-        .map(|(i, pd)| describe_device(&owner.instance, pd, i).info)
-        .collect())
+    Ok(devices.into_iter().enumerate().map(|(i, pd)| describe_device(&owner.instance, pd, i).info).collect())
 }
 
 /// "  0: llvmpipe (LLVM 15.0.6, 256 bits) (CPU)" lines, for error messages.
 fn device_list(candidates: &[Candidate]) -> String {
     candidates
         .iter()
-        .map(|c| {
-            format!(
-                "  {}: {} ({})",
-                c.info.index, c.info.name, c.info.device_type
-            )
-        })
+        .map(|c| format!("  {}: {} ({})", c.info.index, c.info.name, c.info.device_type))
         .collect::<Vec<_>>()
         .join("\n")
 }
@@ -391,21 +326,12 @@ fn choose_device(candidates: &[Candidate], requested: Option<&str>) -> Result<us
     let chosen = match requested.map(str::trim).filter(|r| !r.is_empty()) {
         Some(requested) => {
             let lower = requested.to_lowercase();
-            let by_index = requested
-                .parse::<usize>()
-                .ok()
-                .filter(|&i| i < candidates.len());
-            let by_name = || {
-                candidates
-                    .iter()
-                    .position(|c| c.info.name.to_lowercase().contains(&lower))
-            };
-            by_index
-                .or_else(by_name)
-                .ok_or_else(|| GpuError::DeviceNotFound {
-                    requested: requested.to_string(),
-                    available: device_list(candidates),
-                })?
+            let by_index = requested.parse::<usize>().ok().filter(|&i| i < candidates.len());
+            let by_name = || candidates.iter().position(|c| c.info.name.to_lowercase().contains(&lower));
+            by_index.or_else(by_name).ok_or_else(|| GpuError::DeviceNotFound {
+                requested: requested.to_string(),
+                available: device_list(candidates),
+            })?
         }
         None => {
             let usable = candidates
@@ -416,9 +342,9 @@ fn choose_device(candidates: &[Candidate], requested: Option<&str>) -> Result<us
             match usable {
                 Some((i, _)) => i,
                 // Nothing usable: report on the best device of any version.
-                None => (0..candidates.len())
-                    .min_by_key(|&i| (device_type_rank(candidates[i].device_type), i))
-                    .unwrap_or(0),
+                None => {
+                    (0..candidates.len()).min_by_key(|&i| (device_type_rank(candidates[i].device_type), i)).unwrap_or(0)
+                }
             }
         }
     };
@@ -431,9 +357,7 @@ fn choose_device(candidates: &[Candidate], requested: Option<&str>) -> Result<us
         });
     }
     if c.queue_family.is_none() {
-        return Err(GpuError::NoComputeQueue {
-            device: c.info.name.clone(),
-        });
+        return Err(GpuError::NoComputeQueue { device: c.info.name.clone() });
     }
     Ok(chosen)
 }
@@ -463,9 +387,7 @@ impl Shared {
         let Ok(name) = std::ffi::CString::new(name.replace('\0', " ")) else {
             return;
         };
-        let info = vk::DebugUtilsObjectNameInfoEXT::default()
-            .object_handle(handle)
-            .object_name(&name);
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
         // SAFETY: `handle` is a live object of this device; naming is best-effort, so a failure
         // is ignored.
         let _ = unsafe { utils.set_debug_utils_object_name(&info) };
@@ -513,23 +435,18 @@ impl GpuContext {
     pub fn new(options: &GpuOptions) -> Result<GpuContext, GpuError> {
         let instance = InstanceOwner::new(options.validation)?;
         let devices = instance.physical_devices()?;
-        let candidates: Vec<Candidate> = devices
-            .iter()
-            .enumerate()
-            .map(|(i, &pd)| describe_device(&instance.instance, pd, i))
-            .collect();
+        let candidates: Vec<Candidate> =
+            devices.iter().enumerate().map(|(i, &pd)| describe_device(&instance.instance, pd, i)).collect();
         let chosen = choose_device(&candidates, options.device.as_deref())?;
         let candidate = &candidates[chosen];
-        let (queue_family, timestamp_valid_bits) = candidate
-            .queue_family
-            .expect("choose_device returns only devices with a compute queue");
+        let (queue_family, timestamp_valid_bits) =
+            candidate.queue_family.expect("choose_device returns only devices with a compute queue");
 
         // Create the device with only the compute queue and the supported optional features.
         let f = candidate.features;
         let priorities = [1.0f32];
-        let queue_info = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
+        let queue_info =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         let mut extensions = Vec::new();
         if f.atomic_float_extension {
             extensions.push(ash::ext::shader_atomic_float::NAME.as_ptr());
@@ -541,8 +458,8 @@ impl GpuContext {
             .shader_float64(f.shader_float64)
             .shader_int64(f.shader_int64)
             .shader_int16(f.shader_int16);
-        let mut v11 = vk::PhysicalDeviceVulkan11Features::default()
-            .storage_buffer16_bit_access(f.storage_buffer16_bit_access);
+        let mut v11 =
+            vk::PhysicalDeviceVulkan11Features::default().storage_buffer16_bit_access(f.storage_buffer16_bit_access);
         let mut v12 = vk::PhysicalDeviceVulkan12Features::default()
             .storage_buffer8_bit_access(f.storage_buffer8_bit_access)
             .shader_int8(f.shader_int8)
@@ -553,10 +470,8 @@ impl GpuContext {
         let mut atomic_float = vk::PhysicalDeviceShaderAtomicFloatFeaturesEXT::default()
             .shader_buffer_float32_atomic_add(f.shader_buffer_float32_atomic_add)
             .shader_shared_float32_atomic_add(f.shader_shared_float32_atomic_add);
-        let mut features2 = vk::PhysicalDeviceFeatures2::default()
-            .features(f10)
-            .push_next(&mut v11)
-            .push_next(&mut v12);
+        let mut features2 =
+            vk::PhysicalDeviceFeatures2::default().features(f10).push_next(&mut v11).push_next(&mut v12);
         if f.atomic_float_extension {
             features2 = features2.push_next(&mut atomic_float);
         }
@@ -566,12 +481,8 @@ impl GpuContext {
             .push_next(&mut features2);
         // SAFETY: the physical device belongs to this instance; every feature and extension
         // enabled was reported as supported by `describe_device`; pointers refer to locals.
-        let device = unsafe {
-            instance
-                .instance
-                .create_device(candidate.physical, &device_info, None)
-        }
-        .map_err(|e| GpuError::vk("vkCreateDevice", &candidate.info.name, e))?;
+        let device = unsafe { instance.instance.create_device(candidate.physical, &device_info, None) }
+            .map_err(|e| GpuError::vk("vkCreateDevice", &candidate.info.name, e))?;
         // SAFETY: the queue family and index 0 were requested in `device_info`.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
@@ -591,9 +502,7 @@ impl GpuContext {
                 return Err(GpuError::allocator("the allocator", 0, e));
             }
         };
-        let debug_utils = options
-            .validation
-            .then(|| ash::ext::debug_utils::Device::new(&instance.instance, &device));
+        let debug_utils = options.validation.then(|| ash::ext::debug_utils::Device::new(&instance.instance, &device));
         let shared = Arc::new(Shared {
             device,
             allocator: Mutex::new(Some(allocator)),
@@ -634,17 +543,11 @@ impl GpuContext {
         std::mem::take(&mut *self.timings.lock().unwrap_or_else(|e| e.into_inner()))
     }
 
-    pub(crate) fn check_same_context(
-        &self,
-        shared: &Arc<Shared>,
-        name: &str,
-    ) -> Result<(), GpuError> {
+    pub(crate) fn check_same_context(&self, shared: &Arc<Shared>, name: &str) -> Result<(), GpuError> {
         if Arc::ptr_eq(shared, &self.shared) {
             Ok(())
         } else {
-            Err(GpuError::ForeignObject {
-                name: name.to_string(),
-            })
+            Err(GpuError::ForeignObject { name: name.to_string() })
         }
     }
 }

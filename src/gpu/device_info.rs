@@ -53,16 +53,8 @@ impl fmt::Display for DeviceInfo {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let [gx, gy, gz] = self.max_compute_workgroup_count;
         writeln!(f, "{}: {} ({})", self.index, self.name, self.device_type)?;
-        writeln!(
-            f,
-            "    driver: {}, Vulkan {}",
-            self.driver, self.api_version
-        )?;
-        writeln!(
-            f,
-            "    device-local memory: {}",
-            human_bytes(self.device_local_heap_bytes)
-        )?;
+        writeln!(f, "    driver: {}, Vulkan {}", self.driver, self.api_version)?;
+        writeln!(f, "    device-local memory: {}", human_bytes(self.device_local_heap_bytes))?;
         writeln!(
             f,
             "    largest storage buffer: {}, largest allocation: {}",
@@ -79,11 +71,7 @@ impl fmt::Display for DeviceInfo {
             "    push constants: {} bytes; timestamp tick: {} ns",
             self.max_push_constants_size, self.timestamp_period_ns
         )?;
-        let features = if self.features.is_empty() {
-            "none".to_string()
-        } else {
-            self.features.join(", ")
-        };
+        let features = if self.features.is_empty() { "none".to_string() } else { self.features.join(", ") };
         write!(f, "    optional features: {features}")
     }
 }
@@ -112,10 +100,5 @@ pub(crate) fn device_type_rank(t: vk::PhysicalDeviceType) -> u32 {
 
 /// "1.3.230" for a packed Vulkan version.
 pub(crate) fn version_string(v: u32) -> String {
-    format!(
-        "{}.{}.{}",
-        vk::api_version_major(v),
-        vk::api_version_minor(v),
-        vk::api_version_patch(v)
-    )
+    format!("{}.{}.{}", vk::api_version_major(v), vk::api_version_minor(v), vk::api_version_patch(v))
 }

@@ -42,20 +42,13 @@ pub enum GpuError {
     ValidationLayerMissing,
 
     #[error("no Vulkan device matches `{requested}`; pass an index or part of a name, one of:\n{available}")]
-    DeviceNotFound {
-        requested: String,
-        available: String,
-    },
+    DeviceNotFound { requested: String, available: String },
 
     #[error(
         "device {index} `{name}` supports Vulkan {found}; photonix needs 1.2: update its driver, \
          pick another device with --device, or use --backend cpu"
     )]
-    DeviceTooOld {
-        index: usize,
-        name: String,
-        found: String,
-    },
+    DeviceTooOld { index: usize, name: String, found: String },
 
     #[error("device `{device}` has no compute queue; pick another device with --device or use --backend cpu")]
     NoComputeQueue { device: String },
@@ -66,12 +59,7 @@ pub enum GpuError {
         mib(*size),
         mib(*limit)
     )]
-    BufferTooLarge {
-        name: String,
-        size: u64,
-        limit_name: &'static str,
-        limit: u64,
-    },
+    BufferTooLarge { name: String, size: u64, limit_name: &'static str, limit: u64 },
 
     #[error(
         "out of device memory while allocating `{name}` ({}); lower the photon count or image \
@@ -86,20 +74,14 @@ pub enum GpuError {
     )]
     OutOfMemoryDuring { label: String },
 
-    #[error(
-        "cannot write {len} bytes into buffer `{name}` of {size} bytes; create a larger buffer"
-    )]
+    #[error("cannot write {len} bytes into buffer `{name}` of {size} bytes; create a larger buffer")]
     WriteTooLarge { name: String, len: u64, size: u64 },
 
     #[error(
         "buffer `{name}` holds {size} bytes, not a whole number of {element_size}-byte elements; \
          download it as a type whose size divides the buffer size"
     )]
-    ElementSizeMismatch {
-        name: String,
-        size: u64,
-        element_size: usize,
-    },
+    ElementSizeMismatch { name: String, size: u64, element_size: usize },
 
     #[error("buffer `{name}` was created by another GpuContext; use buffers and kernels only with the context that made them")]
     ForeignObject { name: String },
@@ -108,46 +90,32 @@ pub enum GpuError {
         "dispatch of `{kernel}` binds {given} buffers but the kernel declares {expected}; pass one \
          buffer per binding, in binding order"
     )]
-    BindingCount {
-        kernel: String,
-        given: usize,
-        expected: u32,
-    },
+    BindingCount { kernel: String, given: usize, expected: u32 },
 
     #[error(
         "dispatch of `{kernel}` passes {given} bytes of push constants but the kernel declares \
          {expected}; pass exactly the kernel's push-constant struct"
     )]
-    PushConstantSize {
-        kernel: String,
-        given: usize,
-        expected: u32,
-    },
+    PushConstantSize { kernel: String, given: usize, expected: u32 },
 
     #[error(
         "kernel `{kernel}` asks for {size} bytes of push constants; the size must be a multiple of \
          4 and at most this device's maxPushConstantsSize of {limit}; move the data into a buffer"
     )]
-    PushConstantLimit {
-        kernel: String,
-        size: u32,
-        limit: u32,
-    },
+    PushConstantLimit { kernel: String, size: u32, limit: u32 },
 
     #[error(
         "dispatch of `{kernel}` asks for {groups:?} workgroups, more than this device's \
          maxComputeWorkGroupCount of {limit:?}; split the dispatch"
     )]
-    TooManyGroups {
-        kernel: String,
-        groups: [u32; 3],
-        limit: [u32; 3],
-    },
+    TooManyGroups { kernel: String, groups: [u32; 3], limit: [u32; 3] },
 
-    #[error(
-        "kernel `{kernel}` has invalid SPIR-V ({reason}); rebuild the shaders with `cargo build`"
-    )]
+    #[error("kernel `{kernel}` has invalid SPIR-V ({reason}); rebuild the shaders with `cargo build`")]
     InvalidSpirv { kernel: String, reason: String },
+
+    /// Work that does not fit the device's limits even when split, with what to change.
+    #[error("{0}")]
+    Unsupported(String),
 
     #[error("device lost during `{label}`; no image was written")]
     DeviceLost { label: String },
@@ -156,11 +124,7 @@ pub enum GpuError {
         "{call} failed during `{label}`: {result}; update the GPU driver, run with \
          PHOTONIX_VALIDATION=1 for details, or use --backend cpu"
     )]
-    Vulkan {
-        call: &'static str,
-        label: String,
-        result: vk::Result,
-    },
+    Vulkan { call: &'static str, label: String, result: vk::Result },
 
     #[error("gpu memory allocator failed while allocating `{name}`: {source}; use --backend cpu if this persists")]
     Allocator {
@@ -181,55 +145,29 @@ impl GpuError {
     /// Maps a failed Vulkan call: device loss and exhausted memory get their own variants.
     pub(crate) fn vk(call: &'static str, label: &str, result: vk::Result) -> GpuError {
         match result {
-            vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost {
-                label: label.to_string(),
-            },
+            vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { label: label.to_string() },
             vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemoryDuring {
-                    label: label.to_string(),
-                }
+                GpuError::OutOfMemoryDuring { label: label.to_string() }
             }
-            _ => GpuError::Vulkan {
-                call,
-                label: label.to_string(),
-                result,
-            },
+            _ => GpuError::Vulkan { call, label: label.to_string(), result },
         }
     }
 
     /// Maps a failed Vulkan call that allocates `size` bytes for `name`.
-    pub(crate) fn vk_alloc(
-        call: &'static str,
-        name: &str,
-        size: u64,
-        result: vk::Result,
-    ) -> GpuError {
+    pub(crate) fn vk_alloc(call: &'static str, name: &str, size: u64, result: vk::Result) -> GpuError {
         match result {
             vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemory {
-                    name: name.to_string(),
-                    size,
-                }
+                GpuError::OutOfMemory { name: name.to_string(), size }
             }
             _ => GpuError::vk(call, name, result),
         }
     }
 
     /// Wraps a gpu-allocator error for the buffer `name` of `size` bytes.
-    pub(crate) fn allocator(
-        name: &str,
-        size: u64,
-        source: gpu_allocator::AllocationError,
-    ) -> GpuError {
+    pub(crate) fn allocator(name: &str, size: u64, source: gpu_allocator::AllocationError) -> GpuError {
         match source {
-            gpu_allocator::AllocationError::OutOfMemory => GpuError::OutOfMemory {
-                name: name.to_string(),
-                size,
-            },
-            source => GpuError::Allocator {
-                name: name.to_string(),
-                source,
-            },
+            gpu_allocator::AllocationError::OutOfMemory => GpuError::OutOfMemory { name: name.to_string(), size },
+            source => GpuError::Allocator { name: name.to_string(), source },
         }
     }
 }

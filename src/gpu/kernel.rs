@@ -67,17 +67,9 @@ impl Drop for Kernel {
 
 /// One recorded command of a batch; recorded into Vulkan only when the batch is complete.
 enum Command<'a> {
-    Dispatch {
-        kernel: &'a Kernel,
-        buffers: Vec<&'a Buffer>,
-        push_constants: Vec<u8>,
-        groups: [u32; 3],
-    },
+    Dispatch { kernel: &'a Kernel, buffers: Vec<&'a Buffer>, push_constants: Vec<u8>, groups: [u32; 3] },
     FillZero(&'a Buffer),
-    Copy {
-        src: &'a Buffer,
-        dst: &'a Buffer,
-    },
+    Copy { src: &'a Buffer, dst: &'a Buffer },
 }
 
 /// Collects the commands of one [`GpuContext::run`]. Commands execute in order, each after the
@@ -97,11 +89,9 @@ impl<'a> Recorder<'a> {
         push_constants: &[u8],
         groups: [u32; 3],
     ) -> Result<(), GpuError> {
-        self.context
-            .check_same_context(&kernel.shared, &kernel.name)?;
+        self.context.check_same_context(&kernel.shared, &kernel.name)?;
         for buffer in buffers {
-            self.context
-                .check_same_context(&buffer.shared, buffer.name())?;
+            self.context.check_same_context(&buffer.shared, buffer.name())?;
         }
         if buffers.len() != kernel.binding_count as usize {
             return Err(GpuError::BindingCount {
@@ -119,11 +109,7 @@ impl<'a> Recorder<'a> {
         }
         let limit = self.context.shared.info.max_compute_workgroup_count;
         if groups.iter().zip(limit).any(|(&g, l)| g > l) {
-            return Err(GpuError::TooManyGroups {
-                kernel: kernel.name.clone(),
-                groups,
-                limit,
-            });
+            return Err(GpuError::TooManyGroups { kernel: kernel.name.clone(), groups, limit });
         }
         self.commands.push(Command::Dispatch {
             kernel,
@@ -136,8 +122,7 @@ impl<'a> Recorder<'a> {
 
     /// Zeroes `buffer` at this point of the batch.
     pub fn fill_zero(&mut self, buffer: &'a Buffer) -> Result<(), GpuError> {
-        self.context
-            .check_same_context(&buffer.shared, buffer.name())?;
+        self.context.check_same_context(&buffer.shared, buffer.name())?;
         self.commands.push(Command::FillZero(buffer));
         Ok(())
     }
@@ -147,11 +132,7 @@ impl<'a> Recorder<'a> {
         self.context.check_same_context(&src.shared, src.name())?;
         self.context.check_same_context(&dst.shared, dst.name())?;
         if src.size() > dst.size() {
-            return Err(GpuError::WriteTooLarge {
-                name: dst.name().to_string(),
-                len: src.size(),
-                size: dst.size(),
-            });
+            return Err(GpuError::WriteTooLarge { name: dst.name().to_string(), len: src.size(), size: dst.size() });
         }
         self.commands.push(Command::Copy { src, dst });
         Ok(())
@@ -215,10 +196,7 @@ impl Submitter {
         if sets <= self.descriptor_set_capacity && descriptors <= self.descriptor_capacity {
             // SAFETY: no set from this pool is in use: the previous submission was waited for.
             return unsafe {
-                device.reset_descriptor_pool(
-                    self.descriptor_pool,
-                    vk::DescriptorPoolResetFlags::empty(),
-                )
+                device.reset_descriptor_pool(self.descriptor_pool, vk::DescriptorPoolResetFlags::empty())
             }
             .map_err(|e| GpuError::vk("vkResetDescriptorPool", "descriptor pool", e));
         }
@@ -229,20 +207,14 @@ impl Submitter {
         self.descriptor_pool = vk::DescriptorPool::null();
         self.descriptor_set_capacity = 0;
         self.descriptor_capacity = 0;
-        let sizes = [vk::DescriptorPoolSize {
-            ty: vk::DescriptorType::STORAGE_BUFFER,
-            descriptor_count: descriptors,
-        }];
-        let info = vk::DescriptorPoolCreateInfo::default()
-            .max_sets(sets)
-            .pool_sizes(&sizes);
+        let sizes = [vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: descriptors }];
+        let info = vk::DescriptorPoolCreateInfo::default().max_sets(sets).pool_sizes(&sizes);
         // SAFETY: valid create info; destroyed in Drop or when replaced.
         self.descriptor_pool = unsafe { device.create_descriptor_pool(&info, None) }
             .map_err(|e| GpuError::vk("vkCreateDescriptorPool", "descriptor pool", e))?;
         self.descriptor_set_capacity = sets;
         self.descriptor_capacity = descriptors;
-        self.shared
-            .set_name(self.descriptor_pool, "photonix descriptors");
+        self.shared.set_name(self.descriptor_pool, "photonix descriptors");
         Ok(())
     }
 
@@ -257,9 +229,7 @@ impl Submitter {
         unsafe { device.destroy_query_pool(self.query_pool, None) };
         self.query_pool = vk::QueryPool::null();
         self.query_capacity = 0;
-        let info = vk::QueryPoolCreateInfo::default()
-            .query_type(vk::QueryType::TIMESTAMP)
-            .query_count(queries);
+        let info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(queries);
         // SAFETY: valid create info; destroyed in Drop or when replaced.
         self.query_pool = unsafe { device.create_query_pool(&info, None) }
             .map_err(|e| GpuError::vk("vkCreateQueryPool", "timestamps", e))?;
@@ -276,8 +246,7 @@ impl Submitter {
         // and the pool allows resetting single buffers.
         unsafe { device.reset_command_buffer(cb, vk::CommandBufferResetFlags::empty()) }
             .map_err(|e| GpuError::vk("vkResetCommandBuffer", label, e))?;
-        let info = vk::CommandBufferBeginInfo::default()
-            .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        let info = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
         // SAFETY: `cb` is in the initial state after the reset.
         unsafe { device.begin_command_buffer(cb, &info) }
             .map_err(|e| GpuError::vk("vkBeginCommandBuffer", label, e))?;
@@ -285,12 +254,8 @@ impl Submitter {
         memory_barrier(
             device,
             cb,
-            vk::PipelineStageFlags::HOST
-                | vk::PipelineStageFlags::TRANSFER
-                | vk::PipelineStageFlags::COMPUTE_SHADER,
-            vk::AccessFlags::HOST_WRITE
-                | vk::AccessFlags::TRANSFER_WRITE
-                | vk::AccessFlags::SHADER_WRITE,
+            vk::PipelineStageFlags::HOST | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::COMPUTE_SHADER,
+            vk::AccessFlags::HOST_WRITE | vk::AccessFlags::TRANSFER_WRITE | vk::AccessFlags::SHADER_WRITE,
         );
         Ok(cb)
     }
@@ -316,8 +281,7 @@ impl Submitter {
             )
         };
         // SAFETY: `cb` is recording.
-        unsafe { device.end_command_buffer(cb) }
-            .map_err(|e| GpuError::vk("vkEndCommandBuffer", label, e))?;
+        unsafe { device.end_command_buffer(cb) }.map_err(|e| GpuError::vk("vkEndCommandBuffer", label, e))?;
         let buffers = [cb];
         let submit = [vk::SubmitInfo::default().command_buffers(&buffers)];
         // SAFETY: the queue is used only under the submitter lock (held by our caller), `cb` is
@@ -329,8 +293,7 @@ impl Submitter {
         unsafe { device.wait_for_fences(&[self.fence], true, u64::MAX) }
             .map_err(|e| GpuError::vk("vkWaitForFences", label, e))?;
         // SAFETY: the fence is signalled and no longer used by a pending submission.
-        unsafe { device.reset_fences(&[self.fence]) }
-            .map_err(|e| GpuError::vk("vkResetFences", label, e))
+        unsafe { device.reset_fences(&[self.fence]) }.map_err(|e| GpuError::vk("vkResetFences", label, e))
     }
 }
 
@@ -357,14 +320,12 @@ fn memory_barrier(
     src_stages: vk::PipelineStageFlags,
     src_access: vk::AccessFlags,
 ) {
-    let barrier = vk::MemoryBarrier::default()
-        .src_access_mask(src_access)
-        .dst_access_mask(
-            vk::AccessFlags::SHADER_READ
-                | vk::AccessFlags::SHADER_WRITE
-                | vk::AccessFlags::TRANSFER_READ
-                | vk::AccessFlags::TRANSFER_WRITE,
-        );
+    let barrier = vk::MemoryBarrier::default().src_access_mask(src_access).dst_access_mask(
+        vk::AccessFlags::SHADER_READ
+            | vk::AccessFlags::SHADER_WRITE
+            | vk::AccessFlags::TRANSFER_READ
+            | vk::AccessFlags::TRANSFER_WRITE,
+    );
     // SAFETY: `cb` is recording (callers only pass the recording command buffer).
     unsafe {
         device.cmd_pipeline_barrier(
@@ -407,23 +368,12 @@ impl GpuContext {
         push_constant_size: u32,
     ) -> Result<Kernel, GpuError> {
         if spirv.len() < 5 || spirv[0] != SPIRV_MAGIC {
-            let reason = if spirv.is_empty() {
-                "empty module".to_string()
-            } else {
-                "no SPIR-V header".to_string()
-            };
-            return Err(GpuError::InvalidSpirv {
-                kernel: name.to_string(),
-                reason,
-            });
+            let reason = if spirv.is_empty() { "empty module".to_string() } else { "no SPIR-V header".to_string() };
+            return Err(GpuError::InvalidSpirv { kernel: name.to_string(), reason });
         }
         let limit = self.shared.info.max_push_constants_size;
         if !push_constant_size.is_multiple_of(4) || push_constant_size > limit {
-            return Err(GpuError::PushConstantLimit {
-                kernel: name.to_string(),
-                size: push_constant_size,
-                limit,
-            });
+            return Err(GpuError::PushConstantLimit { kernel: name.to_string(), size: push_constant_size, limit });
         }
         let device = &self.shared.device;
         // Each handle lands in `kernel` as soon as it exists, so an early return frees it.
@@ -467,9 +417,8 @@ impl GpuContext {
             .offset(0)
             .size(push_constant_size)];
         let ranges: &[vk::PushConstantRange] = if push_constant_size > 0 { &ranges } else { &[] };
-        let layout_info = vk::PipelineLayoutCreateInfo::default()
-            .set_layouts(&set_layouts)
-            .push_constant_ranges(ranges);
+        let layout_info =
+            vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(ranges);
         // SAFETY: valid create info; the set layout is live.
         kernel.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
             .map_err(|e| GpuError::vk("vkCreatePipelineLayout", name, e))?;
@@ -479,14 +428,10 @@ impl GpuContext {
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(kernel.shader)
             .name(c"main");
-        let pipeline_info = [vk::ComputePipelineCreateInfo::default()
-            .stage(stage)
-            .layout(kernel.layout)];
+        let pipeline_info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(kernel.layout)];
         // SAFETY: the module and layout are live; no pipeline cache is used.
-        let pipelines = unsafe {
-            device.create_compute_pipelines(vk::PipelineCache::null(), &pipeline_info, None)
-        }
-        .map_err(|(_, e)| GpuError::vk("vkCreateComputePipelines", name, e))?;
+        let pipelines = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &pipeline_info, None) }
+            .map_err(|(_, e)| GpuError::vk("vkCreateComputePipelines", name, e))?;
         kernel.pipeline = pipelines[0];
         self.shared.set_name(kernel.pipeline, name);
 
@@ -503,10 +448,7 @@ impl GpuContext {
         label: &str,
         record: impl FnOnce(&mut Recorder<'a>) -> Result<(), GpuError>,
     ) -> Result<(), GpuError> {
-        let mut recorder = Recorder {
-            context: self,
-            commands: Vec::new(),
-        };
+        let mut recorder = Recorder { context: self, commands: Vec::new() };
         record(&mut recorder)?;
         let commands = recorder.commands;
         if commands.is_empty() {
@@ -532,9 +474,7 @@ impl GpuContext {
         let layouts: Vec<vk::DescriptorSetLayout> = commands
             .iter()
             .filter_map(|c| match c {
-                Command::Dispatch { kernel, .. } if kernel.binding_count > 0 => {
-                    Some(kernel.set_layout)
-                }
+                Command::Dispatch { kernel, .. } if kernel.binding_count > 0 => Some(kernel.set_layout),
                 _ => None,
             })
             .collect();
@@ -551,18 +491,11 @@ impl GpuContext {
         let mut buffer_infos = Vec::with_capacity(descriptor_count as usize);
         let mut set_index = 0;
         for command in &commands {
-            if let Command::Dispatch {
-                kernel, buffers, ..
-            } = command
-            {
+            if let Command::Dispatch { kernel, buffers, .. } = command {
                 if kernel.binding_count > 0 {
                     let infos: Vec<vk::DescriptorBufferInfo> = buffers
                         .iter()
-                        .map(|b| vk::DescriptorBufferInfo {
-                            buffer: b.handle,
-                            offset: 0,
-                            range: b.vk_size,
-                        })
+                        .map(|b| vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size })
                         .collect();
                     buffer_infos.push((sets[set_index], infos));
                     set_index += 1;
@@ -609,12 +542,7 @@ impl GpuContext {
                 );
             }
             match command {
-                Command::Dispatch {
-                    kernel,
-                    push_constants,
-                    groups,
-                    ..
-                } => {
+                Command::Dispatch { kernel, push_constants, groups, .. } => {
                     // SAFETY: `cb` is recording; the pipeline, layout and set are live and match
                     // (the set was allocated from this kernel's layout, and the push-constant
                     // size was checked in `dispatch`); the queries lie inside the pool.
@@ -628,11 +556,7 @@ impl GpuContext {
                                 query,
                             );
                         }
-                        device.cmd_bind_pipeline(
-                            cb,
-                            vk::PipelineBindPoint::COMPUTE,
-                            kernel.pipeline,
-                        );
+                        device.cmd_bind_pipeline(cb, vk::PipelineBindPoint::COMPUTE, kernel.pipeline);
                         if kernel.binding_count > 0 {
                             device.cmd_bind_descriptor_sets(
                                 cb,
@@ -696,11 +620,7 @@ impl GpuContext {
             };
             read.map_err(|e| GpuError::vk("vkGetQueryPoolResults", label, e))?;
             let bits = self.shared.timestamp_valid_bits;
-            let mask = if bits >= 64 {
-                u64::MAX
-            } else {
-                (1u64 << bits) - 1
-            };
+            let mask = if bits >= 64 { u64::MAX } else { (1u64 << bits) - 1 };
             let seconds_per_tick = f64::from(self.shared.info.timestamp_period_ns) * 1e-9;
             let mut timings = self.timings.lock().unwrap_or_else(|e| e.into_inner());
             let kernels = commands.iter().filter_map(|c| match c {

@@ -44,21 +44,14 @@ impl MessageLog {
 pub(crate) fn layer_available(entry: &ash::Entry) -> bool {
     // SAFETY: the entry holds a loaded Vulkan loader; the call has no other preconditions.
     let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
-    layers
-        .iter()
-        .any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == LAYER))
+    layers.iter().any(|l| l.layer_name_as_c_str().is_ok_and(|n| n == LAYER))
 }
 
 /// The messenger description: warnings and errors of every type go to [`callback`], which
 /// appends them to `log`. `log` must outlive every messenger created from this description.
-pub(crate) fn messenger_info(
-    log: &Arc<MessageLog>,
-) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
+pub(crate) fn messenger_info(log: &Arc<MessageLog>) -> vk::DebugUtilsMessengerCreateInfoEXT<'static> {
     vk::DebugUtilsMessengerCreateInfoEXT::default()
-        .message_severity(
-            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-        )
+        .message_severity(vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR)
         .message_type(
             vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
                 | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
@@ -85,20 +78,13 @@ unsafe extern "system" fn callback(
         // `user_data` is the `Arc<MessageLog>` pointer from `messenger_info`, kept alive by the
         // context until after the messenger is destroyed.
         let (data, log) = unsafe { (&*data, &*(user_data as *const MessageLog)) };
-        let level = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
-            "error"
-        } else {
-            "warning"
-        };
+        let level = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) { "error" } else { "warning" };
         // SAFETY: the pointers inside `data` are valid C strings or null for the call's duration.
-        let text = unsafe { data.message_as_c_str() }
-            .map(|m| m.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let text = unsafe { data.message_as_c_str() }.map(|m| m.to_string_lossy().into_owned()).unwrap_or_default();
         let mut names = Vec::new();
         if !data.p_objects.is_null() {
             // SAFETY: `p_objects` points to `object_count` valid object-name infos.
-            let objects =
-                unsafe { std::slice::from_raw_parts(data.p_objects, data.object_count as usize) };
+            let objects = unsafe { std::slice::from_raw_parts(data.p_objects, data.object_count as usize) };
             for object in objects {
                 // SAFETY: as above, each name is a valid C string or null.
                 if let Some(name) = unsafe { object.object_name_as_c_str() } {

@@ -96,13 +96,17 @@ pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
 /// Writes `image` atomically; `.png` gets exposure 2^`exposure` and sRGB encoding, `.exr` is
 /// written as linear radiance, untouched.
 pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
-    let format = format_of(path)?;
+    match format_of(path)? {
+        Format::Exr => write_atomically(path, |tmp| write_exr(tmp, image)),
+        Format::Png => write_atomically(path, |tmp| write_png(tmp, image, exposure)),
+    }
+}
+
+/// Runs `write` on a temporary file next to `path`, then renames it into place; on failure the
+/// temporary file is removed and `path` is untouched.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
     let tmp = temp_path_for(path);
-    let written = match format {
-        Format::Exr => write_exr(&tmp, image),
-        Format::Png => write_png(&tmp, image, exposure),
-    };
-    let finished = written.and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    let finished = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
     finished.map_err(|reason| {
         let _ = std::fs::remove_file(&tmp);
         ImageError::Write { path: path.to_owned(), reason }

@@ -54,3 +54,30 @@ pub fn downsample(image: &Image, factor: u32) -> Image {
     }
     out
 }
+
+/// Per-pixel relMSE (mean over channels), for error images.
+pub fn rel_mse_per_pixel(test: &Image, reference: &Image) -> Vec<f64> {
+    test.pixels
+        .iter()
+        .zip(&reference.pixels)
+        .map(|(t, r)| {
+            (0..3).map(|c| (t[c] as f64 - r[c] as f64).powi(2) / ((r[c] as f64).powi(2) + 0.01)).sum::<f64>() / 3.0
+        })
+        .collect()
+}
+
+/// A false-colour image of per-pixel relMSE on a log scale: black below 1e-4, then blue, green,
+/// yellow, red and white at 1 and above. Linear values, so it survives PNG's sRGB encoding.
+pub fn error_heatmap(test: &Image, reference: &Image) -> Image {
+    const STOPS: [[f32; 3]; 6] =
+        [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
+    let mut out = Image::new(test.width, test.height);
+    for (o, e) in out.pixels.iter_mut().zip(rel_mse_per_pixel(test, reference)) {
+        // log10 from -4 to 0 onto the stops.
+        let x = ((e.max(1e-12).log10() + 4.0) / 4.0).clamp(0.0, 1.0) as f32 * (STOPS.len() - 1) as f32;
+        let i = (x.floor() as usize).min(STOPS.len() - 2);
+        let f = x - i as f32;
+        *o = [0, 1, 2].map(|c| STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f);
+    }
+    out
+}

@@ -41,6 +41,9 @@ shared_constants! {
 
     /// Threads per workgroup of the one-dimensional kernels.
     WORKGROUP_SIZE: u32 = 64;
+    /// Threads of a `grid_scan` workgroup, and the values one workgroup scans.
+    SCAN_THREADS: u32 = 256;
+    SCAN_BLOCK: u32 = 1024;
     /// Most BVH nodes a traversal keeps on its stack; the builder refuses deeper trees.
     BVH_STACK_SIZE: u32 = 64;
 
@@ -53,10 +56,33 @@ shared_constants! {
     RNG_LIGHT_V: u32 = 4;
     RNG_FRESNEL: u32 = 5;
 
+    /// Photon paths draw from dimensions above this, so they never share numbers with camera paths.
+    RNG_PHOTON_DOMAIN: u32 = 0x8000_0000;
+    /// Final-gather rays draw from dimensions above this.
+    RNG_GATHER_DOMAIN: u32 = 0x4000_0000;
+    /// Offsets inside a photon path vertex's block of `RNG_DIMS_PER_BOUNCE` dimensions.
+    RNG_PHOTON_LIGHT_PICK: u32 = 0;
+    RNG_PHOTON_POSITION: u32 = 1;
+    RNG_PHOTON_DIRECTION: u32 = 2;
+    RNG_PHOTON_BOUNCE: u32 = 3;
+    RNG_PHOTON_ROULETTE: u32 = 4;
+    /// Random dimensions per final-gather ray (direction, then one Fresnel choice per bounce).
+    RNG_GATHER_DIMS_PER_RAY: u32 = 32;
+
     /// Photon flag: stored at the first surface its path met (direct light).
     PHOTON_FLAG_DIRECT: u32 = 1;
     /// Photon flag: its path reached this diffuse surface through mirrors and glass only (L S+ D).
     PHOTON_FLAG_CAUSTIC: u32 = 2;
+
+    /// Image layers of the camera kernel, one vec4 each per pixel; combined is their sum.
+    LAYER_DIRECT: u32 = 0;
+    LAYER_SPECULAR: u32 = 1;
+    LAYER_INDIRECT: u32 = 2;
+    LAYER_CAUSTICS: u32 = 3;
+    LAYER_COUNT: u32 = 4;
+    /// Photons farther than this fraction of the radius off the lookup's tangent plane are
+    /// ignored: the disc-shaped filter of Jensen keeps photons on a nearby wall out of a corner.
+    PHOTON_DISC_THICKNESS: f32 = 0.25;
 
     /// Relative offset of secondary ray origins, scaled by the scene's extent (avoids self-hits).
     RAY_EPSILON_SCALE: f32 = 1.0e-5;

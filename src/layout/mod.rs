@@ -61,7 +61,7 @@ pub struct Light {
     pub cdf: f32,
 }
 
-/// Per-render constants of the camera kernels, 96 bytes.
+/// Per-render constants of every kernel, 96 bytes.
 /// A primary ray through film position (sx, sy) in [-1, 1]^2 has direction
 /// `forward + sx * right + sy * up` (not normalised): `right` and `up` carry the field of view.
 #[repr(C)]
@@ -80,9 +80,13 @@ pub struct FrameParams {
     pub ray_epsilon: f32,
     pub primitive_count: u32,
     pub node_count: u32,
-    /// Sum of all light powers (luminance-weighted); 0 when the scene has no light.
+    /// Sum of all light powers (mean of the channels); 0 when the scene has no light.
     pub total_light_power: f32,
-    pub _pad: [u32; 3],
+    /// 1 when photon maps are bound: caustics and indirect light come from them.
+    pub photon_mapping: u32,
+    /// Final-gather rays per camera sample; 0 reads the global map directly (fast preview).
+    pub gather_rays: u32,
+    pub _pad: u32,
 }
 
 /// Push constants of one camera-kernel dispatch: which rows and which samples it renders.
@@ -122,9 +126,29 @@ pub struct GridParams {
     pub _pad: [u32; 3],
 }
 
+/// Push constants of one `emit_photons` dispatch, 32 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct EmitParams {
+    /// First photon path of this dispatch and how many it traces.
+    pub path_begin: u32,
+    pub path_count: u32,
+    /// Photon paths over the whole render: each carries 1/`total_paths` of the light's power.
+    pub total_paths: u32,
+    /// Most surfaces a photon path visits.
+    pub max_depth: u32,
+    /// Capacity of the two photon buffers; photons past them are counted, not stored.
+    pub global_capacity: u32,
+    pub caustic_capacity: u32,
+    /// Selects an independent set of photon paths (progressive passes use the pass index).
+    pub pass: u32,
+    /// 1 for a pass that fills only the caustic map (its paths end at the first diffuse surface).
+    pub caustics_only: u32,
+}
+
 const _: () = assert!(size_of::<Photon>() == 20);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 48);
 const _: () = assert!(size_of::<Material>() == 32);
 const _: () = assert!(size_of::<Light>() == 64);
-const _: () = assert!(size_of::<FrameParams>() % 16 == 0);
+const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));

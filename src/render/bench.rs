@@ -36,8 +36,8 @@ pub fn bench(ctx: Option<&GpuContext>, buffers: &SceneBuffers, spp: u32) -> Resu
     lit.frame.light_count = buffers.frame.light_count;
     let run = |b: &SceneBuffers| -> Result<(u64, f64, String), RenderError> {
         let out = match ctx {
-            Some(ctx) => super::gpu::render_gpu(ctx, b, spp, &mut |_, _| {})?,
-            None => render_cpu(b, spp, &mut |_, _| {}),
+            Some(ctx) => super::gpu::render_gpu(ctx, b, spp, None, &mut |_, _| {})?,
+            None => render_cpu(b, spp, None, &mut |_, _| {}),
         };
         // The render stage only: uploads and pipeline creation are not ray throughput.
         Ok((out.stats.rays, out.stats.stage("render").as_secs_f64(), out.stats.device))

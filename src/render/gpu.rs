@@ -1,36 +1,257 @@
-//! Rendering with the `render` kernel on a Vulkan device.
+//! Rendering on a Vulkan device: photon tracing, the grid build and the camera kernel.
 
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-use super::{resolve_band, unit_paths, work_units, RenderOutput, RenderStats, SceneBuffers};
-use crate::gpu::{GpuContext, GpuError};
-use crate::io::Image;
-use crate::layout::constants::WORKGROUP_SIZE;
-use crate::layout::DispatchRange;
+use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
+use super::{photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats, SceneBuffers};
+use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
+use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, WORKGROUP_SIZE};
+use crate::layout::{DispatchRange, EmitParams, GridParams, Photon};
 
-/// Bytes of accumulation per pixel: one vec4.
-const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16;
+/// Bytes of accumulation per pixel: one vec4 per layer.
+const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
+/// Photon paths per `emit_photons` dispatch.
+const PATHS_PER_DISPATCH: u32 = 1 << 18;
+/// First guess of photons stored per path; the buffer grows (and the pass is traced again) when
+/// a scene stores more.
+const INITIAL_PHOTONS_PER_PATH: u64 = 4;
 
-/// Renders on `ctx`; `progress(done, total)` is called after each dispatch.
+fn kernel(ctx: &GpuContext, name: &str, bindings: u32, push_bytes: usize) -> Result<Kernel, GpuError> {
+    let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
+    ctx.create_kernel(name, &spirv, bindings, push_bytes as u32)
+}
+
+fn groups(invocations: u32) -> [u32; 3] {
+    [invocations.div_ceil(WORKGROUP_SIZE).max(1), 1, 1]
+}
+
+/// The scene arrays on the device.
+pub struct DeviceScene {
+    pub frame: Buffer,
+    pub nodes: Buffer,
+    pub primitives: Buffer,
+    pub materials: Buffer,
+    pub lights: Buffer,
+}
+
+impl DeviceScene {
+    pub fn upload(
+        ctx: &GpuContext,
+        buffers: &SceneBuffers,
+        photons: Option<&PhotonSettings>,
+    ) -> Result<Self, GpuError> {
+        let frame = photon_frame(buffers, photons);
+        Ok(DeviceScene {
+            frame: ctx.upload("frame", std::slice::from_ref(&frame))?,
+            nodes: ctx.upload("bvh_nodes", &buffers.nodes)?,
+            primitives: ctx.upload("primitives", &buffers.primitives)?,
+            materials: ctx.upload("materials", &buffers.materials)?,
+            lights: ctx.upload("lights", &buffers.lights)?,
+        })
+    }
+}
+
+/// One photon map on the device: photons sorted by bucket and the bucket starts.
+pub struct DeviceMap {
+    pub grid: GridParams,
+    pub photons: Buffer,
+    pub starts: Buffer,
+}
+
+/// Both maps on the device, plus their grid parameters in one buffer for the camera kernel.
+pub struct DeviceMaps {
+    pub global: DeviceMap,
+    pub caustic: DeviceMap,
+    pub grids: Buffer,
+}
+
+impl DeviceMaps {
+    /// Reads both maps back (for tests and tools).
+    pub fn download(&self, ctx: &GpuContext) -> Result<PhotonMaps, GpuError> {
+        let photons = |m: &DeviceMap| -> Result<Vec<Photon>, GpuError> {
+            let mut v: Vec<Photon> = ctx.download(&m.photons)?;
+            v.truncate(m.grid.photon_count as usize);
+            Ok(v)
+        };
+        let starts = |m: &DeviceMap| -> Result<Vec<u32>, GpuError> {
+            let mut v: Vec<u32> = ctx.download(&m.starts)?;
+            v.truncate(m.grid.table_mask as usize + 2);
+            Ok(v)
+        };
+        Ok(PhotonMaps {
+            grids: [self.global.grid, self.caustic.grid],
+            global_photons: photons(&self.global)?,
+            global_starts: starts(&self.global)?,
+            caustic_photons: photons(&self.caustic)?,
+            caustic_starts: starts(&self.caustic)?,
+        })
+    }
+}
+
+/// Traces one emission pass; returns the photon buffer holding `count` photons.
+fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool) -> Result<(Buffer, u32), GpuError> {
+    let emit_kernel = kernel(ctx, "emit_photons", 8, size_of::<EmitParams>())?;
+    let photon_bytes = size_of::<Photon>() as u64;
+    let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+    let name = if caustic { "caustic_photons" } else { "global_photons" };
+    let mut capacity = (params.total_paths as u64 * INITIAL_PHOTONS_PER_PATH).clamp(1, limit / photon_bytes);
+    loop {
+        let photons = ctx.create_buffer(name, capacity * photon_bytes)?;
+        let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
+        let counters = ctx.create_buffer("photon_counters", 8)?;
+        let mut begin = 0;
+        while begin < params.total_paths {
+            let mut p = params;
+            p.path_begin = begin;
+            p.path_count = PATHS_PER_DISPATCH.min(params.total_paths - begin);
+            p.global_capacity = if caustic { 0 } else { capacity as u32 };
+            p.caustic_capacity = if caustic { capacity as u32 } else { 0 };
+            let (global_buffer, caustic_buffer) = if caustic { (&unused, &photons) } else { (&photons, &unused) };
+            ctx.run("emit_photons", |rec| {
+                rec.dispatch(
+                    &emit_kernel,
+                    &[
+                        &scene.frame,
+                        &scene.nodes,
+                        &scene.primitives,
+                        &scene.materials,
+                        &scene.lights,
+                        global_buffer,
+                        caustic_buffer,
+                        &counters,
+                    ],
+                    bytemuck::bytes_of(&p),
+                    groups(p.path_count),
+                )
+            })?;
+            begin += p.path_count;
+        }
+        let counts: Vec<u32> = ctx.download(&counters)?;
+        let wanted = counts[caustic as usize] as u64;
+        if wanted <= capacity {
+            return Ok((photons, wanted as u32));
+        }
+        if wanted > limit / photon_bytes {
+            return Err(GpuError::Unsupported(format!(
+                "the {name} map needs {wanted} photons ({} MiB), more than one storage buffer holds on this device ({} MiB = {} photons); lower the photon count",
+                wanted * photon_bytes >> 20,
+                limit >> 20,
+                limit / photon_bytes
+            )));
+        }
+        // The pass is deterministic, so tracing it again with room for every photon stores the same set.
+        capacity = wanted;
+    }
+}
+
+/// Exclusive prefix sum of `values` (`count` entries) in place, by blocks of SCAN_BLOCK and a
+/// recursive scan of the block sums.
+fn scan(ctx: &GpuContext, values: &Buffer, count: u32) -> Result<(), GpuError> {
+    let scan_kernel = kernel(ctx, "grid_scan", 2, 4)?;
+    let add_kernel = kernel(ctx, "grid_scan_add", 2, 4)?;
+    let mut levels = Vec::new(); // (buffer of block sums, its length)
+    let mut n = count;
+    while n > 1 {
+        let blocks = n.div_ceil(SCAN_BLOCK);
+        levels.push((ctx.create_buffer("scan_block_sums", blocks as u64 * 4)?, blocks, n));
+        n = blocks;
+    }
+    ctx.run("grid_scan", |rec| {
+        let mut input = values;
+        for (sums, blocks, n) in &levels {
+            rec.dispatch(&scan_kernel, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
+            input = sums;
+        }
+        for i in (0..levels.len()).rev() {
+            let (sums, _, n) = &levels[i];
+            let target = if i == 0 { values } else { &levels[i - 1].0 };
+            if levels[i].1 > 1 {
+                rec.dispatch(&add_kernel, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// Builds the hashed grid over `count` photons: count, scan, scatter, sort inside buckets.
+fn build_map(ctx: &GpuContext, photons: Buffer, grid: GridParams, name: &str) -> Result<DeviceMap, GpuError> {
+    let buckets = grid.table_mask + 1;
+    let grid_buffer = ctx.upload("grid_params", std::slice::from_ref(&grid))?;
+    let starts = ctx.create_buffer(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
+    let count = grid.photon_count;
+    let count_kernel = kernel(ctx, "grid_count", 3, 0)?;
+    ctx.run("grid_count", |rec| rec.dispatch(&count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
+    scan(ctx, &starts, buckets + 1)?;
+    let fill = ctx.create_buffer("grid_fill", buckets as u64 * 4)?;
+    let sorted = ctx.create_buffer(&format!("{name}_sorted"), (count.max(1) as u64) * size_of::<Photon>() as u64)?;
+    let scatter_kernel = kernel(ctx, "grid_scatter", 5, 0)?;
+    let sort_kernel = kernel(ctx, "grid_sort_cells", 3, 0)?;
+    ctx.run("grid_scatter", |rec| {
+        rec.dispatch(&scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &sorted], &[], groups(count))?;
+        rec.dispatch(&sort_kernel, &[&grid_buffer, &starts, &sorted], &[], groups(buckets))
+    })?;
+    Ok(DeviceMap { grid, photons: sorted, starts })
+}
+
+/// Traces pass `pass` of both photon maps and builds their grids on the device.
+pub fn build_maps_gpu(
+    ctx: &GpuContext,
+    scene: &DeviceScene,
+    buffers: &SceneBuffers,
+    settings: &PhotonSettings,
+    pass: u32,
+) -> Result<DeviceMaps, GpuError> {
+    let (global_photons, global_count) = emit(ctx, scene, emit_params(settings, pass, false), false)?;
+    let (caustic_photons, caustic_count) = emit(ctx, scene, emit_params(settings, pass, true), true)?;
+    let (r_global, r_caustic) = radii(buffers, settings, global_count);
+    let g_global = map_grid(buffers, r_global, global_count, settings.photons);
+    let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
+    let global = build_map(ctx, global_photons, g_global, "global")?;
+    let caustic = build_map(ctx, caustic_photons, g_caustic, "caustic")?;
+    let grids = ctx.upload("grids", &[g_global, g_caustic])?;
+    Ok(DeviceMaps { global, caustic, grids })
+}
+
+/// Empty maps for a render without photon mapping: every lookup finds no photon.
+fn no_maps(ctx: &GpuContext) -> Result<DeviceMaps, GpuError> {
+    let empty = |name: &str| -> Result<DeviceMap, GpuError> {
+        let grid = crate::cpu::NO_MAPS.grids[0];
+        Ok(DeviceMap { grid, photons: ctx.create_buffer(name, 20)?, starts: ctx.upload("no_starts", &[0u32, 0])? })
+    };
+    Ok(DeviceMaps {
+        global: empty("no_photons")?,
+        caustic: empty("no_photons")?,
+        grids: ctx.upload("grids", crate::cpu::NO_MAPS.grids)?,
+    })
+}
+
+/// Renders on `ctx`, with photon maps when `photons` is given; `progress(done, total)` is called
+/// after each dispatch of the camera kernel.
 pub fn render_gpu(
     ctx: &GpuContext,
     buffers: &SceneBuffers,
     spp: u32,
+    photons: Option<&PhotonSettings>,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<RenderOutput, GpuError> {
-    let f = buffers.frame;
+    let f = photon_frame(buffers, photons);
     let mut stages = Vec::new();
 
     // Upload
     let t = Instant::now();
-    let frame = ctx.upload("frame", std::slice::from_ref(&f))?;
-    let nodes = ctx.upload("bvh_nodes", &buffers.nodes)?;
-    let primitives = ctx.upload("primitives", &buffers.primitives)?;
-    let materials = ctx.upload("materials", &buffers.materials)?;
-    let lights = ctx.upload("lights", &buffers.lights)?;
-    let spirv = crate::shaders::spirv("render").expect("build.rs embeds the render kernel");
-    let kernel = ctx.create_kernel("render", &spirv, 6, size_of::<DispatchRange>() as u32)?;
+    let scene = DeviceScene::upload(ctx, buffers, photons)?;
+    let render_kernel = kernel(ctx, "render", 11, size_of::<DispatchRange>())?;
     stages.push(("upload".to_string(), t.elapsed()));
+
+    // Trace photons and build the grids
+    let t = Instant::now();
+    let maps = match photons {
+        Some(settings) => build_maps_gpu(ctx, &scene, buffers, settings, 0)?,
+        None => no_maps(ctx)?,
+    };
+    if photons.is_some() {
+        stages.push(("photons".to_string(), t.elapsed()));
+    }
 
     // The accumulation buffer holds as many rows as one storage binding may address.
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
@@ -44,26 +265,37 @@ pub fn render_gpu(
     }
     let accumulation = ctx.create_buffer("accumulation", max_rows as u64 * row_bytes)?;
 
-    // Render, band by band
+    // Gather, band by band
     let t = Instant::now();
-    let mut image = Image::new(f.width, f.height);
+    let mut layers = Layers::new(f.width, f.height);
     let units = work_units(f.width, f.height, spp, max_rows);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
     let mut rays = 0;
-    let mut download_time = std::time::Duration::ZERO;
+    let mut download_time = Duration::ZERO;
     for (i, unit) in units.iter().enumerate() {
         if unit.sample_begin == 0 {
             ctx.fill_zero(&accumulation)?;
         }
         let invocations = unit.row_count * f.width;
-        let groups = invocations.div_ceil(WORKGROUP_SIZE);
         ctx.run("render", |rec| {
             rec.dispatch(
-                &kernel,
-                &[&frame, &nodes, &primitives, &materials, &lights, &accumulation],
+                &render_kernel,
+                &[
+                    &scene.frame,
+                    &scene.nodes,
+                    &scene.primitives,
+                    &scene.materials,
+                    &scene.lights,
+                    &accumulation,
+                    &maps.grids,
+                    &maps.global.photons,
+                    &maps.global.starts,
+                    &maps.caustic.photons,
+                    &maps.caustic.starts,
+                ],
                 bytemuck::bytes_of(unit),
-                [groups, 1, 1],
+                groups(invocations),
             )
         })?;
         done += unit_paths(unit);
@@ -72,7 +304,8 @@ pub fn render_gpu(
         if band_done {
             let td = Instant::now();
             let sums: Vec<[f32; 4]> = ctx.download(&accumulation)?;
-            rays += resolve_band(&mut image, unit.row_begin, &sums[..invocations as usize], spp);
+            let band = (invocations * LAYER_COUNT) as usize;
+            rays += resolve_band(&mut layers, unit.row_begin, &sums[..band], spp);
             download_time += td.elapsed();
         }
     }
@@ -85,5 +318,5 @@ pub fn render_gpu(
         samples_per_pixel: spp,
         device: format!("{} ({})", ctx.info().name, ctx.info().driver),
     };
-    Ok(RenderOutput { image, stats })
+    Ok(RenderOutput { image: layers.combined(), layers, stats })
 }

@@ -4,14 +4,17 @@
 
 pub mod bench;
 pub mod gpu;
+pub mod photons;
 pub mod prepare;
 
 use std::time::{Duration, Instant};
 
+pub use photons::PhotonSettings;
 pub use prepare::{prepare, FrameSettings, SceneBuffers};
 
 use crate::io::Image;
-use crate::layout::DispatchRange;
+use crate::layout::constants::{LAYER_COUNT, LAYER_DIRECT};
+use crate::layout::{DispatchRange, FrameParams};
 
 /// Camera paths per dispatch: about 0.1 s of work on lavapipe, far below any GPU watchdog.
 const PATHS_PER_DISPATCH: u64 = 1 << 18;
@@ -58,7 +61,56 @@ impl RenderStats {
     }
 }
 
+/// The four terms of a render; `combined` is their sum.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layers {
+    pub direct: Image,
+    pub specular: Image,
+    pub indirect: Image,
+    pub caustics: Image,
+}
+
+impl Layers {
+    pub fn new(width: u32, height: u32) -> Layers {
+        let blank = Image::new(width, height);
+        Layers { direct: blank.clone(), specular: blank.clone(), indirect: blank.clone(), caustics: blank }
+    }
+
+    /// The terms in `LAYER_*` order with their names.
+    pub fn named(&self) -> [(&'static str, &Image); 4] {
+        [
+            ("direct", &self.direct),
+            ("specular", &self.specular),
+            ("indirect", &self.indirect),
+            ("caustics", &self.caustics),
+        ]
+    }
+
+    fn layer_mut(&mut self, layer: usize) -> &mut Image {
+        match layer {
+            0 => &mut self.direct,
+            1 => &mut self.specular,
+            2 => &mut self.indirect,
+            _ => &mut self.caustics,
+        }
+    }
+
+    pub fn combined(&self) -> Image {
+        let mut out = self.direct.clone();
+        for (_, layer) in &self.named()[1..] {
+            for (o, p) in out.pixels.iter_mut().zip(&layer.pixels) {
+                for c in 0..3 {
+                    o[c] += p[c];
+                }
+            }
+        }
+        out
+    }
+}
+
 pub struct RenderOutput {
+    pub layers: Layers,
+    /// The sum of the layers: what `-o` writes.
     pub image: Image,
     pub stats: RenderStats,
 }
@@ -83,46 +135,72 @@ pub fn work_units(width: u32, height: u32, spp: u32, max_band_rows: u32) -> Vec<
     units
 }
 
-/// Divides accumulated sums by the sample count and copies one band into `image`; returns the
-/// band's ray count.
-pub fn resolve_band(image: &mut Image, row_begin: u32, accumulation: &[[f32; 4]], spp: u32) -> u64 {
-    let start = (row_begin * image.width) as usize;
+/// Divides accumulated sums (`LAYER_COUNT` vec4 per pixel) by the sample count and copies one
+/// band into `layers`; returns the band's ray count.
+pub fn resolve_band(layers: &mut Layers, row_begin: u32, accumulation: &[[f32; 4]], spp: u32) -> u64 {
+    let start = (row_begin * layers.direct.width) as usize;
     let inv = 1.0 / spp as f32;
     let mut rays = 0u64;
-    for (dst, src) in image.pixels[start..].iter_mut().zip(accumulation) {
-        *dst = [src[0] * inv, src[1] * inv, src[2] * inv];
-        rays += src[3] as u64;
+    for (i, pixel) in accumulation.chunks_exact(LAYER_COUNT as usize).enumerate() {
+        for (layer, sum) in pixel.iter().enumerate() {
+            layers.layer_mut(layer).pixels[start + i] = [sum[0] * inv, sum[1] * inv, sum[2] * inv];
+        }
+        rays += pixel[LAYER_DIRECT as usize][3] as u64;
     }
     rays
 }
 
-/// Renders on the CPU reference; `progress(done, total)` is called after each work unit.
-pub fn render_cpu(buffers: &SceneBuffers, spp: u32, progress: &mut dyn FnMut(u64, u64)) -> RenderOutput {
-    let f = buffers.frame;
-    let mut image = Image::new(f.width, f.height);
-    let start = Instant::now();
-    let units = work_units(f.width, f.height, spp, f.height);
+/// The frame constants with photon mapping switched on or off.
+pub fn photon_frame(buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> FrameParams {
+    let mut frame = buffers.frame;
+    frame.photon_mapping = photons.is_some() as u32;
+    frame.gather_rays = photons.map_or(0, |p| p.gather_rays);
+    frame
+}
+
+/// Renders on the CPU reference, with photon maps when `photons` is given; `progress(done,
+/// total)` is called after each work unit.
+pub fn render_cpu(
+    buffers: &SceneBuffers,
+    spp: u32,
+    photons: Option<&PhotonSettings>,
+    progress: &mut dyn FnMut(u64, u64),
+) -> RenderOutput {
+    let mut stages = Vec::new();
+    let t = Instant::now();
+    let maps = photons.map(|settings| photons::build_maps_cpu(buffers, settings, 0));
+    if maps.is_some() {
+        stages.push(("photons".to_string(), t.elapsed()));
+    }
+    let frame = photon_frame(buffers, photons);
+    let mut view = buffers.view();
+    view.frame = &frame;
+    if let Some(maps) = &maps {
+        view.maps = maps.view();
+    }
+
+    let t = Instant::now();
+    let mut layers = Layers::new(frame.width, frame.height);
+    let units = work_units(frame.width, frame.height, spp, frame.height);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
-    let mut rays = 0;
-    let mut accumulation = vec![[0.0f32; 4]; (f.width * f.height) as usize];
-    let view = buffers.view();
+    let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
     for unit in &units {
-        let band = &mut accumulation[(unit.row_begin * f.width) as usize..];
+        let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
         crate::cpu::render::render(&view, unit, band);
         done += unit_paths(unit);
         progress(done, total);
     }
-    rays += resolve_band(&mut image, 0, &accumulation, spp);
-    let device = format!("CPU reference ({} threads)", rayon::current_num_threads());
+    let rays = resolve_band(&mut layers, 0, &accumulation, spp);
+    stages.push(("render".to_string(), t.elapsed()));
     let stats = RenderStats {
-        stages: vec![("render".into(), start.elapsed())],
+        stages,
         rays,
         samples_per_pixel: spp,
-        device,
+        device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
         ..Default::default()
     };
-    RenderOutput { image, stats }
+    RenderOutput { image: layers.combined(), layers, stats }
 }
 
 fn unit_paths(unit: &DispatchRange) -> u64 {

@@ -19,6 +19,8 @@ pub struct SceneBuffers {
     /// Centre and radius of a sphere around the whole scene (for default radii and epsilons).
     pub bounding_center: Vec3,
     pub bounding_radius: f32,
+    /// Total area of all surfaces (scene units squared), for the automatic photon radius.
+    pub surface_area: f32,
 }
 
 impl SceneBuffers {
@@ -29,6 +31,7 @@ impl SceneBuffers {
             primitives: &self.primitives,
             materials: &self.materials,
             lights: &self.lights,
+            maps: crate::cpu::NO_MAPS,
         }
     }
 }
@@ -70,6 +73,12 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             light: NO_LIGHT,
         });
     }
+    let surface_area: f32 = scene
+        .triangles
+        .iter()
+        .map(|t| 0.5 * (t.vertices[1] - t.vertices[0]).cross(t.vertices[2] - t.vertices[0]).length())
+        .chain(scene.spheres.iter().map(|s| 4.0 * std::f32::consts::PI * s.radius * s.radius))
+        .sum();
     let bvh = build_bvh(&primitives)?;
     let mut primitives = bvh.primitives;
 
@@ -99,7 +108,12 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     for pl in &scene.point_lights {
         // An isotropic point light of intensity I emits power 4 pi I.
         powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
-        lights.push(Light { p0: pl.position.into(), kind: LIGHT_POINT, radiance: pl.intensity.into(), ..Default::default() });
+        lights.push(Light {
+            p0: pl.position.into(),
+            kind: LIGHT_POINT,
+            radiance: pl.intensity.into(),
+            ..Default::default()
+        });
     }
     let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
     let mut running = 0.0f64;
@@ -139,7 +153,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         primitive_count: primitives.len() as u32,
         node_count: bvh.nodes.len() as u32,
         total_light_power: total_power as f32,
-        _pad: [0; 3],
+        photon_mapping: 0,
+        gather_rays: 0,
+        _pad: 0,
     };
     Ok(SceneBuffers {
         frame,
@@ -149,5 +165,6 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         lights,
         bounding_center,
         bounding_radius,
+        surface_area,
     })
 }

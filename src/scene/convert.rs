@@ -13,6 +13,7 @@ use super::mesh::{load_obj_triangles, ObjError};
 use super::{Camera, PointLight, RenderSettings, Scene, Sphere, Triangle};
 use crate::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR};
 use crate::layout::Material;
+use crate::render::PhotonSettings;
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -42,12 +43,11 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     };
 
     let Some(camera) = &file.camera else {
-        return Err(SceneError::MissingCamera {
-            location: src.path.display().to_string(),
-        });
+        return Err(SceneError::MissingCamera { location: src.path.display().to_string() });
     };
     let camera = builder.camera(camera)?;
     let render = builder.render(file.render.as_ref())?;
+    let photons = builder.photons(file.photons.as_ref())?;
 
     // Materials in file order, so ids follow the file.
     let mut materials: Vec<_> = file.materials.iter().collect();
@@ -66,9 +66,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     // Warnings
     for (name, used) in builder.material_names.iter().zip(&builder.material_used) {
         if !used {
-            builder.warnings.push(format!(
-                "material \"{name}\" is defined but no shape uses it"
-            ));
+            builder.warnings.push(format!("material \"{name}\" is defined but no shape uses it"));
         }
     }
     let emits = |m: u32| {
@@ -77,26 +75,18 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     };
     let has_light = builder.triangles.iter().any(|t| emits(t.material))
         || builder.spheres.iter().any(|s| emits(s.material))
-        || builder
-            .point_lights
-            .iter()
-            .any(|p| p.intensity.max_element() > 0.0);
+        || builder.point_lights.iter().any(|p| p.intensity.max_element() > 0.0);
     if !has_light {
-        builder
-            .warnings
-            .push("scene has no lights; the image will be black".to_string());
+        builder.warnings.push("scene has no lights; the image will be black".to_string());
     }
 
-    let name = src
-        .path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let name = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Ok(Scene {
         name,
         path: src.path.to_path_buf(),
         camera,
         render,
+        photons,
         materials: builder.materials,
         material_names: builder.material_names,
         triangles: builder.triangles,
@@ -138,33 +128,20 @@ impl Builder<'_> {
         name: &str,
         example: &str,
     ) -> Result<&'f Spanned<T>> {
-        field.as_ref().ok_or_else(|| {
-            self.invalid(
-                table,
-                object,
-                format!("missing field `{name}`; add it, e.g. `{example}`"),
-            )
-        })
+        field
+            .as_ref()
+            .ok_or_else(|| self.invalid(table, object, format!("missing field `{name}`; add it, e.g. `{example}`")))
     }
 
     /// Rejects fields that exist in the format but not for this `type`.
-    fn only_fields(
-        &self,
-        object: &str,
-        what: &str,
-        present: &[Present<'_>],
-        allowed: &[&str],
-    ) -> Result<()> {
+    fn only_fields(&self, object: &str, what: &str, present: &[Present<'_>], allowed: &[&str]) -> Result<()> {
         for (name, span) in present {
             if let Some(span) = span {
                 if !allowed.contains(name) {
                     return Err(self.invalid(
                         span,
                         object,
-                        format!(
-                            "`{name}` does not apply to {what} (it takes {})",
-                            backticked(allowed)
-                        ),
+                        format!("`{name}` does not apply to {what} (it takes {})", backticked(allowed)),
                     ));
                 }
             }
@@ -173,43 +150,22 @@ impl Builder<'_> {
     }
 
     /// A `type` (or `shape`) value that must be one of `valid`.
-    fn one_of<'v>(
-        &self,
-        value: &Spanned<String>,
-        object: &str,
-        field: &str,
-        valid: &[&'v str],
-    ) -> Result<&'v str> {
+    fn one_of<'v>(&self, value: &Spanned<String>, object: &str, field: &str, valid: &[&'v str]) -> Result<&'v str> {
         let given = value.get_ref().as_str();
         if let Some(hit) = valid.iter().find(|v| **v == given) {
             return Ok(hit);
         }
         let hint = match suggest(given, valid) {
             Some(best) => format!("did you mean \"{best}\"?"),
-            None => format!(
-                "use one of {}",
-                valid
-                    .iter()
-                    .map(|v| format!("\"{v}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
+            None => format!("use one of {}", valid.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ")),
         };
-        Err(self.invalid(
-            &value.span(),
-            object,
-            format!("unknown {field} \"{given}\" ({hint})"),
-        ))
+        Err(self.invalid(&value.span(), object, format!("unknown {field} \"{given}\" ({hint})")))
     }
 
     fn number(&self, value: &Spanned<f64>, object: &str, field: &str) -> Result<f32> {
         let v = *value.get_ref();
         if !v.is_finite() || !(v as f32).is_finite() {
-            return Err(self.invalid(
-                &value.span(),
-                object,
-                format!("`{field}` is {v}; give a finite number"),
-            ));
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; give a finite number")));
         }
         Ok(v as f32)
     }
@@ -229,27 +185,14 @@ impl Builder<'_> {
     /// Three finite numbers; a single number `v` means `[v, v, v]`.
     fn vector(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
         let v = value.get_ref().value;
-        if let Some(bad) = v
-            .iter()
-            .find(|c| !c.is_finite() || !(**c as f32).is_finite())
-        {
-            return Err(self.invalid(
-                &value.span(),
-                object,
-                format!("`{field}` contains {bad}; give finite numbers"),
-            ));
+        if let Some(bad) = v.iter().find(|c| !c.is_finite() || !(**c as f32).is_finite()) {
+            return Err(self.invalid(&value.span(), object, format!("`{field}` contains {bad}; give finite numbers")));
         }
         Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
     }
 
     /// An RGB triple that must be >= 0, and <= 1 when `at_most_one` (albedos and tints).
-    fn color(
-        &self,
-        value: &Spanned<Vec3Def>,
-        object: &str,
-        field: &str,
-        at_most_one: bool,
-    ) -> Result<[f32; 3]> {
+    fn color(&self, value: &Spanned<Vec3Def>, object: &str, field: &str, at_most_one: bool) -> Result<[f32; 3]> {
         let c = self.vector(value, object, field)?;
         if c.min_element() < 0.0 {
             return Err(self.invalid(
@@ -262,29 +205,16 @@ impl Builder<'_> {
             return Err(self.invalid(
                 &value.span(),
                 object,
-                format!(
-                    "`{field}` is above 1 ({c}); it is a fraction of light, in [0, 1] per channel"
-                ),
+                format!("`{field}` is above 1 ({c}); it is a fraction of light, in [0, 1] per channel"),
             ));
         }
         Ok(c.to_array())
     }
 
-    fn integer(
-        &self,
-        value: &Spanned<i64>,
-        object: &str,
-        field: &str,
-        min: i64,
-        what: &str,
-    ) -> Result<u32> {
+    fn integer(&self, value: &Spanned<i64>, object: &str, field: &str, min: i64, what: &str) -> Result<u32> {
         let v = *value.get_ref();
         if v < min || v > u32::MAX as i64 {
-            return Err(self.invalid(
-                &value.span(),
-                object,
-                format!("`{field}` is {v}; it must be {what}"),
-            ));
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be {what}")));
         }
         Ok(v as u32)
     }
@@ -295,16 +225,9 @@ impl Builder<'_> {
         let object = "[camera]";
         let table = def.span();
         let c = def.get_ref();
-        let position = self.require(
-            &c.position,
-            &table,
-            object,
-            "position",
-            "position = [0, 1, 5]",
-        )?;
+        let position = self.require(&c.position, &table, object, "position", "position = [0, 1, 5]")?;
         let position = self.point(position, object, "position")?;
-        let look_at_def =
-            self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
+        let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
         let look_at = self.point(look_at_def, object, "look_at")?;
         if look_at == position {
             return Err(self.invalid(
@@ -321,7 +244,8 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &up_def.span(),
                         object,
-                        "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it".to_string(),
+                        "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it"
+                            .to_string(),
                     ));
                 }
                 up
@@ -344,10 +268,7 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &res.span(),
                         object,
-                        format!(
-                            "`resolution` has {} numbers; give [width, height]",
-                            values.len()
-                        ),
+                        format!("`resolution` has {} numbers; give [width, height]", values.len()),
                     ));
                 }
                 let mut wh = [0; 2];
@@ -356,9 +277,7 @@ impl Builder<'_> {
                         return Err(self.invalid(
                             &res.span(),
                             object,
-                            format!(
-                                "`resolution` is {values:?}; width and height must be at least 1"
-                            ),
+                            format!("`resolution` is {values:?}; width and height must be at least 1"),
                         ));
                     }
                     *out = v as u32;
@@ -367,23 +286,12 @@ impl Builder<'_> {
             }
             None => DEFAULT_RESOLUTION,
         };
-        Ok(Camera {
-            position,
-            look_at,
-            up,
-            fov_deg,
-            width,
-            height,
-        })
+        Ok(Camera { position, look_at, up, fov_deg, width, height })
     }
 
     fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
         let object = "[render]";
-        let mut settings = RenderSettings {
-            spp: DEFAULT_SPP,
-            max_depth: DEFAULT_MAX_DEPTH,
-            seed: 0,
-        };
+        let mut settings = RenderSettings { spp: DEFAULT_SPP, max_depth: DEFAULT_MAX_DEPTH, seed: 0 };
         let Some(def) = def else {
             return Ok(settings);
         };
@@ -400,19 +308,62 @@ impl Builder<'_> {
         Ok(settings)
     }
 
+    fn photons(&self, def: Option<&Spanned<super::format::PhotonsDef>>) -> Result<Option<PhotonSettings>> {
+        let object = "[photons]";
+        let mut settings = PhotonSettings::default();
+        let Some(def) = def else {
+            return Ok(Some(settings));
+        };
+        let p = def.get_ref();
+        if let Some(count) = &p.count {
+            settings.photons = self.integer(
+                count,
+                object,
+                "count",
+                1,
+                "at least 1 photon path (set `enabled = false` to turn photon mapping off)",
+            )?;
+        }
+        if let Some(count) = &p.caustic_count {
+            settings.caustic_photons = self.integer(count, object, "caustic_count", 1, "at least 1 photon path")?;
+        }
+        let radius = |value: &Spanned<f64>, field: &str| -> Result<f32> {
+            let r = self.number(value, object, field)?;
+            if r <= 0.0 {
+                return Err(self.invalid(
+                    &value.span(),
+                    object,
+                    format!("`{field}` is {r}; give a positive radius in scene units, or leave it out to derive one"),
+                ));
+            }
+            Ok(r)
+        };
+        if let Some(r) = &p.radius {
+            settings.radius = Some(radius(r, "radius")?);
+        }
+        if let Some(r) = &p.caustic_radius {
+            settings.caustic_radius = Some(radius(r, "caustic_radius")?);
+        }
+        if let Some(rays) = &p.gather_rays {
+            settings.gather_rays =
+                self.integer(rays, object, "gather_rays", 0, "0 (read the global map directly) or more")?;
+        }
+        if let Some(depth) = &p.max_depth {
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+        }
+        if p.enabled.as_ref().is_some_and(|e| !*e.get_ref()) {
+            return Ok(None);
+        }
+        Ok(Some(settings))
+    }
+
     // Materials
 
     fn material(&mut self, key: &Spanned<String>, def: &Spanned<MaterialDef>) -> Result<()> {
         let name = key.get_ref().clone();
         let object = format!("material \"{name}\"");
         let m = def.get_ref();
-        let kind_def = self.require(
-            &m.r#type,
-            &def.span(),
-            &object,
-            "type",
-            "type = \"diffuse\"",
-        )?;
+        let kind_def = self.require(&m.r#type, &def.span(), &object, "type", "type = \"diffuse\"")?;
         let kind = self.one_of(kind_def, &object, "type", MATERIAL_TYPES)?;
         let present = [
             ("type", span_of(&m.r#type)),
@@ -427,48 +378,23 @@ impl Builder<'_> {
         };
         let material = match kind {
             "diffuse" => {
-                self.only_fields(
-                    &object,
-                    "a diffuse material",
-                    &present,
-                    &["type", "reflectance", "emission"],
-                )?;
+                self.only_fields(&object, "a diffuse material", &present, &["type", "reflectance", "emission"])?;
                 let reflectance = match &m.reflectance {
                     Some(r) => self.color(r, &object, "reflectance", true)?,
                     None => [DEFAULT_REFLECTANCE; 3],
                 };
-                Material {
-                    reflectance,
-                    kind: MATERIAL_DIFFUSE,
-                    emission,
-                    ior: 1.0,
-                }
+                Material { reflectance, kind: MATERIAL_DIFFUSE, emission, ior: 1.0 }
             }
             "mirror" => {
-                self.only_fields(
-                    &object,
-                    "a mirror material",
-                    &present,
-                    &["type", "tint", "emission"],
-                )?;
+                self.only_fields(&object, "a mirror material", &present, &["type", "tint", "emission"])?;
                 let tint = match &m.tint {
                     Some(t) => self.color(t, &object, "tint", true)?,
                     None => [1.0; 3],
                 };
-                Material {
-                    reflectance: tint,
-                    kind: MATERIAL_MIRROR,
-                    emission,
-                    ior: 1.0,
-                }
+                Material { reflectance: tint, kind: MATERIAL_MIRROR, emission, ior: 1.0 }
             }
             _ => {
-                self.only_fields(
-                    &object,
-                    "a dielectric material",
-                    &present,
-                    &["type", "ior", "emission"],
-                )?;
+                self.only_fields(&object, "a dielectric material", &present, &["type", "ior", "emission"])?;
                 let ior = match &m.ior {
                     Some(ior_def) => {
                         let ior = self.number(ior_def, &object, "ior")?;
@@ -483,12 +409,7 @@ impl Builder<'_> {
                     }
                     None => DEFAULT_IOR,
                 };
-                Material {
-                    reflectance: [1.0; 3],
-                    kind: MATERIAL_DIELECTRIC,
-                    emission,
-                    ior,
-                }
+                Material { reflectance: [1.0; 3], kind: MATERIAL_DIELECTRIC, emission, ior }
             }
         };
         self.add_material(name, material);
@@ -515,29 +436,17 @@ impl Builder<'_> {
             }
             None => format!(
                 "defined materials: {}; or add a [materials.{name}] table",
-                self.material_names
-                    .iter()
-                    .map(|n| format!("\"{n}\""))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                self.material_names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
             ),
         };
-        Err(self.invalid(
-            &value.span(),
-            object,
-            format!("unknown material \"{name}\" ({hint})"),
-        ))
+        Err(self.invalid(&value.span(), object, format!("unknown material \"{name}\" ({hint})")))
     }
 
     // Shapes
 
     fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
         let s = def.get_ref();
-        let object = object_name(
-            "shape",
-            index,
-            s.name.as_ref().map(|n| n.get_ref().as_str()),
-        );
+        let object = object_name("shape", index, s.name.as_ref().map(|n| n.get_ref().as_str()));
         let table = def.span();
         let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
         let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;
@@ -554,14 +463,7 @@ impl Builder<'_> {
             ("transform", span_of(&s.transform)),
         ];
         let (what, fields): (&str, &[&str]) = match kind {
-            "quad" | "triangle" => (
-                if kind == "quad" {
-                    "a quad"
-                } else {
-                    "a triangle"
-                },
-                &["vertices"],
-            ),
+            "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
             "sphere" => ("a sphere", &["center", "radius"]),
             "box" => ("a box", &["min", "max"]),
             _ => ("a mesh", &["file"]),
@@ -570,13 +472,7 @@ impl Builder<'_> {
         allowed.extend_from_slice(fields);
         self.only_fields(&object, what, &present, &allowed)?;
 
-        let material_def = self.require(
-            &s.material,
-            &table,
-            &object,
-            "material",
-            "material = \"white\"",
-        )?;
+        let material_def = self.require(&s.material, &table, &object, "material", "material = \"white\"")?;
         let material = self.material_id(material_def, &object)?;
         let transform = self.transform(s.transform.as_ref(), &object)?;
 
@@ -593,8 +489,7 @@ impl Builder<'_> {
                 )
             }
             "sphere" => {
-                let center =
-                    self.require(&s.center, &table, &object, "center", "center = [0, 1, 0]")?;
+                let center = self.require(&s.center, &table, &object, "center", "center = [0, 1, 0]")?;
                 let radius = self.require(&s.radius, &table, &object, "radius", "radius = 1.0")?;
                 self.sphere(center, radius, &object, material, transform)
             }
@@ -616,13 +511,7 @@ impl Builder<'_> {
                 Ok(())
             }
             _ => {
-                let file = self.require(
-                    &s.file,
-                    &table,
-                    &object,
-                    "file",
-                    "file = \"meshes/bunny.obj\"",
-                )?;
+                let file = self.require(&s.file, &table, &object, "file", "file = \"meshes/bunny.obj\"")?;
                 self.mesh(file, &object, material, transform)
             }
         }
@@ -643,10 +532,7 @@ impl Builder<'_> {
             return Err(self.invalid(
                 &field.span(),
                 object,
-                format!(
-                    "`vertices` has {} points; this shape needs {count}",
-                    list.len()
-                ),
+                format!("`vertices` has {} points; this shape needs {count}", list.len()),
             ));
         }
         list.iter()
@@ -686,22 +572,8 @@ impl Builder<'_> {
         // The split the Cornell data prescribes; some of its walls are not planar.
         let first = [q[0], q[1], q[2]];
         let second = [q[0], q[2], q[3]];
-        self.explicit_triangle(
-            first,
-            span,
-            object,
-            "triangle (v0, v1, v2) of the quad",
-            material,
-            transform,
-        )?;
-        self.explicit_triangle(
-            second,
-            span,
-            object,
-            "triangle (v0, v2, v3) of the quad",
-            material,
-            transform,
-        )
+        self.explicit_triangle(first, span, object, "triangle (v0, v1, v2) of the quad", material, transform)?;
+        self.explicit_triangle(second, span, object, "triangle (v0, v2, v3) of the quad", material, transform)
     }
 
     /// A triangle written in the scene file: zero area is an error.
@@ -737,19 +609,11 @@ impl Builder<'_> {
         let mut c = self.point(center, object, "center")?;
         let mut r = self.number(radius, object, "radius")?;
         if r <= 0.0 {
-            return Err(self.invalid(
-                &radius.span(),
-                object,
-                format!("`radius` is {r}; it must be > 0"),
-            ));
+            return Err(self.invalid(&radius.span(), object, format!("`radius` is {r}; it must be > 0")));
         }
         if let Some(t) = transform {
             // Columns of the linear part have the scale's lengths (rotation keeps lengths).
-            let lengths = Vec3::new(
-                t.matrix3.x_axis.length(),
-                t.matrix3.y_axis.length(),
-                t.matrix3.z_axis.length(),
-            );
+            let lengths = Vec3::new(t.matrix3.x_axis.length(), t.matrix3.y_axis.length(), t.matrix3.z_axis.length());
             if lengths.max_element() - lengths.min_element() > 1e-5 * lengths.max_element() {
                 return Err(self.invalid(
                     &radius.span(),
@@ -760,21 +624,11 @@ impl Builder<'_> {
             c = t.transform_point3(c);
             r *= lengths.x;
         }
-        self.spheres.push(Sphere {
-            center: c,
-            radius: r,
-            material,
-        });
+        self.spheres.push(Sphere { center: c, radius: r, material });
         Ok(())
     }
 
-    fn mesh(
-        &mut self,
-        file: &Spanned<String>,
-        object: &str,
-        material: u32,
-        transform: Option<Affine3A>,
-    ) -> Result<()> {
+    fn mesh(&mut self, file: &Spanned<String>, object: &str, material: u32, transform: Option<Affine3A>) -> Result<()> {
         let base = self.src.path.parent().unwrap_or(Path::new(""));
         let obj_path = base.join(file.get_ref());
         let location = self.src.at(&file.span());
@@ -823,11 +677,7 @@ impl Builder<'_> {
     }
 
     /// `world_from_object` = translate · rotate Z · rotate Y · rotate X · scale.
-    fn transform(
-        &self,
-        def: Option<&Spanned<TransformDef>>,
-        object: &str,
-    ) -> Result<Option<Affine3A>> {
+    fn transform(&self, def: Option<&Spanned<TransformDef>>, object: &str) -> Result<Option<Affine3A>> {
         let Some(def) = def else {
             return Ok(None);
         };
@@ -839,7 +689,8 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &s.span(),
                         object,
-                        "`transform.scale` is 0 along an axis, which flattens the shape; give non-zero factors".to_string(),
+                        "`transform.scale` is 0 along an axis, which flattens the shape; give non-zero factors"
+                            .to_string(),
                     ));
                 }
                 scale
@@ -855,23 +706,15 @@ impl Builder<'_> {
             None => Vec3::ZERO,
         };
         let r = rotate * (std::f32::consts::PI / 180.0);
-        let rotation =
-            Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
-        Ok(Some(Affine3A::from_mat3_translation(
-            rotation * Mat3::from_diagonal(scale),
-            translate,
-        )))
+        let rotation = Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
+        Ok(Some(Affine3A::from_mat3_translation(rotation * Mat3::from_diagonal(scale), translate)))
     }
 
     // Lights
 
     fn light(&mut self, index: usize, def: &Spanned<LightDef>) -> Result<()> {
         let l = def.get_ref();
-        let object = object_name(
-            "light",
-            index,
-            l.name.as_ref().map(|n| n.get_ref().as_str()),
-        );
+        let object = object_name("light", index, l.name.as_ref().map(|n| n.get_ref().as_str()));
         let table = def.span();
         let kind_def = self.require(&l.r#type, &table, &object, "type", "type = \"area\"")?;
         let kind = self.one_of(kind_def, &object, "type", LIGHT_TYPES)?;
@@ -889,32 +732,12 @@ impl Builder<'_> {
         ];
 
         if kind == "point" {
-            self.only_fields(
-                &object,
-                "a point light",
-                &present,
-                &["name", "type", "position", "intensity"],
-            )?;
-            let position = self.require(
-                &l.position,
-                &table,
-                &object,
-                "position",
-                "position = [0, 5, 0]",
-            )?;
-            let intensity = self.require(
-                &l.intensity,
-                &table,
-                &object,
-                "intensity",
-                "intensity = [10, 10, 10]",
-            )?;
+            self.only_fields(&object, "a point light", &present, &["name", "type", "position", "intensity"])?;
+            let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
+            let intensity = self.require(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
             let position = self.point(position, &object, "position")?;
             let intensity = Vec3::from(self.color(intensity, &object, "intensity", false)?);
-            self.point_lights.push(PointLight {
-                position,
-                intensity,
-            });
+            self.point_lights.push(PointLight { position, intensity });
             return Ok(());
         }
 
@@ -929,13 +752,7 @@ impl Builder<'_> {
             "a sphere area light"
         };
         self.only_fields(&object, what, &present, &allowed)?;
-        let radiance_def = self.require(
-            &l.radiance,
-            &table,
-            &object,
-            "radiance",
-            "radiance = [10, 10, 10]",
-        )?;
+        let radiance_def = self.require(&l.radiance, &table, &object, "radiance", "radiance = [10, 10, 10]")?;
         let radiance = self.color(radiance_def, &object, "radiance", false)?;
 
         // Each area light gets its own black, emitting material named after the light's index.
@@ -949,27 +766,15 @@ impl Builder<'_> {
         }
         let material = self.add_material(
             material_name,
-            Material {
-                reflectance: [0.0; 3],
-                kind: MATERIAL_DIFFUSE,
-                emission: radiance,
-                ior: 1.0,
-            },
+            Material { reflectance: [0.0; 3], kind: MATERIAL_DIFFUSE, emission: radiance, ior: 1.0 },
         );
         self.material_used[material as usize] = true;
         let transform = self.transform(l.transform.as_ref(), &object)?;
         if shape == "quad" {
             let vertices = self.vertices(&l.vertices, &table, &object, 4)?;
-            self.polygon(
-                &vertices,
-                span_of(&l.vertices).unwrap_or(table),
-                &object,
-                material,
-                transform,
-            )
+            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table), &object, material, transform)
         } else {
-            let center =
-                self.require(&l.center, &table, &object, "center", "center = [0, 5, 0]")?;
+            let center = self.require(&l.center, &table, &object, "center", "center = [0, 5, 0]")?;
             let radius = self.require(&l.radius, &table, &object, "radius", "radius = 0.5")?;
             self.sphere(center, radius, &object, material, transform)
         }
@@ -996,10 +801,7 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let e0 = v[1] - v[0];
     let e1 = v[2] - v[0];
     let e2 = v[2] - v[1];
-    let longest = e0
-        .length_squared()
-        .max(e1.length_squared())
-        .max(e2.length_squared());
+    let longest = e0.length_squared().max(e1.length_squared()).max(e2.length_squared());
     let twice_area = e0.cross(e1).length();
     let has_area = twice_area.is_finite() && twice_area > 1e-7 * longest;
     !has_area
@@ -1008,50 +810,16 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
 /// The six faces of an axis-aligned box as quads whose winding normal points outward.
 fn box_faces(min: Vec3, max: Vec3) -> [[Vec3; 4]; 6] {
     let p = |x: bool, y: bool, z: bool| {
-        Vec3::new(
-            if x { max.x } else { min.x },
-            if y { max.y } else { min.y },
-            if z { max.z } else { min.z },
-        )
+        Vec3::new(if x { max.x } else { min.x }, if y { max.y } else { min.y }, if z { max.z } else { min.z })
     };
     // Each face listed counter-clockwise seen from outside, so (v1-v0)x(v2-v0) points out.
     [
-        [
-            p(false, false, false),
-            p(false, false, true),
-            p(false, true, true),
-            p(false, true, false),
-        ], // -x
-        [
-            p(true, false, false),
-            p(true, true, false),
-            p(true, true, true),
-            p(true, false, true),
-        ], // +x
-        [
-            p(false, false, false),
-            p(true, false, false),
-            p(true, false, true),
-            p(false, false, true),
-        ], // -y
-        [
-            p(false, true, false),
-            p(false, true, true),
-            p(true, true, true),
-            p(true, true, false),
-        ], // +y
-        [
-            p(false, false, false),
-            p(false, true, false),
-            p(true, true, false),
-            p(true, false, false),
-        ], // -z
-        [
-            p(false, false, true),
-            p(true, false, true),
-            p(true, true, true),
-            p(false, true, true),
-        ], // +z
+        [p(false, false, false), p(false, false, true), p(false, true, true), p(false, true, false)], // -x
+        [p(true, false, false), p(true, true, false), p(true, true, true), p(true, false, true)],     // +x
+        [p(false, false, false), p(true, false, false), p(true, false, true), p(false, false, true)], // -y
+        [p(false, true, false), p(false, true, true), p(true, true, true), p(true, true, false)],     // +y
+        [p(false, false, false), p(false, true, false), p(true, true, false), p(true, false, false)], // -z
+        [p(false, false, true), p(true, false, true), p(true, true, true), p(false, true, true)],     // +z
     ]
 }
 
@@ -1066,10 +834,7 @@ mod tests {
         for face in box_faces(min, max) {
             let n = (face[1] - face[0]).cross(face[2] - face[0]);
             let face_center = (face[0] + face[1] + face[2] + face[3]) / 4.0;
-            assert!(
-                n.dot(face_center - center) > 0.0,
-                "face {face:?} normal {n}"
-            );
+            assert!(n.dot(face_center - center) > 0.0, "face {face:?} normal {n}");
         }
     }
 

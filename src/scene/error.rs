@@ -14,10 +14,7 @@ use toml::Spanned;
 pub enum SceneError {
     /// The scene file could not be read.
     #[error("{}: cannot read the scene file: {source}", path.display())]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
+    Read { path: PathBuf, source: std::io::Error },
     /// TOML syntax error, or a value of the wrong type (`radius = "big"`).
     #[error("{location}: {message}")]
     Syntax { location: String, message: String },
@@ -32,30 +29,17 @@ pub enum SceneError {
     },
     /// A value that parses but makes no sense: NaN, a negative radius, an unknown material...
     #[error("{location}: {object}: {message}")]
-    Invalid {
-        location: String,
-        object: String,
-        message: String,
-    },
+    Invalid { location: String, object: String, message: String },
     /// The scene has no `[camera]` table.
     #[error("{location}: the scene has no [camera]; add a [camera] table with `position`, `look_at` and `fov`")]
     MissingCamera { location: String },
     /// A mesh's OBJ file does not exist.
     #[error("{location}: {object}: mesh file not found: {} (paths are relative to the scene file)", looked_for.display())]
-    MeshNotFound {
-        location: String,
-        object: String,
-        looked_for: PathBuf,
-    },
+    MeshNotFound { location: String, object: String, looked_for: PathBuf },
     /// A mesh's OBJ file exists but cannot be used. `obj_location` is `file.obj:line` when the
     /// line is known, else the OBJ path.
     #[error("{obj_location}: {message} (mesh of {object} at {location})")]
-    Obj {
-        obj_location: String,
-        message: String,
-        object: String,
-        location: String,
-    },
+    Obj { obj_location: String, message: String, object: String, location: String },
 }
 
 /// The scene source and its path, for turning byte offsets into `path:line`.
@@ -88,11 +72,7 @@ impl Source<'_> {
 
     /// An `Invalid` error at `span`.
     pub fn invalid(&self, span: &Range<usize>, object: &str, message: String) -> SceneError {
-        SceneError::Invalid {
-            location: self.at(span),
-            object: object.to_string(),
-            message,
-        }
+        SceneError::Invalid { location: self.at(span), object: object.to_string(), message }
     }
 
     /// Turns an error of `toml::from_str` into a `SceneError` that names the object and field.
@@ -116,12 +96,7 @@ impl Source<'_> {
                 None if valid.is_empty() => "this table takes no fields".to_string(),
                 None => format!("valid fields: {}", backticked(&valid)),
             };
-            return SceneError::UnknownField {
-                location,
-                field,
-                object,
-                hint,
-            };
+            return SceneError::UnknownField { location, field, object, hint };
         }
 
         if key_path.is_empty() || message == "duplicate key" || error.span().is_none() {
@@ -142,15 +117,9 @@ impl Source<'_> {
                 KeyPart::Index(_) => None,
             })
             .unwrap_or_default();
-        let owner_len = key_path
-            .iter()
-            .rposition(|k| matches!(k, KeyPart::Key(name) if *name == field))
-            .unwrap_or(0);
+        let owner_len = key_path.iter().rposition(|k| matches!(k, KeyPart::Key(name) if *name == field)).unwrap_or(0);
         let object = describe_table(self.text, &key_path[..owner_len]);
-        SceneError::Syntax {
-            location,
-            message: format!("{object}: `{field}`: {}", friendly_types(&message)),
-        }
+        SceneError::Syntax { location, message: format!("{object}: `{field}`: {}", friendly_types(&message)) }
     }
 }
 
@@ -211,11 +180,9 @@ fn describe_table(text: &str, path: &[KeyPart]) -> String {
         (Some("materials"), 1) => "[materials]".to_string(),
         (Some("materials"), _) => format!("material \"{}\"", key(1).unwrap_or_default()),
         (Some(list @ ("shapes" | "lights")), _) => match index(1) {
-            Some(n) => object_name(
-                if list == "shapes" { "shape" } else { "light" },
-                n,
-                element_name(text, list, n).as_deref(),
-            ),
+            Some(n) => {
+                object_name(if list == "shapes" { "shape" } else { "light" }, n, element_name(text, list, n).as_deref())
+            }
             None => format!("`{list}`"),
         },
         (Some(other), _) => format!("`{other}`"),
@@ -257,12 +224,7 @@ fn expected_names(message_tail: &str) -> Vec<String> {
     let Some((_, expected)) = message_tail.split_once("expected") else {
         return Vec::new();
     };
-    expected
-        .split('`')
-        .skip(1)
-        .step_by(2)
-        .map(str::to_string)
-        .collect()
+    expected.split('`').skip(1).step_by(2).map(str::to_string).collect()
 }
 
 /// serde names Rust types; users know numbers and integers.
@@ -277,11 +239,7 @@ fn friendly_types(message: &str) -> String {
 
 /// `a`, `b`, `c`
 pub(crate) fn backticked(names: &[impl AsRef<str>]) -> String {
-    names
-        .iter()
-        .map(|n| format!("`{}`", n.as_ref()))
-        .collect::<Vec<_>>()
-        .join(", ")
+    names.iter().map(|n| format!("`{}`", n.as_ref())).collect::<Vec<_>>().join(", ")
 }
 
 /// Words people write for our fields, tried before spelling similarity: `colour` is not spelled
@@ -326,10 +284,7 @@ const SYNONYMS: &[(&str, &[&str])] = &[
 pub(crate) fn suggest(unknown: &str, valid: &[impl AsRef<str>]) -> Option<String> {
     let lower = unknown.to_lowercase();
     if let Some((_, targets)) = SYNONYMS.iter().find(|(word, _)| *word == lower) {
-        if let Some(hit) = targets
-            .iter()
-            .find(|t| valid.iter().any(|v| v.as_ref() == **t))
-        {
+        if let Some(hit) = targets.iter().find(|t| valid.iter().any(|v| v.as_ref() == **t)) {
             return Some(hit.to_string());
         }
     }
@@ -337,10 +292,7 @@ pub(crate) fn suggest(unknown: &str, valid: &[impl AsRef<str>]) -> Option<String
         .iter()
         .map(|v| {
             let v = v.as_ref();
-            (
-                strsim::normalized_damerau_levenshtein(&lower, &v.to_lowercase()),
-                v,
-            )
+            (strsim::normalized_damerau_levenshtein(&lower, &v.to_lowercase()), v)
         })
         .filter(|(score, _)| *score >= 0.5)
         .max_by(|a, b| a.0.total_cmp(&b.0))
@@ -355,10 +307,7 @@ mod tests {
     fn suggest_finds_typos_and_synonyms_but_not_noise() {
         let material = ["type", "reflectance", "tint", "ior", "emission"];
         assert_eq!(suggest("colour", &material).as_deref(), Some("reflectance"));
-        assert_eq!(
-            suggest("reflectence", &material).as_deref(),
-            Some("reflectance")
-        );
+        assert_eq!(suggest("reflectence", &material).as_deref(), Some("reflectance"));
         assert_eq!(suggest("emision", &material).as_deref(), Some("emission"));
         assert_eq!(suggest("zzzzzzzz", &material), None);
         let shape = ["name", "type", "material", "center", "radius"];
@@ -368,10 +317,7 @@ mod tests {
 
     #[test]
     fn line_column_counts_from_one() {
-        let source = Source {
-            text: "a = 1\nbb = 2\n",
-            path: Path::new("x.toml"),
-        };
+        let source = Source { text: "a = 1\nbb = 2\n", path: Path::new("x.toml") };
         assert_eq!(source.line_column(0), (1, 1));
         assert_eq!(source.line_column(6), (2, 1));
         assert_eq!(source.line_column(9), (2, 4));
@@ -381,10 +327,7 @@ mod tests {
     #[test]
     fn expected_names_reads_serde_lists() {
         assert_eq!(expected_names("x`, expected `a` or `b`"), ["a", "b"]);
-        assert_eq!(
-            expected_names("x`, expected one of `a`, `b`, `c`"),
-            ["a", "b", "c"]
-        );
+        assert_eq!(expected_names("x`, expected one of `a`, `b`, `c`"), ["a", "b", "c"]);
         assert!(expected_names("x`, there are no fields").is_empty());
     }
 }

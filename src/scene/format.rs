@@ -14,6 +14,7 @@ use toml::Spanned;
 pub(crate) struct SceneFile {
     pub camera: Option<Spanned<CameraDef>>,
     pub render: Option<Spanned<RenderDef>>,
+    pub photons: Option<Spanned<PhotonsDef>>,
     #[serde(default)]
     pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
     #[serde(default)]
@@ -38,6 +39,18 @@ pub(crate) struct RenderDef {
     pub spp: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
     pub seed: Option<Spanned<i64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct PhotonsDef {
+    pub enabled: Option<Spanned<bool>>,
+    pub count: Option<Spanned<i64>>,
+    pub caustic_count: Option<Spanned<i64>>,
+    pub radius: Option<Spanned<f64>>,
+    pub caustic_radius: Option<Spanned<f64>>,
+    pub gather_rays: Option<Spanned<i64>>,
+    pub max_depth: Option<Spanned<i64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -105,10 +118,7 @@ impl<'de> Deserialize<'de> for Vec3Def {
                 f.write_str("an array of 3 numbers [x, y, z] or a single number")
             }
             fn visit_f64<E: de::Error>(self, v: f64) -> Result<Vec3Def, E> {
-                Ok(Vec3Def {
-                    value: [v; 3],
-                    scalar: true,
-                })
+                Ok(Vec3Def { value: [v; 3], scalar: true })
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<Vec3Def, E> {
                 self.visit_f64(v as f64)
@@ -128,10 +138,7 @@ impl<'de> Deserialize<'de> for Vec3Def {
                 if count != 3 {
                     return Err(de::Error::invalid_length(count, &"an array of 3 numbers"));
                 }
-                Ok(Vec3Def {
-                    value,
-                    scalar: false,
-                })
+                Ok(Vec3Def { value, scalar: false })
             }
         }
         deserializer.deserialize_any(Vec3Visitor)

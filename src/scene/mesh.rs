@@ -23,28 +23,17 @@ pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, ObjError
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(ObjError::NotFound),
-        Err(e) => {
-            return Err(ObjError::Malformed {
-                line: None,
-                message: format!("cannot read the OBJ file: {e}"),
-            })
-        }
+        Err(e) => return Err(ObjError::Malformed { line: None, message: format!("cannot read the OBJ file: {e}") }),
     };
-    let models = parse(&bytes).map_err(|error| ObjError::Malformed {
-        line: find_error_line(&bytes, &error),
-        message: describe(&error),
-    })?;
+    let models = parse(&bytes)
+        .map_err(|error| ObjError::Malformed { line: find_error_line(&bytes, &error), message: describe(&error) })?;
 
     let mut triangles = Vec::new();
     for model in &models {
         let mesh = &model.mesh;
         let position = |i: u32| {
             let i = i as usize * 3;
-            Vec3::new(
-                mesh.positions[i],
-                mesh.positions[i + 1],
-                mesh.positions[i + 2],
-            )
+            Vec3::new(mesh.positions[i], mesh.positions[i + 1], mesh.positions[i + 2])
         };
         for face in mesh.indices.chunks_exact(3) {
             triangles.push([position(face[0]), position(face[1]), position(face[2])]);
@@ -71,9 +60,8 @@ fn parse(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
         ..Default::default()
     };
     // Materials are not used, so `mtllib` lines load nothing (and a missing .mtl is no error).
-    let (models, _materials) = tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })?;
+    let (models, _materials) =
+        tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |_| Err(tobj::LoadError::OpenFileFailed))?;
     Ok(models)
 }
 
@@ -110,9 +98,7 @@ fn describe(error: &tobj::LoadError) -> String {
         E::NormalParseError => "cannot parse a normal; `vn` needs 3 numbers".to_string(),
         E::TexcoordParseError => "cannot parse a texture coordinate (`vt`)".to_string(),
         E::FaceParseError => "cannot parse a face; `f` needs 3 or more vertex indices".to_string(),
-        E::FaceVertexOutOfBounds => {
-            "a face refers to a vertex that does not exist (indices start at 1)".to_string()
-        }
+        E::FaceVertexOutOfBounds => "a face refers to a vertex that does not exist (indices start at 1)".to_string(),
         E::ReadError => "cannot read the OBJ file (is it UTF-8 text?)".to_string(),
         other => format!("malformed OBJ file: {other}"),
     }

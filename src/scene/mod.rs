@@ -26,6 +26,8 @@ pub struct Scene {
     pub path: PathBuf,
     pub camera: Camera,
     pub render: RenderSettings,
+    /// Photon mapping settings; `None` renders direct light and specular paths only.
+    pub photons: Option<crate::render::PhotonSettings>,
     /// Index = material id. Materials of the file in file order, then one per area light.
     pub materials: Vec<crate::layout::Material>,
     /// Name of each material, same index as `materials`.
@@ -85,10 +87,8 @@ pub struct PointLight {
 
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let source = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let source =
+        std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.to_path_buf(), source })?;
     parse_scene(&source, path)
 }
 
@@ -136,11 +136,7 @@ radiance = 20
         assert_eq!(scene.spheres.len(), 2);
         // Scale 2 then rotate 90 degrees about z: (1,0,0) -> (2,0,0) -> (0,2,0), then +y.
         let s = &scene.spheres[0];
-        assert!(
-            s.center.abs_diff_eq(Vec3::new(0.0, 3.0, 0.0), 1e-5),
-            "{}",
-            s.center
-        );
+        assert!(s.center.abs_diff_eq(Vec3::new(0.0, 3.0, 0.0), 1e-5), "{}", s.center);
         assert_eq!(s.radius, 2.0);
         let light = &scene.materials[scene.spheres[1].material as usize];
         assert_eq!(light.emission, [20.0; 3]);

@@ -1,0 +1,47 @@
+#version 450
+// emit_photons: trace photon paths from the lights and store their photons in the global and
+// caustic maps. CPU twin: src/cpu/emit_photons.rs. Bindings: 0 frame, 1 nodes, 2 primitives,
+// 3 materials, 4 lights, 5 global photons, 6 caustic photons, 7 counters (photons for the global
+// and the caustic map; one past a buffer's capacity is counted but not stored, so the host can
+// grow the buffer and trace again).
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+layout(std430, binding = 0) readonly buffer Frame { FrameParams frame; };
+layout(std430, binding = 1) readonly buffer Nodes { BvhNode nodes[]; };
+layout(std430, binding = 2) readonly buffer Primitives { Primitive primitives[]; };
+layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
+layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = 5) writeonly buffer GlobalPhotons { Photon global_photons[]; };
+layout(std430, binding = 6) writeonly buffer CausticPhotons { Photon caustic_photons[]; };
+layout(std430, binding = 7) buffer Counters { uint counters[2]; };
+layout(push_constant) uniform Push { EmitParams params; };
+
+#include "rng.glsl"
+#include "trace.glsl"
+#include "shading.glsl"
+#include "photon.glsl"
+
+void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags) {
+    // Flux relative to the mean power per path keeps the half floats near 1.
+    float inv_scale = float(params.total_paths) / frame.total_light_power;
+    Photon p = pack_photon(x, flux, inv_scale, wi, flags);
+    if (params.caustics_only == 0u) {
+        uint slot = atomicAdd(counters[0], 1u);
+        if (slot < params.global_capacity) global_photons[slot] = p;
+    }
+    if (flags == PHOTON_FLAG_CAUSTIC) {
+        uint cslot = atomicAdd(counters[1], 1u);
+        if (cslot < params.caustic_capacity) caustic_photons[cslot] = p;
+    }
+}
+
+#include "photon_path.glsl"
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= params.path_count) return;
+    trace_photon_path(params.path_begin + i, params);
+}

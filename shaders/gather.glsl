@@ -1,0 +1,95 @@
+// Radiance estimates from the photon maps and the final gather. CPU twin: src/cpu/gather.rs.
+// The including kernel declares `grids[2]` (0 global, 1 caustic), `global_photons[]`,
+// `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes grid.glsl and
+// photon.glsl.
+
+const uint MAP_GLOBAL = 0u;
+const uint MAP_CAUSTIC = 1u;
+
+Photon map_photon(uint map, uint i) { return map == MAP_GLOBAL ? global_photons[i] : caustic_photons[i]; }
+uint map_start(uint map, uint h) { return map == MAP_GLOBAL ? global_starts[h] : caustic_starts[h]; }
+
+// Irradiance at x (normal n, facing the side photons must arrive from) from the photons of
+// `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
+// whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
+// photons that arrived from behind the surface or lie off its tangent plane.
+vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
+    GridParams g = grids[map];
+    if (g.photon_count == 0u) return vec3(0.0);
+    float r2 = g.radius * g.radius;
+    float thickness = PHOTON_DISC_THICKNESS * g.radius;
+    uint buckets[8];
+    uint bucket_count = grid_lookup_buckets(x, g, buckets);
+    vec3 sum = vec3(0.0);
+    for (uint b = 0u; b < bucket_count; b++) {
+        uint end = map_start(map, buckets[b] + 1u);
+        for (uint i = map_start(map, buckets[b]); i < end; i++) {
+            Photon p = map_photon(map, i);
+            vec3 d = load3(p.position) - x;
+            float d2 = dot(d, d);
+            if (d2 > r2 || abs(dot(d, n)) > thickness) continue;
+            if ((photon_flags(p) & exclude) != 0u || dot(photon_wi(p), n) <= 0.0) continue;
+            sum += photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+        }
+    }
+    return sum * (2.0 / (PI * r2));
+}
+
+// Indirect radiance toward the viewer at a diffuse point x (normal n facing the viewer) of
+// albedo `albedo`, from the global map: by final gathering when frame.gather_rays > 0 (cosine-
+// distributed rays whose diffuse hits read the global map; mirrors and glass on the way are
+// followed), else read directly at x without the direct and caustic photons (fast preview).
+// Emission that gather rays meet is not counted: direct light and caustics cover those paths.
+vec3 indirect_light(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, inout uint rays) {
+    if (frame.gather_rays == 0u) {
+        return albedo * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
+    }
+    vec3 sum = vec3(0.0);
+    for (uint j = 0u; j < frame.gather_rays; j++) {
+        uint gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
+        vec3 d = cosine_direction(n, rand2(stream, sample_index, frame.seed, gdim));
+        vec3 o = x + n * frame.ray_epsilon;
+        vec3 throughput = vec3(1.0);
+        for (uint bounce = 0u; bounce < frame.max_depth; bounce++) {
+            float t;
+            rays++;
+            uint prim = trace_ray(o, d, INF, false, t);
+            if (prim == NO_LIGHT) break;
+            vec3 y = o + t * d;
+            vec3 ny = primitive_normal(prim, y);
+            Material m = materials[primitives[prim].material];
+            bool front = dot(ny, d) < 0.0;
+            vec3 nf = front ? ny : -ny;
+            if (m.kind == MATERIAL_DIFFUSE) {
+                sum += throughput * load3(m.reflectance) * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, y, nf, 0u);
+                break;
+            }
+            if (m.kind == MATERIAL_MIRROR) {
+                throughput *= load3(m.reflectance);
+                d = reflect(d, nf);
+                o = y + nf * frame.ray_epsilon;
+                continue;
+            }
+            float eta_i = front ? 1.0 : m.ior;
+            float eta_t = front ? m.ior : 1.0;
+            float cos_i = -dot(d, nf);
+            float cos_t;
+            float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
+            if (rand1(stream, sample_index, frame.seed, gdim + 1u + bounce) < f) {
+                d = reflect(d, nf);
+                o = y + nf * frame.ray_epsilon;
+            } else {
+                float eta = eta_i / eta_t;
+                d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+                o = y - nf * frame.ray_epsilon;
+            }
+        }
+    }
+    // Cosine sampling cancels the cosine and the 1/pi of the Lambertian BRDF: weight = albedo.
+    return albedo * sum / float(frame.gather_rays);
+}
+
+// Caustic radiance toward the viewer at x from the caustic map.
+vec3 caustic_light(vec3 x, vec3 n, vec3 albedo) {
+    return albedo * (1.0 / PI) * photon_irradiance(MAP_CAUSTIC, x, n, 0u);
+}

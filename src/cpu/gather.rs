@@ -1,0 +1,108 @@
+//! Radiance estimates from the photon maps and the final gather; twin of `shaders/gather.glsl`.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+
+use super::grid::grid_lookup_buckets;
+use super::photon::{photon_flags, photon_flux, photon_wi};
+use super::rng::{rand1, rand2};
+use super::shading::{cosine_direction, fresnel_dielectric, primitive_normal, reflect};
+use super::trace::trace_ray;
+use super::SceneView;
+use crate::layout::constants::*;
+
+pub const MAP_GLOBAL: usize = 0;
+pub const MAP_CAUSTIC: usize = 1;
+
+/// Irradiance at `x` (normal `n`, facing the side photons must arrive from) from the photons of
+/// `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
+/// whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
+/// photons that arrived from behind the surface or lie off its tangent plane.
+pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u32) -> Vec3 {
+    let g = &s.maps.grids[map];
+    if g.photon_count == 0 {
+        return Vec3::ZERO;
+    }
+    let (photons, starts) = if map == MAP_GLOBAL {
+        (s.maps.global_photons, s.maps.global_starts)
+    } else {
+        (s.maps.caustic_photons, s.maps.caustic_starts)
+    };
+    let r2 = g.radius * g.radius;
+    let thickness = PHOTON_DISC_THICKNESS * g.radius;
+    let (buckets, bucket_count) = grid_lookup_buckets(x, g);
+    let mut sum = Vec3::ZERO;
+    for &h in &buckets[..bucket_count] {
+        for p in &photons[starts[h as usize] as usize..starts[h as usize + 1] as usize] {
+            let d = Vec3::from(p.position) - x;
+            let d2 = d.dot(d);
+            if d2 > r2 || d.dot(n).abs() > thickness {
+                continue;
+            }
+            if (photon_flags(p) & exclude) != 0 || photon_wi(p).dot(n) <= 0.0 {
+                continue;
+            }
+            sum += photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+        }
+    }
+    sum * (2.0 / (PI * r2))
+}
+
+/// Indirect radiance toward the viewer at a diffuse point `x` (normal `n` facing the viewer) of
+/// albedo `albedo`, from the global map: final gathering when `gather_rays > 0`, else a direct
+/// read without the direct and caustic photons. Emission that gather rays meet is not counted:
+/// direct light and caustics cover those paths.
+pub fn indirect_light(s: &SceneView, x: Vec3, n: Vec3, albedo: Vec3, stream: u32, sample: u32, rays: &mut u32) -> Vec3 {
+    let f = s.frame;
+    if f.gather_rays == 0 {
+        return albedo * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
+    }
+    let mut sum = Vec3::ZERO;
+    for j in 0..f.gather_rays {
+        let gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
+        let mut d = cosine_direction(n, rand2(stream, sample, f.seed, gdim));
+        let mut o = x + n * f.ray_epsilon;
+        let mut throughput = Vec3::ONE;
+        for bounce in 0..f.max_depth {
+            *rays += 1;
+            let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
+            if prim == NO_LIGHT {
+                break;
+            }
+            let y = o + t * d;
+            let ny = primitive_normal(s, prim, y);
+            let m = &s.materials[s.primitives[prim as usize].material as usize];
+            let front = ny.dot(d) < 0.0;
+            let nf = if front { ny } else { -ny };
+            if m.kind == MATERIAL_DIFFUSE {
+                sum += throughput * Vec3::from(m.reflectance) * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, y, nf, 0);
+                break;
+            }
+            if m.kind == MATERIAL_MIRROR {
+                throughput *= Vec3::from(m.reflectance);
+                d = reflect(d, nf);
+                o = y + nf * f.ray_epsilon;
+                continue;
+            }
+            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+            let cos_i = -d.dot(nf);
+            let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
+            if rand1(stream, sample, f.seed, gdim + 1 + bounce) < fr {
+                d = reflect(d, nf);
+                o = y + nf * f.ray_epsilon;
+            } else {
+                let eta = eta_i / eta_t;
+                d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+                o = y - nf * f.ray_epsilon;
+            }
+        }
+    }
+    // Cosine sampling cancels the cosine and the 1/pi of the Lambertian BRDF: weight = albedo.
+    albedo * sum / f.gather_rays as f32
+}
+
+/// Caustic radiance toward the viewer at `x` from the caustic map.
+pub fn caustic_light(s: &SceneView, x: Vec3, n: Vec3, albedo: Vec3) -> Vec3 {
+    albedo * (1.0 / PI) * photon_irradiance(s, MAP_CAUSTIC, x, n, 0)
+}

@@ -1,0 +1,110 @@
+//! Photon-map settings and the CPU build of both maps (emission, then the hashed grid).
+
+use crate::cpu::emit_photons::emit_photons;
+use crate::cpu::grid_build::{build_grid, grid_params};
+use crate::cpu::MapsView;
+use crate::layout::{EmitParams, GridParams, Photon};
+
+use super::SceneBuffers;
+
+/// Average photons inside a lookup disc the automatic global radius aims at.
+pub const GLOBAL_NEIGHBOURS: f32 = 64.0;
+/// The automatic caustic radius is this fraction of the global one: caustic photons crowd
+/// into small bright areas, so they afford a sharper filter.
+pub const CAUSTIC_RADIUS_FRACTION: f32 = 0.5;
+
+/// How the photon maps are made and read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Photon paths traced for the global map.
+    pub photons: u32,
+    /// Photon paths traced for the caustic map (each ends at its first diffuse surface).
+    pub caustic_photons: u32,
+    /// Lookup radius of the global map (scene units); `None` derives it from the scene's surface
+    /// area and the stored photon count.
+    pub radius: Option<f32>,
+    /// Lookup radius of the caustic map; `None` is half the global radius.
+    pub caustic_radius: Option<f32>,
+    /// Final-gather rays per camera sample; 0 reads the global map directly.
+    pub gather_rays: u32,
+    /// Most surfaces a photon path visits.
+    pub max_depth: u32,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        PhotonSettings {
+            photons: 200_000,
+            caustic_photons: 200_000,
+            radius: None,
+            caustic_radius: None,
+            gather_rays: 8,
+            max_depth: 16,
+        }
+    }
+}
+
+/// Emission parameters of the global (`caustics_only` = 0) or caustic pass `pass`.
+pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) -> EmitParams {
+    let paths = if caustics_only { settings.caustic_photons } else { settings.photons };
+    EmitParams {
+        path_begin: 0,
+        path_count: paths,
+        total_paths: paths,
+        max_depth: settings.max_depth,
+        global_capacity: 0,
+        caustic_capacity: 0,
+        // Global and caustic passes draw disjoint random streams.
+        pass: 2 * pass + caustics_only as u32,
+        caustics_only: caustics_only as u32,
+    }
+}
+
+/// The lookup radii (global, caustic) for maps of the given sizes.
+pub fn radii(buffers: &SceneBuffers, settings: &PhotonSettings, global_stored: u32) -> (f32, f32) {
+    // Photons spread over the surfaces at about stored / area per unit area; the radius whose
+    // disc holds GLOBAL_NEIGHBOURS of them on average.
+    let auto = (GLOBAL_NEIGHBOURS * buffers.surface_area / (std::f32::consts::PI * global_stored.max(1) as f32)).sqrt();
+    let global = settings.radius.unwrap_or(auto);
+    (global, settings.caustic_radius.unwrap_or(global * CAUSTIC_RADIUS_FRACTION))
+}
+
+/// Grid parameters of one map: its photons' flux is relative to total power / paths.
+pub fn map_grid(buffers: &SceneBuffers, radius: f32, stored: u32, paths: u32) -> GridParams {
+    grid_params(radius, stored, buffers.frame.total_light_power / paths.max(1) as f32)
+}
+
+/// Both maps built on the CPU: sorted photons and bucket starts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PhotonMaps {
+    pub grids: [GridParams; 2],
+    pub global_photons: Vec<Photon>,
+    pub global_starts: Vec<u32>,
+    pub caustic_photons: Vec<Photon>,
+    pub caustic_starts: Vec<u32>,
+}
+
+impl PhotonMaps {
+    pub fn view(&self) -> MapsView<'_> {
+        MapsView {
+            grids: &self.grids,
+            global_photons: &self.global_photons,
+            global_starts: &self.global_starts,
+            caustic_photons: &self.caustic_photons,
+            caustic_starts: &self.caustic_starts,
+        }
+    }
+}
+
+/// Traces both passes of `pass` and builds their grids, as the GPU does.
+pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> PhotonMaps {
+    let view = buffers.view();
+    let global = emit_photons(&view, &emit_params(settings, pass, false)).global;
+    let caustic = emit_photons(&view, &emit_params(settings, pass, true)).caustic;
+    let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32);
+    let g_global = map_grid(buffers, r_global, global.len() as u32, settings.photons);
+    let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);
+    let (global_photons, global_starts) = build_grid(&global, &g_global);
+    let (caustic_photons, caustic_starts) = build_grid(&caustic, &g_caustic);
+    PhotonMaps { grids: [g_global, g_caustic], global_photons, global_starts, caustic_photons, caustic_starts }
+}
