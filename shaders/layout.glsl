@@ -3,9 +3,9 @@
 
 struct BvhNode {
     float aabb_min[3];
-    uint left_or_first;
+    uint first;
     float aabb_max[3];
-    uint count;
+    uint skip_count;
 };
 
 struct Primitive {

@@ -15,10 +15,6 @@ float ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
     return enter <= leave ? enter : INF;
 }
 
-float node_entry(uint i, vec3 o, vec3 inv_d, float t_max) {
-    return ray_box(o, inv_d, load3(nodes[i].aabb_min), load3(nodes[i].aabb_max), t_max);
-}
-
 // Möller and Trumbore 1997, two-sided. Returns the hit distance, or INF.
 float ray_triangle(vec3 o, vec3 d, vec3 p0, vec3 p1, vec3 p2, float t_max) {
     vec3 e1 = p1 - p0;
@@ -59,42 +55,34 @@ float ray_primitive(uint i, vec3 o, vec3 d, float t_max) {
 }
 
 // Closest hit in [0, t_max): returns the primitive index or NO_LIGHT (as "none") and sets t_hit.
-// With `any_hit` it returns the first hit found (shadow rays).
+// With `any_hit` it returns the first hit found (shadow rays). Stackless: a missed box, or a
+// finished leaf, continues at the node's miss link.
 uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out float t_hit) {
     vec3 inv_d = 1.0 / d;
     t_hit = t_max;
     uint hit = NO_LIGHT;
-    if (node_entry(0u, o, inv_d, t_hit) == INF) return hit;
-    uint stack[BVH_STACK_SIZE];
-    uint sp = 0u;
     uint node = 0u;
-    while (true) {
+    while (node < frame.node_count) {
         BvhNode n = nodes[node];
-        if (n.count > 0u) {
-            for (uint i = n.left_or_first; i < n.left_or_first + n.count; i++) {
-                float t = ray_primitive(i, o, d, t_hit);
-                if (t < t_hit) {
-                    t_hit = t;
-                    hit = i;
-                    if (any_hit) return hit;
-                }
-            }
-        } else {
-            uint left = node + 1u;
-            uint right = n.left_or_first;
-            float tl = node_entry(left, o, inv_d, t_hit);
-            float tr = node_entry(right, o, inv_d, t_hit);
-            if (tl != INF || tr != INF) {
-                // Visit the nearer child first so that t_hit shrinks early.
-                bool left_first = tl <= tr;
-                node = left_first ? left : right;
-                float t_far = left_first ? tr : tl;
-                if (t_far != INF) stack[sp++] = left_first ? right : left;
-                continue;
+        uint count = n.skip_count & BVH_COUNT_MASK;
+        uint skip = n.skip_count >> BVH_COUNT_BITS;
+        if (ray_box(o, inv_d, load3(n.aabb_min), load3(n.aabb_max), t_hit) == INF) {
+            node = skip;
+            continue;
+        }
+        if (count == 0u) {
+            node++;
+            continue;
+        }
+        for (uint i = n.first; i < n.first + count; i++) {
+            float t = ray_primitive(i, o, d, t_hit);
+            if (t < t_hit) {
+                t_hit = t;
+                hit = i;
+                if (any_hit) return hit;
             }
         }
-        if (sp == 0u) break;
-        node = stack[--sp];
+        node = skip;
     }
     return hit;
 }

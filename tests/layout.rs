@@ -83,7 +83,7 @@ fn glsl_struct_layouts_match_rust() {
     let words = photonix::shaders::spirv("layout_probe").expect("layout_probe kernel is embedded");
     let glsl = spirv_structs(&words);
     let rust = [
-        rust_layout!(BvhNode { aabb_min, left_or_first, aabb_max, count }),
+        rust_layout!(BvhNode { aabb_min, first, aabb_max, skip_count }),
         rust_layout!(Primitive { p0, kind, p1, material, p2, light }),
         rust_layout!(Material { reflectance, kind, emission, ior }),
         rust_layout!(Light { p0, kind, p1, pick_probability, p2, area, radiance, cdf }),

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::layout::constants::{BVH_STACK_SIZE, PRIMITIVE_SPHERE};
+use crate::layout::constants::{BVH_COUNT_BITS, PRIMITIVE_SPHERE};
 use crate::layout::{BvhNode, Primitive};
 
 /// SAH bins per axis; 16 is the usual sweet spot between build time and tree quality.
@@ -18,14 +18,14 @@ const TRAVERSAL_COST: f32 = 1.0;
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     pub primitives: Vec<Primitive>,
-    /// Deepest leaf (root = 1); traversal stacks never need more than this many entries.
+    /// Deepest leaf (root = 1).
     pub depth: u32,
 }
 
 #[derive(Debug, thiserror::Error)]
 pub enum BvhError {
-    #[error("the BVH is {depth} levels deep, more than the {limit} a traversal stack holds; the scene has too many overlapping primitives")]
-    TooDeep { depth: u32, limit: u32 },
+    #[error("the scene has {count} primitives; the BVH addresses at most {limit}")]
+    TooManyPrimitives { count: usize, limit: u32 },
 }
 
 #[derive(Clone, Copy)]
@@ -93,13 +93,15 @@ pub fn build_bvh(primitives: &[Primitive]) -> Result<Bvh, BvhError> {
     if items.is_empty() {
         // One leaf over one zero-area triangle, which no ray can hit: traversal needs no special case.
         let never_hit = Primitive { light: crate::layout::constants::NO_LIGHT, ..Default::default() };
-        nodes.push(BvhNode { count: 1, ..Default::default() });
+        nodes.push(BvhNode { skip_count: (1 << BVH_COUNT_BITS) | 1, ..Default::default() });
         return Ok(Bvh { nodes, primitives: vec![never_hit], depth: 1 });
     }
-    build_node(&mut items, 0, &mut nodes, 1, &mut depth);
-    if depth > BVH_STACK_SIZE {
-        return Err(BvhError::TooDeep { depth, limit: BVH_STACK_SIZE });
+    // Node indices share a u32 with the count bits, and there are fewer than 2n nodes.
+    let limit = 1u32 << (31 - BVH_COUNT_BITS);
+    if primitives.len() >= limit as usize {
+        return Err(BvhError::TooManyPrimitives { count: primitives.len(), limit });
     }
+    build_node(&mut items, 0, &mut nodes, 1, &mut depth);
     let ordered = items.iter().map(|it| primitives[it.index as usize]).collect();
     Ok(Bvh { nodes, primitives: ordered, depth })
 }
@@ -117,21 +119,21 @@ fn build_node(items: &mut [Item], first: usize, nodes: &mut Vec<BvhNode>, level:
     nodes.push(BvhNode {
         aabb_min: bounds.min.into(),
         aabb_max: bounds.max.into(),
-        left_or_first: first as u32,
-        count: items.len() as u32,
+        first: first as u32,
+        skip_count: 0,
     });
-    if items.len() == 1 {
-        return;
-    }
-    let Some(mid) = choose_split(items, &bounds, &centroid_bounds) else {
-        return; // stays a leaf
+    let split = if items.len() == 1 { None } else { choose_split(items, &bounds, &centroid_bounds) };
+    let count = match split {
+        None => items.len() as u32, // a leaf
+        Some(mid) => {
+            let (left, right) = items.split_at_mut(mid);
+            build_node(left, first, nodes, level + 1, depth);
+            build_node(right, first + mid, nodes, level + 1, depth);
+            0
+        }
     };
-    let (left, right) = items.split_at_mut(mid);
-    build_node(left, first, nodes, level + 1, depth);
-    let right_index = nodes.len() as u32;
-    build_node(right, first + mid, nodes, level + 1, depth);
-    nodes[node_index].left_or_first = right_index;
-    nodes[node_index].count = 0;
+    // The miss link: the first node after this subtree.
+    nodes[node_index].skip_count = ((nodes.len() as u32) << BVH_COUNT_BITS) | count;
 }
 
 /// Partitions `items` and returns the split position, or `None` when a leaf is cheaper.
@@ -230,8 +232,8 @@ mod tests {
         let bvh = build_bvh(&prims).unwrap();
         let mut covered = vec![0u32; prims.len()];
         for node in &bvh.nodes {
-            if node.count > 0 {
-                for i in node.left_or_first..node.left_or_first + node.count {
+            if node.count() > 0 {
+                for i in node.first..node.first + node.count() {
                     covered[i as usize] += 1;
                     let (lo, hi) = primitive_bounds(&bvh.primitives[i as usize]);
                     assert!(lo.cmpge(Vec3::from(node.aabb_min)).all() && hi.cmple(Vec3::from(node.aabb_max)).all());
@@ -247,6 +249,6 @@ mod tests {
         let prims = vec![triangle([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]); 100];
         let bvh = build_bvh(&prims).unwrap();
         assert_eq!(bvh.primitives.len(), 100);
-        assert!(bvh.nodes.iter().filter(|n| n.count > 0).all(|n| n.count as usize <= MAX_LEAF_SIZE));
+        assert!(bvh.nodes.iter().filter(|n| n.count() > 0).all(|n| n.count() as usize <= MAX_LEAF_SIZE));
     }
 }

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use crate::layout::constants::{BVH_STACK_SIZE, NO_LIGHT, PRIMITIVE_SPHERE};
+use crate::layout::constants::{NO_LIGHT, PRIMITIVE_SPHERE};
 use crate::layout::{BvhNode, Primitive};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
@@ -18,10 +18,6 @@ pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
     } else {
         f32::INFINITY
     }
-}
-
-fn node_entry(node: &BvhNode, o: Vec3, inv_d: Vec3, t_max: f32) -> f32 {
-    ray_box(o, inv_d, Vec3::from(node.aabb_min), Vec3::from(node.aabb_max), t_max)
 }
 
 /// Möller and Trumbore 1997, two-sided. Returns the hit distance, or infinity.
@@ -79,51 +75,35 @@ pub fn ray_primitive(p: &Primitive, o: Vec3, d: Vec3, t_max: f32) -> f32 {
 }
 
 /// Closest hit in [0, t_max) as (primitive index, distance), or `NO_LIGHT` and t_max on a miss.
-/// With `any_hit` the first hit found is returned (shadow rays).
+/// With `any_hit` the first hit found is returned (shadow rays). Stackless: a missed box, or a
+/// finished leaf, continues at the node's miss link.
 pub fn trace_ray(nodes: &[BvhNode], prims: &[Primitive], o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> (u32, f32) {
     let inv_d = d.recip();
     let mut t_hit = t_max;
     let mut hit = NO_LIGHT;
-    if node_entry(&nodes[0], o, inv_d, t_hit) == f32::INFINITY {
-        return (hit, t_hit);
-    }
-    let mut stack = [0u32; BVH_STACK_SIZE as usize];
-    let mut sp = 0;
-    let mut node = 0u32;
-    loop {
-        let n = &nodes[node as usize];
-        if n.count > 0 {
-            for i in n.left_or_first..n.left_or_first + n.count {
-                let t = ray_primitive(&prims[i as usize], o, d, t_hit);
-                if t < t_hit {
-                    t_hit = t;
-                    hit = i;
-                    if any_hit {
-                        return (hit, t_hit);
-                    }
+    let mut node = 0usize;
+    while node < nodes.len() {
+        let n = &nodes[node];
+        let (count, skip) = (n.count(), n.skip() as usize);
+        if ray_box(o, inv_d, Vec3::from(n.aabb_min), Vec3::from(n.aabb_max), t_hit) == f32::INFINITY {
+            node = skip;
+            continue;
+        }
+        if count == 0 {
+            node += 1;
+            continue;
+        }
+        for i in n.first..n.first + count {
+            let t = ray_primitive(&prims[i as usize], o, d, t_hit);
+            if t < t_hit {
+                t_hit = t;
+                hit = i;
+                if any_hit {
+                    return (hit, t_hit);
                 }
             }
-        } else {
-            let (left, right) = (node + 1, n.left_or_first);
-            let tl = node_entry(&nodes[left as usize], o, inv_d, t_hit);
-            let tr = node_entry(&nodes[right as usize], o, inv_d, t_hit);
-            if tl != f32::INFINITY || tr != f32::INFINITY {
-                // Visit the nearer child first so that t_hit shrinks early.
-                let left_first = tl <= tr;
-                node = if left_first { left } else { right };
-                let t_far = if left_first { tr } else { tl };
-                if t_far != f32::INFINITY {
-                    stack[sp] = if left_first { right } else { left };
-                    sp += 1;
-                }
-                continue;
-            }
         }
-        if sp == 0 {
-            break;
-        }
-        sp -= 1;
-        node = stack[sp];
+        node = skip;
     }
     (hit, t_hit)
 }

@@ -44,8 +44,9 @@ shared_constants! {
     /// Threads of a `grid_scan` workgroup, and the values one workgroup scans.
     SCAN_THREADS: u32 = 256;
     SCAN_BLOCK: u32 = 1024;
-    /// Most BVH nodes a traversal keeps on its stack; the builder refuses deeper trees.
-    BVH_STACK_SIZE: u32 = 64;
+    /// Low bits of `BvhNode::skip_count` holding a leaf's primitive count (leaves hold at most 7).
+    BVH_COUNT_BITS: u32 = 3;
+    BVH_COUNT_MASK: u32 = 7;
 
     /// Random dimensions drawn per path vertex; the dimensions below are offsets inside that block.
     RNG_DIMS_PER_BOUNCE: u32 = 8;

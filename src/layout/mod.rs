@@ -5,16 +5,28 @@ pub mod constants;
 
 use bytemuck::{Pod, Zeroable};
 
-/// A node of the flattened BVH, 32 bytes. Nodes are stored depth-first: an interior node's left
-/// child is the next node and `left_or_first` is its right child; a leaf (`count > 0`) covers the
-/// primitives `left_or_first .. left_or_first + count`.
+/// A node of the flattened BVH, 32 bytes. Nodes are stored depth-first, so an interior node's
+/// first child is the next node, and `skip_count >> BVH_COUNT_BITS` is the node that follows
+/// this node's whole subtree (the "miss link"): traversal needs no stack, which SIMD CPU
+/// drivers such as lavapipe run far faster than a per-lane stack. A leaf has
+/// `count = skip_count & BVH_COUNT_MASK > 0` and covers primitives `first .. first + count`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
     pub aabb_min: [f32; 3],
-    pub left_or_first: u32,
+    pub first: u32,
     pub aabb_max: [f32; 3],
-    pub count: u32,
+    pub skip_count: u32,
+}
+
+impl BvhNode {
+    pub fn count(&self) -> u32 {
+        self.skip_count & constants::BVH_COUNT_MASK
+    }
+
+    pub fn skip(&self) -> u32 {
+        self.skip_count >> constants::BVH_COUNT_BITS
+    }
 }
 
 /// One triangle or sphere, in BVH leaf order, 48 bytes.
