@@ -30,11 +30,11 @@ void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags) {
     Photon p = pack_photon(x, flux, inv_scale, wi, flags);
     if (params.caustics_only == 0u) {
         uint slot = atomicAdd(counters[0], 1u);
-        if (slot < params.global_capacity) global_photons[slot] = p;
+        if (slot < params.global_capacity) STORE_PHOTON(global_photons, slot, p)
     }
     if (flags == PHOTON_FLAG_CAUSTIC) {
         uint cslot = atomicAdd(counters[1], 1u);
-        if (cslot < params.caustic_capacity) caustic_photons[cslot] = p;
+        if (cslot < params.caustic_capacity) STORE_PHOTON(caustic_photons, cslot, p)
     }
 }
 

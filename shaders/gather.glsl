@@ -6,7 +6,16 @@
 const uint MAP_GLOBAL = 0u;
 const uint MAP_CAUSTIC = 1u;
 
-Photon map_photon(uint map, uint i) { return map == MAP_GLOBAL ? global_photons[i] : caustic_photons[i]; }
+// Field by field: a whole-struct copy out of either of two blocks makes glslang emit an OpStore
+// between different struct types, which the validation layer rejects.
+#define COPY_PHOTON(p, array, i) { p.position[0] = array[i].position[0]; p.position[1] = array[i].position[1]; \
+    p.position[2] = array[i].position[2]; p.flux_rg = array[i].flux_rg; p.flux_b_dir = array[i].flux_b_dir; }
+
+Photon map_photon(uint map, uint i) {
+    Photon p;
+    if (map == MAP_GLOBAL) COPY_PHOTON(p, global_photons, i) else COPY_PHOTON(p, caustic_photons, i)
+    return p;
+}
 uint map_start(uint map, uint h) { return map == MAP_GLOBAL ? global_starts[h] : caustic_starts[h]; }
 
 // Irradiance at x (normal n, facing the side photons must arrive from) from the photons of

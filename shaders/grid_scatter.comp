@@ -20,5 +20,5 @@ void main() {
     if (i >= grid.photon_count) return;
     Photon p = photons[i];
     uint h = grid_hash(grid_cell(load3(p.position), grid.cell_size), grid.table_mask);
-    sorted_photons[starts[h] + atomicAdd(fill[h], 1u)] = p;
+    STORE_PHOTON(sorted_photons, starts[h] + atomicAdd(fill[h], 1u), p)
 }

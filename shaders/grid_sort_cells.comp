@@ -23,9 +23,9 @@ void main() {
         Photon p = sorted_photons[i];
         uint j = i;
         while (j > begin && photon_less(p, sorted_photons[j - 1u])) {
-            sorted_photons[j] = sorted_photons[j - 1u];
+            STORE_PHOTON(sorted_photons, j, sorted_photons[j - 1u])
             j--;
         }
-        sorted_photons[j] = p;
+        STORE_PHOTON(sorted_photons, j, p)
     }
 }

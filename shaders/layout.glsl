@@ -87,4 +87,10 @@ struct EmitParams {
     uint caustics_only;
 };
 
+// Stores a Photon field by field: glslang emits an invalid whole-struct OpStore when the value
+// comes from a block of another layout (the validation layer rejects the module).
+#define STORE_PHOTON(array, index, value) { Photon v_ = value; uint i_ = index; \
+    array[i_].position[0] = v_.position[0]; array[i_].position[1] = v_.position[1]; \
+    array[i_].position[2] = v_.position[2]; array[i_].flux_rg = v_.flux_rg; array[i_].flux_b_dir = v_.flux_b_dir; }
+
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }

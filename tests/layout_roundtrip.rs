@@ -6,7 +6,7 @@
 
 use bytemuck::Pod;
 use photonix::gpu::{GpuContext, GpuOptions};
-use photonix::layout::{BvhNode, DispatchRange, FrameParams, Light, Material, Primitive};
+use photonix::layout::{BvhNode, DispatchRange, EmitParams, FrameParams, GridParams, Light, Material, Photon, Primitive};
 
 /// Two elements: element 0 has a distinct word in every 4-byte slot, element 1 is zero.
 /// Each word is `0x40SSKKJJ` (struct S, word K, J = K ^ 0xa5): a normal float between 2 and 4,
@@ -33,7 +33,7 @@ fn gpu_copies_every_shared_struct_field_by_field() {
     let gpu = GpuContext::new(&GpuOptions { device: None, validation: true })
         .unwrap_or_else(|e| panic!("cannot open the GPU: {e}"));
     let spirv = photonix::shaders::spirv("layout_probe").expect("build.rs compiles shaders/layout_probe.comp");
-    let probe = gpu.create_kernel("layout_probe", &spirv, 6, 0).unwrap();
+    let probe = gpu.create_kernel("layout_probe", &spirv, 9, 0).unwrap();
 
     let nodes = pattern::<BvhNode>(1);
     let primitives = pattern::<Primitive>(2);
@@ -41,6 +41,9 @@ fn gpu_copies_every_shared_struct_field_by_field() {
     let lights = pattern::<Light>(4);
     let frames = pattern::<FrameParams>(5);
     let ranges = pattern::<DispatchRange>(6);
+    let photons = pattern::<Photon>(7);
+    let grids = pattern::<GridParams>(8);
+    let emits = pattern::<EmitParams>(9);
     let buffers = [
         gpu.upload("nodes", &nodes).unwrap(),
         gpu.upload("primitives", &primitives).unwrap(),
@@ -48,6 +51,9 @@ fn gpu_copies_every_shared_struct_field_by_field() {
         gpu.upload("lights", &lights).unwrap(),
         gpu.upload("frames", &frames).unwrap(),
         gpu.upload("ranges", &ranges).unwrap(),
+        gpu.upload("photons", &photons).unwrap(),
+        gpu.upload("grids", &grids).unwrap(),
+        gpu.upload("emits", &emits).unwrap(),
     ];
     let bound: Vec<_> = buffers.iter().collect();
     gpu.run("layout_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
@@ -58,4 +64,7 @@ fn gpu_copies_every_shared_struct_field_by_field() {
     check("Light", &lights, &gpu.download::<Light>(&buffers[3]).unwrap());
     check("FrameParams", &frames, &gpu.download::<FrameParams>(&buffers[4]).unwrap());
     check("DispatchRange", &ranges, &gpu.download::<DispatchRange>(&buffers[5]).unwrap());
+    check("Photon", &photons, &gpu.download::<Photon>(&buffers[6]).unwrap());
+    check("GridParams", &grids, &gpu.download::<GridParams>(&buffers[7]).unwrap());
+    check("EmitParams", &emits, &gpu.download::<EmitParams>(&buffers[8]).unwrap());
 }

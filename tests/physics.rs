@@ -50,6 +50,7 @@ fn light_over_plane() -> Scene {
             height: SIZE,
         },
         render: RenderSettings { spp: SPP, max_depth: 4, seed: 7 },
+        photons: None,
         materials: vec![
             Material { reflectance: [ALBEDO; 3], kind: MATERIAL_DIFFUSE, ..Default::default() },
             Material { kind: MATERIAL_DIFFUSE, emission: [RADIANCE; 3], ..Default::default() },

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::io::Image;
-use photonix::render::{gpu::render_gpu, prepare, render_cpu, FrameSettings, SceneBuffers};
+use photonix::render::{gpu::render_gpu, prepare, render_cpu, FrameSettings, PhotonSettings, RenderOutput, SceneBuffers};
 use photonix::scene::Scene;
 
 pub fn repo_path(relative: &str) -> PathBuf {
@@ -27,10 +27,25 @@ pub fn buffers(scene: &Scene, width: u32, height: u32) -> SceneBuffers {
     prepare(scene, &settings).expect("scene prepares")
 }
 
+/// Direct light and specular paths only.
 pub fn cpu_image(buffers: &SceneBuffers, spp: u32) -> Image {
-    render_cpu(buffers, spp, &mut |_, _| {}).image
+    render_cpu(buffers, spp, None, &mut |_, _| {}).image
 }
 
+/// Direct light and specular paths only.
 pub fn gpu_image(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32) -> Image {
-    render_gpu(ctx, buffers, spp, &mut |_, _| {}).expect("gpu render succeeds").image
+    render_gpu(ctx, buffers, spp, None, &mut |_, _| {}).expect("gpu render succeeds").image
+}
+
+pub fn cpu_render(buffers: &SceneBuffers, spp: u32, photons: &PhotonSettings) -> RenderOutput {
+    render_cpu(buffers, spp, Some(photons), &mut |_, _| {})
+}
+
+pub fn gpu_render(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32, photons: &PhotonSettings) -> RenderOutput {
+    render_gpu(ctx, buffers, spp, Some(photons), &mut |_, _| {}).expect("gpu render succeeds")
+}
+
+/// Small photon maps for fast tests.
+pub fn test_photons() -> PhotonSettings {
+    PhotonSettings { photons: 20_000, caustic_photons: 20_000, gather_rays: 4, ..PhotonSettings::default() }
 }
