@@ -45,57 +45,56 @@ vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
 }
 
 // Indirect radiance toward the viewer at a diffuse point x (normal n facing the viewer) of
-// albedo `albedo`, from the global map: by final gathering when frame.gather_rays > 0 (cosine-
-// distributed rays whose diffuse hits read the global map; mirrors and glass on the way are
-// followed), else read directly at x without the direct and caustic photons (fast preview).
-// Emission that gather rays meet is not counted: direct light and caustics cover those paths.
-vec3 indirect_light(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, inout uint rays) {
-    if (frame.gather_rays == 0u) {
-        return albedo * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
-    }
-    vec3 sum = vec3(0.0);
-    for (uint j = 0u; j < frame.gather_rays; j++) {
-        uint gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
-        vec3 d = cosine_direction(n, rand2(stream, sample_index, frame.seed, gdim));
-        vec3 o = x + n * frame.ray_epsilon;
-        vec3 throughput = vec3(1.0);
-        for (uint bounce = 0u; bounce < frame.max_depth; bounce++) {
-            float t;
-            rays++;
-            uint prim = trace_ray(o, d, INF, false, t);
-            if (prim == NO_LIGHT) break;
-            vec3 y = o + t * d;
-            vec3 ny = primitive_normal(prim, y);
-            Material m = materials[primitives[prim].material];
-            bool front = dot(ny, d) < 0.0;
-            vec3 nf = front ? ny : -ny;
-            if (m.kind == MATERIAL_DIFFUSE) {
-                sum += throughput * load3(m.reflectance) * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, y, nf, 0u);
-                break;
-            }
-            if (m.kind == MATERIAL_MIRROR) {
-                throughput *= load3(m.reflectance);
-                d = reflect(d, nf);
-                o = y + nf * frame.ray_epsilon;
-                continue;
-            }
-            float eta_i = front ? 1.0 : m.ior;
-            float eta_t = front ? m.ior : 1.0;
-            float cos_i = -dot(d, nf);
-            float cos_t;
-            float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
-            if (rand1(stream, sample_index, frame.seed, gdim + 1u + bounce) < f) {
-                d = reflect(d, nf);
-                o = y + nf * frame.ray_epsilon;
-            } else {
-                float eta = eta_i / eta_t;
-                d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-                o = y - nf * frame.ray_epsilon;
-            }
+// albedo `albedo`, read from the global map at x without the direct and caustic photons (the
+// fast preview when frame.gather_rays is 0).
+vec3 indirect_preview(vec3 x, vec3 n, vec3 albedo) {
+    return albedo * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
+}
+
+// One final-gather ray's share of the indirect radiance at x: a cosine-distributed ray j whose
+// first diffuse hit reads the global map (mirrors and glass on the way are followed), weighted
+// 1/gather_rays. Emission met on the way is not counted: direct light and caustics cover it.
+vec3 gather_ray(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, uint j, inout uint rays) {
+    uint gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
+    vec3 d = cosine_direction(n, rand2(stream, sample_index, frame.seed, gdim));
+    vec3 o = x + n * frame.ray_epsilon;
+    vec3 throughput = vec3(1.0);
+    for (uint bounce = 0u; bounce < frame.max_depth; bounce++) {
+        float t;
+        rays++;
+        uint prim = trace_ray(o, d, INF, false, t);
+        if (prim == NO_LIGHT) break;
+        vec3 y = o + t * d;
+        vec3 ny = primitive_normal(prim, y);
+        Material m = materials[primitives[prim].material];
+        bool front = dot(ny, d) < 0.0;
+        vec3 nf = front ? ny : -ny;
+        if (m.kind == MATERIAL_DIFFUSE) {
+            // Cosine sampling cancels the cosine and the 1/pi of the BRDF at x: weight = albedo.
+            vec3 radiance = load3(m.reflectance) * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, y, nf, 0u);
+            return albedo * throughput * radiance / float(frame.gather_rays);
+        }
+        if (m.kind == MATERIAL_MIRROR) {
+            throughput *= load3(m.reflectance);
+            d = reflect(d, nf);
+            o = y + nf * frame.ray_epsilon;
+            continue;
+        }
+        float eta_i = front ? 1.0 : m.ior;
+        float eta_t = front ? m.ior : 1.0;
+        float cos_i = -dot(d, nf);
+        float cos_t;
+        float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
+        if (rand1(stream, sample_index, frame.seed, gdim + 1u + bounce) < f) {
+            d = reflect(d, nf);
+            o = y + nf * frame.ray_epsilon;
+        } else {
+            float eta = eta_i / eta_t;
+            d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+            o = y - nf * frame.ray_epsilon;
         }
     }
-    // Cosine sampling cancels the cosine and the 1/pi of the Lambertian BRDF: weight = albedo.
-    return albedo * sum / float(frame.gather_rays);
+    return vec3(0.0);
 }
 
 // Caustic radiance toward the viewer at x from the caustic map.

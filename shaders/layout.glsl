@@ -57,8 +57,8 @@ struct FrameParams {
 struct DispatchRange {
     uint row_begin;
     uint row_count;
-    uint sample_begin;
-    uint sample_count;
+    uint sample_index;
+    uint part;
 };
 
 struct Photon {

@@ -1,5 +1,6 @@
 #version 450
-// render: the four terms of each pixel, accumulated over a range of rows and samples. A camera
+// render: the four terms of each pixel, accumulated over a band of rows, one sample and one part
+// of it (see DispatchRange). A camera
 // path follows mirrors and glass to the first diffuse surface; there the direct light comes from
 // light sampling, the caustics from the caustic map, the indirect light from a final gather on
 // the global map. Terms reached through a mirror or glass are the specular term.
@@ -32,8 +33,9 @@ layout(push_constant) uniform Push { DispatchRange range; };
 #include "grid.glsl"
 #include "gather.glsl"
 
-// Adds the sample's four terms to `terms` and the rays it casts to `rays`.
-void radiance(uint px, uint py, uint sample_index, inout vec3 terms[4], inout uint rays) {
+// Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
+// DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
+void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
     vec2 jitter = rand2(stream, sample_index, frame.seed, RNG_PIXEL_X);
     float sx = 2.0 * (float(px) + jitter.x) / float(frame.width) - 1.0;
@@ -54,18 +56,24 @@ void radiance(uint px, uint py, uint sample_index, inout vec3 terms[4], inout ui
         bool via_specular = depth > 0u;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
         // diffuse vertices end the path and light sampling covers them.
-        if (front) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * load3(m.emission);
+        if (front && part == 0u) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * load3(m.emission);
         vec3 nf = front ? n : -n;
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
         if (m.kind == MATERIAL_DIFFUSE) {
             vec3 albedo = load3(m.reflectance);
             if (albedo == vec3(0.0)) break;
-            vec3 direct = direct_light(x, nf, albedo, stream, sample_index, dim, rays);
-            terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * direct;
-            if (frame.photon_mapping != 0u) {
-                vec3 caustics = caustic_light(x, nf, albedo);
-                vec3 indirect = indirect_light(x, nf, albedo, stream, sample_index, rays);
-                terms[via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS] += throughput * caustics;
+            if (part == 0u) {
+                vec3 direct = direct_light(x, nf, albedo, stream, sample_index, dim, rays);
+                terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * direct;
+            }
+            if (frame.photon_mapping == 0u) break;
+            if (part == 0u) {
+                terms[via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS] += throughput * caustic_light(x, nf, albedo);
+                if (frame.gather_rays == 0u) {
+                    terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += throughput * indirect_preview(x, nf, albedo);
+                }
+            } else {
+                vec3 indirect = gather_ray(x, nf, albedo, stream, sample_index, part - 1u, rays);
                 terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += throughput * indirect;
             }
             break;
@@ -101,11 +109,10 @@ void main() {
     uint py = range.row_begin + i / frame.width;
     vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     uint rays = 0u;
-    for (uint s = range.sample_begin; s < range.sample_begin + range.sample_count; s++) {
-        radiance(px, py, s, terms, rays);
-    }
+    radiance(px, py, range.sample_index, range.part, terms, rays);
     uint base = i * LAYER_COUNT;
     // w of the direct layer counts rays; a float holds counts exactly up to 2^24 per pixel.
+    // Each pixel belongs to one invocation, so plain read-modify-write is race-free.
     accumulation[base + LAYER_DIRECT] += vec4(terms[LAYER_DIRECT], float(rays));
     accumulation[base + LAYER_SPECULAR] += vec4(terms[LAYER_SPECULAR], 0.0);
     accumulation[base + LAYER_INDIRECT] += vec4(terms[LAYER_INDIRECT], 0.0);

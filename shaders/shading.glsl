@@ -96,10 +96,14 @@ vec3 direct_light(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, u
         if (cos_l <= 0.0) return vec3(0.0);
         geometry *= cos_l * l.area;
     }
+    // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
+    // the offset origin would meet the light's plane early at grazing angles.
     vec3 origin = x + n * frame.ray_epsilon;
+    vec3 to_target = target - origin;
+    float shadow_length = length(to_target);
     float t_unused;
     rays++;
-    if (trace_ray(origin, wi, dist - 2.0 * frame.ray_epsilon, true, t_unused) != NO_LIGHT) return vec3(0.0);
+    if (trace_ray(origin, to_target / shadow_length, shadow_length - frame.ray_epsilon, true, t_unused) != NO_LIGHT) return vec3(0.0);
     return albedo * (1.0 / PI) * load3(l.radiance) * (geometry / l.pick_probability);
 }
 

@@ -18,7 +18,8 @@ fn settings() -> PhotonSettings {
 
 fn check(name: &str, max_rel_mse: f64) {
     let scene = load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).unwrap();
-    let reference = downsample(&read_exr(&common::reference_path(name)).expect("shared reference is readable"), 256 / SIZE);
+    let reference =
+        downsample(&read_exr(&common::reference_path(name)).expect("shared reference is readable"), 256 / SIZE);
     let buffers = common::buffers(&scene, SIZE, SIZE);
     let ctx = common::gpu();
     for (backend, image) in [

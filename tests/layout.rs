@@ -105,7 +105,7 @@ fn glsl_struct_layouts_match_rust() {
             gather_rays,
             _pad,
         }),
-        rust_layout!(DispatchRange { row_begin, row_count, sample_begin, sample_count }),
+        rust_layout!(DispatchRange { row_begin, row_count, sample_index, part }),
         rust_layout!(Photon { position, flux_rg, flux_b_dir }),
         rust_layout!(GridParams { cell_size, radius, table_mask, photon_count, flux_scale, _pad }),
         rust_layout!(EmitParams {

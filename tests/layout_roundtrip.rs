@@ -6,7 +6,9 @@
 
 use bytemuck::Pod;
 use photonix::gpu::{GpuContext, GpuOptions};
-use photonix::layout::{BvhNode, DispatchRange, EmitParams, FrameParams, GridParams, Light, Material, Photon, Primitive};
+use photonix::layout::{
+    BvhNode, DispatchRange, EmitParams, FrameParams, GridParams, Light, Material, Photon, Primitive,
+};
 
 /// Two elements: element 0 has a distinct word in every 4-byte slot, element 1 is zero.
 /// Each word is `0x40SSKKJJ` (struct S, word K, J = K ^ 0xa5): a normal float between 2 and 4,

@@ -50,56 +50,67 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
 }
 
 /// Indirect radiance toward the viewer at a diffuse point `x` (normal `n` facing the viewer) of
-/// albedo `albedo`, from the global map: final gathering when `gather_rays > 0`, else a direct
-/// read without the direct and caustic photons. Emission that gather rays meet is not counted:
-/// direct light and caustics cover those paths.
-pub fn indirect_light(s: &SceneView, x: Vec3, n: Vec3, albedo: Vec3, stream: u32, sample: u32, rays: &mut u32) -> Vec3 {
+/// albedo `albedo`, read from the global map at `x` without the direct and caustic photons (the
+/// fast preview when `gather_rays` is 0).
+pub fn indirect_preview(s: &SceneView, x: Vec3, n: Vec3, albedo: Vec3) -> Vec3 {
+    albedo * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC)
+}
+
+/// One final-gather ray's share of the indirect radiance at `x`: cosine-distributed ray `j`
+/// whose first diffuse hit reads the global map (mirrors and glass on the way are followed),
+/// weighted 1/gather_rays. Emission met on the way is not counted: direct light and caustics
+/// cover it.
+#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
+pub fn gather_ray(
+    s: &SceneView,
+    x: Vec3,
+    n: Vec3,
+    albedo: Vec3,
+    stream: u32,
+    sample: u32,
+    j: u32,
+    rays: &mut u32,
+) -> Vec3 {
     let f = s.frame;
-    if f.gather_rays == 0 {
-        return albedo * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
-    }
-    let mut sum = Vec3::ZERO;
-    for j in 0..f.gather_rays {
-        let gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
-        let mut d = cosine_direction(n, rand2(stream, sample, f.seed, gdim));
-        let mut o = x + n * f.ray_epsilon;
-        let mut throughput = Vec3::ONE;
-        for bounce in 0..f.max_depth {
-            *rays += 1;
-            let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
-            if prim == NO_LIGHT {
-                break;
-            }
-            let y = o + t * d;
-            let ny = primitive_normal(s, prim, y);
-            let m = &s.materials[s.primitives[prim as usize].material as usize];
-            let front = ny.dot(d) < 0.0;
-            let nf = if front { ny } else { -ny };
-            if m.kind == MATERIAL_DIFFUSE {
-                sum += throughput * Vec3::from(m.reflectance) * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, y, nf, 0);
-                break;
-            }
-            if m.kind == MATERIAL_MIRROR {
-                throughput *= Vec3::from(m.reflectance);
-                d = reflect(d, nf);
-                o = y + nf * f.ray_epsilon;
-                continue;
-            }
-            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-            let cos_i = -d.dot(nf);
-            let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
-            if rand1(stream, sample, f.seed, gdim + 1 + bounce) < fr {
-                d = reflect(d, nf);
-                o = y + nf * f.ray_epsilon;
-            } else {
-                let eta = eta_i / eta_t;
-                d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-                o = y - nf * f.ray_epsilon;
-            }
+    let gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
+    let mut d = cosine_direction(n, rand2(stream, sample, f.seed, gdim));
+    let mut o = x + n * f.ray_epsilon;
+    let mut throughput = Vec3::ONE;
+    for bounce in 0..f.max_depth {
+        *rays += 1;
+        let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
+        if prim == NO_LIGHT {
+            break;
+        }
+        let y = o + t * d;
+        let ny = primitive_normal(s, prim, y);
+        let m = &s.materials[s.primitives[prim as usize].material as usize];
+        let front = ny.dot(d) < 0.0;
+        let nf = if front { ny } else { -ny };
+        if m.kind == MATERIAL_DIFFUSE {
+            // Cosine sampling cancels the cosine and the 1/pi of the BRDF at x: weight = albedo.
+            let radiance = Vec3::from(m.reflectance) * (1.0 / PI) * photon_irradiance(s, MAP_GLOBAL, y, nf, 0);
+            return albedo * throughput * radiance / f.gather_rays as f32;
+        }
+        if m.kind == MATERIAL_MIRROR {
+            throughput *= Vec3::from(m.reflectance);
+            d = reflect(d, nf);
+            o = y + nf * f.ray_epsilon;
+            continue;
+        }
+        let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
+        let cos_i = -d.dot(nf);
+        let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
+        if rand1(stream, sample, f.seed, gdim + 1 + bounce) < fr {
+            d = reflect(d, nf);
+            o = y + nf * f.ray_epsilon;
+        } else {
+            let eta = eta_i / eta_t;
+            d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
+            o = y - nf * f.ray_epsilon;
         }
     }
-    // Cosine sampling cancels the cosine and the 1/pi of the Lambertian BRDF: weight = albedo.
-    albedo * sum / f.gather_rays as f32
+    Vec3::ZERO
 }
 
 /// Caustic radiance toward the viewer at `x` from the caustic map.

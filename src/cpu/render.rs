@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::gather::{caustic_light, indirect_light};
+use super::gather::{caustic_light, gather_ray, indirect_preview};
 use super::rng::{rand1, rand2};
 use super::shading::{camera_direction, direct_light, fresnel_dielectric, primitive_normal, reflect};
 use super::trace::trace_ray;
@@ -12,9 +12,10 @@ use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::DispatchRange;
 
-/// Adds the four terms of the camera path of `sample` through pixel (`px`, `py`) to `terms`
-/// (indexed by `LAYER_*`) and the rays it casts to `rays`.
-pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
+/// Adds part `part` of the terms of the camera path of `sample` through pixel (`px`, `py`) to
+/// `terms` (indexed by `LAYER_*`) and the rays it casts to `rays`; part 0 is everything but the
+/// final gather, part k >= 1 is gather ray k - 1 (see `DispatchRange`).
+pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
     let jitter = rand2(stream, sample, f.seed, RNG_PIXEL_X);
@@ -37,7 +38,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3;
         let layer = |own: u32| (if depth > 0 { LAYER_SPECULAR } else { own }) as usize;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
         // diffuse vertices end the path and light sampling covers them.
-        if front {
+        if front && part == 0 {
             terms[layer(LAYER_DIRECT)] += throughput * Vec3::from(m.emission);
         }
         let nf = if front { n } else { -n };
@@ -47,12 +48,20 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3;
             if albedo == Vec3::ZERO {
                 break;
             }
-            let direct = direct_light(s, x, nf, albedo, stream, sample, dim, rays);
-            terms[layer(LAYER_DIRECT)] += throughput * direct;
-            if f.photon_mapping != 0 {
-                let caustics = caustic_light(s, x, nf, albedo);
-                let indirect = indirect_light(s, x, nf, albedo, stream, sample, rays);
-                terms[layer(LAYER_CAUSTICS)] += throughput * caustics;
+            if part == 0 {
+                let direct = direct_light(s, x, nf, albedo, stream, sample, dim, rays);
+                terms[layer(LAYER_DIRECT)] += throughput * direct;
+            }
+            if f.photon_mapping == 0 {
+                break;
+            }
+            if part == 0 {
+                terms[layer(LAYER_CAUSTICS)] += throughput * caustic_light(s, x, nf, albedo);
+                if f.gather_rays == 0 {
+                    terms[layer(LAYER_INDIRECT)] += throughput * indirect_preview(s, x, nf, albedo);
+                }
+            } else {
+                let indirect = gather_ray(s, x, nf, albedo, stream, sample, part - 1, rays);
                 terms[layer(LAYER_INDIRECT)] += throughput * indirect;
             }
             break;
@@ -78,8 +87,8 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3;
     }
 }
 
-/// Adds the samples of `range` to `accumulation` (`LAYER_COUNT` `[r, g, b, w]` per pixel of the
-/// band; w of the direct layer counts rays), exactly as one dispatch of the kernel does.
+/// Adds the sample part of `range` to `accumulation` (`LAYER_COUNT` `[r, g, b, w]` per pixel of
+/// the band; w of the direct layer counts rays), exactly as one dispatch of the kernel does.
 pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]]) {
     let row_len = (s.frame.width * LAYER_COUNT) as usize;
     accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
@@ -87,9 +96,7 @@ pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]
         for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
             let mut terms = [Vec3::ZERO; 4];
             let mut rays = 0;
-            for sample in range.sample_begin..range.sample_begin + range.sample_count {
-                radiance(s, px as u32, py, sample, &mut terms, &mut rays);
-            }
+            radiance(s, px as u32, py, range.sample_index, range.part, &mut terms, &mut rays);
             for (layer, term) in acc.iter_mut().zip(terms) {
                 layer[0] += term.x;
                 layer[1] += term.y;

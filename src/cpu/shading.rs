@@ -126,9 +126,14 @@ pub fn direct_light(
         }
         geometry *= cos_l * l.area;
     }
+    // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
+    // the offset origin would meet the light's plane early at grazing angles.
     let origin = x + n * f.ray_epsilon;
+    let to_target = target - origin;
+    let shadow_length = to_target.length();
     *rays += 1;
-    let (blocker, _) = trace_ray(s.nodes, s.primitives, origin, wi, dist - 2.0 * f.ray_epsilon, true);
+    let (blocker, _) =
+        trace_ray(s.nodes, s.primitives, origin, to_target / shadow_length, shadow_length - f.ray_epsilon, true);
     if blocker != NO_LIGHT {
         return Vec3::ZERO;
     }

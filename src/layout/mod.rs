@@ -101,14 +101,18 @@ pub struct FrameParams {
     pub _pad: u32,
 }
 
-/// Push constants of one camera-kernel dispatch: which rows and which samples it renders.
+/// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
+/// that sample: part 0 is the camera path with emission, direct light and caustics; part k >= 1
+/// is final-gather ray k - 1. Lavapipe stops any invocation after 65535 loop iterations in all
+/// (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop of a shader), so an invocation must do a
+/// bounded amount of work: one ray path and at most one photon lookup per part.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct DispatchRange {
     pub row_begin: u32,
     pub row_count: u32,
-    pub sample_begin: u32,
-    pub sample_count: u32,
+    pub sample_index: u32,
+    pub part: u32,
 }
 
 /// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).

@@ -3,13 +3,18 @@
 use std::time::{Duration, Instant};
 
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
-use super::{photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats, SceneBuffers};
+use super::{
+    parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
+    SceneBuffers,
+};
 use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
 use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, WORKGROUP_SIZE};
 use crate::layout::{DispatchRange, EmitParams, GridParams, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
 const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
+/// Camera-path parts per submission of the camera kernel.
+const PATHS_PER_SUBMIT: u64 = 1 << 18;
 /// Photon paths per `emit_photons` dispatch.
 const PATHS_PER_DISPATCH: u32 = 1 << 18;
 /// First guess of photons stored per path; the buffer grows (and the pass is traced again) when
@@ -268,44 +273,58 @@ pub fn render_gpu(
     // Gather, band by band
     let t = Instant::now();
     let mut layers = Layers::new(f.width, f.height);
-    let units = work_units(f.width, f.height, spp, max_rows);
+    let units = work_units(f.height, spp, parts_per_sample(&f), max_rows);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
     let mut rays = 0;
     let mut download_time = Duration::ZERO;
-    for (i, unit) in units.iter().enumerate() {
-        if unit.sample_begin == 0 {
+    // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
+    // submissions, yet none long enough to trip a GPU watchdog.
+    let mut i = 0;
+    while i < units.len() {
+        let band = units[i].row_begin;
+        let mut end = i;
+        let mut paths = 0;
+        while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
+            paths += units[end].row_count as u64 * f.width as u64;
+            end += 1;
+        }
+        let batch = &units[i..end];
+        if batch[0].sample_index == 0 && batch[0].part == 0 {
             ctx.fill_zero(&accumulation)?;
         }
-        let invocations = unit.row_count * f.width;
+        let invocations = batch[0].row_count * f.width;
         ctx.run("render", |rec| {
-            rec.dispatch(
-                &render_kernel,
-                &[
-                    &scene.frame,
-                    &scene.nodes,
-                    &scene.primitives,
-                    &scene.materials,
-                    &scene.lights,
-                    &accumulation,
-                    &maps.grids,
-                    &maps.global.photons,
-                    &maps.global.starts,
-                    &maps.caustic.photons,
-                    &maps.caustic.starts,
-                ],
-                bytemuck::bytes_of(unit),
-                groups(invocations),
-            )
+            for unit in batch {
+                rec.dispatch(
+                    &render_kernel,
+                    &[
+                        &scene.frame,
+                        &scene.nodes,
+                        &scene.primitives,
+                        &scene.materials,
+                        &scene.lights,
+                        &accumulation,
+                        &maps.grids,
+                        &maps.global.photons,
+                        &maps.global.starts,
+                        &maps.caustic.photons,
+                        &maps.caustic.starts,
+                    ],
+                    bytemuck::bytes_of(unit),
+                    groups(invocations),
+                )?;
+            }
+            Ok(())
         })?;
-        done += unit_paths(unit);
+        done += batch.iter().map(unit_paths).sum::<u64>();
         progress(done, total);
-        let band_done = units.get(i + 1).is_none_or(|next| next.row_begin != unit.row_begin);
-        if band_done {
+        i = end;
+        if units.get(i).is_none_or(|next| next.row_begin != band) {
             let td = Instant::now();
             let sums: Vec<[f32; 4]> = ctx.download(&accumulation)?;
-            let band = (invocations * LAYER_COUNT) as usize;
-            rays += resolve_band(&mut layers, unit.row_begin, &sums[..band], spp);
+            let len = (invocations * LAYER_COUNT) as usize;
+            rays += resolve_band(&mut layers, band, &sums[..len], spp);
             download_time += td.elapsed();
         }
     }

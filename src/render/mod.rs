@@ -16,9 +16,6 @@ use crate::io::Image;
 use crate::layout::constants::{LAYER_COUNT, LAYER_DIRECT};
 use crate::layout::{DispatchRange, FrameParams};
 
-/// Camera paths per dispatch: about 0.1 s of work on lavapipe, far below any GPU watchdog.
-const PATHS_PER_DISPATCH: u64 = 1 << 18;
-
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
     Gpu,
@@ -115,24 +112,27 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
-/// One unit of work: a band of rows and a run of samples, as one dispatch renders it.
-pub fn work_units(width: u32, height: u32, spp: u32, max_band_rows: u32) -> Vec<DispatchRange> {
+/// The dispatches of a frame, in the order both backends accumulate them: per band of rows,
+/// per sample, per part (part 0 plus one part per final-gather ray; see `DispatchRange`).
+pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32) -> Vec<DispatchRange> {
     let band_rows = max_band_rows.clamp(1, height.max(1));
     let mut units = Vec::new();
     let mut row = 0;
     while row < height {
         let rows = band_rows.min(height - row);
-        let pixels = rows as u64 * width as u64;
-        let samples_per_unit = (PATHS_PER_DISPATCH / pixels.max(1)).clamp(1, spp.max(1) as u64) as u32;
-        let mut sample = 0;
-        while sample < spp {
-            let count = samples_per_unit.min(spp - sample);
-            units.push(DispatchRange { row_begin: row, row_count: rows, sample_begin: sample, sample_count: count });
-            sample += count;
+        for sample in 0..spp {
+            for part in 0..parts {
+                units.push(DispatchRange { row_begin: row, row_count: rows, sample_index: sample, part });
+            }
         }
         row += rows;
     }
     units
+}
+
+/// Parts per sample: the camera part, plus one per final-gather ray.
+pub fn parts_per_sample(frame: &FrameParams) -> u32 {
+    1 + if frame.photon_mapping != 0 { frame.gather_rays } else { 0 }
 }
 
 /// Divides accumulated sums (`LAYER_COUNT` vec4 per pixel) by the sample count and copies one
@@ -181,7 +181,7 @@ pub fn render_cpu(
 
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
-    let units = work_units(frame.width, frame.height, spp, frame.height);
+    let units = work_units(frame.height, spp, parts_per_sample(&frame), frame.height);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
     let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
@@ -204,5 +204,5 @@ pub fn render_cpu(
 }
 
 fn unit_paths(unit: &DispatchRange) -> u64 {
-    unit.row_count as u64 * unit.sample_count as u64
+    unit.row_count as u64
 }

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::io::Image;
-use photonix::render::{gpu::render_gpu, prepare, render_cpu, FrameSettings, PhotonSettings, RenderOutput, SceneBuffers};
+use photonix::render::{
+    gpu::render_gpu, prepare, render_cpu, FrameSettings, PhotonSettings, RenderOutput, SceneBuffers,
+};
 use photonix::scene::Scene;
 
 pub fn repo_path(relative: &str) -> PathBuf {
