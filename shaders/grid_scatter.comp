@@ -1,6 +1,6 @@
 #version 450
 // grid_scatter: places each photon in its bucket's range. The slot inside the range depends on
-// the order of the atomics; grid_sort_cells removes that. CPU twin: src/cpu/grid_build.rs.
+// the order of the atomics; grid_rank removes that. CPU twin: src/cpu/grid_build.rs.
 // Bindings: 0 grid params, 1 photons, 2 bucket starts, 3 fill counters (zeroed), 4 sorted photons.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"

@@ -117,10 +117,10 @@ struct PhotonArgs {
     #[arg(long)]
     caustic_photons: Option<u32>,
     /// Lookup radius of the global map, in scene units [default: derived from the scene]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     radius: Option<f32>,
     /// Lookup radius of the caustic map, in scene units [default: half the global radius]
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     caustic_radius: Option<f32>,
     /// Final-gather rays per sample; 0 reads the global map directly (fast preview)
     #[arg(long)]

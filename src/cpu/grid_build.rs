@@ -1,5 +1,5 @@
 //! Building the hashed grid by counting sort; twins of the kernels `grid_count`, `grid_scan`,
-//! `grid_scatter` and `grid_sort_cells` (shaders/grid_*.comp). The result is the same integers on
+//! `grid_scatter` and `grid_rank` (shaders/grid_*.comp). The result is the same integers on
 //! both sides: bucket starts, and photons sorted by bucket and then by `photon_order`.
 
 use glam::Vec3;
@@ -58,8 +58,9 @@ pub fn grid_scatter(photons: &[Photon], g: &GridParams, starts: &[u32], sorted: 
     }
 }
 
-/// Sorts each bucket by `photon_order`, which makes the layout independent of scatter order.
-pub fn grid_sort_cells(starts: &[u32], sorted: &mut [Photon]) {
+/// Orders each bucket by `photon_order`, which makes the layout independent of scatter order
+/// (the kernel places each photon at its rank; sorting gives the same bytes).
+pub fn grid_rank(starts: &[u32], sorted: &mut [Photon]) {
     for w in starts.windows(2) {
         sorted[w[0] as usize..w[1] as usize].sort_unstable_by(photon_order);
     }
@@ -72,7 +73,7 @@ pub fn build_grid(photons: &[Photon], g: &GridParams) -> (Vec<Photon>, Vec<u32>)
     let starts = grid_scan(&counts);
     let mut sorted = vec![Photon::default(); photons.len()];
     grid_scatter(photons, g, &starts, &mut sorted);
-    grid_sort_cells(&starts, &mut sorted);
+    grid_rank(&starts, &mut sorted);
     (sorted, starts)
 }
 

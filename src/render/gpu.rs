@@ -139,7 +139,7 @@ fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool
         if wanted > limit / photon_bytes {
             return Err(GpuError::Unsupported(format!(
                 "the {name} map needs {wanted} photons ({} MiB), more than one storage buffer holds on this device ({} MiB = {} photons); lower the photon count",
-                wanted * photon_bytes >> 20,
+                (wanted * photon_bytes) >> 20,
                 limit >> 20,
                 limit / photon_bytes
             )));
@@ -178,7 +178,7 @@ fn scan(ctx: &GpuContext, values: &Buffer, count: u32) -> Result<(), GpuError> {
     })
 }
 
-/// Builds the hashed grid over `count` photons: count, scan, scatter, sort inside buckets.
+/// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets.
 fn build_map(ctx: &GpuContext, photons: Buffer, grid: GridParams, name: &str) -> Result<DeviceMap, GpuError> {
     let buckets = grid.table_mask + 1;
     let grid_buffer = ctx.upload("grid_params", std::slice::from_ref(&grid))?;
@@ -188,14 +188,19 @@ fn build_map(ctx: &GpuContext, photons: Buffer, grid: GridParams, name: &str) ->
     ctx.run("grid_count", |rec| rec.dispatch(&count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
     scan(ctx, &starts, buckets + 1)?;
     let fill = ctx.create_buffer("grid_fill", buckets as u64 * 4)?;
-    let sorted = ctx.create_buffer(&format!("{name}_sorted"), (count.max(1) as u64) * size_of::<Photon>() as u64)?;
+    let photon_bytes = (count.max(1) as u64) * size_of::<Photon>() as u64;
+    let scattered = ctx.create_buffer(&format!("{name}_scattered"), photon_bytes)?;
     let scatter_kernel = kernel(ctx, "grid_scatter", 5, 0)?;
-    let sort_kernel = kernel(ctx, "grid_sort_cells", 3, 0)?;
+    let rank_kernel = kernel(ctx, "grid_rank", 4, 0)?;
     ctx.run("grid_scatter", |rec| {
-        rec.dispatch(&scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &sorted], &[], groups(count))?;
-        rec.dispatch(&sort_kernel, &[&grid_buffer, &starts, &sorted], &[], groups(buckets))
+        rec.dispatch(&scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))
     })?;
-    Ok(DeviceMap { grid, photons: sorted, starts })
+    drop(photons);
+    let ranked = ctx.create_buffer(&format!("{name}_photons"), photon_bytes)?;
+    ctx.run("grid_rank", |rec| {
+        rec.dispatch(&rank_kernel, &[&grid_buffer, &starts, &scattered, &ranked], &[], groups(count))
+    })?;
+    Ok(DeviceMap { grid, photons: ranked, starts })
 }
 
 /// Traces pass `pass` of both photon maps and builds their grids on the device.

@@ -736,7 +736,12 @@ impl Builder<'_> {
             let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
             let intensity = self.require(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
             let position = self.point(position, &object, "position")?;
-            let intensity = Vec3::from(self.color(intensity, &object, "intensity", false)?);
+            let intensity_def = intensity;
+            let intensity = Vec3::from(self.color(intensity_def, &object, "intensity", false)?);
+            if intensity.max_element() == 0.0 {
+                let at = self.src.at(&intensity_def.span());
+                self.warnings.push(format!("{at}: {object}: `intensity` is 0, so this light emits nothing"));
+            }
             self.point_lights.push(PointLight { position, intensity });
             return Ok(());
         }
@@ -754,6 +759,10 @@ impl Builder<'_> {
         self.only_fields(&object, what, &present, &allowed)?;
         let radiance_def = self.require(&l.radiance, &table, &object, "radiance", "radiance = [10, 10, 10]")?;
         let radiance = self.color(radiance_def, &object, "radiance", false)?;
+        if radiance.iter().all(|&c| c == 0.0) {
+            let at = self.src.at(&radiance_def.span());
+            self.warnings.push(format!("{at}: {object}: `radiance` is 0, so this light emits nothing"));
+        }
 
         // Each area light gets its own black, emitting material named after the light's index.
         let material_name = format!("light {index}");

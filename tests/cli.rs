@@ -1,0 +1,177 @@
+//! The `photonix` command end to end: renders that write files, and bad input that must fail
+//! with a clear message, a non-zero exit and no output file.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+const SCENE: &str = r#"
+[camera]
+position = [0, 1, 4]
+look_at = [0, 0.5, 0]
+fov = 45
+resolution = [24, 16]
+
+[render]
+spp = 2
+
+[photons]
+count = 2000
+caustic_count = 2000
+gather_rays = 2
+
+[materials.white]
+type = "diffuse"
+reflectance = [0.7, 0.7, 0.7]
+
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+
+[[shapes]]
+type = "quad"
+material = "white"
+vertices = [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]]
+
+[[shapes]]
+type = "sphere"
+material = "glass"
+center = [0, 0.5, 0]
+radius = 0.5
+
+[[lights]]
+type = "area"
+shape = "quad"
+vertices = [[-0.5, 2, -0.5], [0.5, 2, -0.5], [0.5, 2, 0.5], [-0.5, 2, 0.5]]
+radiance = [5, 5, 5]
+"#;
+
+fn photonix(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_photonix"))
+        .args(args)
+        .current_dir(dir)
+        .env("PHOTONIX_VALIDATION", "1")
+        .output()
+        .expect("the photonix binary runs")
+}
+
+fn scene_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
+    dir
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+/// A failed run: non-zero exit, no panic, the message pieces present, and no file written.
+fn assert_fails(out: &Output, pieces: &[&str], dir: &Path, never_written: &str) {
+    let err = stderr(out);
+    assert!(!out.status.success(), "expected failure, got success: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for p in pieces {
+        assert!(err.contains(p), "`{p}` missing from: {err}");
+    }
+    assert!(!dir.join(never_written).exists(), "{never_written} was written");
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp."))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
+    let dir = scene_dir();
+    for backend in ["gpu", "cpu"] {
+        let out =
+            photonix(&["render", "scene.toml", "--backend", backend, "-o", &format!("{backend}.png")], dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(stderr(&out).contains("rays/s"), "summary line: {}", stderr(&out));
+        let png = image::open(dir.path().join(format!("{backend}.png"))).unwrap();
+        assert_eq!((png.width(), png.height()), (24, 16));
+    }
+    let out =
+        photonix(&["render", "scene.toml", "-o", "layers.exr", "--layers", "--contact-sheet", "sheet.png"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let layers = exr::prelude::read_all_flat_layers_from_file(dir.path().join("layers.exr")).unwrap();
+    let names: Vec<String> =
+        layers.layer_data.iter().map(|l| l.attributes.layer_name.as_ref().unwrap().to_string()).collect();
+    assert_eq!(names, ["combined", "direct", "specular", "indirect", "caustics"]);
+    let sheet = image::open(dir.path().join("sheet.png")).unwrap();
+    assert_eq!(sheet.width(), 4 * 24 + 3 * 4);
+    // The diff tool compares the two backends' images.
+    let out = photonix(&["render", "scene.toml", "-o", "a.exr"], dir.path());
+    assert!(out.status.success());
+    let out = photonix(&["render", "scene.toml", "-o", "b.exr", "--backend", "cpu"], dir.path());
+    assert!(out.status.success());
+    let out = photonix(&["diff", "a.exr", "b.exr", "--heatmap", "heat.png"], dir.path());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && text.contains("relMSE") && text.contains("mean ratio"), "{text}");
+    assert!(dir.path().join("heat.png").exists());
+}
+
+#[test]
+fn unwritable_output_fails_before_rendering() {
+    let dir = scene_dir();
+    let out = photonix(&["render", "scene.toml", "-o", "missing/out.png"], dir.path());
+    assert_fails(&out, &["missing/out.png", "cannot write output"], dir.path(), "missing");
+    // Nothing was rendered: the failure comes before any summary line.
+    assert!(!stderr(&out).contains("rays/s"));
+    let out = photonix(&["render", "scene.toml", "-o", "out.jpg"], dir.path());
+    assert_fails(&out, &["out.jpg", ".exr", ".png"], dir.path(), "out.jpg");
+}
+
+#[test]
+fn bad_scene_reports_file_and_line() {
+    let dir = scene_dir();
+    std::fs::write(dir.path().join("bad.toml"), SCENE.replace("radius = 0.5", "radius = -0.5")).unwrap();
+    let out = photonix(&["render", "bad.toml", "-o", "out.png"], dir.path());
+    assert_fails(&out, &["bad.toml:33", "radius"], dir.path(), "out.png");
+    let out = photonix(&["render", "nowhere.toml", "-o", "out.png"], dir.path());
+    assert_fails(&out, &["nowhere.toml"], dir.path(), "out.png");
+}
+
+#[test]
+fn bad_photon_settings_are_refused() {
+    let dir = scene_dir();
+    for (args, pieces) in [
+        (vec!["--photons", "0"], vec!["--photons", "at least 1"]),
+        (vec!["--radius", "-1"], vec!["--radius", "positive"]),
+        (vec!["--radius", "NaN"], vec!["--radius"]),
+        (vec!["--layers"], vec!["--layers", ".exr"]),
+    ] {
+        let mut all = vec!["render", "scene.toml", "-o", "out.png"];
+        all.extend(args);
+        let out = photonix(&all, dir.path());
+        assert_fails(&out, &pieces, dir.path(), "out.png");
+    }
+    std::fs::write(dir.path().join("zero.toml"), SCENE.replace("count = 2000\ncaustic", "count = 0\ncaustic")).unwrap();
+    let out = photonix(&["render", "zero.toml", "-o", "out.png"], dir.path());
+    assert_fails(&out, &["zero.toml:", "count", "at least 1"], dir.path(), "out.png");
+}
+
+#[test]
+fn zero_power_light_warns() {
+    let dir = scene_dir();
+    std::fs::write(dir.path().join("dark.toml"), SCENE.replace("radiance = [5, 5, 5]", "radiance = [0, 0, 0]"))
+        .unwrap();
+    let out = photonix(&["render", "dark.toml", "-o", "out.png", "--backend", "cpu"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("warning:") && stderr(&out).contains("emits nothing"), "{}", stderr(&out));
+}
+
+#[test]
+fn missing_vulkan_driver_says_what_to_install() {
+    let dir = scene_dir();
+    let out = Command::new(env!("CARGO_BIN_EXE_photonix"))
+        .args(["render", "scene.toml", "-o", "out.png"])
+        .current_dir(dir.path())
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env_remove("PHOTONIX_VALIDATION")
+        .output()
+        .unwrap();
+    assert_fails(&out, &["mesa-vulkan-drivers", "--backend cpu"], dir.path(), "out.png");
+}
