@@ -41,7 +41,7 @@ void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags) {
 #include "photon_path.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= params.path_count) return;
     trace_photon_path(params.path_begin + i, params);
 }

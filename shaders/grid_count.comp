@@ -14,7 +14,7 @@ layout(std430, binding = 2) buffer Counts { uint counts[]; };
 #include "grid.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= grid.photon_count) return;
     Photon p = photons[i];
     atomicAdd(counts[grid_hash(grid_cell(load3(p.position), grid.cell_size), grid.table_mask)], 1u);

@@ -18,7 +18,7 @@ layout(std430, binding = 3) writeonly buffer Ranked { Photon ranked[]; };
 #include "grid.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= grid.photon_count) return;
     Photon p = scattered[i];
     uint h = grid_hash(grid_cell(load3(p.position), grid.cell_size), grid.table_mask);

@@ -11,7 +11,7 @@ layout(std430, binding = 1) readonly buffer Sums { uint sums[]; };
 layout(push_constant) uniform Push { uint count; };
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= count) return;
     values[i] += sums[i / SCAN_BLOCK];
 }

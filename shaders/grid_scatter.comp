@@ -16,7 +16,7 @@ layout(std430, binding = 4) writeonly buffer Sorted { Photon sorted_photons[]; }
 #include "grid.glsl"
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= grid.photon_count) return;
     Photon p = photons[i];
     uint h = grid_hash(grid_cell(load3(p.position), grid.cell_size), grid.table_mask);

@@ -93,4 +93,8 @@ struct EmitParams {
     array[i_].position[0] = v_.position[0]; array[i_].position[1] = v_.position[1]; \
     array[i_].position[2] = v_.position[2]; array[i_].flux_rg = v_.flux_rg; array[i_].flux_b_dir = v_.flux_b_dir; }
 
+// Index of this invocation in a one-dimensional launch of WORKGROUP_SIZE-wide groups that the
+// host spreads over a 2D grid of workgroups (maxComputeWorkGroupCount[0] is often 65535).
+#define GLOBAL_INDEX ((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * WORKGROUP_SIZE + gl_LocalInvocationID.x)
+
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }

@@ -103,7 +103,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
 
 void main() {
     uint band_pixels = range.row_count * frame.width;
-    uint i = gl_GlobalInvocationID.x;
+    uint i = GLOBAL_INDEX;
     if (i >= band_pixels) return;
     uint px = i % frame.width;
     uint py = range.row_begin + i / frame.width;

@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::{check_output_path, contact_sheet, write_image, write_layers_exr};
-use photonix::render::bench::bench;
+use photonix::render::bench::{bench, bench_photons};
 use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput};
 use photonix::scene::load_scene;
 
@@ -68,6 +68,9 @@ struct BenchArgs {
     /// Skip the CPU reference
     #[arg(long)]
     gpu_only: bool,
+    /// Also time photon tracing and the grid build at these photon path counts (comma-separated)
+    #[arg(long, value_delimiter = ',')]
+    photon_paths: Vec<u32>,
 }
 
 #[derive(clap::Args)]
@@ -263,6 +266,29 @@ fn run_bench(args: BenchArgs) -> Result<()> {
             r.shadow_rays,
             r.shadow_seconds,
         );
+    }
+    if !args.photon_paths.is_empty() {
+        println!();
+        println!("| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |");
+        println!("| --- | --- | --- | --- | --- | --- | --- |");
+    }
+    for &paths in &args.photon_paths {
+        let contexts: Vec<Option<&GpuContext>> = if args.gpu_only { vec![Some(&ctx)] } else { vec![Some(&ctx), None] };
+        for c in contexts {
+            match bench_photons(c, &buffers, paths) {
+                Ok(b) => println!(
+                    "| {} | {} | {} | {:.3} | {:.2} M | {:.3} | {:.3} |",
+                    b.backend.name(),
+                    b.paths,
+                    b.stored,
+                    b.trace_seconds,
+                    b.paths as f64 / b.trace_seconds / 1e6,
+                    b.grid_seconds,
+                    b.grid_seconds / (b.stored as f64 / 1e6),
+                ),
+                Err(e) => println!("| {} | {paths} | - | - | - | - | {e} |", if c.is_some() { "gpu" } else { "cpu" }),
+            }
+        }
     }
     Ok(())
 }

@@ -55,3 +55,53 @@ pub fn bench(ctx: Option<&GpuContext>, buffers: &SceneBuffers, spp: u32) -> Resu
         shadow_seconds: (lit_seconds - primary_seconds).max(1e-9),
     })
 }
+
+/// Photon tracing and grid building at one photon count.
+#[derive(Clone, Debug)]
+pub struct PhotonBench {
+    pub backend: Backend,
+    pub paths: u32,
+    /// Photons stored in the global map.
+    pub stored: u32,
+    pub trace_seconds: f64,
+    pub grid_seconds: f64,
+}
+
+/// Traces `paths` global photon paths and builds their grid, timing the two stages (GPU time from
+/// timestamp queries on the device, wall time on the CPU).
+pub fn bench_photons(ctx: Option<&GpuContext>, buffers: &SceneBuffers, paths: u32) -> Result<PhotonBench, RenderError> {
+    use super::photons::{emit_params, map_grid, radii, PhotonSettings};
+    let settings = PhotonSettings { photons: paths, caustic_photons: 1, ..PhotonSettings::default() };
+    match ctx {
+        Some(ctx) => {
+            let scene = super::gpu::DeviceScene::upload(ctx, buffers, Some(&settings))?;
+            ctx.take_timings();
+            let maps = super::gpu::build_maps_gpu(ctx, &scene, buffers, &settings, 0)?;
+            let timings = ctx.take_timings();
+            let sum = |pred: &dyn Fn(&str) -> bool| -> f64 {
+                timings.iter().filter(|(n, _, _)| pred(n)).map(|(_, s, _)| s).sum()
+            };
+            Ok(PhotonBench {
+                backend: Backend::Gpu,
+                paths,
+                stored: maps.global.grid.photon_count,
+                trace_seconds: sum(&|n| n == "emit_photons"),
+                // Both maps' grids are built; the caustic map of 1 path is negligible.
+                grid_seconds: sum(&|n| n.starts_with("grid_")),
+            })
+        }
+        None => {
+            let view = buffers.view();
+            let t = std::time::Instant::now();
+            let photons = crate::cpu::emit_photons::emit_photons(&view, &emit_params(&settings, 0, false)).global;
+            let trace_seconds = t.elapsed().as_secs_f64();
+            let (radius, _) = radii(buffers, &settings, photons.len() as u32);
+            let grid = map_grid(buffers, radius, photons.len() as u32, paths);
+            let t = std::time::Instant::now();
+            let built = crate::cpu::grid_build::build_grid(&photons, &grid);
+            let grid_seconds = t.elapsed().as_secs_f64();
+            drop(built);
+            Ok(PhotonBench { backend: Backend::Cpu, paths, stored: photons.len() as u32, trace_seconds, grid_seconds })
+        }
+    }
+}

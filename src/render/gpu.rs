@@ -26,8 +26,13 @@ fn kernel(ctx: &GpuContext, name: &str, bindings: u32, push_bytes: usize) -> Res
     ctx.create_kernel(name, &spirv, bindings, push_bytes as u32)
 }
 
+/// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
+/// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
 fn groups(invocations: u32) -> [u32; 3] {
-    [invocations.div_ceil(WORKGROUP_SIZE).max(1), 1, 1]
+    const MAX_X: u32 = 1 << 15;
+    let total = invocations.div_ceil(WORKGROUP_SIZE).max(1);
+    let x = total.min(MAX_X);
+    [x, total.div_ceil(x), 1]
 }
 
 /// The scene arrays on the device.
