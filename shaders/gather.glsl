@@ -80,19 +80,8 @@ vec3 gather_ray(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, uin
             o = y + nf * frame.ray_epsilon;
             continue;
         }
-        float eta_i = front ? 1.0 : m.ior;
-        float eta_t = front ? m.ior : 1.0;
-        float cos_i = -dot(d, nf);
-        float cos_t;
-        float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
-        if (rand1(stream, sample_index, frame.seed, gdim + 1u + bounce) < f) {
-            d = reflect(d, nf);
-            o = y + nf * frame.ray_epsilon;
-        } else {
-            float eta = eta_i / eta_t;
-            d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-            o = y - nf * frame.ray_epsilon;
-        }
+        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+        dielectric_scatter(y, nf, front, m.ior, rand1(stream, sample_index, frame.seed, gdim + 1u + bounce), o, d);
     }
     return vec3(0.0);
 }

@@ -57,19 +57,8 @@ void trace_photon_path(uint path, EmitParams params) {
             o = x + nf * frame.ray_epsilon;
         } else {
             bool front = dot(n, d) < 0.0;
-            float eta_i = front ? 1.0 : m.ior;
-            float eta_t = front ? m.ior : 1.0;
-            float cos_i = -dot(d, nf);
-            float cos_t;
-            float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
-            if (rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE) < f) {
-                d = reflect(d, nf);
-                o = x + nf * frame.ray_epsilon;
-            } else {
-                float eta = eta_i / eta_t;
-                d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-                o = x - nf * frame.ray_epsilon;
-            }
+            // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+            dielectric_scatter(x, nf, front, m.ior, rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE), o, d);
         }
     }
 }

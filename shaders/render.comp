@@ -84,20 +84,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             o = x + nf * frame.ray_epsilon;
             continue;
         }
-        // Dielectric: choose reflection or refraction with the Fresnel probability, weight 1.
-        float eta_i = front ? 1.0 : m.ior;
-        float eta_t = front ? m.ior : 1.0;
-        float cos_i = -dot(d, nf);
-        float cos_t;
-        float f = fresnel_dielectric(cos_i, eta_i, eta_t, cos_t);
-        if (rand1(stream, sample_index, frame.seed, dim + RNG_FRESNEL) < f) {
-            d = reflect(d, nf);
-            o = x + nf * frame.ray_epsilon;
-        } else {
-            float eta = eta_i / eta_t;
-            d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
-            o = x - nf * frame.ray_epsilon;
-        }
+        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+        dielectric_scatter(x, nf, front, m.ior, rand1(stream, sample_index, frame.seed, dim + RNG_FRESNEL), o, d);
     }
 }
 

@@ -118,3 +118,21 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t)
     float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
     return 0.5 * (rs * rs + rp * rp);
 }
+
+// Scatters direction d at a smooth dielectric of index `ior` hit at x (nf faces the incoming ray;
+// `front`: the ray arrives from outside): reflection or refraction, chosen with the Fresnel
+// probability against u (weight 1). Sets d to the new direction and o to x offset to its side.
+void dielectric_scatter(vec3 x, vec3 nf, bool front, float ior, float u, inout vec3 o, inout vec3 d) {
+    float eta_i = front ? 1.0 : ior;
+    float eta_t = front ? ior : 1.0;
+    float cos_i = -dot(d, nf);
+    float cos_t;
+    if (u < fresnel_dielectric(cos_i, eta_i, eta_t, cos_t)) {
+        d = reflect(d, nf);
+        o = x + nf * frame.ray_epsilon;
+    } else {
+        float eta = eta_i / eta_t;
+        d = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+        o = x - nf * frame.ray_epsilon;
+    }
+}

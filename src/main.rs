@@ -269,7 +269,9 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     }
     if !args.photon_paths.is_empty() {
         println!();
-        println!("| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |");
+        println!(
+            "| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |"
+        );
         println!("| --- | --- | --- | --- | --- | --- | --- |");
     }
     for &paths in &args.photon_paths {

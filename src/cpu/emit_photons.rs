@@ -9,7 +9,7 @@ use rayon::prelude::*;
 use super::photon::pack_photon;
 use super::rng::{rand1, rand2};
 use super::shading::{
-    cosine_direction, fresnel_dielectric, pick_light, primitive_normal, reflect, sample_light_point, sphere_direction,
+    cosine_direction, dielectric_scatter, pick_light, primitive_normal, reflect, sample_light_point, sphere_direction,
 };
 use super::trace::trace_ray;
 use super::SceneView;
@@ -90,17 +90,9 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
             o = x + nf * f.ray_epsilon;
         } else {
             let front = n.dot(d) < 0.0;
-            let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-            let cos_i = -d.dot(nf);
-            let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
-            if rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE) < fr {
-                d = reflect(d, nf);
-                o = x + nf * f.ray_epsilon;
-            } else {
-                let eta = eta_i / eta_t;
-                d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-                o = x - nf * f.ray_epsilon;
-            }
+            // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+            (o, d) =
+                dielectric_scatter(s, x, nf, front, m.ior, rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE), d);
         }
     }
 }

@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::grid::grid_lookup_buckets;
 use super::photon::{photon_flags, photon_flux, photon_wi};
 use super::rng::{rand1, rand2};
-use super::shading::{cosine_direction, fresnel_dielectric, primitive_normal, reflect};
+use super::shading::{cosine_direction, dielectric_scatter, primitive_normal, reflect};
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
@@ -98,17 +98,8 @@ pub fn gather_ray(
             o = y + nf * f.ray_epsilon;
             continue;
         }
-        let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-        let cos_i = -d.dot(nf);
-        let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
-        if rand1(stream, sample, f.seed, gdim + 1 + bounce) < fr {
-            d = reflect(d, nf);
-            o = y + nf * f.ray_epsilon;
-        } else {
-            let eta = eta_i / eta_t;
-            d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-            o = y - nf * f.ray_epsilon;
-        }
+        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+        (o, d) = dielectric_scatter(s, y, nf, front, m.ior, rand1(stream, sample, f.seed, gdim + 1 + bounce), d);
     }
     Vec3::ZERO
 }

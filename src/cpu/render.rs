@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::gather::{caustic_light, gather_ray, indirect_preview};
 use super::rng::{rand1, rand2};
-use super::shading::{camera_direction, direct_light, fresnel_dielectric, primitive_normal, reflect};
+use super::shading::{camera_direction, dielectric_scatter, direct_light, primitive_normal, reflect};
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
@@ -72,18 +72,8 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             o = x + nf * f.ray_epsilon;
             continue;
         }
-        // Dielectric: choose reflection or refraction with the Fresnel probability, weight 1.
-        let (eta_i, eta_t) = if front { (1.0, m.ior) } else { (m.ior, 1.0) };
-        let cos_i = -d.dot(nf);
-        let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
-        if rand1(stream, sample, f.seed, dim + RNG_FRESNEL) < fr {
-            d = reflect(d, nf);
-            o = x + nf * f.ray_epsilon;
-        } else {
-            let eta = eta_i / eta_t;
-            d = (eta * d + (eta * cos_i - cos_t) * nf).normalize();
-            o = x - nf * f.ray_epsilon;
-        }
+        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
+        (o, d) = dielectric_scatter(s, x, nf, front, m.ior, rand1(stream, sample, f.seed, dim + RNG_FRESNEL), d);
     }
 }
 

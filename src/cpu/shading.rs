@@ -155,6 +155,22 @@ pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
     (0.5 * (rs * rs + rp * rp), cos_t)
 }
 
+/// Scatters direction `d` at a smooth dielectric of index `ior` hit at `x` (`nf` faces the
+/// incoming ray; `front`: the ray arrives from outside): reflection or refraction, chosen with
+/// the Fresnel probability against `u` (weight 1). Returns the new origin (offset to the new
+/// direction's side) and direction.
+pub fn dielectric_scatter(s: &SceneView, x: Vec3, nf: Vec3, front: bool, ior: f32, u: f32, d: Vec3) -> (Vec3, Vec3) {
+    let (eta_i, eta_t) = if front { (1.0, ior) } else { (ior, 1.0) };
+    let cos_i = -d.dot(nf);
+    let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
+    if u < fr {
+        (x + nf * s.frame.ray_epsilon, reflect(d, nf))
+    } else {
+        let eta = eta_i / eta_t;
+        (x - nf * s.frame.ray_epsilon, (eta * d + (eta * cos_i - cos_t) * nf).normalize())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
