@@ -10,8 +10,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::{check_output_path, contact_sheet, write_image, write_layers_exr};
+use photonix::render::accumulation::{format_ranges, merge, write_accumulation};
 use photonix::render::bench::{bench, bench_photons};
-use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput};
+use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
+use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats};
 use photonix::scene::load_scene;
 
 #[derive(Parser)]
@@ -37,6 +39,8 @@ enum Command {
     Bench(BenchArgs),
     /// Compare a render with a reference: relMSE, RMSE, per-channel mean ratio, error image
     Diff(DiffArgs),
+    /// Combine accumulation files of disjoint pass ranges into one image
+    Merge(MergeArgs),
 }
 
 #[derive(clap::Args)]
@@ -103,12 +107,104 @@ struct RenderArgs {
     exposure: f32,
     #[command(flatten)]
     photons: PhotonArgs,
+    #[command(flatten)]
+    progressive: ProgressiveArgs,
     /// Write a multi-layer EXR (direct, specular, indirect, caustics, combined); needs -o *.exr
     #[arg(long)]
     layers: bool,
     /// Also write the four terms side by side as a PNG
     #[arg(long, value_name = "PNG")]
     contact_sheet: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct ProgressiveArgs {
+    /// Progressive passes (each traces its own photons with a smaller radius) [default: the scene's]
+    #[arg(long)]
+    passes: Option<u32>,
+    /// Stop after the pass that crosses this wall time (e.g. 90s, 2m, 1h)
+    #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
+    time: Option<std::time::Duration>,
+    /// Stop when the estimated relMSE (from odd and even passes) falls below this
+    #[arg(long, allow_hyphen_values = true)]
+    target_error: Option<f64>,
+    /// Rewrite the output with the passes so far this often (e.g. 30s)
+    #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
+    checkpoint_every: Option<std::time::Duration>,
+    /// Render exactly passes A..B and write an accumulation file (see docs/progressive.md)
+    #[arg(long, value_parser = parse_pass_range)]
+    pass_range: Option<(u32, u32)>,
+}
+
+impl ProgressiveArgs {
+    fn budget(&self, scene_passes: u32) -> Result<Budget> {
+        if let Some(e) = self.target_error {
+            if !(e.is_finite() && e > 0.0) {
+                bail!("--target-error is {e}; give a positive relMSE such as 0.01");
+            }
+        }
+        if self.pass_range.is_some() && self.passes.is_some() {
+            bail!("--passes and --pass-range both choose passes; give one of them");
+        }
+        let (first, end) = match (self.pass_range, self.passes) {
+            (Some((a, b)), _) => (a, b),
+            (None, Some(0)) => bail!("--passes must be at least 1"),
+            (None, Some(n)) => (0, n),
+            // A time or error budget alone runs until it is met.
+            (None, None) if self.time.is_some() || self.target_error.is_some() => (0, u32::MAX),
+            (None, None) => (0, scene_passes),
+        };
+        Ok(Budget { first, end, time: self.time, target_error: self.target_error })
+    }
+}
+
+/// `90s`, `2m`, `1.5h`, `250ms` or a number of seconds; must be positive.
+fn parse_duration(s: &str) -> Result<std::time::Duration, String> {
+    let t = s.trim();
+    let (number, unit) = match t.find(|c: char| c.is_ascii_alphabetic()) {
+        Some(i) => t.split_at(i),
+        None => (t, "s"),
+    };
+    let scale = match unit {
+        "ms" => 1e-3,
+        "s" => 1.0,
+        "m" | "min" => 60.0,
+        "h" => 3600.0,
+        _ => return Err(format!("`{s}` has an unknown unit `{unit}`; use ms, s, m or h (e.g. 90s)")),
+    };
+    let value: f64 = number.trim().parse().map_err(|_| format!("`{s}` is not a duration such as 90s or 2m"))?;
+    let seconds = value * scale;
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(format!("`{s}` is not a positive duration; give e.g. 90s"));
+    }
+    Ok(std::time::Duration::from_secs_f64(seconds))
+}
+
+/// `A..B` with A < B: passes A, A+1, ..., B-1.
+fn parse_pass_range(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{s}` is not a pass range A..B of whole numbers with A < B (e.g. 0..32)");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b): (u32, u32) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+    if a >= b {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+#[derive(clap::Args)]
+struct MergeArgs {
+    /// Accumulation files written by `render --pass-range`
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+    /// The merged image (.exr or .png), or with --accumulation a merged accumulation file
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write an accumulation file (sums and pass count) instead of the final image
+    #[arg(long)]
+    accumulation: bool,
+    /// PNG only: scale radiance by 2^EXPOSURE before sRGB encoding
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
 }
 
 #[derive(clap::Args)]
@@ -192,6 +288,7 @@ fn main() -> ExitCode {
         Command::Devices => run_devices(),
         Command::Bench(args) => run_bench(args),
         Command::Diff(args) => run_diff(args),
+        Command::Merge(args) => run_merge(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -314,8 +411,18 @@ fn run_render(args: RenderArgs) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
+    let is_exr = matches!(photonix::io::image::format_of(&output), Ok(photonix::io::image::Format::Exr));
+    if args.layers && !is_exr {
+        bail!("--layers writes a multi-layer EXR; give an output ending in .exr (e.g. -o layers.exr)");
+    }
+    if args.progressive.pass_range.is_some() && !is_exr {
+        bail!("--pass-range writes an accumulation file, which is an EXR; give an output ending in .exr");
+    }
     // Fail on a bad output path now, not after a long render.
     check_output_path(&output)?;
+    if let Some(sheet) = &args.contact_sheet {
+        check_output_path(sheet)?;
+    }
 
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
     let settings = FrameSettings {
@@ -325,12 +432,6 @@ fn run_render(args: RenderArgs) -> Result<()> {
         seed: args.seed.unwrap_or(scene.render.seed),
     };
     let photons = args.photons.apply(scene.photons)?;
-    if args.layers && !matches!(photonix::io::image::format_of(&output), Ok(photonix::io::image::Format::Exr)) {
-        bail!("--layers writes a multi-layer EXR; give an output ending in .exr (e.g. -o layers.exr)");
-    }
-    if let Some(sheet) = &args.contact_sheet {
-        check_output_path(sheet)?;
-    }
     let spp = args.spp.unwrap_or(scene.render.spp);
     if spp == 0 {
         bail!("--spp must be at least 1");
@@ -338,54 +439,177 @@ fn run_render(args: RenderArgs) -> Result<()> {
     if settings.max_depth == 0 {
         bail!("--max-depth must be at least 1");
     }
+    let budget = args.progressive.budget(scene.render.passes)?;
 
     let t = std::time::Instant::now();
     let buffers = prepare(&scene, &settings)?;
     let prepare_time = t.elapsed();
-
-    let bar = progress_bar(&scene.name);
-    let mut progress = |done: u64, total: u64| {
-        if let Some(bar) = &bar {
-            bar.set_length(total);
-            bar.set_position(done);
-        }
-    };
     let backend = match args.backend {
         BackendArg::Gpu => Backend::Gpu,
         BackendArg::Cpu => Backend::Cpu,
     };
-    let mut out: RenderOutput = match backend {
-        Backend::Cpu => render_cpu(&buffers, spp, photons.as_ref(), &mut progress),
-        Backend::Gpu => {
-            let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
-            photonix::render::gpu::render_gpu(&ctx, &buffers, spp, photons.as_ref(), &mut progress)
-                .with_context(|| "rendering failed; no image was written")?
-        }
+    let ctx = match backend {
+        Backend::Gpu => Some(GpuContext::new(&GpuOptions::from_env(args.device.clone()))?),
+        Backend::Cpu => None,
     };
+    // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
+    let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
+
+    let write_result = |acc: &Accumulator| -> Result<()> {
+        if budget_is_range(&args) {
+            write_accumulation(&output, acc)?;
+            return Ok(());
+        }
+        let mean = acc.mean();
+        let combined = mean.combined();
+        if args.layers {
+            let mut named = vec![("combined", &combined)];
+            named.extend(mean.named());
+            write_layers_exr(&output, &named)?;
+        } else {
+            write_image(&output, &combined, args.exposure)?;
+        }
+        Ok(())
+    };
+
+    let bar = progress_bar(&scene.name);
+    let total_passes = budget.end - budget.first;
+    let mut stats = RenderStats::default();
+    let mut last_checkpoint = std::time::Instant::now();
+    let passes_done = std::cell::Cell::new(0u32);
+    let paths_per_pass = photons.map_or(0, |p| p.photons as u64 + p.caustic_photons as u64);
+    let result = render_progressive(
+        width,
+        height,
+        &budget,
+        |pass| -> Result<RenderOutput> {
+            let mut progress = |done: u64, total: u64| {
+                if let Some(bar) = &bar {
+                    let (length, position) = match budget.time {
+                        Some(t) => (t.as_millis() as u64, stats_elapsed(&stats).as_millis() as u64),
+                        None => {
+                            (total_passes as u64 * 1000, passes_done.get() as u64 * 1000 + done * 1000 / total.max(1))
+                        }
+                    };
+                    bar.set_length(length);
+                    bar.set_position(position.min(length));
+                }
+            };
+            let out = match &ctx {
+                None => render_cpu(&buffers, spp, photons.as_ref(), pass, &mut progress),
+                Some(ctx) => {
+                    photonix::render::gpu::render_gpu(ctx, &buffers, spp, photons.as_ref(), pass, &mut progress)
+                        .with_context(|| failure_message(&args, passes_done.get(), &output))?
+                }
+            };
+            add_stats(&mut stats, &out.stats);
+            Ok(out)
+        },
+        |acc, elapsed| -> Result<()> {
+            passes_done.set(acc.passes);
+            if let Some(bar) = &bar {
+                let photon_rate = paths_per_pass as f64 * acc.passes as f64 / elapsed.as_secs_f64().max(1e-9);
+                bar.set_message(format!(
+                    "{} pass {}/{} {:.2} M photons/s",
+                    scene.name,
+                    acc.passes,
+                    total_passes,
+                    photon_rate / 1e6
+                ));
+            }
+            if args.progressive.checkpoint_every.is_some_and(|every| last_checkpoint.elapsed() >= every) {
+                write_result(acc)?;
+                last_checkpoint = std::time::Instant::now();
+            }
+            Ok(())
+        },
+    );
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    out.stats.stages.insert(0, ("prepare".into(), prepare_time));
-
-    let t = std::time::Instant::now();
-    if args.layers {
-        let mut named = vec![("combined", &out.image)];
-        named.extend(out.layers.named());
-        write_layers_exr(&output, &named)?;
-    } else {
-        write_image(&output, &out.image, args.exposure)?;
+    let (acc, reason) = result?;
+    if acc.passes == 0 {
+        bail!("interrupted before the first pass finished; no image was written");
     }
+    let t = std::time::Instant::now();
+    write_result(&acc)?;
     if let Some(sheet) = &args.contact_sheet {
-        let terms: Vec<&photonix::io::Image> = out.layers.named().iter().map(|(_, image)| *image).collect();
+        let mean = acc.mean();
+        let terms: Vec<&photonix::io::Image> = mean.named().iter().map(|(_, image)| *image).collect();
         write_image(sheet, &contact_sheet(&terms), args.exposure)?;
     }
-    out.stats.stages.push(("write".into(), t.elapsed()));
-    eprintln!("{}", summary(&scene.name, &output, &out, width, height, backend));
+    stats.stages.insert(0, ("prepare".into(), prepare_time));
+    stats.stages.push(("write".into(), t.elapsed()));
+    stats.samples_per_pixel = spp * acc.passes;
+    let why = match reason {
+        StopReason::Passes => "all passes done".to_string(),
+        StopReason::Time => "time budget reached".to_string(),
+        StopReason::TargetError => {
+            format!("error estimate {:.2e} below the target", acc.error_estimate().unwrap_or(0.0))
+        }
+        StopReason::Interrupted => "interrupted".to_string(),
+    };
+    eprintln!(
+        "{} pass{} ({}; passes {}); {}",
+        acc.passes,
+        if acc.passes == 1 { "" } else { "es" },
+        why,
+        format_ranges(&acc.ranges),
+        summary(&scene.name, &output, &stats, width, height, backend)
+    );
     Ok(())
 }
 
-fn summary(name: &str, output: &Path, out: &RenderOutput, width: u32, height: u32, backend: Backend) -> String {
-    let s = &out.stats;
+fn budget_is_range(args: &RenderArgs) -> bool {
+    args.progressive.pass_range.is_some()
+}
+
+fn failure_message(args: &RenderArgs, passes_done: u32, output: &Path) -> String {
+    if args.progressive.checkpoint_every.is_some() && output.exists() {
+        format!("rendering failed after {passes_done} passes; the last checkpoint stays in {}", output.display())
+    } else {
+        "rendering failed; no image was written".to_string()
+    }
+}
+
+fn stats_elapsed(stats: &RenderStats) -> std::time::Duration {
+    stats.stages.iter().map(|(_, d)| *d).sum()
+}
+
+/// Adds one pass's stage times, kernel times and rays to the running totals.
+fn add_stats(total: &mut RenderStats, pass: &RenderStats) {
+    for (name, d) in &pass.stages {
+        match total.stages.iter_mut().find(|(n, _)| n == name) {
+            Some((_, t)) => *t += *d,
+            None => total.stages.push((name.clone(), *d)),
+        }
+    }
+    for (name, secs, count) in &pass.kernel_times {
+        match total.kernel_times.iter_mut().find(|(n, _, _)| n == name) {
+            Some((_, s, c)) => {
+                *s += secs;
+                *c += count;
+            }
+            None => total.kernel_times.push((name.clone(), *secs, *count)),
+        }
+    }
+    total.rays += pass.rays;
+    total.device.clone_from(&pass.device);
+}
+
+fn run_merge(args: MergeArgs) -> Result<()> {
+    check_output_path(&args.output)?;
+    let acc = merge(&args.inputs)?;
+    if args.accumulation {
+        write_accumulation(&args.output, &acc)?;
+    } else {
+        write_image(&args.output, &acc.mean().combined(), args.exposure)?;
+    }
+    eprintln!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
+    Ok(())
+}
+
+fn summary(name: &str, output: &Path, s: &RenderStats, width: u32, height: u32, backend: Backend) -> String {
     let stages: Vec<String> = s.stages.iter().map(|(n, d)| format!("{n} {:.3} s", d.as_secs_f64())).collect();
     let kernels: Vec<String> =
         s.kernel_times.iter().map(|(n, secs, count)| format!("{n} {secs:.3} s in {count} dispatches")).collect();

@@ -99,7 +99,7 @@ fn closed_box(rho: f32) -> Scene {
             width: 8,
             height: 8,
         },
-        render: RenderSettings { spp: 1, max_depth: 4, seed: 3 },
+        render: RenderSettings { spp: 1, passes: 1, max_depth: 4, seed: 3 },
         photons: None,
         materials: vec![Material { reflectance: [rho; 3], kind: MATERIAL_DIFFUSE, ..Default::default() }],
         material_names: vec!["wall".into()],

@@ -49,7 +49,7 @@ fn light_over_plane() -> Scene {
             width: SIZE,
             height: SIZE,
         },
-        render: RenderSettings { spp: SPP, max_depth: 4, seed: 7 },
+        render: RenderSettings { spp: SPP, passes: 1, max_depth: 4, seed: 7 },
         photons: None,
         materials: vec![
             Material { reflectance: [ALBEDO; 3], kind: MATERIAL_DIFFUSE, ..Default::default() },

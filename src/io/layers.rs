@@ -7,6 +7,15 @@ use super::image::{Image, ImageError};
 /// Writes the named images as the layers of one EXR (`<name>.R`, `<name>.G`, `<name>.B`),
 /// atomically. Readers that take the first layer get the first image given.
 pub fn write_layers_exr(path: &Path, layers: &[(&str, &Image)]) -> Result<(), ImageError> {
+    write_layers_exr_with(path, layers, Vec::new())
+}
+
+/// `write_layers_exr` with extra attributes (name, value), stored in every layer's header.
+pub fn write_layers_exr_with(
+    path: &Path,
+    layers: &[(&str, &Image)],
+    attributes: Vec<(&str, exr::meta::attribute::AttributeValue)>,
+) -> Result<(), ImageError> {
     use exr::prelude::*;
     let (w, h) = layers.first().map_or((0, 0), |(_, i)| (i.width as usize, i.height as usize));
     let exr_layers: Vec<Layer<AnyChannels<FlatSamples>>> = layers
@@ -21,7 +30,13 @@ pub fn write_layers_exr(path: &Path, layers: &[(&str, &Image)]) -> Result<(), Im
                 ]
                 .into(),
             );
-            Layer::new((w, h), LayerAttributes::named(*name), Encoding::FAST_LOSSLESS, channels)
+            let mut layer_attributes = LayerAttributes::named(*name);
+            // Custom attributes live in each layer's header: EXR keeps image-wide ones only for
+            // standard fields.
+            for (key, value) in &attributes {
+                layer_attributes.other.insert(exr::meta::attribute::Text::from(*key), value.clone());
+            }
+            Layer::new((w, h), layer_attributes, Encoding::FAST_LOSSLESS, channels)
         })
         .collect();
     let image =

@@ -36,8 +36,8 @@ pub fn bench(ctx: Option<&GpuContext>, buffers: &SceneBuffers, spp: u32) -> Resu
     lit.frame.light_count = buffers.frame.light_count;
     let run = |b: &SceneBuffers| -> Result<(u64, f64, String), RenderError> {
         let out = match ctx {
-            Some(ctx) => super::gpu::render_gpu(ctx, b, spp, None, &mut |_, _| {})?,
-            None => render_cpu(b, spp, None, &mut |_, _| {}),
+            Some(ctx) => super::gpu::render_gpu(ctx, b, spp, None, 0, &mut |_, _| {})?,
+            None => render_cpu(b, spp, None, 0, &mut |_, _| {}),
         };
         // The render stage only: uploads and pipeline creation are not ray throughput.
         Ok((out.stats.rays, out.stats.stage("render").as_secs_f64(), out.stats.device))
@@ -95,7 +95,7 @@ pub fn bench_photons(ctx: Option<&GpuContext>, buffers: &SceneBuffers, paths: u3
             let t = std::time::Instant::now();
             let photons = crate::cpu::emit_photons::emit_photons(&view, &emit_params(&settings, 0, false)).global;
             let trace_seconds = t.elapsed().as_secs_f64();
-            let (radius, _) = radii(buffers, &settings, photons.len() as u32);
+            let (radius, _) = radii(buffers, &settings, photons.len() as u32, 0);
             let grid = map_grid(buffers, radius, photons.len() as u32, paths);
             let t = std::time::Instant::now();
             let built = crate::cpu::grid_build::build_grid(&photons, &grid);

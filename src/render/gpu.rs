@@ -218,7 +218,7 @@ pub fn build_maps_gpu(
 ) -> Result<DeviceMaps, GpuError> {
     let (global_photons, global_count) = emit(ctx, scene, emit_params(settings, pass, false), false)?;
     let (caustic_photons, caustic_count) = emit(ctx, scene, emit_params(settings, pass, true), true)?;
-    let (r_global, r_caustic) = radii(buffers, settings, global_count);
+    let (r_global, r_caustic) = radii(buffers, settings, global_count, pass);
     let g_global = map_grid(buffers, r_global, global_count, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
     let global = build_map(ctx, global_photons, g_global, "global")?;
@@ -240,13 +240,14 @@ fn no_maps(ctx: &GpuContext) -> Result<DeviceMaps, GpuError> {
     })
 }
 
-/// Renders on `ctx`, with photon maps when `photons` is given; `progress(done, total)` is called
-/// after each dispatch of the camera kernel.
+/// Renders pass `pass` on `ctx`, with photon maps when `photons` is given; `progress(done,
+/// total)` is called after each submission of the camera kernel.
 pub fn render_gpu(
     ctx: &GpuContext,
     buffers: &SceneBuffers,
     spp: u32,
     photons: Option<&PhotonSettings>,
+    pass: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<RenderOutput, GpuError> {
     let f = photon_frame(buffers, photons);
@@ -261,7 +262,7 @@ pub fn render_gpu(
     // Trace photons and build the grids
     let t = Instant::now();
     let maps = match photons {
-        Some(settings) => build_maps_gpu(ctx, &scene, buffers, settings, 0)?,
+        Some(settings) => build_maps_gpu(ctx, &scene, buffers, settings, pass)?,
         None => no_maps(ctx)?,
     };
     if photons.is_some() {
@@ -283,13 +284,14 @@ pub fn render_gpu(
     // Gather, band by band
     let t = Instant::now();
     let mut layers = Layers::new(f.width, f.height);
-    let units = work_units(f.height, spp, parts_per_sample(&f), max_rows);
+    let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
     let mut rays = 0;
     let mut download_time = Duration::ZERO;
     // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
     // submissions, yet none long enough to trip a GPU watchdog.
+    let mut complete = true;
     let mut i = 0;
     while i < units.len() {
         let band = units[i].row_begin;
@@ -300,7 +302,11 @@ pub fn render_gpu(
             end += 1;
         }
         let batch = &units[i..end];
-        if batch[0].sample_index == 0 && batch[0].part == 0 {
+        if super::stop_requested() {
+            complete = false;
+            break;
+        }
+        if batch[0].sample_index == pass * spp && batch[0].part == 0 {
             ctx.fill_zero(&accumulation)?;
         }
         let invocations = batch[0].row_count * f.width;
@@ -347,5 +353,5 @@ pub fn render_gpu(
         samples_per_pixel: spp,
         device: format!("{} ({})", ctx.info().name, ctx.info().driver),
     };
-    Ok(RenderOutput { image: layers.combined(), layers, stats })
+    Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
 }

@@ -2,11 +2,14 @@
 //! into the same work units (bands of rows x runs of samples), so both report progress alike and
 //! no GPU dispatch runs long enough to trip a driver watchdog.
 
+pub mod accumulation;
 pub mod bench;
 pub mod gpu;
 pub mod photons;
 pub mod prepare;
+pub mod progressive;
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
@@ -83,6 +86,15 @@ impl Layers {
         ]
     }
 
+    pub fn named_mut(&mut self) -> [(&'static str, &mut Image); 4] {
+        [
+            ("direct", &mut self.direct),
+            ("specular", &mut self.specular),
+            ("indirect", &mut self.indirect),
+            ("caustics", &mut self.caustics),
+        ]
+    }
+
     fn layer_mut(&mut self, layer: usize) -> &mut Image {
         match layer {
             0 => &mut self.direct,
@@ -110,11 +122,14 @@ pub struct RenderOutput {
     /// The sum of the layers: what `-o` writes.
     pub image: Image,
     pub stats: RenderStats,
+    /// False when a stop request cut the render short: the image is then not to be used.
+    pub complete: bool,
 }
 
-/// The dispatches of a frame, in the order both backends accumulate them: per band of rows,
-/// per sample, per part (part 0 plus one part per final-gather ray; see `DispatchRange`).
-pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32) -> Vec<DispatchRange> {
+/// The dispatches of pass `pass`, in the order both backends accumulate them: per band of rows,
+/// per sample, per part (part 0 plus one part per final-gather ray; see `DispatchRange`). Pass p
+/// draws samples p * spp .. (p + 1) * spp, so passes are independent.
+pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32, pass: u32) -> Vec<DispatchRange> {
     let band_rows = max_band_rows.clamp(1, height.max(1));
     let mut units = Vec::new();
     let mut row = 0;
@@ -122,7 +137,7 @@ pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32) -> Vec<
         let rows = band_rows.min(height - row);
         for sample in 0..spp {
             for part in 0..parts {
-                units.push(DispatchRange { row_begin: row, row_count: rows, sample_index: sample, part });
+                units.push(DispatchRange { row_begin: row, row_count: rows, sample_index: pass * spp + sample, part });
             }
         }
         row += rows;
@@ -158,17 +173,26 @@ pub fn photon_frame(buffers: &SceneBuffers, photons: Option<&PhotonSettings>) ->
     frame
 }
 
-/// Renders on the CPU reference, with photon maps when `photons` is given; `progress(done,
-/// total)` is called after each work unit.
+/// Set by a signal handler (Ctrl-C, SIGTERM): renders stop after the dispatch under way and
+/// return an incomplete output.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
+pub fn stop_requested() -> bool {
+    STOP.load(Ordering::Relaxed)
+}
+
+/// Renders pass `pass` on the CPU reference, with photon maps when `photons` is given;
+/// `progress(done, total)` is called after each work unit.
 pub fn render_cpu(
     buffers: &SceneBuffers,
     spp: u32,
     photons: Option<&PhotonSettings>,
+    pass: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> RenderOutput {
     let mut stages = Vec::new();
     let t = Instant::now();
-    let maps = photons.map(|settings| photons::build_maps_cpu(buffers, settings, 0));
+    let maps = photons.map(|settings| photons::build_maps_cpu(buffers, settings, pass));
     if maps.is_some() {
         stages.push(("photons".to_string(), t.elapsed()));
     }
@@ -181,11 +205,16 @@ pub fn render_cpu(
 
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
-    let units = work_units(frame.height, spp, parts_per_sample(&frame), frame.height);
+    let units = work_units(frame.height, spp, parts_per_sample(&frame), frame.height, pass);
     let total: u64 = units.iter().map(unit_paths).sum();
     let mut done = 0;
     let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
+    let mut complete = true;
     for unit in &units {
+        if stop_requested() {
+            complete = false;
+            break;
+        }
         let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
         crate::cpu::render::render(&view, unit, band);
         done += unit_paths(unit);
@@ -200,7 +229,7 @@ pub fn render_cpu(
         device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
         ..Default::default()
     };
-    RenderOutput { image: layers.combined(), layers, stats }
+    RenderOutput { image: layers.combined(), layers, stats, complete }
 }
 
 fn unit_paths(unit: &DispatchRange) -> u64 {

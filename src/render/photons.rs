@@ -29,6 +29,8 @@ pub struct PhotonSettings {
     pub gather_rays: u32,
     /// Most surfaces a photon path visits.
     pub max_depth: u32,
+    /// Radius reduction of progressive passes, in (0, 1): see `pass_radius_scale`.
+    pub alpha: f32,
 }
 
 impl Default for PhotonSettings {
@@ -40,6 +42,7 @@ impl Default for PhotonSettings {
             caustic_radius: None,
             gather_rays: 8,
             max_depth: 16,
+            alpha: 2.0 / 3.0,
         }
     }
 }
@@ -60,13 +63,22 @@ pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) ->
     }
 }
 
-/// The lookup radii (global, caustic) for maps of the given sizes.
-pub fn radii(buffers: &SceneBuffers, settings: &PhotonSettings, global_stored: u32) -> (f32, f32) {
+/// How the lookup radius shrinks from pass to pass: r_i = r_1 i^((alpha - 1) / 2) for pass
+/// i = `pass` + 1 (Knaus and Zwicker 2011, "Progressive Photon Mapping: A Probabilistic
+/// Approach"), so that both the variance and the bias of the mean over passes go to zero.
+pub fn pass_radius_scale(alpha: f32, pass: u32) -> f32 {
+    ((pass as f64 + 1.0).powf((alpha as f64 - 1.0) / 2.0)) as f32
+}
+
+/// The lookup radii (global, caustic) of pass `pass` for a global map of `global_stored` photons.
+pub fn radii(buffers: &SceneBuffers, settings: &PhotonSettings, global_stored: u32, pass: u32) -> (f32, f32) {
     // Photons spread over the surfaces at about stored / area per unit area; the radius whose
     // disc holds GLOBAL_NEIGHBOURS of them on average.
     let auto = (GLOBAL_NEIGHBOURS * buffers.surface_area / (std::f32::consts::PI * global_stored.max(1) as f32)).sqrt();
     let global = settings.radius.unwrap_or(auto);
-    (global, settings.caustic_radius.unwrap_or(global * CAUSTIC_RADIUS_FRACTION))
+    let caustic = settings.caustic_radius.unwrap_or(global * CAUSTIC_RADIUS_FRACTION);
+    let scale = pass_radius_scale(settings.alpha, pass);
+    (global * scale, caustic * scale)
 }
 
 /// Grid parameters of one map: its photons' flux is relative to total power / paths.
@@ -101,7 +113,7 @@ pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u
     let view = buffers.view();
     let global = emit_photons(&view, &emit_params(settings, pass, false)).global;
     let caustic = emit_photons(&view, &emit_params(settings, pass, true)).caustic;
-    let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32);
+    let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32, pass);
     let g_global = map_grid(buffers, r_global, global.len() as u32, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);
     let (global_photons, global_starts) = build_grid(&global, &g_global);

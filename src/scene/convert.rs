@@ -20,7 +20,8 @@ type Result<T> = std::result::Result<T, SceneError>;
 /// Defaults of the format; `docs/scene-format.md` lists the same numbers.
 const DEFAULT_UP: Vec3 = Vec3::Y;
 const DEFAULT_RESOLUTION: [u32; 2] = [512, 512];
-const DEFAULT_SPP: u32 = 16;
+const DEFAULT_SPP: u32 = 4;
+const DEFAULT_PASSES: u32 = 4;
 const DEFAULT_MAX_DEPTH: u32 = 16;
 const DEFAULT_REFLECTANCE: f32 = 0.8;
 const DEFAULT_IOR: f32 = 1.5;
@@ -291,7 +292,8 @@ impl Builder<'_> {
 
     fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
         let object = "[render]";
-        let mut settings = RenderSettings { spp: DEFAULT_SPP, max_depth: DEFAULT_MAX_DEPTH, seed: 0 };
+        let mut settings =
+            RenderSettings { spp: DEFAULT_SPP, passes: DEFAULT_PASSES, max_depth: DEFAULT_MAX_DEPTH, seed: 0 };
         let Some(def) = def else {
             return Ok(settings);
         };
@@ -301,6 +303,9 @@ impl Builder<'_> {
         }
         if let Some(depth) = &r.max_depth {
             settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+        }
+        if let Some(passes) = &r.passes {
+            settings.passes = self.integer(passes, object, "passes", 1, "at least 1")?;
         }
         if let Some(seed) = &r.seed {
             settings.seed = self.integer(seed, object, "seed", 0, "between 0 and 4294967295")?;
@@ -350,6 +355,17 @@ impl Builder<'_> {
         }
         if let Some(depth) = &p.max_depth {
             settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+        }
+        if let Some(a) = &p.alpha {
+            let alpha = self.number(a, object, "alpha")?;
+            if !(alpha > 0.0 && alpha < 1.0) {
+                return Err(self.invalid(
+                    &a.span(),
+                    object,
+                    format!("`alpha` is {alpha}; it must be in (0, 1), e.g. 0.667"),
+                ));
+            }
+            settings.alpha = alpha;
         }
         if p.enabled.as_ref().is_some_and(|e| !*e.get_ref()) {
             return Ok(None);

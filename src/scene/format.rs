@@ -37,6 +37,7 @@ pub(crate) struct CameraDef {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RenderDef {
     pub spp: Option<Spanned<i64>>,
+    pub passes: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
     pub seed: Option<Spanned<i64>>,
 }
@@ -44,6 +45,7 @@ pub(crate) struct RenderDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct PhotonsDef {
+    pub alpha: Option<Spanned<f64>>,
     pub enabled: Option<Spanned<bool>>,
     pub count: Option<Spanned<i64>>,
     pub caustic_count: Option<Spanned<i64>>,

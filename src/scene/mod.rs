@@ -54,8 +54,10 @@ pub struct Camera {
 
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
-    /// Samples per pixel, >= 1.
+    /// Samples per pixel in each progressive pass, >= 1.
     pub spp: u32,
+    /// Progressive passes, >= 1; the image is their mean.
+    pub passes: u32,
     /// Most specular bounces of a path, >= 1.
     pub max_depth: u32,
     pub seed: u32,

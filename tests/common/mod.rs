@@ -31,20 +31,20 @@ pub fn buffers(scene: &Scene, width: u32, height: u32) -> SceneBuffers {
 
 /// Direct light and specular paths only.
 pub fn cpu_image(buffers: &SceneBuffers, spp: u32) -> Image {
-    render_cpu(buffers, spp, None, &mut |_, _| {}).image
+    render_cpu(buffers, spp, None, 0, &mut |_, _| {}).image
 }
 
 /// Direct light and specular paths only.
 pub fn gpu_image(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32) -> Image {
-    render_gpu(ctx, buffers, spp, None, &mut |_, _| {}).expect("gpu render succeeds").image
+    render_gpu(ctx, buffers, spp, None, 0, &mut |_, _| {}).expect("gpu render succeeds").image
 }
 
 pub fn cpu_render(buffers: &SceneBuffers, spp: u32, photons: &PhotonSettings) -> RenderOutput {
-    render_cpu(buffers, spp, Some(photons), &mut |_, _| {})
+    render_cpu(buffers, spp, Some(photons), 0, &mut |_, _| {})
 }
 
 pub fn gpu_render(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32, photons: &PhotonSettings) -> RenderOutput {
-    render_gpu(ctx, buffers, spp, Some(photons), &mut |_, _| {}).expect("gpu render succeeds")
+    render_gpu(ctx, buffers, spp, Some(photons), 0, &mut |_, _| {}).expect("gpu render succeeds")
 }
 
 /// Small photon maps for fast tests.
