@@ -2,9 +2,10 @@
 //!
 //! Format: an OpenEXR file whose layers `combined`, `direct`, `specular`, `indirect` and
 //! `caustics` (channels R, G, B, float32) hold the **sum** over the passes of each pass's mean
-//! radiance, with three image attributes: `photonix_accumulation` (text `1`),
-//! `photonix_pass_count` (int) and `photonix_passes` (text, the pass ranges, e.g. `0..32,64..96`).
-//! The image is the sum divided by the pass count.
+//! radiance. Each layer's header carries one text attribute, `photonix_accumulation`, e.g.
+//! `passes=64;ranges=0..32,64..96`: the pass count and the pass ranges summed. (One attribute,
+//! not several: the EXR writer orders custom attributes by hash, which would make the bytes of
+//! two identical renders differ.) The image is the sum divided by the pass count.
 
 use std::path::{Path, PathBuf};
 
@@ -15,8 +16,6 @@ use crate::io::layers::write_layers_exr_with;
 use crate::io::Image;
 
 const MARK: &str = "photonix_accumulation";
-const COUNT: &str = "photonix_pass_count";
-const RANGES: &str = "photonix_passes";
 
 #[derive(Debug, thiserror::Error)]
 pub enum AccumulationError {
@@ -53,12 +52,8 @@ pub fn write_accumulation(path: &Path, acc: &Accumulator) -> Result<(), ImageErr
     let combined = acc.sum.combined();
     let mut named: Vec<(&str, &Image)> = vec![("combined", &combined)];
     named.extend(acc.sum.named());
-    let ranges = format_ranges(&acc.ranges);
-    let attributes = vec![
-        (MARK, AttributeValue::Text(Text::from("1"))),
-        (COUNT, AttributeValue::I32(acc.passes as i32)),
-        (RANGES, AttributeValue::Text(Text::from(ranges.as_str()))),
-    ];
+    let mark = format!("passes={};ranges={}", acc.passes, format_ranges(&acc.ranges));
+    let attributes = vec![(MARK, AttributeValue::Text(Text::from(mark.as_str())))];
     write_layers_exr_with(path, &named, attributes)
 }
 
@@ -71,14 +66,12 @@ pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> 
         read.layer_data.first()?.attributes.other.iter().find(|(k, _)| k.to_string() == name).map(|(_, v)| v.clone())
     };
     let not_acc = || AccumulationError::NotAccumulation { path: path.to_owned() };
-    let passes = match (attr(MARK), attr(COUNT)) {
-        (Some(_), Some(AttributeValue::I32(n))) if n >= 0 => n as u32,
-        _ => return Err(not_acc()),
-    };
-    let ranges = match attr(RANGES) {
-        Some(AttributeValue::Text(t)) => parse_ranges(&t.to_string()).ok_or_else(not_acc)?,
-        _ => return Err(not_acc()),
-    };
+    let Some(AttributeValue::Text(mark)) = attr(MARK) else { return Err(not_acc()) };
+    let mark = mark.to_string();
+    let parsed = mark.split_once(';').and_then(|(count, ranges)| {
+        Some((count.strip_prefix("passes=")?.parse::<u32>().ok()?, parse_ranges(ranges.strip_prefix("ranges=")?)?))
+    });
+    let Some((passes, ranges)) = parsed else { return Err(not_acc()) };
     let size = read.attributes.display_window.size;
     let (w, h) = (size.width() as u32, size.height() as u32);
     let mut acc = Accumulator::new(w, h);
