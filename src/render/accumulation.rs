@@ -62,9 +62,8 @@ pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> 
     use exr::meta::attribute::AttributeValue;
     let read = exr::prelude::read_all_flat_layers_from_file(path)
         .map_err(|e| ImageError::Read { path: path.to_owned(), reason: e.to_string() })?;
-    let attr = |name: &str| {
-        read.layer_data.first()?.attributes.other.iter().find(|(k, _)| k.to_string() == name).map(|(_, v)| v.clone())
-    };
+    let attr =
+        |name: &str| read.layer_data.first()?.attributes.other.iter().find(|(k, _)| *k == name).map(|(_, v)| v.clone());
     let not_acc = || AccumulationError::NotAccumulation { path: path.to_owned() };
     let Some(AttributeValue::Text(mark)) = attr(MARK) else { return Err(not_acc()) };
     let mark = mark.to_string();
@@ -79,7 +78,7 @@ pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> 
         let layer = read
             .layer_data
             .iter()
-            .find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.to_string() == name))
+            .find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.eq(name)))
             .ok_or(AccumulationError::MissingLayer { path: path.to_owned(), layer: name })?;
         for (c, channel_name) in ["R", "G", "B"].iter().enumerate() {
             let channel = layer

@@ -61,7 +61,7 @@ impl Accumulator {
         for ((_, dst), (_, src)) in self.sum.named_mut().into_iter().zip(out.layers.named()) {
             add_into(dst, src);
         }
-        add_into(if pass % 2 == 0 { &mut self.even } else { &mut self.odd }, &out.image);
+        add_into(if pass.is_multiple_of(2) { &mut self.even } else { &mut self.odd }, &out.image);
         self.passes += 1;
         self.rays += out.stats.rays;
         match self.ranges.last_mut() {
