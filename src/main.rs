@@ -16,6 +16,14 @@ use photonix::render::progressive::{render_progressive, Accumulator, Budget, Sto
 use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats};
 use photonix::scene::load_scene;
 
+/// `println!` that ignores a closed stdout (`photonix diff ... | head -1`) instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(name = "photonix", version, about = "Physically based photon mapping on Vulkan compute shaders")]
 struct Cli {
@@ -301,7 +309,7 @@ fn main() -> ExitCode {
 
 fn run_devices() -> Result<()> {
     for device in list_devices()? {
-        println!("{}", device.describe());
+        out!("{}", device.describe());
     }
     Ok(())
 }
@@ -329,9 +337,9 @@ fn run_diff(args: DiffArgs) -> Result<()> {
         reference = downsample(&reference, factor);
     }
     let ratio = mean_ratio(&test, &reference);
-    println!("relMSE {:.6}", rel_mse(&test, &reference));
-    println!("RMSE   {:.6}", rmse(&test, &reference));
-    println!("mean ratio (test/reference) R {:.4} G {:.4} B {:.4}", ratio[0], ratio[1], ratio[2]);
+    out!("relMSE {:.6}", rel_mse(&test, &reference));
+    out!("RMSE   {:.6}", rmse(&test, &reference));
+    out!("mean ratio (test/reference) R {:.4} G {:.4} B {:.4}", ratio[0], ratio[1], ratio[2]);
     if let Some(h) = &args.heatmap {
         write_image(h, &error_heatmap(&test, &reference), 0.0)?;
     }
@@ -343,16 +351,16 @@ fn run_bench(args: BenchArgs) -> Result<()> {
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
     let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
     let buffers = prepare(&scene, &settings)?;
-    println!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);
+    out!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);
     let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
     let mut results = vec![bench(Some(&ctx), &buffers, args.spp)?];
     if !args.gpu_only {
         results.push(bench(None, &buffers, args.spp)?);
     }
-    println!("| backend | device | primary rays/s | shadow rays/s |");
-    println!("| --- | --- | --- | --- |");
+    out!("| backend | device | primary rays/s | shadow rays/s |");
+    out!("| --- | --- | --- | --- |");
     for r in &results {
-        println!(
+        out!(
             "| {} | {} | {:.2} M ({} rays in {:.3} s) | {:.2} M ({} rays in {:.3} s) |",
             r.backend.name(),
             r.device,
@@ -365,17 +373,15 @@ fn run_bench(args: BenchArgs) -> Result<()> {
         );
     }
     if !args.photon_paths.is_empty() {
-        println!();
-        println!(
-            "| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |"
-        );
-        println!("| --- | --- | --- | --- | --- | --- | --- |");
+        out!("");
+        out!("| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |");
+        out!("| --- | --- | --- | --- | --- | --- | --- |");
     }
     for &paths in &args.photon_paths {
         let contexts: Vec<Option<&GpuContext>> = if args.gpu_only { vec![Some(&ctx)] } else { vec![Some(&ctx), None] };
         for c in contexts {
             match bench_photons(c, &buffers, paths) {
-                Ok(b) => println!(
+                Ok(b) => out!(
                     "| {} | {} | {} | {:.3} | {:.2} M | {:.3} | {:.3} |",
                     b.backend.name(),
                     b.paths,
@@ -385,7 +391,7 @@ fn run_bench(args: BenchArgs) -> Result<()> {
                     b.grid_seconds,
                     b.grid_seconds / (b.stored as f64 / 1e6),
                 ),
-                Err(e) => println!("| {} | {paths} | - | - | - | - | {e} |", if c.is_some() { "gpu" } else { "cpu" }),
+                Err(e) => out!("| {} | {paths} | - | - | - | - | {e} |", if c.is_some() { "gpu" } else { "cpu" }),
             }
         }
     }
