@@ -175,3 +175,14 @@ fn missing_vulkan_driver_says_what_to_install() {
         .unwrap();
     assert_fails(&out, &["mesa-vulkan-drivers", "--backend cpu"], dir.path(), "out.png");
 }
+
+#[test]
+fn same_seed_gives_identical_bytes() {
+    let dir = scene_dir();
+    for name in ["one.exr", "two.exr"] {
+        let out = photonix(&["render", "scene.toml", "-o", name], dir.path());
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    let read = |n: &str| std::fs::read(dir.path().join(n)).unwrap();
+    assert!(read("one.exr") == read("two.exr"), "two GPU renders with one seed differ");
+}

@@ -120,12 +120,19 @@ fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<(), String> {
 }
 
 fn write_exr(tmp: &Path, image: &Image) -> Result<(), String> {
+    use exr::prelude::*;
     let w = image.width as usize;
-    exr::prelude::write_rgb_file(tmp, w, image.height as usize, |x, y| {
-        let p = image.pixels[y * w + x];
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let p = image.pixels[pos.y() * w + pos.x()];
         (p[0], p[1], p[2])
-    })
-    .map_err(|e| e.to_string())
+    });
+    // Increasing line order: the parallel compressor writes blocks in a fixed order, so the same
+    // image always gives the same bytes.
+    let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+    exr::image::Image::from_encoded_channels((w, image.height as usize), encoding, channels)
+        .write()
+        .to_file(tmp)
+        .map_err(|e| e.to_string())
 }
 
 /// Reads the first RGB(A) layer of an EXR file as linear radiance.

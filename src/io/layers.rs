@@ -36,7 +36,10 @@ pub fn write_layers_exr_with(
             for (key, value) in &attributes {
                 layer_attributes.other.insert(exr::meta::attribute::Text::from(*key), value.clone());
             }
-            Layer::new((w, h), layer_attributes, Encoding::FAST_LOSSLESS, channels)
+            // Increasing line order: the parallel compressor then writes blocks in a fixed order, so
+            // identical images give identical bytes (the default order is whatever finishes first).
+            let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+            Layer::new((w, h), layer_attributes, encoding, channels)
         })
         .collect();
     let image =

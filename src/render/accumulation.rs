@@ -10,7 +10,6 @@
 use std::path::{Path, PathBuf};
 
 use super::progressive::Accumulator;
-use super::Layers;
 use crate::io::image::ImageError;
 use crate::io::layers::write_layers_exr_with;
 use crate::io::Image;
@@ -135,9 +134,4 @@ pub fn merge(paths: &[PathBuf]) -> Result<Accumulator, AccumulationError> {
         total.ranges.sort_unstable();
     }
     Ok(total)
-}
-
-/// The mean image of an accumulation, per layer.
-pub fn mean_layers(acc: &Accumulator) -> Layers {
-    acc.mean()
 }
