@@ -27,14 +27,19 @@ vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
     if (g.photon_count == 0u) return vec3(0.0);
     float r2 = g.radius * g.radius;
     float thickness = PHOTON_DISC_THICKNESS * g.radius;
-    uint buckets[8];
-    uint bucket_count = grid_lookup_buckets(x, g, buckets);
+    ivec3 c = grid_cell(x, g.cell_size);
     vec3 sum = vec3(0.0);
-    for (uint b = 0u; b < bucket_count; b++) {
-        uint end = map_start(map, buckets[b] + 1u);
-        for (uint i = map_start(map, buckets[b]); i < end; i++) {
+    // Each of the 27 cells is read through its bucket; a photon of another cell that shares the
+    // bucket is skipped, so no photon is counted twice and no duplicate buckets need removing.
+    for (uint k = 0u; k < 27u; k++) {
+        ivec3 cell = grid_neighbour(c, k);
+        uint h = grid_hash(cell, g.table_mask);
+        uint end = map_start(map, h + 1u);
+        for (uint i = map_start(map, h); i < end; i++) {
             Photon p = map_photon(map, i);
-            vec3 d = load3(p.position) - x;
+            vec3 pos = load3(p.position);
+            if (grid_cell(pos, g.cell_size) != cell) continue;
+            vec3 d = pos - x;
             float d2 = dot(d, d);
             if (d2 > r2 || abs(dot(d, n)) > thickness) continue;
             if ((photon_flags(p) & exclude) != 0u || dot(photon_wi(p), n) <= 0.0) continue;

@@ -20,20 +20,8 @@ bool photon_less(Photon a, Photon b) {
     return a.flux_b_dir < b.flux_b_dir;
 }
 
-// The buckets a lookup of `radius` (= cell_size / 2) around x must read: the cell holding x and
-// its neighbours on the side x is nearer to, per axis. Duplicate buckets (hash collisions among
-// the eight) are dropped so that no photon is counted twice; returns how many remain.
-uint grid_lookup_buckets(vec3 x, GridParams g, out uint buckets[8]) {
-    vec3 q = x / g.cell_size;
-    ivec3 c = ivec3(floor(q));
-    ivec3 step = ivec3(greaterThanEqual(q - vec3(c), vec3(0.5))) * 2 - 1;
-    uint n = 0u;
-    for (uint k = 0u; k < 8u; k++) {
-        ivec3 cell = c + ivec3(k & 1u, (k >> 1u) & 1u, (k >> 2u) & 1u) * step;
-        uint h = grid_hash(cell, g.table_mask);
-        bool seen = false;
-        for (uint j = 0u; j < n; j++) seen = seen || buckets[j] == h;
-        if (!seen) buckets[n++] = h;
-    }
-    return n;
+// Cells are as large as the lookup radius, so a lookup around x visits the 3x3x3 cells around
+// x's cell; this is cell k (0..26) of them.
+ivec3 grid_neighbour(ivec3 c, uint k) {
+    return c + ivec3(int(k % 3u), int((k / 3u) % 3u), int(k / 9u)) - 1;
 }

@@ -245,7 +245,11 @@ fn defaults_apply_when_fields_are_left_out() {
     let scene = ok_scene(&format!("{CAMERA}{WHITE}{LIGHT}"));
     assert_eq!((scene.camera.width, scene.camera.height), (512, 512));
     assert_eq!(scene.camera.up, glam::Vec3::Y);
-    assert_eq!((scene.render.spp, scene.render.max_depth, scene.render.seed), (16, 16, 0));
+    let r = &scene.render;
+    assert_eq!((r.spp, r.passes, r.max_depth, r.seed), (4, 4, 16, 0));
+    // Photon mapping is on by default, with the documented settings.
+    let photons = scene.photons.expect("photon mapping is on by default");
+    assert_eq!((photons.photons, photons.caustic_photons, photons.gather_rays), (200_000, 200_000, 8));
     assert_eq!(scene.materials[0].reflectance, [0.8; 3]);
     assert_eq!(scene.name, "ok");
 }

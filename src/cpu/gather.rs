@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::grid::grid_lookup_buckets;
+use super::grid::{grid_cell, grid_hash, grid_neighbour};
 use super::photon::{photon_flags, photon_flux, photon_wi};
 use super::rng::{rand1, rand2};
 use super::shading::{cosine_direction, dielectric_scatter, primitive_normal, reflect};
@@ -31,11 +31,19 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
     };
     let r2 = g.radius * g.radius;
     let thickness = PHOTON_DISC_THICKNESS * g.radius;
-    let (buckets, bucket_count) = grid_lookup_buckets(x, g);
+    let c = grid_cell(x, g.cell_size);
     let mut sum = Vec3::ZERO;
-    for &h in &buckets[..bucket_count] {
-        for p in &photons[starts[h as usize] as usize..starts[h as usize + 1] as usize] {
-            let d = Vec3::from(p.position) - x;
+    // Each of the 27 cells is read through its bucket; a photon of another cell that shares the
+    // bucket is skipped, so no photon is counted twice and no duplicate buckets need removing.
+    for k in 0..27 {
+        let cell = grid_neighbour(c, k);
+        let h = grid_hash(cell, g.table_mask) as usize;
+        for p in &photons[starts[h] as usize..starts[h + 1] as usize] {
+            let pos = Vec3::from(p.position);
+            if grid_cell(pos, g.cell_size) != cell {
+                continue;
+            }
+            let d = pos - x;
             let d2 = d.dot(d);
             if d2 > r2 || d.dot(n).abs() > thickness {
                 continue;

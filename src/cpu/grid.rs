@@ -26,28 +26,16 @@ pub fn photon_order(a: &Photon, b: &Photon) -> Ordering {
     key(a).cmp(&key(b))
 }
 
-/// The buckets a lookup of `radius` (= cell_size / 2) around `x` must read, duplicates dropped.
-pub fn grid_lookup_buckets(x: Vec3, g: &GridParams) -> ([u32; 8], usize) {
-    let q = x / g.cell_size;
-    let c = q.floor().as_ivec3();
-    let f = q - c.as_vec3();
-    let step =
-        IVec3::new(if f.x >= 0.5 { 1 } else { -1 }, if f.y >= 0.5 { 1 } else { -1 }, if f.z >= 0.5 { 1 } else { -1 });
-    let mut buckets = [0u32; 8];
-    let mut n = 0;
-    for k in 0..8u32 {
-        let offset = IVec3::new((k & 1) as i32, ((k >> 1) & 1) as i32, ((k >> 2) & 1) as i32);
-        let h = grid_hash(c + offset * step, g.table_mask);
-        if !buckets[..n].contains(&h) {
-            buckets[n] = h;
-            n += 1;
-        }
-    }
-    (buckets, n)
+/// Cells are as large as the lookup radius, so a lookup around a point visits the 3x3x3 cells
+/// around its cell; this is cell `k` (0..26) of them.
+pub fn grid_neighbour(c: IVec3, k: u32) -> IVec3 {
+    c + IVec3::new((k % 3) as i32, ((k / 3) % 3) as i32, (k / 9) as i32) - IVec3::ONE
 }
 
 /// Calls `visit(photon, squared distance)` for every photon within `g.radius` of `x`.
-/// `cell_start` has one entry per bucket plus one (the end of the last bucket).
+/// `cell_start` has one entry per bucket plus one (the end of the last bucket). Each of the 27
+/// cells is read through its bucket, skipping photons of other cells that share the bucket, so
+/// every photon is visited once.
 pub fn for_each_photon_near(
     x: Vec3,
     g: &GridParams,
@@ -56,10 +44,16 @@ pub fn for_each_photon_near(
     mut visit: impl FnMut(&Photon, f32),
 ) {
     let r2 = g.radius * g.radius;
-    let (buckets, n) = grid_lookup_buckets(x, g);
-    for &h in &buckets[..n] {
-        for p in &photons[cell_start[h as usize] as usize..cell_start[h as usize + 1] as usize] {
-            let d = Vec3::from(p.position) - x;
+    let c = grid_cell(x, g.cell_size);
+    for k in 0..27 {
+        let cell = grid_neighbour(c, k);
+        let h = grid_hash(cell, g.table_mask) as usize;
+        for p in &photons[cell_start[h] as usize..cell_start[h + 1] as usize] {
+            let pos = Vec3::from(p.position);
+            if grid_cell(pos, g.cell_size) != cell {
+                continue;
+            }
+            let d = pos - x;
             let d2 = d.dot(d);
             if d2 <= r2 {
                 visit(p, d2);

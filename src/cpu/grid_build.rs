@@ -16,7 +16,7 @@ pub fn table_size_for(photon_count: u32) -> u32 {
 
 pub fn grid_params(radius: f32, photon_count: u32, flux_scale: f32) -> GridParams {
     GridParams {
-        cell_size: 2.0 * radius,
+        cell_size: radius,
         radius,
         table_mask: table_size_for(photon_count) - 1,
         photon_count,
@@ -101,8 +101,7 @@ mod tests {
         for (case, (radius, table_mask)) in
             [(0.05, 16383u32), (0.3, 16383), (1.0, 1023), (0.5, 0), (0.2, 7), (2.5, 65535)].into_iter().enumerate()
         {
-            let g =
-                GridParams { cell_size: 2.0 * radius, radius, table_mask, photon_count: 5000, ..Default::default() };
+            let g = GridParams { cell_size: radius, radius, table_mask, photon_count: 5000, ..Default::default() };
             let (sorted, starts) = build_grid(&photons, &g);
             assert_eq!(*starts.last().unwrap(), 5000);
             for q in 0..300u32 {
