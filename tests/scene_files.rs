@@ -26,7 +26,7 @@ fn cornell_box_has_16_quads_and_its_light() {
     assert_eq!((scene.camera.width, scene.camera.height), (256, 256));
     assert_eq!(scene.camera.fov_deg, 39.307648);
     assert_eq!(scene.camera.position, Vec3::new(278.0, 273.0, -800.0));
-    assert_eq!((scene.render.spp, scene.render.max_depth), (64, 16));
+    assert_eq!((scene.render.spp, scene.render.passes, scene.render.max_depth), (2, 4, 16));
 
     // The light is the last quad: black, emitting (17, 12, 4), facing down.
     let emitting: Vec<_> =
