@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::grid::{grid_cell, grid_hash, grid_neighbour};
+use super::grid::for_each_photon_near;
 use super::photon::{photon_flags, photon_flux, photon_wi};
 use super::rng::{rand1, rand2};
 use super::shading::{cosine_direction, dielectric_scatter, primitive_normal, reflect};
@@ -31,29 +31,14 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
     };
     let r2 = g.radius * g.radius;
     let thickness = PHOTON_DISC_THICKNESS * g.radius;
-    let c = grid_cell(x, g.cell_size);
     let mut sum = Vec3::ZERO;
-    // Each of the 27 cells is read through its bucket; a photon of another cell that shares the
-    // bucket is skipped, so no photon is counted twice and no duplicate buckets need removing.
-    for k in 0..27 {
-        let cell = grid_neighbour(c, k);
-        let h = grid_hash(cell, g.table_mask) as usize;
-        for p in &photons[starts[h] as usize..starts[h + 1] as usize] {
-            let pos = Vec3::from(p.position);
-            if grid_cell(pos, g.cell_size) != cell {
-                continue;
-            }
-            let d = pos - x;
-            let d2 = d.dot(d);
-            if d2 > r2 || d.dot(n).abs() > thickness {
-                continue;
-            }
-            if (photon_flags(p) & exclude) != 0 || photon_wi(p).dot(n) <= 0.0 {
-                continue;
-            }
-            sum += photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+    for_each_photon_near(x, g, photons, starts, |p, d2| {
+        let d = Vec3::from(p.position) - x;
+        if d.dot(n).abs() > thickness || (photon_flags(p) & exclude) != 0 || photon_wi(p).dot(n) <= 0.0 {
+            return;
         }
-    }
+        sum += photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+    });
     sum * (2.0 / (PI * r2))
 }
 
