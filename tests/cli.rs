@@ -1,6 +1,8 @@
 //! The `photonix` command end to end: renders that write files, and bad input that must fail
 //! with a clear message, a non-zero exit and no output file.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -45,15 +47,6 @@ vertices = [[-0.5, 2, -0.5], [0.5, 2, -0.5], [0.5, 2, 0.5], [-0.5, 2, 0.5]]
 radiance = [5, 5, 5]
 "#;
 
-fn photonix(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_photonix"))
-        .args(args)
-        .current_dir(dir)
-        .env("PHOTONIX_VALIDATION", "1")
-        .output()
-        .expect("the photonix binary runs")
-}
-
 fn scene_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
@@ -85,15 +78,19 @@ fn assert_fails(out: &Output, pieces: &[&str], dir: &Path, never_written: &str) 
 fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
     let dir = scene_dir();
     for backend in ["gpu", "cpu"] {
-        let out =
-            photonix(&["render", "scene.toml", "--backend", backend, "-o", &format!("{backend}.png")], dir.path());
+        let out = common::photonix(
+            &["render", "scene.toml", "--backend", backend, "-o", &format!("{backend}.png")],
+            dir.path(),
+        );
         assert!(out.status.success(), "{}", stderr(&out));
         assert!(stderr(&out).contains("rays/s"), "summary line: {}", stderr(&out));
         let png = image::open(dir.path().join(format!("{backend}.png"))).unwrap();
         assert_eq!((png.width(), png.height()), (24, 16));
     }
-    let out =
-        photonix(&["render", "scene.toml", "-o", "layers.exr", "--layers", "--contact-sheet", "sheet.png"], dir.path());
+    let out = common::photonix(
+        &["render", "scene.toml", "-o", "layers.exr", "--layers", "--contact-sheet", "sheet.png"],
+        dir.path(),
+    );
     assert!(out.status.success(), "{}", stderr(&out));
     let layers = exr::prelude::read_all_flat_layers_from_file(dir.path().join("layers.exr")).unwrap();
     let names: Vec<String> =
@@ -102,11 +99,11 @@ fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
     let sheet = image::open(dir.path().join("sheet.png")).unwrap();
     assert_eq!(sheet.width(), 4 * 24 + 3 * 4);
     // The diff tool compares the two backends' images.
-    let out = photonix(&["render", "scene.toml", "-o", "a.exr"], dir.path());
+    let out = common::photonix(&["render", "scene.toml", "-o", "a.exr"], dir.path());
     assert!(out.status.success());
-    let out = photonix(&["render", "scene.toml", "-o", "b.exr", "--backend", "cpu"], dir.path());
+    let out = common::photonix(&["render", "scene.toml", "-o", "b.exr", "--backend", "cpu"], dir.path());
     assert!(out.status.success());
-    let out = photonix(&["diff", "a.exr", "b.exr", "--heatmap", "heat.png"], dir.path());
+    let out = common::photonix(&["diff", "a.exr", "b.exr", "--heatmap", "heat.png"], dir.path());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success() && text.contains("relMSE") && text.contains("mean ratio"), "{text}");
     assert!(dir.path().join("heat.png").exists());
@@ -115,11 +112,11 @@ fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
 #[test]
 fn unwritable_output_fails_before_rendering() {
     let dir = scene_dir();
-    let out = photonix(&["render", "scene.toml", "-o", "missing/out.png"], dir.path());
+    let out = common::photonix(&["render", "scene.toml", "-o", "missing/out.png"], dir.path());
     assert_fails(&out, &["missing/out.png", "cannot write output"], dir.path(), "missing");
     // Nothing was rendered: the failure comes before any summary line.
     assert!(!stderr(&out).contains("rays/s"));
-    let out = photonix(&["render", "scene.toml", "-o", "out.jpg"], dir.path());
+    let out = common::photonix(&["render", "scene.toml", "-o", "out.jpg"], dir.path());
     assert_fails(&out, &["out.jpg", ".exr", ".png"], dir.path(), "out.jpg");
 }
 
@@ -127,9 +124,9 @@ fn unwritable_output_fails_before_rendering() {
 fn bad_scene_reports_file_and_line() {
     let dir = scene_dir();
     std::fs::write(dir.path().join("bad.toml"), SCENE.replace("radius = 0.5", "radius = -0.5")).unwrap();
-    let out = photonix(&["render", "bad.toml", "-o", "out.png"], dir.path());
+    let out = common::photonix(&["render", "bad.toml", "-o", "out.png"], dir.path());
     assert_fails(&out, &["bad.toml:33", "radius"], dir.path(), "out.png");
-    let out = photonix(&["render", "nowhere.toml", "-o", "out.png"], dir.path());
+    let out = common::photonix(&["render", "nowhere.toml", "-o", "out.png"], dir.path());
     assert_fails(&out, &["nowhere.toml"], dir.path(), "out.png");
 }
 
@@ -144,11 +141,11 @@ fn bad_photon_settings_are_refused() {
     ] {
         let mut all = vec!["render", "scene.toml", "-o", "out.png"];
         all.extend(args);
-        let out = photonix(&all, dir.path());
+        let out = common::photonix(&all, dir.path());
         assert_fails(&out, &pieces, dir.path(), "out.png");
     }
     std::fs::write(dir.path().join("zero.toml"), SCENE.replace("count = 2000\ncaustic", "count = 0\ncaustic")).unwrap();
-    let out = photonix(&["render", "zero.toml", "-o", "out.png"], dir.path());
+    let out = common::photonix(&["render", "zero.toml", "-o", "out.png"], dir.path());
     assert_fails(&out, &["zero.toml:", "count", "at least 1"], dir.path(), "out.png");
 }
 
@@ -157,7 +154,7 @@ fn zero_power_light_warns() {
     let dir = scene_dir();
     std::fs::write(dir.path().join("dark.toml"), SCENE.replace("radiance = [5, 5, 5]", "radiance = [0, 0, 0]"))
         .unwrap();
-    let out = photonix(&["render", "dark.toml", "-o", "out.png", "--backend", "cpu"], dir.path());
+    let out = common::photonix(&["render", "dark.toml", "-o", "out.png", "--backend", "cpu"], dir.path());
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("warning:") && stderr(&out).contains("emits nothing"), "{}", stderr(&out));
 }
@@ -180,7 +177,7 @@ fn missing_vulkan_driver_says_what_to_install() {
 fn same_seed_gives_identical_bytes() {
     let dir = scene_dir();
     for name in ["one.exr", "two.exr"] {
-        let out = photonix(&["render", "scene.toml", "-o", name], dir.path());
+        let out = common::photonix(&["render", "scene.toml", "-o", name], dir.path());
         assert!(out.status.success(), "{}", stderr(&out));
     }
     let read = |n: &str| std::fs::read(dir.path().join(n)).unwrap();

@@ -28,15 +28,6 @@ const FAST: &[&str] = &[
     "15",
 ];
 
-fn photonix(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_photonix"))
-        .args(args)
-        .current_dir(dir)
-        .env("PHOTONIX_VALIDATION", "1")
-        .output()
-        .expect("the photonix binary runs")
-}
-
 fn render(dir: &Path, output: &str, extra: &[&str]) -> Output {
     let scene = common::repo_path("scenes/cornell-caustics.toml");
     let mut args = vec!["render", scene.to_str().unwrap(), "-o", output];
@@ -44,7 +35,7 @@ fn render(dir: &Path, output: &str, extra: &[&str]) -> Output {
     let skip = if extra.contains(&"--resolution") { 2 } else { 0 };
     args.extend_from_slice(&FAST[skip..]);
     args.extend_from_slice(extra);
-    photonix(&args, dir)
+    common::photonix(&args, dir)
 }
 
 fn ok(out: &Output) -> String {
@@ -91,7 +82,7 @@ fn merged_halves_equal_one_run_and_reruns_are_identical() {
     ok(&render(p, "full.exr", &["--passes", "4"]));
     ok(&render(p, "a.exr", &["--pass-range", "0..2"]));
     ok(&render(p, "b.exr", &["--pass-range", "2..4"]));
-    ok(&photonix(&["merge", "b.exr", "a.exr", "-o", "merged.exr"], p));
+    ok(&common::photonix(&["merge", "b.exr", "a.exr", "-o", "merged.exr"], p));
     let (full, merged) = (read_exr(&p.join("full.exr")).unwrap(), read_exr(&p.join("merged.exr")).unwrap());
     // Same passes, summed in another order: equal to float summation.
     let error = rel_mse(&merged, &full);
@@ -154,10 +145,10 @@ fn bad_progressive_input_is_refused() {
     ok(&render(p, "a.exr", &["--pass-range", "0..1"]));
     ok(&render(p, "small.exr", &["--pass-range", "1..2", "--resolution", "32x32"]));
     fails(
-        &photonix(&["merge", "a.exr", "plain.exr", "-o", "m.exr"], p),
+        &common::photonix(&["merge", "a.exr", "plain.exr", "-o", "m.exr"], p),
         &["plain.exr", "not a Photonix accumulation file"],
     );
-    fails(&photonix(&["merge", "a.exr", "small.exr", "-o", "m.exr"], p), &["32x32", "64x64"]);
-    fails(&photonix(&["merge", "a.exr", "a.exr", "-o", "m.exr"], p), &["twice"]);
+    fails(&common::photonix(&["merge", "a.exr", "small.exr", "-o", "m.exr"], p), &["32x32", "64x64"]);
+    fails(&common::photonix(&["merge", "a.exr", "a.exr", "-o", "m.exr"], p), &["twice"]);
     assert!(!p.join("m.exr").exists());
 }

@@ -16,8 +16,7 @@ pub struct SceneBuffers {
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
-    /// Centre and radius of a sphere around the whole scene (for default radii and epsilons).
-    pub bounding_center: Vec3,
+    /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
     pub surface_area: f32,
@@ -163,7 +162,6 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         primitives,
         materials: scene.materials.clone(),
         lights,
-        bounding_center,
         bounding_radius,
         surface_area,
     })

@@ -42,7 +42,6 @@ pub struct Accumulator {
     /// Passes summed, and the ranges they came from.
     pub passes: u32,
     pub ranges: Vec<(u32, u32)>,
-    pub rays: u64,
 }
 
 impl Accumulator {
@@ -53,7 +52,6 @@ impl Accumulator {
             odd: Image::new(width, height),
             passes: 0,
             ranges: Vec::new(),
-            rays: 0,
         }
     }
 
@@ -63,7 +61,6 @@ impl Accumulator {
         }
         add_into(if pass.is_multiple_of(2) { &mut self.even } else { &mut self.odd }, &out.image);
         self.passes += 1;
-        self.rays += out.stats.rays;
         match self.ranges.last_mut() {
             Some(r) if r.1 == pass => r.1 = pass + 1,
             _ => self.ranges.push((pass, pass + 1)),

@@ -2,6 +2,7 @@
 #![allow(dead_code)] // each test binary uses a different subset
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::io::Image;
@@ -50,4 +51,14 @@ pub fn gpu_render(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32, photons: &
 /// Small photon maps for fast tests.
 pub fn test_photons() -> PhotonSettings {
     PhotonSettings { photons: 20_000, caustic_photons: 20_000, gather_rays: 4, ..PhotonSettings::default() }
+}
+
+/// Runs the `photonix` binary in `dir` with the validation layer on.
+pub fn photonix(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_photonix"))
+        .args(args)
+        .current_dir(dir)
+        .env("PHOTONIX_VALIDATION", "1")
+        .output()
+        .expect("the photonix binary runs")
 }
