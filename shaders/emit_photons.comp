@@ -1,27 +1,21 @@
 #version 450
 // emit_photons: trace photon paths from the lights and store their photons in the global and
-// caustic maps. CPU twin: src/cpu/emit_photons.rs. Bindings: 0 frame, 1 nodes, 2 primitives,
-// 3 materials, 4 lights, 5 global photons, 6 caustic photons, 7 counters (photons for the global
-// and the caustic map; one past a buffer's capacity is counted but not stored, so the host can
-// grow the buffer and trace again).
+// caustic maps. CPU twin: src/cpu/emit_photons.rs. Bindings: the scene (scene_bindings.glsl),
+// then global photons, caustic photons and counters (photons for the global and the caustic
+// map; one past a buffer's capacity is counted but not stored, so the host can grow the buffer
+// and trace again).
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
-layout(std430, binding = 0) readonly buffer Frame { FrameParams frame; };
-layout(std430, binding = 1) readonly buffer Nodes { BvhNode nodes[]; };
-layout(std430, binding = 2) readonly buffer Primitives { Primitive primitives[]; };
-layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
-layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = 5) writeonly buffer GlobalPhotons { Photon global_photons[]; };
-layout(std430, binding = 6) writeonly buffer CausticPhotons { Photon caustic_photons[]; };
-layout(std430, binding = 7) buffer Counters { uint counters[2]; };
+#include "scene_bindings.glsl"
+layout(std430, binding = SCENE_BINDINGS + 0) writeonly buffer GlobalPhotons { Photon global_photons[]; };
+layout(std430, binding = SCENE_BINDINGS + 1) writeonly buffer CausticPhotons { Photon caustic_photons[]; };
+layout(std430, binding = SCENE_BINDINGS + 2) buffer Counters { uint counters[2]; };
 layout(push_constant) uniform Push { EmitParams params; };
 
-#include "rng.glsl"
-#include "trace.glsl"
-#include "shading.glsl"
+#include "scene.glsl"
 #include "photon.glsl"
 
 void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags) {

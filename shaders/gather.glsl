@@ -1,7 +1,7 @@
 // Radiance estimates from the photon maps and the final gather. CPU twin: src/cpu/gather.rs.
 // The including kernel declares `grids[2]` (0 global, 1 caustic), `global_photons[]`,
-// `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes grid.glsl and
-// photon.glsl.
+// `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes shading.glsl,
+// grid.glsl and photon.glsl.
 
 const uint MAP_GLOBAL = 0u;
 const uint MAP_CAUSTIC = 1u;
@@ -49,49 +49,83 @@ vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
     return sum * (2.0 / (PI * r2));
 }
 
-// Indirect radiance toward the viewer at a diffuse point x (normal n facing the viewer) of
-// albedo `albedo`, read from the global map at x without the direct and caustic photons (the
-// fast preview when frame.gather_rays is 0).
-vec3 indirect_preview(vec3 x, vec3 n, vec3 albedo) {
-    return albedo * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, x, n, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
+// Radiance toward wo at h through the estimate lobes of b, from the photons of `map` (those
+// with flags in `exclude` skipped): each photon weighted by the BSDF's value for its direction.
+vec3 photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
+    vec3 nf = facing(b, wo);
+    // A Lambertian BSDF has one value for every photon: sum the irradiance, apply it once.
+    if (bsdf_estimate_is_constant(b)) return bsdf_eval(b, wo, nf) * photon_irradiance(map, h.p, nf, exclude);
+    GridParams g = grids[map];
+    if (g.photon_count == 0u) return vec3(0.0);
+    float r2 = g.radius * g.radius;
+    float thickness = PHOTON_DISC_THICKNESS * g.radius;
+    // Photons arriving from behind count only where the BSDF transmits.
+    bool both_sides = (bsdf_flags(b) & BSDF_TRANSMISSION) != 0u;
+    ivec3 c = grid_cell(h.p, g.cell_size);
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < 27u; k++) {
+        ivec3 cell = grid_neighbour(c, k);
+        uint bucket = grid_hash(cell, g.table_mask);
+        uint end = map_start(map, bucket + 1u);
+        for (uint i = map_start(map, bucket); i < end; i++) {
+            Photon p = map_photon(map, i);
+            vec3 pos = load3(p.position);
+            if (grid_cell(pos, g.cell_size) != cell) continue;
+            vec3 d = pos - h.p;
+            float d2 = dot(d, d);
+            if (d2 > r2 || abs(dot(d, nf)) > thickness || (photon_flags(p) & exclude) != 0u) continue;
+            vec3 wi = photon_wi(p);
+            if (!both_sides && dot(wi, nf) <= 0.0) continue;
+            sum += bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+        }
+    }
+    return sum * (2.0 / (PI * r2));
 }
 
-// One final-gather ray's share of the indirect radiance at x: a cosine-distributed ray j whose
-// first diffuse hit reads the global map (mirrors and glass on the way are followed), weighted
-// 1/gather_rays. Emission met on the way is not counted: direct light and caustics cover it.
-vec3 gather_ray(vec3 x, vec3 n, vec3 albedo, uint stream, uint sample_index, uint j, inout uint rays) {
+// Indirect radiance toward wo at h, read from the global map at h without the direct and
+// caustic photons (the fast preview when frame.gather_rays is 0).
+vec3 indirect_preview(Hit h, Bsdf b, vec3 wo) {
+    return photon_radiance(MAP_GLOBAL, h, b, wo, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
+}
+
+// One final-gather ray's share of the indirect radiance toward wo at h: ray j, sampled from the
+// estimate lobes of b, follows path lobes to a surface with estimate lobes and reads the global
+// map there, weighted 1/gather_rays. Emission met on the way is not counted: direct light and
+// caustics cover it.
+vec3 gather_ray(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint j, inout uint rays) {
     uint gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
-    vec3 d = cosine_direction(n, rand2(stream, sample_index, frame.seed, gdim));
-    vec3 o = x + n * frame.ray_epsilon;
+    vec4 u0 = rand4(stream, sample_index, frame.seed, gdim);
+    BsdfSample first = bsdf_sample(b, wo, vec3(u0.z, u0.x, u0.y), LOBES_ESTIMATE);
+    if (first.flags == 0u) return vec3(0.0);
+    vec3 d = first.wi;
+    vec3 o = offset_origin(h, wo, first.flags);
     vec3 throughput = vec3(1.0);
     for (uint bounce = 0u; bounce < frame.max_depth; bounce++) {
         float t;
         rays++;
         uint prim = trace_ray(o, d, INF, false, t);
         if (prim == NO_LIGHT) break;
-        vec3 y = o + t * d;
-        vec3 ny = primitive_normal(prim, y);
-        Material m = materials[primitives[prim].material];
-        bool front = dot(ny, d) < 0.0;
-        vec3 nf = front ? ny : -ny;
-        if (m.kind == MATERIAL_DIFFUSE) {
-            // Cosine sampling cancels the cosine and the 1/pi of the BRDF at x: weight = albedo.
-            vec3 radiance = load3(m.reflectance) * (1.0 / PI) * photon_irradiance(MAP_GLOBAL, y, nf, 0u);
-            return albedo * throughput * radiance / float(frame.gather_rays);
-        }
-        if (m.kind == MATERIAL_MIRROR) {
-            throughput *= load3(m.reflectance);
-            d = reflect(d, nf);
-            o = y + nf * frame.ray_epsilon;
+        Hit y = shape_hit(prim, o, d, t);
+        vec3 wo_y = -d;
+        Bsdf by = material_bsdf(materials[y.material], y);
+        vec4 u = rand4(stream, sample_index, frame.seed, gdim + 1u + bounce);
+        float q = bsdf_path_probability(by, wo_y);
+        if (u.w < q) {
+            BsdfSample s = bsdf_sample(by, wo_y, u.xyz, LOBES_PATH);
+            if (s.flags == 0u) break;
+            throughput *= s.weight / q;
+            o = offset_origin(y, wo_y, s.flags);
+            d = s.wi;
             continue;
         }
-        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
-        dielectric_scatter(y, nf, front, m.ior, rand1(stream, sample_index, frame.seed, gdim + 1u + bounce), o, d);
+        if ((bsdf_flags(by) & BSDF_ESTIMATE) == 0u) break;
+        vec3 radiance = photon_radiance(MAP_GLOBAL, y, by, wo_y, 0u);
+        return first.weight * (throughput / (1.0 - q)) * radiance / float(frame.gather_rays);
     }
     return vec3(0.0);
 }
 
-// Caustic radiance toward the viewer at x from the caustic map.
-vec3 caustic_light(vec3 x, vec3 n, vec3 albedo) {
-    return albedo * (1.0 / PI) * photon_irradiance(MAP_CAUSTIC, x, n, 0u);
+// Caustic radiance toward wo at h from the caustic map.
+vec3 caustic_light(Hit h, Bsdf b, vec3 wo) {
+    return photon_radiance(MAP_CAUSTIC, h, b, wo, 0u);
 }

@@ -15,24 +15,55 @@ struct Primitive {
     uint material;
     float p2[3];
     uint light;
+    uint data;
+    uint _pad[3];
 };
 
 struct Material {
-    float reflectance[3];
     uint kind;
+    uint flags;
+    float alpha;
+    uint alpha_tex;
     float emission[3];
+    uint emission_tex;
+    float color0[3];
+    uint color0_tex;
+    float color1[3];
+    uint color1_tex;
+    float roughness[2];
+    uint roughness_tex;
     float ior;
+    uint bump_tex;
+    float bump_strength;
+    uint normal_tex;
+    uint weight_tex;
+    float weight;
+    uint mix_a;
+    uint mix_b;
+    uint _pad;
+};
+
+struct Texture {
+    uint kind;
+    uint space;
+    uint data;
+    uint color_map;
+    float value[3];
+    uint _pad0;
+    float value2[3];
+    uint _pad1;
+    float transform[12];
 };
 
 struct Light {
-    float p0[3];
+    float position[3];
     uint kind;
-    float p1[3];
+    float intensity[3];
+    uint primitive;
     float pick_probability;
-    float p2[3];
-    float area;
-    float radiance[3];
     float cdf;
+    float area;
+    uint _pad;
 };
 
 struct FrameParams {

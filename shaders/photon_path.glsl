@@ -1,64 +1,44 @@
 // One photon path from the lights: emission, bounces with Russian roulette, and the photons it
-// leaves at diffuse surfaces. CPU twin: src/cpu/emit_photons.rs (`trace_photon_path`).
+// leaves at surfaces with estimate lobes. CPU twin: src/cpu/emit_photons.rs (`trace_photon_path`).
 // The including kernel defines `store_photon(vec3 x, vec3 flux, vec3 wi, uint flags)` and
-// declares the scene bindings; rng.glsl, trace.glsl and shading.glsl come first.
+// declares the scene bindings; rng, sampling, shape, texture, bsdf, trace, light and shading
+// come first.
 
 void trace_photon_path(uint path, EmitParams params) {
     if (frame.light_count == 0u) return;
     uint seed = frame.seed;
     uint dim = RNG_PHOTON_DOMAIN;
     Light l = lights[pick_light(rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK))];
-    vec2 u_pos = rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION);
-    vec2 u_dir = rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION);
-    vec3 ln;
-    vec3 o = sample_light_point(l, u_pos, ln);
-    vec3 d;
+    vec3 o, d, flux;
+    light_emit(l, rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION),
+               rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux);
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
-    vec3 flux;
-    if (l.kind == LIGHT_POINT) {
-        d = sphere_direction(u_dir);
-        flux = 4.0 * PI * load3(l.radiance);
-    } else {
-        d = cosine_direction(ln, u_dir);
-        o += ln * frame.ray_epsilon;
-        flux = PI * l.area * load3(l.radiance);
-    }
     flux /= l.pick_probability * float(params.total_paths);
     bool specular_only = true;
     for (uint depth = 0u; depth < params.max_depth; depth++) {
         float t;
         uint prim = trace_ray(o, d, INF, false, t);
         if (prim == NO_LIGHT) return;
-        vec3 x = o + t * d;
-        vec3 n = primitive_normal(prim, x);
-        Material m = materials[primitives[prim].material];
-        vec3 nf = dot(n, d) < 0.0 ? n : -n;
+        Hit h = shape_hit(prim, o, d, t);
+        vec3 wo = -d;
+        Bsdf b = material_bsdf(materials[h.material], h);
+        uint lobes = bsdf_flags(b);
+        if (lobes == 0u) return;  // a black surface keeps nothing and reflects nothing
         uint bdim = dim + (depth + 1u) * RNG_DIMS_PER_BOUNCE;
-        if (m.kind == MATERIAL_DIFFUSE) {
-            vec3 albedo = load3(m.reflectance);
-            float survive = max(albedo.r, max(albedo.g, albedo.b));
-            if (survive <= 0.0) return;  // a black surface keeps nothing and reflects nothing
+        if ((lobes & BSDF_ESTIMATE) != 0u) {
             uint flags = depth == 0u ? PHOTON_FLAG_DIRECT : (specular_only ? PHOTON_FLAG_CAUSTIC : 0u);
-            if (params.caustics_only == 0u || flags == PHOTON_FLAG_CAUSTIC) store_photon(x, flux, -d, flags);
-            // A caustic-only pass has no use for the path once it has met a diffuse surface.
+            if (params.caustics_only == 0u || flags == PHOTON_FLAG_CAUSTIC) store_photon(h.p, flux, wo, flags);
+            // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if (params.caustics_only != 0u) return;
-            // Russian roulette on the albedo: survivors keep their flux up to the colour filter.
-            if (rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive) return;
-            flux *= albedo / survive;
-            d = cosine_direction(nf, rand2(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE));
-            o = x + nf * frame.ray_epsilon;
-            specular_only = false;
-        } else if (m.kind == MATERIAL_MIRROR) {
-            vec3 tint = load3(m.reflectance);
-            float survive = max(tint.r, max(tint.g, tint.b));
-            if (rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive) return;
-            flux *= tint / survive;
-            d = reflect(d, nf);
-            o = x + nf * frame.ray_epsilon;
-        } else {
-            bool front = dot(n, d) < 0.0;
-            // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
-            dielectric_scatter(x, nf, front, m.ior, rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE), o, d);
         }
+        BsdfSample s = bsdf_sample(b, wo, rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE).xyz, LOBES_ALL);
+        if (s.flags == 0u) return;
+        // Russian roulette on the sample's weight: survivors keep their flux up to its colour.
+        float survive = max(s.weight.r, max(s.weight.g, s.weight.b));
+        if (rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive) return;
+        flux *= s.weight / survive;
+        if ((s.flags & BSDF_ESTIMATE) != 0u) specular_only = false;
+        o = offset_origin(h, wo, s.flags);
+        d = s.wi;
     }
 }

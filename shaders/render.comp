@@ -1,34 +1,27 @@
 #version 450
 // render: the four terms of each pixel, accumulated over a band of rows, one sample and one part
 // of it (see DispatchRange). A camera
-// path follows mirrors and glass to the first diffuse surface; there the direct light comes from
+// path follows path lobes (mirrors, glass) to the first estimate lobe; there the direct light comes from
 // light sampling, the caustics from the caustic map, the indirect light from a final gather on
 // the global map. Terms reached through a mirror or glass are the specular term.
-// CPU twin: src/cpu/render.rs. Bindings: 0 frame, 1 nodes, 2 primitives, 3 materials, 4 lights,
-// 5 accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
-// layer = rays cast), 6 grids, 7 global photons, 8 global starts, 9 caustic photons,
-// 10 caustic starts.
+// CPU twin: src/cpu/render.rs. Bindings: the scene (scene_bindings.glsl), then the
+// accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
+// layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
 
-layout(std430, binding = 0) readonly buffer Frame { FrameParams frame; };
-layout(std430, binding = 1) readonly buffer Nodes { BvhNode nodes[]; };
-layout(std430, binding = 2) readonly buffer Primitives { Primitive primitives[]; };
-layout(std430, binding = 3) readonly buffer Materials { Material materials[]; };
-layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = 5) buffer Accumulation { vec4 accumulation[]; };
-layout(std430, binding = 6) readonly buffer Grids { GridParams grids[2]; };
-layout(std430, binding = 7) readonly buffer GlobalPhotons { Photon global_photons[]; };
-layout(std430, binding = 8) readonly buffer GlobalStarts { uint global_starts[]; };
-layout(std430, binding = 9) readonly buffer CausticPhotons { Photon caustic_photons[]; };
-layout(std430, binding = 10) readonly buffer CausticStarts { uint caustic_starts[]; };
+#include "scene_bindings.glsl"
+layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
+layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Grids { GridParams grids[2]; };
+layout(std430, binding = SCENE_BINDINGS + 2) readonly buffer GlobalPhotons { Photon global_photons[]; };
+layout(std430, binding = SCENE_BINDINGS + 3) readonly buffer GlobalStarts { uint global_starts[]; };
+layout(std430, binding = SCENE_BINDINGS + 4) readonly buffer CausticPhotons { Photon caustic_photons[]; };
+layout(std430, binding = SCENE_BINDINGS + 5) readonly buffer CausticStarts { uint caustic_starts[]; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
-#include "rng.glsl"
-#include "trace.glsl"
-#include "shading.glsl"
+#include "scene.glsl"
 #include "photon.glsl"
 #include "grid.glsl"
 #include "gather.glsl"
@@ -48,44 +41,42 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         rays++;
         uint prim = trace_ray(o, d, INF, false, t);
         if (prim == NO_LIGHT) break;
-        vec3 x = o + t * d;
-        vec3 n = primitive_normal(prim, x);
-        Material m = materials[primitives[prim].material];
-        bool front = dot(n, d) < 0.0;
+        Hit h = shape_hit(prim, o, d, t);
+        Material m = materials[h.material];
+        vec3 wo = -d;
         // Everything a mirror or glass shows is the specular term.
         bool via_specular = depth > 0u;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
-        // diffuse vertices end the path and light sampling covers them.
-        if (front && part == 0u) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * load3(m.emission);
-        vec3 nf = front ? n : -n;
+        // estimate lobes end the path and light sampling covers them.
+        if (dot(wo, h.ng) > 0.0 && part == 0u) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
+        Bsdf b = material_bsdf(m, h);
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
-        if (m.kind == MATERIAL_DIFFUSE) {
-            vec3 albedo = load3(m.reflectance);
-            if (albedo == vec3(0.0)) break;
-            if (part == 0u) {
-                vec3 direct = direct_light(x, nf, albedo, stream, sample_index, dim, rays);
-                terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * direct;
-            }
-            if (frame.photon_mapping == 0u) break;
-            if (part == 0u) {
-                terms[via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS] += throughput * caustic_light(x, nf, albedo);
-                if (frame.gather_rays == 0u) {
-                    terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += throughput * indirect_preview(x, nf, albedo);
-                }
-            } else {
-                vec3 indirect = gather_ray(x, nf, albedo, stream, sample_index, part - 1u, rays);
-                terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += throughput * indirect;
-            }
-            break;
-        }
-        if (m.kind == MATERIAL_MIRROR) {
-            throughput *= load3(m.reflectance);
-            d = reflect(d, nf);
-            o = x + nf * frame.ray_epsilon;
+        vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        // Follow the path lobes (mirrors, glass) with their probability; else end here.
+        float q = bsdf_path_probability(b, wo);
+        if (u.w < q) {
+            BsdfSample s = bsdf_sample(b, wo, u.xyz, LOBES_PATH);
+            if (s.flags == 0u) break;
+            throughput *= s.weight / q;
+            o = offset_origin(h, wo, s.flags);
+            d = s.wi;
             continue;
         }
-        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
-        dielectric_scatter(x, nf, front, m.ior, rand1(stream, sample_index, frame.seed, dim + RNG_FRESNEL), o, d);
+        if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) break;
+        vec3 weight = throughput / (1.0 - q);
+        if (part == 0u) {
+            terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * direct_light(h, b, wo, stream, sample_index, dim, rays);
+        }
+        if (frame.photon_mapping == 0u) break;
+        if (part == 0u) {
+            terms[via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS] += weight * caustic_light(h, b, wo);
+            if (frame.gather_rays == 0u) {
+                terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += weight * indirect_preview(h, b, wo);
+            }
+        } else {
+            terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += weight * gather_ray(h, b, wo, stream, sample_index, part - 1u, rays);
+        }
+        break;
     }
 }
 

@@ -13,6 +13,12 @@ uvec4 pcg4d(uvec4 v) {
 // 24 random bits scaled into [0, 1): exact in float32, so both sides give the same value.
 float rand_unit(uint bits) { return float(bits >> 8u) * (1.0 / 16777216.0); }
 
+// Four uniform numbers in [0, 1) from one hash of `dim`; rand2 and rand1 are its first ones.
+vec4 rand4(uint stream, uint sample_index, uint seed, uint dim) {
+    uvec4 h = pcg4d(uvec4(stream, sample_index, seed, dim));
+    return vec4(rand_unit(h.x), rand_unit(h.y), rand_unit(h.z), rand_unit(h.w));
+}
+
 // Two uniform numbers in [0, 1) for `dim` (and the next dimension, which is the same hash).
 vec2 rand2(uint stream, uint sample_index, uint seed, uint dim) {
     uvec4 h = pcg4d(uvec4(stream, sample_index, seed, dim));
@@ -21,4 +27,13 @@ vec2 rand2(uint stream, uint sample_index, uint seed, uint dim) {
 
 float rand1(uint stream, uint sample_index, uint seed, uint dim) {
     return rand_unit(pcg4d(uvec4(stream, sample_index, seed, dim)).x);
+}
+
+// A number in [0, 1) that depends only on a ray and a key: stochastic alpha decides by it
+// without spending a random dimension of the path (pbrt-v4 hashes the ray for its alpha test
+// alike).
+float hash_ray(vec3 o, vec3 d, uint key) {
+    uvec3 a = floatBitsToUint(o);
+    uvec3 b = floatBitsToUint(d);
+    return rand_unit(pcg4d(uvec4(a.x ^ b.y, a.y ^ b.z, a.z ^ b.x, key)).x);
 }

@@ -3,9 +3,11 @@
 use glam::Vec3;
 use photonix::accel::build_bvh;
 use photonix::cpu::rng::rand1;
-use photonix::cpu::trace::{ray_primitive, trace_ray};
+use photonix::cpu::shape::shape_intersect;
+use photonix::cpu::trace::trace_ray;
+use photonix::cpu::SceneView;
 use photonix::layout::constants::{NO_LIGHT, PRIMITIVE_SPHERE, PRIMITIVE_TRIANGLE};
-use photonix::layout::Primitive;
+use photonix::layout::{FrameParams, Primitive};
 
 fn random_vec(key: u32, dim: u32) -> Vec3 {
     Vec3::new(rand1(key, 0, 99, dim), rand1(key, 0, 99, dim + 1), rand1(key, 0, 99, dim + 2))
@@ -30,7 +32,7 @@ fn random_scene(count: u32) -> Vec<Primitive> {
 fn brute_force(prims: &[Primitive], o: Vec3, d: Vec3) -> (Option<Primitive>, f32) {
     let mut best = (None, f32::INFINITY);
     for p in prims {
-        let t = ray_primitive(p, o, d, best.1);
+        let t = shape_intersect(p, o, d, 0.0, best.1);
         if t < best.1 {
             best = (Some(*p), t);
         }
@@ -38,17 +40,28 @@ fn brute_force(prims: &[Primitive], o: Vec3, d: Vec3) -> (Option<Primitive>, f32
     best
 }
 
+fn bounds(p: &Primitive) -> (Vec3, Vec3) {
+    let p0 = Vec3::from(p.p0);
+    if p.kind == PRIMITIVE_SPHERE {
+        return (p0 - Vec3::splat(p.p1[0]), p0 + Vec3::splat(p.p1[0]));
+    }
+    let (p1, p2) = (Vec3::from(p.p1), Vec3::from(p.p2));
+    (p0.min(p1).min(p2), p0.max(p1).max(p2))
+}
+
 #[test]
 fn closest_hit_matches_brute_force() {
     let prims = random_scene(3000);
-    let bvh = build_bvh(&prims).unwrap();
+    let bvh = build_bvh(&prims, &prims.iter().map(bounds).collect::<Vec<_>>()).unwrap();
+    let frame = FrameParams::default();
+    let view = SceneView::geometry(&frame, &bvh.nodes, &bvh.primitives);
     let mut hits = 0;
     for ray in 0..5000u32 {
         // Origins inside and around the cloud, so rays start both inside and outside boxes.
         let o = random_vec(ray, 100) * 30.0 - 15.0;
         let d = (random_vec(ray, 103) * 2.0 - 1.0).normalize();
         let (expected, t_expected) = brute_force(&prims, o, d);
-        let (index, t) = trace_ray(&bvh.nodes, &bvh.primitives, o, d, f32::INFINITY, false);
+        let (index, t) = trace_ray(&view, o, d, f32::INFINITY, false);
         match expected {
             None => assert_eq!(index, NO_LIGHT, "ray {ray}: BVH hit where brute force missed"),
             Some(p) => {
@@ -60,7 +73,7 @@ fn closest_hit_matches_brute_force() {
             }
         }
         // Any-hit agrees on whether something blocks the ray.
-        let (any, _) = trace_ray(&bvh.nodes, &bvh.primitives, o, d, f32::INFINITY, true);
+        let (any, _) = trace_ray(&view, o, d, f32::INFINITY, true);
         assert_eq!(any == NO_LIGHT, expected.is_none(), "ray {ray}: any-hit disagrees");
     }
     println!("{hits} of 5000 rays hit; all match brute force");
@@ -69,7 +82,9 @@ fn closest_hit_matches_brute_force() {
 
 #[test]
 fn empty_scene_misses_everything() {
-    let bvh = build_bvh(&[]).unwrap();
-    let (index, _) = trace_ray(&bvh.nodes, &bvh.primitives, Vec3::ZERO, Vec3::X, f32::INFINITY, false);
+    let bvh = build_bvh(&[], &[]).unwrap();
+    let frame = FrameParams::default();
+    let view = SceneView::geometry(&frame, &bvh.nodes, &bvh.primitives);
+    let (index, _) = trace_ray(&view, Vec3::ZERO, Vec3::X, f32::INFINITY, false);
     assert_eq!(index, NO_LIGHT);
 }

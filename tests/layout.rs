@@ -4,7 +4,6 @@
 //! through a kernel on the device.
 
 use std::collections::HashMap;
-use std::mem::{offset_of, size_of};
 
 use photonix::layout::*;
 
@@ -72,57 +71,49 @@ fn spirv_structs(words: &[u32]) -> HashMap<String, SpirvStruct> {
     structs
 }
 
-macro_rules! rust_layout {
-    ($ty:ty { $($field:ident),* $(,)? }) => {
-        (stringify!($ty), vec![$((stringify!($field).to_string(), offset_of!($ty, $field) as u32)),*], size_of::<$ty>() as u32)
-    };
+/// The binding of each buffer in layout_probe.comp, by the name of its element struct.
+fn probe_bindings(words: &[u32]) -> HashMap<String, u32> {
+    // The probe declares `buffer X { T x[]; }` with a binding per block; glslang names the block
+    // X and the runtime array's element type T. Reading the block's member type chain is more
+    // SPIR-V than this test needs: the source itself is the simpler witness, and it is compiled
+    // into the very module checked above.
+    let _ = words;
+    let source = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/layout_probe.comp")).unwrap();
+    let mut bindings = HashMap::new();
+    for line in source.lines().filter(|l| l.starts_with("layout(std430, binding = ")) {
+        let binding: u32 = line["layout(std430, binding = ".len()..].split(')').next().unwrap().trim().parse().unwrap();
+        let element = line.split('{').nth(1).unwrap().split_whitespace().next().unwrap();
+        bindings.insert(element.to_string(), binding);
+    }
+    bindings
+}
+
+/// Every `struct X {` of shaders/layout.glsl.
+fn glsl_struct_names() -> Vec<String> {
+    let source = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/layout.glsl")).unwrap();
+    source.lines().filter_map(|l| l.strip_prefix("struct ")).map(|l| l.trim_end_matches(" {").to_string()).collect()
 }
 
 #[test]
 fn glsl_struct_layouts_match_rust() {
     let words = photonix::shaders::spirv("layout_probe").expect("layout_probe kernel is embedded");
     let glsl = spirv_structs(&words);
-    let rust = [
-        rust_layout!(BvhNode { aabb_min, first, aabb_max, skip_count }),
-        rust_layout!(Primitive { p0, kind, p1, material, p2, light }),
-        rust_layout!(Material { reflectance, kind, emission, ior }),
-        rust_layout!(Light { p0, kind, p1, pick_probability, p2, area, radiance, cdf }),
-        rust_layout!(FrameParams {
-            camera_position,
-            width,
-            camera_forward,
-            height,
-            camera_right,
-            max_depth,
-            camera_up,
-            seed,
-            light_count,
-            ray_epsilon,
-            primitive_count,
-            node_count,
-            total_light_power,
-            photon_mapping,
-            gather_rays,
-            _pad,
-        }),
-        rust_layout!(DispatchRange { row_begin, row_count, sample_index, part }),
-        rust_layout!(Photon { position, flux_rg, flux_b_dir }),
-        rust_layout!(GridParams { cell_size, radius, table_mask, photon_count, flux_scale, _pad }),
-        rust_layout!(EmitParams {
-            path_begin,
-            path_count,
-            total_paths,
-            max_depth,
-            global_capacity,
-            caustic_capacity,
-            pass,
-            caustics_only,
-        }),
-    ];
-    for (name, fields, size) in rust {
-        let g = glsl.get(name).unwrap_or_else(|| panic!("struct {name} is missing from layout_probe.comp"));
+    let rust = gpu_struct_layouts();
+    let bindings = probe_bindings(&words);
+    for (index, (name, fields, size)) in rust.iter().enumerate() {
+        let g = glsl.get(*name).unwrap_or_else(|| panic!("struct {name} is missing from layout_probe.comp"));
+        let fields: Vec<(String, u32)> = fields.iter().map(|(f, o)| (f.to_string(), *o)).collect();
         assert_eq!(g.members, fields, "member names and offsets of {name}");
-        assert_eq!(g.array_stride, Some(size), "std430 array stride of {name} vs size_of");
+        assert_eq!(g.array_stride, Some(*size), "std430 array stride of {name} vs size_of");
+        assert_eq!(
+            bindings.get(*name),
+            Some(&(index as u32)),
+            "layout_probe.comp binds {name} at its index in gpu_structs!"
+        );
         println!("{name}: {} members, stride {size} bytes: match", fields.len());
+    }
+    let rust_names: Vec<&str> = rust.iter().map(|(n, _, _)| *n).collect();
+    for name in glsl_struct_names() {
+        assert!(rust_names.contains(&name.as_str()), "layout.glsl declares {name}, which gpu_structs! lacks");
     }
 }

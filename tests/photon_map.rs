@@ -6,12 +6,12 @@ mod common;
 use glam::Vec3;
 use photonix::cpu::grid::for_each_photon_near;
 use photonix::cpu::photon::{photon_flags, photon_flux};
-use photonix::layout::constants::{MATERIAL_DIFFUSE, PHOTON_FLAG_DIRECT};
-use photonix::layout::{GridParams, Material, Photon};
+use photonix::layout::constants::PHOTON_FLAG_DIRECT;
+use photonix::layout::{GridParams, Photon};
 use photonix::render::gpu::{build_maps_gpu, DeviceScene};
 use photonix::render::photons::build_maps_cpu;
 use photonix::render::PhotonSettings;
-use photonix::scene::{load_scene, Camera, PointLight, RenderSettings, Scene, Triangle};
+use photonix::scene::{load_scene, Camera, PointLight, RenderSettings, Scene};
 
 /// Fraction of `gpu` photons that have a twin in `cpu`: same flags, flux within 0.1%, position
 /// within 1e-4 of the scene size (float rounding along a path of a few bounces; a half-float
@@ -85,8 +85,8 @@ fn closed_box(rho: f32) -> Scene {
     let mut triangles = Vec::new();
     for f in faces {
         let v = f.map(|i| corners[i]);
-        triangles.push(Triangle { vertices: [v[0], v[1], v[2]], material: 0 });
-        triangles.push(Triangle { vertices: [v[0], v[2], v[3]], material: 0 });
+        triangles.push(common::triangle([v[0], v[1], v[2]], 0));
+        triangles.push(common::triangle([v[0], v[2], v[3]], 0));
     }
     Scene {
         name: "closed-box".into(),
@@ -101,10 +101,10 @@ fn closed_box(rho: f32) -> Scene {
         },
         render: RenderSettings { spp: 1, passes: 1, max_depth: 4, seed: 3 },
         photons: None,
-        materials: vec![Material { reflectance: [rho; 3], kind: MATERIAL_DIFFUSE, ..Default::default() }],
+        materials: vec![common::diffuse(rho, 0.0)],
         material_names: vec!["wall".into()],
-        triangles,
-        spheres: vec![],
+        textures: vec![],
+        shapes: triangles,
         point_lights: vec![PointLight { position: Vec3::new(0.1, 0.2, -0.3), intensity: Vec3::new(1.0, 2.0, 3.0) }],
         warnings: vec![],
     }

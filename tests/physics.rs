@@ -6,9 +6,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
 use photonix::io::Image;
-use photonix::layout::constants::MATERIAL_DIFFUSE;
-use photonix::layout::Material;
-use photonix::scene::{Camera, RenderSettings, Scene, Triangle};
+use photonix::scene::{Camera, RenderSettings, Scene, Shape};
 
 const ALBEDO: f32 = 0.5;
 const RADIANCE: f32 = 10.0;
@@ -22,8 +20,8 @@ fn light_corners() -> [DVec3; 4] {
     [DVec3::new(-0.5, 1.0, -0.5), DVec3::new(0.5, 1.0, -0.5), DVec3::new(0.5, 1.0, 0.5), DVec3::new(-0.5, 1.0, 0.5)]
 }
 
-fn quad(v: [Vec3; 4], material: u32) -> [Triangle; 2] {
-    [Triangle { vertices: [v[0], v[1], v[2]], material }, Triangle { vertices: [v[0], v[2], v[3]], material }]
+fn quad(v: [Vec3; 4], material: u32) -> [Shape; 2] {
+    [common::triangle([v[0], v[1], v[2]], material), common::triangle([v[0], v[2], v[3]], material)]
 }
 
 /// A square Lambertian light of radiance 10 one unit above a large diffuse plane of albedo 0.5,
@@ -51,13 +49,10 @@ fn light_over_plane() -> Scene {
         },
         render: RenderSettings { spp: SPP, passes: 1, max_depth: 4, seed: 7 },
         photons: None,
-        materials: vec![
-            Material { reflectance: [ALBEDO; 3], kind: MATERIAL_DIFFUSE, ..Default::default() },
-            Material { kind: MATERIAL_DIFFUSE, emission: [RADIANCE; 3], ..Default::default() },
-        ],
+        materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],
         material_names: vec!["plane".into(), "light".into()],
-        triangles,
-        spheres: vec![],
+        textures: vec![],
+        shapes: triangles,
         point_lights: vec![],
         warnings: vec![],
     }
@@ -132,7 +127,7 @@ fn point_light_follows_inverse_square_law() {
     // A point light of intensity I at height h over the plane: E = I cos(theta) / d^2 with
     // cos(theta) = h / d, so L = rho / pi * I h / d^3.
     let mut scene = light_over_plane();
-    scene.triangles.truncate(2);
+    scene.shapes.truncate(2);
     scene
         .point_lights
         .push(photonix::scene::PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(30.0) });

@@ -234,7 +234,7 @@ fn scene_without_lights_loads_with_a_warning() {
     let scene = ok_scene(&format!(
         "{CAMERA}{WHITE}[[shapes]]\ntype = \"box\"\nmaterial = \"white\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n"
     ));
-    assert_eq!(scene.triangles.len(), 12);
+    assert_eq!(scene.triangles().count(), 12);
     assert!(scene.warnings.iter().any(|w| w.contains("no lights")), "{:?}", scene.warnings);
     let lit = ok_scene(&format!("{CAMERA}{LIGHT}"));
     assert!(!lit.warnings.iter().any(|w| w.contains("no lights")));
@@ -250,6 +250,7 @@ fn defaults_apply_when_fields_are_left_out() {
     // Photon mapping is on by default, with the documented settings.
     let photons = scene.photons.expect("photon mapping is on by default");
     assert_eq!((photons.photons, photons.caustic_photons, photons.gather_rays), (200_000, 200_000, 8));
-    assert_eq!(scene.materials[0].reflectance, [0.8; 3]);
+    let default = photonix::scene::ColorParam::constant(glam::Vec3::splat(0.8));
+    assert_eq!(scene.materials[0].kind, photonix::scene::MaterialKind::Diffuse { reflectance: default });
     assert_eq!(scene.name, "ok");
 }

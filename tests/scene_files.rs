@@ -3,8 +3,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use photonix::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_MIRROR};
-use photonix::scene::{load_scene, Scene};
+use photonix::scene::{load_scene, ColorParam, MaterialKind, Scene};
 
 fn load(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
@@ -19,8 +18,8 @@ fn winding_normal(v: &[Vec3; 3]) -> Vec3 {
 fn cornell_box_has_16_quads_and_its_light() {
     let scene = load("cornell-box.toml");
     assert_eq!(scene.name, "cornell-box");
-    assert_eq!(scene.triangles.len(), 32, "16 quads, light included");
-    assert!(scene.spheres.is_empty());
+    assert_eq!(scene.triangles().count(), 32, "16 quads, light included");
+    assert_eq!(scene.spheres().count(), 0);
     assert!(scene.point_lights.is_empty());
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     assert_eq!((scene.camera.width, scene.camera.height), (256, 256));
@@ -29,13 +28,12 @@ fn cornell_box_has_16_quads_and_its_light() {
     assert_eq!((scene.render.spp, scene.render.passes, scene.render.max_depth), (2, 4, 16));
 
     // The light is the last quad: black, emitting (17, 12, 4), facing down.
-    let emitting: Vec<_> =
-        scene.triangles.iter().filter(|t| scene.materials[t.material as usize].emission != [0.0; 3]).collect();
+    let emitting: Vec<_> = scene.triangles().filter(|(_, m)| scene.materials[*m as usize].emits()).collect();
     assert_eq!(emitting.len(), 2);
-    for t in emitting {
-        let m = &scene.materials[t.material as usize];
-        assert_eq!(m.emission, [17.0, 12.0, 4.0]);
-        assert_eq!(m.reflectance, [0.0; 3]);
+    for (t, material) in emitting {
+        let m = &scene.materials[material as usize];
+        assert_eq!(m.emission.value, Vec3::new(17.0, 12.0, 4.0));
+        assert_eq!(m.kind, MaterialKind::Diffuse { reflectance: ColorParam::constant(Vec3::ZERO) });
         assert!(winding_normal(&t.vertices).abs_diff_eq(Vec3::NEG_Y, 1e-6));
     }
 }
@@ -47,27 +45,27 @@ fn cornell_quads_keep_their_vertex_order() {
     // (v0,v2,v3), winding normal +y (into the box).
     let (v0, v1, v2, v3) =
         (Vec3::new(552.8, 0.0, 0.0), Vec3::ZERO, Vec3::new(0.0, 0.0, 559.2), Vec3::new(549.6, 0.0, 559.2));
-    assert_eq!(scene.triangles[0].vertices, [v0, v1, v2]);
-    assert_eq!(scene.triangles[1].vertices, [v0, v2, v3]);
-    assert!(winding_normal(&scene.triangles[0].vertices).abs_diff_eq(Vec3::Y, 1e-6));
+    let triangles: Vec<_> = scene.triangles().collect();
+    assert_eq!(triangles[0].0.vertices, [v0, v1, v2]);
+    assert_eq!(triangles[1].0.vertices, [v0, v2, v3]);
+    assert!(winding_normal(&triangles[0].0.vertices).abs_diff_eq(Vec3::Y, 1e-6));
     // The red wall's normal points into the box (-x), per the reference.
     let red = scene.material_names.iter().position(|n| n == "red").unwrap() as u32;
-    let wall = scene.triangles.iter().find(|t| t.material == red).unwrap();
+    let (wall, _) = scene.triangles().find(|(_, m)| *m == red).unwrap();
     assert!(winding_normal(&wall.vertices).x < -0.99);
 }
 
 #[test]
 fn cornell_caustics_has_6_quads_and_2_spheres() {
     let scene = load("cornell-caustics.toml");
-    assert_eq!(scene.triangles.len(), 12);
-    assert_eq!(scene.spheres.len(), 2);
-    let kind = |s: usize| scene.materials[scene.spheres[s].material as usize];
-    assert_eq!(kind(0).kind, MATERIAL_DIELECTRIC);
-    assert_eq!(kind(0).ior, 1.5);
-    assert_eq!(kind(1).kind, MATERIAL_MIRROR);
-    assert_eq!(kind(1).reflectance, [1.0; 3]);
-    assert_eq!(scene.spheres[0].center, Vec3::new(370.0, 90.0, 170.0));
-    assert_eq!(scene.spheres[1].radius, 90.0);
+    assert_eq!(scene.triangles().count(), 12);
+    let spheres: Vec<_> = scene.spheres().collect();
+    assert_eq!(spheres.len(), 2);
+    let kind = |s: usize| &scene.materials[spheres[s].1 as usize].kind;
+    assert_eq!(kind(0), &MaterialKind::Dielectric { ior: 1.5 });
+    assert_eq!(kind(1), &MaterialKind::Mirror { tint: ColorParam::constant(Vec3::ONE) });
+    assert_eq!(spheres[0].0.center, Vec3::new(370.0, 90.0, 170.0));
+    assert_eq!(spheres[1].0.radius, 90.0);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }
 
@@ -76,14 +74,14 @@ fn showcase_uses_every_feature() {
     let scene = load("showcase.toml");
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     // floor 2 + wall 2 + mirror 2 + box 12 + icosahedron 20 + triangle 1 + light 2
-    assert_eq!(scene.triangles.len(), 41);
-    assert_eq!(scene.spheres.len(), 1);
+    assert_eq!(scene.triangles().count(), 41);
+    assert_eq!(scene.spheres().count(), 1);
     assert_eq!(scene.point_lights.len(), 1);
     assert_eq!(scene.material_names.last().unwrap(), "light 0");
     // The icosahedron (circumradius 1, scaled 0.4) stays outward-facing after its transform.
     let copper = scene.material_names.iter().position(|n| n == "copper").unwrap() as u32;
     let center = Vec3::new(0.9, 0.4, -0.9);
-    for t in scene.triangles.iter().filter(|t| t.material == copper) {
+    for (t, _) in scene.triangles().filter(|(_, m)| *m == copper) {
         let centroid = (t.vertices[0] + t.vertices[1] + t.vertices[2]) / 3.0;
         assert!(winding_normal(&t.vertices).dot(centroid - center) > 0.0);
         for v in t.vertices {

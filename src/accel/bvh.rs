@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::layout::constants::{BVH_COUNT_BITS, PRIMITIVE_SPHERE};
+use crate::layout::constants::BVH_COUNT_BITS;
 use crate::layout::{BvhNode, Primitive};
 
 /// SAH bins per axis; 16 is the usual sweet spot between build time and tree quality.
@@ -18,6 +18,9 @@ const TRAVERSAL_COST: f32 = 1.0;
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     pub primitives: Vec<Primitive>,
+    /// Index in the input of each reordered primitive (`u32::MAX` for the placeholder of an
+    /// empty scene).
+    pub order: Vec<u32>,
     /// Deepest leaf (root = 1).
     pub depth: u32,
 }
@@ -53,38 +56,21 @@ impl Bounds {
     }
 }
 
-/// Bounds of one primitive.
-pub fn primitive_bounds(p: &Primitive) -> (Vec3, Vec3) {
-    let b = bounds_of(p);
-    (b.min, b.max)
-}
-
-fn bounds_of(p: &Primitive) -> Bounds {
-    let p0 = Vec3::from(p.p0);
-    if p.kind == PRIMITIVE_SPHERE {
-        let r = Vec3::splat(p.p1[0]);
-        return Bounds { min: p0 - r, max: p0 + r };
-    }
-    let mut b = Bounds::EMPTY;
-    for v in [p.p0, p.p1, p.p2] {
-        b.grow_point(Vec3::from(v));
-    }
-    b
-}
-
 struct Item {
     bounds: Bounds,
     centroid: Vec3,
     index: u32,
 }
 
-/// Builds the hierarchy over `primitives` (any order) and returns it with the primitives reordered.
-pub fn build_bvh(primitives: &[Primitive]) -> Result<Bvh, BvhError> {
-    let mut items: Vec<Item> = primitives
+/// Builds the hierarchy over `primitives` (any order), whose axis-aligned bounds (min, max) are
+/// `bounds`, and returns it with the primitives reordered.
+pub fn build_bvh(primitives: &[Primitive], bounds: &[(Vec3, Vec3)]) -> Result<Bvh, BvhError> {
+    assert_eq!(primitives.len(), bounds.len(), "one bounding box per primitive");
+    let mut items: Vec<Item> = bounds
         .iter()
         .enumerate()
-        .map(|(i, p)| {
-            let bounds = bounds_of(p);
+        .map(|(i, &(min, max))| {
+            let bounds = Bounds { min, max };
             Item { bounds, centroid: (bounds.min + bounds.max) * 0.5, index: i as u32 }
         })
         .collect();
@@ -94,7 +80,7 @@ pub fn build_bvh(primitives: &[Primitive]) -> Result<Bvh, BvhError> {
         // One leaf over one zero-area triangle, which no ray can hit: traversal needs no special case.
         let never_hit = Primitive { light: crate::layout::constants::NO_LIGHT, ..Default::default() };
         nodes.push(BvhNode { skip_count: (1 << BVH_COUNT_BITS) | 1, ..Default::default() });
-        return Ok(Bvh { nodes, primitives: vec![never_hit], depth: 1 });
+        return Ok(Bvh { nodes, primitives: vec![never_hit], order: vec![u32::MAX], depth: 1 });
     }
     // Node indices share a u32 with the count bits, and there are fewer than 2n nodes.
     let limit = 1u32 << (31 - BVH_COUNT_BITS);
@@ -103,7 +89,7 @@ pub fn build_bvh(primitives: &[Primitive]) -> Result<Bvh, BvhError> {
     }
     build_node(&mut items, 0, &mut nodes, 1, &mut depth);
     let ordered = items.iter().map(|it| primitives[it.index as usize]).collect();
-    Ok(Bvh { nodes, primitives: ordered, depth })
+    Ok(Bvh { nodes, primitives: ordered, order: items.iter().map(|it| it.index).collect(), depth })
 }
 
 /// Appends the subtree over `items` (which start at primitive `first`) in depth-first order.
@@ -219,6 +205,16 @@ mod tests {
         Primitive { p0: a, p1: b, p2: c, kind: PRIMITIVE_TRIANGLE, ..Default::default() }
     }
 
+    fn triangle_bounds(p: &Primitive) -> (Vec3, Vec3) {
+        let [a, b, c] = [p.p0, p.p1, p.p2].map(Vec3::from);
+        (a.min(b).min(c), a.max(b).max(c))
+    }
+
+    fn build(prims: &[Primitive]) -> Bvh {
+        let bounds: Vec<_> = prims.iter().map(triangle_bounds).collect();
+        build_bvh(prims, &bounds).unwrap()
+    }
+
     #[test]
     fn every_primitive_lands_in_exactly_one_leaf_inside_its_node_box() {
         let prims: Vec<Primitive> = (0..1000)
@@ -229,13 +225,13 @@ mod tests {
                 triangle([x, y, z], [x + 0.5, y, z], [x, y + 0.5, z + 0.2])
             })
             .collect();
-        let bvh = build_bvh(&prims).unwrap();
+        let bvh = build(&prims);
         let mut covered = vec![0u32; prims.len()];
         for node in &bvh.nodes {
             if node.count() > 0 {
                 for i in node.first..node.first + node.count() {
                     covered[i as usize] += 1;
-                    let (lo, hi) = primitive_bounds(&bvh.primitives[i as usize]);
+                    let (lo, hi) = triangle_bounds(&bvh.primitives[i as usize]);
                     assert!(lo.cmpge(Vec3::from(node.aabb_min)).all() && hi.cmple(Vec3::from(node.aabb_max)).all());
                 }
             }
@@ -247,7 +243,7 @@ mod tests {
     #[test]
     fn identical_primitives_still_build() {
         let prims = vec![triangle([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]); 100];
-        let bvh = build_bvh(&prims).unwrap();
+        let bvh = build(&prims);
         assert_eq!(bvh.primitives.len(), 100);
         assert!(bvh.nodes.iter().filter(|n| n.count() > 0).all(|n| n.count() as usize <= MAX_LEAF_SIZE));
     }

@@ -1,23 +1,22 @@
 //! Photon paths from the lights and the photons they leave at diffuse surfaces; twin of
 //! `shaders/emit_photons.comp` and `shaders/photon_path.glsl`.
 
-use std::f32::consts::PI;
-
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf};
+use super::light::{light_emit, pick_light};
 use super::photon::pack_photon;
-use super::rng::{rand1, rand2};
-use super::shading::{
-    cosine_direction, dielectric_scatter, pick_light, primitive_normal, reflect, sample_light_point, sphere_direction,
-};
+use super::rng::{rand1, rand2, rand4};
+use super::shading::offset_origin;
+use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{EmitParams, Photon};
 
-/// Traces photon path `path` and calls `store(x, flux, wi, flags)` at every diffuse surface it
-/// meets, exactly as the kernel does.
+/// Traces photon path `path` and calls `store(x, flux, wi, flags)` at every surface with
+/// estimate lobes it meets, exactly as the kernel does.
 pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut store: impl FnMut(Vec3, Vec3, Vec3, u32)) {
     let f = s.frame;
     if f.light_count == 0 {
@@ -26,37 +25,29 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
     let seed = f.seed;
     let dim = RNG_PHOTON_DOMAIN;
     let l = &s.lights[pick_light(s, rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK)) as usize];
-    let u_pos = rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION);
-    let u_dir = rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION);
-    let (mut o, ln) = sample_light_point(l, u_pos);
+    let (mut o, mut d, mut flux) = light_emit(
+        s,
+        l,
+        rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION),
+        rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION),
+    );
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
-    let (mut d, mut flux);
-    if l.kind == LIGHT_POINT {
-        d = sphere_direction(u_dir);
-        flux = 4.0 * PI * Vec3::from(l.radiance);
-    } else {
-        d = cosine_direction(ln, u_dir);
-        o += ln * f.ray_epsilon;
-        flux = PI * l.area * Vec3::from(l.radiance);
-    }
     flux /= l.pick_probability * params.total_paths as f32;
     let mut specular_only = true;
     for depth in 0..params.max_depth {
-        let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);
         if prim == NO_LIGHT {
             return;
         }
-        let x = o + t * d;
-        let n = primitive_normal(s, prim, x);
-        let m = &s.materials[s.primitives[prim as usize].material as usize];
-        let nf = if n.dot(d) < 0.0 { n } else { -n };
+        let h = shape_hit(s, prim, o, d, t);
+        let wo = -d;
+        let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+        let lobes = bsdf_flags(&b);
+        if lobes == 0 {
+            return; // a black surface keeps nothing and reflects nothing
+        }
         let bdim = dim + (depth + 1) * RNG_DIMS_PER_BOUNCE;
-        if m.kind == MATERIAL_DIFFUSE {
-            let albedo = Vec3::from(m.reflectance);
-            let survive = albedo.max_element();
-            if survive <= 0.0 {
-                return; // a black surface keeps nothing and reflects nothing
-            }
+        if lobes & BSDF_ESTIMATE != 0 {
             let flags = if depth == 0 {
                 PHOTON_FLAG_DIRECT
             } else if specular_only {
@@ -65,35 +56,29 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
                 0
             };
             if params.caustics_only == 0 || flags == PHOTON_FLAG_CAUSTIC {
-                store(x, flux, -d, flags);
+                store(h.p, flux, wo, flags);
             }
-            // A caustic-only pass has no use for the path once it has met a diffuse surface.
+            // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if params.caustics_only != 0 {
                 return;
             }
-            // Russian roulette on the albedo: survivors keep their flux up to the colour filter.
-            if rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive {
-                return;
-            }
-            flux *= albedo / survive;
-            d = cosine_direction(nf, rand2(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE));
-            o = x + nf * f.ray_epsilon;
-            specular_only = false;
-        } else if m.kind == MATERIAL_MIRROR {
-            let tint = Vec3::from(m.reflectance);
-            let survive = tint.max_element();
-            if rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive {
-                return;
-            }
-            flux *= tint / survive;
-            d = reflect(d, nf);
-            o = x + nf * f.ray_epsilon;
-        } else {
-            let front = n.dot(d) < 0.0;
-            // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
-            (o, d) =
-                dielectric_scatter(s, x, nf, front, m.ior, rand1(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE), d);
         }
+        let u = rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE);
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], LOBES_ALL);
+        if smp.flags == 0 {
+            return;
+        }
+        // Russian roulette on the sample's weight: survivors keep their flux up to its colour.
+        let survive = smp.weight.max_element();
+        if rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive {
+            return;
+        }
+        flux *= smp.weight / survive;
+        if smp.flags & BSDF_ESTIMATE != 0 {
+            specular_only = false;
+        }
+        o = offset_origin(s, &h, wo, smp.flags);
+        d = smp.wi;
     }
 }
 

@@ -1,17 +1,22 @@
 //! The CPU reference: each file is the twin of the shader of the same name and reads the same
 //! flattened arrays, so GPU and CPU results can be compared sample for sample.
 
+pub mod bsdf;
 pub mod emit_photons;
 pub mod gather;
 pub mod grid;
 pub mod grid_build;
+pub mod light;
 pub mod photon;
 pub mod render;
 pub mod rng;
+pub mod sampling;
 pub mod shading;
+pub mod shape;
+pub mod texture;
 pub mod trace;
 
-use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Photon, Primitive};
+use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Photon, Primitive, Texture};
 
 /// The arrays a kernel sees through its bindings, borrowed.
 #[derive(Clone, Copy)]
@@ -21,6 +26,9 @@ pub struct SceneView<'a> {
     pub primitives: &'a [Primitive],
     pub materials: &'a [Material],
     pub lights: &'a [Light],
+    pub textures: &'a [Texture],
+    pub texture_data: &'a [u32],
+    pub shape_data: &'a [f32],
     pub maps: MapsView<'a>,
 }
 
@@ -44,3 +52,21 @@ pub const NO_MAPS: MapsView<'static> = MapsView {
     caustic_photons: &[],
     caustic_starts: &[0, 0],
 };
+
+impl<'a> SceneView<'a> {
+    /// Geometry alone (no materials, lights or textures): enough to trace rays through opaque
+    /// primitives, for tests and tools.
+    pub fn geometry(frame: &'a FrameParams, nodes: &'a [BvhNode], primitives: &'a [Primitive]) -> SceneView<'a> {
+        SceneView {
+            frame,
+            nodes,
+            primitives,
+            materials: &[],
+            lights: &[],
+            textures: &[],
+            texture_data: &[],
+            shape_data: &[],
+            maps: NO_MAPS,
+        }
+    }
+}

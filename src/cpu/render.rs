@@ -4,9 +4,11 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
 use super::gather::{caustic_light, gather_ray, indirect_preview};
-use super::rng::{rand1, rand2};
-use super::shading::{camera_direction, dielectric_scatter, direct_light, primitive_normal, reflect};
+use super::rng::{rand2, rand4};
+use super::shading::{camera_direction, direct_light, offset_origin};
+use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
@@ -26,54 +28,54 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     let mut throughput = Vec3::ONE;
     for depth in 0..f.max_depth {
         *rays += 1;
-        let (prim, t) = trace_ray(s.nodes, s.primitives, o, d, f32::INFINITY, false);
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);
         if prim == NO_LIGHT {
             break;
         }
-        let x = o + t * d;
-        let n = primitive_normal(s, prim, x);
-        let m = &s.materials[s.primitives[prim as usize].material as usize];
-        let front = n.dot(d) < 0.0;
+        let h = shape_hit(s, prim, o, d, t);
+        let m = &s.materials[h.material as usize];
+        let wo = -d;
         // Everything a mirror or glass shows is the specular term.
         let layer = |own: u32| (if depth > 0 { LAYER_SPECULAR } else { own }) as usize;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
-        // diffuse vertices end the path and light sampling covers them.
-        if front && part == 0 {
-            terms[layer(LAYER_DIRECT)] += throughput * Vec3::from(m.emission);
+        // estimate lobes end the path and light sampling covers them.
+        if wo.dot(h.ng) > 0.0 && part == 0 {
+            terms[layer(LAYER_DIRECT)] += throughput * material_emission(s, m, &h);
         }
-        let nf = if front { n } else { -n };
+        let b = material_bsdf(s, m, &h);
         let dim = depth * RNG_DIMS_PER_BOUNCE;
-        if m.kind == MATERIAL_DIFFUSE {
-            let albedo = Vec3::from(m.reflectance);
-            if albedo == Vec3::ZERO {
+        let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
+        // Follow the path lobes (mirrors, glass) with their probability; else end here.
+        let q = bsdf_path_probability(&b, wo);
+        if u[3] < q {
+            let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], LOBES_PATH);
+            if smp.flags == 0 {
                 break;
             }
-            if part == 0 {
-                let direct = direct_light(s, x, nf, albedo, stream, sample, dim, rays);
-                terms[layer(LAYER_DIRECT)] += throughput * direct;
-            }
-            if f.photon_mapping == 0 {
-                break;
-            }
-            if part == 0 {
-                terms[layer(LAYER_CAUSTICS)] += throughput * caustic_light(s, x, nf, albedo);
-                if f.gather_rays == 0 {
-                    terms[layer(LAYER_INDIRECT)] += throughput * indirect_preview(s, x, nf, albedo);
-                }
-            } else {
-                let indirect = gather_ray(s, x, nf, albedo, stream, sample, part - 1, rays);
-                terms[layer(LAYER_INDIRECT)] += throughput * indirect;
-            }
-            break;
-        }
-        if m.kind == MATERIAL_MIRROR {
-            throughput *= Vec3::from(m.reflectance);
-            d = reflect(d, nf);
-            o = x + nf * f.ray_epsilon;
+            throughput *= smp.weight / q;
+            o = offset_origin(s, &h, wo, smp.flags);
+            d = smp.wi;
             continue;
         }
-        // Dielectric: reflection or refraction with the Fresnel probability, weight 1.
-        (o, d) = dielectric_scatter(s, x, nf, front, m.ior, rand1(stream, sample, f.seed, dim + RNG_FRESNEL), d);
+        if bsdf_flags(&b) & BSDF_ESTIMATE == 0 {
+            break;
+        }
+        let weight = throughput / (1.0 - q);
+        if part == 0 {
+            terms[layer(LAYER_DIRECT)] += weight * direct_light(s, &h, &b, wo, stream, sample, dim, rays);
+        }
+        if f.photon_mapping == 0 {
+            break;
+        }
+        if part == 0 {
+            terms[layer(LAYER_CAUSTICS)] += weight * caustic_light(s, &h, &b, wo);
+            if f.gather_rays == 0 {
+                terms[layer(LAYER_INDIRECT)] += weight * indirect_preview(s, &h, &b, wo);
+            }
+        } else {
+            terms[layer(LAYER_INDIRECT)] += weight * gather_ray(s, &h, &b, wo, stream, sample, part - 1, rays);
+        }
+        break;
     }
 }
 

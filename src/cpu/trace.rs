@@ -2,8 +2,11 @@
 
 use glam::Vec3;
 
-use crate::layout::constants::{NO_LIGHT, PRIMITIVE_SPHERE};
-use crate::layout::{BvhNode, Primitive};
+use super::bsdf::material_opacity;
+use super::rng::hash_ray;
+use super::shape::{shape_hit, shape_intersect};
+use super::SceneView;
+use crate::layout::constants::{NO_LIGHT, PRIMITIVE_FLAG_ALPHA};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
 pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
@@ -20,64 +23,21 @@ pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
     }
 }
 
-/// Möller and Trumbore 1997, two-sided. Returns the hit distance, or infinity.
-pub fn ray_triangle(o: Vec3, d: Vec3, p0: Vec3, p1: Vec3, p2: Vec3, t_max: f32) -> f32 {
-    let e1 = p1 - p0;
-    let e2 = p2 - p0;
-    let pv = d.cross(e2);
-    let det = e1.dot(pv);
-    if det == 0.0 {
-        return f32::INFINITY;
+/// Stochastic transparency: the ray passes through primitive `i` at distance `t` with
+/// probability 1 - opacity. Camera rays, shadow rays and photons all decide here.
+pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
+    if s.primitives[i as usize].kind & PRIMITIVE_FLAG_ALPHA == 0 {
+        return false;
     }
-    let inv_det = 1.0 / det;
-    let tv = o - p0;
-    let u = tv.dot(pv) * inv_det;
-    if !(0.0..=1.0).contains(&u) {
-        return f32::INFINITY;
-    }
-    let qv = tv.cross(e1);
-    let v = d.dot(qv) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
-        return f32::INFINITY;
-    }
-    let t = e2.dot(qv) * inv_det;
-    if t > 0.0 && t < t_max {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-/// Nearest positive root, in the form of Haines et al., Ray Tracing Gems ch. 7.
-pub fn ray_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32, t_max: f32) -> f32 {
-    let f = o - c;
-    let b = f.dot(d);
-    let l = f - b * d;
-    let disc = r * r - l.dot(l);
-    if disc < 0.0 {
-        return f32::INFINITY;
-    }
-    let s = disc.sqrt();
-    let (t0, t1) = (-b - s, -b + s);
-    let t = if t0 > 0.0 { t0 } else { t1 };
-    if t > 0.0 && t < t_max {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-pub fn ray_primitive(p: &Primitive, o: Vec3, d: Vec3, t_max: f32) -> f32 {
-    if p.kind == PRIMITIVE_SPHERE {
-        return ray_sphere(o, d, Vec3::from(p.p0), p.p1[0], t_max);
-    }
-    ray_triangle(o, d, Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2), t_max)
+    let h = shape_hit(s, i, o, d, t);
+    hash_ray(o, d, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
 }
 
 /// Closest hit in [0, t_max) as (primitive index, distance), or `NO_LIGHT` and t_max on a miss.
 /// With `any_hit` the first hit found is returned (shadow rays). Stackless: a missed box, or a
 /// finished leaf, continues at the node's miss link.
-pub fn trace_ray(nodes: &[BvhNode], prims: &[Primitive], o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> (u32, f32) {
+pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> (u32, f32) {
+    let nodes = s.nodes;
     let inv_d = d.recip();
     let mut t_hit = t_max;
     let mut hit = NO_LIGHT;
@@ -94,7 +54,15 @@ pub fn trace_ray(nodes: &[BvhNode], prims: &[Primitive], o: Vec3, d: Vec3, t_max
             continue;
         }
         for i in n.first..n.first + count {
-            let t = ray_primitive(&prims[i as usize], o, d, t_hit);
+            let p = &s.primitives[i as usize];
+            let mut t = shape_intersect(p, o, d, 0.0, t_hit);
+            // A ray that passes a transparent point may meet the shape again behind it (a
+            // sphere's far side); a shape has at most two surfaces along a ray.
+            let mut k = 0;
+            while k < 2 && t < t_hit && passes_through(s, i, o, d, t) {
+                t = shape_intersect(p, o, d, t, t_hit);
+                k += 1;
+            }
             if t < t_hit {
                 t_hit = t;
                 hit = i;

@@ -17,27 +17,72 @@ macro_rules! shared_constants {
 }
 
 shared_constants! {
-    /// Lambertian reflector; `Material::reflectance` is its albedo.
+    /// Lambertian reflector; `Material::color0` is its albedo.
     MATERIAL_DIFFUSE: u32 = 0;
-    /// Perfect mirror; `Material::reflectance` is its tint.
+    /// Perfect mirror; `Material::color0` is its tint.
     MATERIAL_MIRROR: u32 = 1;
     /// Smooth dielectric with Fresnel reflection and refraction; `Material::ior` is its index.
     MATERIAL_DIELECTRIC: u32 = 2;
 
-    /// A triangle primitive: `p0`, `p1`, `p2` are its vertices.
-    PRIMITIVE_TRIANGLE: u32 = 0;
-    /// An analytic sphere: `p0` is its centre, `p1[0]` its radius.
-    PRIMITIVE_SPHERE: u32 = 1;
+    /// Lobe flags of a BSDF (`bsdf_flags`), in the spirit of Mitsuba 3's `BSDFFlags`.
+    BSDF_DIFFUSE: u32 = 1;
+    BSDF_GLOSSY: u32 = 2;
+    BSDF_SPECULAR: u32 = 4;
+    BSDF_REFLECTION: u32 = 8;
+    BSDF_TRANSMISSION: u32 = 16;
+    /// The lobes a camera path ends at: they store photons, are lit by light sampling and read the
+    /// photon maps with the BSDF's value (diffuse, and glossy lobes too rough to follow).
+    BSDF_ESTIMATE: u32 = 32;
+    /// The lobes a path follows (mirrors, glass, smooth glossy): they store no photons.
+    BSDF_PATH: u32 = 64;
+    /// Which lobes `bsdf_sample` draws from.
+    LOBES_ESTIMATE: u32 = 32;
+    LOBES_PATH: u32 = 64;
+    LOBES_ALL: u32 = 96;
 
-    /// A one-sided emissive triangle, sampled uniformly by area.
-    LIGHT_TRIANGLE: u32 = 0;
-    /// An emissive sphere, sampled uniformly by area.
-    LIGHT_SPHERE: u32 = 1;
-    /// A point light; `Light::radiance` holds its intensity in W/sr.
+    /// A triangle primitive: `p0`, `p1`, `p2` are its vertices; `data` (when not `NO_DATA`) holds
+    /// the uv of its three vertices (6 floats), else uv is (b1, b2) of the barycentrics.
+    PRIMITIVE_TRIANGLE: u32 = 0;
+    /// An analytic sphere: `p0` is its centre, `p1[0]` its radius; `data` holds the rows of its
+    /// `object_from_world` rotation (9 floats) that orients its longitude/latitude uv.
+    PRIMITIVE_SPHERE: u32 = 1;
+    /// Low bits of `Primitive::kind` holding the shape kind; the bits above are flags.
+    PRIMITIVE_KIND_MASK: u32 = 0xff;
+    /// Flag of `Primitive::kind`: the material has an opacity below 1 somewhere (alpha), so every
+    /// ray that meets the primitive decides by the opacity whether it passes.
+    PRIMITIVE_FLAG_ALPHA: u32 = 0x100;
+
+    /// A light that is an emitting primitive (`Light::primitive`), sampled uniformly by area.
+    LIGHT_AREA: u32 = 0;
+    /// A point light; `Light::intensity` holds its intensity in W/sr.
     LIGHT_POINT: u32 = 2;
+
+    /// A texture of one colour, `Texture::value`.
+    TEXTURE_CONSTANT: u32 = 0;
+    /// Two colours in a 3D checker of unit cells in texture space (POV-Ray's `checker`):
+    /// `value` where floor(x) + floor(y) + floor(z) is even, `value2` where it is odd.
+    TEXTURE_CHECKER: u32 = 1;
+    /// Where a texture looks itself up: (u, v, 0) of the surface, or the hit point in world space.
+    TEXTURE_SPACE_UV: u32 = 0;
+    TEXTURE_SPACE_WORLD: u32 = 1;
 
     /// Marks a primitive that is not a light.
     NO_LIGHT: u32 = 0xffff_ffff;
+    /// Marks a material parameter without a texture (the constant alone), or a missing data block.
+    NO_TEXTURE: u32 = 0xffff_ffff;
+    NO_DATA: u32 = 0xffff_ffff;
+
+    /// Bindings every kernel that sees the scene declares (shaders/scene_bindings.glsl) and the
+    /// host binds in this order (`DeviceScene::bindings`); a kernel's own bindings follow.
+    BINDING_FRAME: u32 = 0;
+    BINDING_NODES: u32 = 1;
+    BINDING_PRIMITIVES: u32 = 2;
+    BINDING_MATERIALS: u32 = 3;
+    BINDING_LIGHTS: u32 = 4;
+    BINDING_TEXTURES: u32 = 5;
+    BINDING_TEXTURE_DATA: u32 = 6;
+    BINDING_SHAPE_DATA: u32 = 7;
+    SCENE_BINDINGS: u32 = 8;
 
     /// Threads per workgroup of the one-dimensional kernels.
     WORKGROUP_SIZE: u32 = 64;
@@ -55,6 +100,8 @@ shared_constants! {
     RNG_LIGHT_PICK: u32 = 2;
     RNG_LIGHT_U: u32 = 3;
     RNG_LIGHT_V: u32 = 4;
+    /// One hash gives four numbers: x is the Fresnel (or lobe) choice, y and z the BSDF's
+    /// direction sample, w the choice between a BSDF's path and estimate lobes.
     RNG_FRESNEL: u32 = 5;
 
     /// Photon paths draw from dimensions above this, so they never share numbers with camera paths.

@@ -1,22 +1,206 @@
 //! Structs the GPU sees. This module is the source of truth: `shaders/layout.glsl` mirrors it and
-//! `tests/layout.rs` proves, from the compiled SPIR-V, that every offset and stride agrees.
+//! `tests/layout.rs` proves, from the compiled SPIR-V, that every offset and stride agrees. Every
+//! struct is declared inside `gpu_structs!`, which also lists them for that test, so a new struct
+//! cannot be left out of it.
 
 pub mod constants;
 
 use bytemuck::{Pod, Zeroable};
 
-/// A node of the flattened BVH, 32 bytes. Nodes are stored depth-first, so an interior node's
-/// first child is the next node, and `skip_count >> BVH_COUNT_BITS` is the node that follows
-/// this node's whole subtree (the "miss link"): traversal needs no stack, which SIMD CPU
-/// drivers such as lavapipe run far faster than a per-lane stack. A leaf has
-/// `count = skip_count & BVH_COUNT_MASK > 0` and covers primitives `first .. first + count`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub aabb_min: [f32; 3],
-    pub first: u32,
-    pub aabb_max: [f32; 3],
-    pub skip_count: u32,
+/// Declares the shared structs (`#[repr(C)]`, Pod) and `gpu_struct_layouts()`, the list of every
+/// one of them with its fields' offsets and its size.
+macro_rules! gpu_structs {
+    ($( $(#[$meta:meta])* pub struct $name:ident { $( $(#[$fmeta:meta])* pub $field:ident : $ty:ty ),* $(,)? } )*) => {
+        $(
+            $(#[$meta])*
+            #[repr(C)]
+            #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+            pub struct $name { $( $(#[$fmeta])* pub $field: $ty ),* }
+        )*
+        /// Every shared struct as (name, [(field, byte offset)], size in bytes), in declaration order.
+        pub fn gpu_struct_layouts() -> Vec<(&'static str, Vec<(&'static str, u32)>, u32)> {
+            vec![$(
+                (
+                    stringify!($name),
+                    vec![$( (stringify!($field), core::mem::offset_of!($name, $field) as u32) ),*],
+                    size_of::<$name>() as u32,
+                )
+            ),*]
+        }
+    };
+}
+
+gpu_structs! {
+    /// A node of the flattened BVH, 32 bytes. Nodes are stored depth-first, so an interior node's
+    /// first child is the next node, and `skip_count >> BVH_COUNT_BITS` is the node that follows
+    /// this node's whole subtree (the "miss link"): traversal needs no stack, which SIMD CPU
+    /// drivers such as lavapipe run far faster than a per-lane stack. A leaf has
+    /// `count = skip_count & BVH_COUNT_MASK > 0` and covers primitives `first .. first + count`.
+    pub struct BvhNode {
+        pub aabb_min: [f32; 3],
+        pub first: u32,
+        pub aabb_max: [f32; 3],
+        pub skip_count: u32,
+    }
+
+    /// One shape of the scene, in BVH leaf order, 64 bytes. `kind` is a `PRIMITIVE_*` kind in its
+    /// low bits (`PRIMITIVE_KIND_MASK`) plus `PRIMITIVE_FLAG_*` bits. What `p0..p2` and `data`
+    /// hold is said at each `PRIMITIVE_*` constant; `data` is a float offset into the shape data
+    /// buffer (or `NO_DATA`), for what does not fit the fixed fields.
+    pub struct Primitive {
+        pub p0: [f32; 3],
+        pub kind: u32,
+        pub p1: [f32; 3],
+        pub material: u32,
+        pub p2: [f32; 3],
+        /// Index into the light array when the primitive emits, else `NO_LIGHT`.
+        pub light: u32,
+        pub data: u32,
+        pub _pad: [u32; 3],
+    }
+
+    /// A material, 112 bytes. Each parameter is a constant and a texture (`*_tex`, or `NO_TEXTURE`
+    /// for the constant alone); with a texture the value is the constant times the texture's. What
+    /// the colour slots mean depends on `kind` (see `MATERIAL_*`); `bsdf.glsl` reads them.
+    pub struct Material {
+        pub kind: u32,
+        pub flags: u32,
+        /// Opacity in [0, 1] (times `alpha_tex`); below 1 the surface is stochastically transparent.
+        pub alpha: f32,
+        pub alpha_tex: u32,
+        /// Radiance leaving the front face (triangles: the winding side; spheres: outward).
+        pub emission: [f32; 3],
+        pub emission_tex: u32,
+        pub color0: [f32; 3],
+        pub color0_tex: u32,
+        pub color1: [f32; 3],
+        pub color1_tex: u32,
+        /// GGX widths along dpdu and dpdv (not a perceptual roughness).
+        pub roughness: [f32; 2],
+        pub roughness_tex: u32,
+        pub ior: f32,
+        pub bump_tex: u32,
+        pub bump_strength: f32,
+        pub normal_tex: u32,
+        pub weight_tex: u32,
+        /// Blend weight of a mix (of material `mix_b` over `mix_a`).
+        pub weight: f32,
+        pub mix_a: u32,
+        pub mix_b: u32,
+        pub _pad: u32,
+    }
+
+    /// A texture, 96 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*`) at a point
+    /// moved by `transform` (the rows of a 3x4 affine map, texture space from lookup space). `data`
+    /// and `color_map` are word offsets into the texture data buffer (or `NO_DATA`).
+    pub struct Texture {
+        pub kind: u32,
+        pub space: u32,
+        pub data: u32,
+        pub color_map: u32,
+        pub value: [f32; 3],
+        pub _pad0: u32,
+        pub value2: [f32; 3],
+        pub _pad1: u32,
+        pub transform: [f32; 12],
+    }
+
+    /// A light, 48 bytes. Area light: the emitting primitive `primitive`, whose material gives the
+    /// radiance. Point light: `position` and `intensity` (W/sr). `cdf` is the running sum of the
+    /// normalised light powers up to and including this light, so lights are picked in
+    /// proportion to their power by a binary search.
+    pub struct Light {
+        pub position: [f32; 3],
+        pub kind: u32,
+        pub intensity: [f32; 3],
+        pub primitive: u32,
+        /// Probability of picking this light.
+        pub pick_probability: f32,
+        pub cdf: f32,
+        /// Surface area (scene units squared); 0 for point lights.
+        pub area: f32,
+        pub _pad: u32,
+    }
+
+    /// Per-render constants of every kernel, 96 bytes.
+    /// A primary ray through film position (sx, sy) in [-1, 1]^2 has direction
+    /// `forward + sx * right + sy * up` (not normalised): `right` and `up` carry the field of view.
+    pub struct FrameParams {
+        pub camera_position: [f32; 3],
+        pub width: u32,
+        pub camera_forward: [f32; 3],
+        pub height: u32,
+        pub camera_right: [f32; 3],
+        pub max_depth: u32,
+        pub camera_up: [f32; 3],
+        pub seed: u32,
+        pub light_count: u32,
+        /// Offset for secondary ray origins, in scene units.
+        pub ray_epsilon: f32,
+        pub primitive_count: u32,
+        pub node_count: u32,
+        /// Sum of all light powers (mean of the channels); 0 when the scene has no light.
+        pub total_light_power: f32,
+        /// 1 when photon maps are bound: caustics and indirect light come from them.
+        pub photon_mapping: u32,
+        /// Final-gather rays per camera sample; 0 reads the global map directly (fast preview).
+        pub gather_rays: u32,
+        pub _pad: u32,
+    }
+
+    /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
+    /// that sample: part 0 is the camera path with emission, direct light and caustics; part k >= 1
+    /// is final-gather ray k - 1. Lavapipe stops any invocation after 65535 loop iterations in all
+    /// (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop of a shader), so an invocation must do a
+    /// bounded amount of work: one ray path and at most one photon lookup per part.
+    pub struct DispatchRange {
+        pub row_begin: u32,
+        pub row_count: u32,
+        pub sample_index: u32,
+        pub part: u32,
+    }
+
+    /// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).
+    /// Position in scene units; flux as three half floats relative to the map's flux scale; the
+    /// direction toward the light in 14 octahedral bits and two `PHOTON_FLAG_*` bits. Packing lives in
+    /// `shaders/photon.glsl` and its twin `cpu::photon`.
+    pub struct Photon {
+        pub position: [f32; 3], // scalars only: align 4, no padding
+        pub flux_rg: u32,
+        pub flux_b_dir: u32,
+    }
+
+    /// A hashed spatial grid over one photon map, 32 bytes. Cells are cubes of `cell_size` =
+    /// `radius`, so a lookup of that radius touches the 3x3x3 cells around its point (27 r^3 of
+    /// candidates, against 64 r^3 for 2x2x2 cells of 2r: fewer photons read); cell coordinates are hashed
+    /// into `table_mask + 1` buckets (a power of two about twice the photon count).
+    pub struct GridParams {
+        pub cell_size: f32,
+        pub radius: f32,
+        pub table_mask: u32,
+        pub photon_count: u32,
+        /// Stored flux is relative to this (see `Photon`).
+        pub flux_scale: f32,
+        pub _pad: [u32; 3],
+    }
+
+    /// Push constants of one `emit_photons` dispatch, 32 bytes.
+    pub struct EmitParams {
+        /// First photon path of this dispatch and how many it traces.
+        pub path_begin: u32,
+        pub path_count: u32,
+        /// Photon paths over the whole render: each carries 1/`total_paths` of the light's power.
+        pub total_paths: u32,
+        /// Most surfaces a photon path visits.
+        pub max_depth: u32,
+        /// Capacity of the two photon buffers; photons past them are counted, not stored.
+        pub global_capacity: u32,
+        pub caustic_capacity: u32,
+        /// Selects an independent set of photon paths (progressive passes use the pass index).
+        pub pass: u32,
+        /// 1 for a pass that fills only the caustic map (its paths end at the first diffuse surface).
+        pub caustics_only: u32,
+    }
 }
 
 impl BvhNode {
@@ -29,143 +213,10 @@ impl BvhNode {
     }
 }
 
-/// One triangle or sphere, in BVH leaf order, 48 bytes.
-/// Triangle: vertices `p0`, `p1`, `p2`. Sphere: centre `p0`, radius `p1[0]`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Primitive {
-    pub p0: [f32; 3],
-    pub kind: u32,
-    pub p1: [f32; 3],
-    pub material: u32,
-    pub p2: [f32; 3],
-    /// Index into the light array when the primitive emits, else `NO_LIGHT`.
-    pub light: u32,
-}
-
-/// A material, 32 bytes. `reflectance` is the diffuse albedo or the mirror tint; `emission` is
-/// the radiance leaving the front face (triangles: the winding side; spheres: outward).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Material {
-    pub reflectance: [f32; 3],
-    pub kind: u32,
-    pub emission: [f32; 3],
-    pub ior: f32,
-}
-
-/// A light, 64 bytes. Triangle: vertices `p0..p2`. Sphere: centre `p0`, radius `p1[0]`.
-/// Point: position `p0`. `radiance` is emitted radiance, or intensity (W/sr) for a point light.
-/// `cdf` is the running sum of the normalised light powers up to and including this light, so
-/// lights are picked in proportion to their power by a binary search.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Light {
-    pub p0: [f32; 3],
-    pub kind: u32,
-    pub p1: [f32; 3],
-    /// Probability of picking this light.
-    pub pick_probability: f32,
-    pub p2: [f32; 3],
-    /// Surface area (scene units squared); 0 for point lights.
-    pub area: f32,
-    pub radiance: [f32; 3],
-    pub cdf: f32,
-}
-
-/// Per-render constants of every kernel, 96 bytes.
-/// A primary ray through film position (sx, sy) in [-1, 1]^2 has direction
-/// `forward + sx * right + sy * up` (not normalised): `right` and `up` carry the field of view.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct FrameParams {
-    pub camera_position: [f32; 3],
-    pub width: u32,
-    pub camera_forward: [f32; 3],
-    pub height: u32,
-    pub camera_right: [f32; 3],
-    pub max_depth: u32,
-    pub camera_up: [f32; 3],
-    pub seed: u32,
-    pub light_count: u32,
-    /// Offset for secondary ray origins, in scene units.
-    pub ray_epsilon: f32,
-    pub primitive_count: u32,
-    pub node_count: u32,
-    /// Sum of all light powers (mean of the channels); 0 when the scene has no light.
-    pub total_light_power: f32,
-    /// 1 when photon maps are bound: caustics and indirect light come from them.
-    pub photon_mapping: u32,
-    /// Final-gather rays per camera sample; 0 reads the global map directly (fast preview).
-    pub gather_rays: u32,
-    pub _pad: u32,
-}
-
-/// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
-/// that sample: part 0 is the camera path with emission, direct light and caustics; part k >= 1
-/// is final-gather ray k - 1. Lavapipe stops any invocation after 65535 loop iterations in all
-/// (LP_MAX_TGSI_LOOP_ITERATIONS, shared by every loop of a shader), so an invocation must do a
-/// bounded amount of work: one ray path and at most one photon lookup per part.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct DispatchRange {
-    pub row_begin: u32,
-    pub row_count: u32,
-    pub sample_index: u32,
-    pub part: u32,
-}
-
-/// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).
-/// Position in scene units; flux as three half floats relative to the map's flux scale; the
-/// direction toward the light in 14 octahedral bits and two `PHOTON_FLAG_*` bits. Packing lives in
-/// `shaders/photon.glsl` and its twin `cpu::photon`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Photon {
-    pub position: [f32; 3], // scalars only: align 4, no padding
-    pub flux_rg: u32,
-    pub flux_b_dir: u32,
-}
-
-/// A hashed spatial grid over one photon map, 32 bytes. Cells are cubes of `cell_size` =
-/// `radius`, so a lookup of that radius touches the 3x3x3 cells around its point (27 r^3 of
-/// candidates, against 64 r^3 for 2x2x2 cells of 2r: fewer photons read); cell coordinates are hashed
-/// into `table_mask + 1` buckets (a power of two about twice the photon count).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GridParams {
-    pub cell_size: f32,
-    pub radius: f32,
-    pub table_mask: u32,
-    pub photon_count: u32,
-    /// Stored flux is relative to this (see `Photon`).
-    pub flux_scale: f32,
-    pub _pad: [u32; 3],
-}
-
-/// Push constants of one `emit_photons` dispatch, 32 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct EmitParams {
-    /// First photon path of this dispatch and how many it traces.
-    pub path_begin: u32,
-    pub path_count: u32,
-    /// Photon paths over the whole render: each carries 1/`total_paths` of the light's power.
-    pub total_paths: u32,
-    /// Most surfaces a photon path visits.
-    pub max_depth: u32,
-    /// Capacity of the two photon buffers; photons past them are counted, not stored.
-    pub global_capacity: u32,
-    pub caustic_capacity: u32,
-    /// Selects an independent set of photon paths (progressive passes use the pass index).
-    pub pass: u32,
-    /// 1 for a pass that fills only the caustic map (its paths end at the first diffuse surface).
-    pub caustics_only: u32,
-}
-
 const _: () = assert!(size_of::<Photon>() == 20);
 const _: () = assert!(size_of::<BvhNode>() == 32);
-const _: () = assert!(size_of::<Primitive>() == 48);
-const _: () = assert!(size_of::<Material>() == 32);
-const _: () = assert!(size_of::<Light>() == 64);
+const _: () = assert!(size_of::<Primitive>() == 64);
+const _: () = assert!(size_of::<Material>() == 112);
+const _: () = assert!(size_of::<Texture>() == 96);
+const _: () = assert!(size_of::<Light>() == 48);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));

@@ -8,7 +8,7 @@ use super::{
     SceneBuffers,
 };
 use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
-use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, WORKGROUP_SIZE};
+use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
 use crate::layout::{DispatchRange, EmitParams, GridParams, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
@@ -42,6 +42,9 @@ pub struct DeviceScene {
     pub primitives: Buffer,
     pub materials: Buffer,
     pub lights: Buffer,
+    pub textures: Buffer,
+    pub texture_data: Buffer,
+    pub shape_data: Buffer,
 }
 
 impl DeviceScene {
@@ -57,7 +60,27 @@ impl DeviceScene {
             primitives: ctx.upload("primitives", &buffers.primitives)?,
             materials: ctx.upload("materials", &buffers.materials)?,
             lights: ctx.upload("lights", &buffers.lights)?,
+            textures: ctx.upload("textures", &buffers.textures)?,
+            texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
+            shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
         })
+    }
+
+    /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
+    /// by a kernel's own buffers.
+    pub fn bindings<'a>(&'a self, own: &[&'a Buffer]) -> Vec<&'a Buffer> {
+        let scene = [
+            &self.frame,
+            &self.nodes,
+            &self.primitives,
+            &self.materials,
+            &self.lights,
+            &self.textures,
+            &self.texture_data,
+            &self.shape_data,
+        ];
+        debug_assert_eq!(scene.len(), SCENE_BINDINGS as usize);
+        scene.into_iter().chain(own.iter().copied()).collect()
     }
 }
 
@@ -100,7 +123,7 @@ impl DeviceMaps {
 
 /// Traces one emission pass; returns the photon buffer holding `count` photons.
 fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool) -> Result<(Buffer, u32), GpuError> {
-    let emit_kernel = kernel(ctx, "emit_photons", 8, size_of::<EmitParams>())?;
+    let emit_kernel = kernel(ctx, "emit_photons", SCENE_BINDINGS + 3, size_of::<EmitParams>())?;
     let photon_bytes = size_of::<Photon>() as u64;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let name = if caustic { "caustic_photons" } else { "global_photons" };
@@ -120,16 +143,7 @@ fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool
             ctx.run("emit_photons", |rec| {
                 rec.dispatch(
                     &emit_kernel,
-                    &[
-                        &scene.frame,
-                        &scene.nodes,
-                        &scene.primitives,
-                        &scene.materials,
-                        &scene.lights,
-                        global_buffer,
-                        caustic_buffer,
-                        &counters,
-                    ],
+                    &scene.bindings(&[global_buffer, caustic_buffer, &counters]),
                     bytemuck::bytes_of(&p),
                     groups(p.path_count),
                 )
@@ -256,7 +270,7 @@ pub fn render_gpu(
     // Upload
     let t = Instant::now();
     let scene = DeviceScene::upload(ctx, buffers, photons)?;
-    let render_kernel = kernel(ctx, "render", 11, size_of::<DispatchRange>())?;
+    let render_kernel = kernel(ctx, "render", SCENE_BINDINGS + 6, size_of::<DispatchRange>())?;
     stages.push(("upload".to_string(), t.elapsed()));
 
     // Trace photons and build the grids
@@ -314,19 +328,14 @@ pub fn render_gpu(
             for unit in batch {
                 rec.dispatch(
                     &render_kernel,
-                    &[
-                        &scene.frame,
-                        &scene.nodes,
-                        &scene.primitives,
-                        &scene.materials,
-                        &scene.lights,
+                    &scene.bindings(&[
                         &accumulation,
                         &maps.grids,
                         &maps.global.photons,
                         &maps.global.starts,
                         &maps.caustic.photons,
                         &maps.caustic.starts,
-                    ],
+                    ]),
                     bytemuck::bytes_of(unit),
                     groups(invocations),
                 )?;

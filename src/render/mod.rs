@@ -5,6 +5,7 @@
 pub mod accumulation;
 pub mod bench;
 pub mod gpu;
+pub mod pack;
 pub mod photons;
 pub mod prepare;
 pub mod progressive;

@@ -1,4 +1,4 @@
-//! Photon-map settings and the CPU build of both maps (emission, then the hashed grid).
+//! Photon-map parameters and the CPU build of both maps (emission, then the hashed grid).
 
 use crate::cpu::emit_photons::emit_photons;
 use crate::cpu::grid_build::{build_grid, grid_params};
@@ -7,45 +7,13 @@ use crate::layout::{EmitParams, GridParams, Photon};
 
 use super::SceneBuffers;
 
+pub use crate::scene::PhotonSettings;
+
 /// Average photons inside a lookup disc the automatic global radius aims at.
 pub const GLOBAL_NEIGHBOURS: f32 = 64.0;
 /// The automatic caustic radius is this fraction of the global one: caustic photons crowd
 /// into small bright areas, so they afford a sharper filter.
 pub const CAUSTIC_RADIUS_FRACTION: f32 = 0.5;
-
-/// How the photon maps are made and read.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PhotonSettings {
-    /// Photon paths traced for the global map.
-    pub photons: u32,
-    /// Photon paths traced for the caustic map (each ends at its first diffuse surface).
-    pub caustic_photons: u32,
-    /// Lookup radius of the global map (scene units); `None` derives it from the scene's surface
-    /// area and the stored photon count.
-    pub radius: Option<f32>,
-    /// Lookup radius of the caustic map; `None` is half the global radius.
-    pub caustic_radius: Option<f32>,
-    /// Final-gather rays per camera sample; 0 reads the global map directly.
-    pub gather_rays: u32,
-    /// Most surfaces a photon path visits.
-    pub max_depth: u32,
-    /// Radius reduction of progressive passes, in (0, 1): see `pass_radius_scale`.
-    pub alpha: f32,
-}
-
-impl Default for PhotonSettings {
-    fn default() -> Self {
-        PhotonSettings {
-            photons: 200_000,
-            caustic_photons: 200_000,
-            radius: None,
-            caustic_radius: None,
-            gather_rays: 8,
-            max_depth: 16,
-            alpha: 2.0 / 3.0,
-        }
-    }
-}
 
 /// Emission parameters of the global (`caustics_only` = 0) or caustic pass `pass`.
 pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) -> EmitParams {

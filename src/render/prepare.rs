@@ -2,10 +2,11 @@
 
 use glam::Vec3;
 
+use super::pack::pack_scene;
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
-use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive};
+use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
 use crate::scene::Scene;
 
 /// Everything a render dispatch binds, owned.
@@ -16,6 +17,9 @@ pub struct SceneBuffers {
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    pub textures: Vec<Texture>,
+    pub texture_data: Vec<u32>,
+    pub shape_data: Vec<f32>,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
@@ -30,6 +34,9 @@ impl SceneBuffers {
             primitives: &self.primitives,
             materials: &self.materials,
             lights: &self.lights,
+            textures: &self.textures,
+            texture_data: &self.texture_data,
+            shape_data: &self.shape_data,
             maps: crate::cpu::NO_MAPS,
         }
     }
@@ -50,67 +57,38 @@ fn channel_mean(v: [f32; 3]) -> f32 {
 }
 
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
-    // Primitives, each emitter tagged with its future light index
-    let mut primitives = Vec::with_capacity(scene.triangles.len() + scene.spheres.len());
-    for t in &scene.triangles {
-        primitives.push(Primitive {
-            p0: t.vertices[0].into(),
-            p1: t.vertices[1].into(),
-            p2: t.vertices[2].into(),
-            kind: PRIMITIVE_TRIANGLE,
-            material: t.material,
-            light: NO_LIGHT,
-        });
-    }
-    for s in &scene.spheres {
-        primitives.push(Primitive {
-            p0: s.center.into(),
-            p1: [s.radius, 0.0, 0.0],
-            p2: [0.0; 3],
-            kind: PRIMITIVE_SPHERE,
-            material: s.material,
-            light: NO_LIGHT,
-        });
-    }
-    let surface_area: f32 = scene
-        .triangles
-        .iter()
-        .map(|t| 0.5 * (t.vertices[1] - t.vertices[0]).cross(t.vertices[2] - t.vertices[0]).length())
-        .chain(scene.spheres.iter().map(|s| 4.0 * std::f32::consts::PI * s.radius * s.radius))
-        .sum();
-    let bvh = build_bvh(&primitives)?;
+    // Primitives in BVH order, each emitter tagged with its light index
+    let packed = pack_scene(scene);
+    let surface_area: f32 = packed.areas.iter().sum();
+    let bvh = build_bvh(&packed.primitives, &packed.bounds)?;
     let mut primitives = bvh.primitives;
+    // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
+    // original index, which the reorder keeps in `order`).
+    let areas: Vec<f32> = bvh.order.iter().map(|&i| packed.areas.get(i as usize).copied().unwrap_or(0.0)).collect();
 
     // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
     let mut lights = Vec::new();
     let mut powers = Vec::new();
-    for p in primitives.iter_mut() {
-        let Some(emission) = scene.materials.get(p.material as usize).map(|m| m.emission) else { continue };
-        if channel_mean(emission) <= 0.0 {
-            continue;
-        }
-        let (kind, area, p1) = if p.kind == PRIMITIVE_SPHERE {
-            (LIGHT_SPHERE, 4.0 * std::f32::consts::PI * p.p1[0] * p.p1[0], p.p1)
-        } else {
-            let e1 = Vec3::from(p.p1) - Vec3::from(p.p0);
-            let e2 = Vec3::from(p.p2) - Vec3::from(p.p0);
-            (LIGHT_TRIANGLE, 0.5 * e1.cross(e2).length(), p.p1)
-        };
-        if area <= 0.0 {
+    for (i, (p, &area)) in primitives.iter_mut().zip(&areas).enumerate() {
+        let Some(material) = scene.materials.get(p.material as usize) else { continue };
+        // A textured emission's power is estimated from its constant (the texture scales it
+        // by at most its values; the pick probability only steers sampling, it keeps no bias).
+        let emission = material.emission.value;
+        if channel_mean(emission.into()) <= 0.0 || area <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
         // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        powers.push(std::f32::consts::PI * area * channel_mean(emission));
-        lights.push(Light { p0: p.p0, kind, p1, p2: p.p2, area, radiance: emission, ..Default::default() });
+        powers.push(std::f32::consts::PI * area * channel_mean(emission.into()));
+        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
     for pl in &scene.point_lights {
         // An isotropic point light of intensity I emits power 4 pi I.
         powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
         lights.push(Light {
-            p0: pl.position.into(),
+            position: pl.position.into(),
             kind: LIGHT_POINT,
-            radiance: pl.intensity.into(),
+            intensity: pl.intensity.into(),
             ..Default::default()
         });
     }
@@ -160,8 +138,11 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         frame,
         nodes: bvh.nodes,
         primitives,
-        materials: scene.materials.clone(),
+        materials: packed.materials,
         lights,
+        textures: packed.textures,
+        texture_data: packed.texture_data,
+        shape_data: packed.shape_data,
         bounding_radius,
         surface_area,
     })

@@ -4,16 +4,14 @@
 use std::ops::Range;
 use std::path::Path;
 
-use glam::{Affine3A, Mat3, Vec3};
+use glam::{Affine3A, Mat3, Vec2, Vec3};
 use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
-use super::format::{LightDef, MaterialDef, SceneFile, ShapeDef, TransformDef, Vec3Def};
+use super::format::{LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def};
+use super::material::{ColorParam, MaterialDesc, MaterialKind, ScalarParam, TextureDesc, TextureKind, TextureSpace};
 use super::mesh::{load_obj_triangles, ObjError};
-use super::{Camera, PointLight, RenderSettings, Scene, Sphere, Triangle};
-use crate::layout::constants::{MATERIAL_DIELECTRIC, MATERIAL_DIFFUSE, MATERIAL_MIRROR};
-use crate::layout::Material;
-use crate::render::PhotonSettings;
+use super::{Camera, Geometry, PhotonSettings, PointLight, RenderSettings, Scene, Shape, Sphere, Triangle};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -27,6 +25,8 @@ const DEFAULT_REFLECTANCE: f32 = 0.8;
 const DEFAULT_IOR: f32 = 1.5;
 
 const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric"];
+const TEXTURE_TYPES: &[&str] = &["constant", "checker"];
+const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
 const LIGHT_TYPES: &[&str] = &["area", "point"];
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
@@ -37,8 +37,10 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         materials: Vec::new(),
         material_names: Vec::new(),
         material_used: Vec::new(),
-        triangles: Vec::new(),
-        spheres: Vec::new(),
+        textures: Vec::new(),
+        texture_names: Vec::new(),
+        texture_used: Vec::new(),
+        shapes: Vec::new(),
         point_lights: Vec::new(),
         warnings: Vec::new(),
     };
@@ -50,7 +52,12 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     let render = builder.render(file.render.as_ref())?;
     let photons = builder.photons(file.photons.as_ref())?;
 
-    // Materials in file order, so ids follow the file.
+    // Textures, then materials, in file order, so ids follow the file.
+    let mut textures: Vec<_> = file.textures.iter().collect();
+    textures.sort_by_key(|(key, _)| key.span().start);
+    for (key, def) in textures {
+        builder.texture(key, def)?;
+    }
     let mut materials: Vec<_> = file.materials.iter().collect();
     materials.sort_by_key(|(key, _)| key.span().start);
     for (key, def) in materials {
@@ -70,12 +77,12 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
             builder.warnings.push(format!("material \"{name}\" is defined but no shape uses it"));
         }
     }
-    let emits = |m: u32| {
-        let e = builder.materials[m as usize].emission;
-        e.iter().any(|&c| c > 0.0)
-    };
-    let has_light = builder.triangles.iter().any(|t| emits(t.material))
-        || builder.spheres.iter().any(|s| emits(s.material))
+    for (name, used) in builder.texture_names.iter().zip(&builder.texture_used) {
+        if !used {
+            builder.warnings.push(format!("texture \"{name}\" is defined but no material uses it"));
+        }
+    }
+    let has_light = builder.shapes.iter().any(|s| builder.materials[s.material as usize].emits())
         || builder.point_lights.iter().any(|p| p.intensity.max_element() > 0.0);
     if !has_light {
         builder.warnings.push("scene has no lights; the image will be black".to_string());
@@ -90,8 +97,8 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         photons,
         materials: builder.materials,
         material_names: builder.material_names,
-        triangles: builder.triangles,
-        spheres: builder.spheres,
+        textures: builder.textures,
+        shapes: builder.shapes,
         point_lights: builder.point_lights,
         warnings: builder.warnings,
     })
@@ -99,11 +106,13 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
 
 struct Builder<'a> {
     src: &'a Source<'a>,
-    materials: Vec<Material>,
+    materials: Vec<MaterialDesc>,
     material_names: Vec<String>,
     material_used: Vec<bool>,
-    triangles: Vec<Triangle>,
-    spheres: Vec<Sphere>,
+    textures: Vec<TextureDesc>,
+    texture_names: Vec<String>,
+    texture_used: Vec<bool>,
+    shapes: Vec<Shape>,
     point_lights: Vec<PointLight>,
     warnings: Vec<String>,
 }
@@ -387,30 +396,40 @@ impl Builder<'_> {
             ("tint", span_of(&m.tint)),
             ("ior", span_of(&m.ior)),
             ("emission", span_of(&m.emission)),
+            ("opacity", span_of(&m.opacity)),
         ];
         let emission = match &m.emission {
-            Some(e) => self.color(e, &object, "emission", false)?,
-            None => [0.0; 3],
+            Some(e) => self.color_param(e, &object, "emission", false)?,
+            None => ColorParam::constant(Vec3::ZERO),
         };
-        let material = match kind {
+        let opacity = match &m.opacity {
+            Some(o) => self.scalar_param(o, &object, "opacity", 0.0, 1.0, "a fraction in [0, 1] (1 is opaque)")?,
+            None => ScalarParam::constant(1.0),
+        };
+        let kind = match kind {
             "diffuse" => {
-                self.only_fields(&object, "a diffuse material", &present, &["type", "reflectance", "emission"])?;
+                self.only_fields(
+                    &object,
+                    "a diffuse material",
+                    &present,
+                    &["type", "reflectance", "emission", "opacity"],
+                )?;
                 let reflectance = match &m.reflectance {
-                    Some(r) => self.color(r, &object, "reflectance", true)?,
-                    None => [DEFAULT_REFLECTANCE; 3],
+                    Some(r) => self.color_param(r, &object, "reflectance", true)?,
+                    None => ColorParam::constant(Vec3::splat(DEFAULT_REFLECTANCE)),
                 };
-                Material { reflectance, kind: MATERIAL_DIFFUSE, emission, ior: 1.0 }
+                MaterialKind::Diffuse { reflectance }
             }
             "mirror" => {
-                self.only_fields(&object, "a mirror material", &present, &["type", "tint", "emission"])?;
+                self.only_fields(&object, "a mirror material", &present, &["type", "tint", "emission", "opacity"])?;
                 let tint = match &m.tint {
-                    Some(t) => self.color(t, &object, "tint", true)?,
-                    None => [1.0; 3],
+                    Some(t) => self.color_param(t, &object, "tint", true)?,
+                    None => ColorParam::constant(Vec3::ONE),
                 };
-                Material { reflectance: tint, kind: MATERIAL_MIRROR, emission, ior: 1.0 }
+                MaterialKind::Mirror { tint }
             }
             _ => {
-                self.only_fields(&object, "a dielectric material", &present, &["type", "ior", "emission"])?;
+                self.only_fields(&object, "a dielectric material", &present, &["type", "ior", "emission", "opacity"])?;
                 let ior = match &m.ior {
                     Some(ior_def) => {
                         let ior = self.number(ior_def, &object, "ior")?;
@@ -425,14 +444,136 @@ impl Builder<'_> {
                     }
                     None => DEFAULT_IOR,
                 };
-                Material { reflectance: [1.0; 3], kind: MATERIAL_DIELECTRIC, emission, ior }
+                MaterialKind::Dielectric { ior }
             }
         };
-        self.add_material(name, material);
+        self.add_material(name, MaterialDesc { kind, emission, opacity });
         Ok(())
     }
 
-    fn add_material(&mut self, name: String, material: Material) -> u32 {
+    /// A colour parameter: a colour (checked like `color`), or `{ texture = "name" }`.
+    fn color_param(
+        &mut self,
+        value: &Spanned<ParamDef>,
+        object: &str,
+        field: &str,
+        at_most_one: bool,
+    ) -> Result<ColorParam> {
+        match value.get_ref() {
+            ParamDef::Value(v) => {
+                let c = self.color(&Spanned::new(value.span(), *v), object, field, at_most_one)?;
+                Ok(ColorParam::constant(Vec3::from(c)))
+            }
+            ParamDef::Texture { name, scale } => {
+                let texture = Some(self.texture_id(name, &value.span(), object)?);
+                let value = match scale {
+                    Some(s) => Vec3::from(self.color(&Spanned::new(value.span(), *s), object, field, at_most_one)?),
+                    None => Vec3::ONE,
+                };
+                Ok(ColorParam { value, texture })
+            }
+        }
+    }
+
+    /// A scalar parameter in [min, max]: a number, or `{ texture = "name" }`.
+    fn scalar_param(
+        &mut self,
+        value: &Spanned<ParamDef>,
+        object: &str,
+        field: &str,
+        min: f32,
+        max: f32,
+        what: &str,
+    ) -> Result<ScalarParam> {
+        let (number, texture) = match value.get_ref() {
+            ParamDef::Value(v) if v.scalar => (v.value[0], None),
+            ParamDef::Value(_) => {
+                return Err(self.invalid(&value.span(), object, format!("`{field}` is one number, not a colour")));
+            }
+            ParamDef::Texture { name, scale } => {
+                let texture = Some(self.texture_id(name, &value.span(), object)?);
+                match scale {
+                    Some(s) if s.scalar => (s.value[0], texture),
+                    Some(_) => {
+                        return Err(self.invalid(&value.span(), object, format!("`{field}`'s scale is one number")));
+                    }
+                    None => (1.0, texture),
+                }
+            }
+        };
+        let v = number as f32;
+        if !(v >= min && v <= max) {
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {number}; it must be {what}")));
+        }
+        Ok(ScalarParam { value: v, texture })
+    }
+
+    fn texture_id(&mut self, name: &str, span: &Range<usize>, object: &str) -> Result<u32> {
+        if let Some(id) = self.texture_names.iter().position(|n| n == name) {
+            self.texture_used[id] = true;
+            return Ok(id as u32);
+        }
+        let hint = match suggest(name, &self.texture_names) {
+            Some(best) => format!("did you mean \"{best}\"?"),
+            None => format!("define it with a [textures.{name}] table"),
+        };
+        Err(self.invalid(span, object, format!("unknown texture \"{name}\" ({hint})")))
+    }
+
+    // Textures
+
+    fn texture(&mut self, key: &Spanned<String>, def: &Spanned<TextureDef>) -> Result<()> {
+        let name = key.get_ref().clone();
+        let object = format!("texture \"{name}\"");
+        let t = def.get_ref();
+        let kind_def = self.require(&t.r#type, &def.span(), &object, "type", "type = \"checker\"")?;
+        let kind = self.one_of(kind_def, &object, "type", TEXTURE_TYPES)?;
+        let present = [
+            ("type", span_of(&t.r#type)),
+            ("color", span_of(&t.color)),
+            ("colors", span_of(&t.colors)),
+            ("space", span_of(&t.space)),
+            ("transform", span_of(&t.transform)),
+        ];
+        let kind = match kind {
+            "constant" => {
+                self.only_fields(&object, "a constant texture", &present, &["type", "color"])?;
+                let color = self.require(&t.color, &def.span(), &object, "color", "color = [0.8, 0.2, 0.2]")?;
+                TextureKind::Constant(Vec3::from(self.color(color, &object, "color", false)?))
+            }
+            _ => {
+                self.only_fields(&object, "a checker texture", &present, &["type", "colors", "space", "transform"])?;
+                let example = "colors = [[0.9, 0.9, 0.9], [0.1, 0.1, 0.1]]";
+                let colors = self.require(&t.colors, &def.span(), &object, "colors", example)?;
+                if colors.get_ref().len() != 2 {
+                    return Err(self.invalid(
+                        &colors.span(),
+                        &object,
+                        format!("`colors` has {} colours; a checker takes 2, e.g. `{example}`", colors.get_ref().len()),
+                    ));
+                }
+                let mut pair = [Vec3::ZERO; 2];
+                for (out, c) in pair.iter_mut().zip(colors.get_ref()) {
+                    *out = Vec3::from(self.color(&Spanned::new(colors.span(), *c), &object, "colors", false)?);
+                }
+                TextureKind::Checker(pair)
+            }
+        };
+        let space = match &t.space {
+            Some(space) => match self.one_of(space, &object, "space", TEXTURE_SPACES)? {
+                "uv" => TextureSpace::Uv,
+                _ => TextureSpace::World,
+            },
+            None => TextureSpace::Uv,
+        };
+        let lookup_from_texture = self.transform(t.transform.as_ref(), &object)?.unwrap_or(Affine3A::IDENTITY);
+        self.textures.push(TextureDesc { kind, space, lookup_from_texture });
+        self.texture_names.push(name);
+        self.texture_used.push(false);
+        Ok(())
+    }
+
+    fn add_material(&mut self, name: String, material: MaterialDesc) -> u32 {
         self.materials.push(material);
         self.material_names.push(name);
         self.material_used.push(false);
@@ -570,7 +711,7 @@ impl Builder<'_> {
     ) -> Result<()> {
         if vertices.len() == 3 {
             let t = [vertices[0], vertices[1], vertices[2]];
-            self.explicit_triangle(t, &span, object, "the triangle", material, transform)
+            self.explicit_triangle(t, None, &span, object, "the triangle", material, transform)
         } else {
             let q = [vertices[0], vertices[1], vertices[2], vertices[3]];
             self.quad_triangles(&q, &span, object, material, transform)
@@ -585,24 +726,30 @@ impl Builder<'_> {
         material: u32,
         transform: Option<Affine3A>,
     ) -> Result<()> {
-        // The split the Cornell data prescribes; some of its walls are not planar.
+        // The split the Cornell data prescribes; some of its walls are not planar. The quad's uv
+        // runs from (0, 0) at v0 over (1, 0) at v1 to (0, 1) at v3.
         let first = [q[0], q[1], q[2]];
         let second = [q[0], q[2], q[3]];
-        self.explicit_triangle(first, span, object, "triangle (v0, v1, v2) of the quad", material, transform)?;
-        self.explicit_triangle(second, span, object, "triangle (v0, v2, v3) of the quad", material, transform)
+        let uv = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
+        let which = "triangle (v0, v1, v2) of the quad";
+        self.explicit_triangle(first, Some([uv[0], uv[1], uv[2]]), span, object, which, material, transform)?;
+        let which = "triangle (v0, v2, v3) of the quad";
+        self.explicit_triangle(second, Some([uv[0], uv[2], uv[3]]), span, object, which, material, transform)
     }
 
     /// A triangle written in the scene file: zero area is an error.
+    #[allow(clippy::too_many_arguments)]
     fn explicit_triangle(
         &mut self,
         vertices: [Vec3; 3],
+        uv: Option<[Vec2; 3]>,
         span: &Range<usize>,
         object: &str,
         which: &str,
         material: u32,
         transform: Option<Affine3A>,
     ) -> Result<()> {
-        let vertices = apply(transform, vertices);
+        let (vertices, uv) = apply(transform, vertices, uv);
         if is_degenerate(&vertices) {
             return Err(self.invalid(
                 span,
@@ -610,7 +757,7 @@ impl Builder<'_> {
                 format!("`vertices`: {which} has zero area (its points are equal or on a line); fix the points"),
             ));
         }
-        self.triangles.push(Triangle { vertices, material });
+        self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material });
         Ok(())
     }
 
@@ -627,6 +774,7 @@ impl Builder<'_> {
         if r <= 0.0 {
             return Err(self.invalid(&radius.span(), object, format!("`radius` is {r}; it must be > 0")));
         }
+        let mut object_from_world = None;
         if let Some(t) = transform {
             // Columns of the linear part have the scale's lengths (rotation keeps lengths).
             let lengths = Vec3::new(t.matrix3.x_axis.length(), t.matrix3.y_axis.length(), t.matrix3.z_axis.length());
@@ -639,8 +787,14 @@ impl Builder<'_> {
             }
             c = t.transform_point3(c);
             r *= lengths.x;
+            // The rotation part orients the sphere's uv; a mirroring scale keeps its handedness
+            // out of the rotation (the uv of a mirrored sphere is the unmirrored one's).
+            let rotation = Mat3::from(t.matrix3) * (1.0 / lengths.x);
+            let rotation = if rotation.determinant() < 0.0 { -rotation } else { rotation };
+            object_from_world = Some(rotation.transpose());
         }
-        self.spheres.push(Sphere { center: c, radius: r, material });
+        let sphere = Sphere { center: c, radius: r, object_from_world };
+        self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material });
         Ok(())
     }
 
@@ -667,13 +821,13 @@ impl Builder<'_> {
         let total = triangles.len();
         let mut skipped = 0;
         for t in triangles {
-            let vertices = apply(transform, t);
+            let (vertices, uv) = apply(transform, t.vertices, t.uv);
             // Zero-area triangles are common in exported meshes and harmless to skip.
             if is_degenerate(&vertices) {
                 skipped += 1;
                 continue;
             }
-            self.triangles.push(Triangle { vertices, material });
+            self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material });
         }
         if skipped == total {
             return Err(SceneError::Obj {
@@ -789,10 +943,10 @@ impl Builder<'_> {
                 format!("the material name \"{material_name}\" is reserved for this area light; rename that material"),
             ));
         }
-        let material = self.add_material(
-            material_name,
-            Material { reflectance: [0.0; 3], kind: MATERIAL_DIFFUSE, emission: radiance, ior: 1.0 },
-        );
+        let mut light_material =
+            MaterialDesc::new(MaterialKind::Diffuse { reflectance: ColorParam::constant(Vec3::ZERO) });
+        light_material.emission = ColorParam::constant(Vec3::from(radiance));
+        let material = self.add_material(material_name, light_material);
         self.material_used[material as usize] = true;
         let transform = self.transform(l.transform.as_ref(), &object)?;
         if shape == "quad" {
@@ -806,17 +960,19 @@ impl Builder<'_> {
     }
 }
 
-fn apply(transform: Option<Affine3A>, vertices: [Vec3; 3]) -> [Vec3; 3] {
+/// The triangle moved by `transform`, with its vertex uvs kept in step with its vertices.
+fn apply(transform: Option<Affine3A>, vertices: [Vec3; 3], uv: Option<[Vec2; 3]>) -> ([Vec3; 3], Option<[Vec2; 3]>) {
     let Some(t) = transform else {
-        return vertices;
+        return (vertices, uv);
     };
     let [a, b, c] = vertices.map(|v| t.transform_point3(v));
     // A mirroring transform flips the winding normal; swap two vertices so the front face stays
-    // on the same side of the surface (outward stays outward).
+    // on the same side of the surface (outward stays outward). The default uv goes with them.
     if t.matrix3.determinant() < 0.0 {
-        [a, c, b]
+        let [u0, u1, u2] = uv.unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]);
+        ([a, c, b], Some([u0, u2, u1]))
     } else {
-        [a, b, c]
+        ([a, b, c], uv)
     }
 }
 
@@ -867,7 +1023,7 @@ mod tests {
     fn mirroring_transform_keeps_the_front_face_outward() {
         let t = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
         let triangle = [Vec3::ZERO, Vec3::X, Vec3::Y]; // normal +z
-        let out = apply(Some(t), triangle);
+        let (out, _) = apply(Some(t), triangle, None);
         let n = (out[1] - out[0]).cross(out[2] - out[0]);
         assert!(n.z > 0.0, "mirror in x keeps a +z normal: {n}");
     }

@@ -18,6 +18,8 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub materials: BTreeMap<Spanned<String>, Spanned<MaterialDef>>,
     #[serde(default)]
+    pub textures: BTreeMap<Spanned<String>, Spanned<TextureDef>>,
+    #[serde(default)]
     pub shapes: Vec<Spanned<ShapeDef>>,
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
@@ -59,10 +61,21 @@ pub(crate) struct PhotonsDef {
 #[serde(deny_unknown_fields)]
 pub(crate) struct MaterialDef {
     pub r#type: Option<Spanned<String>>,
-    pub reflectance: Option<Spanned<Vec3Def>>,
-    pub tint: Option<Spanned<Vec3Def>>,
+    pub reflectance: Option<Spanned<ParamDef>>,
+    pub tint: Option<Spanned<ParamDef>>,
     pub ior: Option<Spanned<f64>>,
-    pub emission: Option<Spanned<Vec3Def>>,
+    pub emission: Option<Spanned<ParamDef>>,
+    pub opacity: Option<Spanned<ParamDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct TextureDef {
+    pub r#type: Option<Spanned<String>>,
+    pub color: Option<Spanned<Vec3Def>>,
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub space: Option<Spanned<String>>,
+    pub transform: Option<Spanned<TransformDef>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -147,6 +160,51 @@ impl<'de> Deserialize<'de> for Vec3Def {
     }
 }
 
+/// A material parameter: a value as `Vec3Def` takes it (a colour, or one number), or a texture,
+/// `{ texture = "name" }`, optionally scaled, `{ texture = "name", scale = 0.8 }`.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum ParamDef {
+    Value(Vec3Def),
+    Texture { name: String, scale: Option<Vec3Def> },
+}
+
+impl<'de> Deserialize<'de> for ParamDef {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct ParamVisitor;
+        impl<'de> Visitor<'de> for ParamVisitor {
+            type Value = ParamDef;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number, an array of 3 numbers, or a texture { texture = \"name\" }")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<ParamDef, E> {
+                Ok(ParamDef::Value(Vec3Def { value: [v; 3], scalar: true }))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<ParamDef, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<ParamDef, E> {
+                self.visit_f64(v as f64)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<ParamDef, A::Error> {
+                Vec3Def::deserialize(de::value::SeqAccessDeserializer::new(seq)).map(ParamDef::Value)
+            }
+            fn visit_map<A: de::MapAccess<'de>>(self, mut map: A) -> Result<ParamDef, A::Error> {
+                let (mut name, mut scale) = (None, None);
+                while let Some(key) = map.next_key::<String>()? {
+                    match key.as_str() {
+                        "texture" => name = Some(map.next_value::<String>()?),
+                        "scale" => scale = Some(map.next_value::<Vec3Def>()?),
+                        other => return Err(de::Error::unknown_field(other, &["texture", "scale"])),
+                    }
+                }
+                let name = name.ok_or_else(|| de::Error::missing_field("texture"))?;
+                Ok(ParamDef::Texture { name, scale })
+            }
+        }
+        deserializer.deserialize_any(ParamVisitor)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -166,5 +224,23 @@ mod tests {
         assert!(h.v.scalar);
         assert!(toml::from_str::<Holder>("v = [1, 2]").is_err());
         assert!(toml::from_str::<Holder>("v = \"red\"").is_err());
+    }
+
+    #[derive(Deserialize)]
+    struct ParamHolder {
+        p: ParamDef,
+    }
+
+    #[test]
+    fn param_accepts_values_and_textures() {
+        let h: ParamHolder = toml::from_str("p = [1, 2, 3]").unwrap();
+        assert_eq!(h.p, ParamDef::Value(Vec3Def { value: [1.0, 2.0, 3.0], scalar: false }));
+        let h: ParamHolder = toml::from_str("p = 0.5").unwrap();
+        assert_eq!(h.p, ParamDef::Value(Vec3Def { value: [0.5; 3], scalar: true }));
+        let h: ParamHolder = toml::from_str("p = { texture = \"checks\" }").unwrap();
+        assert_eq!(h.p, ParamDef::Texture { name: "checks".into(), scale: None });
+        assert!(toml::from_str::<ParamHolder>("p = { texture = \"a\", colour = 1 }").is_err());
+        assert!(toml::from_str::<ParamHolder>("p = { scale = 1 }").is_err());
+        assert!(toml::from_str::<ParamHolder>("p = [1, 2]").is_err());
     }
 }

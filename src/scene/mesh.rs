@@ -1,10 +1,10 @@
-//! Wavefront OBJ meshes, read with `tobj`: positions and faces only (materials, normals and
-//! texture coordinates are ignored; the scene file assigns the material).
+//! Wavefront OBJ meshes, read with `tobj`: positions, faces and texture coordinates (`vt`);
+//! materials and normals are ignored (the scene file assigns the material).
 
 use std::io::BufReader;
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Why an OBJ file could not be used.
 #[derive(Debug)]
@@ -17,9 +17,16 @@ pub(crate) enum ObjError {
     },
 }
 
+#[derive(Debug)]
+/// A triangle of an OBJ file, with its vertices' `vt` texture coordinates when the face has them.
+pub(crate) struct MeshTriangle {
+    pub vertices: [Vec3; 3],
+    pub uv: Option<[Vec2; 3]>,
+}
+
 /// Every triangle of every object in the OBJ file, in object space, in file order. Polygons are
 /// fanned into triangles by `tobj`, keeping their winding.
-pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, ObjError> {
+pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<MeshTriangle>, ObjError> {
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(ObjError::NotFound),
@@ -35,8 +42,20 @@ pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<[Vec3; 3]>, ObjError
             let i = i as usize * 3;
             Vec3::new(mesh.positions[i], mesh.positions[i + 1], mesh.positions[i + 2])
         };
-        for face in mesh.indices.chunks_exact(3) {
-            triangles.push([position(face[0]), position(face[1]), position(face[2])]);
+        let texcoord = |i: u32| {
+            let i = i as usize * 2;
+            Vec2::new(mesh.texcoords[i], mesh.texcoords[i + 1])
+        };
+        // tobj keeps a separate index list for `vt`, parallel to the positions' when every face
+        // has texture coordinates.
+        let has_uv = mesh.texcoord_indices.len() == mesh.indices.len()
+            && mesh.texcoord_indices.iter().all(|&i| (i as usize) * 2 + 1 < mesh.texcoords.len());
+        for (k, face) in mesh.indices.chunks_exact(3).enumerate() {
+            let uv = has_uv.then(|| {
+                let t = &mesh.texcoord_indices[3 * k..3 * k + 3];
+                [texcoord(t[0]), texcoord(t[1]), texcoord(t[2])]
+            });
+            triangles.push(MeshTriangle { vertices: [position(face[0]), position(face[1]), position(face[2])], uv });
         }
     }
     if triangles.is_empty() {
@@ -121,6 +140,7 @@ mod tests {
         let triangles = load_obj_triangles(file.path()).unwrap();
         assert_eq!(triangles.len(), 2);
         for t in &triangles {
+            let t = &t.vertices;
             let normal = (t[1] - t[0]).cross(t[2] - t[0]);
             assert!(normal.z > 0.0, "winding kept: {normal}");
         }

@@ -1,21 +1,26 @@
 //! Scene format v1: TOML scene files (documented in `docs/scene-format.md`), checked and turned
-//! into triangles, analytic spheres, point lights and a material table.
+//! into a renderer-agnostic description: shapes (triangles and analytic spheres), materials,
+//! textures, point lights and the photon settings. Nothing here knows the GPU's structs; the
+//! renderer packs this description for its kernels in one place (`render::pack`).
 //!
-//! Light sources are every triangle or sphere whose material has `emission` > 0, plus the point
-//! lights; the renderer builds its light list from those. An area light of the file becomes
-//! ordinary shapes with its own material, named `light <index>` (diffuse, reflectance 0,
-//! emission = its radiance).
+//! Light sources are every shape whose material has `emission` > 0, plus the point lights; the
+//! renderer builds its light list from those. An area light of the file becomes ordinary shapes
+//! with its own material, named `light <index>` (diffuse, reflectance 0, emission = its radiance).
 
 mod convert;
 mod error;
 mod format;
+mod material;
 mod mesh;
+mod photons;
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Mat3, Vec2, Vec3};
 
 pub use error::SceneError;
+pub use material::{ColorParam, MaterialDesc, MaterialKind, ScalarParam, TextureDesc, TextureKind, TextureSpace};
+pub use photons::PhotonSettings;
 
 /// A loaded, validated scene. Right-handed, y up, lengths in scene units.
 #[derive(Clone, Debug)]
@@ -27,16 +32,35 @@ pub struct Scene {
     pub camera: Camera,
     pub render: RenderSettings,
     /// Photon mapping settings; `None` renders direct light and specular paths only.
-    pub photons: Option<crate::render::PhotonSettings>,
+    pub photons: Option<PhotonSettings>,
     /// Index = material id. Materials of the file in file order, then one per area light.
-    pub materials: Vec<crate::layout::Material>,
+    pub materials: Vec<MaterialDesc>,
     /// Name of each material, same index as `materials`.
     pub material_names: Vec<String>,
-    pub triangles: Vec<Triangle>,
-    pub spheres: Vec<Sphere>,
+    /// Index = texture id, in file order.
+    pub textures: Vec<TextureDesc>,
+    pub shapes: Vec<Shape>,
     pub point_lights: Vec<PointLight>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// The triangles of the scene with their materials.
+    pub fn triangles(&self) -> impl Iterator<Item = (&Triangle, u32)> {
+        self.shapes.iter().filter_map(|s| match &s.geometry {
+            Geometry::Triangle(t) => Some((t, s.material)),
+            Geometry::Sphere(_) => None,
+        })
+    }
+
+    /// The spheres of the scene with their materials.
+    pub fn spheres(&self) -> impl Iterator<Item = (&Sphere, u32)> {
+        self.shapes.iter().filter_map(|s| match &s.geometry {
+            Geometry::Sphere(sphere) => Some((sphere, s.material)),
+            Geometry::Triangle(_) => None,
+        })
+    }
 }
 
 /// A pinhole camera.
@@ -63,20 +87,61 @@ pub struct RenderSettings {
     pub seed: u32,
 }
 
-/// A triangle with non-zero area. Its front face is the side (v1-v0)x(v2-v0) points to.
+/// One shape of the scene: its geometry and its material id.
 #[derive(Clone, Debug)]
-pub struct Triangle {
-    pub vertices: [Vec3; 3],
+pub struct Shape {
+    pub geometry: Geometry,
     pub material: u32,
 }
 
-/// An analytic sphere; its front face is outward.
+/// Every kind of geometry, behind one match per host-side operation (bounds, area).
 #[derive(Clone, Debug)]
+pub enum Geometry {
+    Triangle(Triangle),
+    Sphere(Sphere),
+}
+
+impl Geometry {
+    /// Axis-aligned bounds (min, max).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            Geometry::Triangle(t) => {
+                let [a, b, c] = t.vertices;
+                (a.min(b).min(c), a.max(b).max(c))
+            }
+            Geometry::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
+        }
+    }
+
+    /// Surface area in scene units squared.
+    pub fn area(&self) -> f32 {
+        match self {
+            Geometry::Triangle(t) => {
+                let [a, b, c] = t.vertices;
+                0.5 * (b - a).cross(c - a).length()
+            }
+            Geometry::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
+        }
+    }
+}
+
+/// A triangle with non-zero area. Its front face is the side (v1-v0)x(v2-v0) points to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triangle {
+    pub vertices: [Vec3; 3],
+    /// Texture coordinates of the vertices; `None` means (0, 0), (1, 0), (0, 1).
+    pub uv: Option<[Vec2; 3]>,
+}
+
+/// An analytic sphere; its front face is outward. Its uv is longitude/latitude about its own
+/// +y axis, turned by `object_from_world`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Sphere {
     pub center: Vec3,
     /// Scene units, > 0.
     pub radius: f32,
-    pub material: u32,
+    /// Rotation into the sphere's own frame; `None` is the identity.
+    pub object_from_world: Option<Mat3>,
 }
 
 /// An isotropic point light.
@@ -135,13 +200,14 @@ radius = 0.25
 radiance = 20
 "#;
         let scene = parse_scene(text, Path::new("doc.toml")).unwrap();
-        assert_eq!(scene.spheres.len(), 2);
+        let spheres: Vec<_> = scene.spheres().collect();
+        assert_eq!(spheres.len(), 2);
         // Scale 2 then rotate 90 degrees about z: (1,0,0) -> (2,0,0) -> (0,2,0), then +y.
-        let s = &scene.spheres[0];
+        let s = spheres[0].0;
         assert!(s.center.abs_diff_eq(Vec3::new(0.0, 3.0, 0.0), 1e-5), "{}", s.center);
         assert_eq!(s.radius, 2.0);
-        let light = &scene.materials[scene.spheres[1].material as usize];
-        assert_eq!(light.emission, [20.0; 3]);
+        let light = &scene.materials[spheres[1].1 as usize];
+        assert_eq!(light.emission.value, Vec3::splat(20.0));
         assert_eq!(scene.material_names[1], "light 0");
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     }

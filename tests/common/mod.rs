@@ -62,3 +62,17 @@ pub fn photonix(args: &[&str], dir: &Path) -> Output {
         .output()
         .expect("the photonix binary runs")
 }
+
+/// A triangle shape of material `material` with the default uv.
+pub fn triangle(vertices: [glam::Vec3; 3], material: u32) -> photonix::scene::Shape {
+    use photonix::scene::{Geometry, Shape, Triangle};
+    Shape { geometry: Geometry::Triangle(Triangle { vertices, uv: None }), material }
+}
+
+/// A diffuse material of albedo `rho` in every channel, emitting `emission`.
+pub fn diffuse(rho: f32, emission: f32) -> photonix::scene::MaterialDesc {
+    use photonix::scene::{ColorParam, MaterialDesc, MaterialKind};
+    let mut m = MaterialDesc::new(MaterialKind::Diffuse { reflectance: ColorParam::constant(glam::Vec3::splat(rho)) });
+    m.emission = ColorParam::constant(glam::Vec3::splat(emission));
+    m
+}

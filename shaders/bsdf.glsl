@@ -1,0 +1,166 @@
+// Materials as BSDFs: every material kind, one switch per operation. CPU twin: src/cpu/bsdf.rs.
+// Directions point away from the surface: `wo` toward the previous vertex (the viewer), `wi`
+// toward the next one. The path loops never ask which kind they hold, only what its lobes are:
+// BSDF_ESTIMATE lobes end a camera path (light sampling, photon lookups, final gather) and store
+// photons; BSDF_PATH lobes are followed. The including kernel declares the scene bindings and
+// includes sampling.glsl, shape.glsl and texture.glsl.
+
+// A material evaluated at one surface point: its textures looked up, its frame set.
+struct Bsdf {
+    uint kind;
+    vec3 color0;
+    vec3 color1;
+    vec2 alpha;
+    float ior;
+    vec3 ng;    // geometric normal (a triangle's winding side, a sphere's outside)
+    vec3 ns;    // shading normal, on the side of ng
+};
+
+struct BsdfSample {
+    vec3 wi;
+    vec3 weight;   // f |cos| / pdf of the lobes sampled from
+    float pdf;     // 0 for a specular (delta) lobe
+    uint flags;    // BSDF_* flags of the lobe sampled; 0 when no direction was sampled
+};
+
+// Radiance the material emits at h toward its front side.
+vec3 material_emission(Material m, Hit h) {
+    return param_color(m.emission, m.emission_tex, h);
+}
+
+Bsdf material_bsdf(Material m, Hit h) {
+    Bsdf b;
+    b.kind = m.kind;
+    b.color0 = param_color(m.color0, m.color0_tex, h);
+    b.color1 = param_color(m.color1, m.color1_tex, h);
+    b.alpha = vec2(m.roughness[0], m.roughness[1]);
+    b.ior = m.ior;
+    b.ng = h.ng;
+    b.ns = h.ns;
+    return b;
+}
+
+// The shading normal turned to the side of w.
+vec3 facing(Bsdf b, vec3 w) { return dot(w, b.ng) > 0.0 ? b.ns : -b.ns; }
+
+BsdfSample no_sample() { return BsdfSample(vec3(0.0), vec3(0.0), 0.0, 0u); }
+
+// Unpolarised Fresnel reflectance for a ray that meets the interface with cos_i > 0 going
+// from index eta_i into index eta_t; 1 under total internal reflection. Sets cos_t.
+float fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t) {
+    float eta = eta_i / eta_t;
+    float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
+    if (sin2_t >= 1.0) { cos_t = 0.0; return 1.0; }
+    cos_t = sqrt(1.0 - sin2_t);
+    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// Diffuse: Lambertian reflection of albedo color0 on both sides.
+
+vec3 diffuse_eval(Bsdf b, vec3 wo, vec3 wi) {
+    return dot(wi, facing(b, wo)) > 0.0 ? b.color0 * (1.0 / PI) : vec3(0.0);
+}
+
+float diffuse_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    return max(0.0, dot(wi, facing(b, wo))) * (1.0 / PI);
+}
+
+BsdfSample diffuse_sample(Bsdf b, vec3 wo, vec3 u) {
+    vec3 n = facing(b, wo);
+    vec3 wi = cosine_direction(n, u.yz);
+    // Cosine sampling cancels the cosine and the 1/pi: the weight is the albedo.
+    return BsdfSample(wi, b.color0, max(0.0, dot(wi, n)) * (1.0 / PI), BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE);
+}
+
+// Mirror: perfect reflection tinted by color0, on both sides.
+
+BsdfSample mirror_sample(Bsdf b, vec3 wo) {
+    return BsdfSample(reflect(-wo, facing(b, wo)), b.color0, 0.0, BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH);
+}
+
+// Dielectric: smooth interface of index ior inside (the side opposite ng), reflection or
+// refraction chosen with the Fresnel probability against u.x, weight 1.
+BsdfSample dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
+    vec3 d = -wo;
+    bool front = dot(b.ng, d) < 0.0;
+    vec3 nf = front ? b.ng : -b.ng;
+    float eta_i = front ? 1.0 : b.ior;
+    float eta_t = front ? b.ior : 1.0;
+    float cos_i = -dot(d, nf);
+    float cos_t;
+    if (u.x < fresnel_dielectric(cos_i, eta_i, eta_t, cos_t)) {
+        return BsdfSample(reflect(d, nf), vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH);
+    }
+    float eta = eta_i / eta_t;
+    vec3 wi = normalize(eta * d + (eta * cos_i - cos_t) * nf);
+    return BsdfSample(wi, vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_TRANSMISSION | BSDF_PATH);
+}
+
+// The lobes of b (BSDF_* flags); 0 for a black surface, which ends paths and stores nothing.
+uint bsdf_flags(Bsdf b) {
+    switch (b.kind) {
+    case MATERIAL_DIFFUSE:
+        return b.color0 == vec3(0.0) ? 0u : BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE;
+    case MATERIAL_MIRROR:
+        return BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH;
+    case MATERIAL_DIELECTRIC:
+        return BSDF_SPECULAR | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_PATH;
+    }
+    return 0u;  // unreachable: the host packs only known kinds (tested)
+}
+
+// Probability that a camera path seen from wo follows the path lobes rather than ending in the
+// estimate lobes: 0 for a surface with estimate lobes alone, 1 for path lobes alone.
+float bsdf_path_probability(Bsdf b, vec3 wo) {
+    switch (b.kind) {
+    case MATERIAL_MIRROR:
+    case MATERIAL_DIELECTRIC:
+        return 1.0;
+    }
+    return 0.0;
+}
+
+// True when the estimate lobes have the same value for every wi on wo's side (Lambertian), so a
+// photon estimate may sum the irradiance first and apply the BSDF once.
+bool bsdf_estimate_is_constant(Bsdf b) { return b.kind == MATERIAL_DIFFUSE; }
+
+// f(wo, wi) of the estimate lobes, without the cosine; 0 for path lobes (they are sampled).
+vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
+    switch (b.kind) {
+    case MATERIAL_DIFFUSE:
+        return diffuse_eval(b, wo, wi);
+    }
+    return vec3(0.0);
+}
+
+// Solid-angle pdf of bsdf_sample(.., LOBES_ESTIMATE) choosing wi.
+float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    switch (b.kind) {
+    case MATERIAL_DIFFUSE:
+        return diffuse_pdf(b, wo, wi);
+    }
+    return 0.0;
+}
+
+// A direction from the lobes in `lobes` (LOBES_*): u.x picks among lobes (or Fresnel), u.yz
+// place the direction. The weight is that of the chosen lobes alone; no_sample() when b has none
+// of them.
+BsdfSample bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
+    if ((bsdf_flags(b) & lobes) == 0u) return no_sample();
+    switch (b.kind) {
+    case MATERIAL_DIFFUSE:
+        return diffuse_sample(b, wo, u);
+    case MATERIAL_MIRROR:
+        return mirror_sample(b, wo);
+    case MATERIAL_DIELECTRIC:
+        return dielectric_sample(b, wo, u);
+    }
+    return no_sample();
+}
+
+// Opacity of the material at h, in [0, 1].
+float material_opacity(Material m, Hit h) {
+    return param_scalar(m.alpha, m.alpha_tex, h);
+}

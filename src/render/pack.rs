@@ -1,0 +1,167 @@
+//! The one place where the scene's description becomes the structs the kernels read: primitives
+//! and their shape data, materials, textures and their data. A new kind of shape, material or
+//! texture adds one arm to the matching function here.
+
+use glam::{Affine3A, Mat3, Vec3};
+
+use crate::layout::constants::*;
+use crate::layout::{Material, Primitive, Texture};
+use crate::scene::{
+    ColorParam, Geometry, MaterialDesc, MaterialKind, ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+};
+
+/// The scene's arrays as the kernels read them (primitives not yet in BVH order).
+#[derive(Clone, Debug, Default)]
+pub struct PackedScene {
+    pub primitives: Vec<Primitive>,
+    /// Axis-aligned bounds of each primitive, same index.
+    pub bounds: Vec<(Vec3, Vec3)>,
+    /// Surface area of each primitive, same index.
+    pub areas: Vec<f32>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub texture_data: Vec<u32>,
+    pub shape_data: Vec<f32>,
+}
+
+pub fn pack_scene(scene: &Scene) -> PackedScene {
+    let mut packed =
+        PackedScene { materials: scene.materials.iter().map(pack_material).collect(), ..Default::default() };
+    for texture in &scene.textures {
+        let t = pack_texture(texture, &mut packed.texture_data);
+        packed.textures.push(t);
+    }
+    for shape in &scene.shapes {
+        let alpha = scene.materials[shape.material as usize].has_alpha();
+        let p = pack_shape(shape, alpha, &mut packed.shape_data);
+        packed.primitives.push(p);
+        packed.bounds.push(shape.geometry.bounds());
+        packed.areas.push(shape.geometry.area());
+    }
+    // Vulkan has no empty buffers: every array gets at least one (unused) element.
+    if packed.textures.is_empty() {
+        packed.textures.push(Texture::default());
+    }
+    if packed.texture_data.is_empty() {
+        packed.texture_data.push(0);
+    }
+    if packed.shape_data.is_empty() {
+        packed.shape_data.push(0.0);
+    }
+    packed
+}
+
+fn texture_index(texture: Option<u32>) -> u32 {
+    texture.unwrap_or(NO_TEXTURE)
+}
+
+fn color(param: &ColorParam) -> ([f32; 3], u32) {
+    (param.value.into(), texture_index(param.texture))
+}
+
+fn scalar(param: &ScalarParam) -> (f32, u32) {
+    (param.value, texture_index(param.texture))
+}
+
+/// The only place that turns a material into the GPU's `Material`: which slot holds what, per kind.
+pub fn pack_material(m: &MaterialDesc) -> Material {
+    let (emission, emission_tex) = color(&m.emission);
+    let (alpha, alpha_tex) = scalar(&m.opacity);
+    let mut out = Material {
+        emission,
+        emission_tex,
+        alpha,
+        alpha_tex,
+        color0_tex: NO_TEXTURE,
+        color1_tex: NO_TEXTURE,
+        roughness_tex: NO_TEXTURE,
+        bump_tex: NO_TEXTURE,
+        normal_tex: NO_TEXTURE,
+        weight_tex: NO_TEXTURE,
+        ior: 1.0,
+        ..Default::default()
+    };
+    match &m.kind {
+        MaterialKind::Diffuse { reflectance } => {
+            out.kind = MATERIAL_DIFFUSE;
+            (out.color0, out.color0_tex) = color(reflectance);
+        }
+        MaterialKind::Mirror { tint } => {
+            out.kind = MATERIAL_MIRROR;
+            (out.color0, out.color0_tex) = color(tint);
+        }
+        MaterialKind::Dielectric { ior } => {
+            out.kind = MATERIAL_DIELECTRIC;
+            out.color0 = [1.0; 3];
+            out.ior = *ior;
+        }
+    }
+    out
+}
+
+/// The rows of the 3x4 affine map `a`.
+fn affine_rows(a: &Affine3A) -> [f32; 12] {
+    let m = Mat3::from(a.matrix3);
+    let t = Vec3::from(a.translation);
+    let mut rows = [0.0; 12];
+    for r in 0..3 {
+        let row = m.row(r);
+        rows[4 * r..4 * r + 4].copy_from_slice(&[row.x, row.y, row.z, t[r]]);
+    }
+    rows
+}
+
+/// The only place that turns a texture into the GPU's `Texture` (and its data block, if any).
+pub fn pack_texture(t: &TextureDesc, _data: &mut Vec<u32>) -> Texture {
+    let mut out = Texture {
+        space: match t.space {
+            TextureSpace::Uv => TEXTURE_SPACE_UV,
+            TextureSpace::World => TEXTURE_SPACE_WORLD,
+        },
+        data: NO_DATA,
+        color_map: NO_DATA,
+        // The kernels move the lookup point into texture space.
+        transform: affine_rows(&t.lookup_from_texture.inverse()),
+        ..Default::default()
+    };
+    match &t.kind {
+        TextureKind::Constant(c) => {
+            out.kind = TEXTURE_CONSTANT;
+            out.value = (*c).into();
+        }
+        TextureKind::Checker([a, b]) => {
+            out.kind = TEXTURE_CHECKER;
+            out.value = (*a).into();
+            out.value2 = (*b).into();
+        }
+    }
+    out
+}
+
+/// The only place that turns a shape into the GPU's `Primitive` (and its shape data, if any).
+pub fn pack_shape(shape: &Shape, alpha: bool, shape_data: &mut Vec<f32>) -> Primitive {
+    let flags = if alpha { PRIMITIVE_FLAG_ALPHA } else { 0 };
+    let mut p = Primitive { material: shape.material, light: NO_LIGHT, data: NO_DATA, ..Default::default() };
+    match &shape.geometry {
+        Geometry::Triangle(t) => {
+            p.kind = PRIMITIVE_TRIANGLE | flags;
+            (p.p0, p.p1, p.p2) = (t.vertices[0].into(), t.vertices[1].into(), t.vertices[2].into());
+            if let Some(uv) = t.uv {
+                p.data = shape_data.len() as u32;
+                shape_data.extend(uv.iter().flat_map(|v| [v.x, v.y]));
+            }
+        }
+        Geometry::Sphere(s) => {
+            p.kind = PRIMITIVE_SPHERE | flags;
+            p.p0 = s.center.into();
+            p.p1 = [s.radius, 0.0, 0.0];
+            if let Some(r) = s.object_from_world {
+                p.data = shape_data.len() as u32;
+                for row in 0..3 {
+                    shape_data.extend(r.row(row).to_array());
+                }
+            }
+        }
+    }
+    p
+}

@@ -1,0 +1,36 @@
+//! How the photon maps of a scene are made and read: part of the scene, so that the scene file
+//! and the renderer share one description.
+
+/// How the photon maps are made and read.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotonSettings {
+    /// Photon paths traced for the global map.
+    pub photons: u32,
+    /// Photon paths traced for the caustic map (each ends at its first diffuse surface).
+    pub caustic_photons: u32,
+    /// Lookup radius of the global map (scene units); `None` derives it from the scene's surface
+    /// area and the stored photon count.
+    pub radius: Option<f32>,
+    /// Lookup radius of the caustic map; `None` is half the global radius.
+    pub caustic_radius: Option<f32>,
+    /// Final-gather rays per camera sample; 0 reads the global map directly.
+    pub gather_rays: u32,
+    /// Most surfaces a photon path visits.
+    pub max_depth: u32,
+    /// Radius reduction of progressive passes, in (0, 1): see `pass_radius_scale`.
+    pub alpha: f32,
+}
+
+impl Default for PhotonSettings {
+    fn default() -> Self {
+        PhotonSettings {
+            photons: 200_000,
+            caustic_photons: 200_000,
+            radius: None,
+            caustic_radius: None,
+            gather_rays: 8,
+            max_depth: 16,
+            alpha: 2.0 / 3.0,
+        }
+    }
+}
