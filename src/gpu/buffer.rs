@@ -1,37 +1,35 @@
-//! Named storage buffers and the copies between them and the host.
+//! Named Vulkan buffers with their memory, and host access through their mapping.
 //!
-//! Storage buffers live in `GpuOnly` memory. Data goes through a `CpuToGpu` staging buffer and
-//! comes back through a `GpuToCpu` readback buffer, as a discrete GPU needs. Where the
-//! device-local memory is also host-visible and coherent (lavapipe's single heap, many integrated
-//! GPUs) the copies go straight through the mapping instead, which saves a second copy of every
-//! buffer in the one heap; [`GpuContext::set_force_staging`] turns that shortcut off.
+//! Storage buffers live in `GpuOnly` memory; staging (`CpuToGpu`) and readback (`GpuToCpu`)
+//! buffers are mapped. The copies between them and the host are [`GpuContext`]'s (`upload`,
+//! `download`, ...).
+//!
+//! [`GpuContext`]: super::GpuContext
 
-use std::sync::atomic::Ordering;
 use std::sync::Arc;
 
 use ash::vk;
-use bytemuck::Pod;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::context::{GpuContext, Shared};
-use super::GpuError;
+use super::device::Shared;
+use super::error::GpuError;
 
 /// Every Vulkan buffer is a multiple of this many bytes and at least this big, so empty data
 /// still makes a valid buffer and `vkCmdFillBuffer` sizes are multiples of 4.
 const GRANULE: u64 = 16;
 
 /// A named Vulkan buffer and its memory. Frees both when dropped; it keeps the device alive, so
-/// it may outlive its [`GpuContext`].
+/// it may outlive its [`GpuContext`](super::GpuContext).
 pub struct Buffer {
     name: String,
     /// Bytes the caller asked for (may be 0).
     size: u64,
     /// Bytes of the Vulkan buffer: `size` rounded up to a multiple of 16, at least 16.
-    pub(crate) vk_size: u64,
-    pub(crate) handle: vk::Buffer,
+    pub(super) vk_size: u64,
+    pub(super) handle: vk::Buffer,
     allocation: Option<Allocation>,
-    pub(crate) shared: Arc<Shared>,
+    pub(super) shared: Arc<Shared>,
 }
 
 impl Buffer {
@@ -45,8 +43,26 @@ impl Buffer {
         self.size
     }
 
+    /// A device-local storage buffer of `size` bytes (not cleared), after checking the device's
+    /// limits.
+    pub(super) fn create_storage(shared: &Arc<Shared>, name: &str, size: u64) -> Result<Buffer, GpuError> {
+        let limit = shared.info.max_storage_buffer_range;
+        if size.max(GRANULE).div_ceil(GRANULE) * GRANULE > limit {
+            return Err(GpuError::BufferTooLarge {
+                name: name.to_string(),
+                size,
+                limit_name: "maxStorageBufferRange",
+                limit,
+            });
+        }
+        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::TRANSFER_DST;
+        Buffer::create(shared, name, size, usage, MemoryLocation::GpuOnly)
+    }
+
     /// Creates a buffer of `size` bytes with `usage` in `location`, bound to fresh memory.
-    pub(crate) fn create(
+    pub(super) fn create(
         shared: &Arc<Shared>,
         name: &str,
         size: u64,
@@ -96,7 +112,7 @@ impl Buffer {
     }
 
     /// The host address of the buffer's memory, when it is mapped and coherent.
-    fn host_ptr(&self) -> Option<*mut u8> {
+    pub(super) fn host_ptr(&self) -> Option<*mut u8> {
         let allocation = self.allocation.as_ref()?;
         let coherent = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
         if !allocation.memory_properties().contains(coherent) {
@@ -108,7 +124,7 @@ impl Buffer {
     /// Copies `bytes` to offset 0 and zeroes the rest up to `zero_to` bytes, through the mapping.
     ///
     /// The caller holds the context's submitter lock, so no GPU work runs meanwhile.
-    fn write_mapped(&self, ptr: *mut u8, bytes: &[u8], zero_to: u64) {
+    pub(super) fn write_mapped(&self, ptr: *mut u8, bytes: &[u8], zero_to: u64) {
         assert!(
             bytes.len() as u64 <= self.vk_size && zero_to <= self.vk_size,
             "callers check sizes against the buffer"
@@ -125,7 +141,7 @@ impl Buffer {
     }
 
     /// Copies the first `out.len()` bytes of the buffer through the mapping.
-    fn read_mapped(&self, ptr: *const u8, out: &mut [u8]) {
+    pub(super) fn read_mapped(&self, ptr: *const u8, out: &mut [u8]) {
         assert!(out.len() as u64 <= self.vk_size, "callers check sizes against the buffer");
         // SAFETY: as in `write_mapped`; the GPU's writes were made visible to the host by the
         // barrier at the end of every submission and the fence wait.
@@ -149,154 +165,5 @@ impl Drop for Buffer {
             // Freeing can only fail on a bookkeeping bug in the allocator; nothing to do then.
             let _ = allocator.free(allocation);
         }
-    }
-}
-
-impl GpuContext {
-    /// A device-local storage buffer created after checking the device's limits.
-    fn create_storage(&self, name: &str, size: u64) -> Result<Buffer, GpuError> {
-        let limit = self.shared.info.max_storage_buffer_range;
-        if size.max(GRANULE).div_ceil(GRANULE) * GRANULE > limit {
-            return Err(GpuError::BufferTooLarge {
-                name: name.to_string(),
-                size,
-                limit_name: "maxStorageBufferRange",
-                limit,
-            });
-        }
-        let usage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_SRC
-            | vk::BufferUsageFlags::TRANSFER_DST;
-        Buffer::create(&self.shared, name, size, usage, MemoryLocation::GpuOnly)
-    }
-
-    /// The mapping of `buffer`, unless staging is forced or the memory is not host-visible.
-    fn direct_ptr(&self, buffer: &Buffer) -> Option<*mut u8> {
-        if self.force_staging.load(Ordering::Relaxed) {
-            None
-        } else {
-            buffer.host_ptr()
-        }
-    }
-
-    /// Device-local storage buffer filled from `data` through a staging buffer. Empty slices
-    /// are allowed (the Vulkan buffer then has 16 zero bytes, and `size()` is 0).
-    pub fn upload<T: Pod>(&self, name: &str, data: &[T]) -> Result<Buffer, GpuError> {
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        let buffer = self.create_storage(name, bytes.len() as u64)?;
-        self.write_bytes(&buffer, bytes, buffer.vk_size, &format!("upload `{name}`"))?;
-        self.shared.check_validation()?;
-        Ok(buffer)
-    }
-
-    /// Zero-filled device-local storage buffer of `size` bytes.
-    pub fn create_buffer(&self, name: &str, size: u64) -> Result<Buffer, GpuError> {
-        let buffer = self.create_storage(name, size)?;
-        self.zero(&buffer, &format!("create `{name}`"))?;
-        self.shared.check_validation()?;
-        Ok(buffer)
-    }
-
-    /// Overwrites the start of `buffer` with `data`; the rest keeps its contents.
-    pub fn write<T: Pod>(&self, buffer: &Buffer, data: &[T]) -> Result<(), GpuError> {
-        self.check_same_context(&buffer.shared, &buffer.name)?;
-        let bytes: &[u8] = bytemuck::cast_slice(data);
-        if bytes.len() as u64 > buffer.size {
-            return Err(GpuError::WriteTooLarge {
-                name: buffer.name.clone(),
-                len: bytes.len() as u64,
-                size: buffer.size,
-            });
-        }
-        self.write_bytes(buffer, bytes, 0, &format!("write `{}`", buffer.name))?;
-        self.shared.check_validation()
-    }
-
-    /// The whole buffer (`size()` bytes) as `T`s, through a readback buffer.
-    pub fn download<T: Pod>(&self, buffer: &Buffer) -> Result<Vec<T>, GpuError> {
-        self.check_same_context(&buffer.shared, &buffer.name)?;
-        let element_size = size_of::<T>();
-        if element_size == 0 {
-            return Ok(Vec::new());
-        }
-        if !buffer.size.is_multiple_of(element_size as u64) {
-            return Err(GpuError::ElementSizeMismatch { name: buffer.name.clone(), size: buffer.size, element_size });
-        }
-        let mut out = vec![T::zeroed(); (buffer.size / element_size as u64) as usize];
-        if out.is_empty() {
-            return Ok(out);
-        }
-        let dst: &mut [u8] = bytemuck::cast_slice_mut(&mut out);
-        let label = format!("download `{}`", buffer.name);
-        if let Some(ptr) = self.direct_ptr(buffer) {
-            let _submitter = self.lock_submitter();
-            buffer.read_mapped(ptr, dst);
-        } else {
-            let readback = Buffer::create(
-                &self.shared,
-                &format!("{} readback", buffer.name),
-                buffer.size,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?;
-            let region = [vk::BufferCopy::default().size(buffer.size)];
-            self.one_shot(&label, |device, cb| {
-                // SAFETY: both buffers are live, the region lies inside both, and the command
-                // buffer is recording.
-                unsafe { device.cmd_copy_buffer(cb, buffer.handle, readback.handle, &region) };
-            })?;
-            let ptr = readback.host_ptr().expect("GpuToCpu memory is host-visible, coherent and mapped");
-            readback.read_mapped(ptr, dst);
-        }
-        self.shared.check_validation()?;
-        Ok(out)
-    }
-
-    /// Sets every byte of `buffer` to zero.
-    pub fn fill_zero(&self, buffer: &Buffer) -> Result<(), GpuError> {
-        self.check_same_context(&buffer.shared, &buffer.name)?;
-        self.zero(buffer, &format!("fill_zero `{}`", buffer.name))?;
-        self.shared.check_validation()
-    }
-
-    fn zero(&self, buffer: &Buffer, label: &str) -> Result<(), GpuError> {
-        if let Some(ptr) = self.direct_ptr(buffer) {
-            let _submitter = self.lock_submitter();
-            buffer.write_mapped(ptr, &[], buffer.vk_size);
-            return Ok(());
-        }
-        self.one_shot(label, |device, cb| {
-            // SAFETY: the buffer is live and was created with TRANSFER_DST; WHOLE_SIZE covers
-            // its `vk_size`, a multiple of 4.
-            unsafe { device.cmd_fill_buffer(cb, buffer.handle, 0, vk::WHOLE_SIZE, 0) };
-        })
-    }
-
-    /// Writes `bytes` at offset 0 and zeroes the buffer from there up to `zero_to` bytes.
-    fn write_bytes(&self, buffer: &Buffer, bytes: &[u8], zero_to: u64, label: &str) -> Result<(), GpuError> {
-        if let Some(ptr) = self.direct_ptr(buffer) {
-            let _submitter = self.lock_submitter();
-            buffer.write_mapped(ptr, bytes, zero_to);
-            return Ok(());
-        }
-        let copy_size = (bytes.len() as u64).max(zero_to);
-        if copy_size == 0 {
-            return Ok(());
-        }
-        let staging = Buffer::create(
-            &self.shared,
-            &format!("{} staging", buffer.name),
-            copy_size,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        let ptr = staging.host_ptr().expect("CpuToGpu memory is host-visible, coherent and mapped");
-        staging.write_mapped(ptr, bytes, copy_size);
-        let region = [vk::BufferCopy::default().size(copy_size)];
-        self.one_shot(label, |device, cb| {
-            // SAFETY: both buffers are live, the region lies inside both (`copy_size` is at most
-            // the target's `vk_size`), and the command buffer is recording.
-            unsafe { device.cmd_copy_buffer(cb, staging.handle, buffer.handle, &region) };
-        })
     }
 }

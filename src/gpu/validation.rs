@@ -6,7 +6,7 @@ use std::sync::{Arc, Mutex};
 
 use ash::vk;
 
-use super::GpuError;
+use super::error::GpuError;
 
 /// The layer's name, as the loader knows it.
 pub(crate) const LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";

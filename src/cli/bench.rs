@@ -1,0 +1,91 @@
+//! `photonix bench`: primary and shadow rays per second on the GPU and the CPU reference, and
+//! optionally photon tracing and grid build times, as Markdown tables.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use photonix::gpu::{GpuContext, GpuOptions};
+use photonix::render::bench::{bench, bench_photons};
+use photonix::render::{prepare, FrameSettings};
+use photonix::scene::load_scene;
+
+use super::parse::parse_resolution;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scene to measure
+    #[arg(default_value = "scenes/cornell-box.toml")]
+    scene: PathBuf,
+    /// Samples per pixel of each timed frame
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Image size as WIDTHxHEIGHT [default: the scene's]
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Vulkan device: index or name substring
+    #[arg(long)]
+    device: Option<String>,
+    /// Skip the CPU reference
+    #[arg(long)]
+    gpu_only: bool,
+    /// Also time photon tracing and the grid build at these photon path counts (comma-separated)
+    #[arg(long, value_delimiter = ',')]
+    photon_paths: Vec<u32>,
+}
+
+pub fn run(args: BenchArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
+    let buffers = prepare(&scene, &settings)?;
+    out!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);
+    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
+
+    // Rays per second
+    let mut results = vec![bench(Some(&ctx), &buffers, args.spp)?];
+    if !args.gpu_only {
+        results.push(bench(None, &buffers, args.spp)?);
+    }
+    out!("| backend | device | primary rays/s | shadow rays/s |");
+    out!("| --- | --- | --- | --- |");
+    for r in &results {
+        out!(
+            "| {} | {} | {:.2} M ({} rays in {:.3} s) | {:.2} M ({} rays in {:.3} s) |",
+            r.backend.name(),
+            r.device,
+            r.primary_rays_per_second() / 1e6,
+            r.primary_rays,
+            r.primary_seconds,
+            r.shadow_rays_per_second() / 1e6,
+            r.shadow_rays,
+            r.shadow_seconds,
+        );
+    }
+
+    // Photon tracing and grid build
+    if !args.photon_paths.is_empty() {
+        out!("");
+        out!("| backend | photon paths | stored photons | trace s | paths/s | grid build s | grid s per M photons |");
+        out!("| --- | --- | --- | --- | --- | --- | --- |");
+    }
+    for &paths in &args.photon_paths {
+        let contexts: Vec<Option<&GpuContext>> = if args.gpu_only { vec![Some(&ctx)] } else { vec![Some(&ctx), None] };
+        for c in contexts {
+            match bench_photons(c, &buffers, paths) {
+                Ok(b) => out!(
+                    "| {} | {} | {} | {:.3} | {:.2} M | {:.3} | {:.3} |",
+                    b.backend.name(),
+                    b.paths,
+                    b.stored,
+                    b.trace_seconds,
+                    b.paths as f64 / b.trace_seconds / 1e6,
+                    b.grid_seconds,
+                    b.grid_seconds / (b.stored as f64 / 1e6),
+                ),
+                Err(e) => out!("| {} | {paths} | - | - | - | - | {e} |", if c.is_some() { "gpu" } else { "cpu" }),
+            }
+        }
+    }
+    Ok(())
+}

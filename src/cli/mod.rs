@@ -1,0 +1,44 @@
+//! The command line of the `photonix` binary: the clap definitions here, one file per command.
+//!
+//! Each command's file holds its flags and a `run` that returns `anyhow::Result`; `main` turns
+//! an error into `error: ...` on stderr and a failing exit code.
+
+use clap::{Parser, Subcommand};
+
+// Defined before the `mod` lines below, so the command modules can use it.
+/// `println!` that ignores a closed stdout (`photonix diff ... | head -1`) instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+pub mod bench;
+pub mod devices;
+pub mod diff;
+pub mod merge;
+mod parse;
+pub mod render;
+
+// No doc comments on the clap types: clap would show them as help text.
+#[derive(Parser)]
+#[command(name = "photonix", version, about = "Physically based photon mapping on Vulkan compute shaders")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Render a scene file to an image (.exr linear radiance, .png sRGB)
+    Render(render::RenderArgs),
+    /// List the Vulkan devices and the limits that matter to Photonix
+    Devices,
+    /// Measure primary and shadow rays per second on the GPU and the CPU reference
+    Bench(bench::BenchArgs),
+    /// Compare a render with a reference: relMSE, RMSE, per-channel mean ratio, error image
+    Diff(diff::DiffArgs),
+    /// Combine accumulation files of disjoint pass ranges into one image
+    Merge(merge::MergeArgs),
+}

@@ -1,0 +1,404 @@
+//! `photonix render`: its flags and their checks against the scene's settings, the progressive
+//! loop with its progress bar and checkpoints, the output files and the closing summary.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use photonix::gpu::{GpuContext, GpuOptions};
+use photonix::io::{check_output_path, contact_sheet, write_image, write_layers_exr};
+use photonix::render::accumulation::{format_ranges, write_accumulation};
+use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
+use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats};
+use photonix::scene::load_scene;
+
+use super::parse::{parse_duration, parse_pass_range, parse_resolution};
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BackendArg {
+    Gpu,
+    Cpu,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene file (TOML, see docs/scene-format.md)
+    scene: PathBuf,
+    /// Output image; the extension picks the format [default: <scene name>.png]
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Where the kernels run: the Vulkan device, or the CPU reference
+    #[arg(long, value_enum, default_value = "gpu")]
+    backend: BackendArg,
+    /// Samples per pixel [default: the scene's]
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Seed of the random streams [default: the scene's]
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Image size as WIDTHxHEIGHT [default: the scene's]
+    #[arg(long, value_parser = parse_resolution)]
+    resolution: Option<(u32, u32)>,
+    /// Most surfaces a camera path visits [default: the scene's]
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Vulkan device: index or name substring (see `photonix devices`)
+    #[arg(long)]
+    device: Option<String>,
+    /// PNG only: scale radiance by 2^EXPOSURE before sRGB encoding
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    #[command(flatten)]
+    photons: PhotonArgs,
+    #[command(flatten)]
+    progressive: ProgressiveArgs,
+    /// Write a multi-layer EXR (direct, specular, indirect, caustics, combined); needs -o *.exr
+    #[arg(long)]
+    layers: bool,
+    /// Also write the four terms side by side as a PNG
+    #[arg(long, value_name = "PNG")]
+    contact_sheet: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct PhotonArgs {
+    /// Photon paths for the global map [default: the scene's]
+    #[arg(long)]
+    photons: Option<u32>,
+    /// Photon paths for the caustic map [default: the scene's]
+    #[arg(long)]
+    caustic_photons: Option<u32>,
+    /// Lookup radius of the global map, in scene units [default: derived from the scene]
+    #[arg(long, allow_negative_numbers = true)]
+    radius: Option<f32>,
+    /// Lookup radius of the caustic map, in scene units [default: half the global radius]
+    #[arg(long, allow_negative_numbers = true)]
+    caustic_radius: Option<f32>,
+    /// Final-gather rays per sample; 0 reads the global map directly (fast preview)
+    #[arg(long)]
+    gather_rays: Option<u32>,
+    /// Most surfaces a photon path visits
+    #[arg(long)]
+    photon_depth: Option<u32>,
+    /// Direct light and specular paths only: no photon maps
+    #[arg(long)]
+    no_photons: bool,
+}
+
+impl PhotonArgs {
+    /// The scene's settings with the command line's overrides, checked.
+    fn apply(&self, scene: Option<PhotonSettings>) -> Result<Option<PhotonSettings>> {
+        if self.no_photons {
+            return Ok(None);
+        }
+        let mut p = scene.unwrap_or_default();
+        let overridden = self.photons.is_some() || self.caustic_photons.is_some() || self.radius.is_some();
+        if scene.is_none() && !overridden {
+            return Ok(None);
+        }
+        if let Some(n) = self.photons {
+            p.photons = n;
+        }
+        if let Some(n) = self.caustic_photons {
+            p.caustic_photons = n;
+        }
+        if p.photons == 0 || p.caustic_photons == 0 {
+            bail!("--photons and --caustic-photons must be at least 1; use --no-photons to render without photon maps");
+        }
+        for (name, value) in [("--radius", self.radius), ("--caustic-radius", self.caustic_radius)] {
+            if let Some(r) = value {
+                if !(r.is_finite() && r > 0.0) {
+                    bail!("{name} is {r}; give a positive radius in scene units, or leave it out to derive one");
+                }
+            }
+        }
+        p.radius = self.radius.or(p.radius);
+        p.caustic_radius = self.caustic_radius.or(p.caustic_radius);
+        p.gather_rays = self.gather_rays.unwrap_or(p.gather_rays);
+        if let Some(d) = self.photon_depth {
+            if d == 0 {
+                bail!("--photon-depth must be at least 1");
+            }
+            p.max_depth = d;
+        }
+        Ok(Some(p))
+    }
+}
+
+#[derive(clap::Args)]
+struct ProgressiveArgs {
+    /// Progressive passes (each traces its own photons with a smaller radius) [default: the scene's]
+    #[arg(long)]
+    passes: Option<u32>,
+    /// Stop after the pass that crosses this wall time (e.g. 90s, 2m, 1h)
+    #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
+    time: Option<std::time::Duration>,
+    /// Stop when the estimated relMSE (from odd and even passes) falls below this
+    #[arg(long, allow_hyphen_values = true)]
+    target_error: Option<f64>,
+    /// Rewrite the output with the passes so far this often (e.g. 30s)
+    #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
+    checkpoint_every: Option<std::time::Duration>,
+    /// Render exactly passes A..B and write an accumulation file (see docs/progressive.md)
+    #[arg(long, value_parser = parse_pass_range)]
+    pass_range: Option<(u32, u32)>,
+}
+
+impl ProgressiveArgs {
+    fn budget(&self, scene_passes: u32) -> Result<Budget> {
+        if let Some(e) = self.target_error {
+            if !(e.is_finite() && e > 0.0) {
+                bail!("--target-error is {e}; give a positive relMSE such as 0.01");
+            }
+        }
+        if self.pass_range.is_some() && self.passes.is_some() {
+            bail!("--passes and --pass-range both choose passes; give one of them");
+        }
+        let (first, end) = match (self.pass_range, self.passes) {
+            (Some((a, b)), _) => (a, b),
+            (None, Some(0)) => bail!("--passes must be at least 1"),
+            (None, Some(n)) => (0, n),
+            // A time or error budget alone runs until it is met.
+            (None, None) if self.time.is_some() || self.target_error.is_some() => (0, u32::MAX),
+            (None, None) => (0, scene_passes),
+        };
+        Ok(Budget { first, end, time: self.time, target_error: self.target_error })
+    }
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    // Check the flags and the output paths, before any long work
+    let scene = load_scene(&args.scene)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
+    let is_exr = matches!(photonix::io::image::format_of(&output), Ok(photonix::io::image::Format::Exr));
+    if args.layers && !is_exr {
+        bail!("--layers writes a multi-layer EXR; give an output ending in .exr (e.g. -o layers.exr)");
+    }
+    if args.progressive.pass_range.is_some() && !is_exr {
+        bail!("--pass-range writes an accumulation file, which is an EXR; give an output ending in .exr");
+    }
+    // Fail on a bad output path now, not after a long render.
+    check_output_path(&output)?;
+    if let Some(sheet) = &args.contact_sheet {
+        check_output_path(sheet)?;
+    }
+
+    let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    let settings = FrameSettings {
+        width,
+        height,
+        max_depth: args.max_depth.unwrap_or(scene.render.max_depth),
+        seed: args.seed.unwrap_or(scene.render.seed),
+    };
+    let photons = args.photons.apply(scene.photons)?;
+    let spp = args.spp.unwrap_or(scene.render.spp);
+    if spp == 0 {
+        bail!("--spp must be at least 1");
+    }
+    if settings.max_depth == 0 {
+        bail!("--max-depth must be at least 1");
+    }
+    let budget = args.progressive.budget(scene.render.passes)?;
+
+    // Prepare the scene and open the device
+    let t = std::time::Instant::now();
+    let buffers = prepare(&scene, &settings)?;
+    let prepare_time = t.elapsed();
+    let backend = match args.backend {
+        BackendArg::Gpu => Backend::Gpu,
+        BackendArg::Cpu => Backend::Cpu,
+    };
+    let ctx = match backend {
+        Backend::Gpu => Some(GpuContext::new(&GpuOptions::from_env(args.device.clone()))?),
+        Backend::Cpu => None,
+    };
+    // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
+    let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
+
+    let write_result = |acc: &Accumulator| -> Result<()> {
+        if budget_is_range(&args) {
+            write_accumulation(&output, acc)?;
+            return Ok(());
+        }
+        let mean = acc.mean();
+        let combined = mean.combined();
+        if args.layers {
+            let mut named = vec![("combined", &combined)];
+            named.extend(mean.named());
+            write_layers_exr(&output, &named)?;
+        } else {
+            write_image(&output, &combined, args.exposure)?;
+        }
+        Ok(())
+    };
+
+    // Render the passes
+    let bar = progress_bar(&scene.name);
+    let total_passes = budget.end - budget.first;
+    let mut stats = RenderStats::default();
+    let mut last_checkpoint = std::time::Instant::now();
+    let passes_done = std::cell::Cell::new(0u32);
+    let paths_per_pass = photons.map_or(0, |p| p.photons as u64 + p.caustic_photons as u64);
+    let result = render_progressive(
+        width,
+        height,
+        &budget,
+        |pass| -> Result<RenderOutput> {
+            let mut progress = |done: u64, total: u64| {
+                if let Some(bar) = &bar {
+                    let (length, position) = match budget.time {
+                        Some(t) => (t.as_millis() as u64, stats_elapsed(&stats).as_millis() as u64),
+                        None => {
+                            (total_passes as u64 * 1000, passes_done.get() as u64 * 1000 + done * 1000 / total.max(1))
+                        }
+                    };
+                    bar.set_length(length);
+                    bar.set_position(position.min(length));
+                }
+            };
+            let out = match &ctx {
+                None => render_cpu(&buffers, spp, photons.as_ref(), pass, &mut progress),
+                Some(ctx) => {
+                    photonix::render::gpu::render_gpu(ctx, &buffers, spp, photons.as_ref(), pass, &mut progress)
+                        .with_context(|| failure_message(&args, passes_done.get(), &output))?
+                }
+            };
+            add_stats(&mut stats, &out.stats);
+            Ok(out)
+        },
+        |acc, elapsed| -> Result<()> {
+            passes_done.set(acc.passes);
+            if let Some(bar) = &bar {
+                let photon_rate = paths_per_pass as f64 * acc.passes as f64 / elapsed.as_secs_f64().max(1e-9);
+                bar.set_message(format!(
+                    "{} pass {}/{} {:.2} M photons/s",
+                    scene.name,
+                    acc.passes,
+                    total_passes,
+                    photon_rate / 1e6
+                ));
+            }
+            if args.progressive.checkpoint_every.is_some_and(|every| last_checkpoint.elapsed() >= every) {
+                write_result(acc)?;
+                last_checkpoint = std::time::Instant::now();
+            }
+            Ok(())
+        },
+    );
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
+    }
+    let (acc, reason) = result?;
+    if acc.passes == 0 {
+        bail!("interrupted before the first pass finished; no image was written");
+    }
+
+    // Write the outputs and the summary
+    let t = std::time::Instant::now();
+    write_result(&acc)?;
+    if let Some(sheet) = &args.contact_sheet {
+        let mean = acc.mean();
+        let terms: Vec<&photonix::io::Image> = mean.named().iter().map(|(_, image)| *image).collect();
+        write_image(sheet, &contact_sheet(&terms), args.exposure)?;
+    }
+    stats.stages.insert(0, ("prepare".into(), prepare_time));
+    stats.stages.push(("write".into(), t.elapsed()));
+    stats.samples_per_pixel = spp * acc.passes;
+    let why = match reason {
+        StopReason::Passes => "all passes done".to_string(),
+        StopReason::Time => "time budget reached".to_string(),
+        StopReason::TargetError => {
+            format!("error estimate {:.2e} below the target", acc.error_estimate().unwrap_or(0.0))
+        }
+        StopReason::Interrupted => "interrupted".to_string(),
+    };
+    eprintln!(
+        "{} pass{} ({}; passes {}); {}",
+        acc.passes,
+        if acc.passes == 1 { "" } else { "es" },
+        why,
+        format_ranges(&acc.ranges),
+        summary(&scene.name, &output, &stats, width, height, backend)
+    );
+    Ok(())
+}
+
+/// A progress bar on stderr, or `None` when stderr is not a terminal (logs, tests).
+fn progress_bar(total_label: &str) -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::new(0);
+    let style = ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} (eta {eta})")
+        .expect("the progress template is valid")
+        .progress_chars("=> ");
+    bar.set_style(style);
+    bar.set_message(total_label.to_string());
+    Some(bar)
+}
+
+fn budget_is_range(args: &RenderArgs) -> bool {
+    args.progressive.pass_range.is_some()
+}
+
+fn failure_message(args: &RenderArgs, passes_done: u32, output: &Path) -> String {
+    if args.progressive.checkpoint_every.is_some() && output.exists() {
+        format!("rendering failed after {passes_done} passes; the last checkpoint stays in {}", output.display())
+    } else {
+        "rendering failed; no image was written".to_string()
+    }
+}
+
+fn stats_elapsed(stats: &RenderStats) -> std::time::Duration {
+    stats.stages.iter().map(|(_, d)| *d).sum()
+}
+
+/// Adds one pass's stage times, kernel times and rays to the running totals.
+fn add_stats(total: &mut RenderStats, pass: &RenderStats) {
+    for (name, d) in &pass.stages {
+        match total.stages.iter_mut().find(|(n, _)| n == name) {
+            Some((_, t)) => *t += *d,
+            None => total.stages.push((name.clone(), *d)),
+        }
+    }
+    for (name, secs, count) in &pass.kernel_times {
+        match total.kernel_times.iter_mut().find(|(n, _, _)| n == name) {
+            Some((_, s, c)) => {
+                *s += secs;
+                *c += count;
+            }
+            None => total.kernel_times.push((name.clone(), *secs, *count)),
+        }
+    }
+    total.rays += pass.rays;
+    total.device.clone_from(&pass.device);
+}
+
+/// The closing lines: image size, samples, backend and device, output path, stage times, ray
+/// rate and, on the GPU, the time per kernel.
+fn summary(name: &str, output: &Path, s: &RenderStats, width: u32, height: u32, backend: Backend) -> String {
+    let stages: Vec<String> = s.stages.iter().map(|(n, d)| format!("{n} {:.3} s", d.as_secs_f64())).collect();
+    let kernels: Vec<String> =
+        s.kernel_times.iter().map(|(n, secs, count)| format!("{n} {secs:.3} s in {count} dispatches")).collect();
+    let render_secs = s.stage("render").as_secs_f64().max(1e-9);
+    let mut line = format!(
+        "{name}: {width}x{height}, {} spp, {} backend on {} -> {}\n  {}; {:.2} M rays/s ({} rays)",
+        s.samples_per_pixel,
+        backend.name(),
+        s.device,
+        output.display(),
+        stages.join(", "),
+        s.rays as f64 / render_secs / 1e6,
+        s.rays,
+    );
+    if !kernels.is_empty() {
+        line += &format!("\n  gpu time: {}", kernels.join(", "));
+    }
+    line
+}
