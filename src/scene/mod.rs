@@ -10,6 +10,7 @@ mod convert;
 mod error;
 mod format;
 mod mesh;
+pub mod pattern;
 
 use std::path::{Path, PathBuf};
 
