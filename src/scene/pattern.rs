@@ -3,8 +3,8 @@
 //! `src/cpu/pattern.rs` read (the block layout is documented there). `docs/patterns.md` is the
 //! user's reference.
 //!
-//! Names, parameters and defaults are POV-Ray 3.7's (reference manual, section 2.4.7 "Patterns"
-//! and 2.4.6 "Pattern Modifiers"; source/core/material/pattern.cpp for the default colour maps).
+//! Names, parameters and defaults are POV-Ray 3.7's (reference manual, "Patterns" and "Pattern
+//! Modifiers"; source/core/material/pattern.cpp for the default colour maps).
 //! Errors are plain strings that name the field and say what to do; the scene parser prefixes
 //! them with `file:line`.
 
