@@ -7,6 +7,7 @@ pub mod gather;
 pub mod grid;
 pub mod grid_build;
 pub mod light;
+pub mod pattern;
 pub mod photon;
 pub mod render;
 pub mod rng;

@@ -12,6 +12,7 @@ mod error;
 mod format;
 mod material;
 mod mesh;
+pub mod pattern;
 mod photons;
 
 use std::path::{Path, PathBuf};
