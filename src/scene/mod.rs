@@ -11,6 +11,8 @@ mod error;
 mod format;
 mod mesh;
 
+pub mod image_texture;
+
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
