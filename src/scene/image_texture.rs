@@ -412,7 +412,9 @@ impl ImageTexture {
 mod tests {
     use super::*;
 
-    const BACK_WALL: &str = "/work/shared/reference/cornell-glossy/textures/back_wall.png";
+    /// The shared ground-truth folder lies next to the repository.
+    const BACK_WALL: &str =
+        concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/reference/cornell-glossy/textures/back_wall.png");
 
     /// sRGB bytes decoded with the exact curve, in f64 (python3, float64).
     const SRGB_BYTES: [(u8, f64); 4] =
