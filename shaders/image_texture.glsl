@@ -24,9 +24,9 @@ float image_half_to_f32(uint h) {
     return uintBitsToFloat(((h & 0x8000u) << 16u) | ((e + 112u) << 23u) | (m << 13u));
 }
 
-// Texel (i, j) of the block at `at`; i < width, j < height.
-vec4 image_fetch(uint at, uint i, uint j) {
-    uint k = at + IMAGE_HEADER_WORDS + 2u * (j * texture_data[at] + i);
+// Texel (i, j) of the block at `at` of width w; i < w, j < height.
+vec4 image_fetch(uint at, uint w, uint i, uint j) {
+    uint k = at + IMAGE_HEADER_WORDS + 2u * (j * w + i);
     uint rg = texture_data[k];
     uint ba = texture_data[k + 1u];
     return vec4(image_half_to_f32(rg & 0xffffu), image_half_to_f32(rg >> 16u), image_half_to_f32(ba & 0xffffu),
@@ -63,7 +63,7 @@ vec4 image_texel(uint at, vec2 uv) {
     uint wrap = texture_data[at + 2u];
     precise float x = image_coord(float(w) * uv.x);
     precise float y = image_coord(float(h) * (1.0 - uv.y));
-    return image_fetch(at, image_wrap(int(floor(x)), w, wrap), image_wrap(int(floor(y)), h, wrap));
+    return image_fetch(at, w, image_wrap(int(floor(x)), w, wrap), image_wrap(int(floor(y)), h, wrap));
 }
 
 // Bilinear lookup; contract in src/cpu/image_texture.rs. `precise` forbids fused multiply-adds
@@ -82,7 +82,7 @@ vec4 image_lookup(uint at, vec2 uv) {
     uint i1 = image_wrap(int(x0) + 1, w, wrap);
     uint j0 = image_wrap(int(y0), h, wrap);
     uint j1 = image_wrap(int(y0) + 1, h, wrap);
-    precise vec4 value = (1.0 - fx) * (1.0 - fy) * image_fetch(at, i0, j0) + fx * (1.0 - fy) * image_fetch(at, i1, j0)
-                       + (1.0 - fx) * fy * image_fetch(at, i0, j1) + fx * fy * image_fetch(at, i1, j1);
+    precise vec4 value = (1.0 - fx) * (1.0 - fy) * image_fetch(at, w, i0, j0) + fx * (1.0 - fy) * image_fetch(at, w, i1, j0)
+                       + (1.0 - fx) * fy * image_fetch(at, w, i0, j1) + fx * fy * image_fetch(at, w, i1, j1);
     return value;
 }

@@ -47,9 +47,10 @@ pub fn image_half_to_f32(h: u32) -> f32 {
     f32::from_bits(((h & 0x8000) << 16) | ((e + 112) << 23) | (m << 13))
 }
 
-/// Texel (i, j) of the block at `at`; `i` < width, `j` < height.
-pub fn image_fetch(data: &[u32], at: u32, i: u32, j: u32) -> Vec4 {
-    let k = (at + IMAGE_HEADER_WORDS + 2 * (j * data[at as usize] + i)) as usize;
+/// Texel (i, j) of the block at `at` of width `w` (passed in to save a load); `i` < `w`, `j` <
+/// height.
+pub fn image_fetch(data: &[u32], at: u32, w: u32, i: u32, j: u32) -> Vec4 {
+    let k = (at + IMAGE_HEADER_WORDS + 2 * (j * w + i)) as usize;
     let rg = data[k];
     let ba = data[k + 1];
     Vec4::new(
@@ -103,7 +104,7 @@ pub fn image_texel(data: &[u32], at: u32, uv: Vec2) -> Vec4 {
     let wrap = data[at as usize + 2];
     let x = image_coord(w as f32 * uv.x);
     let y = image_coord(h as f32 * (1.0 - uv.y));
-    image_fetch(data, at, image_wrap(x.floor() as i32, w, wrap), image_wrap(y.floor() as i32, h, wrap))
+    image_fetch(data, at, w, image_wrap(x.floor() as i32, w, wrap), image_wrap(y.floor() as i32, h, wrap))
 }
 
 /// Bilinear lookup of the image block at `at`: with x = W u - 0.5 and y = H (1 - v) - 0.5 (texel
@@ -128,10 +129,10 @@ pub fn image_lookup(data: &[u32], at: u32, uv: Vec2) -> Vec4 {
     let i1 = image_wrap(x0 as i32 + 1, w, wrap);
     let j0 = image_wrap(y0 as i32, h, wrap);
     let j1 = image_wrap(y0 as i32 + 1, h, wrap);
-    (1.0 - fx) * (1.0 - fy) * image_fetch(data, at, i0, j0)
-        + fx * (1.0 - fy) * image_fetch(data, at, i1, j0)
-        + (1.0 - fx) * fy * image_fetch(data, at, i0, j1)
-        + fx * fy * image_fetch(data, at, i1, j1)
+    (1.0 - fx) * (1.0 - fy) * image_fetch(data, at, w, i0, j0)
+        + fx * (1.0 - fy) * image_fetch(data, at, w, i1, j0)
+        + (1.0 - fx) * fy * image_fetch(data, at, w, i0, j1)
+        + fx * fy * image_fetch(data, at, w, i1, j1)
 }
 
 #[cfg(test)]

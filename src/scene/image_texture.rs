@@ -555,6 +555,17 @@ mod tests {
             // Halves round by at most 2^-11 relative.
             got.to_array().iter().zip(want).all(|(&g, w)| (f64::from(g) - w).abs() <= w.abs() / 2048.0 + 1e-7)
         };
+        let mut worst = 0.0f64;
+        for j in 0..64 {
+            for i in 0..64 {
+                let stored = crate::cpu::image_texture::image_fetch(&data, at, 64, i, j).to_array();
+                for (s, e) in stored.iter().zip(t.texel(i, j)) {
+                    worst = worst.max(f64::from((s - e).abs() / e.max(1e-30)));
+                }
+            }
+        }
+        println!("back wall: worst relative change by half-float storage {worst:.2e}");
+        assert!(worst <= 1.0 / 2048.0);
         assert!(near(lookup(0.05, 0.95), white), "{}", lookup(0.05, 0.95));
         assert!(near(lookup(20.5 / 64.0, 1.0 - 30.5 / 64.0), dark));
         assert!(near(lookup(2.5 / 64.0, 1.0 - 60.5 / 64.0), red));
