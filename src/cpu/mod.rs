@@ -6,6 +6,7 @@ pub mod emit_photons;
 pub mod gather;
 pub mod grid;
 pub mod grid_build;
+pub mod image_texture;
 pub mod light;
 pub mod pattern;
 pub mod photon;

@@ -15,6 +15,8 @@ mod mesh;
 pub mod pattern;
 mod photons;
 
+pub mod image_texture;
+
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Vec2, Vec3};

@@ -1,0 +1,164 @@
+//! The image texture lookups of `shaders/image_texture.glsl` against their CPU twin, through the
+//! test kernel `image_texture_probe`: the same packed blocks, the same points, every wrap mode,
+//! including the seams, texel centres, far-away and non-finite coordinates.
+
+mod common;
+
+use glam::{Vec2, Vec4};
+use photonix::cpu::image_texture::{image_lookup, image_texel};
+use photonix::layout::constants::WORKGROUP_SIZE;
+use photonix::scene::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
+
+/// xorshift64*: reproducible numbers without a dependency.
+struct Rng(u64);
+
+impl Rng {
+    fn next_f32(&mut self) -> f32 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A 5x3 image (sizes that are not powers of two) of varied values: negative, subnormal halves,
+/// values near the largest half, alpha below 1.
+fn odd_image() -> ImageTexture {
+    let mut rng = Rng(0x1234_5678);
+    let mut texels: Vec<[f32; 4]> = (0..15).map(|_| [0.0; 4].map(|_: f32| 4.0 * rng.next_f32() - 1.0)).collect();
+    texels[3] = [3e-6, 1e-7, 60000.0, 0.0];
+    texels[7] = [-2.5, 0.0, 1.0, 1.0];
+    ImageTexture { width: 5, height: 3, texels }
+}
+
+/// Points to look up in a block of `w` x `h` texels.
+fn points(w: u32, h: u32, rng: &mut Rng) -> Vec<Vec2> {
+    let (wf, hf) = (w as f32, h as f32);
+    let mut p = Vec::new();
+    // A grid over [-2.3, 2.3]^2 whose steps do not line up with texels.
+    for a in 0..67 {
+        for b in 0..41 {
+            p.push(Vec2::new(-2.3 + a as f32 * 0.0697, -2.3 + b as f32 * 0.1131));
+        }
+    }
+    // Texel centres and the points halfway between them.
+    for j in 0..2 * h + 1 {
+        for i in 0..2 * w + 1 {
+            p.push(Vec2::new(i as f32 * 0.5 / wf, 1.0 - j as f32 * 0.5 / hf));
+        }
+    }
+    // Seams and edges: u, v in {0, 1, -1, 2, half a texel in}, and just beside them.
+    let edges = [0.0, 1.0, -1.0, 2.0, 0.5 / wf, 1.0 - 0.5 / wf, 0.5 / hf, 1.0 - 0.5 / hf];
+    for &a in &edges {
+        for &b in &edges {
+            for d in [0.0, 1e-7, -1e-7, 1e-3] {
+                p.push(Vec2::new(a + d, b - d));
+            }
+        }
+    }
+    // Far away and not finite: the lookups must stay inside the block.
+    let wild =
+        [1e6, -1e6, 123_456.79, 1e30, -1e30, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 1e-40, -0.0, 16_777_217.0];
+    for &a in &wild {
+        for &b in &wild {
+            p.push(Vec2::new(a, b));
+        }
+        p.push(Vec2::new(a, 0.3));
+        p.push(Vec2::new(0.7, a));
+    }
+    for _ in 0..2000 {
+        p.push(Vec2::new(6.0 * rng.next_f32() - 3.0, 6.0 * rng.next_f32() - 3.0));
+    }
+    p
+}
+
+/// Distance in units in the last place between two finite floats of the same sign, else a big
+/// number (0 for +0 and -0).
+fn ulps(a: f32, b: f32) -> u32 {
+    if a == b {
+        return 0;
+    }
+    if a.is_nan() || b.is_nan() || (a < 0.0) != (b < 0.0) {
+        return u32::MAX;
+    }
+    a.to_bits().abs_diff(b.to_bits())
+}
+
+#[test]
+fn gpu_image_lookups_equal_cpu_lookups() {
+    let back_wall = common::repo_path("../shared/reference/cornell-glossy/textures/back_wall.png");
+    let back_wall = load_image_texture(&back_wall, ColorSpace::Srgb).expect("the shared back-wall texture loads");
+    let odd = odd_image();
+    let one = ImageTexture { width: 1, height: 1, texels: vec![[0.25, 0.5, 0.75, 1.0]] };
+    let row = ImageTexture { width: 7, height: 1, texels: (0..7).map(|i| [i as f32, 1.0, 2.0, 0.5]).collect() };
+
+    let mut data = Vec::new();
+    let mut blocks = Vec::new(); // (at, width, height, label)
+    for (image, name) in [(&odd, "5x3"), (&back_wall, "back wall"), (&one, "1x1"), (&row, "7x1")] {
+        for wrap in [Wrap::Repeat, Wrap::Clamp, Wrap::Mirror] {
+            let at = image.pack(wrap, &mut data);
+            blocks.push((at, image.width, image.height, format!("{name} {wrap:?}")));
+        }
+    }
+
+    let mut rng = Rng(42);
+    let mut queries: Vec<u32> = Vec::new();
+    let mut owners = Vec::new();
+    for (b, &(at, w, h, _)) in blocks.iter().enumerate() {
+        for p in points(w, h, &mut rng) {
+            queries.extend([p.x.to_bits(), p.y.to_bits(), at, 0]);
+            owners.push(b);
+        }
+    }
+    let count = owners.len() as u32;
+
+    let ctx = common::gpu();
+    let spirv = photonix::shaders::spirv("image_texture_probe").expect("build.rs compiles the probe");
+    let probe = ctx.create_kernel("image_texture_probe", &spirv, 3, 4).expect("probe matches its layout");
+    let texture_data = ctx.upload("texture_data", &data).unwrap();
+    let query_buffer = ctx.upload("queries", &queries).unwrap();
+    let results = ctx.create_buffer("results", u64::from(count) * 32).unwrap();
+    ctx.run("image_texture_probe", |r| {
+        let groups = [count.div_ceil(WORKGROUP_SIZE), 1, 1];
+        r.dispatch(&probe, &[&texture_data, &query_buffer, &results], bytemuck::bytes_of(&count), groups)
+    })
+    .unwrap();
+    let gpu: Vec<[f32; 4]> = ctx.download(&results).unwrap();
+
+    let mut worst_ulps = 0;
+    let mut worst_abs = 0.0f32;
+    let mut identical = 0;
+    for (q, &b) in owners.iter().enumerate() {
+        let (at, _, _, ref label) = blocks[b];
+        let uv = Vec2::new(f32::from_bits(queries[4 * q]), f32::from_bits(queries[4 * q + 1]));
+        let lookup = image_lookup(&data, at, uv);
+        let texel = image_texel(&data, at, uv);
+        let (gpu_lookup, gpu_texel) = (Vec4::from(gpu[2 * q]), Vec4::from(gpu[2 * q + 1]));
+        // The nearest texel involves one exact product and a floor: identical bits.
+        let same_bits =
+            |a: Vec4, b: Vec4| a.to_array().iter().zip(b.to_array()).all(|(x, y)| x.to_bits() == y.to_bits());
+        assert!(same_bits(gpu_texel, texel), "{label}, uv {uv}: texel gpu {gpu_texel} cpu {texel}");
+        if same_bits(gpu_lookup, lookup) {
+            identical += 1;
+        }
+        for c in 0..4 {
+            worst_ulps = worst_ulps.max(ulps(gpu_lookup[c], lookup[c]));
+            worst_abs = worst_abs.max((gpu_lookup[c] - lookup[c]).abs());
+        }
+        // Both sides decode the same halves exactly and evaluate the same expression in the
+        // same order without fused multiply-adds (`precise` in GLSL), and Vulkan rounds + and *
+        // correctly, so the results should be bit for bit equal (lavapipe: all are). 4 ulps
+        // leaves room for a driver that ignores `precise` while catching any change of formula
+        // (a texel off by one, a weight swapped) which moves values by 1e-3 or more.
+        for c in 0..4 {
+            assert!(
+                ulps(gpu_lookup[c], lookup[c]) <= 4 || (gpu_lookup[c] - lookup[c]).abs() <= 1e-30,
+                "{label}, uv {uv}: lookup gpu {gpu_lookup} cpu {lookup}"
+            );
+        }
+    }
+    println!(
+        "{count} lookups in {} blocks: {identical} bit-identical, worst {worst_ulps} ulp, worst |gpu - cpu| {worst_abs:e}",
+        blocks.len()
+    );
+}
