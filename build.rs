@@ -28,13 +28,22 @@ fn main() {
         String::from("/// Every compute kernel as (name, SPIR-V bytes).\npub const KERNELS: &[(&str, &[u8])] = &[\n");
     let mut failures = Vec::new();
     for kernel in &kernels {
-        let name = kernel.file_stem().unwrap().to_string_lossy().to_string();
-        let spv = out_dir.join(format!("{name}.spv"));
-        match compile(kernel, &spv, &out_dir) {
-            Ok(()) => {
-                writeln!(index, "    ({name:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
+        let stem = kernel.file_stem().unwrap().to_string_lossy().to_string();
+        // A line `// variant: NAME` compiles the kernel a second time as `<stem>_NAME` with
+        // `VARIANT_NAME` defined (e.g. with the procedural textures that slow down lavapipe).
+        let source = std::fs::read_to_string(kernel).unwrap_or_default();
+        let variants = source.lines().filter_map(|l| l.strip_prefix("// variant: ")).map(str::trim);
+        let builds: Vec<(String, Option<String>)> = std::iter::once((stem.clone(), None))
+            .chain(variants.map(|v| (format!("{stem}_{v}"), Some(format!("VARIANT_{}", v.to_uppercase())))))
+            .collect();
+        for (name, define) in builds {
+            let spv = out_dir.join(format!("{name}.spv"));
+            match compile(kernel, &spv, &out_dir, define.as_deref()) {
+                Ok(()) => {
+                    writeln!(index, "    ({name:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
+                }
+                Err(message) => failures.push(message),
             }
-            Err(message) => failures.push(message),
         }
     }
     index.push_str("];\n");
@@ -49,10 +58,11 @@ fn main() {
     std::fs::write(out_dir.join("kernels.rs"), index).expect("OUT_DIR is writable");
 }
 
-fn compile(kernel: &Path, spv: &Path, include_dir: &Path) -> Result<(), String> {
+fn compile(kernel: &Path, spv: &Path, include_dir: &Path, define: Option<&str>) -> Result<(), String> {
     let depfile = spv.with_extension("d");
     let output = Command::new("glslangValidator")
         .args(["-V", "--target-env", "vulkan1.2"])
+        .args(define.map(|d| format!("-D{d}")))
         .arg(format!("-I{}", include_dir.display()))
         .arg("-Ishaders")
         .arg("--depfile")

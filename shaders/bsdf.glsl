@@ -37,6 +37,10 @@ Bsdf material_bsdf(Material m, Hit h) {
     b.ior = m.ior;
     b.ng = h.ng;
     b.ns = h.ns;
+    // Bump and normal maps change the shading normal only: the geometric normal keeps deciding
+    // sides, offsets and leaks.
+    WHEN(m.normal_tex != NO_TEXTURE) b.ns = normal_map_normal(m.normal_tex, h);
+    WHEN(m.bump_tex != NO_TEXTURE) b.ns = bump_normal(m.bump_tex, m.bump_strength, h);
     return b;
 }
 
@@ -59,17 +63,24 @@ float fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t)
 
 // Diffuse: Lambertian reflection of albedo color0 on both sides.
 
+// Reflection needs wi on wo's side of the shading normal and of the geometric one, so a bumped
+// normal cannot let light in from under the surface.
+bool same_side(Bsdf b, vec3 wo, vec3 wi) {
+    return dot(wi, facing(b, wo)) > 0.0 && dot(wi, b.ng) * dot(wo, b.ng) > 0.0;
+}
+
 vec3 diffuse_eval(Bsdf b, vec3 wo, vec3 wi) {
-    return dot(wi, facing(b, wo)) > 0.0 ? b.color0 * (1.0 / PI) : vec3(0.0);
+    return same_side(b, wo, wi) ? b.color0 * (1.0 / PI) : vec3(0.0);
 }
 
 float diffuse_pdf(Bsdf b, vec3 wo, vec3 wi) {
-    return max(0.0, dot(wi, facing(b, wo))) * (1.0 / PI);
+    return same_side(b, wo, wi) ? dot(wi, facing(b, wo)) * (1.0 / PI) : 0.0;
 }
 
 BsdfSample diffuse_sample(Bsdf b, vec3 wo, vec3 u) {
     vec3 n = facing(b, wo);
     vec3 wi = cosine_direction(n, u.yz);
+    if (!same_side(b, wo, wi)) return no_sample();
     // Cosine sampling cancels the cosine and the 1/pi: the weight is the albedo.
     return BsdfSample(wi, b.color0, max(0.0, dot(wi, n)) * (1.0 / PI), BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE);
 }

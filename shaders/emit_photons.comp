@@ -4,6 +4,7 @@
 // then global photons, caustic photons and counters (photons for the global and the caustic
 // map; one past a buffer's capacity is counted but not stored, so the host can grow the buffer
 // and trace again).
+// variant: textured
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

@@ -49,9 +49,7 @@ struct Texture {
     uint data;
     uint color_map;
     float value[3];
-    uint _pad0;
-    float value2[3];
-    uint _pad1;
+    uint channel;
     float transform[12];
 };
 
@@ -129,3 +127,9 @@ struct EmitParams {
 #define GLOBAL_INDEX ((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * WORKGROUP_SIZE + gl_LocalInvocationID.x)
 
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }
+
+// `WHEN(cond) { ... }` runs the block where cond holds, as a loop of zero or one turn: lavapipe
+// runs both sides of every branch under masks, but leaves a loop at once when no lane enters it,
+// so costly optional work (textures, bump maps, alpha, the other shape kinds) costs nothing where
+// no lane needs it. Each entry counts one loop turn toward lavapipe's limit of 65535.
+#define WHEN(cond) for (uint when_ = ((cond) ? 0u : 1u); when_ < 1u; when_++)

@@ -7,6 +7,7 @@
 // CPU twin: src/cpu/render.rs. Bindings: the scene (scene_bindings.glsl), then the
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
 // layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
+// variant: textured
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

@@ -7,8 +7,8 @@ struct Hit {
     vec3 ng;    // unit geometric normal: a triangle's winding normal, a sphere's outward normal
     vec3 ns;    // unit shading normal, on the side of ng
     vec2 uv;
-    vec3 dpdu;  // surface derivatives along u and v (never zero: a frame from ng when uv is degenerate)
-    vec3 dpdv;
+    vec3 dpdu;  // surface derivatives along u and v (never zero: a frame from ng when uv is degenerate;
+    vec3 dpdv;  // uv, dpdu and dpdv are zero unless the primitive has PRIMITIVE_FLAG_UV)
     uint prim;
     uint material;
 };
@@ -114,35 +114,41 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
     h.p = x;
     h.prim = i;
     h.material = p.material;
-    switch (p.kind & PRIMITIVE_KIND_MASK) {
-    case PRIMITIVE_SPHERE: {
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
+    bool wants_uv = (p.kind & PRIMITIVE_FLAG_UV) != 0u;
+    h.uv = vec2(0.0);
+    h.dpdu = vec3(0.0);
+    h.dpdv = vec3(0.0);
+    WHEN(kind == PRIMITIVE_SPHERE) {
         vec3 c = load3(p.p0);
-        float r = p.p1[0];
         h.ng = normalize(x - c);
-        mat3 object_from_world = sphere_rotation(p);
-        vec3 dwdu, dwdv;
-        h.uv = sphere_uv(object_from_world * h.ng, dwdu, dwdv);
-        h.dpdu = r * (transpose(object_from_world) * dwdu);
-        h.dpdv = r * (transpose(object_from_world) * dwdv);
-        if (length(cross(h.dpdu, h.dpdv)) == 0.0) onb(h.ng, h.dpdu, h.dpdv);
-        break;
+        WHEN(wants_uv) {
+            float r = p.p1[0];
+            mat3 object_from_world = sphere_rotation(p);
+            vec3 dwdu, dwdv;
+            h.uv = sphere_uv(object_from_world * h.ng, dwdu, dwdv);
+            h.dpdu = r * (transpose(object_from_world) * dwdu);
+            h.dpdv = r * (transpose(object_from_world) * dwdv);
+            if (length(cross(h.dpdu, h.dpdv)) == 0.0) onb(h.ng, h.dpdu, h.dpdv);
+        }
     }
-    default: {
+    WHEN(kind == PRIMITIVE_TRIANGLE) {
         vec3 p0 = load3(p.p0), p1 = load3(p.p1), p2 = load3(p.p2);
-        vec3 e1 = p1 - p0, e2 = p2 - p0, v = x - p0;
+        vec3 e1 = p1 - p0, e2 = p2 - p0;
         h.ng = normalize(cross(e1, e2));
-        // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
-        float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
-        float d20 = dot(v, e1), d21 = dot(v, e2);
-        float inv = 1.0 / (d00 * d11 - d01 * d01);
-        float b1 = (d11 * d20 - d01 * d21) * inv;
-        float b2 = (d00 * d21 - d01 * d20) * inv;
-        vec2 uv0, uv1, uv2;
-        triangle_uvs(p, uv0, uv1, uv2);
-        h.uv = (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2;
-        triangle_derivatives(p0, p1, p2, uv0, uv1, uv2, h.ng, h.dpdu, h.dpdv);
-        break;
-    }
+        WHEN(wants_uv) {
+            // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
+            vec3 v = x - p0;
+            float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
+            float d20 = dot(v, e1), d21 = dot(v, e2);
+            float inv = 1.0 / (d00 * d11 - d01 * d01);
+            float b1 = (d11 * d20 - d01 * d21) * inv;
+            float b2 = (d00 * d21 - d01 * d20) * inv;
+            vec2 uv0, uv1, uv2;
+            triangle_uvs(p, uv0, uv1, uv2);
+            h.uv = (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2;
+            triangle_derivatives(p0, p1, p2, uv0, uv1, uv2, h.ng, h.dpdu, h.dpdv);
+        }
     }
     h.ns = h.ng;
 }

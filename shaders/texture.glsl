@@ -1,5 +1,6 @@
 // Textures behind one evaluate function, and material parameters that may be textured.
-// CPU twin: src/cpu/texture.rs. The including kernel declares the scene bindings.
+// CPU twin: src/cpu/texture.rs. The including kernel declares the scene bindings and includes
+// shape.glsl, pattern.glsl and image_texture.glsl.
 
 vec3 texture_lookup_point(Texture t, Hit h) {
     vec3 p = t.space == TEXTURE_SPACE_UV ? vec3(h.uv, 0.0) : h.p;
@@ -12,24 +13,71 @@ vec3 texture_lookup_point(Texture t, Hit h) {
 vec3 texture_eval(uint index, Hit h) {
     Texture t = textures[index];
     vec3 p = texture_lookup_point(t, h);
-    switch (t.kind) {
-    case TEXTURE_CONSTANT:
-        return load3(t.value);
-    case TEXTURE_CHECKER: {
-        ivec3 c = ivec3(floor(p));
-        return ((c.x + c.y + c.z) & 1) == 0 ? load3(t.value) : load3(t.value2);
+    vec3 c = load3(t.value);
+#ifdef VARIANT_TEXTURED
+    WHEN(t.kind == TEXTURE_IMAGE) {
+        vec4 texel = image_lookup(t.data, p.xy);
+        c = t.channel == TEXTURE_CHANNEL_RGB ? texel.rgb : vec3(texel[t.channel - 1u]);
     }
+    WHEN(t.kind == TEXTURE_PATTERN) {
+        c = color_map_eval(t.color_map, pattern_value(t.data, p));
     }
-    return vec3(0.0);  // unreachable: the host packs only known kinds
+#endif
+    // TEXTURE_CONSTANT: the value itself. The host packs only known kinds, and image and pattern
+    // textures only for the textured variant.
+    return c;
 }
 
 // A colour parameter: the constant, times the texture when it has one.
 vec3 param_color(float value[3], uint tex, Hit h) {
     vec3 v = load3(value);
-    return tex == NO_TEXTURE ? v : v * texture_eval(tex, h);
+    WHEN(tex != NO_TEXTURE) v *= texture_eval(tex, h);
+    return v;
 }
 
 // A scalar parameter: the constant, times the texture's first channel when it has one.
 float param_scalar(float value, uint tex, Hit h) {
-    return tex == NO_TEXTURE ? value : value * texture_eval(tex, h).x;
+    float v = value;
+    WHEN(tex != NO_TEXTURE) v *= texture_eval(tex, h).x;
+    return v;
+}
+
+// Hit h moved by (du, dv) in uv along the surface's tangent plane.
+Hit hit_moved(Hit h, float du, float dv) {
+    Hit m = h;
+    m.uv += vec2(du, dv);
+    m.p += du * h.dpdu + dv * h.dpdv;
+    return m;
+}
+
+// The shading normal of a bump map: the surface displaced along ng by `strength` times the
+// first channel of texture `tex` (scene units), its slopes from central differences along u and
+// v (pbrt-v4's BumpMap). Works alike for uv-space images and 3D patterns, since moving in uv
+// moves the point along dpdu and dpdv.
+vec3 bump_normal(uint tex, float strength, Hit h) {
+    float d = BUMP_DELTA;
+    float dhdu = strength * (texture_eval(tex, hit_moved(h, d, 0.0)).x - texture_eval(tex, hit_moved(h, -d, 0.0)).x) / (2.0 * d);
+    float dhdv = strength * (texture_eval(tex, hit_moved(h, 0.0, d)).x - texture_eval(tex, hit_moved(h, 0.0, -d)).x) / (2.0 * d);
+    vec3 n = cross(h.dpdu + dhdu * h.ng, h.dpdv + dhdv * h.ng);
+    float len = length(n);
+    if (!(len > 0.0)) return h.ns;
+    n /= len;
+    return dot(n, h.ng) < 0.0 ? -n : n;
+}
+
+// The shading normal of a tangent-space normal map (OpenGL convention: red along +u, green
+// along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
+vec3 normal_map_normal(uint tex, Hit h) {
+    vec3 c = 2.0 * texture_eval(tex, h) - 1.0;
+    vec3 t = h.dpdu - h.ng * dot(h.ng, h.dpdu);
+    if (!(length(t) > 0.0)) return h.ns;
+    t = normalize(t);
+    vec3 b = cross(h.ng, t);
+    if (dot(b, h.dpdv) < 0.0) b = -b;
+    vec3 n = t * c.x + b * c.y + h.ng * c.z;
+    float len = length(n);
+    if (!(len > 0.0)) return h.ns;
+    n /= len;
+    // A normal map never turns the shading normal below the surface.
+    return dot(n, h.ng) <= 0.0 ? h.ns : n;
 }

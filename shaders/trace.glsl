@@ -16,9 +16,12 @@ float ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
 // Stochastic transparency: the ray passes through primitive i at distance t with probability
 // 1 - opacity. Camera rays, shadow rays and photons all decide here.
 bool passes_through(uint i, vec3 o, vec3 d, float t) {
-    if ((primitives[i].kind & PRIMITIVE_FLAG_ALPHA) == 0u) return false;
-    Hit h = shape_hit(i, o, d, t);
-    return hash_ray(o, d, i) >= material_opacity(materials[h.material], h);
+    bool passes = false;
+    WHEN((primitives[i].kind & PRIMITIVE_FLAG_ALPHA) != 0u) {
+        Hit h = shape_hit(i, o, d, t);
+        passes = hash_ray(o, d, i) >= material_opacity(materials[h.material], h);
+    }
+    return passes;
 }
 
 // Closest hit in [0, t_max): returns the primitive index or NO_LIGHT (as "none") and sets t_hit.
@@ -43,11 +46,14 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out float t_hit) {
         }
         for (uint i = n.first; i < n.first + count; i++) {
             float t = shape_intersect(i, o, d, 0.0, t_hit);
+#ifdef VARIANT_TEXTURED
             // A ray that passes a transparent point may meet the shape again behind it (a
-            // sphere's far side); a shape has at most two surfaces along a ray.
+            // sphere's far side); a shape has at most two surfaces along a ray. Alpha lives in
+            // the textured variant only: its test in the innermost loop slows lavapipe down.
             for (uint k = 0u; k < 2u && t < t_hit && passes_through(i, o, d, t); k++) {
                 t = shape_intersect(i, o, d, t, t_hit);
             }
+#endif
             if (t < t_hit) {
                 t_hit = t;
                 hit = i;

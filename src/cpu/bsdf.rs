@@ -10,7 +10,7 @@ use glam::{Vec2, Vec3};
 
 use super::sampling::{cosine_direction, reflect};
 use super::shape::Hit;
-use super::texture::{param_color, param_scalar};
+use super::texture::{bump_normal, normal_map_normal, param_color, param_scalar};
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Material;
@@ -53,7 +53,15 @@ pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
         alpha: Vec2::from(m.roughness),
         ior: m.ior,
         ng: h.ng,
-        ns: h.ns,
+        // Bump and normal maps change the shading normal only: the geometric normal keeps
+        // deciding sides, offsets and leaks.
+        ns: if m.bump_tex != NO_TEXTURE {
+            bump_normal(s, m.bump_tex, m.bump_strength, h)
+        } else if m.normal_tex != NO_TEXTURE {
+            normal_map_normal(s, m.normal_tex, h)
+        } else {
+            h.ns
+        },
     }
 }
 
@@ -83,8 +91,14 @@ pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
 
 // Diffuse: Lambertian reflection of albedo color0 on both sides.
 
+/// Reflection needs `wi` on `wo`'s side of the shading normal and of the geometric one, so a
+/// bumped normal cannot let light in from under the surface.
+pub fn same_side(b: &Bsdf, wo: Vec3, wi: Vec3) -> bool {
+    wi.dot(facing(b, wo)) > 0.0 && wi.dot(b.ng) * wo.dot(b.ng) > 0.0
+}
+
 pub fn diffuse_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
-    if wi.dot(facing(b, wo)) > 0.0 {
+    if same_side(b, wo, wi) {
         b.color0 * (1.0 / PI)
     } else {
         Vec3::ZERO
@@ -92,12 +106,19 @@ pub fn diffuse_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
 }
 
 pub fn diffuse_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
-    wi.dot(facing(b, wo)).max(0.0) * (1.0 / PI)
+    if same_side(b, wo, wi) {
+        wi.dot(facing(b, wo)) * (1.0 / PI)
+    } else {
+        0.0
+    }
 }
 
 pub fn diffuse_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let n = facing(b, wo);
     let wi = cosine_direction(n, [u[1], u[2]]);
+    if !same_side(b, wo, wi) {
+        return BsdfSample::default();
+    }
     // Cosine sampling cancels the cosine and the 1/pi: the weight is the albedo.
     BsdfSample {
         wi,

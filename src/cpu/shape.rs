@@ -18,7 +18,8 @@ pub struct Hit {
     /// Unit shading normal, on the side of `ng`.
     pub ns: Vec3,
     pub uv: Vec2,
-    /// Surface derivatives along u and v (never zero: a frame from `ng` when uv is degenerate).
+    /// Surface derivatives along u and v (never zero: a frame from `ng` when uv is degenerate;
+    /// uv, dpdu and dpdv are zero unless the primitive has `PRIMITIVE_FLAG_UV`).
     pub dpdu: Vec3,
     pub dpdv: Vec3,
     pub prim: u32,
@@ -135,32 +136,38 @@ pub fn sphere_rotation(s: &SceneView, p: &Primitive) -> Mat3 {
 pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
     let p = &s.primitives[i as usize];
     let mut h = Hit { p: x, prim: i, material: p.material, ..Default::default() };
+    let wants_uv = p.kind & PRIMITIVE_FLAG_UV != 0;
     match p.kind & PRIMITIVE_KIND_MASK {
         PRIMITIVE_SPHERE => {
             let (c, r) = (Vec3::from(p.p0), p.p1[0]);
             h.ng = (x - c).normalize();
-            let object_from_world = sphere_rotation(s, p);
-            let (uv, dwdu, dwdv) = sphere_uv(object_from_world * h.ng);
-            h.uv = uv;
-            h.dpdu = r * (object_from_world.transpose() * dwdu);
-            h.dpdv = r * (object_from_world.transpose() * dwdv);
-            if h.dpdu.cross(h.dpdv).length() == 0.0 {
-                (h.dpdu, h.dpdv) = onb(h.ng);
+            if wants_uv {
+                let object_from_world = sphere_rotation(s, p);
+                let (uv, dwdu, dwdv) = sphere_uv(object_from_world * h.ng);
+                h.uv = uv;
+                h.dpdu = r * (object_from_world.transpose() * dwdu);
+                h.dpdv = r * (object_from_world.transpose() * dwdv);
+                if h.dpdu.cross(h.dpdv).length() == 0.0 {
+                    (h.dpdu, h.dpdv) = onb(h.ng);
+                }
             }
         }
         _ => {
             let (p0, p1, p2) = (Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2));
-            let (e1, e2, v) = (p1 - p0, p2 - p0, x - p0);
+            let (e1, e2) = (p1 - p0, p2 - p0);
             h.ng = e1.cross(e2).normalize();
-            // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
-            let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-            let (d20, d21) = (v.dot(e1), v.dot(e2));
-            let inv = 1.0 / (d00 * d11 - d01 * d01);
-            let b1 = (d11 * d20 - d01 * d21) * inv;
-            let b2 = (d00 * d21 - d01 * d20) * inv;
-            let uv = triangle_uvs(s, p);
-            h.uv = (1.0 - b1 - b2) * uv[0] + b1 * uv[1] + b2 * uv[2];
-            (h.dpdu, h.dpdv) = triangle_derivatives([p0, p1, p2], uv, h.ng);
+            if wants_uv {
+                // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
+                let v = x - p0;
+                let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+                let (d20, d21) = (v.dot(e1), v.dot(e2));
+                let inv = 1.0 / (d00 * d11 - d01 * d01);
+                let b1 = (d11 * d20 - d01 * d21) * inv;
+                let b2 = (d00 * d21 - d01 * d20) * inv;
+                let uv = triangle_uvs(s, p);
+                h.uv = (1.0 - b1 - b2) * uv[0] + b1 * uv[1] + b2 * uv[2];
+                (h.dpdu, h.dpdv) = triangle_derivatives([p0, p1, p2], uv, h.ng);
+            }
         }
     }
     h.ns = h.ng;

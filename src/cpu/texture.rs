@@ -3,6 +3,8 @@
 
 use glam::{Vec3, Vec4};
 
+use super::image_texture::image_lookup;
+use super::pattern::{color_map_eval, pattern_value};
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
@@ -21,14 +23,15 @@ pub fn texture_eval(s: &SceneView, index: u32, h: &Hit) -> Vec3 {
     let p = texture_lookup_point(t, h);
     match t.kind {
         TEXTURE_CONSTANT => Vec3::from(t.value),
-        TEXTURE_CHECKER => {
-            let c = p.floor().as_ivec3();
-            if (c.x.wrapping_add(c.y).wrapping_add(c.z) & 1) == 0 {
-                Vec3::from(t.value)
+        TEXTURE_IMAGE => {
+            let c = image_lookup(s.texture_data, t.data, p.truncate());
+            if t.channel == TEXTURE_CHANNEL_RGB {
+                c.truncate()
             } else {
-                Vec3::from(t.value2)
+                Vec3::splat(c[t.channel as usize - 1])
             }
         }
+        TEXTURE_PATTERN => color_map_eval(s.texture_data, t.color_map, pattern_value(s.texture_data, t.data, p)),
         _ => Vec3::ZERO, // unreachable: the host packs only known kinds
     }
 }
@@ -49,5 +52,62 @@ pub fn param_scalar(s: &SceneView, value: f32, tex: u32, h: &Hit) -> f32 {
         value
     } else {
         value * texture_eval(s, tex, h).x
+    }
+}
+
+/// Hit `h` moved by (du, dv) in uv along the surface's tangent plane.
+pub fn hit_moved(h: &Hit, du: f32, dv: f32) -> Hit {
+    let mut m = *h;
+    m.uv += glam::Vec2::new(du, dv);
+    m.p += du * h.dpdu + dv * h.dpdv;
+    m
+}
+
+/// The shading normal of a bump map: the surface displaced along `ng` by `strength` times the
+/// first channel of texture `tex` (scene units), its slopes from central differences along u and
+/// v (pbrt-v4's `BumpMap`). Works alike for uv-space images and 3D patterns, since moving in uv
+/// moves the point along dpdu and dpdv.
+pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
+    let d = BUMP_DELTA;
+    let height = |du: f32, dv: f32| texture_eval(s, tex, &hit_moved(h, du, dv)).x;
+    let dhdu = strength * (height(d, 0.0) - height(-d, 0.0)) / (2.0 * d);
+    let dhdv = strength * (height(0.0, d) - height(0.0, -d)) / (2.0 * d);
+    let n = (h.dpdu + dhdu * h.ng).cross(h.dpdv + dhdv * h.ng);
+    let len = n.length();
+    if !(len > 0.0) {
+        return h.ns;
+    }
+    let n = n / len;
+    if n.dot(h.ng) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// The shading normal of a tangent-space normal map (OpenGL convention: red along +u, green
+/// along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
+pub fn normal_map_normal(s: &SceneView, tex: u32, h: &Hit) -> Vec3 {
+    let c = 2.0 * texture_eval(s, tex, h) - 1.0;
+    let t = h.dpdu - h.ng * h.ng.dot(h.dpdu);
+    if !(t.length() > 0.0) {
+        return h.ns;
+    }
+    let t = t.normalize();
+    let mut b = h.ng.cross(t);
+    if b.dot(h.dpdv) < 0.0 {
+        b = -b;
+    }
+    let n = t * c.x + b * c.y + h.ng * c.z;
+    let len = n.length();
+    if !(len > 0.0) {
+        return h.ns;
+    }
+    let n = n / len;
+    // A normal map never turns the shading normal below the surface.
+    if n.dot(h.ng) <= 0.0 {
+        h.ns
+    } else {
+        n
     }
 }

@@ -51,6 +51,9 @@ shared_constants! {
     /// Flag of `Primitive::kind`: the material has an opacity below 1 somewhere (alpha), so every
     /// ray that meets the primitive decides by the opacity whether it passes.
     PRIMITIVE_FLAG_ALPHA: u32 = 0x100;
+    /// Flag of `Primitive::kind`: its material reads uv or the surface derivatives (textures, bump
+    /// and normal maps); without it a hit record leaves them at zero, which saves their cost.
+    PRIMITIVE_FLAG_UV: u32 = 0x200;
 
     /// A light that is an emitting primitive (`Light::primitive`), sampled uniformly by area.
     LIGHT_AREA: u32 = 0;
@@ -59,9 +62,21 @@ shared_constants! {
 
     /// A texture of one colour, `Texture::value`.
     TEXTURE_CONSTANT: u32 = 0;
-    /// Two colours in a 3D checker of unit cells in texture space (POV-Ray's `checker`):
-    /// `value` where floor(x) + floor(y) + floor(z) is even, `value2` where it is odd.
-    TEXTURE_CHECKER: u32 = 1;
+    /// An image: `Texture::data` is its block (shaders/image_texture.glsl), looked up at (x, y)
+    /// of the texture-space point with bilinear filtering.
+    TEXTURE_IMAGE: u32 = 1;
+    /// A procedural 3D pattern (shaders/pattern.glsl): `data` is its block, `color_map` the map
+    /// from its value in [0, 1] to a colour.
+    TEXTURE_PATTERN: u32 = 2;
+    /// `Texture::channel`: the colour as it is, or one channel of an image spread to grey.
+    TEXTURE_CHANNEL_RGB: u32 = 0;
+    TEXTURE_CHANNEL_R: u32 = 1;
+    TEXTURE_CHANNEL_G: u32 = 2;
+    TEXTURE_CHANNEL_B: u32 = 3;
+    TEXTURE_CHANNEL_A: u32 = 4;
+    /// Step in u and v of the central differences that give a bump map's slope (pbrt's default
+    /// when a ray has no differentials).
+    BUMP_DELTA: f32 = 0.0005;
     /// Where a texture looks itself up: (u, v, 0) of the surface, or the hit point in world space.
     TEXTURE_SPACE_UV: u32 = 0;
     TEXTURE_SPACE_WORLD: u32 = 1;

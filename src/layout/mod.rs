@@ -90,7 +90,7 @@ gpu_structs! {
         pub _pad: u32,
     }
 
-    /// A texture, 96 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*`) at a point
+    /// A texture, 80 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*`) at a point
     /// moved by `transform` (the rows of a 3x4 affine map, texture space from lookup space). `data`
     /// and `color_map` are word offsets into the texture data buffer (or `NO_DATA`).
     pub struct Texture {
@@ -99,9 +99,8 @@ gpu_structs! {
         pub data: u32,
         pub color_map: u32,
         pub value: [f32; 3],
-        pub _pad0: u32,
-        pub value2: [f32; 3],
-        pub _pad1: u32,
+        /// `TEXTURE_CHANNEL_*`: which channel of the colour the texture gives.
+        pub channel: u32,
         pub transform: [f32; 12],
     }
 
@@ -217,6 +216,6 @@ const _: () = assert!(size_of::<Photon>() == 20);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
-const _: () = assert!(size_of::<Texture>() == 96);
+const _: () = assert!(size_of::<Texture>() == 80);
 const _: () = assert!(size_of::<Light>() == 48);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));

@@ -45,6 +45,8 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
+    /// The scene needs the `textured` variant of the scene kernels.
+    pub textured: bool,
 }
 
 impl DeviceScene {
@@ -63,7 +65,20 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
+            textured: buffers.textured,
         })
+    }
+
+    /// The kernel `name` in the variant this scene needs.
+    pub fn kernel(
+        &self,
+        ctx: &GpuContext,
+        name: &str,
+        own_bindings: u32,
+        push_bytes: usize,
+    ) -> Result<Kernel, GpuError> {
+        let variant = if self.textured { format!("{name}_textured") } else { name.to_string() };
+        kernel(ctx, &variant, SCENE_BINDINGS + own_bindings, push_bytes)
     }
 
     /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
@@ -123,7 +138,7 @@ impl DeviceMaps {
 
 /// Traces one emission pass; returns the photon buffer holding `count` photons.
 fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool) -> Result<(Buffer, u32), GpuError> {
-    let emit_kernel = kernel(ctx, "emit_photons", SCENE_BINDINGS + 3, size_of::<EmitParams>())?;
+    let emit_kernel = scene.kernel(ctx, "emit_photons", 3, size_of::<EmitParams>())?;
     let photon_bytes = size_of::<Photon>() as u64;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let name = if caustic { "caustic_photons" } else { "global_photons" };
@@ -270,7 +285,7 @@ pub fn render_gpu(
     // Upload
     let t = Instant::now();
     let scene = DeviceScene::upload(ctx, buffers, photons)?;
-    let render_kernel = kernel(ctx, "render", SCENE_BINDINGS + 6, size_of::<DispatchRange>())?;
+    let render_kernel = scene.kernel(ctx, "render", 6, size_of::<DispatchRange>())?;
     stages.push(("upload".to_string(), t.elapsed()));
 
     // Trace photons and build the grids

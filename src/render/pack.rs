@@ -7,7 +7,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use crate::layout::constants::*;
 use crate::layout::{Material, Primitive, Texture};
 use crate::scene::{
-    ColorParam, Geometry, MaterialDesc, MaterialKind, ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+    Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene, Shape, TextureDesc,
+    TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -22,6 +23,9 @@ pub struct PackedScene {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
+    /// True when some texture is an image or a pattern, or some material has alpha: the kernels
+    /// then need their `textured` variant.
+    pub textured: bool,
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
@@ -32,12 +36,14 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         packed.textures.push(t);
     }
     for shape in &scene.shapes {
-        let alpha = scene.materials[shape.material as usize].has_alpha();
-        let p = pack_shape(shape, alpha, &mut packed.shape_data);
+        let material = &scene.materials[shape.material as usize];
+        let p = pack_shape(shape, material.has_alpha(), material.uses_uv(), &mut packed.shape_data);
         packed.primitives.push(p);
         packed.bounds.push(shape.geometry.bounds());
         packed.areas.push(shape.geometry.area());
     }
+    packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
+        || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.
     if packed.textures.is_empty() {
         packed.textures.push(Texture::default());
@@ -81,6 +87,11 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
         ior: 1.0,
         ..Default::default()
     };
+    match m.normal {
+        NormalMod::None => {}
+        NormalMod::Bump { texture, strength } => (out.bump_tex, out.bump_strength) = (texture, strength),
+        NormalMod::NormalMap { texture } => out.normal_tex = texture,
+    }
     match &m.kind {
         MaterialKind::Diffuse { reflectance } => {
             out.kind = MATERIAL_DIFFUSE;
@@ -112,7 +123,7 @@ fn affine_rows(a: &Affine3A) -> [f32; 12] {
 }
 
 /// The only place that turns a texture into the GPU's `Texture` (and its data block, if any).
-pub fn pack_texture(t: &TextureDesc, _data: &mut Vec<u32>) -> Texture {
+pub fn pack_texture(t: &TextureDesc, data: &mut Vec<u32>) -> Texture {
     let mut out = Texture {
         space: match t.space {
             TextureSpace::Uv => TEXTURE_SPACE_UV,
@@ -129,18 +140,29 @@ pub fn pack_texture(t: &TextureDesc, _data: &mut Vec<u32>) -> Texture {
             out.kind = TEXTURE_CONSTANT;
             out.value = (*c).into();
         }
-        TextureKind::Checker([a, b]) => {
-            out.kind = TEXTURE_CHECKER;
-            out.value = (*a).into();
-            out.value2 = (*b).into();
+        TextureKind::Image { image, wrap, channel } => {
+            out.kind = TEXTURE_IMAGE;
+            out.data = image.pack(*wrap, data);
+            out.channel = match channel {
+                Channel::Rgb => TEXTURE_CHANNEL_RGB,
+                Channel::R => TEXTURE_CHANNEL_R,
+                Channel::G => TEXTURE_CHANNEL_G,
+                Channel::B => TEXTURE_CHANNEL_B,
+                Channel::Alpha => TEXTURE_CHANNEL_A,
+            };
+        }
+        TextureKind::Pattern { pattern, color_map } => {
+            out.kind = TEXTURE_PATTERN;
+            out.data = pattern.pack(data);
+            out.color_map = color_map.pack(data);
         }
     }
     out
 }
 
 /// The only place that turns a shape into the GPU's `Primitive` (and its shape data, if any).
-pub fn pack_shape(shape: &Shape, alpha: bool, shape_data: &mut Vec<f32>) -> Primitive {
-    let flags = if alpha { PRIMITIVE_FLAG_ALPHA } else { 0 };
+pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Vec<f32>) -> Primitive {
+    let flags = if alpha { PRIMITIVE_FLAG_ALPHA } else { 0 } | if uses_uv { PRIMITIVE_FLAG_UV } else { 0 };
     let mut p = Primitive { material: shape.material, light: NO_LIGHT, data: NO_DATA, ..Default::default() };
     match &shape.geometry {
         Geometry::Triangle(t) => {

@@ -20,6 +20,8 @@ pub struct SceneBuffers {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
+    /// True when the scene has image or pattern textures (see `PackedScene::textured`).
+    pub textured: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
@@ -143,6 +145,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textures: packed.textures,
         texture_data: packed.texture_data,
         shape_data: packed.shape_data,
+        textured: packed.textured,
         bounding_radius,
         surface_area,
     })

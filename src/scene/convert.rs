@@ -9,8 +9,12 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def};
-use super::material::{ColorParam, MaterialDesc, MaterialKind, ScalarParam, TextureDesc, TextureKind, TextureSpace};
+use super::image_texture::{load_image_texture, ColorSpace, Wrap};
+use super::material::{
+    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, ScalarParam, TextureDesc, TextureKind, TextureSpace,
+};
 use super::mesh::{load_obj_triangles, ObjError};
+use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{Camera, Geometry, PhotonSettings, PointLight, RenderSettings, Scene, Shape, Sphere, Triangle};
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -25,7 +29,7 @@ const DEFAULT_REFLECTANCE: f32 = 0.8;
 const DEFAULT_IOR: f32 = 1.5;
 
 const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric"];
-const TEXTURE_TYPES: &[&str] = &["constant", "checker"];
+const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern"];
 const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
 const LIGHT_TYPES: &[&str] = &["area", "point"];
@@ -397,6 +401,8 @@ impl Builder<'_> {
             ("ior", span_of(&m.ior)),
             ("emission", span_of(&m.emission)),
             ("opacity", span_of(&m.opacity)),
+            ("bump", span_of(&m.bump)),
+            ("normal_map", span_of(&m.normal_map)),
         ];
         let emission = match &m.emission {
             Some(e) => self.color_param(e, &object, "emission", false)?,
@@ -406,14 +412,41 @@ impl Builder<'_> {
             Some(o) => self.scalar_param(o, &object, "opacity", 0.0, 1.0, "a fraction in [0, 1] (1 is opaque)")?,
             None => ScalarParam::constant(1.0),
         };
+        let normal = match (&m.bump, &m.normal_map) {
+            (Some(_), Some(n)) => {
+                return Err(self.invalid(
+                    &n.span(),
+                    &object,
+                    "a material takes `bump` or `normal_map`, not both".to_string(),
+                ));
+            }
+            (Some(b), None) => {
+                let what = "a texture, e.g. `bump = { texture = \"dents\", scale = 0.02 }` (scale in scene units)";
+                let ParamDef::Texture { .. } = b.get_ref() else {
+                    return Err(self.invalid(&b.span(), &object, format!("`bump` must be {what}")));
+                };
+                let p = self.scalar_param(b, &object, "bump", -f32::MAX, f32::MAX, "a finite number")?;
+                NormalMod::Bump { texture: p.texture.expect("a texture parameter"), strength: p.value }
+            }
+            (None, Some(n)) => match n.get_ref() {
+                ParamDef::Texture { name, scale: None } => {
+                    NormalMod::NormalMap { texture: self.texture_id(name, &n.span(), &object)? }
+                }
+                _ => {
+                    return Err(self.invalid(
+                        &n.span(),
+                        &object,
+                        "`normal_map` must be a texture, e.g. `normal_map = { texture = \"tiles_normal\" }`"
+                            .to_string(),
+                    ));
+                }
+            },
+            (None, None) => NormalMod::None,
+        };
+        let common = ["type", "emission", "opacity", "bump", "normal_map"];
         let kind = match kind {
             "diffuse" => {
-                self.only_fields(
-                    &object,
-                    "a diffuse material",
-                    &present,
-                    &["type", "reflectance", "emission", "opacity"],
-                )?;
+                self.only_fields(&object, "a diffuse material", &present, &[&common[..], &["reflectance"]].concat())?;
                 let reflectance = match &m.reflectance {
                     Some(r) => self.color_param(r, &object, "reflectance", true)?,
                     None => ColorParam::constant(Vec3::splat(DEFAULT_REFLECTANCE)),
@@ -421,7 +454,7 @@ impl Builder<'_> {
                 MaterialKind::Diffuse { reflectance }
             }
             "mirror" => {
-                self.only_fields(&object, "a mirror material", &present, &["type", "tint", "emission", "opacity"])?;
+                self.only_fields(&object, "a mirror material", &present, &[&common[..], &["tint"]].concat())?;
                 let tint = match &m.tint {
                     Some(t) => self.color_param(t, &object, "tint", true)?,
                     None => ColorParam::constant(Vec3::ONE),
@@ -429,7 +462,7 @@ impl Builder<'_> {
                 MaterialKind::Mirror { tint }
             }
             _ => {
-                self.only_fields(&object, "a dielectric material", &present, &["type", "ior", "emission", "opacity"])?;
+                self.only_fields(&object, "a dielectric material", &present, &[&common[..], &["ior"]].concat())?;
                 let ior = match &m.ior {
                     Some(ior_def) => {
                         let ior = self.number(ior_def, &object, "ior")?;
@@ -447,7 +480,7 @@ impl Builder<'_> {
                 MaterialKind::Dielectric { ior }
             }
         };
-        self.add_material(name, MaterialDesc { kind, emission, opacity });
+        self.add_material(name, MaterialDesc { kind, emission, opacity, normal });
         Ok(())
     }
 
@@ -526,37 +559,38 @@ impl Builder<'_> {
         let name = key.get_ref().clone();
         let object = format!("texture \"{name}\"");
         let t = def.get_ref();
-        let kind_def = self.require(&t.r#type, &def.span(), &object, "type", "type = \"checker\"")?;
+        let table = def.span();
+        let kind_def = self.require(&t.r#type, &table, &object, "type", "type = \"pattern\"")?;
         let kind = self.one_of(kind_def, &object, "type", TEXTURE_TYPES)?;
-        let present = [
+        let mut present = vec![
             ("type", span_of(&t.r#type)),
-            ("color", span_of(&t.color)),
-            ("colors", span_of(&t.colors)),
             ("space", span_of(&t.space)),
             ("transform", span_of(&t.transform)),
+            ("color", span_of(&t.color)),
+            ("file", span_of(&t.file)),
+            ("color_space", span_of(&t.color_space)),
+            ("wrap", span_of(&t.wrap)),
+            ("channel", span_of(&t.channel)),
+            ("colors", span_of(&t.colors)),
         ];
-        let kind = match kind {
+        let pattern_fields = t.pattern_fields();
+        present.extend(pattern_fields.iter().map(|(name, value)| (*name, Some(value.span()))));
+        let (kind, default_space) = match kind {
             "constant" => {
                 self.only_fields(&object, "a constant texture", &present, &["type", "color"])?;
-                let color = self.require(&t.color, &def.span(), &object, "color", "color = [0.8, 0.2, 0.2]")?;
-                TextureKind::Constant(Vec3::from(self.color(color, &object, "color", false)?))
+                let color = self.require(&t.color, &table, &object, "color", "color = [0.8, 0.2, 0.2]")?;
+                (TextureKind::Constant(Vec3::from(self.color(color, &object, "color", false)?)), TextureSpace::Uv)
+            }
+            "image" => {
+                let fields = ["type", "space", "transform", "file", "color_space", "wrap", "channel"];
+                self.only_fields(&object, "an image texture", &present, &fields)?;
+                (self.image_texture(t, &table, &object)?, TextureSpace::Uv)
             }
             _ => {
-                self.only_fields(&object, "a checker texture", &present, &["type", "colors", "space", "transform"])?;
-                let example = "colors = [[0.9, 0.9, 0.9], [0.1, 0.1, 0.1]]";
-                let colors = self.require(&t.colors, &def.span(), &object, "colors", example)?;
-                if colors.get_ref().len() != 2 {
-                    return Err(self.invalid(
-                        &colors.span(),
-                        &object,
-                        format!("`colors` has {} colours; a checker takes 2, e.g. `{example}`", colors.get_ref().len()),
-                    ));
-                }
-                let mut pair = [Vec3::ZERO; 2];
-                for (out, c) in pair.iter_mut().zip(colors.get_ref()) {
-                    *out = Vec3::from(self.color(&Spanned::new(colors.span(), *c), &object, "colors", false)?);
-                }
-                TextureKind::Checker(pair)
+                let mut fields = vec!["type", "space", "transform", "colors"];
+                fields.extend_from_slice(PATTERN_FIELDS);
+                self.only_fields(&object, "a pattern texture", &present, &fields)?;
+                (self.pattern_texture(t, &table, &object)?, TextureSpace::World)
             }
         };
         let space = match &t.space {
@@ -564,13 +598,90 @@ impl Builder<'_> {
                 "uv" => TextureSpace::Uv,
                 _ => TextureSpace::World,
             },
-            None => TextureSpace::Uv,
+            None => default_space,
         };
+        if matches!(kind, TextureKind::Image { .. }) && space != TextureSpace::Uv {
+            let span = span_of(&t.space).unwrap_or(table.clone());
+            return Err(self.invalid(&span, &object, "an image is looked up in `space = \"uv\"`".to_string()));
+        }
         let lookup_from_texture = self.transform(t.transform.as_ref(), &object)?.unwrap_or(Affine3A::IDENTITY);
         self.textures.push(TextureDesc { kind, space, lookup_from_texture });
         self.texture_names.push(name);
         self.texture_used.push(false);
         Ok(())
+    }
+
+    fn image_texture(&self, t: &TextureDef, table: &Range<usize>, object: &str) -> Result<TextureKind> {
+        let file = self.require(&t.file, table, object, "file", "file = \"textures/wood.png\"")?;
+        let color_space = match &t.color_space {
+            Some(cs) => match self.one_of(cs, object, "color_space", &["srgb", "linear"])? {
+                "srgb" => ColorSpace::Srgb,
+                _ => ColorSpace::Linear,
+            },
+            None => ColorSpace::Srgb,
+        };
+        let wrap = match &t.wrap {
+            Some(w) => match self.one_of(w, object, "wrap", &["repeat", "clamp", "mirror"])? {
+                "repeat" => Wrap::Repeat,
+                "clamp" => Wrap::Clamp,
+                _ => Wrap::Mirror,
+            },
+            None => Wrap::Repeat,
+        };
+        let channel = match &t.channel {
+            Some(c) => match self.one_of(c, object, "channel", &["rgb", "r", "g", "b", "alpha"])? {
+                "rgb" => Channel::Rgb,
+                "r" => Channel::R,
+                "g" => Channel::G,
+                "b" => Channel::B,
+                _ => Channel::Alpha,
+            },
+            None => Channel::Rgb,
+        };
+        let base = self.src.path.parent().unwrap_or(Path::new(""));
+        let image = load_image_texture(&base.join(file.get_ref()), color_space)
+            .map_err(|e| self.invalid(&file.span(), object, e.to_string()))?;
+        Ok(TextureKind::Image { image: std::sync::Arc::new(image), wrap, channel })
+    }
+
+    fn pattern_texture(&self, t: &TextureDef, table: &Range<usize>, object: &str) -> Result<TextureKind> {
+        let fields = t.pattern_fields();
+        let mut pattern_table = toml::Table::new();
+        for (name, value) in &fields {
+            pattern_table.insert(name.to_string(), value.get_ref().clone());
+        }
+        // The message names the field; point at it when it is one of the table's, else at the table.
+        let at = |message: &str| -> Range<usize> {
+            fields
+                .iter()
+                .find(|(name, _)| message.contains(&format!("`{name}`")))
+                .map(|(_, v)| v.span())
+                .unwrap_or(table.clone())
+        };
+        let (pattern, color_map) = parse_pattern(&toml::Value::Table(pattern_table))
+            .map_err(|message| self.invalid(&at(&message), object, message))?;
+        let color_map = match (&t.colors, color_map) {
+            (Some(colors), None) => {
+                let list = colors.get_ref();
+                let mut entries = Vec::new();
+                for (i, c) in list.iter().enumerate() {
+                    let c = self.color(&Spanned::new(colors.span(), *c), object, "colors", false)?;
+                    let position = if list.len() > 1 { i as f32 / (list.len() - 1) as f32 } else { 0.0 };
+                    entries.push((position, c));
+                }
+                ColorMap::new(entries).map_err(|message| self.invalid(&colors.span(), object, message))?
+            }
+            (Some(colors), Some(_)) => {
+                return Err(self.invalid(
+                    &colors.span(),
+                    object,
+                    "give either `colors` (evenly spaced) or `color_map`, not both".to_string(),
+                ));
+            }
+            (None, Some(map)) => map,
+            (None, None) => pattern.kind.default_color_map(),
+        };
+        Ok(TextureKind::Pattern { pattern, color_map })
     }
 
     fn add_material(&mut self, name: String, material: MaterialDesc) -> u32 {

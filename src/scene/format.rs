@@ -66,16 +66,73 @@ pub(crate) struct MaterialDef {
     pub ior: Option<Spanned<f64>>,
     pub emission: Option<Spanned<ParamDef>>,
     pub opacity: Option<Spanned<ParamDef>>,
+    pub bump: Option<Spanned<ParamDef>>,
+    pub normal_map: Option<Spanned<ParamDef>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct TextureDef {
     pub r#type: Option<Spanned<String>>,
-    pub color: Option<Spanned<Vec3Def>>,
-    pub colors: Option<Spanned<Vec<Vec3Def>>>,
     pub space: Option<Spanned<String>>,
     pub transform: Option<Spanned<TransformDef>>,
+    // constant
+    pub color: Option<Spanned<Vec3Def>>,
+    // image
+    pub file: Option<Spanned<String>>,
+    pub color_space: Option<Spanned<String>>,
+    pub wrap: Option<Spanned<String>>,
+    pub channel: Option<Spanned<String>>,
+    // pattern: read by `pattern::parse_pattern`, which names bad fields itself
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub pattern: Option<Spanned<toml::Value>>,
+    pub turbulence: Option<Spanned<toml::Value>>,
+    pub octaves: Option<Spanned<toml::Value>>,
+    pub omega: Option<Spanned<toml::Value>>,
+    pub lambda: Option<Spanned<toml::Value>>,
+    pub frequency: Option<Spanned<toml::Value>>,
+    pub phase: Option<Spanned<toml::Value>>,
+    pub wave: Option<Spanned<toml::Value>>,
+    pub exponent: Option<Spanned<toml::Value>>,
+    pub direction: Option<Spanned<toml::Value>>,
+    pub orientation: Option<Spanned<toml::Value>>,
+    pub brick_size: Option<Spanned<toml::Value>>,
+    pub mortar: Option<Spanned<toml::Value>>,
+    pub metric: Option<Spanned<toml::Value>>,
+    pub form: Option<Spanned<toml::Value>>,
+    pub offset: Option<Spanned<toml::Value>>,
+    pub solid: Option<Spanned<toml::Value>>,
+    pub agate_turb: Option<Spanned<toml::Value>>,
+    pub color_map: Option<Spanned<toml::Value>>,
+}
+
+impl TextureDef {
+    /// The pattern fields as written, as `pattern::parse_pattern` reads them, and the span of the
+    /// first one (or none).
+    pub fn pattern_fields(&self) -> Vec<(&'static str, &Spanned<toml::Value>)> {
+        let fields = [
+            ("pattern", &self.pattern),
+            ("turbulence", &self.turbulence),
+            ("octaves", &self.octaves),
+            ("omega", &self.omega),
+            ("lambda", &self.lambda),
+            ("frequency", &self.frequency),
+            ("phase", &self.phase),
+            ("wave", &self.wave),
+            ("exponent", &self.exponent),
+            ("direction", &self.direction),
+            ("orientation", &self.orientation),
+            ("brick_size", &self.brick_size),
+            ("mortar", &self.mortar),
+            ("metric", &self.metric),
+            ("form", &self.form),
+            ("offset", &self.offset),
+            ("solid", &self.solid),
+            ("agate_turb", &self.agate_turb),
+            ("color_map", &self.color_map),
+        ];
+        fields.into_iter().filter_map(|(name, value)| value.as_ref().map(|v| (name, v))).collect()
+    }
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,7 +1,12 @@
 //! Materials and textures as the scene describes them, independent of any renderer: each kind is
 //! a variant with its parameters. `render::pack` turns them into the GPU's structs.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec3};
+
+use super::image_texture::{ImageTexture, Wrap};
+use super::pattern::{ColorMap, PatternDesc};
 
 /// A colour parameter: a constant, optionally times a texture (index into `Scene::textures`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -40,24 +45,59 @@ pub enum MaterialKind {
     Dielectric { ior: f32 },
 }
 
-/// A material: its kind, the radiance it emits from its front side and its opacity.
+/// A material: its kind, the radiance it emits from its front side, its opacity and what bends
+/// its shading normal.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialDesc {
     pub kind: MaterialKind,
     pub emission: ColorParam,
     /// In [0, 1]; below 1 the surface lets that fraction of rays through (stochastic alpha).
     pub opacity: ScalarParam,
+    pub normal: NormalMod,
+}
+
+/// How a material bends its shading normal (never its geometric normal).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum NormalMod {
+    None,
+    /// The surface displaced along its normal by `strength` (scene units) times the texture's
+    /// first channel.
+    Bump {
+        texture: u32,
+        strength: f32,
+    },
+    /// A tangent-space normal map (OpenGL convention).
+    NormalMap {
+        texture: u32,
+    },
 }
 
 impl MaterialDesc {
     /// A material of `kind` that emits nothing and is opaque.
     pub fn new(kind: MaterialKind) -> MaterialDesc {
-        MaterialDesc { kind, emission: ColorParam::constant(Vec3::ZERO), opacity: ScalarParam::constant(1.0) }
+        MaterialDesc {
+            kind,
+            emission: ColorParam::constant(Vec3::ZERO),
+            opacity: ScalarParam::constant(1.0),
+            normal: NormalMod::None,
+        }
     }
 
     /// True when some point of the material emits.
     pub fn emits(&self) -> bool {
         self.emission.value.max_element() > 0.0
+    }
+
+    /// True when the material reads the surface's uv or derivatives: a texture anywhere, or a
+    /// bump or normal map (3D patterns move the lookup point along the derivatives for bumps).
+    pub fn uses_uv(&self) -> bool {
+        let textured = |p: &ColorParam| p.texture.is_some();
+        let kind_textured = match &self.kind {
+            MaterialKind::Diffuse { reflectance } => textured(reflectance),
+            MaterialKind::Mirror { tint } => textured(tint),
+            MaterialKind::Dielectric { .. } => false,
+        };
+        kind_textured || textured(&self.emission) || self.opacity.texture.is_some() || self.normal != NormalMod::None
     }
 
     /// True when some point of the material may let rays through.
@@ -75,12 +115,31 @@ pub enum TextureSpace {
     World,
 }
 
+/// Which channel of an image a texture gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Channel {
+    Rgb,
+    R,
+    G,
+    B,
+    Alpha,
+}
+
 /// What a texture computes at its lookup point, by kind.
 #[derive(Clone, Debug, PartialEq)]
 pub enum TextureKind {
     Constant(Vec3),
-    /// POV-Ray's `checker`: the first colour where floor(x) + floor(y) + floor(z) is even.
-    Checker([Vec3; 2]),
+    /// An image looked up at (x, y) of the texture-space point, bilinear.
+    Image {
+        image: Arc<ImageTexture>,
+        wrap: Wrap,
+        channel: Channel,
+    },
+    /// A POV-Ray pattern and the map from its value to a colour.
+    Pattern {
+        pattern: PatternDesc,
+        color_map: ColorMap,
+    },
 }
 
 /// A texture: its kind, where it is looked up, and where it is placed there (`lookup_from_texture`:

@@ -22,7 +22,9 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec2, Vec3};
 
 pub use error::SceneError;
-pub use material::{ColorParam, MaterialDesc, MaterialKind, ScalarParam, TextureDesc, TextureKind, TextureSpace};
+pub use material::{
+    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, ScalarParam, TextureDesc, TextureKind, TextureSpace,
+};
 pub use photons::PhotonSettings;
 
 /// A loaded, validated scene. Right-handed, y up, lengths in scene units.
