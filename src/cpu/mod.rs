@@ -5,6 +5,7 @@ pub mod emit_photons;
 pub mod gather;
 pub mod grid;
 pub mod grid_build;
+pub mod microfacet;
 pub mod photon;
 pub mod render;
 pub mod rng;
