@@ -1200,6 +1200,8 @@ mod tests {
                 let b = dielectric_eval(wi, wo, alpha, 1.5) / (n(wi) * n(wi));
                 if a.abs().max(b.abs()) > 1e-6 {
                     nonzero += 1;
+                }
+                if a.abs().max(b.abs()) > 1e-3 {
                     worst = worst.max((a - b).abs() / a.abs().max(b.abs()));
                 }
                 // 1e-3 relative: h comes from wo + eta wi or from wi + wo / eta. The absolute 1e-6
@@ -1211,7 +1213,9 @@ mod tests {
                 );
             }
         }
-        println!("transmission reciprocity: {nonzero} non-zero pairs, worst relative difference {worst:.1e}");
+        println!(
+            "transmission reciprocity: {nonzero} non-zero pairs, worst relative difference {worst:.1e} (f > 1e-3)"
+        );
         assert!(nonzero > 5000);
     }
 
