@@ -8,6 +8,7 @@ pub mod grid;
 pub mod grid_build;
 pub mod image_texture;
 pub mod light;
+pub mod microfacet;
 pub mod pattern;
 pub mod photon;
 pub mod render;

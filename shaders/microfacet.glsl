@@ -1,0 +1,369 @@
+// Microfacet BSDFs as pure functions: GGX with visible-normal sampling, rough conductor, rough
+// dielectric, plastic (diffuse base under a dielectric coat) and Lambert.
+// CPU twin: src/cpu/microfacet.rs, which states the contracts; this file only points to them.
+//
+// Everything works in a local shading frame: z is the surface normal (the front side), and both
+// directions point AWAY from the surface: `wo` toward the previous vertex (the viewer), `wi`
+// toward the next one (the light, or the sampled direction). `alpha` = (alpha_x, alpha_y) are the
+// GGX widths themselves, not a roughness to square. eval returns f without the cosine; pdf is
+// per unit solid angle of wi. A sampler returns false (and zeros) when it fails; otherwise wi,
+// weight = f |wi.z| / pdf, pdf (0 for a delta lobe) and the lobe (MF_REFLECTION or
+// MF_TRANSMISSION). Nothing here reads a buffer or a global, and every private name starts with
+// mf_ or MF_, so any kernel can include this file.
+
+const float MF_PI = 3.14159265358979;
+const uint MF_REFLECTION = 0u;
+const uint MF_TRANSMISSION = 1u;
+
+// ---------------------------------------------------------------------------------------------
+// Helpers
+
+// pbrt-v4 (TrowbridgeReitzDistribution): below 1e-3 a lobe is a delta; a rough one has both
+// widths at least 1e-4, so that D stays finite in float.
+bool mf_is_smooth(vec2 alpha) { return max(alpha.x, alpha.y) < 1e-3; }
+vec2 mf_rough_alpha(vec2 alpha) { return max(alpha, vec2(1e-4)); }
+
+// Unpolarised Fresnel reflectance from index eta_i into eta_t at cos_i >= 0; 1 under total
+// internal reflection. Sets cos_t. Same formula as fresnel_dielectric in shading.glsl.
+float mf_fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t) {
+    float eta = eta_i / eta_t;
+    float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
+    if (sin2_t >= 1.0) { cos_t = 0.0; return 1.0; }
+    cos_t = sqrt(1.0 - sin2_t);
+    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
+    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// Exact unpolarised reflectance of a conductor eta + i k, one channel (Mitsuba 3 fresnel.h).
+float mf_fresnel_conductor1(float c, float eta, float k) {
+    c = clamp(abs(c), 0.0, 1.0);
+    float c2 = c * c;
+    float s2 = 1.0 - c2;
+    float t0 = eta * eta - k * k - s2;
+    float a2pb2 = sqrt(t0 * t0 + 4.0 * eta * eta * k * k);
+    float a = sqrt(max(0.0, 0.5 * (a2pb2 + t0)));
+    float t1 = a2pb2 + c2;
+    float t2 = 2.0 * c * a;
+    float rs = (t1 - t2) / (t1 + t2);
+    float t3 = c2 * a2pb2 + s2 * s2;
+    float t4 = t2 * s2;
+    float rp = rs * (t3 - t4) / (t3 + t4);
+    return 0.5 * (rs + rp);
+}
+
+// Hemispherical-cosine average of mf_fresnel_dielectric(c, 1, n) for n > 1, in closed form
+// (see the twin for its accuracy, and for the chord used below n = 1.05).
+float mf_fresnel_diffuse_closed(float n) {
+    float n2 = n * n;
+    float n4 = n2 * n2;
+    float a = n2 + 1.0;
+    float b = n4 - 1.0;
+    return 0.5 + (n - 1.0) * (3.0 * n + 1.0) / (6.0 * (n + 1.0) * (n + 1.0))
+        + n2 * (n2 - 1.0) * (n2 - 1.0) / (a * a * a) * log((n - 1.0) / (n + 1.0))
+        - 2.0 * n * n2 * (n2 + 2.0 * n - 1.0) / (a * b)
+        + 8.0 * n4 * (n4 + 1.0) / (a * b * b) * log(n);
+}
+
+float mf_fresnel_diffuse(float n) {
+    if (n < 1.05) return max(n - 1.0, 0.0) * 20.0 * mf_fresnel_diffuse_closed(1.05);
+    return mf_fresnel_diffuse_closed(n);
+}
+
+vec3 mf_mirror(vec3 w) { return vec3(-w.x, -w.y, w.z); }
+
+// Cosine-distributed direction about +z (Malley's method).
+vec3 mf_cosine_direction(vec2 u) {
+    float r = sqrt(u.x);
+    float phi = 2.0 * MF_PI * u.y;
+    return vec3(r * cos(phi), r * sin(phi), sqrt(max(0.0, 1.0 - u.x)));
+}
+
+// Probability with which plastic_sample picks the coat: its Fresnel reflectance at wo against
+// the base's mean albedo times the coat's transmittance.
+float mf_plastic_coat_probability(vec3 wo, float ior, vec3 diffuse) {
+    float cos_t;
+    float f = mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t);
+    float d = (1.0 - f) * (diffuse.x + diffuse.y + diffuse.z) / 3.0;
+    return d > 0.0 ? f / (f + d) : 1.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// GGX (Trowbridge-Reitz) distribution
+
+float ggx_d(vec3 m, vec2 alpha) {
+    if (m.z <= 0.0) return 0.0;
+    float x = m.x / alpha.x;
+    float y = m.y / alpha.y;
+    float t = x * x + y * y + m.z * m.z;
+    return 1.0 / (MF_PI * alpha.x * alpha.y * t * t);
+}
+
+float ggx_g1(vec3 v, vec3 m, vec2 alpha) {
+    if (dot(v, m) * v.z <= 0.0) return 0.0;
+    float a2tan2 = (alpha.x * alpha.x * v.x * v.x + alpha.y * alpha.y * v.y * v.y) / (v.z * v.z);
+    return 2.0 / (1.0 + sqrt(1.0 + a2tan2));
+}
+
+vec3 ggx_sample_visible(vec3 wo, vec2 alpha, vec2 u) {
+    // Heitz 2018, "Sampling the GGX Distribution of Visible Normals" (JCGT 7(4)), listing 1.
+    vec3 v = wo.z < 0.0 ? -wo : wo;
+    vec3 vh = normalize(vec3(alpha.x * v.x, alpha.y * v.y, v.z));
+    float lensq = vh.x * vh.x + vh.y * vh.y;
+    vec3 t1 = lensq > 0.0 ? vec3(-vh.y, vh.x, 0.0) / sqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 t2 = cross(vh, t1);
+    float r = sqrt(u.x);
+    float phi = 2.0 * MF_PI * u.y;
+    float p1 = r * cos(phi);
+    float p2 = r * sin(phi);
+    float s = 0.5 * (1.0 + vh.z);
+    p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * p2;
+    vec3 nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3(alpha.x * nh.x, alpha.y * nh.y, max(0.0, nh.z)));
+}
+
+float ggx_pdf_visible(vec3 wo, vec3 m, vec2 alpha) {
+    if (wo.z == 0.0) return 0.0;
+    return ggx_g1(wo, m, alpha) * abs(dot(wo, m)) * ggx_d(m, alpha) / abs(wo.z);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rough conductor
+
+vec3 fresnel_conductor(float cos_theta, vec3 eta, vec3 k) {
+    return vec3(mf_fresnel_conductor1(cos_theta, eta.x, k.x), mf_fresnel_conductor1(cos_theta, eta.y, k.y),
+                mf_fresnel_conductor1(cos_theta, eta.z, k.z));
+}
+
+vec3 conductor_eval(vec3 wo, vec3 wi, vec2 alpha, vec3 eta, vec3 k) {
+    if (wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha)) return vec3(0.0);
+    alpha = mf_rough_alpha(alpha);
+    vec3 h = normalize(wo + wi);
+    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    return fresnel_conductor(dot(wo, h), eta, k) * (dg / (4.0 * wo.z * wi.z));
+}
+
+float conductor_pdf(vec3 wo, vec3 wi, vec2 alpha) {
+    if (wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha)) return 0.0;
+    alpha = mf_rough_alpha(alpha);
+    vec3 h = normalize(wo + wi);
+    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    return pdf_m > 0.0 ? pdf_m / (4.0 * dot(wo, h)) : 0.0;
+}
+
+bool conductor_sample(vec3 wo, vec2 alpha, vec3 eta, vec3 k, vec2 u, out vec3 wi, out vec3 weight, out float pdf,
+                      out uint lobe) {
+    wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
+    if (wo.z <= 0.0) return false;
+    if (mf_is_smooth(alpha)) {
+        wi = mf_mirror(wo);
+        weight = fresnel_conductor(wo.z, eta, k);
+        return true;
+    }
+    alpha = mf_rough_alpha(alpha);
+    vec3 m = ggx_sample_visible(wo, alpha, u);
+    float dot_o = dot(wo, m);
+    vec3 w = 2.0 * dot_o * m - wo;
+    if (dot_o <= 0.0 || w.z <= 0.0) return false;
+    float p = ggx_pdf_visible(wo, m, alpha) / (4.0 * dot_o);
+    if (!(p > 0.0)) return false;
+    // f |cos| / pdf = F D G1(wo) G1(wi) / (4 wo.z) / (G1(wo) D / (4 wo.z)) = F G1(wi).
+    wi = w;
+    weight = fresnel_conductor(dot_o, eta, k) * ggx_g1(w, m, alpha);
+    pdf = p;
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rough dielectric (Walter et al. 2007), radiance form: see dielectric_eval in the twin
+
+float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, float ior) {
+    float cos_o = wo.z;
+    float cos_i = wi.z;
+    if (cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha)) return 0.0;
+    alpha = mf_rough_alpha(alpha);
+    float eta_o = cos_o > 0.0 ? 1.0 : ior;
+    float eta_t = cos_o > 0.0 ? ior : 1.0;
+    float eta = eta_t / eta_o;
+    bool reflection = cos_o * cos_i > 0.0;
+    vec3 h = reflection ? wo + wi : wo + eta * wi;
+    float len2 = dot(h, h);
+    if (len2 == 0.0) return 0.0;
+    h = h / sqrt(len2);
+    if (h.z < 0.0) h = -h;
+    float dot_o = dot(wo, h);
+    float dot_i = dot(wi, h);
+    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    if (dg == 0.0) return 0.0;
+    float cos_t;
+    float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
+    if (reflection) return f * dg / (4.0 * abs(cos_o * cos_i));
+    float denom = dot_o + eta * dot_i;
+    return (1.0 - f) * dg * abs(dot_o * dot_i) / (abs(cos_o * cos_i) * denom * denom);
+}
+
+float dielectric_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior) {
+    float cos_o = wo.z;
+    float cos_i = wi.z;
+    if (cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha)) return 0.0;
+    alpha = mf_rough_alpha(alpha);
+    float eta_o = cos_o > 0.0 ? 1.0 : ior;
+    float eta_t = cos_o > 0.0 ? ior : 1.0;
+    float eta = eta_t / eta_o;
+    bool reflection = cos_o * cos_i > 0.0;
+    vec3 h = reflection ? wo + wi : wo + eta * wi;
+    float len2 = dot(h, h);
+    if (len2 == 0.0) return 0.0;
+    h = h / sqrt(len2);
+    if (h.z < 0.0) h = -h;
+    float dot_o = dot(wo, h);
+    float dot_i = dot(wi, h);
+    // The sampler only makes pairs that see the front of their microfacet.
+    if (dot_o * cos_o <= 0.0 || dot_i * cos_i <= 0.0) return 0.0;
+    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    float cos_t;
+    float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
+    if (reflection) return f * pdf_m / (4.0 * abs(dot_o));
+    float denom = dot_o + eta * dot_i;
+    return (1.0 - f) * pdf_m * eta * eta * abs(dot_i) / (denom * denom);
+}
+
+bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out vec3 weight, out float pdf,
+                       out uint lobe) {
+    wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
+    float cos_o = wo.z;
+    if (cos_o == 0.0) return false;
+    float eta_o = cos_o > 0.0 ? 1.0 : ior;
+    float eta_t = cos_o > 0.0 ? ior : 1.0;
+    float eta = eta_t / eta_o;
+    float side = cos_o > 0.0 ? 1.0 : -1.0;
+    if (mf_is_smooth(alpha)) {
+        float cos_t;
+        float f = mf_fresnel_dielectric(abs(cos_o), eta_o, eta_t, cos_t);
+        if (u.x < f) {
+            wi = mf_mirror(wo);
+            weight = vec3(1.0);
+            return true;
+        }
+        // Snell: the tangential part shrinks by 1/eta, the ray crosses to the other side.
+        wi = vec3(-wo.x / eta, -wo.y / eta, -side * cos_t);
+        weight = vec3(1.0 / (eta * eta));
+        lobe = MF_TRANSMISSION;
+        return true;
+    }
+    alpha = mf_rough_alpha(alpha);
+    vec3 m = ggx_sample_visible(wo, alpha, u.yz);
+    float dot_o = dot(wo, m);
+    if (dot_o * side <= 0.0) return false;
+    float pdf_m = ggx_pdf_visible(wo, m, alpha);
+    float cos_t;
+    float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
+    if (u.x < f) {
+        vec3 w = 2.0 * dot_o * m - wo;
+        if (w.z * side <= 0.0) return false;
+        float p = f * pdf_m / (4.0 * abs(dot_o));
+        if (!(p > 0.0)) return false;
+        wi = w;
+        // f |cos| / pdf = G1(wi): F, D and G1(wo) cancel.
+        weight = vec3(ggx_g1(w, m, alpha));
+        pdf = p;
+        return true;
+    }
+    // Refraction through m turned to wo's side (pbrt-v3 Refract with relative index 1/eta).
+    vec3 w = -wo / eta + (abs(dot_o) / eta - cos_t) * (side * m);
+    if (w.z * side >= 0.0) return false;
+    float dot_i = dot(w, m);
+    float denom = dot_o + eta * dot_i;
+    float p = (1.0 - f) * pdf_m * eta * eta * abs(dot_i) / (denom * denom);
+    if (!(p > 0.0)) return false;
+    wi = w;
+    // f |cos| / pdf = G1(wi) / eta^2: (1 - F), D, G1(wo) and the Jacobian cancel.
+    weight = vec3(ggx_g1(w, m, alpha) / (eta * eta));
+    pdf = p;
+    lobe = MF_TRANSMISSION;
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plastic: GGX dielectric coat over a Lambertian base (Mitsuba 3 plastic / roughplastic, linear,
+// with the changes listed at plastic_eval in the twin)
+
+vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
+    float cos_t;
+    float f_o = mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t);
+    float f_i = mf_fresnel_dielectric(wi.z, 1.0, ior, cos_t);
+    vec3 f = diffuse * ((1.0 - f_o) * (1.0 - f_i) / (MF_PI * (1.0 - mf_fresnel_diffuse(ior))));
+    if (mf_is_smooth(alpha)) return f;
+    alpha = mf_rough_alpha(alpha);
+    vec3 h = normalize(wo + wi);
+    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    // The coat's Fresnel is clamped by F(wo.z) and F(wi.z) so that it reflects no more than
+    // F(wo.z): see plastic_eval in the twin.
+    float f_h = mf_fresnel_dielectric(abs(dot(wo, h)), 1.0, ior, cos_t);
+    return f + vec3(min(f_h, min(f_o, f_i)) * dg / (4.0 * wo.z * wi.z));
+}
+
+float plastic_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
+    float p_coat = mf_plastic_coat_probability(wo, ior, diffuse);
+    float pdf = (1.0 - p_coat) * wi.z / MF_PI;
+    if (mf_is_smooth(alpha)) return pdf;
+    alpha = mf_rough_alpha(alpha);
+    vec3 h = normalize(wo + wi);
+    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    if (pdf_m > 0.0) pdf += p_coat * pdf_m / (4.0 * dot(wo, h));
+    return pdf;
+}
+
+bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, vec3 u, out vec3 wi, out vec3 weight, out float pdf,
+                    out uint lobe) {
+    wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
+    if (wo.z <= 0.0) return false;
+    float p_coat = mf_plastic_coat_probability(wo, ior, diffuse);
+    vec3 w;
+    if (u.x < p_coat) {
+        if (mf_is_smooth(alpha)) {
+            float cos_t;
+            wi = mf_mirror(wo);
+            weight = vec3(mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t) / p_coat);
+            return true;
+        }
+        vec3 m = ggx_sample_visible(wo, mf_rough_alpha(alpha), u.yz);
+        w = 2.0 * dot(wo, m) * m - wo;
+    } else {
+        w = mf_cosine_direction(u.yz);
+    }
+    if (w.z <= 0.0) return false;
+    // Both lobes count in pdf and weight (one-sample MIS over the two lobes).
+    float p = plastic_pdf(wo, w, alpha, ior, diffuse);
+    if (!(p > 0.0)) return false;
+    wi = w;
+    weight = plastic_eval(wo, w, alpha, ior, diffuse) * (w.z / p);
+    pdf = p;
+    return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Lambert
+
+vec3 lambert_eval(vec3 wo, vec3 wi, vec3 albedo) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
+    return albedo / MF_PI;
+}
+
+float lambert_pdf(vec3 wo, vec3 wi) {
+    if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
+    return wi.z / MF_PI;
+}
+
+bool lambert_sample(vec3 wo, vec3 albedo, vec2 u, out vec3 wi, out vec3 weight, out float pdf, out uint lobe) {
+    wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
+    if (wo.z <= 0.0) return false;
+    vec3 w = mf_cosine_direction(u);
+    if (w.z <= 0.0) return false;
+    wi = w;
+    weight = albedo;
+    pdf = w.z / MF_PI;
+    return true;
+}
