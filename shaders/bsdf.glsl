@@ -3,7 +3,7 @@
 // toward the next one. The path loops never ask which kind they hold, only what its lobes are:
 // BSDF_ESTIMATE lobes end a camera path (light sampling, photon lookups, final gather) and store
 // photons; BSDF_PATH lobes are followed. The including kernel declares the scene bindings and
-// includes sampling.glsl, shape.glsl and texture.glsl.
+// includes sampling.glsl, shape.glsl, texture.glsl and microfacet.glsl.
 
 // A material evaluated at one surface point: its textures looked up, its frame set.
 struct Bsdf {
@@ -12,8 +12,10 @@ struct Bsdf {
     vec3 color1;
     vec2 alpha;
     float ior;
-    vec3 ng;    // geometric normal (a triangle's winding side, a sphere's outside)
-    vec3 ns;    // shading normal, on the side of ng
+    vec3 ng;          // geometric normal (a triangle's winding side, a sphere's outside)
+    vec3 ns;          // shading normal, on the side of ng
+    vec3 ts;          // direction of the first GGX width (dpdu; zero without uv: any tangent)
+    bool glossy_path; // glossy lobes are path lobes (GGX width <= frame.glossy_threshold)
 };
 
 struct BsdfSample {
@@ -28,15 +30,25 @@ vec3 material_emission(Material m, Hit h) {
     return param_color(m.emission, m.emission_tex, h);
 }
 
+// A hash of the point in [0, 1): a mix chooses by it, so camera rays and photons see the same
+// material at the same point.
+float hash_point(vec3 p, uint level) { return hash_ray(p, vec3(0.0), level); }
+
 Bsdf material_bsdf(Material m, Hit h) {
+    for (uint level = 0u; level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX; level++) {
+        m = materials[hash_point(h.p, level) < param_scalar(m.weight, m.weight_tex, h) ? m.mix_b : m.mix_a];
+    }
     Bsdf b;
     b.kind = m.kind;
     b.color0 = param_color(m.color0, m.color0_tex, h);
     b.color1 = param_color(m.color1, m.color1_tex, h);
     b.alpha = vec2(m.roughness[0], m.roughness[1]);
+    WHEN(m.roughness_tex != NO_TEXTURE) b.alpha *= texture_eval(m.roughness_tex, h).x;
     b.ior = m.ior;
     b.ng = h.ng;
     b.ns = h.ns;
+    b.ts = h.dpdu;
+    b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;
     // Bump and normal maps change the shading normal only: the geometric normal keeps deciding
     // sides, offsets and leaks.
     WHEN(m.normal_tex != NO_TEXTURE) b.ns = normal_map_normal(m.normal_tex, h);
@@ -93,7 +105,7 @@ BsdfSample mirror_sample(Bsdf b, vec3 wo) {
 
 // Dielectric: smooth interface of index ior inside (the side opposite ng), reflection or
 // refraction chosen with the Fresnel probability against u.x, weight 1.
-BsdfSample dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
+BsdfSample smooth_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
     vec3 d = -wo;
     bool front = dot(b.ng, d) < 0.0;
     vec3 nf = front ? b.ng : -b.ng;
@@ -109,6 +121,137 @@ BsdfSample dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
     return BsdfSample(wi, vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_TRANSMISSION | BSDF_PATH);
 }
 
+// The local frame of b around normal n (x along ts where it is known).
+void bsdf_frame(Bsdf b, vec3 n, out vec3 t, out vec3 bt) {
+    vec3 tt = b.ts - n * dot(n, b.ts);
+    if (dot(tt, tt) > 1e-12) {
+        t = normalize(tt);
+        bt = cross(n, t);
+    } else {
+        onb(n, t, bt);
+    }
+}
+
+vec3 to_local(vec3 v, vec3 t, vec3 bt, vec3 n) { return vec3(dot(v, t), dot(v, bt), dot(v, n)); }
+vec3 to_world(vec3 v, vec3 t, vec3 bt, vec3 n) { return v.x * t + v.y * bt + v.z * n; }
+
+bool is_smooth(Bsdf b) { return mf_is_smooth(b.alpha); }
+
+// A microfacet sample as a BsdfSample: `glossy` lobe flags unless its pdf is 0 (a delta).
+BsdfSample microfacet_result(bool ok, vec3 wi_local, vec3 weight, float pdf, uint lobe, vec3 t, vec3 bt, vec3 n, uint rough) {
+    if (!ok) return no_sample();
+    uint side = lobe == MF_TRANSMISSION ? BSDF_TRANSMISSION : BSDF_REFLECTION;
+    uint kind = pdf == 0.0 ? BSDF_SPECULAR | BSDF_PATH : rough;
+    return BsdfSample(to_world(wi_local, t, bt, n), weight, pdf, kind | side);
+}
+
+// The flags of a glossy lobe: followed by paths up to the threshold, an estimate lobe above it.
+uint glossy_flags(Bsdf b) { return BSDF_GLOSSY | (b.glossy_path ? BSDF_PATH : BSDF_ESTIMATE); }
+
+// Conductor: GGX metal with complex index color0 + i color1, reflecting on both sides.
+
+vec3 conductor_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
+    if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    return conductor_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.color0, b.color1);
+}
+
+float conductor_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return 0.0;
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    return conductor_pdf(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha);
+}
+
+BsdfSample conductor_bsdf_sample(Bsdf b, vec3 wo, vec3 u) {
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    vec3 wi, weight;
+    float pdf;
+    uint lobe;
+    bool ok = conductor_sample(to_local(wo, t, bt, n), b.alpha, b.color0, b.color1, u.yz, wi, weight, pdf, lobe);
+    BsdfSample s = microfacet_result(ok, wi, weight, pdf, lobe, t, bt, n, glossy_flags(b));
+    if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
+    return s;
+}
+
+// Rough dielectric: GGX reflection and refraction (the smooth one is smooth_dielectric_sample).
+
+float rough_dielectric_eval(Bsdf b, vec3 wo, vec3 wi) {
+    vec3 t, bt;
+    bsdf_frame(b, b.ns, t, bt);
+    return dielectric_eval(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, b.ior);
+}
+
+float rough_dielectric_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    vec3 t, bt;
+    bsdf_frame(b, b.ns, t, bt);
+    return dielectric_pdf(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, b.ior);
+}
+
+BsdfSample rough_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
+    vec3 t, bt;
+    bsdf_frame(b, b.ns, t, bt);
+    vec3 wi, weight;
+    float pdf;
+    uint lobe;
+    bool ok = dielectric_sample(to_local(wo, t, bt, b.ns), b.alpha, b.ior, u, wi, weight, pdf, lobe);
+    BsdfSample s = microfacet_result(ok, wi, weight * b.color0, pdf, lobe, t, bt, b.ns, glossy_flags(b));
+    return s;
+}
+
+// Plastic: diffuse base color0 under a dielectric coat of index ior, on both sides. A smooth
+// coat is a path lobe (a delta); a rough coat is read with the base as an estimate lobe.
+
+vec3 plastic_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
+    if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    return plastic_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.ior, b.color0);
+}
+
+float plastic_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return 0.0;
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    vec3 wo_l = to_local(wo, t, bt, n), wi_l = to_local(wi, t, bt, n);
+    // With a smooth coat the estimate lobe is the base alone, sampled by cosine.
+    return is_smooth(b) ? max(0.0, wi_l.z) * (1.0 / PI) : plastic_pdf(wo_l, wi_l, b.alpha, b.ior, b.color0);
+}
+
+float plastic_coat_probability(Bsdf b, vec3 wo) {
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    return mf_plastic_coat_probability(to_local(wo, t, bt, n), b.ior, b.color0);
+}
+
+BsdfSample plastic_bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
+    vec3 n = facing(b, wo), t, bt;
+    bsdf_frame(b, n, t, bt);
+    vec3 wo_l = to_local(wo, t, bt, n);
+    if (is_smooth(b) && lobes == LOBES_PATH) {
+        // The coat alone: a mirror weighted by its Fresnel reflectance.
+        float cos_t;
+        float f = mf_fresnel_dielectric(wo_l.z, 1.0, b.ior, cos_t);
+        return BsdfSample(reflect(-wo, n), vec3(f), 0.0, BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH);
+    }
+    if (is_smooth(b) && lobes == LOBES_ESTIMATE) {
+        // The base alone, by cosine: weight f cos / pdf = pi f.
+        vec3 wi_l = mf_cosine_direction(u.yz);
+        vec3 f = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0);
+        BsdfSample s = BsdfSample(to_world(wi_l, t, bt, n), PI * f, wi_l.z * (1.0 / PI), BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE);
+        return dot(s.wi, b.ng) * dot(wo, b.ng) > 0.0 && wi_l.z > 0.0 ? s : no_sample();
+    }
+    vec3 wi, weight;
+    float pdf;
+    uint lobe;
+    bool ok = plastic_sample(wo_l, b.alpha, b.ior, b.color0, u, wi, weight, pdf, lobe);
+    BsdfSample s = microfacet_result(ok, wi, weight, pdf, lobe, t, bt, n, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
+    if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
+    return s;
+}
+
 // The lobes of b (BSDF_* flags); 0 for a black surface, which ends paths and stores nothing.
 uint bsdf_flags(Bsdf b) {
     switch (b.kind) {
@@ -117,7 +260,12 @@ uint bsdf_flags(Bsdf b) {
     case MATERIAL_MIRROR:
         return BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH;
     case MATERIAL_DIELECTRIC:
-        return BSDF_SPECULAR | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_PATH;
+        return BSDF_REFLECTION | BSDF_TRANSMISSION | (is_smooth(b) ? BSDF_SPECULAR | BSDF_PATH : glossy_flags(b));
+    case MATERIAL_CONDUCTOR:
+        return BSDF_REFLECTION | (is_smooth(b) ? BSDF_SPECULAR | BSDF_PATH : glossy_flags(b));
+    case MATERIAL_PLASTIC:
+        return BSDF_REFLECTION | (is_smooth(b) ? BSDF_SPECULAR | BSDF_PATH : BSDF_GLOSSY | BSDF_ESTIMATE)
+            | (b.color0 == vec3(0.0) ? 0u : BSDF_DIFFUSE | BSDF_ESTIMATE);
     }
     return 0u;  // unreachable: the host packs only known kinds (tested)
 }
@@ -125,12 +273,11 @@ uint bsdf_flags(Bsdf b) {
 // Probability that a camera path seen from wo follows the path lobes rather than ending in the
 // estimate lobes: 0 for a surface with estimate lobes alone, 1 for path lobes alone.
 float bsdf_path_probability(Bsdf b, vec3 wo) {
-    switch (b.kind) {
-    case MATERIAL_MIRROR:
-    case MATERIAL_DIELECTRIC:
-        return 1.0;
-    }
-    return 0.0;
+    uint flags = bsdf_flags(b);
+    if ((flags & BSDF_PATH) == 0u) return 0.0;
+    if ((flags & BSDF_ESTIMATE) == 0u) return 1.0;
+    // Both: a smooth plastic; its coat is chosen as the plastic's own sampling chooses it.
+    return plastic_coat_probability(b, wo);
 }
 
 // True when the estimate lobes have the same value for every wi on wo's side (Lambertian), so a
@@ -139,18 +286,32 @@ bool bsdf_estimate_is_constant(Bsdf b) { return b.kind == MATERIAL_DIFFUSE; }
 
 // f(wo, wi) of the estimate lobes, without the cosine; 0 for path lobes (they are sampled).
 vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
+    if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) return vec3(0.0);
     switch (b.kind) {
     case MATERIAL_DIFFUSE:
         return diffuse_eval(b, wo, wi);
+    case MATERIAL_DIELECTRIC:
+        return b.color0 * rough_dielectric_eval(b, wo, wi);
+    case MATERIAL_CONDUCTOR:
+        return conductor_bsdf_eval(b, wo, wi);
+    case MATERIAL_PLASTIC:
+        return plastic_bsdf_eval(b, wo, wi);
     }
     return vec3(0.0);
 }
 
 // Solid-angle pdf of bsdf_sample(.., LOBES_ESTIMATE) choosing wi.
 float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
+    if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) return 0.0;
     switch (b.kind) {
     case MATERIAL_DIFFUSE:
         return diffuse_pdf(b, wo, wi);
+    case MATERIAL_DIELECTRIC:
+        return rough_dielectric_pdf(b, wo, wi);
+    case MATERIAL_CONDUCTOR:
+        return conductor_bsdf_pdf(b, wo, wi);
+    case MATERIAL_PLASTIC:
+        return plastic_bsdf_pdf(b, wo, wi);
     }
     return 0.0;
 }
@@ -166,7 +327,11 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
     case MATERIAL_MIRROR:
         return mirror_sample(b, wo);
     case MATERIAL_DIELECTRIC:
-        return dielectric_sample(b, wo, u);
+        return is_smooth(b) ? smooth_dielectric_sample(b, wo, u) : rough_dielectric_sample(b, wo, u);
+    case MATERIAL_CONDUCTOR:
+        return conductor_bsdf_sample(b, wo, u);
+    case MATERIAL_PLASTIC:
+        return plastic_bsdf_sample(b, wo, u, lobes);
     }
     return no_sample();
 }

@@ -80,7 +80,7 @@ struct FrameParams {
     float total_light_power;
     uint photon_mapping;
     uint gather_rays;
-    uint _pad;
+    float glossy_threshold;
 };
 
 struct DispatchRange {

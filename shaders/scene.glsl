@@ -14,6 +14,7 @@ const float INF = 1.0 / 0.0;
 #include "image_texture.glsl"
 #endif
 #include "texture.glsl"
+#include "microfacet.glsl"
 #include "bsdf.glsl"
 #include "trace.glsl"
 #include "light.glsl"

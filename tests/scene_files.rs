@@ -62,7 +62,7 @@ fn cornell_caustics_has_6_quads_and_2_spheres() {
     let spheres: Vec<_> = scene.spheres().collect();
     assert_eq!(spheres.len(), 2);
     let kind = |s: usize| &scene.materials[spheres[s].1 as usize].kind;
-    assert_eq!(kind(0), &MaterialKind::Dielectric { ior: 1.5 });
+    assert_eq!(kind(0), &MaterialKind::Dielectric { ior: 1.5, roughness: photonix::scene::Roughness::SMOOTH });
     assert_eq!(kind(1), &MaterialKind::Mirror { tint: ColorParam::constant(Vec3::ONE) });
     assert_eq!(spheres[0].0.center, Vec3::new(370.0, 90.0, 170.0));
     assert_eq!(spheres[1].0.radius, 90.0);

@@ -8,9 +8,15 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use super::sampling::{cosine_direction, reflect};
+use super::microfacet::{
+    conductor_eval, conductor_pdf, conductor_sample, dielectric_eval, dielectric_pdf, dielectric_sample,
+    mf_cosine_direction, mf_fresnel_dielectric, mf_is_smooth, mf_plastic_coat_probability, plastic_eval, plastic_pdf,
+    plastic_sample, MfSample, MF_TRANSMISSION,
+};
+use super::rng::hash_ray;
+use super::sampling::{cosine_direction, onb, reflect};
 use super::shape::Hit;
-use super::texture::{bump_normal, normal_map_normal, param_color, param_scalar};
+use super::texture::{bump_normal, normal_map_normal, param_color, param_scalar, texture_eval};
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Material;
@@ -27,6 +33,10 @@ pub struct Bsdf {
     pub ng: Vec3,
     /// Shading normal, on the side of `ng`.
     pub ns: Vec3,
+    /// Direction of the first GGX width (dpdu; zero without uv: any tangent).
+    pub ts: Vec3,
+    /// Glossy lobes are path lobes (GGX width <= `frame.glossy_threshold`).
+    pub glossy_path: bool,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -45,12 +55,29 @@ pub fn material_emission(s: &SceneView, m: &Material, h: &Hit) -> Vec3 {
     param_color(s, m.emission, m.emission_tex, h)
 }
 
+/// A hash of the point in [0, 1): a mix chooses by it, so camera rays and photons see the same
+/// material at the same point.
+pub fn hash_point(p: Vec3, level: u32) -> f32 {
+    hash_ray(p, Vec3::ZERO, level)
+}
+
 pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
+    let mut m = m;
+    let mut level = 0;
+    while level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX {
+        let pick = if hash_point(h.p, level) < param_scalar(s, m.weight, m.weight_tex, h) { m.mix_b } else { m.mix_a };
+        m = &s.materials[pick as usize];
+        level += 1;
+    }
+    let mut alpha = Vec2::from(m.roughness);
+    if m.roughness_tex != NO_TEXTURE {
+        alpha *= texture_eval(s, m.roughness_tex, h).x;
+    }
     Bsdf {
         kind: m.kind,
         color0: param_color(s, m.color0, m.color0_tex, h),
         color1: param_color(s, m.color1, m.color1_tex, h),
-        alpha: Vec2::from(m.roughness),
+        alpha,
         ior: m.ior,
         ng: h.ng,
         // Bump and normal maps change the shading normal only: the geometric normal keeps
@@ -62,6 +89,8 @@ pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
         } else {
             h.ns
         },
+        ts: h.dpdu,
+        glossy_path: alpha.max_element() <= s.frame.glossy_threshold,
     }
 }
 
@@ -141,7 +170,7 @@ pub fn mirror_sample(b: &Bsdf, wo: Vec3) -> BsdfSample {
 
 /// Dielectric: smooth interface of index `ior` inside (the side opposite `ng`), reflection or
 /// refraction chosen with the Fresnel probability against `u[0]`, weight 1.
-pub fn dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
+pub fn smooth_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let d = -wo;
     let front = b.ng.dot(d) < 0.0;
     let nf = if front { b.ng } else { -b.ng };
@@ -165,24 +194,196 @@ pub fn dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     }
 }
 
+/// The local frame of `b` around normal `n` (x along `ts` where it is known).
+pub fn bsdf_frame(b: &Bsdf, n: Vec3) -> (Vec3, Vec3) {
+    let tt = b.ts - n * n.dot(b.ts);
+    if tt.dot(tt) > 1e-12 {
+        let t = tt.normalize();
+        (t, n.cross(t))
+    } else {
+        onb(n)
+    }
+}
+
+/// `v` in the frame (t, bt, n), and back.
+pub fn to_local(v: Vec3, (t, bt, n): (Vec3, Vec3, Vec3)) -> Vec3 {
+    Vec3::new(v.dot(t), v.dot(bt), v.dot(n))
+}
+
+pub fn to_world(v: Vec3, (t, bt, n): (Vec3, Vec3, Vec3)) -> Vec3 {
+    v.x * t + v.y * bt + v.z * n
+}
+
+fn frame_around(b: &Bsdf, n: Vec3) -> (Vec3, Vec3, Vec3) {
+    let (t, bt) = bsdf_frame(b, n);
+    (t, bt, n)
+}
+
+pub fn is_smooth(b: &Bsdf) -> bool {
+    mf_is_smooth(b.alpha)
+}
+
+/// A microfacet sample as a `BsdfSample`: `rough` lobe flags unless its pdf is 0 (a delta).
+fn microfacet_result(sample: Option<MfSample>, frame: (Vec3, Vec3, Vec3), rough: u32) -> BsdfSample {
+    let Some(m) = sample else {
+        return BsdfSample::default();
+    };
+    let side = if m.lobe == MF_TRANSMISSION { BSDF_TRANSMISSION } else { BSDF_REFLECTION };
+    let kind = if m.pdf == 0.0 { BSDF_SPECULAR | BSDF_PATH } else { rough };
+    BsdfSample { wi: to_world(m.wi, frame), weight: m.weight, pdf: m.pdf, flags: kind | side }
+}
+
+/// The flags of a glossy lobe: followed by paths up to the threshold, an estimate lobe above it.
+pub fn glossy_flags(b: &Bsdf) -> u32 {
+    BSDF_GLOSSY | if b.glossy_path { BSDF_PATH } else { BSDF_ESTIMATE }
+}
+
+fn same_geometric_side(b: &Bsdf, wo: Vec3, wi: Vec3) -> bool {
+    wi.dot(b.ng) * wo.dot(b.ng) > 0.0
+}
+
+// Conductor: GGX metal with complex index color0 + i color1, reflecting on both sides.
+
+pub fn conductor_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
+    if !same_geometric_side(b, wo, wi) {
+        return Vec3::ZERO;
+    }
+    let f = frame_around(b, facing(b, wo));
+    conductor_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.color0, b.color1)
+}
+
+pub fn conductor_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    if !same_geometric_side(b, wo, wi) {
+        return 0.0;
+    }
+    let f = frame_around(b, facing(b, wo));
+    conductor_pdf(to_local(wo, f), to_local(wi, f), b.alpha)
+}
+
+pub fn conductor_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
+    let f = frame_around(b, facing(b, wo));
+    let m = conductor_sample(to_local(wo, f), b.alpha, b.color0, b.color1, Vec2::new(u[1], u[2]));
+    let smp = microfacet_result(m, f, glossy_flags(b));
+    if !same_geometric_side(b, wo, smp.wi) {
+        return BsdfSample::default();
+    }
+    smp
+}
+
+// Rough dielectric: GGX reflection and refraction (the smooth one is `smooth_dielectric_sample`).
+
+pub fn rough_dielectric_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    let f = frame_around(b, b.ns);
+    dielectric_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior)
+}
+
+pub fn rough_dielectric_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    let f = frame_around(b, b.ns);
+    dielectric_pdf(to_local(wo, f), to_local(wi, f), b.alpha, b.ior)
+}
+
+pub fn rough_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
+    let f = frame_around(b, b.ns);
+    let m = dielectric_sample(to_local(wo, f), b.alpha, b.ior, Vec3::from(u))
+        .map(|m| MfSample { weight: m.weight * b.color0, ..m });
+    microfacet_result(m, f, glossy_flags(b))
+}
+
+// Plastic: diffuse base color0 under a dielectric coat of index ior, on both sides. A smooth
+// coat is a path lobe (a delta); a rough coat is read with the base as an estimate lobe.
+
+pub fn plastic_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
+    if !same_geometric_side(b, wo, wi) {
+        return Vec3::ZERO;
+    }
+    let f = frame_around(b, facing(b, wo));
+    plastic_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior, b.color0)
+}
+
+pub fn plastic_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    if !same_geometric_side(b, wo, wi) {
+        return 0.0;
+    }
+    let f = frame_around(b, facing(b, wo));
+    let (wo_l, wi_l) = (to_local(wo, f), to_local(wi, f));
+    // With a smooth coat the estimate lobe is the base alone, sampled by cosine.
+    if is_smooth(b) {
+        wi_l.z.max(0.0) * (1.0 / PI)
+    } else {
+        plastic_pdf(wo_l, wi_l, b.alpha, b.ior, b.color0)
+    }
+}
+
+pub fn plastic_coat_probability(b: &Bsdf, wo: Vec3) -> f32 {
+    let f = frame_around(b, facing(b, wo));
+    mf_plastic_coat_probability(to_local(wo, f), b.ior, b.color0)
+}
+
+pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfSample {
+    let n = facing(b, wo);
+    let f = frame_around(b, n);
+    let wo_l = to_local(wo, f);
+    if is_smooth(b) && lobes == LOBES_PATH {
+        // The coat alone: a mirror weighted by its Fresnel reflectance.
+        let (fr, _) = mf_fresnel_dielectric(wo_l.z, 1.0, b.ior);
+        return BsdfSample {
+            wi: reflect(-wo, n),
+            weight: Vec3::splat(fr),
+            pdf: 0.0,
+            flags: BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH,
+        };
+    }
+    if is_smooth(b) && lobes == LOBES_ESTIMATE {
+        // The base alone, by cosine: weight f cos / pdf = pi f.
+        let wi_l = mf_cosine_direction(Vec2::new(u[1], u[2]));
+        let fr = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0);
+        let smp = BsdfSample {
+            wi: to_world(wi_l, f),
+            weight: PI * fr,
+            pdf: wi_l.z * (1.0 / PI),
+            flags: BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE,
+        };
+        return if same_geometric_side(b, wo, smp.wi) && wi_l.z > 0.0 { smp } else { BsdfSample::default() };
+    }
+    let m = plastic_sample(wo_l, b.alpha, b.ior, b.color0, Vec3::from(u));
+    let smp = microfacet_result(m, f, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
+    if !same_geometric_side(b, wo, smp.wi) {
+        return BsdfSample::default();
+    }
+    smp
+}
+
 /// The lobes of `b` (`BSDF_*` flags); 0 for a black surface, which ends paths and stores nothing.
 pub fn bsdf_flags(b: &Bsdf) -> u32 {
     match b.kind {
         MATERIAL_DIFFUSE if b.color0 == Vec3::ZERO => 0,
         MATERIAL_DIFFUSE => BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE,
         MATERIAL_MIRROR => BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH,
-        MATERIAL_DIELECTRIC => BSDF_SPECULAR | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_PATH,
+        MATERIAL_DIELECTRIC => {
+            BSDF_REFLECTION | BSDF_TRANSMISSION | if is_smooth(b) { BSDF_SPECULAR | BSDF_PATH } else { glossy_flags(b) }
+        }
+        MATERIAL_CONDUCTOR => BSDF_REFLECTION | if is_smooth(b) { BSDF_SPECULAR | BSDF_PATH } else { glossy_flags(b) },
+        MATERIAL_PLASTIC => {
+            let coat = if is_smooth(b) { BSDF_SPECULAR | BSDF_PATH } else { BSDF_GLOSSY | BSDF_ESTIMATE };
+            let base = if b.color0 == Vec3::ZERO { 0 } else { BSDF_DIFFUSE | BSDF_ESTIMATE };
+            BSDF_REFLECTION | coat | base
+        }
         _ => 0, // unreachable: the host packs only known kinds (tested)
     }
 }
 
 /// Probability that a camera path seen from `wo` follows the path lobes rather than ending in the
 /// estimate lobes: 0 for a surface with estimate lobes alone, 1 for path lobes alone.
-pub fn bsdf_path_probability(b: &Bsdf, _wo: Vec3) -> f32 {
-    match b.kind {
-        MATERIAL_MIRROR | MATERIAL_DIELECTRIC => 1.0,
-        _ => 0.0,
+pub fn bsdf_path_probability(b: &Bsdf, wo: Vec3) -> f32 {
+    let flags = bsdf_flags(b);
+    if flags & BSDF_PATH == 0 {
+        return 0.0;
     }
+    if flags & BSDF_ESTIMATE == 0 {
+        return 1.0;
+    }
+    // Both: a smooth plastic; its coat is chosen as the plastic's own sampling chooses it.
+    plastic_coat_probability(b, wo)
 }
 
 /// True when the estimate lobes have the same value for every `wi` on `wo`'s side (Lambertian),
@@ -193,16 +394,28 @@ pub fn bsdf_estimate_is_constant(b: &Bsdf) -> bool {
 
 /// f(wo, wi) of the estimate lobes, without the cosine; 0 for path lobes (they are sampled).
 pub fn bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
+    if bsdf_flags(b) & BSDF_ESTIMATE == 0 {
+        return Vec3::ZERO;
+    }
     match b.kind {
         MATERIAL_DIFFUSE => diffuse_eval(b, wo, wi),
+        MATERIAL_DIELECTRIC => b.color0 * rough_dielectric_eval(b, wo, wi),
+        MATERIAL_CONDUCTOR => conductor_bsdf_eval(b, wo, wi),
+        MATERIAL_PLASTIC => plastic_bsdf_eval(b, wo, wi),
         _ => Vec3::ZERO,
     }
 }
 
 /// Solid-angle pdf of `bsdf_sample(.., LOBES_ESTIMATE)` choosing `wi`.
 pub fn bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    if bsdf_flags(b) & BSDF_ESTIMATE == 0 {
+        return 0.0;
+    }
     match b.kind {
         MATERIAL_DIFFUSE => diffuse_pdf(b, wo, wi),
+        MATERIAL_DIELECTRIC => rough_dielectric_pdf(b, wo, wi),
+        MATERIAL_CONDUCTOR => conductor_bsdf_pdf(b, wo, wi),
+        MATERIAL_PLASTIC => plastic_bsdf_pdf(b, wo, wi),
         _ => 0.0,
     }
 }
@@ -217,7 +430,10 @@ pub fn bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfSample {
     match b.kind {
         MATERIAL_DIFFUSE => diffuse_sample(b, wo, u),
         MATERIAL_MIRROR => mirror_sample(b, wo),
-        MATERIAL_DIELECTRIC => dielectric_sample(b, wo, u),
+        MATERIAL_DIELECTRIC if is_smooth(b) => smooth_dielectric_sample(b, wo, u),
+        MATERIAL_DIELECTRIC => rough_dielectric_sample(b, wo, u),
+        MATERIAL_CONDUCTOR => conductor_bsdf_sample(b, wo, u),
+        MATERIAL_PLASTIC => plastic_bsdf_sample(b, wo, u, lobes),
         _ => BsdfSample::default(),
     }
 }

@@ -42,7 +42,7 @@ pub struct MfSample {
 
 // pbrt-v4 (TrowbridgeReitzDistribution): below 1e-3 a lobe is a delta; a rough one has both
 // widths at least 1e-4, so that D stays finite in f32.
-fn mf_is_smooth(alpha: Vec2) -> bool {
+pub fn mf_is_smooth(alpha: Vec2) -> bool {
     alpha.x.max(alpha.y) < 1e-3
 }
 
@@ -53,7 +53,7 @@ fn mf_rough_alpha(alpha: Vec2) -> Vec2 {
 /// Unpolarised Fresnel reflectance from index `eta_i` into `eta_t` at `cos_i >= 0`; returns
 /// (reflectance, cos_t), reflectance 1 under total internal reflection. Same formula as
 /// `shading::fresnel_dielectric`.
-fn mf_fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
+pub fn mf_fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
     let eta = eta_i / eta_t;
     let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
     if sin2_t >= 1.0 {
@@ -111,7 +111,7 @@ fn mf_mirror(w: Vec3) -> Vec3 {
 }
 
 /// Cosine-distributed direction about +z (Malley's method).
-fn mf_cosine_direction(u: Vec2) -> Vec3 {
+pub fn mf_cosine_direction(u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
     let phi = 2.0 * PI * u.y;
     Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.x).max(0.0).sqrt())
@@ -119,7 +119,7 @@ fn mf_cosine_direction(u: Vec2) -> Vec3 {
 
 /// Probability with which `plastic_sample` picks the coat: the coat's Fresnel reflectance at wo
 /// against the base's mean albedo times the coat's transmittance (1 when the base is black).
-fn mf_plastic_coat_probability(wo: Vec3, ior: f32, diffuse: Vec3) -> f32 {
+pub fn mf_plastic_coat_probability(wo: Vec3, ior: f32, diffuse: Vec3) -> f32 {
     let (f, _) = mf_fresnel_dielectric(wo.z, 1.0, ior);
     let d = (1.0 - f) * (diffuse.x + diffuse.y + diffuse.z) / 3.0;
     if d > 0.0 {

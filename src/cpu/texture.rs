@@ -74,7 +74,7 @@ pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
     let dhdv = strength * (height(0.0, d) - height(0.0, -d)) / (2.0 * d);
     let n = (h.dpdu + dhdu * h.ng).cross(h.dpdv + dhdv * h.ng);
     let len = n.length();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return h.ns;
     }
     let n = n / len;
@@ -90,7 +90,7 @@ pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
 pub fn normal_map_normal(s: &SceneView, tex: u32, h: &Hit) -> Vec3 {
     let c = 2.0 * texture_eval(s, tex, h) - 1.0;
     let t = h.dpdu - h.ng * h.ng.dot(h.dpdu);
-    if !(t.length() > 0.0) {
+    if t.length().is_nan() || t.length() <= 0.0 {
         return h.ns;
     }
     let t = t.normalize();
@@ -100,7 +100,7 @@ pub fn normal_map_normal(s: &SceneView, tex: u32, h: &Hit) -> Vec3 {
     }
     let n = t * c.x + b * c.y + h.ng * c.z;
     let len = n.length();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return h.ns;
     }
     let n = n / len;

@@ -21,8 +21,23 @@ shared_constants! {
     MATERIAL_DIFFUSE: u32 = 0;
     /// Perfect mirror; `Material::color0` is its tint.
     MATERIAL_MIRROR: u32 = 1;
-    /// Smooth dielectric with Fresnel reflection and refraction; `Material::ior` is its index.
+    /// Dielectric interface, index `Material::ior` inside, tint `color0`: smooth (Fresnel
+    /// reflection and refraction) when `roughness` is 0, else GGX (Walter et al. 2007).
     MATERIAL_DIELECTRIC: u32 = 2;
+    /// Metal: complex index of refraction `color0` (eta) + i `color1` (k) per channel, smooth or
+    /// GGX with widths `roughness` (anisotropic along dpdu and dpdv).
+    MATERIAL_CONDUCTOR: u32 = 3;
+    /// A diffuse base of albedo `color0` under a dielectric coat of index `ior`, smooth or GGX.
+    MATERIAL_PLASTIC: u32 = 4;
+    /// Material `mix_b` where a hash of the point falls below `weight` (times `weight_tex`), else
+    /// `mix_a`: a stochastic blend, the same for camera rays and photons at a point.
+    MATERIAL_MIX: u32 = 5;
+    /// Deepest nesting of mixes the kernels resolve (the host refuses deeper ones).
+    MIX_MAX_DEPTH: u32 = 4;
+    /// Default of `[photons] glossy_threshold`: glossy lobes with GGX width up to this are followed
+    /// by paths (sharp reflections and caustics through them); rougher ones end camera paths and
+    /// read the photon maps with the BSDF's value (docs/materials.md).
+    GLOSSY_THRESHOLD: f32 = 0.25;
 
     /// Lobe flags of a BSDF (`bsdf_flags`), in the spirit of Mitsuba 3's `BSDFFlags`.
     BSDF_DIFFUSE: u32 = 1;

@@ -144,7 +144,8 @@ gpu_structs! {
         pub photon_mapping: u32,
         /// Final-gather rays per camera sample; 0 reads the global map directly (fast preview).
         pub gather_rays: u32,
-        pub _pad: u32,
+        /// Glossy lobes with GGX width up to this are path lobes, rougher ones estimate lobes.
+        pub glossy_threshold: f32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

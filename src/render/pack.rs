@@ -36,8 +36,8 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         packed.textures.push(t);
     }
     for shape in &scene.shapes {
-        let material = &scene.materials[shape.material as usize];
-        let p = pack_shape(shape, material.has_alpha(), material.uses_uv(), &mut packed.shape_data);
+        let (alpha, uses_uv) = material_needs(scene, shape.material, 0);
+        let p = pack_shape(shape, alpha, uses_uv, &mut packed.shape_data);
         packed.primitives.push(p);
         packed.bounds.push(shape.geometry.bounds());
         packed.areas.push(shape.geometry.area());
@@ -55,6 +55,20 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         packed.shape_data.push(0.0);
     }
     packed
+}
+
+/// Whether material `id` (or any material a mix of it may pick) has alpha, and whether it reads
+/// uv or the surface derivatives.
+fn material_needs(scene: &Scene, id: u32, depth: u32) -> (bool, bool) {
+    let m = &scene.materials[id as usize];
+    let own = (m.has_alpha(), m.uses_uv());
+    match m.kind {
+        MaterialKind::Mix { a, b, .. } if depth < MIX_MAX_DEPTH => {
+            let (na, nb) = (material_needs(scene, a, depth + 1), material_needs(scene, b, depth + 1));
+            (own.0 || na.0 || nb.0, own.1 || na.1 || nb.1)
+        }
+        _ => own,
+    }
 }
 
 fn texture_index(texture: Option<u32>) -> u32 {
@@ -101,10 +115,28 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
             out.kind = MATERIAL_MIRROR;
             (out.color0, out.color0_tex) = color(tint);
         }
-        MaterialKind::Dielectric { ior } => {
+        MaterialKind::Dielectric { ior, roughness } => {
             out.kind = MATERIAL_DIELECTRIC;
             out.color0 = [1.0; 3];
             out.ior = *ior;
+            (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+        }
+        MaterialKind::Conductor { eta, k, roughness } => {
+            out.kind = MATERIAL_CONDUCTOR;
+            (out.color0, out.color0_tex) = color(eta);
+            (out.color1, out.color1_tex) = color(k);
+            (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+        }
+        MaterialKind::Plastic { reflectance, ior, roughness } => {
+            out.kind = MATERIAL_PLASTIC;
+            (out.color0, out.color0_tex) = color(reflectance);
+            out.ior = *ior;
+            (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+        }
+        MaterialKind::Mix { a, b, weight } => {
+            out.kind = MATERIAL_MIX;
+            (out.mix_a, out.mix_b) = (*a, *b);
+            (out.weight, out.weight_tex) = scalar(weight);
         }
     }
     out

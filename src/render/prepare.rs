@@ -134,7 +134,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         total_light_power: total_power as f32,
         photon_mapping: 0,
         gather_rays: 0,
-        _pad: 0,
+        glossy_threshold: scene.photons.map_or(GLOSSY_THRESHOLD, |p| p.glossy_threshold),
     };
     Ok(SceneBuffers {
         frame,

@@ -68,6 +68,12 @@ pub(crate) struct MaterialDef {
     pub opacity: Option<Spanned<ParamDef>>,
     pub bump: Option<Spanned<ParamDef>>,
     pub normal_map: Option<Spanned<ParamDef>>,
+    pub roughness: Option<Spanned<toml::Value>>,
+    pub eta: Option<Spanned<ParamDef>>,
+    pub k: Option<Spanned<ParamDef>>,
+    pub preset: Option<Spanned<String>>,
+    pub materials: Option<Spanned<Vec<String>>>,
+    pub weight: Option<Spanned<ParamDef>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -34,6 +34,18 @@ impl ScalarParam {
     }
 }
 
+/// GGX widths along dpdu and dpdv (alpha itself, not a perceptual roughness to square), each
+/// optionally times a texture's first channel; (0, 0) is smooth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roughness {
+    pub alpha: [f32; 2],
+    pub texture: Option<u32>,
+}
+
+impl Roughness {
+    pub const SMOOTH: Roughness = Roughness { alpha: [0.0; 2], texture: None };
+}
+
 /// What a material does with light, by kind.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MaterialKind {
@@ -41,8 +53,14 @@ pub enum MaterialKind {
     Diffuse { reflectance: ColorParam },
     /// Perfect mirror tinted by `tint`, on both sides.
     Mirror { tint: ColorParam },
-    /// Smooth dielectric interface, index `ior` inside (the side opposite the front face).
-    Dielectric { ior: f32 },
+    /// Dielectric interface, index `ior` inside (the side opposite the front face), smooth or GGX.
+    Dielectric { ior: f32, roughness: Roughness },
+    /// Metal of complex index of refraction `eta` + i `k` per channel, smooth or GGX, both sides.
+    Conductor { eta: ColorParam, k: ColorParam, roughness: Roughness },
+    /// A diffuse base of albedo `reflectance` under a dielectric coat of index `ior`.
+    Plastic { reflectance: ColorParam, ior: f32, roughness: Roughness },
+    /// Material `b` where a hash of the point falls below `weight`, else `a` (material ids).
+    Mix { a: u32, b: u32, weight: ScalarParam },
 }
 
 /// A material: its kind, the radiance it emits from its front side, its opacity and what bends
@@ -92,10 +110,15 @@ impl MaterialDesc {
     /// bump or normal map (3D patterns move the lookup point along the derivatives for bumps).
     pub fn uses_uv(&self) -> bool {
         let textured = |p: &ColorParam| p.texture.is_some();
+        let rough = |r: &Roughness| r.texture.is_some() || r.alpha[0] != r.alpha[1];
         let kind_textured = match &self.kind {
             MaterialKind::Diffuse { reflectance } => textured(reflectance),
             MaterialKind::Mirror { tint } => textured(tint),
-            MaterialKind::Dielectric { .. } => false,
+            MaterialKind::Dielectric { roughness, .. } => rough(roughness),
+            MaterialKind::Conductor { eta, k, roughness } => textured(eta) || textured(k) || rough(roughness),
+            MaterialKind::Plastic { reflectance, roughness, .. } => textured(reflectance) || rough(roughness),
+            // A mix hashes the point; what its materials read is decided by theirs (see `pack`).
+            MaterialKind::Mix { weight, .. } => weight.texture.is_some(),
         };
         kind_textured || textured(&self.emission) || self.opacity.texture.is_some() || self.normal != NormalMod::None
     }

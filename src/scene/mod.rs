@@ -23,7 +23,8 @@ use glam::{Mat3, Vec2, Vec3};
 
 pub use error::SceneError;
 pub use material::{
-    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, ScalarParam, TextureDesc, TextureKind, TextureSpace,
+    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
+    TextureSpace,
 };
 pub use photons::PhotonSettings;
 

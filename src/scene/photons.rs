@@ -19,6 +19,8 @@ pub struct PhotonSettings {
     pub max_depth: u32,
     /// Radius reduction of progressive passes, in (0, 1): see `pass_radius_scale`.
     pub alpha: f32,
+    /// Glossy lobes with GGX width up to this are followed by paths; rougher ones read photons.
+    pub glossy_threshold: f32,
 }
 
 impl Default for PhotonSettings {
@@ -31,6 +33,7 @@ impl Default for PhotonSettings {
             gather_rays: 8,
             max_depth: 16,
             alpha: 2.0 / 3.0,
+            glossy_threshold: crate::layout::constants::GLOSSY_THRESHOLD,
         }
     }
 }
