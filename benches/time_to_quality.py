@@ -176,10 +176,10 @@ def mitsuba_time_for(fit, error):
 # Photonix
 
 
-def run_photonix(binary, scene_name, backend, budget, reference, out_dir):
+def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra):
     scene = REPO / "scenes" / f"{scene_name}.toml"
     out = Path(out_dir) / f"{scene_name}-{backend}-{budget}s.exr"
-    cmd = [str(binary), "render", str(scene), "--backend", backend, "--time", f"{budget}s", "-o", str(out)]
+    cmd = [str(binary), "render", str(scene), "--backend", backend, "--time", f"{budget}s", "-o", str(out)] + extra
     t = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True)
     seconds = time.perf_counter() - t
@@ -210,6 +210,8 @@ def main():
     ap.add_argument("--variant", default=None, help="Mitsuba variant [default: llvm_ad_rgb, else scalar_rgb]")
     ap.add_argument("--max-depth", type=int, default=65, help="Mitsuba path depth (the references used 65)")
     ap.add_argument("--photonix", default=str(REPO / "target" / "release" / "photonix"))
+    ap.add_argument("--photonix-args", default="", help="extra flags for `photonix render`, e.g. '--gather-rays 2'")
+    ap.add_argument("--no-mitsuba", action="store_true", help="Photonix only (no ratios)")
     ap.add_argument("--json", help="also write every measurement to this file")
     args = ap.parse_args()
 
@@ -231,7 +233,14 @@ def main():
     with tempfile.TemporaryDirectory() as out_dir:
         for scene in scenes:
             reference = read_exr(REFERENCES / scene / "reference.exr")
-            ours = [run_photonix(binary, scene, b, t, reference, out_dir) for b in args.backends.split(",") for t in budgets]
+            extra = args.photonix_args.split()
+            ours = [
+                run_photonix(binary, scene, b, t, reference, out_dir, extra)
+                for b in args.backends.split(",")
+                for t in budgets
+            ]
+            if args.no_mitsuba:
+                continue
             theirs = run_mitsuba(scene, spps, variant, reference, args.max_depth)
             results[scene] = {"photonix": ours, "mitsuba": theirs, "fit": fit_mitsuba(theirs)}
 
