@@ -54,6 +54,11 @@ def rel_mse(test, ref):
     return float((((test - ref) ** 2) / (ref**2 + 0.01)).mean())
 
 
+def mean_ratio(test, ref):
+    """Per-channel ratio of mean radiance: the energy check (1 = unbiased on average)."""
+    return [float(test[..., c].mean() / ref[..., c].mean()) for c in range(3)]
+
+
 # ---------------------------------------------------------------------------------------------
 # Mitsuba 3: the scene from the renderer-agnostic scene.json
 
@@ -186,15 +191,18 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra)
     if proc.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{proc.stderr}")
     passes = re.search(r"^(\d+) pass", proc.stderr, re.M)
+    image = read_exr(out)
     row = {
         "backend": backend,
+        "args": " ".join(extra),
         "budget": budget,
         "seconds": seconds,
         "passes": int(passes.group(1)) if passes else None,
-        "rel_mse": rel_mse(read_exr(out), reference),
+        "rel_mse": rel_mse(image, reference),
+        "mean_ratio": mean_ratio(image, reference),
         "summary": proc.stderr.strip().splitlines()[-3:],
     }
-    print(f"  photonix {backend} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
+    print(f"  photonix {backend} {' '.join(extra)} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
     return row
 
 
@@ -210,7 +218,12 @@ def main():
     ap.add_argument("--variant", default=None, help="Mitsuba variant [default: llvm_ad_rgb, else scalar_rgb]")
     ap.add_argument("--max-depth", type=int, default=65, help="Mitsuba path depth (the references used 65)")
     ap.add_argument("--photonix", default=str(REPO / "target" / "release" / "photonix"))
-    ap.add_argument("--photonix-args", default="", help="extra flags for `photonix render`, e.g. '--gather-rays 2'")
+    ap.add_argument(
+        "--photonix-args",
+        action="append",
+        help="extra flags for `photonix render`, e.g. '--gather-rays 2'; repeat to measure variants in one run "
+        "('' for the defaults)",
+    )
     ap.add_argument("--no-mitsuba", action="store_true", help="Photonix only (no ratios)")
     ap.add_argument("--json", help="also write every measurement to this file")
     args = ap.parse_args()
@@ -233,9 +246,9 @@ def main():
     with tempfile.TemporaryDirectory() as out_dir:
         for scene in scenes:
             reference = read_exr(REFERENCES / scene / "reference.exr")
-            extra = args.photonix_args.split()
             ours = [
-                run_photonix(binary, scene, b, t, reference, out_dir, extra)
+                run_photonix(binary, scene, b, t, reference, out_dir, extra.split())
+                for extra in args.photonix_args or [""]
                 for b in args.backends.split(",")
                 for t in budgets
             ]
@@ -245,18 +258,20 @@ def main():
             results[scene] = {"photonix": ours, "mitsuba": theirs, "fit": fit_mitsuba(theirs)}
 
     print()
-    print("| scene | renderer | budget | seconds | passes / spp | relMSE | Mitsuba s for this relMSE (spp) | equal-error ratio |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | renderer | budget | seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for scene, r in results.items():
         fit = r["fit"]
         for m in r["mitsuba"]:
-            print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['spp']} spp | {m['rel_mse']:.5f} | - | - |")
+            print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['spp']} spp | {m['rel_mse']:.5f} | - | - | - |")
         for p in r["photonix"]:
             t_mi, spp = mitsuba_time_for(fit, p["rel_mse"])
             p["mitsuba_seconds"], p["ratio"] = t_mi, t_mi / p["seconds"]
-            print(f"| {scene} | photonix {p['backend']} | {p['budget']} s | {p['seconds']:.2f} | {p['passes']} passes | "
-                  f"{p['rel_mse']:.5f} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** |")
-        print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | |")
+            ratio = ", ".join(f"{r:.4f}" for r in p["mean_ratio"])
+            name = f"photonix {p['backend']} {p['args']}".strip()
+            print(f"| {scene} | {name} | {p['budget']} s | {p['seconds']:.2f} | {p['passes']} passes | "
+                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** |")
+        print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | | |")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
 
