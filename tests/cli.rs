@@ -88,7 +88,7 @@ fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
         assert_eq!((png.width(), png.height()), (24, 16));
     }
     let out = common::photonix(
-        &["render", "scene.toml", "-o", "layers.exr", "--layers", "--contact-sheet", "sheet.png"],
+        &["render", "scene.toml", "--backend", "gpu", "-o", "layers.exr", "--layers", "--contact-sheet", "sheet.png"],
         dir.path(),
     );
     assert!(out.status.success(), "{}", stderr(&out));
@@ -99,7 +99,7 @@ fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
     let sheet = image::open(dir.path().join("sheet.png")).unwrap();
     assert_eq!(sheet.width(), 4 * 24 + 3 * 4);
     // The diff tool compares the two backends' images.
-    let out = common::photonix(&["render", "scene.toml", "-o", "a.exr"], dir.path());
+    let out = common::photonix(&["render", "scene.toml", "-o", "a.exr", "--backend", "gpu"], dir.path());
     assert!(out.status.success());
     let out = common::photonix(&["render", "scene.toml", "-o", "b.exr", "--backend", "cpu"], dir.path());
     assert!(out.status.success());
@@ -162,22 +162,43 @@ fn zero_power_light_warns() {
 #[test]
 fn missing_vulkan_driver_says_what_to_install() {
     let dir = scene_dir();
-    let out = Command::new(env!("CARGO_BIN_EXE_photonix"))
-        .args(["render", "scene.toml", "-o", "out.png"])
-        .current_dir(dir.path())
-        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
-        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
-        .env_remove("PHOTONIX_VALIDATION")
-        .output()
-        .unwrap();
+    let without_driver = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_photonix"))
+            .args(args)
+            .current_dir(dir.path())
+            .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+            .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+            .env_remove("PHOTONIX_VALIDATION")
+            .output()
+            .unwrap()
+    };
+    let out = without_driver(&["render", "scene.toml", "-o", "out.png", "--backend", "gpu"]);
     assert_fails(&out, &["mesa-vulkan-drivers", "--backend cpu"], dir.path(), "out.png");
+    // The default (auto) renders on the CPU backend instead, and says why.
+    let out = without_driver(&["render", "scene.toml", "-o", "out.png"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("cpu backend (auto: no Vulkan driver found)"), "{}", stderr(&out));
+    assert!(dir.path().join("out.png").exists());
+}
+
+#[test]
+fn auto_backend_says_which_backend_ran_and_why() {
+    let dir = scene_dir();
+    let out = common::photonix(&["render", "scene.toml", "-o", "out.png"], dir.path());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let devices = photonix::gpu::list_devices();
+    let (backend, why) = photonix::render::auto_backend(&devices, false);
+    let expected = format!("{} backend (auto: {why})", backend.name());
+    assert!(stderr(&out).contains(&expected), "`{expected}` missing from: {}", stderr(&out));
+    let out = common::photonix(&["render", "scene.toml", "-o", "out.png", "--backend", "gpu"], dir.path());
+    assert!(stderr(&out).contains("gpu backend (--backend gpu)"), "{}", stderr(&out));
 }
 
 #[test]
 fn same_seed_gives_identical_bytes() {
     let dir = scene_dir();
     for name in ["one.exr", "two.exr"] {
-        let out = common::photonix(&["render", "scene.toml", "-o", name], dir.path());
+        let out = common::photonix(&["render", "scene.toml", "-o", name, "--backend", "gpu"], dir.path());
         assert!(out.status.success(), "{}", stderr(&out));
     }
     let read = |n: &str| std::fs::read(dir.path().join(n)).unwrap();

@@ -30,7 +30,7 @@ const FAST: &[&str] = &[
 
 fn render(dir: &Path, output: &str, extra: &[&str]) -> Output {
     let scene = common::repo_path("scenes/cornell-caustics.toml");
-    let mut args = vec!["render", scene.to_str().unwrap(), "-o", output];
+    let mut args = vec!["render", scene.to_str().unwrap(), "-o", output, "--backend", "gpu"];
     // An explicit resolution replaces FAST's (its first two words).
     let skip = if extra.contains(&"--resolution") { 2 } else { 0 };
     args.extend_from_slice(&FAST[skip..]);
@@ -97,8 +97,8 @@ fn merged_halves_equal_one_run_and_reruns_are_identical() {
 fn interrupt_keeps_the_finished_passes() {
     let dir = tempfile::tempdir().unwrap();
     let scene = common::repo_path("scenes/cornell-caustics.toml");
-    let mut args =
-        vec!["render", scene.to_str().unwrap(), "-o", "out.exr", "--passes", "100000", "--checkpoint-every", "1ms"];
+    let mut args = vec!["render", scene.to_str().unwrap(), "-o", "out.exr", "--backend", "gpu", "--passes", "100000"];
+    args.extend_from_slice(&["--checkpoint-every", "1ms"]);
     args.extend_from_slice(FAST);
     let child = Command::new(env!("CARGO_BIN_EXE_photonix"))
         .args(&args)
@@ -151,4 +151,31 @@ fn bad_progressive_input_is_refused() {
     fails(&common::photonix(&["merge", "a.exr", "small.exr", "-o", "m.exr"], p), &["32x32", "64x64"]);
     fails(&common::photonix(&["merge", "a.exr", "a.exr", "-o", "m.exr"], p), &["twice"]);
     assert!(!p.join("m.exr").exists());
+}
+
+/// A renderer kept across passes (kernels, scene buffers and accumulation made once) renders
+/// the same bytes as a renderer made for each pass, and a scene replaced in place renders as a
+/// renderer made for the new scene.
+#[test]
+fn kept_renderer_equals_a_renderer_per_pass() {
+    use photonix::render::gpu::{render_gpu, GpuRenderer};
+    let scene = photonix::scene::load_scene(&common::repo_path("scenes/cornell-caustics.toml")).unwrap();
+    let buffers = common::buffers(&scene, 32, 32);
+    let ctx = common::gpu();
+    let photons = common::test_photons();
+    let mut renderer = GpuRenderer::new(&ctx, &buffers, Some(&photons)).unwrap();
+    for pass in 0..3 {
+        let kept = renderer.render_pass(1, pass, &mut |_, _| {}).unwrap();
+        let fresh = render_gpu(&ctx, &buffers, 1, Some(&photons), pass, &mut |_, _| {}).unwrap();
+        assert!(kept.layers == fresh.layers, "pass {pass}: the kept renderer's image differs");
+    }
+    // Another seed changes only the frame constants: written in place, all 8 arrays kept.
+    let mut reseeded = buffers.clone();
+    reseeded.frame.seed += 1;
+    assert_eq!(renderer.update_scene(&reseeded, Some(&photons)).unwrap(), 8);
+    let kept = renderer.render_pass(1, 0, &mut |_, _| {}).unwrap();
+    let fresh = render_gpu(&ctx, &reseeded, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
+    assert!(kept.layers == fresh.layers, "the updated scene renders differently from a fresh renderer");
+    let before = render_gpu(&ctx, &buffers, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
+    assert!(kept.layers != before.layers, "the new seed was not used");
 }

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use photonix::gpu::{GpuContext, GpuOptions};
-use photonix::render::bench::{bench, bench_photons};
+use photonix::render::bench::{bench, bench_photons, bench_setup};
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::load_scene;
 
@@ -32,9 +32,16 @@ pub struct BenchArgs {
     /// Also time photon tracing and the grid build at these photon path counts (comma-separated)
     #[arg(long, value_delimiter = ',')]
     photon_paths: Vec<u32>,
+    /// Instead of ray rates: time this many progressive passes (the scene's settings) with a
+    /// renderer made per pass and with one kept across passes
+    #[arg(long)]
+    passes: Option<u32>,
 }
 
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Some(passes) = args.passes {
+        return run_passes(&args, passes);
+    }
     let scene = load_scene(&args.scene)?;
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
     let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
@@ -87,5 +94,32 @@ pub fn run(args: BenchArgs) -> Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+/// `--passes N`: the per-pass cost of set-up (scene upload, kernel creation) that a renderer kept
+/// across passes saves.
+fn run_passes(args: &BenchArgs, passes: u32) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
+    let buffers = prepare(&scene, &settings)?;
+    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
+    let spp = scene.render.spp;
+    out!(
+        "scene {} at {width}x{height}, {spp} spp per pass, {passes} passes, on {}",
+        args.scene.display(),
+        ctx.info().name
+    );
+    let b = bench_setup(&ctx, &buffers, scene.photons.as_ref(), spp, passes)?;
+    let kernels: f64 = b.kernel_seconds.iter().map(|(_, s)| s).sum();
+    let each: Vec<String> = b.kernel_seconds.iter().map(|(n, s)| format!("{n} {s:.3}")).collect();
+    out!("scene upload {:.3} s; kernel creation {kernels:.3} s ({})", b.upload_seconds, each.join(", "));
+    let list = |v: &[f64]| v.iter().map(|s| format!("{s:.2}")).collect::<Vec<_>>().join(", ");
+    let fresh: f64 = b.fresh_pass_seconds.iter().sum();
+    let kept: f64 = b.kept_pass_seconds.iter().sum::<f64>() + b.kept_setup_seconds;
+    out!("renderer per pass: {fresh:.2} s ({})", list(&b.fresh_pass_seconds));
+    out!("renderer kept:     {kept:.2} s (set-up {:.2}, then {})", b.kept_setup_seconds, list(&b.kept_pass_seconds));
+    out!("saved per pass: {:.3} s", (fresh - kept) / passes.max(1) as f64);
     Ok(())
 }

@@ -8,17 +8,21 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use photonix::gpu::{GpuContext, GpuOptions};
+use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::{check_output_path, contact_sheet, write_image, write_layers_exr};
 use photonix::render::accumulation::{format_ranges, write_accumulation};
+use photonix::render::gpu::GpuRenderer;
 use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
-use photonix::render::{prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats};
+use photonix::render::{
+    auto_backend, prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats,
+};
 use photonix::scene::load_scene;
 
 use super::parse::{parse_duration, parse_pass_range, parse_resolution};
 
 #[derive(Clone, Copy, ValueEnum)]
 enum BackendArg {
+    Auto,
     Gpu,
     Cpu,
 }
@@ -30,8 +34,9 @@ pub struct RenderArgs {
     /// Output image; the extension picks the format [default: <scene name>.png]
     #[arg(short, long)]
     output: Option<PathBuf>,
-    /// Where the kernels run: the Vulkan device, or the CPU reference
-    #[arg(long, value_enum, default_value = "gpu")]
+    /// Where the kernels run: a real GPU when there is one, else the CPU reference (auto); the
+    /// Vulkan device even when it is a CPU such as lavapipe (gpu); the CPU reference (cpu)
+    #[arg(long, value_enum, default_value = "auto")]
     backend: BackendArg,
     /// Samples per pixel [default: the scene's]
     #[arg(long)]
@@ -210,13 +215,30 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let buffers = prepare(&scene, &settings)?;
     let prepare_time = t.elapsed();
-    let backend = match args.backend {
-        BackendArg::Gpu => Backend::Gpu,
-        BackendArg::Cpu => Backend::Cpu,
+    let (mut backend, mut backend_why) = match args.backend {
+        BackendArg::Gpu => (Backend::Gpu, "--backend gpu".to_string()),
+        BackendArg::Cpu => (Backend::Cpu, "--backend cpu".to_string()),
+        BackendArg::Auto => {
+            let (backend, why) = auto_backend(&list_devices(), args.device.is_some());
+            (backend, format!("auto: {why}"))
+        }
     };
     let ctx = match backend {
-        Backend::Gpu => Some(GpuContext::new(&GpuOptions::from_env(args.device.clone()))?),
+        Backend::Gpu => match GpuContext::new(&GpuOptions::from_env(args.device.clone())) {
+            Ok(ctx) => Some(ctx),
+            // Auto chose a GPU that will not open: the CPU backend still renders the image.
+            Err(e) if matches!(args.backend, BackendArg::Auto) && args.device.is_none() => {
+                eprintln!("warning: {e}; rendering on the CPU backend instead");
+                (backend, backend_why) = (Backend::Cpu, "auto: the GPU failed to open".to_string());
+                None
+            }
+            Err(e) => return Err(e.into()),
+        },
         Backend::Cpu => None,
+    };
+    let mut renderer = match &ctx {
+        Some(ctx) => Some(GpuRenderer::new(ctx, &buffers, photons.as_ref())?),
+        None => None,
     };
     // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
     let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
@@ -262,12 +284,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     bar.set_position(position.min(length));
                 }
             };
-            let out = match &ctx {
+            let out = match &mut renderer {
                 None => render_cpu(&buffers, spp, photons.as_ref(), pass, &mut progress),
-                Some(ctx) => {
-                    photonix::render::gpu::render_gpu(ctx, &buffers, spp, photons.as_ref(), pass, &mut progress)
-                        .with_context(|| failure_message(&args, passes_done.get(), &output))?
-                }
+                Some(renderer) => renderer
+                    .render_pass(spp, pass, &mut progress)
+                    .with_context(|| failure_message(&args, passes_done.get(), &output))?,
             };
             add_stats(&mut stats, &out.stats);
             Ok(out)
@@ -307,6 +328,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let terms: Vec<&photonix::io::Image> = mean.named().iter().map(|(_, image)| *image).collect();
         write_image(sheet, &contact_sheet(&terms), args.exposure)?;
     }
+    if let Some(renderer) = &renderer {
+        stats.stages.insert(0, ("setup".into(), renderer.setup_time()));
+    }
     stats.stages.insert(0, ("prepare".into(), prepare_time));
     stats.stages.push(("write".into(), t.elapsed()));
     stats.samples_per_pixel = spp * acc.passes;
@@ -324,7 +348,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if acc.passes == 1 { "" } else { "es" },
         why,
         format_ranges(&acc.ranges),
-        summary(&scene.name, &output, &stats, width, height, backend)
+        summary(&scene.name, &output, &stats, width, height, backend, &backend_why)
     );
     Ok(())
 }
@@ -382,13 +406,13 @@ fn add_stats(total: &mut RenderStats, pass: &RenderStats) {
 
 /// The closing lines: image size, samples, backend and device, output path, stage times, ray
 /// rate and, on the GPU, the time per kernel.
-fn summary(name: &str, output: &Path, s: &RenderStats, width: u32, height: u32, backend: Backend) -> String {
+fn summary(name: &str, output: &Path, s: &RenderStats, width: u32, height: u32, backend: Backend, why: &str) -> String {
     let stages: Vec<String> = s.stages.iter().map(|(n, d)| format!("{n} {:.3} s", d.as_secs_f64())).collect();
     let kernels: Vec<String> =
         s.kernel_times.iter().map(|(n, secs, count)| format!("{n} {secs:.3} s in {count} dispatches")).collect();
     let render_secs = s.stage("render").as_secs_f64().max(1e-9);
     let mut line = format!(
-        "{name}: {width}x{height}, {} spp, {} backend on {} -> {}\n  {}; {:.2} M rays/s ({} rays)",
+        "{name}: {width}x{height}, {} spp, {} backend ({why}) on {} -> {}\n  {}; {:.2} M rays/s ({} rays)",
         s.samples_per_pixel,
         backend.name(),
         s.device,

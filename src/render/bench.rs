@@ -105,3 +105,52 @@ pub fn bench_photons(ctx: Option<&GpuContext>, buffers: &SceneBuffers, paths: u3
         }
     }
 }
+
+/// What keeping a [`GpuRenderer`](super::gpu::GpuRenderer) across passes saves.
+#[derive(Clone, Debug)]
+pub struct SetupBench {
+    /// Seconds to upload the scene's arrays.
+    pub upload_seconds: f64,
+    /// Seconds to create each kernel once.
+    pub kernel_seconds: Vec<(&'static str, f64)>,
+    /// Wall seconds of each pass with a renderer made for that pass alone (upload and kernels
+    /// every pass, as before the renderer kept its state).
+    pub fresh_pass_seconds: Vec<f64>,
+    /// Wall seconds of each pass of one renderer kept across passes, and its set-up.
+    pub kept_pass_seconds: Vec<f64>,
+    pub kept_setup_seconds: f64,
+}
+
+/// Renders `passes` passes twice on `ctx`: once with a new renderer per pass and once with one
+/// renderer kept across them; the images are the same, the difference is the set-up.
+pub fn bench_setup(
+    ctx: &GpuContext,
+    buffers: &SceneBuffers,
+    photons: Option<&super::PhotonSettings>,
+    spp: u32,
+    passes: u32,
+) -> Result<SetupBench, RenderError> {
+    use super::gpu::{DeviceScene, GpuKernels, GpuRenderer};
+    use std::time::Instant;
+    let t = Instant::now();
+    drop(DeviceScene::upload(ctx, buffers, photons)?);
+    let upload_seconds = t.elapsed().as_secs_f64();
+    let kernel_seconds = GpuKernels::time_creation(ctx)?;
+    let mut fresh_pass_seconds = Vec::new();
+    for pass in 0..passes {
+        let t = Instant::now();
+        super::gpu::render_gpu(ctx, buffers, spp, photons, pass, &mut |_, _| {})?;
+        fresh_pass_seconds.push(t.elapsed().as_secs_f64());
+    }
+    let t = Instant::now();
+    let mut renderer = GpuRenderer::new(ctx, buffers, photons)?;
+    let kept_setup_seconds = t.elapsed().as_secs_f64();
+    let mut kept_pass_seconds = Vec::new();
+    for pass in 0..passes {
+        let t = Instant::now();
+        renderer.render_pass(spp, pass, &mut |_, _| {})?;
+        kept_pass_seconds.push(t.elapsed().as_secs_f64());
+    }
+    ctx.take_timings();
+    Ok(SetupBench { upload_seconds, kernel_seconds, fresh_pass_seconds, kept_pass_seconds, kept_setup_seconds })
+}

@@ -1,5 +1,6 @@
 //! Rendering on a Vulkan device: photon tracing, the grid build and the camera kernel.
 
+use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
@@ -33,6 +34,111 @@ fn groups(invocations: u32) -> [u32; 3] {
     let total = invocations.div_ceil(WORKGROUP_SIZE).max(1);
     let x = total.min(MAX_X);
     [x, total.div_ceil(x), 1]
+}
+
+/// The compute pipelines of a render, each created on first use and then kept: creating them
+/// (shader compilation, on lavapipe through LLVM) is the largest fixed cost of a pass.
+#[derive(Default)]
+pub struct GpuKernels {
+    emit_photons: OnceCell<Kernel>,
+    grid_count: OnceCell<Kernel>,
+    grid_scan: OnceCell<Kernel>,
+    grid_scan_add: OnceCell<Kernel>,
+    grid_scatter: OnceCell<Kernel>,
+    grid_rank: OnceCell<Kernel>,
+    render: OnceCell<Kernel>,
+    /// Use the `textured` variants of the scene kernels (`SceneBuffers::textured`).
+    textured: bool,
+}
+
+impl GpuKernels {
+    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha.
+    pub fn for_scene(textured: bool) -> GpuKernels {
+        GpuKernels { textured, ..Default::default() }
+    }
+
+    /// `name`, or its `textured` variant for a textured scene.
+    fn scene_kernel(&self, name: &str) -> String {
+        if self.textured {
+            format!("{name}_textured")
+        } else {
+            name.to_string()
+        }
+    }
+
+    fn get<'k>(
+        cell: &'k OnceCell<Kernel>,
+        ctx: &GpuContext,
+        name: &str,
+        bindings: u32,
+        push_bytes: usize,
+    ) -> Result<&'k Kernel, GpuError> {
+        if let Some(k) = cell.get() {
+            return Ok(k);
+        }
+        let k = kernel(ctx, name, bindings, push_bytes)?;
+        Ok(cell.get_or_init(|| k))
+    }
+
+    fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        let name = self.scene_kernel("emit_photons");
+        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 3, size_of::<EmitParams>())
+    }
+    fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_count, ctx, "grid_count", 3, 0)
+    }
+    fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scan, ctx, "grid_scan", 2, 4)
+    }
+    fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, 4)
+    }
+    fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, 0)
+    }
+    fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, 0)
+    }
+    fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        let name = self.scene_kernel("render");
+        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 6, size_of::<DispatchRange>())
+    }
+
+    /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
+    /// keeping the kernels saves per pass (`photonix bench --passes`).
+    pub fn time_creation(ctx: &GpuContext) -> Result<Vec<(&'static str, f64)>, GpuError> {
+        let k = GpuKernels::default();
+        let mut out = Vec::new();
+        let mut timed = |name: &'static str, f: &dyn Fn() -> Result<(), GpuError>| -> Result<(), GpuError> {
+            let t = Instant::now();
+            f()?;
+            out.push((name, t.elapsed().as_secs_f64()));
+            Ok(())
+        };
+        timed("emit_photons", &|| k.emit_photons(ctx).map(drop))?;
+        timed("grid_count", &|| k.grid_count(ctx).map(drop))?;
+        timed("grid_scan", &|| k.grid_scan(ctx).map(drop))?;
+        timed("grid_scan_add", &|| k.grid_scan_add(ctx).map(drop))?;
+        timed("grid_scatter", &|| k.grid_scatter(ctx).map(drop))?;
+        timed("grid_rank", &|| k.grid_rank(ctx).map(drop))?;
+        timed("render", &|| k.render(ctx).map(drop))?;
+        Ok(out)
+    }
+
+    /// Creates now every kernel a render with (`photons` true) or without photon maps uses, so
+    /// that the cost falls into set-up rather than into the first pass.
+    pub fn create_all(&self, ctx: &GpuContext, photons: bool) -> Result<(), GpuError> {
+        if photons {
+            self.emit_photons(ctx)?;
+            self.grid_count(ctx)?;
+            self.grid_scan(ctx)?;
+            self.grid_scan_add(ctx)?;
+            self.grid_scatter(ctx)?;
+            self.grid_rank(ctx)?;
+        }
+        self.render(ctx)?;
+        Ok(())
+    }
 }
 
 /// The scene arrays on the device.
@@ -69,16 +175,35 @@ impl DeviceScene {
         })
     }
 
-    /// The kernel `name` in the variant this scene needs.
-    pub fn kernel(
-        &self,
+    /// Replaces the scene's arrays with those of `buffers`: an array of the same byte size is
+    /// written into its existing buffer, any other gets a new buffer. Returns how many arrays were
+    /// written in place (of 8).
+    pub fn update(
+        &mut self,
         ctx: &GpuContext,
-        name: &str,
-        own_bindings: u32,
-        push_bytes: usize,
-    ) -> Result<Kernel, GpuError> {
-        let variant = if self.textured { format!("{name}_textured") } else { name.to_string() };
-        kernel(ctx, &variant, SCENE_BINDINGS + own_bindings, push_bytes)
+        buffers: &SceneBuffers,
+        photons: Option<&PhotonSettings>,
+    ) -> Result<u32, GpuError> {
+        fn replace<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &mut Buffer, data: &[T]) -> Result<u32, GpuError> {
+            let bytes = std::mem::size_of_val(data) as u64;
+            if bytes == buffer.size() {
+                ctx.write(buffer, data)?;
+                Ok(1)
+            } else {
+                *buffer = ctx.upload(buffer.name(), data)?;
+                Ok(0)
+            }
+        }
+        let frame = photon_frame(buffers, photons);
+        self.textured = buffers.textured;
+        Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
+            + replace(ctx, &mut self.nodes, &buffers.nodes)?
+            + replace(ctx, &mut self.primitives, &buffers.primitives)?
+            + replace(ctx, &mut self.materials, &buffers.materials)?
+            + replace(ctx, &mut self.lights, &buffers.lights)?
+            + replace(ctx, &mut self.textures, &buffers.textures)?
+            + replace(ctx, &mut self.texture_data, &buffers.texture_data)?
+            + replace(ctx, &mut self.shape_data, &buffers.shape_data)?)
     }
 
     /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
@@ -136,13 +261,21 @@ impl DeviceMaps {
     }
 }
 
-/// Traces one emission pass; returns the photon buffer holding `count` photons.
-fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool) -> Result<(Buffer, u32), GpuError> {
-    let emit_kernel = scene.kernel(ctx, "emit_photons", 3, size_of::<EmitParams>())?;
+/// Traces one emission pass into a buffer of room for `capacity` photons (a first guess); returns
+/// the photon buffer and the number of photons stored.
+fn emit(
+    ctx: &GpuContext,
+    kernels: &GpuKernels,
+    scene: &DeviceScene,
+    params: EmitParams,
+    caustic: bool,
+    capacity: u64,
+) -> Result<(Buffer, u32), GpuError> {
+    let emit_kernel = kernels.emit_photons(ctx)?;
     let photon_bytes = size_of::<Photon>() as u64;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let name = if caustic { "caustic_photons" } else { "global_photons" };
-    let mut capacity = (params.total_paths as u64 * INITIAL_PHOTONS_PER_PATH).clamp(1, limit / photon_bytes);
+    let mut capacity = capacity.clamp(1, limit / photon_bytes);
     loop {
         let photons = ctx.create_buffer(name, capacity * photon_bytes)?;
         let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
@@ -157,7 +290,7 @@ fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool
             let (global_buffer, caustic_buffer) = if caustic { (&unused, &photons) } else { (&photons, &unused) };
             ctx.run("emit_photons", |rec| {
                 rec.dispatch(
-                    &emit_kernel,
+                    emit_kernel,
                     &scene.bindings(&[global_buffer, caustic_buffer, &counters]),
                     bytemuck::bytes_of(&p),
                     groups(p.path_count),
@@ -185,9 +318,9 @@ fn emit(ctx: &GpuContext, scene: &DeviceScene, params: EmitParams, caustic: bool
 
 /// Exclusive prefix sum of `values` (`count` entries) in place, by blocks of SCAN_BLOCK and a
 /// recursive scan of the block sums.
-fn scan(ctx: &GpuContext, values: &Buffer, count: u32) -> Result<(), GpuError> {
-    let scan_kernel = kernel(ctx, "grid_scan", 2, 4)?;
-    let add_kernel = kernel(ctx, "grid_scan_add", 2, 4)?;
+fn scan(ctx: &GpuContext, kernels: &GpuKernels, values: &Buffer, count: u32) -> Result<(), GpuError> {
+    let scan_kernel = kernels.grid_scan(ctx)?;
+    let add_kernel = kernels.grid_scan_add(ctx)?;
     let mut levels = Vec::new(); // (buffer of block sums, its length)
     let mut n = count;
     while n > 1 {
@@ -198,14 +331,14 @@ fn scan(ctx: &GpuContext, values: &Buffer, count: u32) -> Result<(), GpuError> {
     ctx.run("grid_scan", |rec| {
         let mut input = values;
         for (sums, blocks, n) in &levels {
-            rec.dispatch(&scan_kernel, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
+            rec.dispatch(scan_kernel, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
             input = sums;
         }
         for i in (0..levels.len()).rev() {
             let (sums, _, n) = &levels[i];
             let target = if i == 0 { values } else { &levels[i - 1].0 };
             if levels[i].1 > 1 {
-                rec.dispatch(&add_kernel, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
+                rec.dispatch(add_kernel, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
             }
         }
         Ok(())
@@ -213,31 +346,38 @@ fn scan(ctx: &GpuContext, values: &Buffer, count: u32) -> Result<(), GpuError> {
 }
 
 /// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets.
-fn build_map(ctx: &GpuContext, photons: Buffer, grid: GridParams, name: &str) -> Result<DeviceMap, GpuError> {
+fn build_map(
+    ctx: &GpuContext,
+    kernels: &GpuKernels,
+    photons: Buffer,
+    grid: GridParams,
+    name: &str,
+) -> Result<DeviceMap, GpuError> {
     let buckets = grid.table_mask + 1;
     let grid_buffer = ctx.upload("grid_params", std::slice::from_ref(&grid))?;
     let starts = ctx.create_buffer(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
     let count = grid.photon_count;
-    let count_kernel = kernel(ctx, "grid_count", 3, 0)?;
-    ctx.run("grid_count", |rec| rec.dispatch(&count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
-    scan(ctx, &starts, buckets + 1)?;
+    let count_kernel = kernels.grid_count(ctx)?;
+    ctx.run("grid_count", |rec| rec.dispatch(count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
+    scan(ctx, kernels, &starts, buckets + 1)?;
     let fill = ctx.create_buffer("grid_fill", buckets as u64 * 4)?;
     let photon_bytes = (count.max(1) as u64) * size_of::<Photon>() as u64;
     let scattered = ctx.create_buffer(&format!("{name}_scattered"), photon_bytes)?;
-    let scatter_kernel = kernel(ctx, "grid_scatter", 5, 0)?;
-    let rank_kernel = kernel(ctx, "grid_rank", 4, 0)?;
+    let scatter_kernel = kernels.grid_scatter(ctx)?;
+    let rank_kernel = kernels.grid_rank(ctx)?;
     ctx.run("grid_scatter", |rec| {
-        rec.dispatch(&scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))
+        rec.dispatch(scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))
     })?;
     drop(photons);
     let ranked = ctx.create_buffer(&format!("{name}_photons"), photon_bytes)?;
     ctx.run("grid_rank", |rec| {
-        rec.dispatch(&rank_kernel, &[&grid_buffer, &starts, &scattered, &ranked], &[], groups(count))
+        rec.dispatch(rank_kernel, &[&grid_buffer, &starts, &scattered, &ranked], &[], groups(count))
     })?;
     Ok(DeviceMap { grid, photons: ranked, starts })
 }
 
-/// Traces pass `pass` of both photon maps and builds their grids on the device.
+/// Traces pass `pass` of both photon maps and builds their grids on the device, creating the
+/// kernels it needs (tests and tools; a [`GpuRenderer`] keeps its kernels across passes).
 pub fn build_maps_gpu(
     ctx: &GpuContext,
     scene: &DeviceScene,
@@ -245,13 +385,42 @@ pub fn build_maps_gpu(
     settings: &PhotonSettings,
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
-    let (global_photons, global_count) = emit(ctx, scene, emit_params(settings, pass, false), false)?;
-    let (caustic_photons, caustic_count) = emit(ctx, scene, emit_params(settings, pass, true), true)?;
+    let mut capacity = [0; 2];
+    build_maps(ctx, &GpuKernels::for_scene(scene.textured), scene, buffers, settings, pass, &mut capacity)
+}
+
+/// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
+/// (global, caustic) to make room for, and on return the counts this pass stored: the next
+/// pass then allocates once instead of tracing again (0 = guess from the path count).
+fn build_maps(
+    ctx: &GpuContext,
+    kernels: &GpuKernels,
+    scene: &DeviceScene,
+    buffers: &SceneBuffers,
+    settings: &PhotonSettings,
+    pass: u32,
+    capacity: &mut [u64; 2],
+) -> Result<DeviceMaps, GpuError> {
+    let room = |stored: u64, paths: u32| {
+        // 1/16 above the last pass's count: passes store a few thousandths more or fewer.
+        if stored == 0 {
+            paths as u64 * INITIAL_PHOTONS_PER_PATH
+        } else {
+            stored + stored / 16 + 64
+        }
+    };
+    let global_room = room(capacity[0], settings.photons);
+    let caustic_room = room(capacity[1], settings.caustic_photons);
+    let (global_photons, global_count) =
+        emit(ctx, kernels, scene, emit_params(settings, pass, false), false, global_room)?;
+    let (caustic_photons, caustic_count) =
+        emit(ctx, kernels, scene, emit_params(settings, pass, true), true, caustic_room)?;
+    *capacity = [global_count as u64, caustic_count as u64];
     let (r_global, r_caustic) = radii(buffers, settings, global_count, pass);
     let g_global = map_grid(buffers, r_global, global_count, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
-    let global = build_map(ctx, global_photons, g_global, "global")?;
-    let caustic = build_map(ctx, caustic_photons, g_caustic, "caustic")?;
+    let global = build_map(ctx, kernels, global_photons, g_global, "global")?;
+    let caustic = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")?;
     let grids = ctx.upload("grids", &[g_global, g_caustic])?;
     Ok(DeviceMaps { global, caustic, grids })
 }
@@ -269,8 +438,194 @@ fn no_maps(ctx: &GpuContext) -> Result<DeviceMaps, GpuError> {
     })
 }
 
-/// Renders pass `pass` on `ctx`, with photon maps when `photons` is given; `progress(done,
-/// total)` is called after each submission of the camera kernel.
+/// A renderer that keeps its state from pass to pass: the kernels (compute pipelines), the scene
+/// on the device and the accumulation buffer are made once; each pass then only traces its
+/// photons, builds its grids and runs the camera kernel. [`GpuRenderer::update_scene`] replaces the
+/// scene in place (an editor changing a material rewrites one small buffer).
+pub struct GpuRenderer<'a> {
+    ctx: &'a GpuContext,
+    kernels: GpuKernels,
+    buffers: SceneBuffers,
+    photons: Option<PhotonSettings>,
+    scene: DeviceScene,
+    /// Created by the first pass, then reused while the image size stays.
+    accumulation: Option<(Buffer, u32)>,
+    /// Photons stored by the last pass (global, caustic): the next pass's buffer sizes.
+    photon_capacity: [u64; 2],
+    /// Wall time of uploading the scene and creating the kernels.
+    setup_time: Duration,
+}
+
+impl<'a> GpuRenderer<'a> {
+    /// Uploads `buffers` and creates every kernel a render with (or, `photons` = `None`,
+    /// without) photon maps needs.
+    pub fn new(
+        ctx: &'a GpuContext,
+        buffers: &SceneBuffers,
+        photons: Option<&PhotonSettings>,
+    ) -> Result<GpuRenderer<'a>, GpuError> {
+        let t = Instant::now();
+        let scene = DeviceScene::upload(ctx, buffers, photons)?;
+        let kernels = GpuKernels::for_scene(buffers.textured);
+        kernels.create_all(ctx, photons.is_some())?;
+        Ok(GpuRenderer {
+            ctx,
+            kernels,
+            buffers: buffers.clone(),
+            photons: photons.copied(),
+            scene,
+            accumulation: None,
+            photon_capacity: [0; 2],
+            setup_time: t.elapsed(),
+        })
+    }
+
+    /// Wall time spent in [`GpuRenderer::new`] and [`GpuRenderer::update_scene`] so far: the
+    /// scene's upload and the kernels' creation.
+    pub fn setup_time(&self) -> Duration {
+        self.setup_time
+    }
+
+    pub fn context(&self) -> &'a GpuContext {
+        self.ctx
+    }
+
+    /// Replaces the scene (and the photon settings) without recreating the kernels: arrays that
+    /// keep their size are rewritten in their buffers. Returns how many of the 8 scene arrays
+    /// were written in place.
+    pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
+        let t = Instant::now();
+        let in_place = self.scene.update(self.ctx, buffers, photons)?;
+        if buffers.textured != self.kernels.textured {
+            self.kernels = GpuKernels::for_scene(buffers.textured);
+            self.kernels.create_all(self.ctx, photons.is_some())?;
+        }
+        if photons.is_some() {
+            self.kernels.create_all(self.ctx, true)?;
+        }
+        self.buffers = buffers.clone();
+        self.photons = photons.copied();
+        self.photon_capacity = [0; 2];
+        self.setup_time += t.elapsed();
+        Ok(in_place)
+    }
+
+    /// Renders pass `pass` with `spp` samples per pixel; `progress(done, total)` is called after
+    /// each submission of the camera kernel.
+    pub fn render_pass(
+        &mut self,
+        spp: u32,
+        pass: u32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<RenderOutput, GpuError> {
+        let ctx = self.ctx;
+        let f = photon_frame(&self.buffers, self.photons.as_ref());
+        let mut stages = Vec::new();
+
+        // Trace photons and build the grids
+        let t = Instant::now();
+        let maps = match &self.photons {
+            Some(settings) => {
+                build_maps(ctx, &self.kernels, &self.scene, &self.buffers, settings, pass, &mut self.photon_capacity)?
+            }
+            None => no_maps(ctx)?,
+        };
+        if self.photons.is_some() {
+            stages.push(("photons".to_string(), t.elapsed()));
+        }
+
+        // The accumulation buffer holds as many rows as one storage binding may address.
+        let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+        let row_bytes = f.width as u64 * ACCUMULATION_BYTES_PER_PIXEL;
+        let max_rows = (limit / row_bytes).min(f.height as u64) as u32;
+        if max_rows == 0 {
+            return Err(GpuError::Unsupported(format!(
+                "one image row of {} pixels needs {row_bytes} bytes, more than the device's storage buffer limit of {limit} bytes; lower the resolution",
+                f.width
+            )));
+        }
+        let bytes = max_rows as u64 * row_bytes;
+        if self.accumulation.as_ref().is_none_or(|(b, w)| b.size() != bytes || *w != f.width) {
+            self.accumulation = Some((ctx.create_buffer("accumulation", bytes)?, f.width));
+        }
+        let accumulation = &self.accumulation.as_ref().expect("created just above").0;
+        let render_kernel = self.kernels.render(ctx)?;
+
+        // Gather, band by band
+        let t = Instant::now();
+        let mut layers = Layers::new(f.width, f.height);
+        let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
+        let total: u64 = units.iter().map(unit_paths).sum();
+        let mut done = 0;
+        let mut rays = 0;
+        let mut download_time = Duration::ZERO;
+        // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
+        // submissions, yet none long enough to trip a GPU watchdog.
+        let mut complete = true;
+        let mut i = 0;
+        while i < units.len() {
+            let band = units[i].row_begin;
+            let mut end = i;
+            let mut paths = 0;
+            while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
+                paths += units[end].row_count as u64 * f.width as u64;
+                end += 1;
+            }
+            let batch = &units[i..end];
+            if super::stop_requested() {
+                complete = false;
+                break;
+            }
+            if batch[0].sample_index == pass * spp && batch[0].part == 0 {
+                ctx.fill_zero(accumulation)?;
+            }
+            let invocations = batch[0].row_count * f.width;
+            ctx.run("render", |rec| {
+                for unit in batch {
+                    rec.dispatch(
+                        render_kernel,
+                        &self.scene.bindings(&[
+                            accumulation,
+                            &maps.grids,
+                            &maps.global.photons,
+                            &maps.global.starts,
+                            &maps.caustic.photons,
+                            &maps.caustic.starts,
+                        ]),
+                        bytemuck::bytes_of(unit),
+                        groups(invocations),
+                    )?;
+                }
+                Ok(())
+            })?;
+            done += batch.iter().map(unit_paths).sum::<u64>();
+            progress(done, total);
+            i = end;
+            if units.get(i).is_none_or(|next| next.row_begin != band) {
+                let td = Instant::now();
+                let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
+                let len = (invocations * LAYER_COUNT) as usize;
+                rays += resolve_band(&mut layers, band, &sums[..len], spp);
+                download_time += td.elapsed();
+            }
+        }
+        stages.push(("render".to_string(), t.elapsed() - download_time));
+        stages.push(("download".to_string(), download_time));
+        let stats = RenderStats {
+            stages,
+            kernel_times: ctx.take_timings(),
+            rays,
+            samples_per_pixel: spp,
+            device: format!("{} ({})", ctx.info().name, ctx.info().driver),
+        };
+        Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
+    }
+}
+
+/// Renders pass `pass` on `ctx`, with photon maps when `photons` is given, with a renderer made
+/// for this one pass (its set-up time is reported as the `upload` stage); `progress(done, total)`
+/// is called after each submission of the camera kernel. Progressive renders keep one
+/// [`GpuRenderer`] instead.
 pub fn render_gpu(
     ctx: &GpuContext,
     buffers: &SceneBuffers,
@@ -279,103 +634,8 @@ pub fn render_gpu(
     pass: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<RenderOutput, GpuError> {
-    let f = photon_frame(buffers, photons);
-    let mut stages = Vec::new();
-
-    // Upload
-    let t = Instant::now();
-    let scene = DeviceScene::upload(ctx, buffers, photons)?;
-    let render_kernel = scene.kernel(ctx, "render", 6, size_of::<DispatchRange>())?;
-    stages.push(("upload".to_string(), t.elapsed()));
-
-    // Trace photons and build the grids
-    let t = Instant::now();
-    let maps = match photons {
-        Some(settings) => build_maps_gpu(ctx, &scene, buffers, settings, pass)?,
-        None => no_maps(ctx)?,
-    };
-    if photons.is_some() {
-        stages.push(("photons".to_string(), t.elapsed()));
-    }
-
-    // The accumulation buffer holds as many rows as one storage binding may address.
-    let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
-    let row_bytes = f.width as u64 * ACCUMULATION_BYTES_PER_PIXEL;
-    let max_rows = (limit / row_bytes).min(f.height as u64) as u32;
-    if max_rows == 0 {
-        return Err(GpuError::Unsupported(format!(
-            "one image row of {} pixels needs {row_bytes} bytes, more than the device's storage buffer limit of {limit} bytes; lower the resolution",
-            f.width
-        )));
-    }
-    let accumulation = ctx.create_buffer("accumulation", max_rows as u64 * row_bytes)?;
-
-    // Gather, band by band
-    let t = Instant::now();
-    let mut layers = Layers::new(f.width, f.height);
-    let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
-    let total: u64 = units.iter().map(unit_paths).sum();
-    let mut done = 0;
-    let mut rays = 0;
-    let mut download_time = Duration::ZERO;
-    // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
-    // submissions, yet none long enough to trip a GPU watchdog.
-    let mut complete = true;
-    let mut i = 0;
-    while i < units.len() {
-        let band = units[i].row_begin;
-        let mut end = i;
-        let mut paths = 0;
-        while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
-            paths += units[end].row_count as u64 * f.width as u64;
-            end += 1;
-        }
-        let batch = &units[i..end];
-        if super::stop_requested() {
-            complete = false;
-            break;
-        }
-        if batch[0].sample_index == pass * spp && batch[0].part == 0 {
-            ctx.fill_zero(&accumulation)?;
-        }
-        let invocations = batch[0].row_count * f.width;
-        ctx.run("render", |rec| {
-            for unit in batch {
-                rec.dispatch(
-                    &render_kernel,
-                    &scene.bindings(&[
-                        &accumulation,
-                        &maps.grids,
-                        &maps.global.photons,
-                        &maps.global.starts,
-                        &maps.caustic.photons,
-                        &maps.caustic.starts,
-                    ]),
-                    bytemuck::bytes_of(unit),
-                    groups(invocations),
-                )?;
-            }
-            Ok(())
-        })?;
-        done += batch.iter().map(unit_paths).sum::<u64>();
-        progress(done, total);
-        i = end;
-        if units.get(i).is_none_or(|next| next.row_begin != band) {
-            let td = Instant::now();
-            let sums: Vec<[f32; 4]> = ctx.download(&accumulation)?;
-            let len = (invocations * LAYER_COUNT) as usize;
-            rays += resolve_band(&mut layers, band, &sums[..len], spp);
-            download_time += td.elapsed();
-        }
-    }
-    stages.push(("render".to_string(), t.elapsed() - download_time));
-    stages.push(("download".to_string(), download_time));
-    let stats = RenderStats {
-        stages,
-        kernel_times: ctx.take_timings(),
-        rays,
-        samples_per_pixel: spp,
-        device: format!("{} ({})", ctx.info().name, ctx.info().driver),
-    };
-    Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
+    let mut renderer = GpuRenderer::new(ctx, buffers, photons)?;
+    let mut out = renderer.render_pass(spp, pass, progress)?;
+    out.stats.stages.insert(0, ("upload".to_string(), renderer.setup_time()));
+    Ok(out)
 }

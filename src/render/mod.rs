@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 pub use photons::PhotonSettings;
 pub use prepare::{prepare, FrameSettings, SceneBuffers};
 
+use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
 use crate::layout::constants::{LAYER_COUNT, LAYER_DIRECT};
 use crate::layout::{DispatchRange, FrameParams};
@@ -31,6 +32,37 @@ impl Backend {
         match self {
             Backend::Gpu => "gpu",
             Backend::Cpu => "cpu",
+        }
+    }
+}
+
+/// The backend `--backend auto` picks, and why, from the Vulkan devices the loader lists (or its
+/// failure to list any) and whether the user named a `--device`:
+/// - a named device, or any real GPU (discrete, integrated or virtual): the kernels on it;
+/// - only CPU devices (lavapipe), or no Vulkan at all: the CPU backend. It draws the same random
+///   numbers and renders the same image, and on the same cores it is several times faster than
+///   the kernels through lavapipe (BENCHMARKS.md, "Backends on a machine without a GPU").
+pub fn auto_backend(devices: &Result<Vec<DeviceInfo>, GpuError>, device_requested: bool) -> (Backend, String) {
+    if device_requested {
+        return (Backend::Gpu, "a --device was named".to_string());
+    }
+    let devices = match devices {
+        Ok(devices) => devices,
+        Err(_) => return (Backend::Cpu, "no Vulkan driver found".to_string()),
+    };
+    let is_gpu = |d: &&DeviceInfo| matches!(d.device_type.as_str(), "discrete GPU" | "integrated GPU" | "virtual GPU");
+    // The same preference as the device choice: discrete, then integrated, then virtual.
+    let rank =
+        |d: &&DeviceInfo| ["discrete GPU", "integrated GPU", "virtual GPU"].iter().position(|t| *t == d.device_type);
+    match devices.iter().filter(is_gpu).min_by_key(|d| (rank(d), d.index)) {
+        Some(gpu) => (Backend::Gpu, format!("{} {} found", gpu.device_type, gpu.name)),
+        None if devices.is_empty() => (Backend::Cpu, "no Vulkan device found".to_string()),
+        None => {
+            let names: Vec<&str> = devices.iter().map(|d| d.name.as_str()).collect();
+            (
+                Backend::Cpu,
+                format!("no GPU, only {} running on the CPU, where the CPU backend is faster", names.join(", ")),
+            )
         }
     }
 }
@@ -235,4 +267,46 @@ pub fn render_cpu(
 
 fn unit_paths(unit: &DispatchRange) -> u64 {
     unit.row_count as u64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn device(index: usize, name: &str, device_type: &str) -> DeviceInfo {
+        DeviceInfo {
+            index,
+            name: name.to_string(),
+            device_type: device_type.to_string(),
+            driver: String::new(),
+            api_version: "1.3.0".to_string(),
+            max_storage_buffer_range: 1 << 27,
+            max_memory_allocation_size: 1 << 31,
+            max_compute_workgroup_invocations: 1024,
+            max_compute_workgroup_count: [65535; 3],
+            max_push_constants_size: 128,
+            subgroup_size: 8,
+            timestamp_period_ns: 1.0,
+            device_local_heap_bytes: 1 << 31,
+            features: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn auto_backend_prefers_a_real_gpu_and_else_the_cpu() {
+        let lavapipe = device(0, "llvmpipe (LLVM 15.0.6, 256 bits)", "CPU");
+        let (backend, why) = auto_backend(&Ok(vec![lavapipe.clone()]), false);
+        assert_eq!(backend, Backend::Cpu);
+        assert!(why.contains("llvmpipe") && why.contains("CPU backend is faster"), "{why}");
+
+        let gpus = vec![lavapipe.clone(), device(1, "Intel UHD", "integrated GPU"), device(2, "RTX", "discrete GPU")];
+        let (backend, why) = auto_backend(&Ok(gpus), false);
+        assert_eq!(backend, Backend::Gpu);
+        assert!(why.contains("discrete GPU RTX"), "{why}");
+
+        assert_eq!(auto_backend(&Err(GpuError::NoDriver), false).0, Backend::Cpu);
+        assert_eq!(auto_backend(&Ok(Vec::new()), false).0, Backend::Cpu);
+        // A named device means the kernels, even on lavapipe.
+        assert_eq!(auto_backend(&Ok(vec![lavapipe]), true).0, Backend::Gpu);
+    }
 }

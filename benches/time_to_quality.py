@@ -1,0 +1,280 @@
+#!/usr/bin/env python3
+"""Time to quality: Photonix against Mitsuba 3 at equal error on the shared Cornell scenes.
+
+For each scene (default: cornell-box and cornell-caustics) this
+  1. renders with Photonix under each time budget on each backend (`--backend gpu`: the Vulkan
+     kernels, lavapipe on a machine without a GPU; `--backend cpu`: the CPU twin), timing the
+     whole command (process start, scene preparation, device set-up, photons, passes, writing);
+  2. renders the same scene with Mitsuba 3's path tracer at several sample counts (the scene built
+     from ../shared/reference/<scene>/scene.json, the way the references were made: integrator
+     `path`, max_depth 65, Russian roulette from depth 5, box filter), timing mi.render after a
+     warm-up render that compiles its kernels;
+  3. measures every image's relMSE against ../shared/reference/<scene>/reference.exr
+     (mean over pixels and channels of (t - r)^2 / (r^2 + 0.01), as `photonix diff` prints it);
+  4. fits Mitsuba's error as k / spp and its time as t0 + c * spp (least squares), and prints for
+     each Photonix render the time Mitsuba needs for the same error divided by Photonix's time
+     (the equal-error time ratio; above 1 means Photonix is faster).
+
+Needs: a release build (`cargo build --release`), `pip install mitsuba` (3.9 was used), and for
+the fast variant Debian's `libllvm19` (the script sets DRJIT_LIBLLVM_PATH=libLLVM-19.so unless it
+is set); without LLVM it falls back to `scalar_rgb`. Slow by design (minutes): never run in CI.
+
+    python3 benches/time_to_quality.py                     # 30 s budgets, both backends
+    python3 benches/time_to_quality.py --budgets 10,30 --backends cpu --scenes cornell-box
+"""
+
+import argparse
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+REFERENCES = REPO.parent / "shared" / "reference"
+
+
+# ---------------------------------------------------------------------------------------------
+# Error metric
+
+
+def read_exr(path):
+    import numpy as np
+    import mitsuba as mi
+
+    return np.array(mi.Bitmap(str(path)).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32), dtype=np.float64)
+
+
+def rel_mse(test, ref):
+    """mean over pixels and channels of (t - r)^2 / (r^2 + 0.01), as src/io/metrics.rs."""
+    return float((((test - ref) ** 2) / (ref**2 + 0.01)).mean())
+
+
+def mean_ratio(test, ref):
+    """Per-channel ratio of mean radiance: the energy check (1 = unbiased on average)."""
+    return [float(test[..., c].mean() / ref[..., c].mean()) for c in range(3)]
+
+
+# ---------------------------------------------------------------------------------------------
+# Mitsuba 3: the scene from the renderer-agnostic scene.json
+
+
+def choose_variant(requested):
+    import mitsuba as mi
+
+    os.environ.setdefault("DRJIT_LIBLLVM_PATH", "libLLVM-19.so")
+    for variant in [requested] if requested else ["llvm_ad_rgb", "scalar_rgb"]:
+        try:
+            mi.set_variant(variant)
+            return variant
+        except Exception as e:  # noqa: BLE001 (drjit raises several kinds when LLVM is missing)
+            print(f"mitsuba variant {variant} unavailable: {e}", file=sys.stderr)
+    sys.exit("no usable Mitsuba variant; pip install mitsuba (and apt-get install libllvm19)")
+
+
+def write_quad_obj(path, vertices):
+    """A quad as the two triangles (v0, v1, v2) and (v0, v2, v3), as scene.json asks."""
+    with open(path, "w") as f:
+        for v in vertices:
+            f.write("v {} {} {}\n".format(*v))
+        f.write("f 1 2 3\nf 1 3 4\n")
+
+
+def mitsuba_scene(scene_json, mesh_dir, max_depth):
+    import mitsuba as mi
+
+    s = json.loads(Path(scene_json).read_text())
+
+    def bsdf(name):
+        m = s["materials"][name]
+        if m["type"] == "diffuse":
+            # Diffuse surfaces reflect alike on both sides; Mitsuba's BSDFs are one-sided.
+            return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": m["reflectance"]}}}
+        if m["type"] == "dielectric":
+            return {"type": "dielectric", "int_ior": m["ior"], "ext_ior": m.get("outside_ior", 1.0)}
+        if m["type"] == "mirror":
+            return {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": m["reflectance"]}}
+        raise SystemExit(f"{scene_json}: material type {m['type']} is not translated to Mitsuba")
+
+    cam = s["camera"]
+    d = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": 5},
+        "sensor": {
+            "type": "perspective",
+            "fov": cam["fov_deg"],
+            "fov_axis": "x",
+            "to_world": mi.ScalarTransform4f.look_at(origin=cam["position"], target=cam["look_at"], up=cam["up"]),
+            "film": {
+                "type": "hdrfilm",
+                "width": s["image"]["width"],
+                "height": s["image"]["height"],
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgb",
+            },
+            "sampler": {"type": "independent", "sample_count": 1},
+        },
+    }
+    emitters = {l["shape"]: l for l in s["lights"]}
+    for i, shape in enumerate(s["shapes"]):
+        key = f"shape_{i}_{shape.get('name', shape['type'])}"
+        if shape["type"] == "quad":
+            obj = Path(mesh_dir) / f"{key}.obj"
+            write_quad_obj(obj, shape["vertices"])
+            entry = {"type": "obj", "filename": str(obj), "face_normals": True}
+        elif shape["type"] == "sphere":
+            entry = {"type": "sphere", "center": shape["center"], "radius": shape["radius"]}
+        else:
+            raise SystemExit(f"{scene_json}: shape type {shape['type']} is not translated to Mitsuba")
+        entry["bsdf"] = bsdf(shape["material"])
+        light = emitters.get(shape.get("name"))
+        if light is not None:
+            # One-sided Lambertian emitter on the side of the winding normal (downwards).
+            entry["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": light["radiance"]}}
+        d[key] = entry
+    return mi.load_dict(d)
+
+
+def run_mitsuba(scene_name, spps, variant, reference, max_depth):
+    import numpy as np
+    import mitsuba as mi
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        scene = mitsuba_scene(REFERENCES / scene_name / "scene.json", tmp, max_depth)
+        # Warm-up: compiles the path tracer's kernels (cached afterwards), untimed.
+        np.array(mi.render(scene, spp=1, seed=999))
+        for spp in spps:
+            t = time.perf_counter()
+            image = np.array(mi.render(scene, spp=spp, seed=spp), dtype=np.float64)
+            seconds = time.perf_counter() - t
+            rows.append({"spp": spp, "seconds": seconds, "rel_mse": rel_mse(image[..., :3], reference)})
+            print(f"  mitsuba {variant} {scene_name} {spp:5d} spp: {seconds:7.2f} s, relMSE {rows[-1]['rel_mse']:.5f}", flush=True)
+    return rows
+
+
+def fit_mitsuba(rows):
+    """relMSE = k / spp (k: geometric mean of relMSE * spp) and seconds = t0 + c * spp."""
+    import numpy as np
+
+    spp = np.array([r["spp"] for r in rows], dtype=np.float64)
+    err = np.array([r["rel_mse"] for r in rows])
+    sec = np.array([r["seconds"] for r in rows])
+    k = float(np.exp(np.mean(np.log(err * spp))))
+    if len(rows) > 1:
+        c, t0 = np.polyfit(spp, sec, 1)
+    else:
+        c, t0 = sec[0] / spp[0], 0.0
+    return {"k": k, "c": float(c), "t0": float(max(t0, 0.0))}
+
+
+def mitsuba_time_for(fit, error):
+    spp = fit["k"] / error
+    return fit["t0"] + fit["c"] * spp, spp
+
+
+# ---------------------------------------------------------------------------------------------
+# Photonix
+
+
+def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra):
+    scene = REPO / "scenes" / f"{scene_name}.toml"
+    out = Path(out_dir) / f"{scene_name}-{backend}-{budget}s.exr"
+    cmd = [str(binary), "render", str(scene), "--backend", backend, "--time", f"{budget}s", "-o", str(out)] + extra
+    t = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    seconds = time.perf_counter() - t
+    if proc.returncode != 0:
+        sys.exit(f"{' '.join(cmd)} failed:\n{proc.stderr}")
+    passes = re.search(r"^(\d+) pass", proc.stderr, re.M)
+    image = read_exr(out)
+    row = {
+        "backend": backend,
+        "args": " ".join(extra),
+        "budget": budget,
+        "seconds": seconds,
+        "passes": int(passes.group(1)) if passes else None,
+        "rel_mse": rel_mse(image, reference),
+        "mean_ratio": mean_ratio(image, reference),
+        "summary": proc.stderr.strip().splitlines()[-3:],
+    }
+    print(f"  photonix {backend} {' '.join(extra)} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
+    return row
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenes", default="cornell-box,cornell-caustics")
+    ap.add_argument("--backends", default="gpu,cpu", help="Photonix backends (gpu = the Vulkan kernels)")
+    ap.add_argument("--budgets", default="30", help="Photonix time budgets in seconds, comma-separated")
+    ap.add_argument("--spp", default="16,64,256", help="Mitsuba sample counts, comma-separated")
+    ap.add_argument("--variant", default=None, help="Mitsuba variant [default: llvm_ad_rgb, else scalar_rgb]")
+    ap.add_argument("--max-depth", type=int, default=65, help="Mitsuba path depth (the references used 65)")
+    ap.add_argument("--photonix", default=str(REPO / "target" / "release" / "photonix"))
+    ap.add_argument(
+        "--photonix-args",
+        action="append",
+        help="extra flags for `photonix render`, e.g. '--gather-rays 2'; repeat to measure variants in one run "
+        "('' for the defaults)",
+    )
+    ap.add_argument("--no-mitsuba", action="store_true", help="Photonix only (no ratios)")
+    ap.add_argument("--json", help="also write every measurement to this file")
+    args = ap.parse_args()
+
+    binary = Path(args.photonix)
+    if not binary.exists():
+        sys.exit(f"{binary} not found; run `cargo build --release` first")
+    variant = choose_variant(args.variant)
+    import mitsuba as mi
+
+    scenes = args.scenes.split(",")
+    budgets = [float(b) if "." in b else int(b) for b in args.budgets.split(",")]
+    spps = [int(s) for s in args.spp.split(",")]
+    version = subprocess.run([str(binary), "--version"], capture_output=True, text=True).stdout.strip()
+    print(f"# time to quality, {time.strftime('%Y-%m-%d %H:%M')}, {platform.node()}, {os.cpu_count()} CPUs, "
+          f"{version}, mitsuba {mi.__version__} {variant}")
+    print(f"# command: {' '.join([Path(sys.argv[0]).name] + sys.argv[1:])}")
+
+    results = {}
+    with tempfile.TemporaryDirectory() as out_dir:
+        for scene in scenes:
+            reference = read_exr(REFERENCES / scene / "reference.exr")
+            ours = [
+                run_photonix(binary, scene, b, t, reference, out_dir, extra.split())
+                for extra in args.photonix_args or [""]
+                for b in args.backends.split(",")
+                for t in budgets
+            ]
+            if args.no_mitsuba:
+                continue
+            theirs = run_mitsuba(scene, spps, variant, reference, args.max_depth)
+            results[scene] = {"photonix": ours, "mitsuba": theirs, "fit": fit_mitsuba(theirs)}
+
+    print()
+    print("| scene | renderer | budget | seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for scene, r in results.items():
+        fit = r["fit"]
+        for m in r["mitsuba"]:
+            print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['spp']} spp | {m['rel_mse']:.5f} | - | - | - |")
+        for p in r["photonix"]:
+            t_mi, spp = mitsuba_time_for(fit, p["rel_mse"])
+            p["mitsuba_seconds"], p["ratio"] = t_mi, t_mi / p["seconds"]
+            ratio = ", ".join(f"{r:.4f}" for r in p["mean_ratio"])
+            name = f"photonix {p['backend']} {p['args']}".strip()
+            print(f"| {scene} | {name} | {p['budget']} s | {p['seconds']:.2f} | {p['passes']} passes | "
+                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** |")
+        print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | | |")
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=1))
+
+
+if __name__ == "__main__":
+    main()
