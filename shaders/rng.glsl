@@ -28,12 +28,3 @@ vec2 rand2(uint stream, uint sample_index, uint seed, uint dim) {
 float rand1(uint stream, uint sample_index, uint seed, uint dim) {
     return rand_unit(pcg4d(uvec4(stream, sample_index, seed, dim)).x);
 }
-
-// A number in [0, 1) that depends only on a ray and a key: stochastic alpha decides by it
-// without spending a random dimension of the path (pbrt-v4 hashes the ray for its alpha test
-// alike).
-float hash_ray(vec3 o, vec3 d, uint key) {
-    uvec3 a = floatBitsToUint(o);
-    uvec3 b = floatBitsToUint(d);
-    return rand_unit(pcg4d(uvec4(a.x ^ b.y, a.y ^ b.z, a.z ^ b.x, key)).x);
-}

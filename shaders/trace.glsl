@@ -19,7 +19,7 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
     bool passes = false;
     WHEN((primitives[i].kind & PRIMITIVE_FLAG_ALPHA) != 0u) {
         Hit h = shape_hit(i, o, d, t);
-        passes = hash_ray(o, d, i) >= material_opacity(materials[h.material], h);
+        passes = hash_point(h.p, i) >= material_opacity(materials[h.material], h);
     }
     return passes;
 }

@@ -13,7 +13,7 @@ use super::microfacet::{
     mf_cosine_direction, mf_fresnel_dielectric, mf_is_smooth, mf_plastic_coat_probability, plastic_eval, plastic_pdf,
     plastic_sample, MfSample, MF_TRANSMISSION,
 };
-use super::rng::hash_ray;
+use super::rng::{pcg4d, rand_unit};
 use super::sampling::{cosine_direction, onb, reflect};
 use super::shape::Hit;
 use super::texture::{bump_normal, normal_map_normal, param_color, param_scalar, texture_eval};
@@ -55,17 +55,21 @@ pub fn material_emission(s: &SceneView, m: &Material, h: &Hit) -> Vec3 {
     param_color(s, m.emission, m.emission_tex, h)
 }
 
-/// A hash of the point in [0, 1): a mix chooses by it, so camera rays and photons see the same
-/// material at the same point.
-pub fn hash_point(p: Vec3, level: u32) -> f32 {
-    hash_ray(p, Vec3::ZERO, level)
+/// A number in [0, 1) fixed for each point of space and key: a hash of the point's cell in a
+/// grid of 4 ray offsets. Stochastic alpha and mixes decide by it, so camera rays, shadow rays
+/// and photons see the same surface at the same point; the cell, not the point's bits, is
+/// hashed, since the GPU and the CPU round a hit point differently in its last bits.
+pub fn hash_point(s: &SceneView, p: Vec3, key: u32) -> f32 {
+    let c = (p / (4.0 * s.frame.ray_epsilon)).floor().as_ivec3();
+    rand_unit(pcg4d([c.x as u32, c.y as u32, c.z as u32, key])[0])
 }
 
 pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
     let mut m = m;
     let mut level = 0;
     while level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX {
-        let pick = if hash_point(h.p, level) < param_scalar(s, m.weight, m.weight_tex, h) { m.mix_b } else { m.mix_a };
+        let pick =
+            if hash_point(s, h.p, level) < param_scalar(s, m.weight, m.weight_tex, h) { m.mix_b } else { m.mix_a };
         m = &s.materials[pick as usize];
         level += 1;
     }

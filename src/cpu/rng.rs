@@ -28,14 +28,6 @@ pub fn rand4(stream: u32, sample_index: u32, seed: u32, dim: u32) -> [f32; 4] {
     pcg4d([stream, sample_index, seed, dim]).map(rand_unit)
 }
 
-/// A number in [0, 1) that depends only on a ray and a key: stochastic alpha decides by it
-/// without spending a random dimension of the path (pbrt-v4 hashes the ray for its alpha test
-/// alike).
-pub fn hash_ray(o: glam::Vec3, d: glam::Vec3, key: u32) -> f32 {
-    let (a, b) = (o.to_array().map(f32::to_bits), d.to_array().map(f32::to_bits));
-    rand_unit(pcg4d([a[0] ^ b[1], a[1] ^ b[2], a[2] ^ b[0], key])[0])
-}
-
 /// Two uniform numbers in [0, 1) for dimension `dim` of (`stream`, `sample_index`, `seed`).
 pub fn rand2(stream: u32, sample_index: u32, seed: u32, dim: u32) -> [f32; 2] {
     let h = pcg4d([stream, sample_index, seed, dim]);

@@ -2,8 +2,8 @@
 
 use glam::Vec3;
 
+use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
-use super::rng::hash_ray;
 use super::shape::{shape_hit, shape_intersect};
 use super::SceneView;
 use crate::layout::constants::{NO_LIGHT, PRIMITIVE_FLAG_ALPHA};
@@ -30,7 +30,7 @@ pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
         return false;
     }
     let h = shape_hit(s, i, o, d, t);
-    hash_ray(o, d, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
+    hash_point(s, h.p, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
 }
 
 /// Closest hit in [0, t_max) as (primitive index, distance), or `NO_LIGHT` and t_max on a miss.

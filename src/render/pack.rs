@@ -19,6 +19,8 @@ pub struct PackedScene {
     pub bounds: Vec<(Vec3, Vec3)>,
     /// Surface area of each primitive, same index.
     pub areas: Vec<f32>,
+    /// Total area that holds photons: each shape's area times its constant opacity.
+    pub photon_area: f32,
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
@@ -40,7 +42,12 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         let p = pack_shape(shape, alpha, uses_uv, &mut packed.shape_data);
         packed.primitives.push(p);
         packed.bounds.push(shape.geometry.bounds());
+        // The area that holds photons: a constant opacity scales it (a fully transparent shape
+        // holds none, so adding one leaves the automatic photon radius alone).
+        let opacity = scene.materials[shape.material as usize].opacity;
+        let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
         packed.areas.push(shape.geometry.area());
+        packed.photon_area += shape.geometry.area() * visible;
     }
     packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
         || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);

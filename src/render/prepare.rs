@@ -61,7 +61,7 @@ fn channel_mean(v: [f32; 3]) -> f32 {
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
     // Primitives in BVH order, each emitter tagged with its light index
     let packed = pack_scene(scene);
-    let surface_area: f32 = packed.areas.iter().sum();
+    let surface_area = packed.photon_area;
     let bvh = build_bvh(&packed.primitives, &packed.bounds)?;
     let mut primitives = bvh.primitives;
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the

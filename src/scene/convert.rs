@@ -603,7 +603,7 @@ impl Builder<'_> {
             return Err(self.invalid(
                 &ior_def.span(),
                 object,
-                format!("`ior` is {ior}; the index of refraction must be in (0, 10] (glass is about 1.5)"),
+                format!("`ior` is {ior}; the index of refraction must be > 0 and at most 10 (glass is about 1.5)"),
             ));
         }
         Ok(ior)
