@@ -162,6 +162,22 @@ impl DeviceScene {
         photons: Option<&PhotonSettings>,
     ) -> Result<Self, GpuError> {
         let frame = photon_frame(buffers, photons);
+        // Every array is one storage binding: refuse, with what it holds, one the device cannot bind.
+        let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+        for (what, bytes) in [
+            ("the scene's image and pattern textures", std::mem::size_of_val(buffers.texture_data.as_slice())),
+            ("the scene's primitives", std::mem::size_of_val(buffers.primitives.as_slice())),
+            ("the scene's BVH", std::mem::size_of_val(buffers.nodes.as_slice())),
+            ("the scene's shape data (uv)", std::mem::size_of_val(buffers.shape_data.as_slice())),
+        ] {
+            if bytes as u64 > limit {
+                return Err(GpuError::Unsupported(format!(
+                    "{what} need {} MiB, more than one storage buffer holds on this device ({} MiB); use smaller images or fewer shapes, or --backend cpu",
+                    (bytes as u64).div_ceil(1 << 20),
+                    limit >> 20
+                )));
+            }
+        }
         Ok(DeviceScene {
             frame: ctx.upload("frame", std::slice::from_ref(&frame))?,
             nodes: ctx.upload("bvh_nodes", &buffers.nodes)?,
