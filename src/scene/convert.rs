@@ -825,7 +825,7 @@ impl Builder<'_> {
         let at = |message: &str| -> Range<usize> {
             fields
                 .iter()
-                .find(|(name, _)| message.contains(&format!("`{name}`")))
+                .find(|(name, _)| message.contains(&format!("`{name}`")) || message.contains(&format!("{name} \"")))
                 .map(|(_, v)| v.span())
                 .unwrap_or(table.clone())
         };
