@@ -398,6 +398,17 @@ impl Builder<'_> {
             }
             settings.alpha = alpha;
         }
+        if let Some(g) = &p.glossy_threshold {
+            let threshold = self.number(g, object, "glossy_threshold")?;
+            if !(0.0..=1.0).contains(&threshold) {
+                return Err(self.invalid(
+                    &g.span(),
+                    object,
+                    format!("`glossy_threshold` is {threshold}; it is a GGX width in [0, 1], e.g. 0.25"),
+                ));
+            }
+            settings.glossy_threshold = threshold;
+        }
         if p.enabled.as_ref().is_some_and(|e| !*e.get_ref()) {
             return Ok(None);
         }

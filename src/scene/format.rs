@@ -55,6 +55,7 @@ pub(crate) struct PhotonsDef {
     pub caustic_radius: Option<Spanned<f64>>,
     pub gather_rays: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
+    pub glossy_threshold: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
