@@ -67,18 +67,6 @@ vec3 facing(Bsdf b, vec3 w) { return dot(w, b.ng) > 0.0 ? b.ns : -b.ns; }
 
 BsdfSample no_sample() { return BsdfSample(vec3(0.0), vec3(0.0), 0.0, 0u); }
 
-// Unpolarised Fresnel reflectance for a ray that meets the interface with cos_i > 0 going
-// from index eta_i into index eta_t; 1 under total internal reflection. Sets cos_t.
-float fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t) {
-    float eta = eta_i / eta_t;
-    float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
-    if (sin2_t >= 1.0) { cos_t = 0.0; return 1.0; }
-    cos_t = sqrt(1.0 - sin2_t);
-    float rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-    float rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
 // Diffuse: Lambertian reflection of albedo color0 on both sides.
 
 // Reflection needs wi on wo's side of the shading normal and of the geometric one, so a bumped
@@ -119,7 +107,7 @@ BsdfSample smooth_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
     float eta_t = front ? b.ior : 1.0;
     float cos_i = -dot(d, nf);
     float cos_t;
-    if (u.x < fresnel_dielectric(cos_i, eta_i, eta_t, cos_t)) {
+    if (u.x < mf_fresnel_dielectric(cos_i, eta_i, eta_t, cos_t)) {
         return BsdfSample(reflect(d, nf), vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH);
     }
     float eta = eta_i / eta_t;

@@ -24,7 +24,7 @@ bool mf_is_smooth(vec2 alpha) { return max(alpha.x, alpha.y) < 1e-3; }
 vec2 mf_rough_alpha(vec2 alpha) { return max(alpha, vec2(1e-4)); }
 
 // Unpolarised Fresnel reflectance from index eta_i into eta_t at cos_i >= 0; 1 under total
-// internal reflection. Sets cos_t. Same formula as fresnel_dielectric in shading.glsl.
+// internal reflection. Sets cos_t. The smooth dielectric of bsdf.glsl uses it too.
 float mf_fresnel_dielectric(float cos_i, float eta_i, float eta_t, out float cos_t) {
     float eta = eta_i / eta_t;
     float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);

@@ -107,21 +107,6 @@ pub fn facing(b: &Bsdf, w: Vec3) -> Vec3 {
     }
 }
 
-/// Unpolarised Fresnel reflectance for a ray meeting the interface with `cos_i > 0`, going from
-/// index `eta_i` into `eta_t`; returns (reflectance, cos_t), reflectance 1 under total internal
-/// reflection.
-pub fn fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
-    let eta = eta_i / eta_t;
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
-    if sin2_t >= 1.0 {
-        return (1.0, 0.0);
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (eta_i * cos_i - eta_t * cos_t) / (eta_i * cos_i + eta_t * cos_t);
-    let rp = (eta_t * cos_i - eta_i * cos_t) / (eta_t * cos_i + eta_i * cos_t);
-    (0.5 * (rs * rs + rp * rp), cos_t)
-}
-
 // Diffuse: Lambertian reflection of albedo color0 on both sides.
 
 /// Reflection needs `wi` on `wo`'s side of the shading normal and of the geometric one, so a
@@ -180,7 +165,7 @@ pub fn smooth_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let nf = if front { b.ng } else { -b.ng };
     let (eta_i, eta_t) = if front { (1.0, b.ior) } else { (b.ior, 1.0) };
     let cos_i = -d.dot(nf);
-    let (fr, cos_t) = fresnel_dielectric(cos_i, eta_i, eta_t);
+    let (fr, cos_t) = mf_fresnel_dielectric(cos_i, eta_i, eta_t);
     if u[0] < fr {
         return BsdfSample {
             wi: reflect(d, nf),
@@ -454,13 +439,13 @@ mod tests {
     #[test]
     fn fresnel_matches_known_values() {
         // Normal incidence on glass: ((1.5 - 1) / (1.5 + 1))^2 = 0.04.
-        let (f, cos_t) = fresnel_dielectric(1.0, 1.0, 1.5);
+        let (f, cos_t) = mf_fresnel_dielectric(1.0, 1.0, 1.5);
         assert!((f - 0.04).abs() < 1e-6 && (cos_t - 1.0).abs() < 1e-6);
         // Brewster's angle, atan(1.5): p-polarised reflectance vanishes, so F = rs^2 / 2.
         let theta = 1.5f32.atan();
-        let (f, _) = fresnel_dielectric(theta.cos(), 1.0, 1.5);
+        let (f, _) = mf_fresnel_dielectric(theta.cos(), 1.0, 1.5);
         assert!((f - 0.0739).abs() < 1e-3, "{f}");
         // Total internal reflection beyond the critical angle asin(1/1.5) = 41.8 degrees.
-        assert_eq!(fresnel_dielectric(45f32.to_radians().cos(), 1.5, 1.0).0, 1.0);
+        assert_eq!(mf_fresnel_dielectric(45f32.to_radians().cos(), 1.5, 1.0).0, 1.0);
     }
 }

@@ -51,8 +51,8 @@ fn mf_rough_alpha(alpha: Vec2) -> Vec2 {
 }
 
 /// Unpolarised Fresnel reflectance from index `eta_i` into `eta_t` at `cos_i >= 0`; returns
-/// (reflectance, cos_t), reflectance 1 under total internal reflection. Same formula as
-/// `shading::fresnel_dielectric`.
+/// (reflectance, cos_t), reflectance 1 under total internal reflection. The smooth dielectric
+/// of `bsdf.rs` uses it too.
 pub fn mf_fresnel_dielectric(cos_i: f32, eta_i: f32, eta_t: f32) -> (f32, f32) {
     let eta = eta_i / eta_t;
     let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
