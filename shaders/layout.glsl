@@ -81,6 +81,8 @@ struct FrameParams {
     uint photon_mapping;
     uint gather_rays;
     float glossy_threshold;
+    uint unbounded_first;
+    uint _pad[3];
 };
 
 struct DispatchRange {

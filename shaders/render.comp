@@ -8,6 +8,8 @@
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
 // layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
 // variant: textured
+// variant: analytic
+// variant: textured analytic
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

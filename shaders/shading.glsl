@@ -8,10 +8,11 @@ vec3 camera_direction(float sx, float sy) {
 }
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
-// off the surface to the side the ray goes (wo's side for reflection, the other for transmission).
+// off the surface to the side the ray goes (wo's side for reflection, the other for transmission),
+// by the hit's own offset.
 vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
     vec3 nf = dot(wo, h.ng) > 0.0 ? h.ng : -h.ng;
-    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * frame.ray_epsilon : h.p + nf * frame.ray_epsilon;
+    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * h.eps : h.p + nf * h.eps;
 }
 
 // Radiance reflected at h toward wo from one sampled light through the estimate lobes of b: a
@@ -27,12 +28,12 @@ vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint d
     vec3 wi = to_light / dist;
     vec3 f = bsdf_eval(b, wo, wi);
     if (f == vec3(0.0)) return vec3(0.0);
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 times area (uniform-area pdf).
+    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     float geometry = abs(dot(b.ns, wi)) / dist2;
     if (l.kind != LIGHT_POINT) {
         float cos_l = -dot(s.n, wi);
         if (cos_l <= 0.0) return vec3(0.0);
-        geometry *= cos_l * l.area;
+        geometry *= cos_l * s.inv_pdf;
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
@@ -41,6 +42,6 @@ vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint d
     float shadow_length = length(to_target);
     float t_unused;
     rays++;
-    if (trace_ray(origin, to_target / shadow_length, shadow_length - frame.ray_epsilon, true, t_unused) != NO_LIGHT) return vec3(0.0);
+    if (trace_ray(origin, to_target / shadow_length, shadow_length - s.eps, true, t_unused) != NO_LIGHT) return vec3(0.0);
     return f * s.emitted * (geometry / l.pick_probability);
 }

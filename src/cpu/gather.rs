@@ -113,7 +113,7 @@ pub fn gather_ray(
         return Vec3::ZERO;
     }
     let mut d = first.wi;
-    let mut o = offset_origin(s, h, wo, first.flags);
+    let mut o = offset_origin(h, wo, first.flags);
     let mut throughput = Vec3::ONE;
     for bounce in 0..f.max_depth {
         *rays += 1;
@@ -132,7 +132,7 @@ pub fn gather_ray(
                 break;
             }
             throughput *= smp.weight / q;
-            o = offset_origin(s, &y, wo_y, smp.flags);
+            o = offset_origin(&y, wo_y, smp.flags);
             d = smp.wi;
             continue;
         }

@@ -53,7 +53,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 break;
             }
             throughput *= smp.weight / q;
-            o = offset_origin(s, &h, wo, smp.flags);
+            o = offset_origin(&h, wo, smp.flags);
             d = smp.wi;
             continue;
         }

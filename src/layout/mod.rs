@@ -146,6 +146,10 @@ gpu_structs! {
         pub gather_rays: u32,
         /// Glossy lobes with GGX width up to this are path lobes, rougher ones estimate lobes.
         pub glossy_threshold: f32,
+        /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
+        /// BVH, every ray tests them.
+        pub unbounded_first: u32,
+        pub _pad: [u32; 3],
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -49,21 +49,27 @@ pub struct GpuKernels {
     render: OnceCell<Kernel>,
     /// Use the `textured` variants of the scene kernels (`SceneBuffers::textured`).
     textured: bool,
+    /// Use the `analytic` variants of the scene kernels (`SceneBuffers::analytic`).
+    analytic: bool,
 }
 
 impl GpuKernels {
-    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha.
-    pub fn for_scene(textured: bool) -> GpuKernels {
-        GpuKernels { textured, ..Default::default() }
+    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha,
+    /// and with (`analytic`) or without planes, discs, cones, tori and superellipsoids.
+    pub fn for_scene(textured: bool, analytic: bool) -> GpuKernels {
+        GpuKernels { textured, analytic, ..Default::default() }
     }
 
-    /// `name`, or its `textured` variant for a textured scene.
+    /// `name`, or its `textured`, `analytic` or `textured_analytic` variant.
     fn scene_kernel(&self, name: &str) -> String {
+        let mut out = name.to_string();
         if self.textured {
-            format!("{name}_textured")
-        } else {
-            name.to_string()
+            out.push_str("_textured");
         }
+        if self.analytic {
+            out.push_str("_analytic");
+        }
+        out
     }
 
     fn get<'k>(
@@ -153,6 +159,8 @@ pub struct DeviceScene {
     pub shape_data: Buffer,
     /// The scene needs the `textured` variant of the scene kernels.
     pub textured: bool,
+    /// The scene needs the `analytic` variant of the scene kernels.
+    pub analytic: bool,
 }
 
 impl DeviceScene {
@@ -188,6 +196,7 @@ impl DeviceScene {
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
             textured: buffers.textured,
+            analytic: buffers.analytic,
         })
     }
 
@@ -212,6 +221,7 @@ impl DeviceScene {
         }
         let frame = photon_frame(buffers, photons);
         self.textured = buffers.textured;
+        self.analytic = buffers.analytic;
         Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
             + replace(ctx, &mut self.nodes, &buffers.nodes)?
             + replace(ctx, &mut self.primitives, &buffers.primitives)?
@@ -402,7 +412,15 @@ pub fn build_maps_gpu(
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
     let mut capacity = [0; 2];
-    build_maps(ctx, &GpuKernels::for_scene(scene.textured), scene, buffers, settings, pass, &mut capacity)
+    build_maps(
+        ctx,
+        &GpuKernels::for_scene(scene.textured, scene.analytic),
+        scene,
+        buffers,
+        settings,
+        pass,
+        &mut capacity,
+    )
 }
 
 /// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
@@ -482,7 +500,7 @@ impl<'a> GpuRenderer<'a> {
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.textured);
+        let kernels = GpuKernels::for_scene(buffers.textured, buffers.analytic);
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -512,8 +530,8 @@ impl<'a> GpuRenderer<'a> {
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
         let in_place = self.scene.update(self.ctx, buffers, photons)?;
-        if buffers.textured != self.kernels.textured {
-            self.kernels = GpuKernels::for_scene(buffers.textured);
+        if buffers.textured != self.kernels.textured || buffers.analytic != self.kernels.analytic {
+            self.kernels = GpuKernels::for_scene(buffers.textured, buffers.analytic);
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {

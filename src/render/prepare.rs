@@ -1,13 +1,13 @@
 //! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
 use super::pack::pack_scene;
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
-use crate::scene::Scene;
+use crate::scene::{Geometry, Scene};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -22,6 +22,8 @@ pub struct SceneBuffers {
     pub shape_data: Vec<f32>,
     /// True when the scene has image or pattern textures (see `PackedScene::textured`).
     pub textured: bool,
+    /// True when the scene has analytic shapes other than spheres (see `PackedScene::analytic`).
+    pub analytic: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
@@ -59,14 +61,26 @@ fn channel_mean(v: [f32; 3]) -> f32 {
 }
 
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
-    // Primitives in BVH order, each emitter tagged with its light index
+    // Primitives in BVH order, then the unbounded ones (infinite planes) that every ray tests
     let packed = pack_scene(scene);
-    let surface_area = packed.photon_area;
-    let bvh = build_bvh(&packed.primitives, &packed.bounds)?;
+    let is_unbounded: Vec<bool> = scene.shapes.iter().map(|s| s.geometry.is_unbounded()).collect();
+    let bounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| !is_unbounded[i]).collect();
+    let unbounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| is_unbounded[i]).collect();
+    let bvh = build_bvh(
+        &bounded.iter().map(|&i| packed.primitives[i]).collect::<Vec<_>>(),
+        &bounded.iter().map(|&i| packed.bounds[i]).collect::<Vec<_>>(),
+    )?;
     let mut primitives = bvh.primitives;
+    let unbounded_first = primitives.len() as u32;
+    primitives.extend(unbounded.iter().map(|&i| packed.primitives[i]));
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
     // original index, which the reorder keeps in `order`).
-    let areas: Vec<f32> = bvh.order.iter().map(|&i| packed.areas.get(i as usize).copied().unwrap_or(0.0)).collect();
+    let areas: Vec<f32> = bvh
+        .order
+        .iter()
+        .map(|&i| bounded.get(i as usize).map_or(0.0, |&j| packed.areas[j]))
+        .chain(unbounded.iter().map(|_| 0.0))
+        .collect();
 
     // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
     let mut lights = Vec::new();
@@ -110,6 +124,29 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
     let (bounding_center, bounding_radius) =
         if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    // An infinite plane holds photons over the part of it near the rest of the scene: its disc
+    // inside the sphere around the bounded shapes, the point lights and the camera.
+    let mut surface_area = packed.photon_area;
+    if !unbounded.is_empty() {
+        let mut extent = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        if lo.cmple(hi).all() {
+            extent = (lo, hi);
+        }
+        for p in scene.point_lights.iter().map(|l| l.position).chain([scene.camera.position]) {
+            extent = (extent.0.min(p), extent.1.max(p));
+        }
+        let (center, radius) = ((extent.0 + extent.1) * 0.5, (extent.1 - extent.0).length() * 0.5);
+        for &i in &unbounded {
+            if let Geometry::Analytic(a) = &scene.shapes[i].geometry {
+                let m = a.world_from_object;
+                let normal = (Mat3::from(m.matrix3).inverse().transpose() * Vec3::Y).normalize();
+                let distance = (center - Vec3::from(m.translation)).dot(normal).abs();
+                let opacity = scene.materials[scene.shapes[i].material as usize].opacity;
+                let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
+                surface_area += std::f32::consts::PI * (radius * radius - distance * distance).max(0.0) * visible;
+            }
+        }
+    }
     let cam = &scene.camera;
     let forward = (cam.look_at - cam.position).normalize();
     // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
@@ -135,6 +172,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         photon_mapping: 0,
         gather_rays: 0,
         glossy_threshold: scene.photons.map_or(GLOSSY_THRESHOLD, |p| p.glossy_threshold),
+        unbounded_first,
+        _pad: [0; 3],
     };
     Ok(SceneBuffers {
         frame,
@@ -146,6 +185,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         texture_data: packed.texture_data,
         shape_data: packed.shape_data,
         textured: packed.textured,
+        analytic: packed.analytic,
         bounding_radius,
         surface_area,
     })
