@@ -10,6 +10,8 @@
 // variant: textured
 // variant: analytic
 // variant: textured analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

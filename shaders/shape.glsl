@@ -112,6 +112,9 @@ float ray_cone(vec3 o, vec3 d, float r0, float r1, float h, float t_min, float t
     return INF;
 }
 
+// The torus and the superellipsoid: only in the `implicit` variant (their root finders are the
+// largest code of all, and lavapipe pays for code size in every ray).
+#ifdef VARIANT_IMPLICIT
 // (value, derivative) at x of lead x^4 + c.w x^3 + c.z x^2 + c.y x + c.x.
 vec2 poly4(float lead, vec4 c, float x) {
     float f = (((lead * x + c.w) * x + c.z) * x + c.y) * x + c.x;
@@ -238,6 +241,8 @@ float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
     return (found && t > t_min && t < t_max) ? t : INF;
 }
 
+#endif
+
 float analytic_intersect(Primitive p, vec3 o, vec3 d, float t_min, float t_max) {
     uint a = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
     vec3 oo = affine_point(a, o);
@@ -247,10 +252,12 @@ float analytic_intersect(Primitive p, vec3 o, vec3 d, float t_min, float t_max) 
     WHEN(kind == PRIMITIVE_PLANE) { t = ray_plane(oo, od, t_min, t_max); }
     WHEN(kind == PRIMITIVE_DISC) { t = ray_disc(oo, od, p.p0[0], p.p0[1], t_min, t_max); }
     WHEN(kind == PRIMITIVE_CONE) { t = ray_cone(oo, od, p.p0[0], p.p0[1], p.p0[2], t_min, t_max); }
+#ifdef VARIANT_IMPLICIT
     WHEN(kind == PRIMITIVE_TORUS) { t = ray_torus(oo, od, p.p0[0], p.p0[1], t_min, t_max); }
     WHEN(kind == PRIMITIVE_SUPERELLIPSOID) {
         t = ray_superellipsoid(oo, od, vec4(p.p0[0], p.p0[1], p.p0[2], p.p1[0]), t_min, t_max);
     }
+#endif
     return t;
 }
 #endif
@@ -363,6 +370,7 @@ void analytic_surface(Primitive p, vec3 x, bool wants_uv, inout Hit h) {
         dqdu = 2.0 * PI * vec3(q.z, 0.0, -q.x);
         dqdv = vec3((r1 - r0) * sin_phi, height, (r1 - r0) * cos_phi);
     }
+#ifdef VARIANT_IMPLICIT
     WHEN(kind == PRIMITIVE_TORUS) {
         float big_r = p.p0[0];
         float small_r = p.p0[1];
@@ -392,6 +400,7 @@ void analytic_surface(Primitive p, vec3 x, bool wants_uv, inout Hit h) {
         dqdu = r * (dwdu - q * dot(g, dwdu));
         dqdv = r * (dwdv - q * dot(g, dwdv));
     }
+#endif
     h.p = affine_point(wo, q);
     h.ng = normalize(affine_transpose_vector(ow, n));
     if (wants_uv) {
@@ -435,6 +444,7 @@ vec3 analytic_sample(Primitive p, vec2 u, out float inv_pdf) {
         q = vec3(rho * sin_phi, v * height, rho * cos_phi);
         inv = PI * (r0 + r1) * slant;
     }
+#ifdef VARIANT_IMPLICIT
     WHEN(kind == PRIMITIVE_TORUS) {
         float big_r = p.p0[0];
         float small_r = p.p0[1];
@@ -454,6 +464,7 @@ vec3 analytic_sample(Primitive p, vec2 u, out float inv_pdf) {
         n = g.xyz;
         inv = 4.0 * PI * length(g.xyz) * r * r * r;
     }
+#endif
     vec3 nw = affine_transpose_vector(ow, n);
     inv_pdf = inv * det * length(nw) / length(n);
     return affine_point(wo, q);

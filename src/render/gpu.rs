@@ -4,6 +4,7 @@ use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
+use super::prepare::KernelVariant;
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
     SceneBuffers,
@@ -51,23 +52,38 @@ pub struct GpuKernels {
     textured: bool,
     /// Use the `analytic` variants of the scene kernels (`SceneBuffers::analytic`).
     analytic: bool,
+    /// Use the `analytic_implicit` variants (`SceneBuffers::implicit`).
+    implicit: bool,
 }
 
 impl GpuKernels {
-    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha,
-    /// and with (`analytic`) or without planes, discs, cones, tori and superellipsoids.
-    pub fn for_scene(textured: bool, analytic: bool) -> GpuKernels {
-        GpuKernels { textured, analytic, ..Default::default() }
+    /// The kernels for a scene's variant: with (`textured`) or without image and pattern
+    /// textures or alpha, with (`analytic`) or without planes, discs and cones, and with
+    /// (`implicit`, which implies `analytic`) or without tori and superellipsoids.
+    pub fn for_scene(variant: KernelVariant) -> GpuKernels {
+        GpuKernels {
+            textured: variant.textured,
+            analytic: variant.analytic || variant.implicit,
+            implicit: variant.implicit,
+            ..Default::default()
+        }
     }
 
-    /// `name`, or its `textured`, `analytic` or `textured_analytic` variant.
+    fn variant(&self) -> KernelVariant {
+        KernelVariant { textured: self.textured, analytic: self.analytic, implicit: self.implicit }
+    }
+
+    /// `name`, or its variant: `name[_textured][_analytic[_implicit]]`.
     fn scene_kernel(&self, name: &str) -> String {
         let mut out = name.to_string();
         if self.textured {
             out.push_str("_textured");
         }
-        if self.analytic {
+        if self.analytic || self.implicit {
             out.push_str("_analytic");
+        }
+        if self.implicit {
+            out.push_str("_implicit");
         }
         out
     }
@@ -157,10 +173,8 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
-    /// The scene needs the `textured` variant of the scene kernels.
-    pub textured: bool,
-    /// The scene needs the `analytic` variant of the scene kernels.
-    pub analytic: bool,
+    /// Which variant of the scene kernels the scene needs.
+    pub variant: KernelVariant,
 }
 
 impl DeviceScene {
@@ -195,8 +209,7 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
-            textured: buffers.textured,
-            analytic: buffers.analytic,
+            variant: buffers.variant(),
         })
     }
 
@@ -220,8 +233,7 @@ impl DeviceScene {
             }
         }
         let frame = photon_frame(buffers, photons);
-        self.textured = buffers.textured;
-        self.analytic = buffers.analytic;
+        self.variant = buffers.variant();
         Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
             + replace(ctx, &mut self.nodes, &buffers.nodes)?
             + replace(ctx, &mut self.primitives, &buffers.primitives)?
@@ -412,15 +424,7 @@ pub fn build_maps_gpu(
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
     let mut capacity = [0; 2];
-    build_maps(
-        ctx,
-        &GpuKernels::for_scene(scene.textured, scene.analytic),
-        scene,
-        buffers,
-        settings,
-        pass,
-        &mut capacity,
-    )
+    build_maps(ctx, &GpuKernels::for_scene(scene.variant), scene, buffers, settings, pass, &mut capacity)
 }
 
 /// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
@@ -500,7 +504,7 @@ impl<'a> GpuRenderer<'a> {
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.textured, buffers.analytic);
+        let kernels = GpuKernels::for_scene(buffers.variant());
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -530,8 +534,8 @@ impl<'a> GpuRenderer<'a> {
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
         let in_place = self.scene.update(self.ctx, buffers, photons)?;
-        if buffers.textured != self.kernels.textured || buffers.analytic != self.kernels.analytic {
-            self.kernels = GpuKernels::for_scene(buffers.textured, buffers.analytic);
+        if buffers.variant() != self.kernels.variant() {
+            self.kernels = GpuKernels::for_scene(buffers.variant());
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {

@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
-pub use prepare::{prepare, FrameSettings, SceneBuffers};
+pub use prepare::{prepare, FrameSettings, KernelVariant, SceneBuffers};
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;

@@ -7,8 +7,8 @@ use glam::{Affine3A, Mat3, Vec3};
 use crate::layout::constants::*;
 use crate::layout::{Material, Primitive, Texture};
 use crate::scene::{
-    AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene, Shape,
-    TextureDesc, TextureKind, TextureSpace,
+    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene,
+    Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -31,6 +31,9 @@ pub struct PackedScene {
     /// True when some shape is a plane, disc, cone, torus or superellipsoid: the kernels then
     /// need their `analytic` variant.
     pub analytic: bool,
+    /// True when some shape is a torus or a superellipsoid: the kernels then need their
+    /// `analytic_implicit` variant.
+    pub implicit: bool,
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
@@ -57,6 +60,12 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         }
     }
     packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_)));
+    packed.implicit = scene.shapes.iter().any(|s| {
+        matches!(
+            s.geometry,
+            Geometry::Analytic(Analytic { kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }, .. })
+        )
+    });
     packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
         || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.

@@ -24,13 +24,32 @@ pub struct SceneBuffers {
     pub textured: bool,
     /// True when the scene has analytic shapes other than spheres (see `PackedScene::analytic`).
     pub analytic: bool,
+    /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
+    pub implicit: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
     pub surface_area: f32,
 }
 
+/// Which variant of the scene kernels a scene needs: lavapipe runs every branch of a shader
+/// under masks, so each kind of costly code lives only in the kernels of the scenes that use it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KernelVariant {
+    /// Image and pattern textures, alpha.
+    pub textured: bool,
+    /// Planes, discs and cones.
+    pub analytic: bool,
+    /// Tori and superellipsoids (with the analytic shapes).
+    pub implicit: bool,
+}
+
 impl SceneBuffers {
+    /// The variant of the scene kernels this scene needs.
+    pub fn variant(&self) -> KernelVariant {
+        KernelVariant { textured: self.textured, analytic: self.analytic, implicit: self.implicit }
+    }
+
     pub fn view(&self) -> SceneView<'_> {
         SceneView {
             frame: &self.frame,
@@ -186,6 +205,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         shape_data: packed.shape_data,
         textured: packed.textured,
         analytic: packed.analytic,
+        implicit: packed.implicit,
         bounding_radius,
         surface_area,
     })
