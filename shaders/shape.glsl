@@ -148,8 +148,9 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
     float tc = -dot(o, dn);
     vec3 p = (o + tc * dn) / scale;
     float m2 = dot(p, p);
-    if (m2 >= 1.0) return INF;
-    float half_chord = sqrt(1.0 - m2);
+    float reach = TORUS_CHORD * TORUS_CHORD;
+    if (m2 >= reach) return INF;
+    float half_chord = sqrt(reach - m2);
     float lo = max(-half_chord, (t_min * len - tc) / scale);
     float hi = min(half_chord, (t_max * len - tc) / scale);
     if (!(lo < hi)) return INF;
@@ -208,12 +209,11 @@ vec4 superellipsoid_gauge(vec3 p, vec4 ex) {
     return vec4(grad, h);
 }
 
-const float SUPERELLIPSOID_TOLERANCE = 1e-6;
 
 float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
     vec3 inv = 1.0 / d;
-    vec3 ta = (vec3(-1.0) - o) * inv;
-    vec3 tb = (vec3(1.0) - o) * inv;
+    vec3 ta = (vec3(-SUPERELLIPSOID_BOX) - o) * inv;
+    vec3 tb = (vec3(SUPERELLIPSOID_BOX) - o) * inv;
     vec3 tn = min(ta, tb);
     vec3 tf = max(ta, tb);
     float t_in = max(max(max(tn.x, tn.y), tn.z), t_min);

@@ -232,10 +232,14 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
     let tc = -o.dot(dn);
     let p = (o + tc * dn) / scale;
     let m2 = p.dot(p);
-    if m2 >= 1.0 {
+    // The chord runs to a sphere 0.1% larger than the bounding one: the outer equator touches
+    // the bounding sphere, and a ray leaving there would end its chord on a root, whose sign
+    // rounding may hide.
+    let reach = TORUS_CHORD * TORUS_CHORD;
+    if m2 >= reach {
         return f32::INFINITY;
     }
-    let half = (1.0 - m2).sqrt();
+    let half = (reach - m2).sqrt();
     let lo = (-half).max((t_min * len - tc) / scale);
     let hi = half.min((t_max * len - tc) / scale);
     if !(lo < hi) {
@@ -321,9 +325,6 @@ pub fn superellipsoid_gauge(p: Vec3, ex: Vec4) -> (f32, Vec3) {
     (h, grad)
 }
 
-/// Newton steps stop once the gauge is this close to 1 (about 1e-6 object units off the surface).
-const SUPERELLIPSOID_TOLERANCE: f32 = 1e-6;
-
 /// POV-Ray's superellipsoid inside [-1, 1]^3. Along a ray, h - 1 is a convex function (both
 /// exponents at most 2), so Newton's method started outside the surface on its near side
 /// climbs monotonically to the first root and never steps over it, and a step that leaves the
@@ -333,9 +334,11 @@ const SUPERELLIPSOID_TOLERANCE: f32 = 1e-6;
 /// shapes converge in a few steps.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
 pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) -> f32 {
+    // The box is grown by 1e-3 so that its entry point lies clearly outside even a boxy shape,
+    // whose faces fill the unit box's faces to float precision.
     let inv = d.recip();
-    let ta = (Vec3::NEG_ONE - o) * inv;
-    let tb = (Vec3::ONE - o) * inv;
+    let ta = (Vec3::splat(-SUPERELLIPSOID_BOX) - o) * inv;
+    let tb = (Vec3::splat(SUPERELLIPSOID_BOX) - o) * inv;
     let t_in = ta.min(tb).max_element().max(t_min);
     let t_out = ta.max(tb).min_element();
     if !(t_in < t_out) {

@@ -87,11 +87,22 @@ shared_constants! {
     SHAPE_DATA_FLOATS: u32 = 26;
     /// Ray origins leave an analytic shape's hit point by this times (its largest coordinate +
     /// the shape's size): its hit points are projected onto the surface in object space, so
-    /// their error scales with those, not with the scene (about 170 float ulps).
-    SHAPE_EPSILON_SCALE: f32 = 1.0e-5;
+    /// their error scales with those, not with the scene (this is about 17 float ulps of each).
+    SHAPE_EPSILON_SCALE: f32 = 1.0e-6;
     /// Most Newton steps of one superellipsoid root search (each from one side of a convex
     /// function, so monotone; a grazing ray's double root still halves the gap each step).
     SUPERELLIPSOID_STEPS: u32 = 24;
+    /// Superellipsoid Newton steps stop once the gauge is this close to 1 (about 1e-6 object
+    /// units off the surface).
+    SUPERELLIPSOID_TOLERANCE: f32 = 1.0e-6;
+    /// Half side of the box the superellipsoid's root search starts from: the unit box grown so
+    /// that its entry point lies clearly outside even a boxy shape, whose faces fill the unit
+    /// box's faces to float precision.
+    SUPERELLIPSOID_BOX: f32 = 1.001;
+    /// Radius, over the bounding sphere's, of the sphere on whose chord the torus's roots are
+    /// sought: the outer equator touches the bounding sphere, and a chord ending on a root would
+    /// leave its sign to rounding.
+    TORUS_CHORD: f32 = 1.001;
     /// Most safeguarded Newton steps per bracketed root of the torus quartic and of its
     /// derivative; bisection alone would need 24 to reach float precision on [-1, 1].
     TORUS_ROOT_STEPS: u32 = 16;

@@ -164,6 +164,94 @@ impl Analytic {
         distance_bound(self.kind, q).abs()
     }
 
+    /// The unit outward world normal at the object point of world point p (which should lie on
+    /// the surface), in double precision.
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        let m = self.world_from_object_f64();
+        let q = m.inverse().transform_point3(p);
+        let n = match self.kind {
+            AnalyticKind::Cone { r0, r1, height } => {
+                let phi = q.x.atan2(q.z);
+                DVec3::new(height as f64 * phi.sin(), -(r1 - r0) as f64, height as f64 * phi.cos())
+            }
+            kind => object_normal_f64(kind, q),
+        };
+        (m.matrix3.inverse().transpose() * n).normalize()
+    }
+
+    /// Largest angle (radians) by which the normal turns when p moves by 1e-5 object units along
+    /// an axis: large near a superellipsoid's edges or a cone's apex, where a normal computed
+    /// from a point rounded to float precision may point anywhere nearby.
+    pub fn normal_sensitivity(&self, p: DVec3) -> f64 {
+        let m = self.world_from_object_f64();
+        let n = self.normal_at(p);
+        [DVec3::X, DVec3::Y, DVec3::Z]
+            .iter()
+            .map(|&axis| self.normal_at(p + m.matrix3 * (axis * 1e-5)).dot(n).clamp(-1.0, 1.0).acos())
+            .fold(0.0, f64::max)
+    }
+
+    /// Object-space distance of a world point from the shape's rim (a disc's circles, a cone's
+    /// end circles), infinite for shapes without one: rays this close to a rim may hit or miss
+    /// by rounding.
+    pub fn rim_distance(&self, p: DVec3) -> f64 {
+        let q = self.world_from_object_f64().inverse().transform_point3(p);
+        let rho = (q.x * q.x + q.z * q.z).sqrt();
+        match self.kind {
+            AnalyticKind::Disc { radius, inner_radius } => {
+                let edge = (rho - radius as f64).abs();
+                if inner_radius > 0.0 {
+                    edge.min((rho - inner_radius as f64).abs())
+                } else {
+                    edge
+                }
+            }
+            AnalyticKind::Cone { height, .. } => q.y.abs().min((q.y - height as f64).abs()),
+            _ => f64::INFINITY,
+        }
+    }
+
+    /// How deep (object units, by the distance bound) the world ray o + t d goes into the shape
+    /// for t within `window` of `t`: about 0 or less for a ray that only touches the surface
+    /// there, which rounding may count as a hit or a miss. Infinite for planes and discs.
+    pub fn local_depth(&self, o: DVec3, d: DVec3, t: f64, window: f64) -> f64 {
+        if matches!(self.kind, AnalyticKind::Plane | AnalyticKind::Disc { .. }) {
+            return f64::INFINITY;
+        }
+        let inv = self.world_from_object_f64().inverse();
+        let steps = 4000;
+        (0..=steps)
+            .map(|i| {
+                let s = (t - window + 2.0 * window * i as f64 / steps as f64).max(0.0);
+                -distance_bound(self.kind, inv.transform_point3(o + s * d))
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// How deep the world ray o + t d (t > 0) goes into a torus or superellipsoid, by its
+    /// distance bound sampled finely along the chord of the bounding sphere (object units; <= 0
+    /// for a miss). A ray that goes in by less than rounding may hit or miss.
+    pub fn penetration(&self, o: DVec3, d: DVec3) -> f64 {
+        let inv = self.world_from_object_f64().inverse();
+        let (o, d) = (inv.transform_point3(o), inv.transform_vector3(d).normalize());
+        let radius = match self.kind {
+            AnalyticKind::Torus { major, minor } => (major + minor) as f64,
+            AnalyticKind::Superellipsoid { .. } => 3f64.sqrt(),
+            _ => return f64::INFINITY,
+        };
+        let tc = -o.dot(d);
+        let m2 = (o + tc * d).length_squared();
+        if m2 >= radius * radius {
+            return 0.0;
+        }
+        let half = (radius * radius - m2).sqrt();
+        let (start, end) = ((tc - half).max(0.0), tc + half);
+        let steps = 20_000;
+        (0..=steps)
+            .map(|i| -distance_bound(self.kind, o + (start + (end - start) * i as f64 / steps as f64) * d))
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
     /// Triangles approximating the surface, `segments` around and proportionally across, with
     /// the outward winding; none for the plane.
     pub fn tessellate(&self, segments: usize) -> Vec<[Vec3; 3]> {
