@@ -116,7 +116,9 @@ gpu_structs! {
         /// Probability of picking this light.
         pub pick_probability: f32,
         pub cdf: f32,
-        /// Surface area (scene units squared); 0 for point lights.
+        /// Surface area (scene units squared; estimated for superellipsoids and stretched
+        /// shapes); 0 for point lights. It only sets the light's power for picking: each sample
+        /// on the light carries its own 1/pdf (`shape_sample`).
         pub area: f32,
         pub _pad: u32,
     }
