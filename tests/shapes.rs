@@ -411,3 +411,50 @@ fn gpu_matches_cpu_on_every_shape() {
     }
     assert!(cpu.image.pixels.iter().filter(|p| p[0] > 0.0).count() > 600, "the image is mostly black");
 }
+
+#[test]
+fn surface_derivatives_match_the_uv_they_come_from() {
+    // A uv-space texture makes the kernels compute uv, dpdu and dpdv.
+    let header = HEADER.replace(
+        "[materials.white]\ntype = \"diffuse\"",
+        "[textures.checks]\ntype = \"pattern\"\npattern = \"checker\"\n[materials.white]\ntype = \"diffuse\"\nreflectance = { texture = \"checks\" }",
+    );
+    for (name, shape_text) in SHAPES {
+        let text = format!("{header}\n[[shapes]]\nmaterial = \"white\"\n{shape_text}\n");
+        let scene = parse_scene(&text, std::path::Path::new("uv-test.toml")).unwrap_or_else(|e| panic!("{e}"));
+        let shape = analytic(&scene);
+        if shape.size() as f64 > 10.0 * extent(shape) {
+            // Far from the origin for its size (the thin torus at x = 40): f32 coordinates
+            // there are too coarse for finite differences over its 0.02-wide tube.
+            continue;
+        }
+        let buffers = common::buffers(&scene, 8, 8);
+        let view = buffers.view();
+        let i = prim_index(&buffers);
+        let mirrored = shape.world_from_object.matrix3.determinant() < 0.0;
+        let (mut worst, mut checked) = (0.0f32, 0);
+        for k in 0..400u32 {
+            let u = random3(k, 30);
+            let (p, n, _) = shape.sample([0.05 + 0.9 * u.x, 0.05 + 0.9 * u.y]);
+            let h = photonix::cpu::shape::shape_surface(&view, i, p.as_vec3());
+            // The tangent frame turns the same way as the outward normal.
+            let frame = h.dpdu.cross(h.dpdv).normalize().dot(n.as_vec3());
+            assert!(if mirrored { frame < -0.99 } else { frame > 0.99 }, "{name}: dpdu x dpdv . n = {frame} at {p}");
+            // Small steps along +-dpdu (dpdv) move uv by the step in u (v), to second order.
+            let step = 1e-3;
+            for (dp, expected) in [(h.dpdu, glam::Vec2::X), (h.dpdv, glam::Vec2::Y)] {
+                let ahead = photonix::cpu::shape::shape_surface(&view, i, h.p + step * dp).uv;
+                let behind = photonix::cpu::shape::shape_surface(&view, i, h.p - step * dp).uv;
+                let duv = (ahead - behind) / (2.0 * step);
+                if (ahead - behind).abs().max_element() > 0.1 {
+                    continue; // across the seam of a periodic u or v
+                }
+                worst = worst.max((duv - expected).length());
+                checked += 1;
+            }
+        }
+        println!("{name:22}: {checked} steps, uv moves as the derivatives say to {worst:.1e}");
+        // Central differences in f32: error about step^2 times the curvature, plus rounding.
+        assert!(checked > 600 && worst < 5e-3, "{name}: worst {worst} over {checked} steps");
+    }
+}
