@@ -30,10 +30,14 @@ vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint d
     if (f == vec3(0.0)) return vec3(0.0);
     // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     float geometry = abs(dot(b.ns, wi)) / dist2;
+    // The shadow ray stops short of the light's point by its offset over the cosine there (see
+    // the twin).
+    float shadow_end = s.eps;
     if (l.kind != LIGHT_POINT) {
         float cos_l = -dot(s.n, wi);
         if (cos_l <= 0.0) return vec3(0.0);
         geometry *= cos_l * s.inv_pdf;
+        shadow_end = s.eps / max(cos_l, 1e-2);
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
@@ -42,6 +46,6 @@ vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint d
     float shadow_length = length(to_target);
     float t_unused;
     rays++;
-    if (trace_ray(origin, to_target / shadow_length, shadow_length - s.eps, true, t_unused) != NO_LIGHT) return vec3(0.0);
+    if (trace_ray(origin, to_target / shadow_length, shadow_length - shadow_end, true, t_unused) != NO_LIGHT) return vec3(0.0);
     return f * s.emitted * (geometry / l.pick_probability);
 }
