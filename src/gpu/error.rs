@@ -126,12 +126,10 @@ pub enum GpuError {
     )]
     Vulkan { call: &'static str, label: String, result: vk::Result },
 
-    #[error("gpu memory allocator failed while allocating `{name}`: {source}; use --backend cpu if this persists")]
-    Allocator {
-        name: String,
-        #[source]
-        source: gpu_allocator::AllocationError,
-    },
+    // `cause`, not a `#[source]`: the message holds its text already, and `main` prints the
+    // chain of sources, which would repeat it.
+    #[error("gpu memory allocator failed while allocating `{name}`: {cause}; use --backend cpu if this persists")]
+    Allocator { name: String, cause: gpu_allocator::AllocationError },
 
     #[error(
         "Vulkan validation reported {} message(s); fix the first one:\n{}",
@@ -167,7 +165,7 @@ impl GpuError {
     pub(crate) fn allocator(name: &str, size: u64, source: gpu_allocator::AllocationError) -> GpuError {
         match source {
             gpu_allocator::AllocationError::OutOfMemory => GpuError::OutOfMemory { name: name.to_string(), size },
-            source => GpuError::Allocator { name: name.to_string(), source },
+            cause => GpuError::Allocator { name: name.to_string(), cause },
         }
     }
 }

@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
-pub use prepare::{prepare, FrameSettings, SceneBuffers};
+pub use prepare::{prepare, FrameSettings, PrepareError, SceneBuffers};
 
 use crate::io::Image;
 use crate::layout::constants::{LAYER_COUNT, LAYER_DIRECT};
