@@ -10,15 +10,15 @@ use photonix::render::bench::{bench, bench_photons};
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::load_scene;
 
-use super::parse::parse_resolution;
+use super::parse::{parse_photons, parse_resolution, parse_spp};
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
     /// Scene to measure
     #[arg(default_value = "scenes/cornell-box.toml")]
     scene: PathBuf,
-    /// Samples per pixel of each timed frame
-    #[arg(long, default_value_t = 16)]
+    /// Samples per pixel of each timed frame, 1 to 4096
+    #[arg(long, default_value = "16", value_parser = parse_spp, allow_negative_numbers = true)]
     spp: u32,
     /// Image size as WIDTHxHEIGHT [default: the scene's]
     #[arg(long, value_parser = parse_resolution)]
@@ -29,8 +29,8 @@ pub struct BenchArgs {
     /// Skip the CPU reference
     #[arg(long)]
     gpu_only: bool,
-    /// Also time photon tracing and the grid build at these photon path counts (comma-separated)
-    #[arg(long, value_delimiter = ',')]
+    /// Also time photon tracing and the grid build at these photon path counts (comma-separated, each 1 to 1000000000)
+    #[arg(long, value_delimiter = ',', value_parser = parse_photons)]
     photon_paths: Vec<u32>,
 }
 
@@ -40,7 +40,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
     let buffers = prepare(&scene, &settings)?;
     out!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);
-    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
+    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone())?)?;
 
     // Rays per second
     let mut results = vec![bench(Some(&ctx), &buffers, args.spp)?];

@@ -41,6 +41,19 @@ pub enum GpuError {
     )]
     ValidationLayerMissing,
 
+    #[error(
+        "PHOTONIX_VALIDATION is `{value}`; set it to 1, true, yes or on to turn the Vulkan validation layer on, or \
+         0, false, no or off (or unset it) to leave it off"
+    )]
+    BadValidationSetting { value: String },
+
+    #[error(
+        "{call} returned {result:?} at startup, before any device was opened; the Vulkan loader reports a driver \
+         manifest it cannot parse this way{manifests}: check that file, or run with VK_LOADER_DEBUG=error to see the \
+         loader's complaint, or use --backend cpu"
+    )]
+    LoaderFailed { call: &'static str, result: vk::Result, manifests: String },
+
     #[error("no Vulkan device matches `{requested}`; pass an index or part of a name, one of:\n{available}")]
     DeviceNotFound { requested: String, available: String },
 
@@ -148,6 +161,27 @@ impl GpuError {
                 GpuError::OutOfMemoryDuring { label: label.to_string() }
             }
             _ => GpuError::Vulkan { call, label: label.to_string(), result },
+        }
+    }
+
+    /// Maps a failed call of the loader or the instance, before any device exists. Running out of
+    /// memory there is what the loader answers to a malformed driver manifest (a JSON file it
+    /// cannot parse), not a real shortage: say so, and name the manifests the environment chose.
+    pub(crate) fn loader(call: &'static str, result: vk::Result) -> GpuError {
+        match result {
+            vk::Result::ERROR_OUT_OF_HOST_MEMORY | vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => {
+                let chosen: Vec<String> = ["VK_DRIVER_FILES", "VK_ICD_FILENAMES", "VK_ADD_DRIVER_FILES"]
+                    .iter()
+                    .filter_map(|name| std::env::var(name).ok().map(|v| format!("{name}={v}")))
+                    .collect();
+                let manifests = if chosen.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (the environment sets {})", chosen.join(", "))
+                };
+                GpuError::LoaderFailed { call, result, manifests: crate::limits::printable_message(&manifests) }
+            }
+            _ => GpuError::vk(call, "startup", result),
         }
     }
 
