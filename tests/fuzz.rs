@@ -662,8 +662,7 @@ fn check_scene(
         Err(e) => {
             let message = e.to_string();
             let fail = |what: &str| {
-                let key =
-                    format!("{what}: {}", message.chars().filter(|c| !c.is_ascii_digit()).take(60).collect::<String>());
+                let key = format!("{what}: {}", error_kind(&message));
                 let shown: String = message.chars().take(2000).collect();
                 Err(Failure { key, message: format!("{what}: {shown}") })
             };
@@ -685,6 +684,22 @@ fn check_scene(
             Ok(())
         }
     }
+}
+
+/// What a message says with the place, the quoted names and the numbers left out, so that one
+/// kind of message found in many files counts once.
+fn error_kind(message: &str) -> String {
+    let after_place = message.split_once(": ").map_or(message, |(_, rest)| rest);
+    let mut kind = String::new();
+    let mut quoted = false;
+    for c in after_place.chars() {
+        if c == '"' {
+            quoted = !quoted;
+        } else if !quoted && !c.is_ascii_digit() {
+            kind.push(c);
+        }
+    }
+    kind.chars().take(50).collect()
 }
 
 /// A folder with the files scenes refer to: `mesh.obj` and `meshes/icosahedron.obj`.

@@ -156,6 +156,20 @@ fn a_render_too_big_for_memory_is_refused_before_it_starts() {
 }
 
 #[test]
+fn photon_maps_beyond_one_gpu_buffer_are_refused_before_tracing() {
+    let dir = scene_dir();
+    let p = dir.path();
+    // Lavapipe's storage buffers hold 128 MiB: 6.7 M photons.
+    let t = std::time::Instant::now();
+    let out = render(p, &["-o", "out.png", "--photons", "100000000"]);
+    refused(&out, &["--photons 100000000 would store at least", "more than one storage buffer holds"]);
+    assert!(t.elapsed().as_secs() < 20, "refused only after {:?}", t.elapsed());
+    let out = run(&["bench", "scene.toml", "--gpu-only", "--spp", "1", "--photon-paths", "100000000"], p);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("more than one storage buffer holds"), "{text}");
+}
+
+#[test]
 fn device_files_are_not_read_forever() {
     let dir = scene_dir();
     let out = run(&["render", "/dev/zero", "-o", "out.png"], dir.path());

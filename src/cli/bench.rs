@@ -7,6 +7,7 @@ use anyhow::Result;
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::render::bench::{bench, bench_photons};
+use photonix::render::memory;
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::load_scene;
 
@@ -37,6 +38,9 @@ pub struct BenchArgs {
 pub fn run(args: BenchArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    // The CPU reference renders the frame too: it must fit in memory.
+    let estimate = memory::estimate(width, height, None, None);
+    memory::check_fits(&estimate, width, height, None, memory::available_host_memory(), None)?;
     let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
     let buffers = prepare(&scene, &settings)?;
     out!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);

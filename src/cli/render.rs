@@ -246,6 +246,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
             let ctx = GpuContext::new(options)?;
             let info = ctx.info();
             let limit = info.max_storage_buffer_range.min(info.max_memory_allocation_size);
+            if let Some(p) = &photons {
+                memory::check_photon_buffer(p, limit)?;
+            }
             let device_estimate = estimate(Some(limit));
             check_fits(&device_estimate, width, height, photons.as_ref(), None, Some(info.device_local_heap_bytes))?;
             Some(ctx)

@@ -153,6 +153,7 @@ pub fn check_exr_input(path: &Path) -> Result<(), ImageError> {
     }
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| ImageError::Read { path: path.to_owned(), reason: e.to_string() })?;
+    let mut bytes = 0u64;
     for header in meta.headers.iter() {
         let sizes = [header.layer_size, header.shared_attributes.display_window.size];
         for size in sizes {
@@ -160,6 +161,19 @@ pub fn check_exr_input(path: &Path) -> Result<(), ImageError> {
                 return Err(ImageError::TooLarge { path: path.to_owned(), width: size.width(), height: size.height() });
             }
         }
+        // Decoded samples (4 bytes each, whatever the file's type) and our copy of them.
+        let pixels = header.layer_size.width() as u64 * header.layer_size.height() as u64;
+        bytes += 2 * 4 * pixels * header.channels.list.len() as u64;
+    }
+    if let Some(available) = crate::render::memory::available_host_memory().filter(|&a| bytes > a) {
+        return Err(ImageError::Read {
+            path: path.to_owned(),
+            reason: format!(
+                "reading it needs about {} of memory but {} is available",
+                crate::limits::fmt_bytes(bytes),
+                crate::limits::fmt_bytes(available)
+            ),
+        });
     }
     Ok(())
 }

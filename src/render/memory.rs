@@ -144,6 +144,25 @@ pub fn check_fits(
     Ok(())
 }
 
+/// Refuses, on the GPU, photon maps that cannot fit one storage buffer (`storage_limit` bytes):
+/// a path in a closed scene stores at least one photon, so more paths than the buffer holds
+/// photons would fail only after tracing them all.
+pub fn check_photon_buffer(photons: &PhotonSettings, storage_limit: u64) -> Result<(), Refused> {
+    let photon = size_of::<Photon>() as u64;
+    let most = storage_limit / photon;
+    for (flag, paths) in [("--photons", photons.photons), ("--caustic-photons", photons.caustic_photons)] {
+        if paths as u64 > most {
+            return Err(Refused(format!(
+                "{flag} {paths} would store at least {paths} photons ({}), more than one storage buffer holds on this \
+                 device ({} = {most} photons); give at most {most}, or use --backend cpu",
+                fmt_bytes(paths as u64 * photon),
+                fmt_bytes(storage_limit)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The host memory this process may still take: the kernel's MemAvailable, lowered by a cgroup
 /// (container) limit when there is one. `None` where neither can be read.
 pub fn available_host_memory() -> Option<u64> {

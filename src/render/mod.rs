@@ -42,6 +42,8 @@ pub enum RenderError {
     Bvh(#[from] crate::accel::BvhError),
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
+    Refused(#[from] Refused),
 }
 
 /// A render that would fail or come out wrong, refused before it starts; the message says why

@@ -723,7 +723,11 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &max_def.span(),
                         &object,
-                        format!("`max` ({max}) must be greater than `min` ({min}) in x, y and z"),
+                        format!(
+                            "`max` ({}) must be greater than `min` ({}) in x, y and z",
+                            vec3_text(max),
+                            vec3_text(min)
+                        ),
                     ));
                 }
                 for corners in box_faces(min, max) {
