@@ -26,6 +26,8 @@ use std::sync::Once;
 use std::time::{Duration, Instant};
 
 use photonix::cpu::rng::pcg4d;
+use photonix::render::memory;
+use photonix::render::photons::check_radii;
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::{load_scene, parse_scene, Geometry, Scene};
 
@@ -643,7 +645,14 @@ fn check_scene(
                 return Err(Failure { key, message: broken });
             }
             let settings = FrameSettings { width: 8, height: 8, max_depth: scene.render.max_depth, seed: 0 };
+            // The checks a render makes before it starts must not panic either.
+            let (w, h) = (scene.camera.width, scene.camera.height);
+            let estimate = memory::estimate(w, h, scene.photons.as_ref(), None);
+            let _ = memory::check_fits(&estimate, w, h, scene.photons.as_ref(), Some(1 << 30), Some(1 << 30));
             if let Ok(buffers) = prepare(&scene, &settings) {
+                if let Some(p) = &scene.photons {
+                    let _ = check_radii(&buffers, p);
+                }
                 let f = &buffers.frame;
                 let vectors = [f.camera_position, f.camera_forward, f.camera_right, f.camera_up];
                 let frame_ok = vectors.iter().flatten().all(|x| x.is_finite())

@@ -59,7 +59,7 @@ pub fn run(args: DiffArgs) -> Result<()> {
 fn read_image(path: &Path) -> Result<Image> {
     match read_accumulation(path) {
         Ok((acc, _)) => {
-            eprintln!(
+            note!(
                 "note: {} is an accumulation file of {} passes; comparing its mean image",
                 path.display(),
                 acc.passes

@@ -53,6 +53,6 @@ pub fn run(args: MergeArgs) -> Result<()> {
     } else {
         write_image(&args.output, &acc.mean().combined(), args.exposure.unwrap_or(0.0))?;
     }
-    eprintln!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
+    note!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
     Ok(())
 }

@@ -178,7 +178,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     for warning in &scene.warnings {
-        eprintln!("warning: {}", printable_message(warning));
+        note!("warning: {warning}");
     }
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
     let is_exr = matches!(photonix::io::image::format_of(&output), Ok(photonix::io::image::Format::Exr));
@@ -316,7 +316,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 let photon_rate = paths_per_pass as f64 * acc.passes as f64 / elapsed.as_secs_f64().max(1e-9);
                 bar.set_message(format!(
                     "{} pass {}/{} {:.2} M photons/s",
-                    scene.name,
+                    printable_message(&scene.name),
                     acc.passes,
                     total_passes,
                     photon_rate / 1e6
@@ -356,7 +356,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         StopReason::Interrupted => "interrupted".to_string(),
     };
-    eprintln!(
+    note!(
         "{} pass{} ({}; passes {}); {}",
         acc.passes,
         if acc.passes == 1 { "" } else { "es" },
@@ -377,7 +377,7 @@ fn progress_bar(total_label: &str) -> Option<ProgressBar> {
         .expect("the progress template is valid")
         .progress_chars("=> ");
     bar.set_style(style);
-    bar.set_message(total_label.to_string());
+    bar.set_message(printable_message(total_label));
     Some(bar)
 }
 

@@ -82,10 +82,10 @@ pub enum GpuError {
     OutOfMemory { name: String, size: u64 },
 
     #[error(
-        "out of device memory during `{label}`; lower the photon count or image size, or use \
+        "out of {memory} memory during `{label}`; lower the photon count or image size, or use \
          --backend cpu"
     )]
-    OutOfMemoryDuring { label: String },
+    OutOfMemoryDuring { label: String, memory: &'static str },
 
     #[error("cannot write {len} bytes into buffer `{name}` of {size} bytes; create a larger buffer")]
     WriteTooLarge { name: String, len: u64, size: u64 },
@@ -157,8 +157,11 @@ impl GpuError {
     pub(crate) fn vk(call: &'static str, label: &str, result: vk::Result) -> GpuError {
         match result {
             vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { label: label.to_string() },
-            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemoryDuring { label: label.to_string() }
+            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => {
+                GpuError::OutOfMemoryDuring { label: label.to_string(), memory: "device" }
+            }
+            vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                GpuError::OutOfMemoryDuring { label: label.to_string(), memory: "host" }
             }
             _ => GpuError::Vulkan { call, label: label.to_string(), result },
         }

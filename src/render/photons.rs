@@ -54,7 +54,7 @@ pub fn radii(buffers: &SceneBuffers, settings: &PhotonSettings, global_stored: u
 /// the whole scene (every lookup would visit every photon).
 pub fn check_radii(buffers: &SceneBuffers, settings: &PhotonSettings) -> Result<(), super::Refused> {
     use crate::limits::fmt_f32;
-    let root = &buffers.nodes[0];
+    let Some(root) = buffers.nodes.first() else { return Ok(()) };
     let extent =
         root.aabb_min.iter().chain(&root.aabb_max).map(|c| c.abs()).filter(|c| c.is_finite()).fold(0.0, f32::max);
     let smallest = extent / (1u32 << 30) as f32;
