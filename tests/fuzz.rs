@@ -394,9 +394,17 @@ const TOKENS: &[&[u8]] = &[
     b"-1", b"0", b"1e-45", b"\xc3\x28",
 ];
 
+/// Mutated inputs stop growing here: repeating a long line of a repeated line grows without
+/// bound (a 1.4 GB OBJ once), and file sizes have their own tests.
+const MAX_INPUT_BYTES: usize = 2 << 20;
+
 fn mutate(r: &mut Rng, input: &[u8]) -> Vec<u8> {
     let mut b = input.to_vec();
     for _ in 0..1 + r.below(8) {
+        if b.len() > MAX_INPUT_BYTES {
+            b.truncate(MAX_INPUT_BYTES);
+            break;
+        }
         let len = b.len();
         match r.below(9) {
             0 if len > 0 => {
@@ -533,6 +541,8 @@ fn grammar_obj(r: &mut Rng) -> Vec<u8> {
 
 /// How many cases, for how long, and where findings go: from the environment, see the top.
 struct Config {
+    /// The first case (`PHOTONIX_FUZZ_START`), to replay one case of a run.
+    start: u64,
     cases: u64,
     time: Option<Duration>,
     seed: u32,
@@ -544,6 +554,7 @@ fn config(default_cases: u64) -> Config {
     let parse =
         |name: &str, v: String| -> f64 { v.trim().parse().unwrap_or_else(|_| panic!("{name}={v} is not a number")) };
     Config {
+        start: var("PHOTONIX_FUZZ_START").map_or(0, |v| parse("PHOTONIX_FUZZ_START", v) as u64),
         cases: var("PHOTONIX_FUZZ_CASES").map_or(default_cases, |v| parse("PHOTONIX_FUZZ_CASES", v) as u64),
         time: var("PHOTONIX_FUZZ_SECONDS").map(|v| Duration::from_secs_f64(parse("PHOTONIX_FUZZ_SECONDS", v))),
         seed: var("PHOTONIX_FUZZ_SEED").map_or(0, |v| parse("PHOTONIX_FUZZ_SEED", v) as u32),
@@ -765,8 +776,8 @@ fn fuzz(
     let start = Instant::now();
     let mut found: BTreeMap<String, (u64, String)> = BTreeMap::new();
     let mut slowest = (Duration::ZERO, 0u64);
-    let mut case = 0u64;
-    while case < cfg.cases && cfg.time.is_none_or(|t| start.elapsed() < t) {
+    let mut case = cfg.start;
+    while case < cfg.start + cfg.cases && cfg.time.is_none_or(|t| start.elapsed() < t) {
         let mut r = Rng::new(cfg.seed, case as u32);
         let input = generate(&mut r);
         if let Some(findings) = &cfg.findings {
@@ -779,8 +790,9 @@ fn fuzz(
         if took > slowest.0 {
             slowest = (took, case);
         }
-        if result.is_ok() && took > Duration::from_secs(5) {
-            result = Err(Failure { key: "slow".into(), message: format!("took {:.1} s", took.as_secs_f64()) });
+        if took > Duration::from_secs(5) {
+            let what = result.err().map_or(String::new(), |f| format!(" (and failed: {})", f.message));
+            result = Err(Failure { key: "slow".into(), message: format!("took {:.1} s{what}", took.as_secs_f64()) });
         }
         if let Err(failure) = result {
             let Some(findings) = &cfg.findings else {
@@ -804,8 +816,9 @@ fn fuzz(
         case += 1;
     }
     let summary = format!(
-        "{target}: seed {}, {case} cases in {:.1} s, slowest case {} ({:.3} s), {} kinds of failure{}",
+        "{target}: seed {}, {} cases in {:.1} s, slowest case {} ({:.3} s), {} kinds of failure{}",
         cfg.seed,
+        case - cfg.start,
         start.elapsed().as_secs_f64(),
         slowest.1,
         slowest.0.as_secs_f64(),
