@@ -319,12 +319,16 @@ fn nearly_degenerate_cameras_are_refused() {
         ("[0, 1, 5]", "[0, 1, 0]", "[0, 1e-30, 0]"),
         ("[0, 1, 5]", "[0, 1, 0]", "[0, 1e-9, 1]"),
         ("[0, 5, 0]", "[0, 0, 0]", "[0, 1, 0]"),
+        ("[0, 1, 5]", "[0, 1, 0]", "[0, 0, 0]"),
     ] {
         let text = format!("[camera]\nposition = {position}\nlook_at = {look_at}\nup = {up}\nfov = 40\n");
         let message = error_of(&text);
         assert_mentions(&message, &["bad.toml:", "[camera]"]);
         assert!(message.contains("`look_at` equals") || message.contains("`up` is zero or parallel"), "{message}");
     }
+    // Looking straight down with the default up: this rendered black before.
+    let message = error_of("[camera]\nposition = [0, 5, 0]\nlook_at = [0, 0, 0]\nfov = 40\n");
+    assert_mentions(&message, &["bad.toml:3:", "[camera]", "parallel to the default `up`", "add an `up`"]);
 }
 
 #[test]

@@ -31,7 +31,9 @@ pub fn run(args: DiffArgs) -> Result<()> {
     let mut reference = read_image(&args.reference)?;
     if (test.width, test.height) != (reference.width, reference.height) {
         let factor = reference.width / test.width.max(1);
-        if factor < 2 || test.width * factor != reference.width || test.height * factor != reference.height {
+        let scaled = |side: u32| side as u64 * factor as u64;
+        if factor < 2 || scaled(test.width) != reference.width as u64 || scaled(test.height) != reference.height as u64
+        {
             bail!(
                 "{} is {}x{} but {} is {}x{}; render at the reference's size or an integer fraction of it",
                 args.test.display(),

@@ -35,6 +35,8 @@ pub enum AccumulationError {
     Overlap { path: PathBuf, theirs: String, ours: String },
     #[error("no accumulation files to merge")]
     Empty,
+    #[error("{path}: the record of its passes is damaged ({reason}); render that part again")]
+    Damaged { path: PathBuf, reason: String },
     #[error(
         "{path} has no record of the scene and settings it was rendered from (an older photonix wrote it); \
          render it again to merge it"
@@ -166,6 +168,23 @@ pub fn read_accumulation(path: &Path) -> Result<(Accumulator, Option<Provenance>
     let field = |key: &str| fields.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
     let parsed = field("passes").and_then(|p| p.parse::<u32>().ok()).zip(field("ranges").and_then(parse_ranges));
     let Some((passes, ranges)) = parsed else { return Err(not_acc()) };
+    // The pass count is what the sums are divided by: it must be what the ranges say.
+    let damaged = |reason: String| AccumulationError::Damaged { path: path.to_owned(), reason };
+    let mut counted = 0u64;
+    let mut sorted = ranges.clone();
+    sorted.sort_unstable();
+    for (i, &(a, b)) in sorted.iter().enumerate() {
+        if a >= b || b > crate::limits::MAX_PASSES {
+            return Err(damaged(format!("pass range {a}..{b} is empty or beyond {}", crate::limits::MAX_PASSES)));
+        }
+        if i > 0 && a < sorted[i - 1].1 {
+            return Err(damaged(format!("pass ranges {}..{} and {a}..{b} overlap", sorted[i - 1].0, sorted[i - 1].1)));
+        }
+        counted += (b - a) as u64;
+    }
+    if counted != passes as u64 || passes == 0 {
+        return Err(damaged(format!("it counts {passes} passes but its ranges hold {counted}")));
+    }
     let provenance = field("scene").and_then(|h| u64::from_str_radix(h, 16).ok()).map(|scene| Provenance {
         scene,
         settings: fields
@@ -266,4 +285,42 @@ pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), Accumulatio
         total.ranges.sort_unstable();
     }
     Ok((total, first))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file_with_mark(dir: &Path, name: &str, mark: &str) -> PathBuf {
+        use exr::meta::attribute::{AttributeValue, Text};
+        let path = dir.join(name);
+        let image = Image::new(2, 2);
+        let layers: Vec<(&str, &Image)> =
+            ["combined", "direct", "specular", "indirect", "caustics"].iter().map(|n| (*n, &image)).collect();
+        write_layers_exr_with(&path, &layers, vec![(MARK, AttributeValue::Text(Text::from(mark)))]).unwrap();
+        path
+    }
+
+    #[test]
+    fn damaged_pass_records_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = file_with_mark(dir.path(), "good.exr", "passes=2;ranges=0..2;scene=00000000000000ff;spp=1");
+        let (acc, provenance) = read_accumulation(&good).unwrap();
+        assert_eq!((acc.passes, provenance.unwrap().scene), (2, 255));
+        for (mark, piece) in [
+            ("passes=0;ranges=0..1;scene=1", "counts 0 passes"),
+            ("passes=4294967295;ranges=0..4294967295;scene=1", "beyond 1000000"),
+            ("passes=10;ranges=0..5,0..5;scene=1", "overlap"),
+            ("passes=3;ranges=5..2;scene=1", "empty"),
+        ] {
+            let path = file_with_mark(dir.path(), "bad.exr", mark);
+            let e = read_accumulation(&path).unwrap_err().to_string();
+            assert!(e.contains("damaged") && e.contains(piece), "{mark}: {e}");
+        }
+        // Without a provenance a file reads, but merge refuses it.
+        let old = file_with_mark(dir.path(), "old.exr", "passes=1;ranges=2..3");
+        assert!(read_accumulation(&old).unwrap().1.is_none());
+        let e = merge(&[good, old]).unwrap_err().to_string();
+        assert!(e.contains("no record of the scene and settings"), "{e}");
+    }
 }

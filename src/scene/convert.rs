@@ -285,13 +285,19 @@ impl Builder<'_> {
         };
         let probe = Camera { position, look_at, up, fov_deg: 45.0, width: 1, height: 1 };
         if probe.basis().is_none() {
-            let span = c.up.as_ref().map_or(look_at_def.span(), |u| u.span());
-            return Err(self.invalid(
-                &span,
-                object,
-                "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it"
-                    .to_string(),
-            ));
+            let (span, message) = match &c.up {
+                Some(up_def) => (
+                    up_def.span(),
+                    "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it",
+                ),
+                // Looking straight up or down with no `up` given.
+                None => (
+                    look_at_def.span(),
+                    "the view direction is vertical, parallel to the default `up` = [0, 1, 0]; add an `up` roughly \
+                     perpendicular to it, e.g. `up = [0, 0, -1]`",
+                ),
+            };
+            return Err(self.invalid(&span, object, message.to_string()));
         }
         let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
         let fov_deg = self.number(fov_def, object, "fov")?;
