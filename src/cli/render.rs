@@ -10,8 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::io::{check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr};
-use photonix::limits::printable_message;
-use photonix::limits::MAX_PASSES;
+use photonix::limits::{printable_message, MAX_PASSES};
 use photonix::render::accumulation::{format_ranges, write_accumulation, Provenance};
 use photonix::render::memory::{self, available_host_memory, check_fits};
 use photonix::render::photons::check_radii;
@@ -96,7 +95,6 @@ struct PhotonArgs {
 }
 
 impl PhotonArgs {
-    /// The scene's settings with the command line's overrides, checked.
     /// The scene's settings with the command line's overrides. Any photon flag turns photon
     /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
     /// (Each value was range-checked by its parser.)
@@ -191,7 +189,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.progressive.pass_range.is_some() && args.layers {
         bail!("--pass-range writes an accumulation file, which holds every layer already; leave out --layers");
     }
-    if args.exposure.is_some() && is_exr && args.contact_sheet.is_none() {
+    let png = |p: &Path| matches!(photonix::io::image::format_of(p), Ok(photonix::io::image::Format::Png));
+    if args.exposure.is_some() && !png(&output) && !args.contact_sheet.as_deref().is_some_and(png) {
         bail!(
             "--exposure scales PNG output only, and {} is a linear-radiance EXR; leave it out, or write a .png",
             output.display()
