@@ -98,7 +98,14 @@ fn bad_number_line(bytes: &[u8]) -> Option<(usize, String)> {
         for word in words {
             let Ok(v) = word.parse::<f64>() else { continue };
             if !v.is_finite() {
-                return Some((i + 1, format!("a {what} is `{}`, not a finite number", printable(word))));
+                // `nan` and `inf` as written; digits that overflow even 64-bit floats are not
+                // echoed (they can run to any length).
+                let message = if word.contains(|c: char| c.is_ascii_digit()) {
+                    format!("a {what} overflows 64-bit floats; the largest scene coordinate is +-{MAX_SCENE_VALUE:e}")
+                } else {
+                    format!("a {what} is `{}`, not a finite number", printable(word))
+                };
+                return Some((i + 1, message));
             }
             if v.abs() > MAX_SCENE_VALUE {
                 let message = format!(
@@ -196,6 +203,7 @@ mod tests {
             ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", 2, "`nan`, not a finite number"),
             ("v 0 0 0\nv 1 0 0\nv 0 1 -inf\nf 1 2 3\n", 3, "`-inf`, not a finite number"),
             ("v 0 0 0\nv 1 0 0\nv 0 1 1e39\nf 1 2 3\n", 3, "1e39, beyond the largest scene coordinate"),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 1.79769342949672961348623157e308\nf 1 2 3\n", 3, "overflows 64-bit floats"),
             ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 NaN\nf 1/1 2/1 3/1\n", 4, "texture coordinate is `NaN`"),
         ] {
             let file = obj_file(text);
