@@ -878,7 +878,15 @@ impl Builder<'_> {
             object_from_world = Some(rotation.transpose());
         }
         if let Some(far) = beyond_scene_range(&[c - Vec3::splat(r), c + Vec3::splat(r)]) {
-            return Err(self.invalid(&radius.span(), object, transformed_out_of_range(far)));
+            let message = match transform {
+                Some(_) => transformed_out_of_range(far),
+                None => format!(
+                    "the sphere reaches coordinate {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} (see \
+                     docs/limits.md)",
+                    fmt_f32(far)
+                ),
+            };
+            return Err(self.invalid(&radius.span(), object, message));
         }
         if (r as f64) < MIN_SPHERE_RADIUS {
             let message = format!(
@@ -1096,8 +1104,8 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
 /// A number outside +-`MAX_SCENE_VALUE`, as a message.
 fn out_of_scene_range(field: &str, v: f64) -> String {
     format!(
-        "`{field}` holds {}; scene coordinates, lengths and colours must be within +-{MAX_SCENE_VALUE:e} (see \
-         docs/limits.md)",
+        "`{field}` holds {}; every number in a scene (coordinates, lengths, colours, angles) must be within \
+         +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
         fmt_number(v)
     )
 }
