@@ -247,6 +247,25 @@ fn a_merged_accumulation_file_is_never_written_under_a_png_name() {
     assert!(std::fs::read(p.join("m.png")).unwrap().starts_with(b"\x89PNG"));
 }
 
+#[test]
+fn lights_without_power_do_not_poison_light_picking() {
+    // Found by the fuzz target: a lone point light of intensity -0 (or 0) made the pick
+    // probabilities 0 / 0 = NaN.
+    for intensity in ["0", "-0e0", "1e-45"] {
+        let text = format!(
+            "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0.5, 0]\nfov = 45\n[materials.white]\ntype = \"diffuse\"\n\
+             [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = 1\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 3, 0]\nintensity = {intensity}\n"
+        );
+        let scene = photonix::scene::parse_scene(&text, Path::new("dark.toml")).unwrap();
+        let buffers = common::buffers(&scene, 8, 8);
+        assert!(buffers.frame.total_light_power.is_finite(), "{intensity}");
+        assert!(buffers.lights.iter().all(|l| l.pick_probability.is_finite() && l.cdf.is_finite()), "{intensity}");
+        let image = common::cpu_image(&buffers, 1);
+        assert!(image.pixels.iter().flatten().all(|c| *c == 0.0), "{intensity}: a dark scene renders black, not NaN");
+    }
+}
+
 // 4. Nothing the user needs is overwritten
 
 #[test]

@@ -93,17 +93,24 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A textured emission's power is estimated from its constant (the texture scales it
         // by at most its values; the pick probability only steers sampling, it keeps no bias).
         let emission = material.emission.value;
-        if channel_mean(emission.into()) <= 0.0 || area <= 0.0 {
+        // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
+        // power (or one so faint its power rounds to 0) is left out: were every light such, the
+        // pick probabilities would be 0 / 0.
+        let power = std::f32::consts::PI * area * channel_mean(emission.into());
+        if power.is_nan() || power <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
-        // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        powers.push(std::f32::consts::PI * area * channel_mean(emission.into()));
+        powers.push(power);
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
     for pl in &scene.point_lights {
         // An isotropic point light of intensity I emits power 4 pi I.
-        powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
+        let power = 4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into());
+        if power.is_nan() || power <= 0.0 {
+            continue;
+        }
+        powers.push(power);
         lights.push(Light {
             position: pl.position.into(),
             kind: LIGHT_POINT,
