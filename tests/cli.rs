@@ -134,7 +134,7 @@ fn bad_scene_reports_file_and_line() {
 fn bad_photon_settings_are_refused() {
     let dir = scene_dir();
     for (args, pieces) in [
-        (vec!["--photons", "0"], vec!["--photons", "at least 1"]),
+        (vec!["--photons", "0"], vec!["--photons", "from 1 to 1000000000"]),
         (vec!["--radius", "-1"], vec!["--radius", "positive"]),
         (vec!["--radius", "NaN"], vec!["--radius"]),
         (vec!["--layers"], vec!["--layers", ".exr"]),

@@ -571,23 +571,25 @@ impl<'a> GpuRenderer<'a> {
         let t = Instant::now();
         let mut layers = Layers::new(f.width, f.height);
         let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
-        let total: u64 = units.iter().map(unit_paths).sum();
+        let total = units.total_rows();
+        let mut units = units.peekable();
         let mut done = 0;
         let mut rays = 0;
         let mut download_time = Duration::ZERO;
         // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
         // submissions, yet none long enough to trip a GPU watchdog.
         let mut complete = true;
-        let mut i = 0;
-        while i < units.len() {
-            let band = units[i].row_begin;
-            let mut end = i;
-            let mut paths = 0;
-            while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
-                paths += units[end].row_count as u64 * f.width as u64;
-                end += 1;
+        let mut batch: Vec<DispatchRange> = Vec::new();
+        while let Some(first) = units.next() {
+            let band = first.row_begin;
+            let mut paths = first.row_count as u64 * f.width as u64;
+            batch.clear();
+            batch.push(first);
+            while paths < PATHS_PER_SUBMIT {
+                let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
+                paths += unit.row_count as u64 * f.width as u64;
+                batch.push(unit);
             }
-            let batch = &units[i..end];
             if super::stop_requested() {
                 complete = false;
                 break;
@@ -597,7 +599,7 @@ impl<'a> GpuRenderer<'a> {
             }
             let invocations = batch[0].row_count * f.width;
             ctx.run("render", |rec| {
-                for unit in batch {
+                for unit in &batch {
                     rec.dispatch(
                         render_kernel,
                         &self.scene.bindings(&[
@@ -616,8 +618,7 @@ impl<'a> GpuRenderer<'a> {
             })?;
             done += batch.iter().map(unit_paths).sum::<u64>();
             progress(done, total);
-            i = end;
-            if units.get(i).is_none_or(|next| next.row_begin != band) {
+            if units.peek().is_none_or(|next| next.row_begin != band) {
                 let td = Instant::now();
                 let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
                 let len = (invocations * LAYER_COUNT) as usize;

@@ -58,7 +58,26 @@ fn channel_mean(v: [f32; 3]) -> f32 {
     (v[0] + v[1] + v[2]) / 3.0
 }
 
-pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
+/// Why a scene cannot be prepared. Loading checks scene files so that only hand-built scenes
+/// meet the last two.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    #[error(
+        "{path}: [camera]: no camera frame: `look_at` equals `position`, or `up` is zero or parallel to the view \
+         direction"
+    )]
+    Camera { path: String },
+    #[error(
+        "{path}: the scene's {what} is {value}, beyond what 32-bit floats hold; scale the scene or its lights down \
+         (see docs/limits.md)"
+    )]
+    Overflow { path: String, what: &'static str, value: String },
+}
+
+pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, PrepareError> {
+    let path = || crate::limits::printable_message(&scene.path.display().to_string());
     // Primitives in BVH order, each emitter tagged with its light index
     let packed = pack_scene(scene);
     let surface_area = packed.photon_area;
@@ -76,17 +95,24 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A textured emission's power is estimated from its constant (the texture scales it
         // by at most its values; the pick probability only steers sampling, it keeps no bias).
         let emission = material.emission.value;
-        if channel_mean(emission.into()) <= 0.0 || area <= 0.0 {
+        // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
+        // power (or one so faint its power rounds to 0) is left out: were every light such, the
+        // pick probabilities would be 0 / 0.
+        let power = std::f32::consts::PI * area * channel_mean(emission.into());
+        if power.is_nan() || power <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
-        // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        powers.push(std::f32::consts::PI * area * channel_mean(emission.into()));
+        powers.push(power);
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
     for pl in &scene.point_lights {
         // An isotropic point light of intensity I emits power 4 pi I.
-        powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
+        let power = 4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into());
+        if power.is_nan() || power <= 0.0 {
+            continue;
+        }
+        powers.push(power);
         lights.push(Light {
             position: pl.position.into(),
             kind: LIGHT_POINT,
@@ -95,6 +121,12 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         });
     }
     let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
+    for (what, value) in [("total light power", total_power), ("total surface area", surface_area as f64)] {
+        if !(value as f32).is_finite() {
+            let value = crate::limits::fmt_number(value);
+            return Err(PrepareError::Overflow { path: path(), what, value });
+        }
+    }
     let mut running = 0.0f64;
     for (light, &power) in lights.iter_mut().zip(&powers) {
         running += power as f64;
@@ -111,10 +143,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let (bounding_center, bounding_radius) =
         if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
     let cam = &scene.camera;
-    let forward = (cam.look_at - cam.position).normalize();
-    // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
+    let (forward, right, up) = cam.basis().ok_or_else(|| PrepareError::Camera { path: path() })?;
     let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let aspect = settings.width as f32 / settings.height as f32;
     let scale = bounding_radius.max(cam.position.distance(bounding_center));
