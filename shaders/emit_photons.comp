@@ -5,6 +5,7 @@
 // map; one past a buffer's capacity is counted but not stored, so the host can grow the buffer
 // and trace again).
 // variant: textured
+// variant: textured_alpha
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

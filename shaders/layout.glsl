@@ -126,6 +126,12 @@ struct EmitParams {
 // host spreads over a 2D grid of workgroups (maxComputeWorkGroupCount[0] is often 65535).
 #define GLOBAL_INDEX ((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * WORKGROUP_SIZE + gl_LocalInvocationID.x)
 
+// The textured_alpha build of a kernel is its textured build with the alpha test.
+#ifdef VARIANT_TEXTURED_ALPHA
+#define VARIANT_TEXTURED
+#define VARIANT_ALPHA
+#endif
+
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }
 
 // `WHEN(cond) { ... }` runs the block where cond holds, as a loop of zero or one turn: lavapipe

@@ -254,7 +254,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     memory::check_photon_buffer(p, limit)?;
                 }
                 let device_estimate = estimate(Some(limit));
-                check_fits(&device_estimate, width, height, photons.as_ref(), None, Some(info.device_local_heap_bytes))?;
+                check_fits(
+                    &device_estimate,
+                    width,
+                    height,
+                    photons.as_ref(),
+                    None,
+                    Some(info.device_local_heap_bytes),
+                )?;
                 Some(ctx)
             }
             // Auto chose a GPU that will not open: the CPU backend still renders the image.

@@ -3,6 +3,7 @@
 use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
+use super::pack::KernelVariant;
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
@@ -47,23 +48,19 @@ pub struct GpuKernels {
     grid_scatter: OnceCell<Kernel>,
     grid_rank: OnceCell<Kernel>,
     render: OnceCell<Kernel>,
-    /// Use the `textured` variants of the scene kernels (`SceneBuffers::textured`).
-    textured: bool,
+    /// Which build of the scene kernels (`SceneBuffers::variant`).
+    variant: KernelVariant,
 }
 
 impl GpuKernels {
-    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha.
-    pub fn for_scene(textured: bool) -> GpuKernels {
-        GpuKernels { textured, ..Default::default() }
+    /// The kernels of one variant (`SceneBuffers::variant`).
+    pub fn for_scene(variant: KernelVariant) -> GpuKernels {
+        GpuKernels { variant, ..Default::default() }
     }
 
-    /// `name`, or its `textured` variant for a textured scene.
+    /// `name` in the build this scene needs.
     fn scene_kernel(&self, name: &str) -> String {
-        if self.textured {
-            format!("{name}_textured")
-        } else {
-            name.to_string()
-        }
+        self.variant.kernel_name(name)
     }
 
     fn get<'k>(
@@ -151,8 +148,8 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
-    /// The scene needs the `textured` variant of the scene kernels.
-    pub textured: bool,
+    /// Which build of the scene kernels the scene needs.
+    pub variant: KernelVariant,
 }
 
 impl DeviceScene {
@@ -187,7 +184,7 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
-            textured: buffers.textured,
+            variant: buffers.variant,
         })
     }
 
@@ -211,7 +208,7 @@ impl DeviceScene {
             }
         }
         let frame = photon_frame(buffers, photons);
-        self.textured = buffers.textured;
+        self.variant = buffers.variant;
         Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
             + replace(ctx, &mut self.nodes, &buffers.nodes)?
             + replace(ctx, &mut self.primitives, &buffers.primitives)?
@@ -402,7 +399,7 @@ pub fn build_maps_gpu(
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
     let mut capacity = [0; 2];
-    build_maps(ctx, &GpuKernels::for_scene(scene.textured), scene, buffers, settings, pass, &mut capacity)
+    build_maps(ctx, &GpuKernels::for_scene(scene.variant), scene, buffers, settings, pass, &mut capacity)
 }
 
 /// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
@@ -482,7 +479,7 @@ impl<'a> GpuRenderer<'a> {
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.textured);
+        let kernels = GpuKernels::for_scene(buffers.variant);
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -512,8 +509,8 @@ impl<'a> GpuRenderer<'a> {
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
         let in_place = self.scene.update(self.ctx, buffers, photons)?;
-        if buffers.textured != self.kernels.textured {
-            self.kernels = GpuKernels::for_scene(buffers.textured);
+        if buffers.variant != self.kernels.variant {
+            self.kernels = GpuKernels::for_scene(buffers.variant);
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {

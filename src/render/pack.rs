@@ -25,9 +25,33 @@ pub struct PackedScene {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
-    /// True when some texture is an image or a pattern, or some material has alpha: the kernels
-    /// then need their `textured` variant.
-    pub textured: bool,
+    /// Which build of the scene kernels the scene needs.
+    pub variant: KernelVariant,
+}
+
+/// The builds of the scene kernels (`// variant:` lines, see build.rs). Lavapipe pays for code
+/// a scene never runs: image and pattern textures made the kernels of untextured scenes several
+/// times slower, and the alpha test inside BVH traversal slowed textured scenes as much again.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum KernelVariant {
+    /// Constant textures only, every shape opaque.
+    #[default]
+    Plain,
+    /// Image or pattern textures, every shape opaque.
+    Textured,
+    /// Textures of any kind and some shape with opacity below 1 (stochastic alpha).
+    TexturedAlpha,
+}
+
+impl KernelVariant {
+    /// The kernel `name` in this variant's build.
+    pub fn kernel_name(self, name: &str) -> String {
+        match self {
+            KernelVariant::Plain => name.to_string(),
+            KernelVariant::Textured => format!("{name}_textured"),
+            KernelVariant::TexturedAlpha => format!("{name}_textured_alpha"),
+        }
+    }
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
@@ -49,8 +73,13 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         packed.areas.push(shape.geometry.area());
         packed.photon_area += shape.geometry.area() * visible;
     }
-    packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
-        || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
+    packed.variant = if packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0) {
+        KernelVariant::TexturedAlpha
+    } else if packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT) {
+        KernelVariant::Textured
+    } else {
+        KernelVariant::Plain
+    };
     // Vulkan has no empty buffers: every array gets at least one (unused) element.
     if packed.textures.is_empty() {
         packed.textures.push(Texture::default());

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::pack::pack_scene;
+use super::pack::{pack_scene, KernelVariant};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
@@ -20,8 +20,8 @@ pub struct SceneBuffers {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
-    /// True when the scene has image or pattern textures (see `PackedScene::textured`).
-    pub textured: bool,
+    /// Which build of the scene kernels the scene needs.
+    pub variant: KernelVariant,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
@@ -174,7 +174,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textures: packed.textures,
         texture_data: packed.texture_data,
         shape_data: packed.shape_data,
-        textured: packed.textured,
+        variant: packed.variant,
         bounding_radius,
         surface_area,
     })
