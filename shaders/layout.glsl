@@ -81,6 +81,8 @@ struct FrameParams {
     uint photon_mapping;
     uint gather_rays;
     float glossy_threshold;
+    uint unbounded_first;
+    uint _pad[3];
 };
 
 struct DispatchRange {
@@ -125,12 +127,6 @@ struct EmitParams {
 // Index of this invocation in a one-dimensional launch of WORKGROUP_SIZE-wide groups that the
 // host spreads over a 2D grid of workgroups (maxComputeWorkGroupCount[0] is often 65535).
 #define GLOBAL_INDEX ((gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * WORKGROUP_SIZE + gl_LocalInvocationID.x)
-
-// The textured_alpha build of a kernel is its textured build with the alpha test.
-#ifdef VARIANT_TEXTURED_ALPHA
-#define VARIANT_TEXTURED
-#define VARIANT_ALPHA
-#endif
 
 vec3 load3(float v[3]) { return vec3(v[0], v[1], v[2]); }
 

@@ -15,21 +15,26 @@ uint pick_light(float u) {
 
 // A point on a light: its position, its normal (zero for a point light) and what it emits
 // there: radiance toward its front side, or a point light's intensity (W/sr).
+// inv_pdf: 1/pdf of the point by area (1 for a point light); eps: the offset of rays that
+// start or end there.
 struct LightPoint {
     vec3 p;
     vec3 n;
     vec3 emitted;
+    float inv_pdf;
+    float eps;
 };
 
-// A point on light l, uniform by area.
+// A point on light l (see shape_sample for the density of area lights' points).
 LightPoint light_point(Light l, vec2 u) {
     switch (l.kind) {
     case LIGHT_AREA: {
-        Hit h = shape_sample(l.primitive, u);
-        return LightPoint(h.p, h.ng, material_emission(materials[h.material], h));
+        float inv_pdf;
+        Hit h = shape_sample(l.primitive, u, inv_pdf);
+        return LightPoint(h.p, h.ng, material_emission(materials[h.material], h), inv_pdf, h.eps);
     }
     }
-    return LightPoint(load3(l.position), vec3(0.0), load3(l.intensity));
+    return LightPoint(load3(l.position), vec3(0.0), load3(l.intensity), 1.0, frame.ray_epsilon);
 }
 
 // A photon leaving light l: its origin, direction and the power it carries before the division
@@ -41,8 +46,8 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
     switch (l.kind) {
     case LIGHT_AREA:
         d = cosine_direction(s.n, u_dir);
-        o += s.n * frame.ray_epsilon;
-        power = PI * l.area * s.emitted;
+        o += s.n * s.eps;
+        power = PI * s.inv_pdf * s.emitted;
         return;
     }
     d = sphere_direction(u_dir);

@@ -8,7 +8,13 @@
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
 // layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
 // variant: textured
-// variant: textured_alpha
+// variant: textured alpha
+// variant: analytic
+// variant: textured analytic
+// variant: textured alpha analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
+// variant: textured alpha analytic implicit
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

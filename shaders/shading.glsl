@@ -8,10 +8,11 @@ vec3 camera_direction(float sx, float sy) {
 }
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
-// off the surface to the side the ray goes (wo's side for reflection, the other for transmission).
+// off the surface to the side the ray goes (wo's side for reflection, the other for transmission),
+// by the hit's own offset.
 vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
     vec3 nf = dot(wo, h.ng) > 0.0 ? h.ng : -h.ng;
-    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * frame.ray_epsilon : h.p + nf * frame.ray_epsilon;
+    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * h.eps : h.p + nf * h.eps;
 }
 
 // A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
@@ -40,18 +41,18 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     vec3 wi = to_light / dist;
     vec3 f = bsdf_eval(b, wo, wi);
     if (f == vec3(0.0)) return none;
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 times area (uniform-area pdf).
+    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     float geometry = abs(dot(b.ns, wi)) / dist2;
     if (l.kind != LIGHT_POINT) {
         float cos_l = -dot(s.n, wi);
         if (cos_l <= 0.0) return none;
-        geometry *= cos_l * l.area;
+        geometry *= cos_l * s.inv_pdf;
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
     vec3 origin = offset_origin(h, wi, BSDF_REFLECTION);
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
-    float t_max = max(shadow_length - frame.ray_epsilon, 0.0);
+    float t_max = max(shadow_length - s.eps, 0.0);
     return ShadowRay(origin, to_target / shadow_length, t_max, f * s.emitted * (geometry / l.pick_probability));
 }

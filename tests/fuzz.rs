@@ -646,6 +646,13 @@ fn broken_invariant(scene: &Scene) -> Option<String> {
                     return Some(format!("bad sphere accepted: {s:?}"));
                 }
             }
+            Geometry::Analytic(a) => {
+                // The infinite plane is unbounded; every other analytic shape is finite.
+                let (lo, hi) = a.bounds();
+                if !a.world_from_object.is_finite() || (!a.is_unbounded() && !(lo.is_finite() && hi.is_finite())) {
+                    return Some(format!("bad analytic shape accepted: {a:?}"));
+                }
+            }
         }
     }
     for l in &scene.point_lights {

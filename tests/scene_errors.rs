@@ -369,3 +369,34 @@ fn unreadable_file_says_why_once() {
     let error = load_scene(Path::new("/nonexistent/scene.toml")).unwrap_err();
     assert!(std::error::Error::source(&error).is_none());
 }
+
+#[test]
+fn analytic_shape_errors_name_the_line_and_field_and_the_fix() {
+    let neon = "[materials.neon]\ntype = \"diffuse\"\nemission = 5\n";
+    let line_of = |text: &str, needle: &str| text.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("type = \"plane\"\nmaterial = \"neon\"\nnormal = [0, 1, 0]\n", "material", &["infinite plane cannot be a light", "use a quad or a disc"]),
+        ("type = \"plane\"\nmaterial = \"white\"\nnormal = [0, 0, 0]\n", "normal", &["`normal` is [0, 0, 0]", "e.g. `normal = [0, 1, 0]`"]),
+        ("type = \"disc\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\ninner_radius = 1\n", "inner_radius", &["`inner_radius` is 1", "[0, radius)"]),
+        ("type = \"disc\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = -1\n", "radius", &["`radius` is -1", "> 0"]),
+        ("type = \"cylinder\"\nmaterial = \"white\"\nbase = [0, 1, 0]\ncap = [0, 1, 0]\nradius = 1\n", "cap", &["`cap`", "same point as `base`"]),
+        ("type = \"cone\"\nmaterial = \"white\"\nbase = [0, 0, 0]\ncap = [0, 1, 0]\nbase_radius = 0\ncap_radius = 0\n", "cap_radius", &["both 0", "give one of them a radius"]),
+        ("type = \"cone\"\nmaterial = \"white\"\nbase = [0, 0, 0]\ncap = [0, 1, 0]\nbase_radius = -0.5\ncap_radius = 0\n", "base_radius", &["`base_radius` is -0.5", ">= 0"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = 1\nminor_radius = 1.2\n", "minor_radius", &["`minor_radius` (1.2) must be smaller than `major_radius` (1)", "spindle"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nminor_radius = 0.2\n", "[[shapes]]", &["missing field `major_radius`", "major_radius = 1.0"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = 1\nminor_radius = 0.2\nradius = 2\n", "radius", &["`radius` does not apply to a torus", "`major_radius`"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [3, 1]\n", "exponents", &["`exponents` is [3.0, 1.0]", "each in [0.01, 2]"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [0.5]\n", "exponents", &["give two numbers [e, n]"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [1, 1]\ntransform = { scale = 1e-30 }\n", "transform", &["scales the shape to zero or to infinity", "between about 1e-6 and 1e6"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = nan\nminor_radius = 0.2\n", "major_radius", &["`major_radius` is NaN", "finite number"]),
+        ("type = \"cylindre\"\nmaterial = \"white\"\n", "type = \"cyl", &["unknown type \"cylindre\"", "did you mean \"cylinder\"?"]),
+    ];
+    for (body, field, pieces) in cases {
+        let text = format!("{CAMERA}{WHITE}{neon}[[shapes]]\n{body}{LIGHT}");
+        let message = error_of(&text);
+        println!("{message}");
+        let at = format!("bad.toml:{}:", line_of(&text, field));
+        assert_mentions(&message, &[at.as_str(), "shape 0"]);
+        assert_mentions(&message, pieces);
+    }
+}

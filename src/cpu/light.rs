@@ -33,16 +33,27 @@ pub struct LightPoint {
     pub p: Vec3,
     pub n: Vec3,
     pub emitted: Vec3,
+    /// 1/pdf of the point by area (scene units squared); 1 for a point light.
+    pub inv_pdf: f32,
+    /// Offset of rays that start or end at the point (`Hit::eps`).
+    pub eps: f32,
 }
 
-/// A point on light `l`, uniform by area.
+/// A point on light `l` (see `shape_sample` for the density of area lights' points).
 pub fn light_point(s: &SceneView, l: &Light, u: [f32; 2]) -> LightPoint {
     match l.kind {
         LIGHT_AREA => {
-            let h = shape_sample(s, l.primitive, u);
-            LightPoint { p: h.p, n: h.ng, emitted: material_emission(s, &s.materials[h.material as usize], &h) }
+            let (h, inv_pdf) = shape_sample(s, l.primitive, u);
+            let emitted = material_emission(s, &s.materials[h.material as usize], &h);
+            LightPoint { p: h.p, n: h.ng, emitted, inv_pdf, eps: h.eps }
         }
-        _ => LightPoint { p: Vec3::from(l.position), n: Vec3::ZERO, emitted: Vec3::from(l.intensity) },
+        _ => LightPoint {
+            p: Vec3::from(l.position),
+            n: Vec3::ZERO,
+            emitted: Vec3::from(l.intensity),
+            inv_pdf: 1.0,
+            eps: s.frame.ray_epsilon,
+        },
     }
 }
 
@@ -52,7 +63,7 @@ pub fn light_point(s: &SceneView, l: &Light, u: [f32; 2]) -> LightPoint {
 pub fn light_emit(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) -> (Vec3, Vec3, Vec3) {
     let lp = light_point(s, l, u_pos);
     match l.kind {
-        LIGHT_AREA => (lp.p + lp.n * s.frame.ray_epsilon, cosine_direction(lp.n, u_dir), PI * l.area * lp.emitted),
+        LIGHT_AREA => (lp.p + lp.n * lp.eps, cosine_direction(lp.n, u_dir), PI * lp.inv_pdf * lp.emitted),
         _ => (lp.p, sphere_direction(u_dir), 4.0 * PI * lp.emitted),
     }
 }

@@ -111,7 +111,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 break;
             }
             throughput *= smp.weight / q;
-            o = offset_origin(s, &h, wo, smp.flags);
+            o = offset_origin(&h, wo, smp.flags);
             d = smp.wi;
             depth += 1;
             if depth >= f.max_depth {
@@ -153,7 +153,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             break;
         }
         gather_weight = first.weight;
-        o = offset_origin(s, &h, wo, first.flags);
+        o = offset_origin(&h, wo, first.flags);
         d = first.wi;
         throughput = Vec3::ONE;
         depth = 0;

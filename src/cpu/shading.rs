@@ -18,12 +18,13 @@ pub fn camera_direction(s: &SceneView, sx: f32, sy: f32) -> Vec3 {
 /// Origin of the ray that leaves `h` in a direction sampled from a lobe with `lobe_flags`:
 /// offset off the surface to the side the ray goes (`wo`'s side for reflection, the other for
 /// transmission).
-pub fn offset_origin(s: &SceneView, h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
+/// The offset is the hit's own (`Hit::eps`).
+pub fn offset_origin(h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
     let nf = if wo.dot(h.ng) > 0.0 { h.ng } else { -h.ng };
     if lobe_flags & BSDF_TRANSMISSION != 0 {
-        h.p - nf * s.frame.ray_epsilon
+        h.p - nf * h.eps
     } else {
-        h.p + nf * s.frame.ray_epsilon
+        h.p + nf * h.eps
     }
 }
 
@@ -66,24 +67,24 @@ pub fn direct_light_sample(
     if fr == Vec3::ZERO {
         return none;
     }
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 times area (uniform-area pdf).
+    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     let mut geometry = b.ns.dot(wi).abs() / dist2;
     if l.kind != LIGHT_POINT {
         let cos_l = -lp.n.dot(wi);
         if cos_l <= 0.0 {
             return none;
         }
-        geometry *= cos_l * l.area;
+        geometry *= cos_l * lp.inv_pdf;
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
-    let origin = offset_origin(s, h, wi, BSDF_REFLECTION);
+    let origin = offset_origin(h, wi, BSDF_REFLECTION);
     let to_target = lp.p - origin;
     let shadow_length = to_target.length();
     ShadowRay {
         origin,
         direction: to_target / shadow_length,
-        t_max: (shadow_length - f.ray_epsilon).max(0.0),
+        t_max: (shadow_length - lp.eps).max(0.0),
         unoccluded: fr * lp.emitted * (geometry / l.pick_probability),
     }
 }

@@ -61,6 +61,53 @@ shared_constants! {
     /// An analytic sphere: `p0` is its centre, `p1[0]` its radius; `data` holds the rows of its
     /// `object_from_world` rotation (9 floats) that orients its longitude/latitude uv.
     PRIMITIVE_SPHERE: u32 = 1;
+    /// The analytic shapes below are intersected in their own object space: `data` holds a block
+    /// of `SHAPE_DATA_FLOATS` (see `SHAPE_DATA_*`) with the transform both ways; `p0..p2` hold
+    /// the shape's own numbers. They live in the `analytic` variant of the scene kernels.
+    /// An infinite plane y = 0 (normal +y); unbounded, so it stays out of the BVH (the primitives
+    /// from `FrameParams::unbounded_first` on are tested by every ray). No numbers.
+    PRIMITIVE_PLANE: u32 = 2;
+    /// A disc (or an annulus) in y = 0 around the origin, normal +y: `p0 = [radius, inner radius, 0]`.
+    PRIMITIVE_DISC: u32 = 3;
+    /// The side of a truncated cone (a cylinder when both radii are equal) around +y from y = 0
+    /// to y = h: `p0 = [radius at 0, radius at h, h]`. Caps are discs of their own.
+    PRIMITIVE_CONE: u32 = 4;
+    /// A torus around the y axis: `p0 = [major radius R, minor radius r, 0]`, r < R.
+    PRIMITIVE_TORUS: u32 = 5;
+    /// POV-Ray's superellipsoid inside [-1, 1]^3, (|x|^(2/e) + |y|^(2/e))^(e/n) + |z|^(2/n) = 1:
+    /// `p0 = [2/e, e/2, 2/n]`, `p1 = [n/2, 0, 0]`.
+    PRIMITIVE_SUPERELLIPSOID: u32 = 6;
+    /// Offsets in an analytic shape's data block: the rows of `object_from_world` (3x4), the rows
+    /// of `world_from_object` (3x4), |det| of its linear part, and the shape's size (the largest
+    /// coordinate of its world bounds; 0 for a plane), which scales its ray offsets.
+    SHAPE_DATA_OBJECT_FROM_WORLD: u32 = 0;
+    SHAPE_DATA_WORLD_FROM_OBJECT: u32 = 12;
+    SHAPE_DATA_DET: u32 = 24;
+    SHAPE_DATA_SIZE: u32 = 25;
+    SHAPE_DATA_FLOATS: u32 = 26;
+    /// Ray origins leave an analytic shape's hit point by this times (its largest coordinate +
+    /// the shape's size): its hit points are projected onto the surface in object space, so
+    /// their error scales with those, not with the scene (this is about 17 float ulps of each).
+    SHAPE_EPSILON_SCALE: f32 = 1.0e-6;
+    /// Most Newton steps of one superellipsoid root search (each from one side of a convex
+    /// function, so monotone; a grazing ray's double root still halves the gap each step).
+    SUPERELLIPSOID_STEPS: u32 = 24;
+    /// Superellipsoid Newton steps stop once the gauge is this close to 1 (about 1e-6 object
+    /// units off the surface).
+    SUPERELLIPSOID_TOLERANCE: f32 = 1.0e-6;
+    /// Half side of the box the superellipsoid's root search starts from: the unit box grown so
+    /// that its entry point lies clearly outside even a boxy shape, whose faces fill the unit
+    /// box's faces to float precision.
+    SUPERELLIPSOID_BOX: f32 = 1.001;
+    /// Radius, over the bounding sphere's, of the sphere on whose chord the torus's roots are
+    /// sought: the outer equator touches the bounding sphere, and a chord ending on a root would
+    /// leave its sign to rounding.
+    TORUS_CHORD: f32 = 1.001;
+    /// Most safeguarded Newton steps per bracketed root of the torus quartic and of its
+    /// derivative; bisection alone would need 24 to reach float precision on [-1, 1].
+    TORUS_ROOT_STEPS: u32 = 16;
+    /// Newton steps that invert the torus's area cdf (Kepler's equation) when it is sampled.
+    TORUS_SAMPLE_STEPS: u32 = 8;
     /// Low bits of `Primitive::kind` holding the shape kind; the bits above are flags.
     PRIMITIVE_KIND_MASK: u32 = 0xff;
     /// Flag of `Primitive::kind`: the material has an opacity below 1 somewhere (alpha), so every

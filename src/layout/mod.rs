@@ -116,7 +116,9 @@ gpu_structs! {
         /// Probability of picking this light.
         pub pick_probability: f32,
         pub cdf: f32,
-        /// Surface area (scene units squared); 0 for point lights.
+        /// Surface area (scene units squared; estimated for superellipsoids and stretched
+        /// shapes); 0 for point lights. It only sets the light's power for picking: each sample
+        /// on the light carries its own 1/pdf (`shape_sample`).
         pub area: f32,
         pub _pad: u32,
     }
@@ -146,6 +148,10 @@ gpu_structs! {
         pub gather_rays: u32,
         /// Glossy lobes with GGX width up to this are path lobes, rougher ones estimate lobes.
         pub glossy_threshold: f32,
+        /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
+        /// BVH, every ray tests them.
+        pub unbounded_first: u32,
+        pub _pad: [u32; 3],
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -3,8 +3,8 @@
 use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
-use super::pack::KernelVariant;
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
+use super::prepare::KernelVariant;
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
     SceneBuffers,
@@ -56,6 +56,10 @@ impl GpuKernels {
     /// The kernels of one variant (`SceneBuffers::variant`).
     pub fn for_scene(variant: KernelVariant) -> GpuKernels {
         GpuKernels { variant, ..Default::default() }
+    }
+
+    fn variant(&self) -> KernelVariant {
+        self.variant
     }
 
     /// `name` in the build this scene needs.
@@ -148,7 +152,7 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
-    /// Which build of the scene kernels the scene needs.
+    /// Which variant of the scene kernels the scene needs.
     pub variant: KernelVariant,
 }
 
@@ -184,7 +188,7 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
-            variant: buffers.variant,
+            variant: buffers.variant(),
         })
     }
 
@@ -208,7 +212,7 @@ impl DeviceScene {
             }
         }
         let frame = photon_frame(buffers, photons);
-        self.variant = buffers.variant;
+        self.variant = buffers.variant();
         Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
             + replace(ctx, &mut self.nodes, &buffers.nodes)?
             + replace(ctx, &mut self.primitives, &buffers.primitives)?
@@ -479,7 +483,7 @@ impl<'a> GpuRenderer<'a> {
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.variant);
+        let kernels = GpuKernels::for_scene(buffers.variant());
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -509,8 +513,8 @@ impl<'a> GpuRenderer<'a> {
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
         let in_place = self.scene.update(self.ctx, buffers, photons)?;
-        if buffers.variant != self.kernels.variant {
-            self.kernels = GpuKernels::for_scene(buffers.variant);
+        if buffers.variant() != self.kernels.variant() {
+            self.kernels = GpuKernels::for_scene(buffers.variant());
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {

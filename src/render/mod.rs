@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
-pub use prepare::{prepare, FrameSettings, PrepareError, SceneBuffers};
+pub use prepare::{prepare, FrameSettings, KernelVariant, PrepareError, SceneBuffers};
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;

@@ -1,13 +1,13 @@
 //! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
-use super::pack::{pack_scene, KernelVariant};
+use super::pack::pack_scene;
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
-use crate::scene::Scene;
+use crate::scene::{Geometry, Scene};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -20,15 +20,62 @@ pub struct SceneBuffers {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
-    /// Which build of the scene kernels the scene needs.
-    pub variant: KernelVariant,
+    /// True when the scene has image or pattern textures (see `PackedScene::textured`).
+    pub textured: bool,
+    /// True when the scene has analytic shapes other than spheres (see `PackedScene::analytic`).
+    pub analytic: bool,
+    /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
+    pub implicit: bool,
+    /// True when some shape has an opacity below 1 (see `PackedScene::alpha`).
+    pub alpha: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
     pub surface_area: f32,
 }
 
+/// Which variant of the scene kernels a scene needs: lavapipe runs every branch of a shader
+/// under masks, so each kind of costly code lives only in the kernels of the scenes that use it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KernelVariant {
+    /// Image and pattern textures, alpha.
+    pub textured: bool,
+    /// The alpha test inside BVH traversal (with the textures): it slowed textured scenes'
+    /// photon tracing 3x on lavapipe, so only scenes with a shape of opacity below 1 pay for it.
+    pub alpha: bool,
+    /// Planes, discs and cones.
+    pub analytic: bool,
+    /// Tori and superellipsoids (with the analytic shapes).
+    pub implicit: bool,
+}
+
+impl KernelVariant {
+    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]]`
+    /// (the `// variant:` lines of the kernels, see build.rs).
+    pub fn kernel_name(self, name: &str) -> String {
+        let mut out = name.to_string();
+        if self.textured || self.alpha {
+            out.push_str("_textured");
+        }
+        if self.alpha {
+            out.push_str("_alpha");
+        }
+        if self.analytic || self.implicit {
+            out.push_str("_analytic");
+        }
+        if self.implicit {
+            out.push_str("_implicit");
+        }
+        out
+    }
+}
+
 impl SceneBuffers {
+    /// The variant of the scene kernels this scene needs.
+    pub fn variant(&self) -> KernelVariant {
+        KernelVariant { textured: self.textured, alpha: self.alpha, analytic: self.analytic, implicit: self.implicit }
+    }
+
     pub fn view(&self) -> SceneView<'_> {
         SceneView {
             frame: &self.frame,
@@ -78,14 +125,26 @@ pub enum PrepareError {
 
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, PrepareError> {
     let path = || crate::limits::printable_message(&scene.path.display().to_string());
-    // Primitives in BVH order, each emitter tagged with its light index
+    // Primitives in BVH order, then the unbounded ones (infinite planes) that every ray tests
     let packed = pack_scene(scene);
-    let surface_area = packed.photon_area;
-    let bvh = build_bvh(&packed.primitives, &packed.bounds)?;
+    let is_unbounded: Vec<bool> = scene.shapes.iter().map(|s| s.geometry.is_unbounded()).collect();
+    let bounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| !is_unbounded[i]).collect();
+    let unbounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| is_unbounded[i]).collect();
+    let bvh = build_bvh(
+        &bounded.iter().map(|&i| packed.primitives[i]).collect::<Vec<_>>(),
+        &bounded.iter().map(|&i| packed.bounds[i]).collect::<Vec<_>>(),
+    )?;
     let mut primitives = bvh.primitives;
+    let unbounded_first = primitives.len() as u32;
+    primitives.extend(unbounded.iter().map(|&i| packed.primitives[i]));
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
     // original index, which the reorder keeps in `order`).
-    let areas: Vec<f32> = bvh.order.iter().map(|&i| packed.areas.get(i as usize).copied().unwrap_or(0.0)).collect();
+    let areas: Vec<f32> = bvh
+        .order
+        .iter()
+        .map(|&i| bounded.get(i as usize).map_or(0.0, |&j| packed.areas[j]))
+        .chain(unbounded.iter().map(|_| 0.0))
+        .collect();
 
     // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
     let mut lights = Vec::new();
@@ -121,11 +180,15 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         });
     }
     let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
-    for (what, value) in [("total light power", total_power), ("total surface area", surface_area as f64)] {
-        if !(value as f32).is_finite() {
-            let value = crate::limits::fmt_number(value);
-            return Err(PrepareError::Overflow { path: path(), what, value });
-        }
+    let overflow = |what: &'static str, value: f64| {
+        (!(value as f32).is_finite()).then(|| PrepareError::Overflow {
+            path: path(),
+            what,
+            value: crate::limits::fmt_number(value),
+        })
+    };
+    if let Some(e) = overflow("total light power", total_power) {
+        return Err(e);
     }
     let mut running = 0.0f64;
     for (light, &power) in lights.iter_mut().zip(&powers) {
@@ -142,6 +205,32 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
     let (bounding_center, bounding_radius) =
         if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    // An infinite plane holds photons over the part of it near the rest of the scene: its disc
+    // inside the sphere around the bounded shapes, the point lights and the camera.
+    let mut surface_area = packed.photon_area;
+    if !unbounded.is_empty() {
+        let mut extent = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        if lo.cmple(hi).all() {
+            extent = (lo, hi);
+        }
+        for p in scene.point_lights.iter().map(|l| l.position).chain([scene.camera.position]) {
+            extent = (extent.0.min(p), extent.1.max(p));
+        }
+        let (center, radius) = ((extent.0 + extent.1) * 0.5, (extent.1 - extent.0).length() * 0.5);
+        for &i in &unbounded {
+            if let Geometry::Analytic(a) = &scene.shapes[i].geometry {
+                let m = a.world_from_object;
+                let normal = (Mat3::from(m.matrix3).inverse().transpose() * Vec3::Y).normalize();
+                let distance = (center - Vec3::from(m.translation)).dot(normal).abs();
+                let opacity = scene.materials[scene.shapes[i].material as usize].opacity;
+                let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
+                surface_area += std::f32::consts::PI * (radius * radius - distance * distance).max(0.0) * visible;
+            }
+        }
+    }
+    if let Some(e) = overflow("total surface area", surface_area as f64) {
+        return Err(e);
+    }
     let cam = &scene.camera;
     let (forward, right, up) = cam.basis().ok_or_else(|| PrepareError::Camera { path: path() })?;
     let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
@@ -164,6 +253,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         photon_mapping: 0,
         gather_rays: 0,
         glossy_threshold: scene.photons.map_or(GLOSSY_THRESHOLD, |p| p.glossy_threshold),
+        unbounded_first,
+        _pad: [0; 3],
     };
     Ok(SceneBuffers {
         frame,
@@ -174,7 +265,10 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textures: packed.textures,
         texture_data: packed.texture_data,
         shape_data: packed.shape_data,
-        variant: packed.variant,
+        textured: packed.textured,
+        analytic: packed.analytic,
+        implicit: packed.implicit,
+        alpha: packed.alpha,
         bounding_radius,
         surface_area,
     })

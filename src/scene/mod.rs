@@ -7,6 +7,7 @@
 //! renderer builds its light list from those. An area light of the file becomes ordinary shapes
 //! with its own material, named `light <index>` (diffuse, reflectance 0, emission = its radiance).
 
+pub mod analytic;
 mod convert;
 mod error;
 mod format;
@@ -21,6 +22,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Vec2, Vec3};
 
+pub use analytic::{Analytic, AnalyticKind};
 pub use error::SceneError;
 pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
@@ -56,7 +58,7 @@ impl Scene {
     pub fn triangles(&self) -> impl Iterator<Item = (&Triangle, u32)> {
         self.shapes.iter().filter_map(|s| match &s.geometry {
             Geometry::Triangle(t) => Some((t, s.material)),
-            Geometry::Sphere(_) => None,
+            _ => None,
         })
     }
 
@@ -64,7 +66,7 @@ impl Scene {
     pub fn spheres(&self) -> impl Iterator<Item = (&Sphere, u32)> {
         self.shapes.iter().filter_map(|s| match &s.geometry {
             Geometry::Sphere(sphere) => Some((sphere, s.material)),
-            Geometry::Triangle(_) => None,
+            _ => None,
         })
     }
 }
@@ -122,6 +124,8 @@ pub struct Shape {
 pub enum Geometry {
     Triangle(Triangle),
     Sphere(Sphere),
+    /// Plane, disc, cone or cylinder side, torus, superellipsoid (`analytic.rs`).
+    Analytic(Analytic),
 }
 
 impl Geometry {
@@ -133,10 +137,16 @@ impl Geometry {
                 (a.min(b).min(c), a.max(b).max(c))
             }
             Geometry::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
+            Geometry::Analytic(a) => a.bounds(),
         }
     }
 
-    /// Surface area in scene units squared.
+    /// True for shapes no box bounds (the infinite plane): they stay out of the BVH.
+    pub fn is_unbounded(&self) -> bool {
+        matches!(self, Geometry::Analytic(a) if a.is_unbounded())
+    }
+
+    /// Surface area in scene units squared (infinite for the plane).
     pub fn area(&self) -> f32 {
         match self {
             Geometry::Triangle(t) => {
@@ -144,6 +154,7 @@ impl Geometry {
                 0.5 * (b - a).cross(c - a).length()
             }
             Geometry::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
+            Geometry::Analytic(a) => a.area(),
         }
     }
 }
