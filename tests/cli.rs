@@ -48,14 +48,10 @@ radiance = [5, 5, 5]
 "#;
 
 fn scene_dir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
-    dir
+    common::scene_dir(SCENE)
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
+use common::stderr;
 
 /// A failed run: non-zero exit, no panic, the message pieces present, and no file written.
 fn assert_fails(out: &Output, pieces: &[&str], dir: &Path, never_written: &str) {

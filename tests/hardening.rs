@@ -40,14 +40,10 @@ radiance = [5, 5, 5]
 "#;
 
 fn scene_dir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
-    dir
+    common::scene_dir(SCENE)
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
+use common::stderr;
 
 fn run(args: &[&str], dir: &Path) -> Output {
     common::photonix(args, dir)
