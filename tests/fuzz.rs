@@ -649,7 +649,8 @@ fn broken_invariant(scene: &Scene) -> Option<String> {
             Geometry::Analytic(a) => {
                 // The infinite plane is unbounded; every other analytic shape is finite.
                 let (lo, hi) = a.bounds();
-                if !a.world_from_object.is_finite() || (!a.is_unbounded() && !(lo.is_finite() && hi.is_finite())) {
+                let bounded_ok = a.is_unbounded() || (lo.is_finite() && hi.is_finite());
+                if !a.world_from_object.is_finite() || !bounded_ok {
                     return Some(format!("bad analytic shape accepted: {a:?}"));
                 }
             }
