@@ -43,16 +43,20 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     if (f == vec3(0.0)) return none;
     // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     float geometry = abs(dot(b.ns, wi)) / dist2;
+    // The shadow ray stops short of the light's point by its offset over the cosine there (see
+    // the twin).
+    float shadow_end = s.eps;
     if (l.kind != LIGHT_POINT) {
         float cos_l = -dot(s.n, wi);
         if (cos_l <= 0.0) return none;
         geometry *= cos_l * s.inv_pdf;
+        shadow_end = s.eps / max(cos_l, 1e-2);
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
     vec3 origin = offset_origin(h, wi, BSDF_REFLECTION);
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
-    float t_max = max(shadow_length - s.eps, 0.0);
+    float t_max = max(shadow_length - shadow_end, 0.0);
     return ShadowRay(origin, to_target / shadow_length, t_max, f * s.emitted * (geometry / l.pick_probability));
 }

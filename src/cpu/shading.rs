@@ -69,12 +69,16 @@ pub fn direct_light_sample(
     }
     // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     let mut geometry = b.ns.dot(wi).abs() / dist2;
+    // The shadow ray stops short of the light's point by its offset, over the cosine there: a
+    // hit on the light's own surface moves along a grazing ray by its error over that cosine.
+    let mut shadow_end = lp.eps;
     if l.kind != LIGHT_POINT {
         let cos_l = -lp.n.dot(wi);
         if cos_l <= 0.0 {
             return none;
         }
         geometry *= cos_l * lp.inv_pdf;
+        shadow_end = lp.eps / cos_l.max(1e-2);
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
@@ -84,7 +88,7 @@ pub fn direct_light_sample(
     ShadowRay {
         origin,
         direction: to_target / shadow_length,
-        t_max: (shadow_length - lp.eps).max(0.0),
+        t_max: (shadow_length - shadow_end).max(0.0),
         unoccluded: fr * lp.emitted * (geometry / l.pick_probability),
     }
 }

@@ -63,7 +63,8 @@ shared_constants! {
     PRIMITIVE_SPHERE: u32 = 1;
     /// The analytic shapes below are intersected in their own object space: `data` holds a block
     /// of `SHAPE_DATA_FLOATS` (see `SHAPE_DATA_*`) with the transform both ways; `p0..p2` hold
-    /// the shape's own numbers. They live in the `analytic` variant of the scene kernels.
+    /// the shape's own numbers. They live in the `analytic` variant of the scene kernels (tori
+    /// and superellipsoids in `analytic_implicit`).
     /// An infinite plane y = 0 (normal +y); unbounded, so it stays out of the BVH (the primitives
     /// from `FrameParams::unbounded_first` on are tested by every ray). No numbers.
     PRIMITIVE_PLANE: u32 = 2;

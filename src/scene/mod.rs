@@ -1,5 +1,6 @@
 //! Scene format v1: TOML scene files (documented in `docs/scene-format.md`), checked and turned
-//! into a renderer-agnostic description: shapes (triangles and analytic spheres), materials,
+//! into a renderer-agnostic description: shapes (triangles, analytic spheres and the analytic
+//! shapes of `analytic.rs`: planes, discs, cones and cylinders, tori, superellipsoids), materials,
 //! textures, point lights and the photon settings. Nothing here knows the GPU's structs; the
 //! renderer packs this description for its kernels in one place (`render::pack`).
 //!
