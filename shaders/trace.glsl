@@ -27,10 +27,10 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
 // Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer.
 void visit(uint i, vec3 o, vec3 d, inout uint hit, inout float t_hit) {
     float t = shape_intersect(i, o, d, 0.0, t_hit);
-#ifdef VARIANT_TEXTURED
+#ifdef VARIANT_ALPHA
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray. Alpha lives in
-    // the textured variant only: its test in the innermost loop slows lavapipe down.
+    // its own variant: its test in the innermost loop slows lavapipe down.
     for (uint k = 0u; k < 2u && t < t_hit && passes_through(i, o, d, t); k++) {
         t = shape_intersect(i, o, d, t, t_hit);
     }

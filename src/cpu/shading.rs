@@ -6,7 +6,6 @@ use super::bsdf::{bsdf_eval, Bsdf};
 use super::light::{light_point, pick_light};
 use super::rng::{rand1, rand2};
 use super::shape::Hit;
-use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
 
@@ -29,10 +28,21 @@ pub fn offset_origin(h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
     }
 }
 
-/// Radiance reflected at `h` toward `wo` from one sampled light through the estimate lobes of
-/// `b`: a one-sample estimate of the direct light. Counts the shadow ray it casts in `rays`.
-#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
-pub fn direct_light(
+/// The length of a shadow ray that is not cast: `trace_ray` meets nothing before it.
+pub const NO_RAY: f32 = -1.0;
+
+/// A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
+/// shading point toward `wo` through the estimate lobes of its BSDF if nothing blocks the ray: a
+/// one-sample estimate of the direct light. `t_max` is `NO_RAY` when no ray is needed (no light,
+/// or nothing to reflect).
+pub struct ShadowRay {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub t_max: f32,
+    pub unoccluded: Vec3,
+}
+
+pub fn direct_light_sample(
     s: &SceneView,
     h: &Hit,
     b: &Bsdf,
@@ -40,11 +50,11 @@ pub fn direct_light(
     stream: u32,
     sample: u32,
     dim: u32,
-    rays: &mut u32,
-) -> Vec3 {
+) -> ShadowRay {
     let f = s.frame;
+    let none = ShadowRay { origin: h.p, direction: Vec3::Y, t_max: NO_RAY, unoccluded: Vec3::ZERO };
     if f.light_count == 0 {
-        return Vec3::ZERO;
+        return none;
     }
     let li = pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK));
     let l = &s.lights[li as usize];
@@ -55,7 +65,7 @@ pub fn direct_light(
     let wi = to_light / dist;
     let fr = bsdf_eval(b, wo, wi);
     if fr == Vec3::ZERO {
-        return Vec3::ZERO;
+        return none;
     }
     // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
     let mut geometry = b.ns.dot(wi).abs() / dist2;
@@ -65,7 +75,7 @@ pub fn direct_light(
     if l.kind != LIGHT_POINT {
         let cos_l = -lp.n.dot(wi);
         if cos_l <= 0.0 {
-            return Vec3::ZERO;
+            return none;
         }
         geometry *= cos_l * lp.inv_pdf;
         shadow_end = lp.eps / cos_l.max(1e-2);
@@ -75,10 +85,10 @@ pub fn direct_light(
     let origin = offset_origin(h, wi, BSDF_REFLECTION);
     let to_target = lp.p - origin;
     let shadow_length = to_target.length();
-    *rays += 1;
-    let (blocker, _) = trace_ray(s, origin, to_target / shadow_length, shadow_length - shadow_end, true);
-    if blocker != NO_LIGHT {
-        return Vec3::ZERO;
+    ShadowRay {
+        origin,
+        direction: to_target / shadow_length,
+        t_max: (shadow_length - shadow_end).max(0.0),
+        unoccluded: fr * lp.emitted * (geometry / l.pick_probability),
     }
-    fr * lp.emitted * (geometry / l.pick_probability)
 }

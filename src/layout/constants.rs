@@ -212,4 +212,77 @@ shared_constants! {
 
     /// Relative offset of secondary ray origins, scaled by the scene's extent (avoids self-hits).
     RAY_EPSILON_SCALE: f32 = 1.0e-5;
+
+    // Procedural patterns (src/cpu/pattern.rs, shaders/pattern.glsl). Pattern kinds (word 0).
+    PATTERN_AGATE: u32 = 0;
+    PATTERN_BOZO: u32 = 1;
+    PATTERN_BRICK: u32 = 2;
+    PATTERN_BUMPS: u32 = 3;
+    PATTERN_CHECKER: u32 = 4;
+    PATTERN_CRACKLE: u32 = 5;
+    PATTERN_DENTS: u32 = 6;
+    PATTERN_GRADIENT: u32 = 7;
+    PATTERN_GRANITE: u32 = 8;
+    PATTERN_HEXAGON: u32 = 9;
+    PATTERN_LEOPARD: u32 = 10;
+    PATTERN_MARBLE: u32 = 11;
+    PATTERN_ONION: u32 = 12;
+    PATTERN_RIPPLES: u32 = 13;
+    PATTERN_SPOTTED: u32 = 14;
+    PATTERN_WAVES: u32 = 15;
+    PATTERN_WOOD: u32 = 16;
+    PATTERN_WRINKLES: u32 = 17;
+    /// Number of pattern kinds; kinds are 0..PATTERN_KIND_COUNT.
+    PATTERN_KIND_COUNT: u32 = 18;
+
+    // Wave shapes (word 1), POV-Ray's ramp_wave, sine_wave, ...
+    WAVE_RAMP: u32 = 0;
+    WAVE_SINE: u32 = 1;
+    WAVE_TRIANGLE: u32 = 2;
+    WAVE_SCALLOP: u32 = 3;
+    WAVE_CUBIC: u32 = 4;
+    WAVE_POLY: u32 = 5;
+
+    // Word offsets inside a pattern block.
+    PATTERN_KIND: u32 = 0;
+    PATTERN_WAVE: u32 = 1;
+    PATTERN_OCTAVES: u32 = 2;
+    PATTERN_OMEGA: u32 = 3;
+    PATTERN_LAMBDA: u32 = 4;
+    PATTERN_TURBULENCE: u32 = 5;
+    PATTERN_FREQUENCY: u32 = 8;
+    PATTERN_PHASE: u32 = 9;
+    PATTERN_EXPONENT: u32 = 10;
+    PATTERN_PARAMS: u32 = 12;
+    /// Words of one pattern block.
+    PATTERN_WORDS: u32 = 20;
+    /// Most octaves of turbulence (POV-Ray 3.7 allows 1 to 10); bounds the shader's loops.
+    MAX_OCTAVES: u32 = 10;
+    /// Most entries of a colour map (POV-Ray's MAX_BLEND_MAP_ENTRIES).
+    MAX_COLOR_MAP_ENTRIES: u32 = 256;
+    /// Wave sources of ripples and waves (POV-Ray's default `number_of_waves`).
+    WAVE_SOURCES: u32 = 10;
+
+    /// Scale of the signed noise (standard deviation 0.270, measured) in `noise_unit`: gives the
+    /// standard deviation 0.126 of POV-Ray 3.7's default (range-corrected) noise, 0.2568 x 0.4899 in
+    /// its noise.cpp, so that the default colour maps band as they do in POV-Ray.
+    NOISE_UNIT_SCALE: f32 = 0.466;
+    /// Scale of each component of `noise_vector`: standard deviation 0.257 like POV-Ray's DNoise
+    /// (the same sum as its Noise before the range correction), so a turbulence amount warps as far.
+    NOISE_VECTOR_SCALE: f32 = 0.95;
+
+    // Image textures (src/cpu/image_texture.rs, shaders/image_texture.glsl).
+    /// Words before the first texel of a block.
+    IMAGE_HEADER_WORDS: u32 = 4;
+    /// Wrap mode: indices modulo the size (tiling).
+    IMAGE_WRAP_REPEAT: u32 = 0;
+    /// Wrap mode: indices clamped to the edge texels.
+    IMAGE_WRAP_CLAMP: u32 = 1;
+    /// Wrap mode: indices reflected at the edges: ..., 1, 0, 0, 1, ..., W-1, W-1, W-2, ...
+    IMAGE_WRAP_MIRROR: u32 = 2;
+    /// Flag: some texel has an alpha other than 1 (an alpha test may skip images without it).
+    IMAGE_FLAG_ALPHA: u32 = 1;
+    /// Texel coordinates are clamped to +-2^24: beyond it an f32 has no fraction left, and the
+    /// integer indices stay far from overflow.
+    IMAGE_COORD_LIMIT: f32 = 16_777_216.0;
 }

@@ -48,44 +48,23 @@ pub struct GpuKernels {
     grid_scatter: OnceCell<Kernel>,
     grid_rank: OnceCell<Kernel>,
     render: OnceCell<Kernel>,
-    /// Use the `textured` variants of the scene kernels (`SceneBuffers::textured`).
-    textured: bool,
-    /// Use the `analytic` variants of the scene kernels (`SceneBuffers::analytic`).
-    analytic: bool,
-    /// Use the `analytic_implicit` variants (`SceneBuffers::implicit`).
-    implicit: bool,
+    /// Which build of the scene kernels (`SceneBuffers::variant`).
+    variant: KernelVariant,
 }
 
 impl GpuKernels {
-    /// The kernels for a scene's variant: with (`textured`) or without image and pattern
-    /// textures or alpha, with (`analytic`) or without planes, discs and cones, and with
-    /// (`implicit`, which implies `analytic`) or without tori and superellipsoids.
+    /// The kernels of one variant (`SceneBuffers::variant`).
     pub fn for_scene(variant: KernelVariant) -> GpuKernels {
-        GpuKernels {
-            textured: variant.textured,
-            analytic: variant.analytic || variant.implicit,
-            implicit: variant.implicit,
-            ..Default::default()
-        }
+        GpuKernels { variant, ..Default::default() }
     }
 
     fn variant(&self) -> KernelVariant {
-        KernelVariant { textured: self.textured, analytic: self.analytic, implicit: self.implicit }
+        self.variant
     }
 
-    /// `name`, or its variant: `name[_textured][_analytic[_implicit]]`.
+    /// `name` in the build this scene needs.
     fn scene_kernel(&self, name: &str) -> String {
-        let mut out = name.to_string();
-        if self.textured {
-            out.push_str("_textured");
-        }
-        if self.analytic || self.implicit {
-            out.push_str("_analytic");
-        }
-        if self.implicit {
-            out.push_str("_implicit");
-        }
-        out
+        self.variant.kernel_name(name)
     }
 
     fn get<'k>(
@@ -593,23 +572,25 @@ impl<'a> GpuRenderer<'a> {
         let t = Instant::now();
         let mut layers = Layers::new(f.width, f.height);
         let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
-        let total: u64 = units.iter().map(unit_paths).sum();
+        let total = units.total_rows();
+        let mut units = units.peekable();
         let mut done = 0;
         let mut rays = 0;
         let mut download_time = Duration::ZERO;
         // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
         // submissions, yet none long enough to trip a GPU watchdog.
         let mut complete = true;
-        let mut i = 0;
-        while i < units.len() {
-            let band = units[i].row_begin;
-            let mut end = i;
-            let mut paths = 0;
-            while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
-                paths += units[end].row_count as u64 * f.width as u64;
-                end += 1;
+        let mut batch: Vec<DispatchRange> = Vec::new();
+        while let Some(first) = units.next() {
+            let band = first.row_begin;
+            let mut paths = first.row_count as u64 * f.width as u64;
+            batch.clear();
+            batch.push(first);
+            while paths < PATHS_PER_SUBMIT {
+                let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
+                paths += unit.row_count as u64 * f.width as u64;
+                batch.push(unit);
             }
-            let batch = &units[i..end];
             if super::stop_requested() {
                 complete = false;
                 break;
@@ -619,7 +600,7 @@ impl<'a> GpuRenderer<'a> {
             }
             let invocations = batch[0].row_count * f.width;
             ctx.run("render", |rec| {
-                for unit in batch {
+                for unit in &batch {
                     rec.dispatch(
                         render_kernel,
                         &self.scene.bindings(&[
@@ -638,8 +619,7 @@ impl<'a> GpuRenderer<'a> {
             })?;
             done += batch.iter().map(unit_paths).sum::<u64>();
             progress(done, total);
-            i = end;
-            if units.get(i).is_none_or(|next| next.row_begin != band) {
+            if units.peek().is_none_or(|next| next.row_begin != band) {
                 let td = Instant::now();
                 let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
                 let len = (invocations * LAYER_COUNT) as usize;

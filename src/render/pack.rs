@@ -28,6 +28,9 @@ pub struct PackedScene {
     /// True when some texture is an image or a pattern, or some material has alpha: the kernels
     /// then need their `textured` variant.
     pub textured: bool,
+    /// True when some shape has an opacity below 1: the kernels then need the alpha test, in
+    /// their `textured_alpha` variant.
+    pub alpha: bool,
     /// True when some shape is a plane, disc, cone, torus or superellipsoid: the kernels then
     /// need their `analytic` variant.
     pub analytic: bool,
@@ -66,8 +69,8 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
             Geometry::Analytic(Analytic { kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }, .. })
         )
     });
-    packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
-        || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
+    packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
+    packed.textured = packed.alpha || packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.
     if packed.textures.is_empty() {
         packed.textures.push(Texture::default());

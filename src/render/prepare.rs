@@ -26,6 +26,8 @@ pub struct SceneBuffers {
     pub analytic: bool,
     /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
     pub implicit: bool,
+    /// True when some shape has an opacity below 1 (see `PackedScene::alpha`).
+    pub alpha: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
@@ -38,16 +40,40 @@ pub struct SceneBuffers {
 pub struct KernelVariant {
     /// Image and pattern textures, alpha.
     pub textured: bool,
+    /// The alpha test inside BVH traversal (with the textures): it slowed textured scenes'
+    /// photon tracing 3x on lavapipe, so only scenes with a shape of opacity below 1 pay for it.
+    pub alpha: bool,
     /// Planes, discs and cones.
     pub analytic: bool,
     /// Tori and superellipsoids (with the analytic shapes).
     pub implicit: bool,
 }
 
+impl KernelVariant {
+    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]]`
+    /// (the `// variant:` lines of the kernels, see build.rs).
+    pub fn kernel_name(self, name: &str) -> String {
+        let mut out = name.to_string();
+        if self.textured || self.alpha {
+            out.push_str("_textured");
+        }
+        if self.alpha {
+            out.push_str("_alpha");
+        }
+        if self.analytic || self.implicit {
+            out.push_str("_analytic");
+        }
+        if self.implicit {
+            out.push_str("_implicit");
+        }
+        out
+    }
+}
+
 impl SceneBuffers {
     /// The variant of the scene kernels this scene needs.
     pub fn variant(&self) -> KernelVariant {
-        KernelVariant { textured: self.textured, analytic: self.analytic, implicit: self.implicit }
+        KernelVariant { textured: self.textured, alpha: self.alpha, analytic: self.analytic, implicit: self.implicit }
     }
 
     pub fn view(&self) -> SceneView<'_> {
@@ -79,7 +105,26 @@ fn channel_mean(v: [f32; 3]) -> f32 {
     (v[0] + v[1] + v[2]) / 3.0
 }
 
-pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
+/// Why a scene cannot be prepared. Loading checks scene files so that only hand-built scenes
+/// meet the last two.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    #[error(
+        "{path}: [camera]: no camera frame: `look_at` equals `position`, or `up` is zero or parallel to the view \
+         direction"
+    )]
+    Camera { path: String },
+    #[error(
+        "{path}: the scene's {what} is {value}, beyond what 32-bit floats hold; scale the scene or its lights down \
+         (see docs/limits.md)"
+    )]
+    Overflow { path: String, what: &'static str, value: String },
+}
+
+pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, PrepareError> {
+    let path = || crate::limits::printable_message(&scene.path.display().to_string());
     // Primitives in BVH order, then the unbounded ones (infinite planes) that every ray tests
     let packed = pack_scene(scene);
     let is_unbounded: Vec<bool> = scene.shapes.iter().map(|s| s.geometry.is_unbounded()).collect();
@@ -109,17 +154,24 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A textured emission's power is estimated from its constant (the texture scales it
         // by at most its values; the pick probability only steers sampling, it keeps no bias).
         let emission = material.emission.value;
-        if channel_mean(emission.into()) <= 0.0 || area <= 0.0 {
+        // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
+        // power (or one so faint its power rounds to 0) is left out: were every light such, the
+        // pick probabilities would be 0 / 0.
+        let power = std::f32::consts::PI * area * channel_mean(emission.into());
+        if power.is_nan() || power <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
-        // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        powers.push(std::f32::consts::PI * area * channel_mean(emission.into()));
+        powers.push(power);
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
     for pl in &scene.point_lights {
         // An isotropic point light of intensity I emits power 4 pi I.
-        powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
+        let power = 4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into());
+        if power.is_nan() || power <= 0.0 {
+            continue;
+        }
+        powers.push(power);
         lights.push(Light {
             position: pl.position.into(),
             kind: LIGHT_POINT,
@@ -128,6 +180,16 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         });
     }
     let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
+    let overflow = |what: &'static str, value: f64| {
+        (!(value as f32).is_finite()).then(|| PrepareError::Overflow {
+            path: path(),
+            what,
+            value: crate::limits::fmt_number(value),
+        })
+    };
+    if let Some(e) = overflow("total light power", total_power) {
+        return Err(e);
+    }
     let mut running = 0.0f64;
     for (light, &power) in lights.iter_mut().zip(&powers) {
         running += power as f64;
@@ -166,11 +228,11 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             }
         }
     }
+    if let Some(e) = overflow("total surface area", surface_area as f64) {
+        return Err(e);
+    }
     let cam = &scene.camera;
-    let forward = (cam.look_at - cam.position).normalize();
-    // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
+    let (forward, right, up) = cam.basis().ok_or_else(|| PrepareError::Camera { path: path() })?;
     let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let aspect = settings.width as f32 / settings.height as f32;
     let scale = bounding_radius.max(cam.position.distance(bounding_center));
@@ -206,6 +268,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textured: packed.textured,
         analytic: packed.analytic,
         implicit: packed.implicit,
+        alpha: packed.alpha,
         bounding_radius,
         surface_area,
     })

@@ -21,6 +21,10 @@ use super::{
     Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
+use crate::limits::{
+    fmt_f32, fmt_number, printable, printable_message, MAX_DEPTH, MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES,
+    MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
+};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -194,17 +198,22 @@ impl Builder<'_> {
         if let Some(hit) = valid.iter().find(|v| **v == given) {
             return Ok(hit);
         }
-        let hint = match suggest(given, valid) {
+        let given = printable(given);
+        let hint = match suggest(&given, valid) {
             Some(best) => format!("did you mean \"{best}\"?"),
             None => format!("use one of {}", valid.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ")),
         };
         Err(self.invalid(&value.span(), object, format!("unknown {field} \"{given}\" ({hint})")))
     }
 
+    /// A finite number within the scene range, +-`MAX_SCENE_VALUE`.
     fn number(&self, value: &Spanned<f64>, object: &str, field: &str) -> Result<f32> {
         let v = *value.get_ref();
-        if !v.is_finite() || !(v as f32).is_finite() {
+        if !v.is_finite() {
             return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; give a finite number")));
+        }
+        if v.abs() > MAX_SCENE_VALUE {
+            return Err(self.invalid(&value.span(), object, out_of_scene_range(field, v)));
         }
         Ok(v as f32)
     }
@@ -224,8 +233,11 @@ impl Builder<'_> {
     /// Three finite numbers; a single number `v` means `[v, v, v]`.
     fn vector(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
         let v = value.get_ref().value;
-        if let Some(bad) = v.iter().find(|c| !c.is_finite() || !(**c as f32).is_finite()) {
+        if let Some(bad) = v.iter().find(|c| !c.is_finite()) {
             return Err(self.invalid(&value.span(), object, format!("`{field}` contains {bad}; give finite numbers")));
+        }
+        if let Some(big) = v.iter().find(|c| c.abs() > MAX_SCENE_VALUE) {
+            return Err(self.invalid(&value.span(), object, out_of_scene_range(field, *big)));
         }
         Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
     }
@@ -237,23 +249,40 @@ impl Builder<'_> {
             return Err(self.invalid(
                 &value.span(),
                 object,
-                format!("`{field}` is negative ({c}); it must be >= 0 in every channel"),
+                format!("`{field}` is negative ({}); it must be >= 0 in every channel", vec3_text(c)),
             ));
         }
         if at_most_one && c.max_element() > 1.0 {
             return Err(self.invalid(
                 &value.span(),
                 object,
-                format!("`{field}` is above 1 ({c}); it is a fraction of light, in [0, 1] per channel"),
+                format!("`{field}` is above 1 ({}); it is a fraction of light, in [0, 1] per channel", vec3_text(c)),
             ));
         }
         Ok(c.to_array())
     }
 
-    fn integer(&self, value: &Spanned<i64>, object: &str, field: &str, min: i64, what: &str) -> Result<u32> {
+    /// A whole number in `min..=max`; `unit` follows the numbers in the message (" photon
+    /// paths"), `hint` follows a number below the minimum.
+    #[allow(clippy::too_many_arguments)]
+    fn integer(
+        &self,
+        value: &Spanned<i64>,
+        object: &str,
+        field: &str,
+        min: u32,
+        max: u32,
+        unit: &str,
+        hint: &str,
+    ) -> Result<u32> {
         let v = *value.get_ref();
-        if v < min || v > u32::MAX as i64 {
-            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be {what}")));
+        if v < min as i64 {
+            let message = format!("`{field}` is {v}; it must be at least {min}{unit} (and at most {max}){hint}");
+            return Err(self.invalid(&value.span(), object, message));
+        }
+        if v > max as i64 {
+            let message = format!("`{field}` is {v}; it must be at most {max}{unit} (see docs/limits.md)");
+            return Err(self.invalid(&value.span(), object, message));
         }
         Ok(v as u32)
     }
@@ -268,36 +297,50 @@ impl Builder<'_> {
         let position = self.point(position, object, "position")?;
         let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
         let look_at = self.point(look_at_def, object, "look_at")?;
-        if look_at == position {
+        // The same test as `Camera::basis`, which the renderer uses: nearly equal points (closer
+        // than 32-bit floats can tell apart) are as bad as equal ones.
+        if (look_at - position).try_normalize().is_none() {
             return Err(self.invalid(
                 &look_at_def.span(),
                 object,
-                "`look_at` equals `position`; the camera needs a direction to look in".to_string(),
+                "`look_at` equals `position` (or is too close to it to give a direction); the camera needs a \
+                 direction to look in"
+                    .to_string(),
             ));
         }
         let up = match &c.up {
-            Some(up_def) => {
-                let up = self.point(up_def, object, "up")?;
-                let forward = (look_at - position).normalize();
-                if up.cross(forward).length() <= 1e-6 * up.length() {
-                    return Err(self.invalid(
-                        &up_def.span(),
-                        object,
-                        "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it"
-                            .to_string(),
-                    ));
-                }
-                up
-            }
+            Some(up_def) => self.point(up_def, object, "up")?,
             None => DEFAULT_UP,
         };
+        let probe = Camera { position, look_at, up, fov_deg: 45.0, width: 1, height: 1 };
+        if probe.basis().is_none() {
+            let (span, message) = match &c.up {
+                Some(up_def) => (
+                    up_def.span(),
+                    "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it",
+                ),
+                // Looking straight up or down with no `up` given.
+                None => (
+                    look_at_def.span(),
+                    "the view direction is vertical, parallel to the default `up` = [0, 1, 0]; add an `up` roughly \
+                     perpendicular to it, e.g. `up = [0, 0, -1]`",
+                ),
+            };
+            return Err(self.invalid(&span, object, message.to_string()));
+        }
         let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
         let fov_deg = self.number(fov_def, object, "fov")?;
-        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+        let fov_range = MIN_FOV_DEGREES as f32..=(180.0 - MIN_FOV_DEGREES) as f32;
+        if !fov_range.contains(&fov_deg) {
             return Err(self.invalid(
                 &fov_def.span(),
                 object,
-                format!("`fov` is {fov_deg}; the vertical field of view must be between 0 and 180 degrees"),
+                format!(
+                    "`fov` is {}; the vertical field of view must be between 0 and 180 degrees (from {} to {})",
+                    fmt_f32(fov_deg),
+                    fov_range.start(),
+                    fov_range.end()
+                ),
             ));
         }
         let [width, height] = match &c.resolution {
@@ -312,14 +355,24 @@ impl Builder<'_> {
                 }
                 let mut wh = [0; 2];
                 for (out, &v) in wh.iter_mut().zip(values) {
-                    if v < 1 || v > u32::MAX as i64 {
+                    if v < 1 || v > MAX_IMAGE_SIDE as i64 {
                         return Err(self.invalid(
                             &res.span(),
                             object,
-                            format!("`resolution` is {values:?}; width and height must be at least 1"),
+                            format!(
+                                "`resolution` is {values:?}; width and height must be at least 1 and at most \
+                                 {MAX_IMAGE_SIDE}"
+                            ),
                         ));
                     }
                     *out = v as u32;
+                }
+                if wh[0] as u64 * wh[1] as u64 > MAX_PIXELS {
+                    return Err(self.invalid(
+                        &res.span(),
+                        object,
+                        format!("`resolution` is {values:?}; an image has at most {MAX_PIXELS} pixels (16384x16384)"),
+                    ));
                 }
                 wh
             }
@@ -337,16 +390,16 @@ impl Builder<'_> {
         };
         let r = def.get_ref();
         if let Some(spp) = &r.spp {
-            settings.spp = self.integer(spp, object, "spp", 1, "at least 1 sample per pixel")?;
+            settings.spp = self.integer(spp, object, "spp", 1, MAX_SPP, " samples per pixel", "")?;
         }
         if let Some(depth) = &r.max_depth {
-            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, MAX_DEPTH, "", "")?;
         }
         if let Some(passes) = &r.passes {
-            settings.passes = self.integer(passes, object, "passes", 1, "at least 1")?;
+            settings.passes = self.integer(passes, object, "passes", 1, MAX_PASSES, "", "")?;
         }
         if let Some(seed) = &r.seed {
-            settings.seed = self.integer(seed, object, "seed", 0, "between 0 and 4294967295")?;
+            settings.seed = self.integer(seed, object, "seed", 0, u32::MAX, "", "")?;
         }
         Ok(settings)
     }
@@ -364,11 +417,14 @@ impl Builder<'_> {
                 object,
                 "count",
                 1,
-                "at least 1 photon path (set `enabled = false` to turn photon mapping off)",
+                MAX_PHOTON_PATHS,
+                " photon paths",
+                "; set `enabled = false` to turn photon mapping off",
             )?;
         }
         if let Some(count) = &p.caustic_count {
-            settings.caustic_photons = self.integer(count, object, "caustic_count", 1, "at least 1 photon path")?;
+            settings.caustic_photons =
+                self.integer(count, object, "caustic_count", 1, MAX_PHOTON_PATHS, " photon paths", "")?;
         }
         let radius = |value: &Spanned<f64>, field: &str| -> Result<f32> {
             let r = self.number(value, object, field)?;
@@ -376,7 +432,10 @@ impl Builder<'_> {
                 return Err(self.invalid(
                     &value.span(),
                     object,
-                    format!("`{field}` is {r}; give a positive radius in scene units, or leave it out to derive one"),
+                    format!(
+                        "`{field}` is {}; give a positive radius in scene units, or leave it out to derive one",
+                        fmt_f32(r)
+                    ),
                 ));
             }
             Ok(r)
@@ -389,10 +448,10 @@ impl Builder<'_> {
         }
         if let Some(rays) = &p.gather_rays {
             settings.gather_rays =
-                self.integer(rays, object, "gather_rays", 0, "0 (read the global map directly) or more")?;
+                self.integer(rays, object, "gather_rays", 0, MAX_GATHER_RAYS, "", "; 0 reads the global map directly")?;
         }
         if let Some(depth) = &p.max_depth {
-            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, MAX_DEPTH, "", "")?;
         }
         if let Some(a) = &p.alpha {
             let alpha = self.number(a, object, "alpha")?;
@@ -400,7 +459,7 @@ impl Builder<'_> {
                 return Err(self.invalid(
                     &a.span(),
                     object,
-                    format!("`alpha` is {alpha}; it must be in (0, 1), e.g. 0.667"),
+                    format!("`alpha` is {}; it must be in (0, 1), e.g. 0.667", fmt_f32(alpha)),
                 ));
             }
             settings.alpha = alpha;
@@ -426,7 +485,7 @@ impl Builder<'_> {
 
     fn material(&mut self, key: &Spanned<String>, def: &Spanned<MaterialDef>) -> Result<()> {
         let name = key.get_ref().clone();
-        let object = format!("material \"{name}\"");
+        let object = format!("material \"{}\"", printable(&name));
         let m = def.get_ref();
         let kind_def = self.require(&m.r#type, &def.span(), &object, "type", "type = \"diffuse\"")?;
         let kind = self.one_of(kind_def, &object, "type", MATERIAL_TYPES)?;
@@ -617,11 +676,15 @@ impl Builder<'_> {
             return Ok(DEFAULT_IOR);
         };
         let ior = self.number(ior_def, object, "ior")?;
-        if !(ior > 0.0 && ior <= 10.0) {
+        if !(ior as f64 >= 1.0 / MAX_IOR && ior as f64 <= MAX_IOR) {
             return Err(self.invalid(
                 &ior_def.span(),
                 object,
-                format!("`ior` is {ior}; the index of refraction must be > 0 and at most 10 (glass is about 1.5)"),
+                format!(
+                    "`ior` is {}; the index of refraction must be > 0, from {} to {MAX_IOR} (glass is about 1.5)",
+                    fmt_f32(ior),
+                    1.0 / MAX_IOR
+                ),
             ));
         }
         Ok(ior)
@@ -725,7 +788,8 @@ impl Builder<'_> {
         };
         let v = number as f32;
         if !(v >= min && v <= max) {
-            return Err(self.invalid(&value.span(), object, format!("`{field}` is {number}; it must be {what}")));
+            let shown = fmt_number(number);
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {shown}; it must be {what}")));
         }
         Ok(ScalarParam { value: v, texture })
     }
@@ -736,17 +800,17 @@ impl Builder<'_> {
             return Ok(id as u32);
         }
         let hint = match suggest(name, &self.texture_names) {
-            Some(best) => format!("did you mean \"{best}\"?"),
-            None => format!("define it with a [textures.{name}] table"),
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
+            None => format!("define it with a [textures.{}] table", printable(name)),
         };
-        Err(self.invalid(span, object, format!("unknown texture \"{name}\" ({hint})")))
+        Err(self.invalid(span, object, format!("unknown texture \"{}\" ({hint})", printable(name))))
     }
 
     // Textures
 
     fn texture(&mut self, key: &Spanned<String>, def: &Spanned<TextureDef>) -> Result<()> {
         let name = key.get_ref().clone();
-        let object = format!("texture \"{name}\"");
+        let object = format!("texture \"{}\"", printable(&name));
         let t = def.get_ref();
         let table = def.span();
         let kind_def = self.require(&t.r#type, &table, &object, "type", "type = \"pattern\"")?;
@@ -886,17 +950,23 @@ impl Builder<'_> {
             self.material_used[id] = true;
             return Ok(id as u32);
         }
+        let shown = printable(name);
         let hint = match suggest(name, &self.material_names) {
-            Some(best) => format!("did you mean \"{best}\"?"),
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
             None if self.material_names.is_empty() => {
-                format!("define it with a [materials.{name}] table")
+                format!("define it with a [materials.{shown}] table")
             }
             None => format!(
-                "defined materials: {}; or add a [materials.{name}] table",
-                self.material_names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
+                "defined materials: {}; or add a [materials.{shown}] table",
+                self.material_names
+                    .iter()
+                    .take(20)
+                    .map(|n| format!("\"{}\"", printable(n)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         };
-        Err(self.invalid(&value.span(), object, format!("unknown material \"{name}\" ({hint})")))
+        Err(self.invalid(&value.span(), object, format!("unknown material \"{shown}\" ({hint})")))
     }
 
     // Shapes
@@ -977,7 +1047,11 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &max_def.span(),
                         &object,
-                        format!("`max` ({max}) must be greater than `min` ({min}) in x, y and z"),
+                        format!(
+                            "`max` ({}) must be greater than `min` ({}) in x, y and z",
+                            vec3_text(max),
+                            vec3_text(min)
+                        ),
                     ));
                 }
                 for corners in box_faces(min, max) {
@@ -1260,6 +1334,9 @@ impl Builder<'_> {
         transform: Option<Affine3A>,
     ) -> Result<()> {
         let (vertices, uv) = apply(transform, vertices, uv);
+        if let Some(far) = beyond_scene_range(&vertices) {
+            return Err(self.invalid(span, object, transformed_out_of_range(far)));
+        }
         if is_degenerate(&vertices) {
             return Err(self.invalid(
                 span,
@@ -1281,8 +1358,15 @@ impl Builder<'_> {
     ) -> Result<()> {
         let mut c = self.point(center, object, "center")?;
         let mut r = self.number(radius, object, "radius")?;
-        if r <= 0.0 {
-            return Err(self.invalid(&radius.span(), object, format!("`radius` is {r}; it must be > 0")));
+        if (r as f64) < MIN_SPHERE_RADIUS {
+            return Err(self.invalid(
+                &radius.span(),
+                object,
+                format!(
+                    "`radius` is {}; it must be > 0 (at least {MIN_SPHERE_RADIUS:e}, at most {MAX_SCENE_VALUE:e})",
+                    fmt_f32(r)
+                ),
+            ));
         }
         let mut object_from_world = None;
         if let Some(t) = transform {
@@ -1303,6 +1387,24 @@ impl Builder<'_> {
             let rotation = if rotation.determinant() < 0.0 { -rotation } else { rotation };
             object_from_world = Some(rotation.transpose());
         }
+        if let Some(far) = beyond_scene_range(&[c - Vec3::splat(r), c + Vec3::splat(r)]) {
+            let message = match transform {
+                Some(_) => transformed_out_of_range(far),
+                None => format!(
+                    "the sphere reaches coordinate {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} (see \
+                     docs/limits.md)",
+                    fmt_f32(far)
+                ),
+            };
+            return Err(self.invalid(&radius.span(), object, message));
+        }
+        if (r as f64) < MIN_SPHERE_RADIUS {
+            let message = format!(
+                "`transform` shrinks the sphere to radius {}, below the smallest, {MIN_SPHERE_RADIUS:e}",
+                fmt_f32(r)
+            );
+            return Err(self.invalid(&radius.span(), object, message));
+        }
         let sphere = Sphere { center: c, radius: r, object_from_world };
         self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material });
         Ok(())
@@ -1320,8 +1422,8 @@ impl Builder<'_> {
             },
             ObjError::Malformed { line, message } => SceneError::Obj {
                 obj_location: match line {
-                    Some(line) => format!("{}:{line}", obj_path.display()),
-                    None => obj_path.display().to_string(),
+                    Some(line) => format!("{}:{line}", printable_message(&obj_path.display().to_string())),
+                    None => printable_message(&obj_path.display().to_string()),
                 },
                 message,
                 object: object.to_string(),
@@ -1332,6 +1434,17 @@ impl Builder<'_> {
         let mut skipped = 0;
         for t in triangles {
             let (vertices, uv) = apply(transform, t.vertices, t.uv);
+            if let Some(far) = beyond_scene_range(&vertices) {
+                return Err(SceneError::Invalid {
+                    location,
+                    object: object.to_string(),
+                    message: format!(
+                        "mesh {}: {}",
+                        printable_message(&obj_path.display().to_string()),
+                        transformed_out_of_range(far)
+                    ),
+                });
+            }
             // Zero-area triangles are common in exported meshes and harmless to skip.
             if is_degenerate(&vertices) {
                 skipped += 1;
@@ -1341,7 +1454,7 @@ impl Builder<'_> {
         }
         if skipped == total {
             return Err(SceneError::Obj {
-                obj_location: obj_path.display().to_string(),
+                obj_location: printable_message(&obj_path.display().to_string()),
                 message: format!("all {total} triangles have zero area"),
                 object: object.to_string(),
                 location,
@@ -1350,7 +1463,7 @@ impl Builder<'_> {
         if skipped > 0 {
             self.warnings.push(format!(
                 "{location}: {object}: skipped {skipped} of {total} triangles of {} with zero area",
-                obj_path.display()
+                printable_message(&obj_path.display().to_string())
             ));
         }
         Ok(())
@@ -1507,6 +1620,32 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let twice_area = e0.cross(e1).length();
     let has_area = twice_area.is_finite() && twice_area > 1e-7 * longest;
     !has_area
+}
+
+/// A number outside +-`MAX_SCENE_VALUE`, as a message.
+fn out_of_scene_range(field: &str, v: f64) -> String {
+    format!(
+        "`{field}` holds {}; every number in a scene (coordinates, lengths, colours, angles) must be within \
+         +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
+        fmt_number(v)
+    )
+}
+
+/// The first coordinate of `points` beyond +-`MAX_SCENE_VALUE` (or not finite), if any.
+fn beyond_scene_range(points: &[Vec3]) -> Option<f32> {
+    points.iter().flat_map(|p| p.to_array()).find(|c| !c.is_finite() || c.abs() as f64 > MAX_SCENE_VALUE)
+}
+
+fn transformed_out_of_range(coordinate: f32) -> String {
+    format!(
+        "`transform` moves the shape to coordinate {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} \
+         (see docs/limits.md); use a smaller `scale` or `translate`",
+        fmt_f32(coordinate)
+    )
+}
+
+fn vec3_text(c: Vec3) -> String {
+    format!("[{}, {}, {}]", fmt_f32(c.x), fmt_f32(c.y), fmt_f32(c.z))
 }
 
 /// The six faces of an axis-aligned box as quads whose winding normal points outward.

@@ -85,6 +85,23 @@ pub struct Camera {
     pub height: u32,
 }
 
+impl Camera {
+    /// The camera's frame, (forward, right, up), unit length and orthogonal; right-handed:
+    /// right = forward x up, so with forward +z and up +y it is -x. `None` when 32-bit floats
+    /// cannot make one: `look_at` (nearly) equals `position`, or `up` is (nearly) zero or parallel
+    /// to the view direction. Loading refuses such a camera; the renderer reads this same frame.
+    pub fn basis(&self) -> Option<(Vec3, Vec3, Vec3)> {
+        let forward = (self.look_at - self.position).try_normalize()?;
+        // Parallel to within 1e-6 radians: the right vector would be mostly rounding noise.
+        let sine = forward.cross(self.up.try_normalize()?).length();
+        if sine.is_nan() || sine <= 1e-6 {
+            return None;
+        }
+        let right = forward.cross(self.up).try_normalize()?;
+        Some((forward, right, right.cross(forward)))
+    }
+}
+
 #[derive(Clone, Debug)]
 pub struct RenderSettings {
     /// Samples per pixel in each progressive pass, >= 1.
@@ -170,10 +187,20 @@ pub struct PointLight {
     pub intensity: Vec3,
 }
 
-/// Reads and parses a scene file; mesh paths in it are relative to the file's folder.
+/// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
+/// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let source =
-        std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.to_path_buf(), source })?;
+    let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+        Some(cause) => SceneError::Read { path: path.to_path_buf(), cause },
+        None => SceneError::TooLarge { path: path.to_path_buf(), limit: crate::limits::MAX_SCENE_FILE_BYTES },
+    })?;
+    let source = String::from_utf8(bytes).map_err(|e| SceneError::Read {
+        path: path.to_path_buf(),
+        cause: std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("it is not UTF-8 text (bad byte at offset {})", e.utf8_error().valid_up_to()),
+        ),
+    })?;
     parse_scene(&source, path)
 }
 
