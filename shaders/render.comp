@@ -31,11 +31,12 @@ layout(push_constant) uniform Push { DispatchRange range; };
 // DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
 void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
-    vec2 jitter = rand2(stream, sample_index, frame.seed, RNG_PIXEL_X);
-    float sx = 2.0 * (float(px) + jitter.x) / float(frame.width) - 1.0;
-    float sy = 1.0 - 2.0 * (float(py) + jitter.y) / float(frame.height);
-    vec3 o = load3(frame.camera_position);
-    vec3 d = camera_direction(sx, sy);
+    // xy jitter the film position, zw sample the lens.
+    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
+    float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
+    vec3 o, d;
+    camera_ray(sx, sy, film.zw, o, d);
     vec3 throughput = vec3(1.0);
     for (uint depth = 0u; depth < frame.max_depth; depth++) {
         float t;

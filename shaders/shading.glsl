@@ -2,9 +2,33 @@
 // The including kernel declares the scene bindings and includes rng, sampling, shape, texture,
 // bsdf, trace and light (in that order).
 
-// Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row.
-vec3 camera_direction(float sx, float sy) {
-    return normalize(load3(frame.camera_forward) + sx * load3(frame.camera_right) + sy * load3(frame.camera_up));
+// Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row, with lens
+// sample u (see FrameParams and the CAMERA_* kinds).
+void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
+    vec3 forward = load3(frame.camera_forward);
+    vec3 right = load3(frame.camera_right);
+    vec3 up = load3(frame.camera_up);
+    o = load3(frame.camera_position);
+    if (frame.camera_kind == CAMERA_LATLONG) {
+        float phi = PI * sx;
+        float theta = 0.5 * PI * sy;
+        d = cos(theta) * (sin(phi) * right + cos(phi) * forward) + sin(theta) * up;
+        return;
+    }
+    if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
+        o += sx * right + sy * up;
+        d = forward;
+    } else {
+        d = normalize(forward + sx * right + sy * up);
+    }
+    // Thin lens: the ray from a point of the aperture aims where the pinhole ray meets the plane
+    // in focus. A loop of at most one turn, so pinhole cameras skip the lens code entirely.
+    WHEN(frame.lens_radius > 0.0) {
+        vec3 focus = o + d * (frame.focal_distance / dot(d, forward));
+        vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation) * frame.lens_radius;
+        o += a.x * normalize(right) + a.y * normalize(up);
+        d = normalize(focus - o);
+    }
 }
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
@@ -18,29 +42,19 @@ vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
 // one-sample estimate of the direct light. Counts the shadow ray it casts in `rays`.
 vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
-    uint li = pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK));
-    Light l = lights[li];
-    LightPoint s = light_point(l, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
-    vec3 to_light = s.p - h.p;
-    float dist2 = dot(to_light, to_light);
-    float dist = sqrt(dist2);
-    vec3 wi = to_light / dist;
-    vec3 f = bsdf_eval(b, wo, wi);
+    Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
+    // A scene whose lights all give photons only picks one with probability 0.
+    if (l.pick_probability <= 0.0) return vec3(0.0);
+    LightSample s = light_sample(l, h.p, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
+    vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return vec3(0.0);
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 times area (uniform-area pdf).
-    float geometry = abs(dot(b.ns, wi)) / dist2;
-    if (l.kind != LIGHT_POINT) {
-        float cos_l = -dot(s.n, wi);
-        if (cos_l <= 0.0) return vec3(0.0);
-        geometry *= cos_l * l.area;
-    }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
-    vec3 origin = offset_origin(h, wi, BSDF_REFLECTION);
+    vec3 origin = offset_origin(h, s.wi, BSDF_REFLECTION);
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
     float t_unused;
     rays++;
     if (trace_ray(origin, to_target / shadow_length, shadow_length - frame.ray_epsilon, true, t_unused) != NO_LIGHT) return vec3(0.0);
-    return f * s.emitted * (geometry / l.pick_probability);
+    return f * (abs(dot(b.ns, s.wi)) / l.pick_probability);
 }

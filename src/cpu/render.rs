@@ -6,8 +6,8 @@ use rayon::prelude::*;
 
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
 use super::gather::{caustic_light, gather_ray, indirect_preview};
-use super::rng::{rand2, rand4};
-use super::shading::{camera_direction, direct_light, offset_origin};
+use super::rng::rand4;
+use super::shading::{camera_ray, direct_light, offset_origin};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
@@ -20,11 +20,11 @@ use crate::layout::DispatchRange;
 pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
-    let jitter = rand2(stream, sample, f.seed, RNG_PIXEL_X);
-    let sx = 2.0 * (px as f32 + jitter[0]) / f.width as f32 - 1.0;
-    let sy = 1.0 - 2.0 * (py as f32 + jitter[1]) / f.height as f32;
-    let mut o = Vec3::from(f.camera_position);
-    let mut d = camera_direction(s, sx, sy);
+    // xy jitter the film position, zw sample the lens.
+    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
+    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
     let mut throughput = Vec3::ONE;
     for depth in 0..f.max_depth {
         *rays += 1;

@@ -1,5 +1,7 @@
 //! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
 
+use std::f32::consts::PI;
+
 use glam::Vec3;
 
 use super::pack::pack_scene;
@@ -7,7 +9,7 @@ use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
-use crate::scene::Scene;
+use crate::scene::{LightKind, Projection, Scene, ThinLens};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -58,6 +60,106 @@ fn channel_mean(v: [f32; 3]) -> f32 {
     (v[0] + v[1] + v[2]) / 3.0
 }
 
+/// A light's power in the two distributions (direct light, photons): 0 where it takes no part.
+fn light_powers(power: f32, direct: bool, photons: bool) -> (f32, f32) {
+    (if direct { power } else { 0.0 }, if photons { power } else { 0.0 })
+}
+
+/// The light record of a point, spot or distant light and its power (W, mean of the channels),
+/// or `None` for the options of an area light (its primitives are its records).
+pub fn light_record(kind: &LightKind, bounding_center: Vec3, bounding_radius: f32) -> Option<(Light, f32)> {
+    let (light, power) = match *kind {
+        LightKind::Point { position, intensity } => {
+            // An isotropic point light of intensity I emits power 4 pi I. Its cone is the sphere.
+            let light = Light {
+                position: position.into(),
+                kind: LIGHT_POINT,
+                intensity: intensity.into(),
+                direction: [0.0, 1.0, 0.0],
+                cos_outer: -1.0,
+                falloff_scale: HARD_EDGE,
+                ..Default::default()
+            };
+            (light, 4.0 * PI * channel_mean(intensity.into()))
+        }
+        LightKind::Spot { position, direction, intensity, cos_inner, cos_outer, exponent } => {
+            let falloff_scale = if cos_inner > cos_outer { 1.0 / (cos_inner - cos_outer) } else { HARD_EDGE };
+            let light = Light {
+                position: position.into(),
+                kind: LIGHT_SPOT,
+                intensity: intensity.into(),
+                direction: direction.into(),
+                cos_outer,
+                falloff_scale,
+                exponent,
+                ..Default::default()
+            };
+            (light, channel_mean(intensity.into()) * spot_solid_angle(&light))
+        }
+        LightKind::Distant { direction, irradiance, half_angle_deg } => {
+            // A cone of half-angle a and radiance L gives E = L pi sin^2 a on a surface facing it
+            // and has solid angle 2 pi (1 - cos a): radiance times solid angle is
+            // E 2 (1 - cos a) / sin^2 a, which tends to E as a -> 0.
+            let a = (half_angle_deg as f64).to_radians();
+            let ratio = if a > 0.0 { 2.0 * (1.0 - a.cos()) / (a.sin() * a.sin()) } else { 1.0 };
+            let light = Light {
+                position: bounding_center.into(),
+                kind: LIGHT_DISTANT,
+                intensity: (irradiance * ratio as f32).into(),
+                direction: direction.into(),
+                cos_outer: a.cos() as f32,
+                radius: bounding_radius,
+                ..Default::default()
+            };
+            // The power that crosses the disc of the bounding sphere.
+            (light, channel_mean(irradiance.into()) * PI * bounding_radius * bounding_radius)
+        }
+        LightKind::Area { .. } => return None,
+    };
+    Some((light, power))
+}
+
+/// `falloff_scale` of a cone with no smooth part: any cos inside the cone gives t >= 1.
+const HARD_EDGE: f32 = 1.0e30;
+
+/// The integral of a spot light's profile over the sphere (steradians): power = I times this.
+/// 2 pi times the integral over cos in [cos_outer, 1], by the midpoint rule in f64 (the profile
+/// is smooth; 4096 steps leave an error far below the f32 of the result).
+fn spot_solid_angle(l: &Light) -> f32 {
+    const STEPS: u32 = 4096;
+    let (lo, scale, exponent) = (l.cos_outer as f64, l.falloff_scale as f64, l.exponent as f64);
+    let h = (1.0 - lo) / STEPS as f64;
+    let sum: f64 = (0..STEPS)
+        .map(|i| {
+            let c = lo + (i as f64 + 0.5) * h;
+            let t = ((c - lo) * scale).clamp(0.0, 1.0);
+            t * t * (3.0 - 2.0 * t) * if exponent > 0.0 { c.max(0.0).powf(exponent) } else { 1.0 }
+        })
+        .sum();
+    (2.0 * std::f64::consts::PI * sum * h) as f32
+}
+
+/// Fills one pick distribution (probability and running cdf) from `power(powers[i])`; returns
+/// the total. A light of power 0 gets an empty interval; the last light with power gets cdf 1
+/// (and every light after it), so a pick of u close to 1 never falls past it.
+fn fill_cdf(
+    lights: &mut [Light],
+    powers: &[(f32, f32)],
+    power: impl Fn(&(f32, f32)) -> f32,
+    mut set: impl FnMut(&mut Light, f32, f32),
+) -> f64 {
+    let total: f64 = powers.iter().map(|p| power(p) as f64).sum();
+    let last = powers.iter().rposition(|p| power(p) > 0.0);
+    let mut running = 0.0f64;
+    for (i, (light, p)) in lights.iter_mut().zip(powers).enumerate() {
+        running += power(p) as f64;
+        let (probability, cdf) = if total > 0.0 { (power(p) as f64 / total, running / total) } else { (0.0, 0.0) };
+        let cdf = if last.is_some_and(|last| i >= last) { 1.0 } else { cdf as f32 };
+        set(light, probability as f32, cdf);
+    }
+    total
+}
+
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
     // Primitives in BVH order, each emitter tagged with its light index
     let packed = pack_scene(scene);
@@ -68,7 +170,13 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     // original index, which the reorder keeps in `order`).
     let areas: Vec<f32> = bvh.order.iter().map(|&i| packed.areas.get(i as usize).copied().unwrap_or(0.0)).collect();
 
-    // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
+    // Bounds: distant lights send their photons through the bounding sphere's disc
+    let root = &bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
+    let (bounding_center, bounding_radius) =
+        if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+
+    // Lights: emissive primitives (in BVH order), then the lights of the file
     let mut lights = Vec::new();
     let mut powers = Vec::new();
     for (i, (p, &area)) in primitives.iter_mut().zip(&areas).enumerate() {
@@ -80,61 +188,76 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             continue;
         }
         p.light = lights.len() as u32;
+        let options = scene.lights.iter().find(|l| l.kind == LightKind::Area { material: p.material });
         // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        powers.push(std::f32::consts::PI * area * channel_mean(emission.into()));
+        let power = PI * area * channel_mean(emission.into());
+        powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
-    for pl in &scene.point_lights {
-        // An isotropic point light of intensity I emits power 4 pi I.
-        powers.push(4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into()));
-        lights.push(Light {
-            position: pl.position.into(),
-            kind: LIGHT_POINT,
-            intensity: pl.intensity.into(),
-            ..Default::default()
-        });
+    for desc in &scene.lights {
+        let Some((light, power)) = light_record(&desc.kind, bounding_center, bounding_radius) else { continue };
+        powers.push(light_powers(power, desc.direct, desc.photons));
+        lights.push(light);
     }
-    let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
-    let mut running = 0.0f64;
-    for (light, &power) in lights.iter_mut().zip(&powers) {
-        running += power as f64;
-        light.pick_probability = (power as f64 / total_power) as f32;
-        light.cdf = (running / total_power) as f32;
-    }
-    if let Some(last) = lights.last_mut() {
-        last.cdf = 1.0; // so a pick of u close to 1 never falls past the end
-    }
+    fill_cdf(
+        &mut lights,
+        &powers,
+        |p| p.0,
+        |l, probability, cdf| {
+            l.pick_probability = probability;
+            l.cdf = cdf;
+        },
+    );
+    let total_photon = fill_cdf(
+        &mut lights,
+        &powers,
+        |p| p.1,
+        |l, probability, cdf| {
+            l.photon_probability = probability;
+            l.photon_cdf = cdf;
+        },
+    );
 
-    // Bounds and camera
-    let root = &bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
-    let (bounding_center, bounding_radius) =
-        if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    // Camera
     let cam = &scene.camera;
     let forward = (cam.look_at - cam.position).normalize();
     // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
     let right = forward.cross(cam.up).normalize();
     let up = right.cross(forward);
-    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let aspect = settings.width as f32 / settings.height as f32;
+    // `right` and `up` carry the film's half-extent: tangents of the half field of view, half
+    // the view's size in scene units, or nothing (latlong).
+    let (camera_kind, half_height) = match cam.projection {
+        Projection::Perspective => (CAMERA_PERSPECTIVE, (cam.fov_deg.to_radians() * 0.5).tan()),
+        Projection::Orthographic { view_height } => (CAMERA_ORTHOGRAPHIC, 0.5 * view_height),
+        Projection::LatLong => (CAMERA_LATLONG, 1.0),
+    };
+    let half_width = if camera_kind == CAMERA_LATLONG { 1.0 } else { half_height * aspect };
+    let lens = cam.lens.unwrap_or(ThinLens { radius: 0.0, focal_distance: 1.0, blades: 0, rotation_deg: 0.0 });
     let scale = bounding_radius.max(cam.position.distance(bounding_center));
     let frame = FrameParams {
         camera_position: cam.position.into(),
         width: settings.width,
         camera_forward: forward.into(),
         height: settings.height,
-        camera_right: (right * tan_half * aspect).into(),
+        camera_right: (right * half_width).into(),
         max_depth: settings.max_depth,
-        camera_up: (up * tan_half).into(),
+        camera_up: (up * half_height).into(),
         seed: settings.seed,
         light_count: lights.len() as u32,
         ray_epsilon: scale * RAY_EPSILON_SCALE,
         primitive_count: primitives.len() as u32,
         node_count: bvh.nodes.len() as u32,
-        total_light_power: total_power as f32,
+        total_light_power: total_photon as f32,
         photon_mapping: 0,
         gather_rays: 0,
         glossy_threshold: scene.photons.map_or(GLOSSY_THRESHOLD, |p| p.glossy_threshold),
+        camera_kind,
+        lens_radius: lens.radius,
+        focal_distance: lens.focal_distance,
+        aperture_blades: lens.blades,
+        aperture_rotation: lens.rotation_deg.to_radians(),
+        _pad: [0; 3],
     };
     Ok(SceneBuffers {
         frame,

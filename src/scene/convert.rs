@@ -16,7 +16,10 @@ use super::material::{
 };
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
-use super::{Camera, Geometry, PhotonSettings, PointLight, RenderSettings, Scene, Shape, Sphere, Triangle};
+use super::{
+    Camera, Geometry, LightDesc, LightKind, PhotonSettings, Projection, RenderSettings, Scene, Shape, Sphere, ThinLens,
+    Triangle,
+};
 use crate::layout::constants::MIX_MAX_DEPTH;
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -29,6 +32,13 @@ const DEFAULT_PASSES: u32 = 4;
 const DEFAULT_MAX_DEPTH: u32 = 16;
 const DEFAULT_REFLECTANCE: f32 = 0.8;
 const DEFAULT_IOR: f32 = 1.5;
+/// Unused by orthographic and latlong cameras; kept so `Camera::fov_deg` is always valid.
+const DEFAULT_FOV: f32 = 40.0;
+/// Spot lights: the inner angle is this fraction of the outer one unless given (Mitsuba 3's
+/// default beam width); POV-Ray's defaults for `radius`, `falloff` and `tightness`.
+const DEFAULT_INNER_FRACTION: f32 = 0.75;
+const POV_SPOT_RADIUS: f32 = 30.0;
+const POV_SPOT_FALLOFF: f32 = 45.0;
 
 const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix"];
 
@@ -50,7 +60,8 @@ const METAL_PRESETS: &[(&str, [f32; 3], [f32; 3])] = &[
 const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern"];
 const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
-const LIGHT_TYPES: &[&str] = &["area", "point"];
+const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
+const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
@@ -63,15 +74,19 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         texture_names: Vec::new(),
         texture_used: Vec::new(),
         shapes: Vec::new(),
-        point_lights: Vec::new(),
+        lights: Vec::new(),
         warnings: Vec::new(),
     };
 
     let Some(camera) = &file.camera else {
         return Err(SceneError::MissingCamera { location: src.path.display().to_string() });
     };
-    let camera = builder.camera(camera)?;
-    let render = builder.render(file.render.as_ref())?;
+    let (camera, blur_samples) = builder.camera(camera)?;
+    let mut render = builder.render(file.render.as_ref())?;
+    // POV-Ray's blur_samples: lens samples per pixel, here over all passes.
+    if let Some(samples) = blur_samples {
+        render.spp = render.spp.max(samples.div_ceil(render.passes));
+    }
     let photons = builder.photons(file.photons.as_ref())?;
 
     // Textures, then materials, in file order, so ids follow the file.
@@ -105,7 +120,11 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         }
     }
     let has_light = builder.shapes.iter().any(|s| builder.materials[s.material as usize].emits())
-        || builder.point_lights.iter().any(|p| p.intensity.max_element() > 0.0);
+        || builder.lights.iter().any(|l| match l.kind {
+            LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity.max_element() > 0.0,
+            LightKind::Distant { irradiance, .. } => irradiance.max_element() > 0.0,
+            LightKind::Area { .. } => false,
+        });
     if !has_light {
         builder.warnings.push("scene has no lights; the image will be black".to_string());
     }
@@ -121,7 +140,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         material_names: builder.material_names,
         textures: builder.textures,
         shapes: builder.shapes,
-        point_lights: builder.point_lights,
+        lights: builder.lights,
         warnings: builder.warnings,
     })
 }
@@ -135,7 +154,7 @@ struct Builder<'a> {
     texture_names: Vec<String>,
     texture_used: Vec<bool>,
     shapes: Vec<Shape>,
-    point_lights: Vec<PointLight>,
+    lights: Vec<LightDesc>,
     warnings: Vec<String>,
 }
 
@@ -253,10 +272,60 @@ impl Builder<'_> {
 
     // Camera and render settings
 
-    fn camera(&self, def: &Spanned<super::format::CameraDef>) -> Result<Camera> {
+    /// The camera, and POV-Ray's `blur_samples` when given (it raises the samples per pixel).
+    fn camera(&mut self, def: &Spanned<super::format::CameraDef>) -> Result<(Camera, Option<u32>)> {
         let object = "[camera]";
         let table = def.span();
         let c = def.get_ref();
+        let kind = match &c.r#type {
+            Some(t) => self.one_of(t, object, "type", CAMERA_TYPES)?,
+            None => "perspective",
+        };
+        let present = [
+            ("type", span_of(&c.r#type)),
+            ("position", span_of(&c.position)),
+            ("look_at", span_of(&c.look_at)),
+            ("up", span_of(&c.up)),
+            ("fov", span_of(&c.fov)),
+            ("resolution", span_of(&c.resolution)),
+            ("view_height", span_of(&c.view_height)),
+            ("aperture_radius", span_of(&c.aperture_radius)),
+            ("f_number", span_of(&c.f_number)),
+            ("focal_length", span_of(&c.focal_length)),
+            ("focal_distance", span_of(&c.focal_distance)),
+            ("focal_point", span_of(&c.focal_point)),
+            ("aperture_blades", span_of(&c.aperture_blades)),
+            ("aperture_rotation", span_of(&c.aperture_rotation)),
+            ("aperture", span_of(&c.aperture)),
+            ("blur_samples", span_of(&c.blur_samples)),
+        ];
+        let common = ["type", "position", "look_at", "up", "resolution"];
+        let lens_fields = [
+            "aperture_radius",
+            "f_number",
+            "focal_length",
+            "focal_distance",
+            "focal_point",
+            "aperture_blades",
+            "aperture_rotation",
+            "aperture",
+            "blur_samples",
+        ];
+        match kind {
+            "perspective" => self.only_fields(
+                object,
+                "a perspective camera",
+                &present,
+                &[&common[..], &["fov"], &lens_fields[..]].concat(),
+            )?,
+            "orthographic" => self.only_fields(
+                object,
+                "an orthographic camera",
+                &present,
+                &[&common[..], &["view_height"], &lens_fields[..]].concat(),
+            )?,
+            _ => self.only_fields(object, "a latlong camera (it has no lens)", &present, &common)?,
+        }
         let position = self.require(&c.position, &table, object, "position", "position = [0, 1, 5]")?;
         let position = self.point(position, object, "position")?;
         let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
@@ -268,10 +337,10 @@ impl Builder<'_> {
                 "`look_at` equals `position`; the camera needs a direction to look in".to_string(),
             ));
         }
+        let forward = (look_at - position).normalize();
         let up = match &c.up {
             Some(up_def) => {
                 let up = self.point(up_def, object, "up")?;
-                let forward = (look_at - position).normalize();
                 if up.cross(forward).length() <= 1e-6 * up.length() {
                     return Err(self.invalid(
                         &up_def.span(),
@@ -284,15 +353,32 @@ impl Builder<'_> {
             }
             None => DEFAULT_UP,
         };
-        let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
-        let fov_deg = self.number(fov_def, object, "fov")?;
-        if !(fov_deg > 0.0 && fov_deg < 180.0) {
-            return Err(self.invalid(
-                &fov_def.span(),
-                object,
-                format!("`fov` is {fov_deg}; the vertical field of view must be between 0 and 180 degrees"),
-            ));
-        }
+        let mut fov_deg = DEFAULT_FOV;
+        let projection = match kind {
+            "perspective" => {
+                let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
+                fov_deg = self.number(fov_def, object, "fov")?;
+                if !(fov_deg > 0.0 && fov_deg < 180.0) {
+                    return Err(self.invalid(
+                        &fov_def.span(),
+                        object,
+                        format!("`fov` is {fov_deg}; the vertical field of view must be between 0 and 180 degrees"),
+                    ));
+                }
+                Projection::Perspective
+            }
+            "orthographic" => {
+                let h = self.require(&c.view_height, &table, object, "view_height", "view_height = 4")?;
+                let view_height = self.positive(h, object, "view_height", "the height of the view in scene units")?;
+                Projection::Orthographic { view_height }
+            }
+            _ => Projection::LatLong,
+        };
+        let lens = self.lens(c, forward, position, object)?;
+        let blur_samples = match &c.blur_samples {
+            Some(b) => Some(self.integer(b, object, "blur_samples", 1, "at least 1 lens sample per pixel")?),
+            None => None,
+        };
         let [width, height] = match &c.resolution {
             Some(res) => {
                 let values = res.get_ref();
@@ -318,7 +404,147 @@ impl Builder<'_> {
             }
             None => DEFAULT_RESOLUTION,
         };
-        Ok(Camera { position, look_at, up, fov_deg, width, height })
+        Ok((Camera { position, look_at, up, fov_deg, projection, lens, width, height }, blur_samples))
+    }
+
+    /// A number > 0; `what` says what it measures.
+    fn positive(&self, value: &Spanned<f64>, object: &str, field: &str, what: &str) -> Result<f32> {
+        let v = self.number(value, object, field)?;
+        if v <= 0.0 {
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be > 0 ({what})")));
+        }
+        Ok(v)
+    }
+
+    /// The thin lens of a camera, or `None` for a pinhole: an aperture (`aperture_radius`,
+    /// `f_number` with `focal_length`, or POV-Ray's `aperture`) and a plane in focus
+    /// (`focal_distance` or `focal_point`).
+    fn lens(
+        &mut self,
+        c: &super::format::CameraDef,
+        forward: Vec3,
+        position: Vec3,
+        object: &str,
+    ) -> Result<Option<ThinLens>> {
+        let apertures = [("aperture_radius", &c.aperture_radius), ("f_number", &c.f_number), ("aperture", &c.aperture)];
+        let given: Vec<_> = apertures.iter().filter_map(|(n, f)| f.as_ref().map(|v| (*n, v))).collect();
+        if given.len() > 1 {
+            return Err(self.invalid(
+                &given[1].1.span(),
+                object,
+                format!(
+                    "give one of `aperture_radius`, `f_number` and `aperture`, not both `{}` and `{}`",
+                    given[0].0, given[1].0
+                ),
+            ));
+        }
+        let Some(&(name, value)) = given.first() else {
+            if let Some(span) = span_of(&c.focal_length) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    "`focal_length` only sets the aperture with `f_number`; add `f_number = 2.8` or remove it"
+                        .to_string(),
+                ));
+            }
+            for (field, span) in [
+                ("focal_distance", span_of(&c.focal_distance)),
+                ("focal_point", span_of(&c.focal_point)),
+                ("aperture_blades", span_of(&c.aperture_blades)),
+                ("aperture_rotation", span_of(&c.aperture_rotation)),
+                ("blur_samples", span_of(&c.blur_samples)),
+            ] {
+                if let Some(span) = span {
+                    let at = self.src.at(&span);
+                    self.warnings.push(format!(
+                        "{at}: {object}: `{field}` has no effect without an aperture (add `aperture_radius`)"
+                    ));
+                }
+            }
+            return Ok(None);
+        };
+        let radius = match name {
+            "aperture_radius" => self.positive(value, object, name, "the radius of the lens in scene units")?,
+            "f_number" => {
+                let n = self.positive(value, object, name, "the focal length over the aperture's diameter")?;
+                let Some(fl) = &c.focal_length else {
+                    return Err(self.invalid(
+                        &value.span(),
+                        object,
+                        "`f_number` needs the lens's `focal_length` in scene units to size the aperture, e.g. \
+                         `focal_length = 0.05` (a 50 mm lens in a scene in metres), or give `aperture_radius`"
+                            .to_string(),
+                    ));
+                };
+                let focal_length = self.positive(fl, object, "focal_length", "scene units")?;
+                focal_length / (2.0 * n)
+            }
+            // POV-Ray offsets the eye by aperture/2 times lens samples within +-0.5
+            // (tracepixel.cpp, JitterCameraRay): a disc of radius aperture/4.
+            _ => 0.25 * self.positive(value, object, name, "POV-Ray's aperture, four times the lens radius")?,
+        };
+        if name != "f_number" {
+            if let Some(span) = span_of(&c.focal_length) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    format!(
+                        "`focal_length` only sets the aperture with `f_number`; remove it (the aperture is `{name}`)"
+                    ),
+                ));
+            }
+        }
+        let focal_distance = match (&c.focal_distance, &c.focal_point) {
+            (Some(_), Some(p)) => {
+                return Err(self.invalid(
+                    &p.span(),
+                    object,
+                    "give `focal_distance` or `focal_point`, not both".to_string(),
+                ));
+            }
+            (Some(d), None) => self.positive(d, object, "focal_distance", "scene units along the view direction")?,
+            (None, Some(p)) => {
+                let point = self.point(p, object, "focal_point")?;
+                let depth = (point - position).dot(forward);
+                if depth <= 0.0 {
+                    return Err(self.invalid(
+                        &p.span(),
+                        object,
+                        format!("`focal_point` {point} is not in front of the camera; give a point it looks at"),
+                    ));
+                }
+                depth
+            }
+            (None, None) => {
+                return Err(self.invalid(
+                    &value.span(),
+                    object,
+                    format!(
+                        "`{name}` needs a plane in focus; add `focal_distance = 5` (scene units along the view) \
+                         or `focal_point = [x, y, z]`"
+                    ),
+                ));
+            }
+        };
+        let blades = match &c.aperture_blades {
+            Some(b) => {
+                let n = self.integer(b, object, "aperture_blades", 0, "0 (a round aperture) or 3 to 64")?;
+                if n != 0 && !(3..=64).contains(&n) {
+                    return Err(self.invalid(
+                        &b.span(),
+                        object,
+                        format!("`aperture_blades` is {n}; it must be 0 (a round aperture) or 3 to 64"),
+                    ));
+                }
+                n
+            }
+            None => 0,
+        };
+        let rotation_deg = match &c.aperture_rotation {
+            Some(r) => self.number(r, object, "aperture_rotation")?,
+            None => 0.0,
+        };
+        Ok(Some(ThinLens { radius, focal_distance, blades, rotation_deg }))
     }
 
     fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
@@ -1192,26 +1418,244 @@ impl Builder<'_> {
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
             ("transform", span_of(&l.transform)),
+            ("direction", span_of(&l.direction)),
+            ("point_at", span_of(&l.point_at)),
+            ("inner_angle", span_of(&l.inner_angle)),
+            ("outer_angle", span_of(&l.outer_angle)),
+            ("falloff", span_of(&l.falloff)),
+            ("tightness", span_of(&l.tightness)),
+            ("irradiance", span_of(&l.irradiance)),
+            ("angular_diameter", span_of(&l.angular_diameter)),
+            ("photons", span_of(&l.photons)),
+            ("direct", span_of(&l.direct)),
         ];
-
-        if kind == "point" {
-            self.only_fields(&object, "a point light", &present, &["name", "type", "position", "intensity"])?;
-            let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
-            let intensity = self.require(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
-            let position = self.point(position, &object, "position")?;
-            let intensity_def = intensity;
-            let intensity = Vec3::from(self.color(intensity_def, &object, "intensity", false)?);
-            if intensity.max_element() == 0.0 {
-                let at = self.src.at(&intensity_def.span());
-                self.warnings.push(format!("{at}: {object}: `intensity` is 0, so this light emits nothing"));
-            }
-            self.point_lights.push(PointLight { position, intensity });
-            return Ok(());
+        let common = ["name", "type", "photons", "direct"];
+        let direct = l.direct.as_ref().is_none_or(|d| *d.get_ref());
+        let photons = l.photons.as_ref().is_none_or(|p| *p.get_ref());
+        if !direct && !photons {
+            let span = span_of(&l.direct).unwrap_or(table.clone());
+            return Err(self.invalid(
+                &span,
+                &object,
+                "`direct = false` and `photons = false` leave the light nothing to do; keep one of them true or remove the light"
+                    .to_string(),
+            ));
         }
+        let kind = match kind {
+            "point" => {
+                let allowed = [&common[..], &["position", "intensity"]].concat();
+                self.only_fields(&object, "a point light", &present, &allowed)?;
+                let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
+                let position = self.point(position, &object, "position")?;
+                let intensity =
+                    self.light_color(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
+                LightKind::Point { position, intensity }
+            }
+            "spot" => self.spot_light(l, &table, &object, &present, &common)?,
+            "distant" => {
+                let allowed = [&common[..], &["direction", "irradiance", "angular_diameter"]].concat();
+                self.only_fields(&object, "a distant light", &present, &allowed)?;
+                let direction = self.direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
+                let irradiance = self.light_color(&l.irradiance, &table, &object, "irradiance", "irradiance = 3")?;
+                let half_angle_deg = match &l.angular_diameter {
+                    Some(a) => {
+                        let deg = self.number(a, &object, "angular_diameter")?;
+                        if !(0.0..=90.0).contains(&deg) {
+                            return Err(self.invalid(
+                                &a.span(),
+                                &object,
+                                format!(
+                                    "`angular_diameter` is {deg}; it is the apparent size of the light in degrees, \
+                                     in [0, 90] (the sun is about 0.53)"
+                                ),
+                            ));
+                        }
+                        0.5 * deg
+                    }
+                    None => 0.0,
+                };
+                LightKind::Distant { direction, irradiance, half_angle_deg }
+            }
+            _ => return self.area_light(index, l, &table, &object, &present, &common, direct, photons),
+        };
+        self.lights.push(LightDesc { kind, direct, photons });
+        Ok(())
+    }
 
-        let shape_def = self.require(&l.shape, &table, &object, "shape", "shape = \"quad\"")?;
-        let shape = self.one_of(shape_def, &object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = vec!["name", "type", "shape", "radiance", "transform"];
+    /// A light's colour field (intensity, irradiance): required, >= 0, with a warning when 0.
+    fn light_color(
+        &mut self,
+        field: &Option<Spanned<Vec3Def>>,
+        table: &Range<usize>,
+        object: &str,
+        name: &str,
+        example: &str,
+    ) -> Result<Vec3> {
+        let def = self.require(field, table, object, name, example)?;
+        let value = Vec3::from(self.color(def, object, name, false)?);
+        if value.max_element() == 0.0 {
+            let at = self.src.at(&def.span());
+            self.warnings.push(format!("{at}: {object}: `{name}` is 0, so this light emits nothing"));
+        }
+        Ok(value)
+    }
+
+    /// A required direction: three numbers, not all zero; returned normalised.
+    fn direction(
+        &self,
+        field: &Option<Spanned<Vec3Def>>,
+        table: &Range<usize>,
+        object: &str,
+        example: &str,
+    ) -> Result<Vec3> {
+        let def = self.require(field, table, object, "direction", example)?;
+        let d = self.point(def, object, "direction")?;
+        if d.length() == 0.0 {
+            return Err(self.invalid(
+                &def.span(),
+                object,
+                "`direction` is zero; give the direction the light shines in".to_string(),
+            ));
+        }
+        Ok(d.normalize())
+    }
+
+    /// A spot light: `position`, `direction` or `point_at`, `intensity`, and either
+    /// `outer_angle` (with `inner_angle`) or POV-Ray's `radius` and `falloff`; `tightness` with either.
+    fn spot_light(
+        &mut self,
+        l: &LightDef,
+        table: &Range<usize>,
+        object: &str,
+        present: &[Present<'_>],
+        common: &[&str],
+    ) -> Result<LightKind> {
+        let allowed = [
+            common,
+            &[
+                "position",
+                "direction",
+                "point_at",
+                "intensity",
+                "inner_angle",
+                "outer_angle",
+                "radius",
+                "falloff",
+                "tightness",
+            ],
+        ]
+        .concat();
+        self.only_fields(object, "a spot light", present, &allowed)?;
+        let position = self.require(&l.position, table, object, "position", "position = [0, 5, 0]")?;
+        let position = self.point(position, object, "position")?;
+        let direction = match (&l.direction, &l.point_at) {
+            (Some(_), Some(p)) => {
+                return Err(self.invalid(&p.span(), object, "give `direction` or `point_at`, not both".to_string()));
+            }
+            (None, Some(p)) => {
+                let target = self.point(p, object, "point_at")?;
+                if target == position {
+                    return Err(self.invalid(
+                        &p.span(),
+                        object,
+                        "`point_at` equals `position`; give the point the spot light aims at".to_string(),
+                    ));
+                }
+                (target - position).normalize()
+            }
+            _ => self.direction(&l.direction, table, object, "direction = [0, -1, 0]` or `point_at = [0, 0, 0]")?,
+        };
+        let intensity = self.light_color(&l.intensity, table, object, "intensity", "intensity = [50, 50, 50]")?;
+        // Half-angles in degrees, at most 90; an outer angle must also be above 0.
+        let angle = |value: &Spanned<f64>, field: &str, outer: bool, what: &str| -> Result<f32> {
+            let deg = self.number(value, object, field)?;
+            if !(0.0..=90.0).contains(&deg) || (outer && deg == 0.0) {
+                return Err(self.invalid(&value.span(), object, format!("`{field}` is {deg}; {what}")));
+            }
+            Ok(deg)
+        };
+        let pov = l.radius.is_some() || l.falloff.is_some();
+        let (inner, outer, inner_name, outer_name, outer_span) = if pov {
+            if let Some(span) = span_of(&l.outer_angle).or(span_of(&l.inner_angle)) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    "give `inner_angle`/`outer_angle` or POV-Ray's `radius`/`falloff`, not both".to_string(),
+                ));
+            }
+            let inner = match &l.radius {
+                Some(r) => angle(r, "radius", false, "POV-Ray's hotspot half-angle in degrees, in [0, 90]")?,
+                None => POV_SPOT_RADIUS,
+            };
+            let outer = match &l.falloff {
+                Some(f) => angle(f, "falloff", true, "POV-Ray's falloff half-angle in degrees, in (0, 90]")?,
+                None => POV_SPOT_FALLOFF,
+            };
+            (inner, outer, "radius", "falloff", span_of(&l.falloff).or(span_of(&l.radius)))
+        } else {
+            let outer_def = self.require(
+                &l.outer_angle,
+                table,
+                object,
+                "outer_angle",
+                "outer_angle = 30` (degrees from the axis)",
+            )?;
+            let outer = angle(outer_def, "outer_angle", true, "the cone's half-angle in degrees, in (0, 90]")?;
+            let inner = match &l.inner_angle {
+                Some(i) => angle(i, "inner_angle", false, "the half-angle of full intensity in degrees, in [0, 90]")?,
+                None => DEFAULT_INNER_FRACTION * outer,
+            };
+            (inner, outer, "inner_angle", "outer_angle", Some(outer_def.span()))
+        };
+        if outer < inner {
+            return Err(self.invalid(
+                &outer_span.unwrap_or(table.clone()),
+                object,
+                format!(
+                    "`{outer_name}` ({outer}) is below `{inner_name}` ({inner}); the light falls off from \
+                     `{inner_name}` out to `{outer_name}`, so raise `{outer_name}` to at least {inner} or lower `{inner_name}`"
+                ),
+            ));
+        }
+        let exponent = match &l.tightness {
+            Some(t) => {
+                let e = self.number(t, object, "tightness")?;
+                if !(0.0..=1000.0).contains(&e) {
+                    return Err(self.invalid(
+                        &t.span(),
+                        object,
+                        format!("`tightness` is {e}; it is the exponent of cos in [0, 1000] (0 for none)"),
+                    ));
+                }
+                e
+            }
+            None => 0.0,
+        };
+        Ok(LightKind::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner: inner.to_radians().cos(),
+            cos_outer: outer.to_radians().cos(),
+            exponent,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)] // the light's fields and options, already read
+    fn area_light(
+        &mut self,
+        index: usize,
+        l: &LightDef,
+        table: &Range<usize>,
+        object: &str,
+        present: &[Present<'_>],
+        common: &[&str],
+        direct: bool,
+        photons: bool,
+    ) -> Result<()> {
+        let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
+        let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
+        let mut allowed = [common, &["shape", "radiance", "transform"]].concat();
         let what = if shape == "quad" {
             allowed.push("vertices");
             "a quad area light"
@@ -1219,9 +1663,9 @@ impl Builder<'_> {
             allowed.extend_from_slice(&["center", "radius"]);
             "a sphere area light"
         };
-        self.only_fields(&object, what, &present, &allowed)?;
-        let radiance_def = self.require(&l.radiance, &table, &object, "radiance", "radiance = [10, 10, 10]")?;
-        let radiance = self.color(radiance_def, &object, "radiance", false)?;
+        self.only_fields(object, what, present, &allowed)?;
+        let radiance_def = self.require(&l.radiance, table, object, "radiance", "radiance = [10, 10, 10]")?;
+        let radiance = self.color(radiance_def, object, "radiance", false)?;
         if radiance.iter().all(|&c| c == 0.0) {
             let at = self.src.at(&radiance_def.span());
             self.warnings.push(format!("{at}: {object}: `radiance` is 0, so this light emits nothing"));
@@ -1231,8 +1675,8 @@ impl Builder<'_> {
         let material_name = format!("light {index}");
         if self.material_names.contains(&material_name) {
             return Err(self.invalid(
-                &table,
-                &object,
+                table,
+                object,
                 format!("the material name \"{material_name}\" is reserved for this area light; rename that material"),
             ));
         }
@@ -1241,14 +1685,15 @@ impl Builder<'_> {
         light_material.emission = ColorParam::constant(Vec3::from(radiance));
         let material = self.add_material(material_name, light_material);
         self.material_used[material as usize] = true;
-        let transform = self.transform(l.transform.as_ref(), &object)?;
+        self.lights.push(LightDesc { kind: LightKind::Area { material }, direct, photons });
+        let transform = self.transform(l.transform.as_ref(), object)?;
         if shape == "quad" {
-            let vertices = self.vertices(&l.vertices, &table, &object, 4)?;
-            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table), &object, material, transform)
+            let vertices = self.vertices(&l.vertices, table, object, 4)?;
+            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
         } else {
-            let center = self.require(&l.center, &table, &object, "center", "center = [0, 5, 0]")?;
-            let radius = self.require(&l.radius, &table, &object, "radius", "radius = 0.5")?;
-            self.sphere(center, radius, &object, material, transform)
+            let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
+            let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
+            self.sphere(center, radius, object, material, transform)
         }
     }
 }
