@@ -47,6 +47,11 @@ fn gpu_matches_cpu_on_showcase() {
 }
 
 #[test]
+fn gpu_matches_cpu_on_spotlights() {
+    compare("scenes/spotlights.toml");
+}
+
+#[test]
 fn gpu_render_is_deterministic() {
     let scene = load_scene(&common::repo_path("scenes/cornell-caustics.toml")).unwrap();
     let buffers = common::buffers(&scene, 32, 32);
