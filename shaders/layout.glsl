@@ -92,7 +92,8 @@ struct FrameParams {
     float focal_distance;
     uint aperture_blades;
     float aperture_rotation;
-    uint _pad[3];
+    uint environment;
+    uint _pad[2];
 };
 
 struct DispatchRange {

@@ -26,6 +26,79 @@ float spot_falloff(Light l, vec3 w) {
     return t * t * (3.0 - 2.0 * t) * tight;
 }
 
+// The environment (LIGHT_ENVIRONMENT): a latitude-longitude image of radiance, its block at
+// word `base` of the texture data (layout at ENV_TEXELS). Texel (i, j) covers the directions of
+// polar angle theta in pi [j, j + 1] / H from +y and longitude phi in pi (2 [i, i + 1] / W - 1)
+// around +y, phi = 0 toward -z, pi/2 toward +x, before the rotation about +y.
+float env_float(uint word) { return uintBitsToFloat(texture_data[word]); }
+
+// The direction of image position (u, v) in [0, 1]^2, in world space.
+vec3 env_direction(uint base, vec2 uv) {
+    float theta = PI * uv.y;
+    float phi = PI * (2.0 * uv.x - 1.0);
+    vec3 local = vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+    float c = env_float(base + ENV_COS_ROTATION);
+    float s = env_float(base + ENV_SIN_ROTATION);
+    return vec3(c * local.x + s * local.z, local.y, c * local.z - s * local.x);
+}
+
+// The texel (column, row) that world direction d falls in.
+uvec2 env_texel(uint base, vec3 d) {
+    uint w = texture_data[base + ENV_WIDTH];
+    uint h = texture_data[base + ENV_HEIGHT];
+    float c = env_float(base + ENV_COS_ROTATION);
+    float s = env_float(base + ENV_SIN_ROTATION);
+    vec3 local = vec3(c * d.x - s * d.z, d.y, c * d.z + s * d.x);
+    float u = 0.5 * (atan(local.x, -local.z) / PI + 1.0);
+    float v = acos(clamp(local.y, -1.0, 1.0)) / PI;
+    return uvec2(min(uint(u * float(w)), w - 1u), min(uint(v * float(h)), h - 1u));
+}
+
+vec3 env_radiance_at(uint base, uvec2 t) {
+    uint k = base + ENV_TEXELS + 3u * (t.y * texture_data[base + ENV_WIDTH] + t.x);
+    return vec3(env_float(k), env_float(k + 1u), env_float(k + 2u));
+}
+
+// Radiance of the environment of light l arriving along -d (d points away from the scene).
+vec3 environment_radiance(Light l, vec3 d) {
+    return env_radiance_at(l.primitive, env_texel(l.primitive, d));
+}
+
+// Index of the interval [cdf[k], cdf[k + 1]) of the n + 1 values from `first` that holds u.
+uint env_search(uint first, uint n, float u) {
+    uint lo = 0u;
+    uint hi = n - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi + 1u) / 2u;
+        if (env_float(first + mid) <= u) lo = mid; else hi = mid - 1u;
+    }
+    return lo;
+}
+
+// A direction toward the environment of light l, drawn in proportion to luminance times
+// sin(theta) per texel (a piecewise-constant 2D distribution, pbrt's Distribution2D), with
+// the radiance from it divided by its solid-angle pdf.
+void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
+    uint base = l.primitive;
+    uint w = texture_data[base + ENV_WIDTH];
+    uint h = texture_data[base + ENV_HEIGHT];
+    uint marginal = base + ENV_TEXELS + 3u * w * h;
+    uint j = env_search(marginal, h, u.y);
+    float m0 = env_float(marginal + j);
+    float m1 = env_float(marginal + j + 1u);
+    uint row = marginal + h + 1u + j * (w + 1u);
+    uint i = env_search(row, w, u.x);
+    float c0 = env_float(row + i);
+    float c1 = env_float(row + i + 1u);
+    vec2 uv = vec2((float(i) + clamp((u.x - c0) / (c1 - c0), 0.0, 1.0)) / float(w),
+                   (float(j) + clamp((u.y - m0) / (m1 - m0), 0.0, 1.0)) / float(h));
+    d = env_direction(base, uv);
+    // pdf in (u, v) is W H (m1 - m0)(c1 - c0); the map to directions has Jacobian 2 pi^2 sin(theta).
+    float sin_theta = sin(PI * uv.y);
+    float pdf = float(w * h) * (m1 - m0) * (c1 - c0) / (2.0 * PI * PI * sin_theta);
+    weight = sin_theta > 0.0 && pdf > 0.0 ? env_radiance_at(base, uvec2(i, j)) / pdf : vec3(0.0);
+}
+
 // Light l as seen from x: the direction wi toward it, a point p to aim the shadow ray at (beyond
 // the scene for a distant light) and `weight`, the radiance arriving along -wi divided by the
 // solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability).
@@ -36,7 +109,15 @@ struct LightSample {
 };
 
 LightSample light_sample(Light l, vec3 x, vec2 u) {
+    // The environment's searches are loops: no lane enters them unless it holds the environment.
+    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0));
+    WHEN(l.kind == LIGHT_ENVIRONMENT) {
+        environment_sample(l, u, env.wi, env.weight);
+        env.p = x + env.wi * (length(x - load3(l.position)) + 2.0 * l.radius);
+    }
     switch (l.kind) {
+    case LIGHT_ENVIRONMENT:
+        return env;
     case LIGHT_AREA: {
         // Uniform by area: L cos' / d^2 times the area.
         Hit h = shape_sample(l.primitive, u);
@@ -69,6 +150,12 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
 // scene's bounding sphere that faces them, uniformly in their cone of directions.
 void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec3 power) {
     vec3 axis = load3(l.direction);
+    // The environment: a direction toward it, then a disc facing it, as for a distant light.
+    vec3 env_weight = vec3(0.0);
+    WHEN(l.kind == LIGHT_ENVIRONMENT) {
+        environment_sample(l, u_dir, axis, env_weight);
+        axis = -axis;
+    }
     switch (l.kind) {
     case LIGHT_AREA: {
         Hit h = shape_sample(l.primitive, u_pos);
@@ -77,11 +164,18 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
         power = PI * l.area * material_emission(materials[h.material], h);
         return;
     }
+    case LIGHT_ENVIRONMENT:
     case LIGHT_DISTANT: {
         vec3 t, b;
         onb(axis, t, b);
         vec2 q = disc_point(u_pos) * l.radius;
         o = load3(l.position) - axis * l.radius + q.x * t + q.y * b;
+        if (l.kind == LIGHT_ENVIRONMENT) {
+            // Radiance over the direction's pdf, through the whole disc.
+            d = axis;
+            power = env_weight * (PI * l.radius * l.radius);
+            return;
+        }
         d = cone_direction(axis, l.cos_outer, u_dir);
         // Flux through the disc: radiance times solid angle times the projected disc area.
         power = load3(l.intensity) * (PI * l.radius * l.radius * dot(d, axis));

@@ -42,12 +42,18 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         float t;
         rays++;
         uint prim = trace_ray(o, d, INF, false, t);
-        if (prim == NO_LIGHT) break;
+        // Everything a mirror or glass shows is the specular term.
+        bool via_specular = depth > 0u;
+        if (prim == NO_LIGHT) {
+            // A ray that leaves the scene sees the environment (a path lobe's view of a light).
+            WHEN(frame.environment != NO_LIGHT && part == 0u) {
+                terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * environment_radiance(lights[frame.environment], d);
+            }
+            break;
+        }
         Hit h = shape_hit(prim, o, d, t);
         Material m = materials[h.material];
         vec3 wo = -d;
-        // Everything a mirror or glass shows is the specular term.
-        bool via_specular = depth > 0u;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
         // estimate lobes end the path and light sampling covers them.
         if (dot(wo, h.ng) > 0.0 && part == 0u) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);

@@ -142,3 +142,26 @@ fn focus_without_aperture_warns_and_blur_samples_raise_spp() {
     let lens = scene.camera.lens.expect("a thin lens");
     assert_eq!((lens.radius, lens.focal_distance, scene.render.spp), (0.1, 5.0, 10));
 }
+
+#[test]
+fn environment_errors_name_the_field_and_the_fix() {
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"map\"\nfile = \"nowhere/sky.hdr\"\n"));
+    assert_mentions(
+        &m,
+        &["bad.toml:7:", "[environment]", "`file`", "nowhere/sky.hdr", "cannot read", "relative to the scene file"],
+    );
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"map\"\n"));
+    assert_mentions(&m, &["bad.toml:5:", "missing field `file`", "file = \"textures/sky.hdr\""]);
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"sky\"\n"));
+    assert_mentions(&m, &["bad.toml:6:", "unknown type \"sky\""]);
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"uniform\"\nradiance = 1\nstrength = -2\n"));
+    assert_mentions(&m, &["bad.toml:8:", "`strength` is -2", ">= 0"]);
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"gradient\"\ncolors = [[1, 1, 1]]\n"));
+    assert_mentions(&m, &["bad.toml:7:", "at least 2 colours"]);
+    let m = error_of(&format!(
+        "{CAMERA}[environment]\ntype = \"gradient\"\ncolors = [[1, 1, 1], [0, 0, 1]]\nelevations = [40, 10]\n"
+    ));
+    assert_mentions(&m, &["bad.toml:8:", "`elevations` is [40.0, 10.0]", "increasing"]);
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"uniform\"\nradiance = 1\nfile = \"sky.hdr\"\n"));
+    assert_mentions(&m, &["bad.toml:8:", "`file` does not apply to a uniform environment"]);
+}

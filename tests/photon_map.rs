@@ -111,6 +111,7 @@ fn closed_box(rho: f32) -> Scene {
             position: Vec3::new(0.1, 0.2, -0.3),
             intensity: Vec3::new(1.0, 2.0, 3.0),
         })],
+        environment: None,
         warnings: vec![],
     }
 }

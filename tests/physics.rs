@@ -56,6 +56,7 @@ fn light_over_plane() -> Scene {
         textures: vec![],
         shapes: triangles,
         lights: vec![],
+        environment: None,
         warnings: vec![],
     }
 }

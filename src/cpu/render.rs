@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
 use super::gather::{caustic_light, gather_ray, indirect_preview};
+use super::light::environment_radiance;
 use super::rng::rand4;
 use super::shading::{camera_ray, direct_light, offset_origin};
 use super::shape::shape_hit;
@@ -29,14 +30,19 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     for depth in 0..f.max_depth {
         *rays += 1;
         let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);
+        // Everything a mirror or glass shows is the specular term.
+        let layer = |own: u32| (if depth > 0 { LAYER_SPECULAR } else { own }) as usize;
         if prim == NO_LIGHT {
+            // A ray that leaves the scene sees the environment (a path lobe's view of a light).
+            if f.environment != NO_LIGHT && part == 0 {
+                terms[layer(LAYER_DIRECT)] +=
+                    throughput * environment_radiance(s, &s.lights[f.environment as usize], d);
+            }
             break;
         }
         let h = shape_hit(s, prim, o, d, t);
         let m = &s.materials[h.material as usize];
         let wo = -d;
-        // Everything a mirror or glass shows is the specular term.
-        let layer = |own: u32| (if depth > 0 { LAYER_SPECULAR } else { own }) as usize;
         // Emission leaves the front face only; it counts wherever a camera path meets it, since
         // estimate lobes end the path and light sampling covers them.
         if wo.dot(h.ng) > 0.0 && part == 0 {

@@ -84,6 +84,19 @@ shared_constants! {
     /// the cone's solid angle (W/m^2 per unit solid-angle pdf, see `prepare.rs`). Its photons leave
     /// a disc of radius `radius` around the scene's bounding sphere centred at `position`.
     LIGHT_DISTANT: u32 = 4;
+    /// The environment: radiance from every direction, a latitude-longitude image. `primitive`
+    /// is the word offset of its block in the texture data (`ENV_*` below); `position` and
+    /// `radius` are the bounding sphere its photons enter through, as for a distant light.
+    LIGHT_ENVIRONMENT: u32 = 5;
+    /// Words of an environment block, from its offset: width W, height H, cos and sin of its
+    /// rotation about +y (f32 bits), then W x H texels of RGB radiance (f32 bits, row 0 = the
+    /// zenith, column W/2 = -z), the marginal cdf over rows (H + 1 floats) and each row's
+    /// conditional cdf over columns (W + 1 floats per row), of luminance times sin(theta).
+    ENV_WIDTH: u32 = 0;
+    ENV_HEIGHT: u32 = 1;
+    ENV_COS_ROTATION: u32 = 2;
+    ENV_SIN_ROTATION: u32 = 3;
+    ENV_TEXELS: u32 = 4;
 
     /// `FrameParams::camera_kind`: a perspective camera (pinhole, or thin lens with
     /// `lens_radius` > 0): film position (sx, sy) looks along `forward + sx right + sy up`.

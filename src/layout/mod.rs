@@ -175,7 +175,10 @@ gpu_structs! {
         /// corner from `camera_up` toward `camera_right`, radians.
         pub aperture_blades: u32,
         pub aperture_rotation: f32,
-        pub _pad: [u32; 3],
+        /// Index of the environment's light (`LIGHT_ENVIRONMENT`), or `NO_LIGHT`: rays that leave
+        /// the scene see it.
+        pub environment: u32,
+        pub _pad: [u32; 2],
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -4,7 +4,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::pack::pack_scene;
+use super::pack::{pack_environment, pack_scene};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
@@ -199,6 +199,22 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         powers.push(light_powers(power, desc.direct, desc.photons));
         lights.push(light);
     }
+    let mut texture_data = packed.texture_data;
+    let mut environment = NO_LIGHT;
+    if let Some(env) = &scene.environment {
+        let (offset, integral) = pack_environment(&env.image, env.rotation_deg, &mut texture_data);
+        environment = lights.len() as u32;
+        lights.push(Light {
+            position: bounding_center.into(),
+            kind: LIGHT_ENVIRONMENT,
+            primitive: offset,
+            radius: bounding_radius,
+            ..Default::default()
+        });
+        // The power that enters the bounding sphere's disc from every direction.
+        let power = integral as f32 * PI * bounding_radius * bounding_radius;
+        powers.push(light_powers(power, env.direct, env.photons));
+    }
     fill_cdf(
         &mut lights,
         &powers,
@@ -257,7 +273,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         focal_distance: lens.focal_distance,
         aperture_blades: lens.blades,
         aperture_rotation: lens.rotation_deg.to_radians(),
-        _pad: [0; 3],
+        environment,
+        _pad: [0; 2],
     };
     Ok(SceneBuffers {
         frame,
@@ -266,7 +283,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         materials: packed.materials,
         lights,
         textures: packed.textures,
-        texture_data: packed.texture_data,
+        texture_data,
         shape_data: packed.shape_data,
         textured: packed.textured,
         bounding_radius,

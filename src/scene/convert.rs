@@ -8,8 +8,10 @@ use glam::{Affine3A, Mat3, Vec2, Vec3};
 use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
-use super::format::{LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def};
-use super::image_texture::{load_image_texture, ColorSpace, Wrap};
+use super::format::{
+    EnvironmentDef, LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
+};
+use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
 use super::material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
@@ -17,8 +19,8 @@ use super::material::{
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
-    Camera, Geometry, LightDesc, LightKind, PhotonSettings, Projection, RenderSettings, Scene, Shape, Sphere, ThinLens,
-    Triangle,
+    Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection, RenderSettings, Scene, Shape,
+    Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 
@@ -62,6 +64,12 @@ const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
 const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
 const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
+const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform"];
+/// Environment maps above this many texels are halved (2x2 means) until they fit: the map, its
+/// cdfs and the scene's other data must fit one storage buffer (128 MiB on lavapipe).
+const ENV_MAX_TEXELS: u64 = 2048 * 1024;
+/// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
+const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
@@ -107,6 +115,10 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     for (index, light) in file.lights.iter().enumerate() {
         builder.light(index, light)?;
     }
+    let environment = match &file.environment {
+        Some(def) => Some(builder.environment(def)?),
+        None => None,
+    };
 
     // Warnings
     for (name, used) in builder.material_names.iter().zip(&builder.material_used) {
@@ -124,7 +136,8 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
             LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity.max_element() > 0.0,
             LightKind::Distant { irradiance, .. } => irradiance.max_element() > 0.0,
             LightKind::Area { .. } => false,
-        });
+        })
+        || environment.as_ref().is_some_and(|e| e.image.texels.iter().any(|t| t[..3].iter().any(|&c| c > 0.0)));
     if !has_light {
         builder.warnings.push("scene has no lights; the image will be black".to_string());
     }
@@ -141,6 +154,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         textures: builder.textures,
         shapes: builder.shapes,
         lights: builder.lights,
+        environment,
         warnings: builder.warnings,
     })
 }
@@ -1696,6 +1710,191 @@ impl Builder<'_> {
             self.sphere(center, radius, object, material, transform)
         }
     }
+}
+
+impl Builder<'_> {
+    // Environment
+
+    fn environment(&mut self, def: &Spanned<EnvironmentDef>) -> Result<Environment> {
+        let object = "[environment]";
+        let table = def.span();
+        let e = def.get_ref();
+        let kind_def = self.require(&e.r#type, &table, object, "type", "type = \"map\"")?;
+        let kind = self.one_of(kind_def, object, "type", ENVIRONMENT_TYPES)?;
+        let present = [
+            ("type", span_of(&e.r#type)),
+            ("file", span_of(&e.file)),
+            ("radiance", span_of(&e.radiance)),
+            ("colors", span_of(&e.colors)),
+            ("elevations", span_of(&e.elevations)),
+            ("strength", span_of(&e.strength)),
+            ("rotation", span_of(&e.rotation)),
+            ("photons", span_of(&e.photons)),
+            ("direct", span_of(&e.direct)),
+        ];
+        let common = ["type", "strength", "rotation", "photons", "direct"];
+        let strength = match &e.strength {
+            Some(v) => {
+                let k = self.number(v, object, "strength")?;
+                if k < 0.0 {
+                    return Err(self.invalid(
+                        &v.span(),
+                        object,
+                        format!("`strength` is {k}; it scales the radiance and must be >= 0"),
+                    ));
+                }
+                k
+            }
+            None => 1.0,
+        };
+        let rotation_deg = match &e.rotation {
+            Some(r) => self.number(r, object, "rotation")?,
+            None => 0.0,
+        };
+        let direct = e.direct.as_ref().is_none_or(|d| *d.get_ref());
+        let photons = e.photons.as_ref().is_none_or(|p| *p.get_ref());
+        if !direct && !photons {
+            return Err(self.invalid(
+                &span_of(&e.direct).unwrap_or(table.clone()),
+                object,
+                "`direct = false` and `photons = false` leave the environment only visible to camera rays; keep one true".to_string(),
+            ));
+        }
+        let mut image = match kind {
+            "map" => {
+                self.only_fields(object, "an environment map", &present, &[&common[..], &["file"]].concat())?;
+                let file = self.require(&e.file, &table, object, "file", "file = \"textures/sky.hdr\"")?;
+                let base = self.src.path.parent().unwrap_or(Path::new(""));
+                let image = load_image_texture(&base.join(file.get_ref()), ColorSpace::Srgb).map_err(|err| {
+                    self.invalid(
+                        &file.span(),
+                        object,
+                        format!("`file`: {err}; give a latitude-longitude EXR or Radiance HDR image, its path relative to the scene file"),
+                    )
+                })?;
+                let mut image = image;
+                let (w0, h0) = (image.width, image.height);
+                while image.width as u64 * image.height as u64 > ENV_MAX_TEXELS && image.width > 1 && image.height > 1 {
+                    image = halve(&image);
+                }
+                if image.width != w0 {
+                    let at = self.src.at(&file.span());
+                    self.warnings.push(format!(
+                        "{at}: {object}: the map is {w0}x{h0}; it is used at {}x{} to fit one storage buffer",
+                        image.width, image.height
+                    ));
+                }
+                image
+            }
+            "gradient" => {
+                self.only_fields(
+                    object,
+                    "a gradient sky",
+                    &present,
+                    &[&common[..], &["colors", "elevations"]].concat(),
+                )?;
+                let colors_def =
+                    self.require(&e.colors, &table, object, "colors", "colors = [[0.9, 0.9, 1.0], [0.3, 0.5, 1.0]]")?;
+                let mut colors = Vec::new();
+                for c in colors_def.get_ref() {
+                    let v = Vec3::new(c.value[0] as f32, c.value[1] as f32, c.value[2] as f32);
+                    if !v.is_finite() || v.min_element() < 0.0 {
+                        return Err(self.invalid(
+                            &colors_def.span(),
+                            object,
+                            format!("`colors` holds {v}; give finite radiances >= 0"),
+                        ));
+                    }
+                    colors.push(v);
+                }
+                if colors.len() < 2 {
+                    return Err(self.invalid(
+                        &colors_def.span(),
+                        object,
+                        "`colors` needs at least 2 colours (horizon to zenith)".to_string(),
+                    ));
+                }
+                let elevations: Vec<f32> = match &e.elevations {
+                    Some(el) => {
+                        let values: Vec<f32> = el.get_ref().iter().map(|&v| v as f32).collect();
+                        let increasing = values.windows(2).all(|w| w[0] < w[1]);
+                        if values.len() != colors.len()
+                            || !increasing
+                            || values.iter().any(|v| !(-90.0..=90.0).contains(v))
+                        {
+                            return Err(self.invalid(
+                                &el.span(),
+                                object,
+                                format!(
+                                    "`elevations` is {values:?}; give one elevation per colour ({}), increasing, in [-90, 90] degrees",
+                                    colors.len()
+                                ),
+                            ));
+                        }
+                        values
+                    }
+                    None => (0..colors.len()).map(|k| 90.0 * k as f32 / (colors.len() - 1) as f32).collect(),
+                };
+                gradient_image(&colors, &elevations)
+            }
+            _ => {
+                self.only_fields(object, "a uniform environment", &present, &[&common[..], &["radiance"]].concat())?;
+                let r = self.require(&e.radiance, &table, object, "radiance", "radiance = 1")?;
+                let c = self.color(r, object, "radiance", false)?;
+                // Rows, so that directions are drawn in proportion to sin(theta): uniformly.
+                ImageTexture {
+                    width: 1,
+                    height: GRADIENT_ROWS,
+                    texels: vec![[c[0], c[1], c[2], 1.0]; GRADIENT_ROWS as usize],
+                }
+            }
+        };
+        for t in &mut image.texels {
+            for c in &mut t[..3] {
+                *c *= strength;
+            }
+        }
+        Ok(Environment { image: std::sync::Arc::new(image), rotation_deg, direct, photons })
+    }
+}
+
+/// The image halved in both directions (odd last rows and columns dropped), each texel the mean
+/// of the 2x2 it replaces.
+fn halve(image: &ImageTexture) -> ImageTexture {
+    let (w, h) = (image.width / 2, image.height / 2);
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let mut sum = [0.0f32; 4];
+            for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let t = image.texels[((2 * j + dj) * image.width + 2 * i + di) as usize];
+                (0..4).for_each(|c| sum[c] += 0.25 * t[c]);
+            }
+            texels.push(sum);
+        }
+    }
+    ImageTexture { width: w, height: h, texels }
+}
+
+/// A one-column latitude-longitude image of `colors` at `elevations` (degrees), linear in
+/// elevation between them and constant beyond the first and the last.
+fn gradient_image(colors: &[Vec3], elevations: &[f32]) -> ImageTexture {
+    let texels = (0..GRADIENT_ROWS)
+        .map(|j| {
+            let elevation = 90.0 - 180.0 * (j as f32 + 0.5) / GRADIENT_ROWS as f32;
+            let k = elevations.iter().rposition(|&e| e <= elevation).unwrap_or(0);
+            let c = if elevation <= elevations[0] {
+                colors[0]
+            } else if k + 1 >= colors.len() {
+                colors[colors.len() - 1]
+            } else {
+                let t = (elevation - elevations[k]) / (elevations[k + 1] - elevations[k]);
+                colors[k].lerp(colors[k + 1], t)
+            };
+            [c.x, c.y, c.z, 1.0]
+        })
+        .collect();
+    ImageTexture { width: 1, height: GRADIENT_ROWS, texels }
 }
 
 /// The triangle moved by `transform`, with its vertex uvs kept in step with its vertices.

@@ -23,6 +23,21 @@ pub(crate) struct SceneFile {
     pub shapes: Vec<Spanned<ShapeDef>>,
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
+    pub environment: Option<Spanned<EnvironmentDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EnvironmentDef {
+    pub r#type: Option<Spanned<String>>,
+    pub file: Option<Spanned<String>>,
+    pub radiance: Option<Spanned<Vec3Def>>,
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub elevations: Option<Spanned<Vec<f64>>>,
+    pub strength: Option<Spanned<f64>>,
+    pub rotation: Option<Spanned<f64>>,
+    pub photons: Option<Spanned<bool>>,
+    pub direct: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -50,6 +50,8 @@ pub struct Scene {
     /// The lights of `[[lights]]` in file order: point, spot and distant lights, and for each
     /// area light the options of the shapes that carry its material.
     pub lights: Vec<LightDesc>,
+    /// What rays that leave the scene see, and a light of its own; `None` is black.
+    pub environment: Option<Environment>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
 }
@@ -181,6 +183,20 @@ pub struct Sphere {
     pub radius: f32,
     /// Rotation into the sphere's own frame; `None` is the identity.
     pub object_from_world: Option<Mat3>,
+}
+
+/// The environment: radiance from every direction, as a latitude-longitude image (an HDR map,
+/// or a gradient or uniform sky drawn into one). Row 0 is the zenith (+y), the middle column
+/// looks toward -z and the column at three quarters toward +x, before `rotation_deg`.
+#[derive(Clone, Debug)]
+pub struct Environment {
+    /// Linear RGB radiance, already scaled by the file's `strength`.
+    pub image: std::sync::Arc<image_texture::ImageTexture>,
+    /// Rotation about +y, degrees, right-handed: 90 turns the image's middle from -z to -x.
+    pub rotation_deg: f32,
+    /// As `LightDesc::direct` and `LightDesc::photons`.
+    pub direct: bool,
+    pub photons: bool,
 }
 
 /// A light of `[[lights]]`, with the options every kind takes.
