@@ -1,7 +1,7 @@
 #!/bin/sh
 # Cost of each light kind per shadow ray: the Cornell box's geometry lit by one light of each
 # kind in turn (the ceiling quad, a sphere lamp, a point, a spot, a sharp and a soft distant
-# light), each timed by `photonix bench` (shadow rays are the extra time of a frame with one
+# light, and a uniform environment), each timed by `photonix bench` (shadow rays are the extra time of a frame with one
 # shadow ray per diffuse hit). Usage: benches/light_kinds.sh [photonix binary] [bench args...]
 set -eu
 bin=${1:-target/release/photonix}
@@ -24,3 +24,7 @@ run point 'type = "point"' 'position = [278, 540, 279.5]' 'intensity = 100000'
 run spot 'type = "spot"' 'position = [278, 540, 279.5]' 'point_at = [278, 0, 279.5]' 'intensity = 100000' 'inner_angle = 30' 'outer_angle = 50'
 run distant 'type = "distant"' 'direction = [0.2, -1, 0.3]' 'irradiance = 1'
 run distant-soft 'type = "distant"' 'direction = [0.2, -1, 0.3]' 'irradiance = 1' 'angular_diameter = 10'
+# An environment has no [[lights]] entry: a uniform sky instead of the light.
+echo "== environment"
+{ cat "$dir/box.toml"; printf '[environment]\ntype = "uniform"\nradiance = 1\n'; } > "$dir/environment.toml"
+"$bin" bench "$dir/environment.toml" $BENCH_ARGS

@@ -9,20 +9,20 @@ void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
     vec3 right = load3(frame.camera_right);
     vec3 up = load3(frame.camera_up);
     o = load3(frame.camera_position);
-    if (frame.camera_kind == CAMERA_LATLONG) {
+    d = normalize(forward + sx * right + sy * up);
+    // The other projections and the lens are loops of at most one turn: lavapipe runs both sides
+    // of an `if` under masks, but skips a loop no lane enters, so a pinhole pays for none of them.
+    WHEN(frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
+        o += sx * right + sy * up;
+        d = forward;
+    }
+    WHEN(frame.camera_kind == CAMERA_LATLONG) {
         float phi = PI * sx;
         float theta = 0.5 * PI * sy;
         d = cos(theta) * (sin(phi) * right + cos(phi) * forward) + sin(theta) * up;
-        return;
     }
-    if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
-        o += sx * right + sy * up;
-        d = forward;
-    } else {
-        d = normalize(forward + sx * right + sy * up);
-    }
-    // Thin lens: the ray from a point of the aperture aims where the pinhole ray meets the plane
-    // in focus. A loop of at most one turn, so pinhole cameras skip the lens code entirely.
+    // Thin lens (never latlong): the ray from a point of the aperture aims where the pinhole ray
+    // meets the plane in focus.
     WHEN(frame.lens_radius > 0.0) {
         vec3 focus = o + d * (frame.focal_distance / dot(d, forward));
         vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation) * frame.lens_radius;

@@ -108,7 +108,8 @@ gpu_structs! {
     /// primitive `primitive`, whose material gives the radiance. Point and spot lights:
     /// `position`, `intensity` (W/sr on the axis), the cone `direction`, `cos_outer`,
     /// `falloff_scale` and `exponent`. Distant light: `direction`, `cos_outer`, `intensity`,
-    /// and the bounding sphere (`position`, `radius`) its photons enter through. `cdf` is the
+    /// and the bounding sphere (`position`, `radius`) its photons enter through. Environment: its
+    /// block in the texture data at word `primitive`, and the bounding sphere. `cdf` is the
     /// running sum of the normalised powers of the lights that cast direct light, up to and
     /// including this one, so a binary search picks them in proportion to power; `photon_cdf`
     /// does the same for the lights that emit photons.
@@ -134,7 +135,7 @@ gpu_structs! {
         pub falloff_scale: f32,
         /// Spot intensity is also scaled by cos^exponent (POV-Ray's `tightness`; 0 for none).
         pub exponent: f32,
-        /// Radius of the scene's bounding sphere (distant lights), scene units.
+        /// Radius of the scene's bounding sphere (distant lights, the environment), scene units.
         pub radius: f32,
     }
 
