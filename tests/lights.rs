@@ -9,7 +9,7 @@ use glam::{DVec3, Vec3};
 use photonix::cpu::light::light_emit;
 use photonix::cpu::rng::rand4;
 use photonix::io::Image;
-use photonix::layout::constants::{LIGHT_DISTANT, LIGHT_SPOT};
+use photonix::layout::constants::{LIGHT_AREA, LIGHT_DISTANT, LIGHT_SPOT};
 use photonix::render::photons::build_maps_cpu;
 use photonix::render::{PhotonSettings, SceneBuffers};
 use photonix::scene::{parse_scene, Scene};
@@ -355,6 +355,12 @@ fn direct_only_and_photons_only_lights_split_the_work() {
     );
     assert_eq!(maps.global_photons.len(), 0, "a direct-only light emits no photons");
     assert!(direct.channel_means()[1] > 0.01, "a direct-only light casts direct light");
+
+    // An area light takes the options too: they follow its material to its shapes.
+    let area = "[[lights]]\ntype = \"area\"\nshape = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.2\nradiance = 5\nphotons = false\n";
+    let buffers = common::buffers(&plane_scene(&format!("{area}\n{photons_only}"), true), SIZE, SIZE);
+    let picks: Vec<_> = buffers.lights.iter().map(|l| (l.kind, l.pick_probability, l.photon_probability)).collect();
+    assert_eq!(picks, vec![(LIGHT_AREA, 1.0, 0.0), (LIGHT_SPOT, 0.0, 1.0)]);
 
     // Both lights: each distribution holds one of them with probability 1.
     let buffers = common::buffers(&plane_scene(&format!("{photons_only}\n{direct_only}"), true), SIZE, SIZE);
