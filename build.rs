@@ -29,16 +29,21 @@ fn main() {
     let mut failures = Vec::new();
     for kernel in &kernels {
         let stem = kernel.file_stem().unwrap().to_string_lossy().to_string();
-        // A line `// variant: NAME` compiles the kernel a second time as `<stem>_NAME` with
-        // `VARIANT_NAME` defined (e.g. with the procedural textures that slow down lavapipe).
+        // A line `// variant: NAME` compiles the kernel once more as `<stem>_NAME` with
+        // `VARIANT_NAME` defined (e.g. with the procedural textures that slow down lavapipe);
+        // `// variant: A B` compiles `<stem>_A_B` with both defined.
         let source = std::fs::read_to_string(kernel).unwrap_or_default();
         let variants = source.lines().filter_map(|l| l.strip_prefix("// variant: ")).map(str::trim);
-        let builds: Vec<(String, Option<String>)> = std::iter::once((stem.clone(), None))
-            .chain(variants.map(|v| (format!("{stem}_{v}"), Some(format!("VARIANT_{}", v.to_uppercase())))))
+        let builds: Vec<(String, Vec<String>)> = std::iter::once((stem.clone(), Vec::new()))
+            .chain(variants.map(|v| {
+                let names: Vec<&str> = v.split_whitespace().collect();
+                let defines = names.iter().map(|n| format!("VARIANT_{}", n.to_uppercase())).collect();
+                (format!("{stem}_{}", names.join("_")), defines)
+            }))
             .collect();
         for (name, define) in builds {
             let spv = out_dir.join(format!("{name}.spv"));
-            match compile(kernel, &spv, &out_dir, define.as_deref()) {
+            match compile(kernel, &spv, &out_dir, &define) {
                 Ok(()) => {
                     writeln!(index, "    ({name:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
                 }
@@ -58,11 +63,11 @@ fn main() {
     std::fs::write(out_dir.join("kernels.rs"), index).expect("OUT_DIR is writable");
 }
 
-fn compile(kernel: &Path, spv: &Path, include_dir: &Path, define: Option<&str>) -> Result<(), String> {
+fn compile(kernel: &Path, spv: &Path, include_dir: &Path, defines: &[String]) -> Result<(), String> {
     let depfile = spv.with_extension("d");
     let output = Command::new("glslangValidator")
         .args(["-V", "--target-env", "vulkan1.2"])
-        .args(define.map(|d| format!("-D{d}")))
+        .args(defines.iter().map(|d| format!("-D{d}")))
         .arg(format!("-I{}", include_dir.display()))
         .arg("-Ishaders")
         .arg("--depfile")

@@ -40,25 +40,84 @@ float hash_point(vec3 p, uint key) {
     return rand_unit(pcg4d(uvec4(uvec3(c), key)).x);
 }
 
+// The texture lookups of material_bsdf, one bit each in a mask: colour 0, colour 1, roughness,
+// normal map, and the bump map's four heights (u+, u-, v+, v-).
+const uint LOOKUP_COLOR0 = 0u;
+const uint LOOKUP_COLOR1 = 1u;
+const uint LOOKUP_ROUGHNESS = 2u;
+const uint LOOKUP_NORMAL = 3u;
+const uint LOOKUP_BUMP = 4u;  // to LOOKUP_BUMP + 3
+const uint LOOKUP_MIX = 8u;   // a mix's weight
+
+uint material_lookups(Material m) {
+    return (m.color0_tex != NO_TEXTURE ? 1u << LOOKUP_COLOR0 : 0u)
+        | (m.color1_tex != NO_TEXTURE ? 1u << LOOKUP_COLOR1 : 0u)
+        | (m.roughness_tex != NO_TEXTURE ? 1u << LOOKUP_ROUGHNESS : 0u)
+        | (m.normal_tex != NO_TEXTURE ? 1u << LOOKUP_NORMAL : 0u)
+        | (m.bump_tex != NO_TEXTURE ? 15u << LOOKUP_BUMP : 0u);
+}
+
+// Where lookup `k` reads: a bump height's point moved by BUMP_DELTA along u or v.
+Hit lookup_hit(Hit h, uint k) {
+    if (k < LOOKUP_BUMP || k == LOOKUP_MIX) return h;
+    uint j = k - LOOKUP_BUMP;
+    float d = (j & 1u) == 0u ? BUMP_DELTA : -BUMP_DELTA;
+    return j < 2u ? hit_moved(h, d, 0.0) : hit_moved(h, 0.0, d);
+}
+
+uint lookup_texture(Material m, uint k) {
+    if (k == LOOKUP_COLOR0) return m.color0_tex;
+    if (k == LOOKUP_COLOR1) return m.color1_tex;
+    if (k == LOOKUP_ROUGHNESS) return m.roughness_tex;
+    if (k == LOOKUP_NORMAL) return m.normal_tex;
+    if (k == LOOKUP_MIX) return m.weight_tex;
+    return m.bump_tex;
+}
+
+// The mix's choices, then every texture of the chosen material, go through the one texture_eval
+// in this loop: lavapipe inlines a function at each call site, and one call per parameter (nine,
+// with the bump map's four) made the textured kernels several times larger and slower.
 Bsdf material_bsdf(Material m, Hit h) {
-    for (uint level = 0u; level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX; level++) {
-        m = materials[hash_point(h.p, level) < param_scalar(m.weight, m.weight_tex, h) ? m.mix_b : m.mix_a];
+    vec3 looked[8];
+    uint level = 0u;
+    bool mixing = m.kind == MATERIAL_MIX;
+    uint pending = mixing ? 0u : material_lookups(m);
+    for (uint step = 0u; step < MIX_MAX_DEPTH + 8u && (mixing || pending != 0u); step++) {
+        uint k = mixing ? LOOKUP_MIX : uint(findLSB(pending));
+        uint tex = lookup_texture(m, k);
+        vec3 v = vec3(1.0);
+        WHEN(tex != NO_TEXTURE) v = texture_eval(tex, lookup_hit(h, k));
+        if (mixing) {
+            m = materials[hash_point(h.p, level) < m.weight * v.x ? m.mix_b : m.mix_a];
+            level++;
+            mixing = level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX;
+            if (!mixing) pending = material_lookups(m);
+        } else {
+            looked[k] = v;
+            pending &= pending - 1u;
+        }
     }
+    uint lookups = material_lookups(m);
     Bsdf b;
     b.kind = m.kind;
-    b.color0 = param_color(m.color0, m.color0_tex, h);
-    b.color1 = param_color(m.color1, m.color1_tex, h);
+    b.color0 = load3(m.color0);
+    if ((lookups & (1u << LOOKUP_COLOR0)) != 0u) b.color0 *= looked[LOOKUP_COLOR0];
+    b.color1 = load3(m.color1);
+    if ((lookups & (1u << LOOKUP_COLOR1)) != 0u) b.color1 *= looked[LOOKUP_COLOR1];
     b.alpha = vec2(m.roughness[0], m.roughness[1]);
-    WHEN(m.roughness_tex != NO_TEXTURE) b.alpha *= texture_eval(m.roughness_tex, h).x;
+    if ((lookups & (1u << LOOKUP_ROUGHNESS)) != 0u) b.alpha *= looked[LOOKUP_ROUGHNESS].x;
     b.ior = m.ior;
     b.ng = h.ng;
     b.ns = h.ns;
     b.ts = h.dpdu;
     b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;
     // Bump and normal maps change the shading normal only: the geometric normal keeps deciding
-    // sides, offsets and leaks.
-    WHEN(m.normal_tex != NO_TEXTURE) b.ns = normal_map_normal(m.normal_tex, h);
-    WHEN(m.bump_tex != NO_TEXTURE) b.ns = bump_normal(m.bump_tex, m.bump_strength, h);
+    // sides, offsets and leaks. A bump map wins over a normal map.
+    WHEN((lookups & (1u << LOOKUP_NORMAL)) != 0u) b.ns = normal_map_normal_from_texel(looked[LOOKUP_NORMAL], h);
+    WHEN((lookups & (15u << LOOKUP_BUMP)) != 0u) {
+        b.ns = bump_normal_from_heights(looked[LOOKUP_BUMP].x, looked[LOOKUP_BUMP + 1u].x, looked[LOOKUP_BUMP + 2u].x,
+                                        looked[LOOKUP_BUMP + 3u].x, m.bump_strength, h);
+    }
     return b;
 }
 

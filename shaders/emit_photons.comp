@@ -5,6 +5,13 @@
 // map; one past a buffer's capacity is counted but not stored, so the host can grow the buffer
 // and trace again).
 // variant: textured
+// variant: textured alpha
+// variant: analytic
+// variant: textured analytic
+// variant: textured alpha analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
+// variant: textured alpha analytic implicit
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

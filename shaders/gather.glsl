@@ -1,4 +1,6 @@
-// Radiance estimates from the photon maps and the final gather. CPU twin: src/cpu/gather.rs.
+// Radiance estimates from the photon maps. CPU twin: src/cpu/gather.rs. The camera kernel reads
+// them at the end of its loop (render.comp): caustics, the preview of the indirect light, and the
+// global map where a final-gather path ends.
 // The including kernel declares `grids[2]` (0 global, 1 caustic), `global_photons[]`,
 // `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes shading.glsl,
 // grid.glsl and photon.glsl.
@@ -80,52 +82,4 @@ vec3 photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
         }
     }
     return sum * (2.0 / (PI * r2));
-}
-
-// Indirect radiance toward wo at h, read from the global map at h without the direct and
-// caustic photons (the fast preview when frame.gather_rays is 0).
-vec3 indirect_preview(Hit h, Bsdf b, vec3 wo) {
-    return photon_radiance(MAP_GLOBAL, h, b, wo, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC);
-}
-
-// One final-gather ray's share of the indirect radiance toward wo at h: ray j, sampled from the
-// estimate lobes of b, follows path lobes to a surface with estimate lobes and reads the global
-// map there, weighted 1/gather_rays. Emission met on the way is not counted: direct light and
-// caustics cover it.
-vec3 gather_ray(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint j, inout uint rays) {
-    uint gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
-    vec4 u0 = rand4(stream, sample_index, frame.seed, gdim);
-    BsdfSample first = bsdf_sample(b, wo, vec3(u0.z, u0.x, u0.y), LOBES_ESTIMATE);
-    if (first.flags == 0u) return vec3(0.0);
-    vec3 d = first.wi;
-    vec3 o = offset_origin(h, wo, first.flags);
-    vec3 throughput = vec3(1.0);
-    for (uint bounce = 0u; bounce < frame.max_depth; bounce++) {
-        float t;
-        rays++;
-        uint prim = trace_ray(o, d, INF, false, t);
-        if (prim == NO_LIGHT) break;
-        Hit y = shape_hit(prim, o, d, t);
-        vec3 wo_y = -d;
-        Bsdf by = material_bsdf(materials[y.material], y);
-        vec4 u = rand4(stream, sample_index, frame.seed, gdim + 1u + bounce);
-        float q = bsdf_path_probability(by, wo_y);
-        if (u.w < q) {
-            BsdfSample s = bsdf_sample(by, wo_y, u.xyz, LOBES_PATH);
-            if (s.flags == 0u) break;
-            throughput *= s.weight / q;
-            o = offset_origin(y, wo_y, s.flags);
-            d = s.wi;
-            continue;
-        }
-        if ((bsdf_flags(by) & BSDF_ESTIMATE) == 0u) break;
-        vec3 radiance = photon_radiance(MAP_GLOBAL, y, by, wo_y, 0u);
-        return first.weight * (throughput / (1.0 - q)) * radiance / float(frame.gather_rays);
-    }
-    return vec3(0.0);
-}
-
-// Caustic radiance toward wo at h from the caustic map.
-vec3 caustic_light(Hit h, Bsdf b, vec3 wo) {
-    return photon_radiance(MAP_CAUSTIC, h, b, wo, 0u);
 }

@@ -5,13 +5,7 @@
 // An image is a block at word offset `at`: width, height, wrap, flags, then the texels row by row
 // (row 0 = the file's top row), two words each: half R | half G << 16, half B | half A << 16.
 
-// Mirror of the constants in src/cpu/image_texture.rs (checked by its tests).
-#define IMAGE_HEADER_WORDS 4u
-#define IMAGE_WRAP_REPEAT 0u
-#define IMAGE_WRAP_CLAMP 1u
-#define IMAGE_WRAP_MIRROR 2u
-#define IMAGE_FLAG_ALPHA 1u
-#define IMAGE_COORD_LIMIT 16777216.0
+// IMAGE_* constants come from constants.glsl (src/layout/constants.rs).
 
 // Half-float bits to f32, exactly, subnormals included (the host writes no Inf or NaN).
 float image_half_to_f32(uint h) {

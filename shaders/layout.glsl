@@ -93,7 +93,8 @@ struct FrameParams {
     uint aperture_blades;
     float aperture_rotation;
     uint environment;
-    uint _pad[2];
+    uint unbounded_first;
+    uint _pad;
 };
 
 struct DispatchRange {

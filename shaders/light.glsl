@@ -101,16 +101,18 @@ void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
 
 // Light l as seen from x: the direction wi toward it, a point p to aim the shadow ray at (beyond
 // the scene for a distant light) and `weight`, the radiance arriving along -wi divided by the
-// solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability).
+// solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability);
+// `eps`, the offset of a ray that ends at p (the area light's point's own, else the frame's).
 struct LightSample {
     vec3 p;
     vec3 wi;
     vec3 weight;
+    float eps;
 };
 
 LightSample light_sample(Light l, vec3 x, vec2 u) {
     // The environment's searches are loops: no lane enters them unless it holds the environment.
-    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0));
+    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon);
     WHEN(l.kind == LIGHT_ENVIRONMENT) {
         environment_sample(l, u, env.wi, env.weight);
         env.p = x + env.wi * (length(x - load3(l.position)) + 2.0 * l.radius);
@@ -119,20 +121,21 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
     case LIGHT_ENVIRONMENT:
         return env;
     case LIGHT_AREA: {
-        // Uniform by area: L cos' / d^2 times the area.
-        Hit h = shape_sample(l.primitive, u);
+        // By area (see shape_sample for the density): L cos' / d^2 over the point's pdf by area.
+        float inv_pdf;
+        Hit h = shape_sample(l.primitive, u, inv_pdf);
         vec3 to_light = h.p - x;
         float dist2 = dot(to_light, to_light);
         vec3 wi = to_light / sqrt(dist2);
         float cos_l = -dot(h.ng, wi);
-        vec3 weight = cos_l > 0.0 ? material_emission(materials[h.material], h) * (cos_l * l.area / dist2) : vec3(0.0);
-        return LightSample(h.p, wi, weight);
+        vec3 weight = cos_l > 0.0 ? material_emission(materials[h.material], h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
+        return LightSample(h.p, wi, weight, h.eps);
     }
     case LIGHT_DISTANT: {
         // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
         vec3 wi = -cone_direction(load3(l.direction), l.cos_outer, u);
         float beyond = length(x - load3(l.position)) + 2.0 * l.radius;
-        return LightSample(x + wi * beyond, wi, load3(l.intensity));
+        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon);
     }
     }
     // Point and spot lights: I(w) / d^2.
@@ -140,14 +143,15 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
     vec3 to_light = p - x;
     float dist2 = dot(to_light, to_light);
     vec3 wi = to_light / sqrt(dist2);
-    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2));
+    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon);
 }
 
 // A photon leaving light l: its origin, direction and the power it carries before the division
-// by the pick probability and the path count. Area lights emit from a uniform point in a
-// cosine-distributed direction (Lambertian); point and spot lights uniformly in their cone,
-// weighted by the spot's profile; distant lights from a uniform point of the disc of the
-// scene's bounding sphere that faces them, uniformly in their cone of directions.
+// by the pick probability and the path count. Area lights emit from a point drawn by
+// shape_sample (their power over that point's pdf by area) in a cosine-distributed direction
+// (Lambertian); point and spot lights uniformly in their cone, weighted by the spot's profile;
+// distant lights from a uniform point of the disc of the scene's bounding sphere that faces
+// them, uniformly in their cone of directions.
 void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec3 power) {
     vec3 axis = load3(l.direction);
     // The environment: a direction toward it, then a disc facing it, as for a distant light.
@@ -158,10 +162,11 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
     }
     switch (l.kind) {
     case LIGHT_AREA: {
-        Hit h = shape_sample(l.primitive, u_pos);
-        o = h.p + h.ng * frame.ray_epsilon;
+        float inv_pdf;
+        Hit h = shape_sample(l.primitive, u_pos, inv_pdf);
+        o = h.p + h.ng * h.eps;
         d = cosine_direction(h.ng, u_dir);
-        power = PI * l.area * material_emission(materials[h.material], h);
+        power = PI * inv_pdf * material_emission(materials[h.material], h);
         return;
     }
     case LIGHT_ENVIRONMENT:

@@ -11,52 +11,8 @@
 #ifndef PATTERN_GLSL
 #define PATTERN_GLSL
 
-// Pattern kinds (word 0); the same numbers as src/cpu/pattern.rs (compared by a test there).
-const uint PATTERN_AGATE = 0u;
-const uint PATTERN_BOZO = 1u;
-const uint PATTERN_BRICK = 2u;
-const uint PATTERN_BUMPS = 3u;
-const uint PATTERN_CHECKER = 4u;
-const uint PATTERN_CRACKLE = 5u;
-const uint PATTERN_DENTS = 6u;
-const uint PATTERN_GRADIENT = 7u;
-const uint PATTERN_GRANITE = 8u;
-const uint PATTERN_HEXAGON = 9u;
-const uint PATTERN_LEOPARD = 10u;
-const uint PATTERN_MARBLE = 11u;
-const uint PATTERN_ONION = 12u;
-const uint PATTERN_RIPPLES = 13u;
-const uint PATTERN_SPOTTED = 14u;
-const uint PATTERN_WAVES = 15u;
-const uint PATTERN_WOOD = 16u;
-const uint PATTERN_WRINKLES = 17u;
-
-// Wave shapes (word 1).
-const uint WAVE_RAMP = 0u;
-const uint WAVE_SINE = 1u;
-const uint WAVE_TRIANGLE = 2u;
-const uint WAVE_SCALLOP = 3u;
-const uint WAVE_CUBIC = 4u;
-const uint WAVE_POLY = 5u;
-
-// Word offsets inside a pattern block.
-const uint PATTERN_KIND = 0u;
-const uint PATTERN_WAVE = 1u;
-const uint PATTERN_OCTAVES = 2u;
-const uint PATTERN_OMEGA = 3u;
-const uint PATTERN_LAMBDA = 4u;
-const uint PATTERN_TURBULENCE = 5u;
-const uint PATTERN_FREQUENCY = 8u;
-const uint PATTERN_PHASE = 9u;
-const uint PATTERN_EXPONENT = 10u;
-const uint PATTERN_PARAMS = 12u;
-const uint PATTERN_WORDS = 20u;
-const uint MAX_OCTAVES = 10u;
-const uint MAX_COLOR_MAP_ENTRIES = 256u;
-const uint WAVE_SOURCES = 10u;
-
-const float NOISE_UNIT_SCALE = 0.466;
-const float NOISE_VECTOR_SCALE = 0.95;
+// Pattern kinds, wave shapes, the block layout and the limits come from constants.glsl
+// (src/layout/constants.rs), which the including kernel includes first.
 
 float pattern_word(uint i) { return uintBitsToFloat(texture_data[i]); }
 

@@ -8,6 +8,13 @@
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
 // layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
 // variant: textured
+// variant: textured alpha
+// variant: analytic
+// variant: textured analytic
+// variant: textured alpha analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
+// variant: textured alpha analytic implicit
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -27,8 +34,17 @@ layout(push_constant) uniform Push { DispatchRange range; };
 #include "grid.glsl"
 #include "gather.glsl"
 
+// What the ray of the current step is (see radiance).
+const uint RAY_CAMERA = 0u; // camera path: through path lobes to the first estimate lobe
+const uint RAY_SHADOW = 1u; // the shadow ray of the direct light at the estimate vertex
+const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an estimate lobe
+
 // Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
 // DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
+// The camera path, its shadow ray and its gather path are one loop with one `trace_ray`, one
+// `material_bsdf` and one `photon_radiance` in it (src/cpu/render.rs is the same loop): lavapipe
+// inlines every call site, so three traversals and two material evaluations made the kernel
+// three times the code, and as much slower to compile and to run.
 void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
     // xy jitter the film position, zw sample the lens.
@@ -37,29 +53,65 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
     camera_ray(sx, sy, film.zw, o, d);
+    float t_max = INF;
+    uint ray = RAY_CAMERA;
+    uint depth = 0u;           // path-lobe bounces of the current path so far
     vec3 throughput = vec3(1.0);
-    for (uint depth = 0u; depth < frame.max_depth; depth++) {
+    // The estimate vertex: the camera path's (then the gather path's) last vertex.
+    Hit he;
+    Bsdf be;
+    vec3 wo_e = vec3(0.0);
+    vec3 weight = vec3(0.0);   // throughput up to the estimate vertex
+    bool via_specular = false; // the estimate vertex was reached through mirrors or glass
+    vec3 unoccluded = vec3(0.0);
+    vec3 gather_weight = vec3(0.0);
+    uint gdim = 0u;
+    // Photon lookups at the estimate vertex, done after the loop: caustics and the preview, or
+    // the gather path's end.
+    uint lookups = 0u;
+    uint lookup_map[2];
+    uint lookup_exclude[2];
+    uint lookup_layer[2];
+    vec3 lookup_weight[2];
+
+    for (uint step = 0u; step < 2u * frame.max_depth + 1u; step++) {
         float t;
-        rays++;
-        uint prim = trace_ray(o, d, INF, false, t);
-        // Everything a mirror or glass shows is the specular term.
-        bool via_specular = depth > 0u;
+        // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
+        if (t_max != NO_RAY) rays++;
+        uint prim = trace_ray(o, d, t_max, ray == RAY_SHADOW, t);
+        if (ray == RAY_SHADOW) {
+            if (prim == NO_LIGHT) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * unoccluded;
+            if (frame.photon_mapping == 0u) break;
+            lookup_map[0] = MAP_CAUSTIC;
+            lookup_exclude[0] = 0u;
+            lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS;
+            lookup_weight[0] = weight;
+            lookup_map[1] = MAP_GLOBAL;
+            lookup_exclude[1] = PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC;
+            lookup_layer[1] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
+            lookup_weight[1] = weight;
+            lookups = frame.gather_rays == 0u ? 2u : 1u;
+            break;
+        }
         if (prim == NO_LIGHT) {
-            // A ray that leaves the scene sees the environment (a path lobe's view of a light).
-            WHEN(frame.environment != NO_LIGHT && part == 0u) {
-                terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * environment_radiance(lights[frame.environment], d);
+            // A camera path that leaves the scene sees the environment (a path lobe's view of a
+            // light); a gather path counts none of it, as it counts no emission.
+            WHEN(frame.environment != NO_LIGHT && ray == RAY_CAMERA && part == 0u) {
+                terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * environment_radiance(lights[frame.environment], d);
             }
             break;
         }
         Hit h = shape_hit(prim, o, d, t);
         Material m = materials[h.material];
         vec3 wo = -d;
-        // Emission leaves the front face only; it counts wherever a camera path meets it, since
-        // estimate lobes end the path and light sampling covers them.
-        if (dot(wo, h.ng) > 0.0 && part == 0u) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
+        bool camera = ray == RAY_CAMERA;
+        // Everything a mirror or glass shows is the specular term. Emission leaves the front
+        // face only; it counts wherever a camera path meets it, since estimate lobes end the path
+        // and light sampling covers them. A gather path counts none: direct light and caustics do.
+        if (camera && dot(wo, h.ng) > 0.0 && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
         Bsdf b = material_bsdf(m, h);
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
-        vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        vec4 u = rand4(stream, sample_index, frame.seed, camera ? dim + RNG_FRESNEL : gdim + 1u + depth);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
         float q = bsdf_path_probability(b, wo);
         if (u.w < q) {
@@ -68,23 +120,52 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             throughput *= s.weight / q;
             o = offset_origin(h, wo, s.flags);
             d = s.wi;
+            depth++;
+            if (depth >= frame.max_depth) break;
             continue;
         }
         if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) break;
-        vec3 weight = throughput / (1.0 - q);
+        if (!camera) {
+            // The gather path's end: the global map there, weighted 1/gather_rays.
+            he = h;
+            be = b;
+            wo_e = wo;
+            lookup_map[0] = MAP_GLOBAL;
+            lookup_exclude[0] = 0u;
+            lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
+            lookup_weight[0] = weight * (gather_weight * (throughput / (1.0 - q)) / float(frame.gather_rays));
+            lookups = 1u;
+            break;
+        }
+        he = h;
+        be = b;
+        wo_e = wo;
+        weight = throughput / (1.0 - q);
+        via_specular = depth > 0u;
         if (part == 0u) {
-            terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * direct_light(h, b, wo, stream, sample_index, dim, rays);
+            ShadowRay sr = direct_light_sample(h, b, wo, stream, sample_index, dim);
+            unoccluded = sr.unoccluded;
+            o = sr.origin;
+            d = sr.direction;
+            t_max = sr.t_max;
+            ray = RAY_SHADOW;
+            continue;
         }
         if (frame.photon_mapping == 0u) break;
-        if (part == 0u) {
-            terms[via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS] += weight * caustic_light(h, b, wo);
-            if (frame.gather_rays == 0u) {
-                terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += weight * indirect_preview(h, b, wo);
-            }
-        } else {
-            terms[via_specular ? LAYER_SPECULAR : LAYER_INDIRECT] += weight * gather_ray(h, b, wo, stream, sample_index, part - 1u, rays);
-        }
-        break;
+        // Final-gather ray part - 1, sampled from the estimate lobes.
+        gdim = RNG_GATHER_DOMAIN + (part - 1u) * RNG_GATHER_DIMS_PER_RAY;
+        vec4 u0 = rand4(stream, sample_index, frame.seed, gdim);
+        BsdfSample first = bsdf_sample(b, wo, vec3(u0.z, u0.x, u0.y), LOBES_ESTIMATE);
+        if (first.flags == 0u) break;
+        gather_weight = first.weight;
+        o = offset_origin(h, wo, first.flags);
+        d = first.wi;
+        throughput = vec3(1.0);
+        depth = 0u;
+        ray = RAY_GATHER;
+    }
+    for (uint k = 0u; k < lookups; k++) {
+        terms[lookup_layer[k]] += lookup_weight[k] * photon_radiance(lookup_map[k], he, be, wo_e, lookup_exclude[k]);
     }
 }
 

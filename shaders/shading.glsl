@@ -32,29 +32,41 @@ void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
 }
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
-// off the surface to the side the ray goes (wo's side for reflection, the other for transmission).
+// off the surface to the side the ray goes (wo's side for reflection, the other for transmission),
+// by the hit's own offset.
 vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
     vec3 nf = dot(wo, h.ng) > 0.0 ? h.ng : -h.ng;
-    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * frame.ray_epsilon : h.p + nf * frame.ray_epsilon;
+    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * h.eps : h.p + nf * h.eps;
 }
 
-// Radiance reflected at h toward wo from one sampled light through the estimate lobes of b: a
-// one-sample estimate of the direct light. Counts the shadow ray it casts in `rays`.
-vec3 direct_light(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim, inout uint rays) {
-    if (frame.light_count == 0u) return vec3(0.0);
+// A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
+// shading point toward wo through the estimate lobes of its BSDF if nothing blocks the ray: a
+// one-sample estimate of the direct light. `t_max` is NO_RAY when no ray is needed (no light,
+// a light picked with probability 0, or nothing to reflect).
+// The length of a shadow ray that is not cast: trace_ray meets nothing before it.
+const float NO_RAY = -1.0;
+
+struct ShadowRay {
+    vec3 origin;
+    vec3 direction;
+    float t_max;
+    vec3 unoccluded;
+};
+
+ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim) {
+    ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0));
+    if (frame.light_count == 0u) return none;
     Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
     // A scene whose lights all give photons only picks one with probability 0.
-    if (l.pick_probability <= 0.0) return vec3(0.0);
+    if (l.pick_probability <= 0.0) return none;
     LightSample s = light_sample(l, h.p, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
-    if (f == vec3(0.0)) return vec3(0.0);
+    if (f == vec3(0.0)) return none;
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
     vec3 origin = offset_origin(h, s.wi, BSDF_REFLECTION);
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
-    float t_unused;
-    rays++;
-    if (trace_ray(origin, to_target / shadow_length, shadow_length - frame.ray_epsilon, true, t_unused) != NO_LIGHT) return vec3(0.0);
-    return f * (abs(dot(b.ns, s.wi)) / l.pick_probability);
+    float t_max = max(shadow_length - s.eps, 0.0);
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (abs(dot(b.ns, s.wi)) / l.pick_probability));
 }

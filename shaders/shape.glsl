@@ -11,6 +11,7 @@ struct Hit {
     vec3 dpdv;  // uv, dpdu and dpdv are zero unless the primitive has PRIMITIVE_FLAG_UV)
     uint prim;
     uint material;
+    float eps;  // offset of rays leaving the point: frame.ray_epsilon, or the analytic shape's own
 };
 
 // Möller and Trumbore 1997, two-sided. Returns the hit distance in (t_min, t_max), or INF.
@@ -46,13 +47,231 @@ float ray_sphere(vec3 o, vec3 d, vec3 c, float r, float t_min, float t_max) {
     return (t > t_min && t < t_max) ? t : INF;
 }
 
+#ifdef VARIANT_ANALYTIC
+// Analytic shapes (plane, disc, cone, torus, superellipsoid), intersected in their object space.
+// Only the `analytic` variant of the scene kernels has them: lavapipe compiles and runs every
+// branch under masks, so scenes without them keep kernels without their code. Each function
+// explains itself at its twin in src/cpu/shape.rs.
+
+// Rows of the affine map at shape_data[a] (3x4) applied to a point, to a vector, and its
+// transposed linear part applied to a vector (object normals to the world with object_from_world).
+vec3 affine_point(uint a, vec3 x) {
+    return vec3(shape_data[a] * x.x + shape_data[a + 1u] * x.y + shape_data[a + 2u] * x.z + shape_data[a + 3u],
+                shape_data[a + 4u] * x.x + shape_data[a + 5u] * x.y + shape_data[a + 6u] * x.z + shape_data[a + 7u],
+                shape_data[a + 8u] * x.x + shape_data[a + 9u] * x.y + shape_data[a + 10u] * x.z + shape_data[a + 11u]);
+}
+vec3 affine_vector(uint a, vec3 v) {
+    return vec3(shape_data[a] * v.x + shape_data[a + 1u] * v.y + shape_data[a + 2u] * v.z,
+                shape_data[a + 4u] * v.x + shape_data[a + 5u] * v.y + shape_data[a + 6u] * v.z,
+                shape_data[a + 8u] * v.x + shape_data[a + 9u] * v.y + shape_data[a + 10u] * v.z);
+}
+vec3 affine_transpose_vector(uint a, vec3 v) {
+    return vec3(shape_data[a], shape_data[a + 1u], shape_data[a + 2u]) * v.x
+         + vec3(shape_data[a + 4u], shape_data[a + 5u], shape_data[a + 6u]) * v.y
+         + vec3(shape_data[a + 8u], shape_data[a + 9u], shape_data[a + 10u]) * v.z;
+}
+
+float ray_plane(vec3 o, vec3 d, float t_min, float t_max) {
+    float t = -o.y / d.y;
+    return (t > t_min && t < t_max) ? t : INF;
+}
+
+float ray_disc(vec3 o, vec3 d, float radius, float inner, float t_min, float t_max) {
+    float t = ray_plane(o, d, t_min, t_max);
+    float x = o.x + t * d.x;
+    float z = o.z + t * d.z;
+    float r2 = x * x + z * z;
+    return (r2 <= radius * radius && r2 >= inner * inner) ? t : INF;
+}
+
+float ray_cone(vec3 o, vec3 d, float r0, float r1, float h, float t_min, float t_max) {
+    vec3 c = vec3(0.0, 0.5 * h, 0.0);
+    float ts = dot(c - o, d) / dot(d, d);
+    vec3 p = o + ts * d;
+    float rb = max(r0, r1);
+    vec3 pc = p - c;
+    if (dot(pc, pc) > rb * rb + 0.25 * h * h) return INF;
+    float k = (r1 - r0) / h;
+    float rho = r0 + k * p.y;
+    float a = d.x * d.x + d.z * d.z - k * k * d.y * d.y;
+    float b = 2.0 * (p.x * d.x + p.z * d.z - k * rho * d.y);
+    float cc = p.x * p.x + p.z * p.z - rho * rho;
+    float disc = b * b - 4.0 * a * cc;
+    if (disc < 0.0) return INF;
+    float sq = sqrt(disc);
+    float q = -0.5 * (b + (b >= 0.0 ? sq : -sq));
+    float s0 = q / a;
+    float s1 = cc / q;
+    if (s0 > s1) { float tmp = s0; s0 = s1; s1 = tmp; }
+    float t0 = ts + s0;
+    float y0 = p.y + s0 * d.y;
+    if (t0 > t_min && t0 < t_max && y0 >= 0.0 && y0 <= h) return t0;
+    float t1 = ts + s1;
+    float y1 = p.y + s1 * d.y;
+    if (t1 > t_min && t1 < t_max && y1 >= 0.0 && y1 <= h) return t1;
+    return INF;
+}
+
+// The torus and the superellipsoid: only in the `implicit` variant (their root finders are the
+// largest code of all, and lavapipe pays for code size in every ray).
+#ifdef VARIANT_IMPLICIT
+// (value, derivative) at x of lead x^4 + c.w x^3 + c.z x^2 + c.y x + c.x.
+vec2 poly4(float lead, vec4 c, float x) {
+    float f = (((lead * x + c.w) * x + c.z) * x + c.y) * x + c.x;
+    float df = ((4.0 * lead * x + 3.0 * c.w) * x + 2.0 * c.z) * x + c.y;
+    return vec2(f, df);
+}
+
+float poly_root_in(float lead, vec4 c, float a, float b, float none) {
+    float fa = poly4(lead, c, a).x;
+    float fb = poly4(lead, c, b).x;
+    if ((fa < 0.0) == (fb < 0.0)) return none;
+    float lo = a;
+    float hi = b;
+    float x = 0.5 * (a + b);
+    for (uint k = 0u; k < TORUS_ROOT_STEPS; k++) {
+        vec2 f = poly4(lead, c, x);
+        if ((f.x < 0.0) == (fa < 0.0)) lo = x; else hi = x;
+        float next = x - f.x / f.y;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        bool done = abs(next - x) <= 1e-7;
+        x = next;
+        if (done) break;
+    }
+    return x;
+}
+
+float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t_max) {
+    float scale = big_r + small_r;
+    float len = length(d);
+    vec3 dn = d / len;
+    float tc = -dot(o, dn);
+    vec3 p = (o + tc * dn) / scale;
+    float m2 = dot(p, p);
+    float reach = TORUS_CHORD * TORUS_CHORD;
+    if (m2 >= reach) return INF;
+    float half_chord = sqrt(reach - m2);
+    float lo = max(-half_chord, (t_min * len - tc) / scale);
+    float hi = min(half_chord, (t_max * len - tc) / scale);
+    if (!(lo < hi)) return INF;
+    float br = big_r / scale;
+    float sr = small_r / scale;
+    float g = m2 + br * br - sr * sr;
+    float k = dot(p, dn);
+    float four_r2 = 4.0 * br * br;
+    vec4 c = vec4(g * g - four_r2 * (p.x * p.x + p.z * p.z),
+                  4.0 * k * g - 2.0 * four_r2 * (p.x * dn.x + p.z * dn.z),
+                  4.0 * k * k + 2.0 * g - four_r2 * (dn.x * dn.x + dn.z * dn.z),
+                  4.0 * k);
+    float qa = 12.0;
+    float qb = 6.0 * c.w;
+    float qc = 2.0 * c.z;
+    float disc = qb * qb - 4.0 * qa * qc;
+    float x1 = lo;
+    float x2 = lo;
+    if (disc > 0.0) {
+        float sq = sqrt(disc);
+        float q = -0.5 * (qb + (qb >= 0.0 ? sq : -sq));
+        float ra = q / qa;
+        float rb = qc / q;
+        x1 = clamp(min(ra, rb), lo, hi);
+        x2 = clamp(max(ra, rb), lo, hi);
+    }
+    vec4 dc = vec4(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
+    float e0 = poly_root_in(0.0, dc, lo, x1, lo);
+    float e1 = poly_root_in(0.0, dc, x1, x2, x1);
+    float e2 = poly_root_in(0.0, dc, x2, hi, x2);
+    float root = poly_root_in(1.0, c, lo, e0, INF);
+    if (root == INF) root = poly_root_in(1.0, c, e0, e1, INF);
+    if (root == INF) root = poly_root_in(1.0, c, e1, e2, INF);
+    if (root == INF) root = poly_root_in(1.0, c, e2, hi, INF);
+    float t = (tc + scale * root) / len;
+    return (t > t_min && t < t_max) ? t : INF;
+}
+
+float safe_pow(float x, float y) {
+    return exp2(y * log2(max(x, 1e-30)));
+}
+
+// The superellipsoid's gauge h (w) and its gradient (xyz). ex = (2/e, e/2, 2/n, n/2).
+vec4 superellipsoid_gauge(vec3 p, vec4 ex) {
+    vec3 a = abs(p);
+    float m = max(a.x, a.y);
+    float rho = m * safe_pow(1.0 + safe_pow(min(a.x, a.y) / max(m, 1e-30), ex.x), ex.y);
+    float big = max(rho, a.z);
+    float h = big * safe_pow(1.0 + safe_pow(min(rho, a.z) / max(big, 1e-30), ex.z), ex.w);
+    float hs = max(h, 1e-30);
+    float rs = max(rho, 1e-30);
+    float hr = safe_pow(rho / hs, ex.z - 1.0);
+    vec3 grad = vec3(hr * safe_pow(a.x / rs, ex.x - 1.0) * sign(p.x),
+                     hr * safe_pow(a.y / rs, ex.x - 1.0) * sign(p.y),
+                     safe_pow(a.z / hs, ex.z - 1.0) * sign(p.z));
+    return vec4(grad, h);
+}
+
+
+float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
+    vec3 inv = 1.0 / d;
+    vec3 ta = (vec3(-SUPERELLIPSOID_BOX) - o) * inv;
+    vec3 tb = (vec3(SUPERELLIPSOID_BOX) - o) * inv;
+    vec3 tn = min(ta, tb);
+    vec3 tf = max(ta, tb);
+    float t_in = max(max(max(tn.x, tn.y), tn.z), t_min);
+    float t_out = min(min(tf.x, tf.y), tf.z);
+    if (!(t_in < t_out)) return INF;
+    vec3 p = o + t_in * d;
+    float span = t_out - t_in;
+    vec4 g0 = superellipsoid_gauge(p, ex);
+    bool outside = g0.w - 1.0 > SUPERELLIPSOID_TOLERANCE;
+    float s = outside ? 0.0 : span;
+    vec4 g = outside ? g0 : superellipsoid_gauge(p + span * d, ex);
+    float phi = g.w - 1.0;
+    float slope = dot(g.xyz, d);
+    bool found = phi <= SUPERELLIPSOID_TOLERANCE;
+    for (uint k = 0u; k < SUPERELLIPSOID_STEPS; k++) {
+        if (found || (outside && slope >= 0.0) || (!outside && slope <= 0.0)) break;
+        s -= phi / slope;
+        if (!(s >= 0.0 && s <= span)) break;
+        g = superellipsoid_gauge(p + s * d, ex);
+        phi = g.w - 1.0;
+        slope = dot(g.xyz, d);
+        found = phi <= SUPERELLIPSOID_TOLERANCE;
+    }
+    float t = t_in + s;
+    return (found && t > t_min && t < t_max) ? t : INF;
+}
+
+#endif
+
+float analytic_intersect(Primitive p, vec3 o, vec3 d, float t_min, float t_max) {
+    uint a = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
+    vec3 oo = affine_point(a, o);
+    vec3 od = affine_vector(a, d);
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
+    float t = INF;
+    WHEN(kind == PRIMITIVE_PLANE) { t = ray_plane(oo, od, t_min, t_max); }
+    WHEN(kind == PRIMITIVE_DISC) { t = ray_disc(oo, od, p.p0[0], p.p0[1], t_min, t_max); }
+    WHEN(kind == PRIMITIVE_CONE) { t = ray_cone(oo, od, p.p0[0], p.p0[1], p.p0[2], t_min, t_max); }
+#ifdef VARIANT_IMPLICIT
+    WHEN(kind == PRIMITIVE_TORUS) { t = ray_torus(oo, od, p.p0[0], p.p0[1], t_min, t_max); }
+    WHEN(kind == PRIMITIVE_SUPERELLIPSOID) {
+        t = ray_superellipsoid(oo, od, vec4(p.p0[0], p.p0[1], p.p0[2], p.p1[0]), t_min, t_max);
+    }
+#endif
+    return t;
+}
+#endif
+
 // Distance to the first surface of primitive i along o + t d with t in (t_min, t_max), or INF.
 float shape_intersect(uint i, vec3 o, vec3 d, float t_min, float t_max) {
     Primitive p = primitives[i];
-    switch (p.kind & PRIMITIVE_KIND_MASK) {
-    case PRIMITIVE_SPHERE:
-        return ray_sphere(o, d, load3(p.p0), p.p1[0], t_min, t_max);
-    }
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
+#ifdef VARIANT_ANALYTIC
+    float t = INF;
+    WHEN(kind > PRIMITIVE_SPHERE) { t = analytic_intersect(p, o, d, t_min, t_max); }
+    if (kind > PRIMITIVE_SPHERE) return t;
+#endif
+    if (kind == PRIMITIVE_SPHERE) return ray_sphere(o, d, load3(p.p0), p.p1[0], t_min, t_max);
     return ray_triangle(o, d, load3(p.p0), load3(p.p1), load3(p.p2), t_min, t_max);
 }
 
@@ -108,6 +327,150 @@ mat3 sphere_rotation(Primitive p) {
                           shape_data[a + 6u], shape_data[a + 7u], shape_data[a + 8u]));
 }
 
+#ifdef VARIANT_ANALYTIC
+// The surface fields of h at world point x of analytic primitive p, x projected onto the
+// surface in object space (see the twin for why).
+void analytic_surface(Primitive p, vec3 x, bool wants_uv, inout Hit h) {
+    uint ow = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
+    uint wo = p.data + SHAPE_DATA_WORLD_FROM_OBJECT;
+    float size = shape_data[p.data + SHAPE_DATA_SIZE];
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
+    vec3 q = affine_point(ow, x);
+    vec3 n = vec3(0.0, 1.0, 0.0);
+    vec2 uv = vec2(0.0);
+    vec3 dqdu = vec3(0.0);
+    vec3 dqdv = vec3(0.0);
+    float rho = sqrt(q.x * q.x + q.z * q.z);
+    float sin_phi = rho > 0.0 ? q.x / rho : 0.0;
+    float cos_phi = rho > 0.0 ? q.z / rho : 1.0;
+    float u_around = 0.5 + atan(q.x, q.z) * (0.5 / PI);
+    WHEN(kind == PRIMITIVE_PLANE) {
+        q.y = 0.0;
+        uv = vec2(q.x, -q.z);
+        dqdu = vec3(1.0, 0.0, 0.0);
+        dqdv = vec3(0.0, 0.0, -1.0);
+    }
+    WHEN(kind == PRIMITIVE_DISC) {
+        q.y = 0.0;
+        float r = p.p0[0];
+        float ri = p.p0[1];
+        uv = vec2(u_around, (r - rho) / (r - ri));
+        dqdu = 2.0 * PI * vec3(q.z, 0.0, -q.x);
+        dqdv = -(r - ri) * vec3(sin_phi, 0.0, cos_phi);
+    }
+    WHEN(kind == PRIMITIVE_CONE) {
+        float r0 = p.p0[0];
+        float r1 = p.p0[1];
+        float height = p.p0[2];
+        float y = clamp(q.y, 0.0, height);
+        float radius = r0 + (r1 - r0) * (y / height);
+        q = vec3(radius * sin_phi, y, radius * cos_phi);
+        n = vec3(height * sin_phi, -(r1 - r0), height * cos_phi);
+        uv = vec2(u_around, y / height);
+        dqdu = 2.0 * PI * vec3(q.z, 0.0, -q.x);
+        dqdv = vec3((r1 - r0) * sin_phi, height, (r1 - r0) * cos_phi);
+    }
+#ifdef VARIANT_IMPLICIT
+    WHEN(kind == PRIMITIVE_TORUS) {
+        float big_r = p.p0[0];
+        float small_r = p.p0[1];
+        vec3 out_dir = vec3(sin_phi, 0.0, cos_phi);
+        vec3 ring = big_r * out_dir;
+        vec3 w = q - ring;
+        float wl = length(w);
+        w = wl > 0.0 ? w / wl : out_dir;
+        q = ring + small_r * w;
+        n = w;
+        float cos_psi = dot(w, out_dir);
+        uv = vec2(u_around, 0.5 + atan(w.y, cos_psi) * (0.5 / PI));
+        dqdu = 2.0 * PI * vec3(q.z, 0.0, -q.x);
+        dqdv = 2.0 * PI * small_r * vec3(-w.y * sin_phi, cos_psi, -w.y * cos_phi);
+    }
+    WHEN(kind == PRIMITIVE_SUPERELLIPSOID) {
+        vec4 ex = vec4(p.p0[0], p.p0[1], p.p0[2], p.p1[0]);
+        q /= max(superellipsoid_gauge(q, ex).w, 1e-30);
+        vec3 g = superellipsoid_gauge(q, ex).xyz;
+        n = g;
+        float r = length(q);
+        vec3 w = q / r;
+        vec3 dwdu, dwdv;
+        uv = sphere_uv(vec3(w.y, w.z, w.x), dwdu, dwdv);
+        dwdu = vec3(dwdu.z, dwdu.x, dwdu.y);
+        dwdv = vec3(dwdv.z, dwdv.x, dwdv.y);
+        dqdu = r * (dwdu - q * dot(g, dwdu));
+        dqdv = r * (dwdv - q * dot(g, dwdv));
+    }
+#endif
+    h.p = affine_point(wo, q);
+    h.ng = normalize(affine_transpose_vector(ow, n));
+    if (wants_uv) {
+        h.uv = uv;
+        h.dpdu = affine_vector(wo, dqdu);
+        h.dpdv = affine_vector(wo, dqdv);
+        if (length(cross(h.dpdu, h.dpdv)) == 0.0) onb(h.ng, h.dpdu, h.dpdv);
+    }
+    vec3 ap = abs(h.p);
+    h.eps = SHAPE_EPSILON_SCALE * (max(max(ap.x, ap.y), ap.z) + size);
+}
+
+// A point of analytic primitive p for u in the world, and 1/pdf by world area.
+vec3 analytic_sample(Primitive p, vec2 u, out float inv_pdf) {
+    uint ow = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
+    uint wo = p.data + SHAPE_DATA_WORLD_FROM_OBJECT;
+    float det = shape_data[p.data + SHAPE_DATA_DET];
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
+    float phi = 2.0 * PI * u.y;
+    float sin_phi = sin(phi);
+    float cos_phi = cos(phi);
+    vec3 q = vec3(0.0);
+    vec3 n = vec3(0.0, 1.0, 0.0);
+    float inv = 0.0;
+    WHEN(kind == PRIMITIVE_DISC) {
+        float r = p.p0[0];
+        float ri = p.p0[1];
+        float rho = sqrt(ri * ri + u.x * (r * r - ri * ri));
+        q = vec3(rho * sin_phi, 0.0, rho * cos_phi);
+        inv = PI * (r * r - ri * ri);
+    }
+    WHEN(kind == PRIMITIVE_CONE) {
+        float r0 = p.p0[0];
+        float r1 = p.p0[1];
+        float height = p.p0[2];
+        float den = r0 + sqrt(r0 * r0 + u.x * (r1 * r1 - r0 * r0));
+        float v = den > 0.0 ? u.x * (r0 + r1) / den : 0.0;
+        float rho = r0 + (r1 - r0) * v;
+        float slant = sqrt(height * height + (r1 - r0) * (r1 - r0));
+        n = vec3(height * sin_phi, -(r1 - r0), height * cos_phi) / slant;
+        q = vec3(rho * sin_phi, v * height, rho * cos_phi);
+        inv = PI * (r0 + r1) * slant;
+    }
+#ifdef VARIANT_IMPLICIT
+    WHEN(kind == PRIMITIVE_TORUS) {
+        float big_r = p.p0[0];
+        float small_r = p.p0[1];
+        float theta = 2.0 * PI * u.x;
+        float sin_theta = sin(theta);
+        float cos_theta = cos(theta);
+        n = vec3(cos_phi * sin_theta, sin_phi, cos_phi * cos_theta);
+        q = big_r * vec3(sin_theta, 0.0, cos_theta) + small_r * n;
+        inv = 4.0 * PI * PI * small_r * (big_r + small_r * cos_phi);
+    }
+    WHEN(kind == PRIMITIVE_SUPERELLIPSOID) {
+        vec4 ex = vec4(p.p0[0], p.p0[1], p.p0[2], p.p1[0]);
+        vec3 w = sphere_direction(u);
+        vec4 g = superellipsoid_gauge(w, ex);
+        float r = 1.0 / g.w;
+        q = w * r;
+        n = g.xyz;
+        inv = 4.0 * PI * length(g.xyz) * r * r * r;
+    }
+#endif
+    vec3 nw = affine_transpose_vector(ow, n);
+    inv_pdf = inv * det * length(nw) / length(n);
+    return affine_point(wo, q);
+}
+#endif
+
 // Fills the surface fields of h for point x on primitive i (x is on the surface).
 void shape_surface(uint i, vec3 x, inout Hit h) {
     Primitive p = primitives[i];
@@ -119,6 +482,7 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
     h.uv = vec2(0.0);
     h.dpdu = vec3(0.0);
     h.dpdv = vec3(0.0);
+    h.eps = frame.ray_epsilon;
     WHEN(kind == PRIMITIVE_SPHERE) {
         vec3 c = load3(p.p0);
         h.ng = normalize(x - c);
@@ -150,6 +514,9 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
             triangle_derivatives(p0, p1, p2, uv0, uv1, uv2, h.ng, h.dpdu, h.dpdv);
         }
     }
+#ifdef VARIANT_ANALYTIC
+    WHEN(kind > PRIMITIVE_SPHERE) { analytic_surface(p, x, wants_uv, h); }
+#endif
     h.ns = h.ng;
 }
 
@@ -160,22 +527,27 @@ Hit shape_hit(uint i, vec3 o, vec3 d, float t) {
     return h;
 }
 
-// A point on primitive i, uniform by area (Turk 1990 for triangles), as a hit record.
-Hit shape_sample(uint i, vec2 u) {
+// A point on primitive i for the uniform numbers u, as a hit record, and 1/pdf of such points
+// by area (see the twin): triangles (Turk 1990) and spheres uniformly, so 1/pdf is their area.
+Hit shape_sample(uint i, vec2 u, out float inv_pdf) {
     Primitive p = primitives[i];
+    uint kind = p.kind & PRIMITIVE_KIND_MASK;
     vec3 x;
-    switch (p.kind & PRIMITIVE_KIND_MASK) {
-    case PRIMITIVE_SPHERE:
-        x = load3(p.p0) + p.p1[0] * sphere_direction(u);
-        break;
-    default: {
+    if (kind == PRIMITIVE_SPHERE) {
+        float r = p.p1[0];
+        x = load3(p.p0) + r * sphere_direction(u);
+        inv_pdf = 4.0 * PI * r * r;
+    } else {
         float su = sqrt(u.x);
         float b0 = 1.0 - su;
         float b1 = u.y * su;
-        x = b0 * load3(p.p0) + b1 * load3(p.p1) + (1.0 - b0 - b1) * load3(p.p2);
-        break;
+        vec3 p0 = load3(p.p0), p1 = load3(p.p1), p2 = load3(p.p2);
+        x = b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2;
+        inv_pdf = 0.5 * length(cross(p1 - p0, p2 - p0));
     }
-    }
+#ifdef VARIANT_ANALYTIC
+    WHEN(kind > PRIMITIVE_SPHERE) { x = analytic_sample(p, u, inv_pdf); }
+#endif
     Hit h;
     shape_surface(i, x, h);
     return h;

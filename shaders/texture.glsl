@@ -50,14 +50,14 @@ Hit hit_moved(Hit h, float du, float dv) {
     return m;
 }
 
-// The shading normal of a bump map: the surface displaced along ng by `strength` times the
-// first channel of texture `tex` (scene units), its slopes from central differences along u and
-// v (pbrt-v4's BumpMap). Works alike for uv-space images and 3D patterns, since moving in uv
-// moves the point along dpdu and dpdv.
-vec3 bump_normal(uint tex, float strength, Hit h) {
+// The shading normal of a bump map: the surface displaced along ng by `strength` times a height
+// (scene units), its slopes from central differences along u and v (pbrt-v4's BumpMap) of the
+// heights at u +- BUMP_DELTA and v +- BUMP_DELTA (looked up at hit_moved points). Works alike for
+// uv-space images and 3D patterns, since moving in uv moves the point along dpdu and dpdv.
+vec3 bump_normal_from_heights(float u_plus, float u_minus, float v_plus, float v_minus, float strength, Hit h) {
     float d = BUMP_DELTA;
-    float dhdu = strength * (texture_eval(tex, hit_moved(h, d, 0.0)).x - texture_eval(tex, hit_moved(h, -d, 0.0)).x) / (2.0 * d);
-    float dhdv = strength * (texture_eval(tex, hit_moved(h, 0.0, d)).x - texture_eval(tex, hit_moved(h, 0.0, -d)).x) / (2.0 * d);
+    float dhdu = strength * (u_plus - u_minus) / (2.0 * d);
+    float dhdv = strength * (v_plus - v_minus) / (2.0 * d);
     vec3 n = cross(h.dpdu + dhdu * h.ng, h.dpdv + dhdv * h.ng);
     float len = length(n);
     if (!(len > 0.0)) return h.ns;
@@ -65,10 +65,10 @@ vec3 bump_normal(uint tex, float strength, Hit h) {
     return dot(n, h.ng) < 0.0 ? -n : n;
 }
 
-// The shading normal of a tangent-space normal map (OpenGL convention: red along +u, green
-// along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
-vec3 normal_map_normal(uint tex, Hit h) {
-    vec3 c = 2.0 * texture_eval(tex, h) - 1.0;
+// The shading normal of a tangent-space normal map from its texel (OpenGL convention: red along
+// +u, green along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
+vec3 normal_map_normal_from_texel(vec3 texel, Hit h) {
+    vec3 c = 2.0 * texel - 1.0;
     vec3 t = h.dpdu - h.ng * dot(h.ng, h.dpdu);
     if (!(length(t) > 0.0)) return h.ns;
     t = normalize(t);

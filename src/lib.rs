@@ -5,6 +5,7 @@ pub mod cpu;
 pub mod gpu;
 pub mod io;
 pub mod layout;
+pub mod limits;
 pub mod render;
 pub mod scene;
 pub mod shaders;

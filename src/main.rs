@@ -10,7 +10,20 @@ use clap::Parser;
 use cli::{Cli, Command};
 
 fn main() -> ExitCode {
-    let result = match Cli::parse().command {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if e.use_stderr() => {
+            // clap quotes the arguments: escape what a terminal would act on.
+            eprint!("{}", photonix::limits::printable_message(&e.to_string()));
+            return ExitCode::from(e.exit_code() as u8);
+        }
+        Err(e) => {
+            // --help and --version
+            let _ = e.print();
+            return ExitCode::SUCCESS;
+        }
+    };
+    let result = match cli.command {
         Command::Render(args) => cli::render::run(args),
         Command::Devices => cli::devices::run(),
         Command::Bench(args) => cli::bench::run(args),
@@ -20,7 +33,8 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            // Names from files and arguments reach the terminal with control characters escaped.
+            eprintln!("error: {}", photonix::limits::printable_message(&format!("{e:#}")));
             ExitCode::FAILURE
         }
     }

@@ -30,9 +30,11 @@ fn random_scene(count: u32) -> Vec<Primitive> {
 }
 
 fn brute_force(prims: &[Primitive], o: Vec3, d: Vec3) -> (Option<Primitive>, f32) {
+    let frame = FrameParams::default();
+    let view = SceneView::geometry(&frame, &[], prims);
     let mut best = (None, f32::INFINITY);
-    for p in prims {
-        let t = shape_intersect(p, o, d, 0.0, best.1);
+    for (i, p) in prims.iter().enumerate() {
+        let t = shape_intersect(&view, i as u32, o, d, 0.0, best.1);
         if t < best.1 {
             best = (Some(*p), t);
         }

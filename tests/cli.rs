@@ -48,14 +48,10 @@ radiance = [5, 5, 5]
 "#;
 
 fn scene_dir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
-    dir
+    common::scene_dir(SCENE)
 }
 
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
+use common::stderr;
 
 /// A failed run: non-zero exit, no panic, the message pieces present, and no file written.
 fn assert_fails(out: &Output, pieces: &[&str], dir: &Path, never_written: &str) {
@@ -134,7 +130,7 @@ fn bad_scene_reports_file_and_line() {
 fn bad_photon_settings_are_refused() {
     let dir = scene_dir();
     for (args, pieces) in [
-        (vec!["--photons", "0"], vec!["--photons", "at least 1"]),
+        (vec!["--photons", "0"], vec!["--photons", "from 1 to 1000000000"]),
         (vec!["--radius", "-1"], vec!["--radius", "positive"]),
         (vec!["--radius", "NaN"], vec!["--radius"]),
         (vec!["--layers"], vec!["--layers", ".exr"]),

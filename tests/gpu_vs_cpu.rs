@@ -11,6 +11,11 @@ const SIZE: u32 = 64;
 const SPP: u32 = 2;
 
 fn compare(scene_file: &str) -> f64 {
+    compare_within(scene_file, 1e-6, 1e-3)
+}
+
+/// `compare` with bounds on relMSE and on each channel's mean ratio.
+fn compare_within(scene_file: &str, max_error: f64, max_ratio_error: f64) -> f64 {
     let scene = load_scene(&common::repo_path(scene_file)).expect("shipped scene loads");
     let buffers = common::buffers(&scene, SIZE, SIZE);
     let ctx = common::gpu();
@@ -24,9 +29,9 @@ fn compare(scene_file: &str) -> f64 {
     // 1e-11 (caustics) and 2e-13 (showcase) on lavapipe. 1e-6 leaves room for other drivers'
     // rounding and still catches any algorithmic drift (a different random dimension or a
     // missing term moves relMSE above 1e-2).
-    assert!(error < 1e-6, "{scene_file}: relMSE {error:.3e}");
+    assert!(error < max_error, "{scene_file}: relMSE {error:.3e}");
     for r in ratio {
-        assert!((r - 1.0).abs() < 1e-3, "{scene_file}: mean ratio {ratio:?}");
+        assert!((r - 1.0).abs() < max_ratio_error, "{scene_file}: mean ratio {ratio:?}");
     }
     error
 }
@@ -49,6 +54,14 @@ fn gpu_matches_cpu_on_showcase() {
 #[test]
 fn gpu_matches_cpu_on_spotlights() {
     compare("scenes/spotlights.toml");
+}
+
+#[test]
+fn gpu_matches_cpu_on_materials() {
+    // Measured 3e-9 on lavapipe. Patterns agree bit for bit except through pow (1.5e-6 at most,
+    // tests/pattern_gpu.rs), and a bumped normal or a mix's choice can flip on that on another
+    // driver: ten times the bound of the untextured scenes.
+    compare_within("scenes/materials.toml", 1e-5, 1e-3);
 }
 
 #[test]

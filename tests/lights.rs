@@ -239,6 +239,57 @@ fn distant_light_gives_e_cos_theta_gpu() {
     check_distant(true);
 }
 
+/// An infinite plane (an analytic shape outside the BVH) alone under a distant light: the scene
+/// has no bounded shape, yet the light keeps its power (a stand-in sphere sends its photons) and
+/// the plane shows E cos(theta) rho / pi on both backends.
+#[test]
+fn distant_light_on_an_infinite_plane() {
+    let t = 40.0f64.to_radians();
+    let scene = parse(&format!(
+        r#"
+[camera]
+position = [0, {CAMERA_HEIGHT}, 0]
+look_at = [0, 0, 0]
+up = [0, 0, 1]
+fov = {FOV_DEG}
+resolution = [{SIZE}, {SIZE}]
+
+[photons]
+count = 2000
+caustic_count = 100
+gather_rays = 1
+
+[materials.plane]
+type = "diffuse"
+reflectance = {ALBEDO}
+
+[[shapes]]
+type = "plane"
+material = "plane"
+normal = [0, 1, 0]
+
+[[lights]]
+type = "distant"
+direction = [{}, {}, 0]
+irradiance = {IRRADIANCE}
+"#,
+        t.sin(),
+        -t.cos()
+    ));
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    assert_eq!(buffers.lights.len(), 1);
+    let light = &buffers.lights[0];
+    assert_eq!(light.kind, LIGHT_DISTANT);
+    assert!(light.radius > 0.0 && light.pick_probability == 1.0 && light.photon_probability == 1.0);
+    let expected = ALBEDO / PI * IRRADIANCE * t.cos();
+    for gpu in [false, true] {
+        let mean = render(&buffers, 4, gpu).channel_means()[1];
+        let error = mean / expected - 1.0;
+        println!("gpu {gpu}: distant light on an infinite plane: mean {mean:.5}, expected {expected:.5}");
+        assert!(error.abs() < 0.005, "gpu {gpu}: off by {:.3}%", 100.0 * error);
+    }
+}
+
 // Photons
 
 /// The power photons carry into each angular bin around the spot's axis, per steradian, equals

@@ -53,8 +53,8 @@ fn unknown_texture_and_pattern_and_preset_suggest_the_closest() {
 fn out_of_range_roughness_and_ior_are_refused() {
     let m = error_of(&format!("{CAMERA}[materials.m]\ntype = \"conductor\"\npreset = \"gold\"\nroughness = 1.5\n"));
     assert_mentions(&m, &["bad.toml:8:", "`roughness` is 1.5", "[0, 1]"]);
-    let m = error_of(&format!("{CAMERA}[materials.m]\ntype = \"dielectric\"\nior = 20\n"));
-    assert_mentions(&m, &["bad.toml:7:", "`ior` is 20", "at most 10"]);
+    let m = error_of(&format!("{CAMERA}[materials.m]\ntype = \"dielectric\"\nior = 200\n"));
+    assert_mentions(&m, &["bad.toml:7:", "`ior` is 200", "from 0.01 to 100"]);
     let m = error_of(&format!("{CAMERA}[materials.m]\ntype = \"conductor\"\neta = [0, 1, 1]\nk = 1\n"));
     assert_mentions(&m, &["bad.toml:7:", "`eta`", "> 0"]);
 }

@@ -194,7 +194,8 @@ fn gpu_matches_cpu_with_every_material_and_texture() {
     let scene = parse(EVERYTHING);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let buffers = common::buffers(&scene, 16, 16);
-    assert!(buffers.textured, "the scene needs the textured kernels");
+    // Textures and an opacity texture: the build with the alpha test.
+    assert!(buffers.textured && buffers.alpha, "the scene needs the textured alpha kernels");
     let photons = scene.photons.unwrap();
     let cpu = common::cpu_render(&buffers, 1, &photons);
     let ctx = common::gpu();

@@ -257,3 +257,149 @@ fn defaults_apply_when_fields_are_left_out() {
     assert_eq!(scene.materials[0].kind, photonix::scene::MaterialKind::Diffuse { reflectance: default });
     assert_eq!(scene.name, "ok");
 }
+
+#[test]
+fn numbers_beyond_their_range_name_the_range() {
+    // Above the maximum is not "must be at least 1".
+    let message = error_of(&format!("{CAMERA}[photons]\ncount = 5000000000\n"));
+    assert_mentions(&message, &["bad.toml:6:", "[photons]", "`count`", "at most 1000000000"]);
+    assert!(!message.contains("at least"), "{message}");
+    for (field, value) in [("spp", "4097"), ("passes", "1000001"), ("max_depth", "1025"), ("seed", "4294967296")] {
+        let message = error_of(&format!("{CAMERA}[render]\n{field} = {value}\n"));
+        assert_mentions(&message, &["bad.toml:6:", "[render]", &format!("`{field}`"), "at most"]);
+    }
+    let message = error_of(&format!("{CAMERA}resolution = [65537, 1]\n"));
+    assert_mentions(&message, &["bad.toml:5:", "`resolution`", "at most 65536"]);
+    let message = error_of(&format!("{CAMERA}resolution = [65536, 65536]\n"));
+    assert_mentions(&message, &["bad.toml:5:", "`resolution`", "at most 268435456 pixels"]);
+    let message = error_of(&format!("{CAMERA}[materials.glass]\ntype = \"dielectric\"\nior = 1000\n"));
+    assert_mentions(&message, &["bad.toml:7:", "`ior`", "to 100"]);
+    let message = error_of(&format!(
+        "{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = 1e-12\n"
+    ));
+    assert_mentions(&message, &["bad.toml:11:", "`radius`", "1e-12", "at least 1e-9"]);
+}
+
+#[test]
+fn huge_numbers_are_printed_short() {
+    // A number is shown in exponent form, never as hundreds of digits, whoever reports it.
+    for text in [
+        format!(
+            "{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = 1e300\n"
+        ),
+        format!("{CAMERA}[render]\nseed = 1e300\n"),
+        format!("{CAMERA}[materials.hot]\ntype = \"diffuse\"\nemission = [1e300, 0, 0]\n"),
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\nfov = 1e300\n".to_string(),
+    ] {
+        let message = error_of(&text);
+        assert_mentions(&message, &["bad.toml:", "1e300"]);
+        assert!(!message.contains("0000000000"), "{message}");
+    }
+}
+
+#[test]
+fn coordinates_beyond_the_scene_range_are_refused_even_after_a_transform() {
+    let message = error_of(&format!(
+        "{CAMERA}{WHITE}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 2e9, 0]\nradius = 1\n"
+    ));
+    assert_mentions(&message, &["bad.toml:10:", "`center`", "2e9", "within +-1e9"]);
+    // A huge scale is reported as such, not as a zero-area triangle.
+    let quad =
+        "[[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n";
+    let message = error_of(&format!("{CAMERA}{WHITE}{quad}transform = {{ scale = 1e9, translate = [1e9, 0, 0] }}\n"));
+    assert_mentions(&message, &["bad.toml:", "shape 0", "`transform` moves the shape", "2e9"]);
+    assert!(!message.contains("zero area"), "{message}");
+    let sphere = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nradius = 1\n";
+    let message = error_of(&format!("{CAMERA}{WHITE}{sphere}transform = {{ scale = 1e-10 }}\n"));
+    assert_mentions(&message, &["bad.toml:", "shrinks the sphere"]);
+}
+
+#[test]
+fn nearly_degenerate_cameras_are_refused() {
+    for (position, look_at, up) in [
+        ("[0, 1, 5]", "[0, 1, 5.0000001]", "[0, 1, 0]"),
+        ("[1e-30, 0, 0]", "[0, 0, 0]", "[0, 1, 0]"),
+        ("[0, 1, 5]", "[0, 1, 0]", "[0, 1e-30, 0]"),
+        ("[0, 1, 5]", "[0, 1, 0]", "[0, 1e-9, 1]"),
+        ("[0, 5, 0]", "[0, 0, 0]", "[0, 1, 0]"),
+        ("[0, 1, 5]", "[0, 1, 0]", "[0, 0, 0]"),
+    ] {
+        let text = format!("[camera]\nposition = {position}\nlook_at = {look_at}\nup = {up}\nfov = 40\n");
+        let message = error_of(&text);
+        assert_mentions(&message, &["bad.toml:", "[camera]"]);
+        assert!(message.contains("`look_at` equals") || message.contains("`up` is zero or parallel"), "{message}");
+    }
+    // Looking straight down with the default up: this rendered black before.
+    let message = error_of("[camera]\nposition = [0, 5, 0]\nlook_at = [0, 0, 0]\nfov = 40\n");
+    assert_mentions(&message, &["bad.toml:3:", "[camera]", "parallel to the default `up`", "add an `up`"]);
+}
+
+#[test]
+fn names_are_escaped_and_long_keys_cut() {
+    let text = format!("{CAMERA}[materials.\"red\\u001b[31m\"]\ntype = \"metal\"\n");
+    let message = error_of(&text);
+    assert!(!message.chars().any(|c| c.is_control()), "{message:?}");
+    assert_mentions(&message, &["material \"red\\u{1b}[31m\"", "unknown type"]);
+    let key = "k".repeat(1 << 20);
+    let message = error_of(&format!("{CAMERA}{key} = 1\n"));
+    assert_mentions(&message, &["bad.toml:5:1:", "unknown field `kkkk", "more characters"]);
+    assert!(message.len() < 1000, "{} bytes", message.len());
+}
+
+#[test]
+fn nan_vertex_in_an_obj_is_not_called_zero_area() {
+    let message = mesh_scene("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n");
+    assert_mentions(&message, &["thing.obj:2:", "`nan`, not a finite number", "bad.toml:10"]);
+    assert!(!message.contains("zero area"), "{message}");
+}
+
+#[test]
+fn device_files_and_huge_scene_files_are_refused_unread() {
+    let error = load_scene(Path::new("/dev/zero")).unwrap_err();
+    assert_mentions(&error.to_string(), &["/dev/zero", "larger than 64.0 MiB"]);
+    let (dir, path) = write_scene(CAMERA);
+    let file = std::fs::OpenOptions::new().append(true).open(&path).unwrap();
+    file.set_len(65 << 20).unwrap(); // sparse: no disk used
+    assert_mentions(&load_scene(&path).unwrap_err().to_string(), &["bad.toml", "larger than 64.0 MiB"]);
+    drop(dir);
+}
+
+#[test]
+fn unreadable_file_says_why_once() {
+    let message = load_scene(Path::new("/nonexistent/scene.toml")).unwrap_err().to_string();
+    assert_eq!(message.matches("No such file").count(), 1, "{message}");
+    // The chain of sources that `main` prints adds nothing.
+    let error = load_scene(Path::new("/nonexistent/scene.toml")).unwrap_err();
+    assert!(std::error::Error::source(&error).is_none());
+}
+
+#[test]
+fn analytic_shape_errors_name_the_line_and_field_and_the_fix() {
+    let neon = "[materials.neon]\ntype = \"diffuse\"\nemission = 5\n";
+    let line_of = |text: &str, needle: &str| text.lines().position(|l| l.starts_with(needle)).unwrap() + 1;
+    let cases: &[(&str, &str, &[&str])] = &[
+        ("type = \"plane\"\nmaterial = \"neon\"\nnormal = [0, 1, 0]\n", "material", &["infinite plane cannot be a light", "use a quad or a disc"]),
+        ("type = \"plane\"\nmaterial = \"white\"\nnormal = [0, 0, 0]\n", "normal", &["`normal` is [0, 0, 0]", "e.g. `normal = [0, 1, 0]`"]),
+        ("type = \"disc\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\ninner_radius = 1\n", "inner_radius", &["`inner_radius` is 1", "[0, radius)"]),
+        ("type = \"disc\"\nmaterial = \"white\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = -1\n", "radius", &["`radius` is -1", "> 0"]),
+        ("type = \"cylinder\"\nmaterial = \"white\"\nbase = [0, 1, 0]\ncap = [0, 1, 0]\nradius = 1\n", "cap", &["`cap`", "same point as `base`"]),
+        ("type = \"cone\"\nmaterial = \"white\"\nbase = [0, 0, 0]\ncap = [0, 1, 0]\nbase_radius = 0\ncap_radius = 0\n", "cap_radius", &["both 0", "give one of them a radius"]),
+        ("type = \"cone\"\nmaterial = \"white\"\nbase = [0, 0, 0]\ncap = [0, 1, 0]\nbase_radius = -0.5\ncap_radius = 0\n", "base_radius", &["`base_radius` is -0.5", ">= 0"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = 1\nminor_radius = 1.2\n", "minor_radius", &["`minor_radius` (1.2) must be smaller than `major_radius` (1)", "spindle"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nminor_radius = 0.2\n", "[[shapes]]", &["missing field `major_radius`", "major_radius = 1.0"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = 1\nminor_radius = 0.2\nradius = 2\n", "radius", &["`radius` does not apply to a torus", "`major_radius`"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [3, 1]\n", "exponents", &["`exponents` is [3.0, 1.0]", "each in [0.01, 2]"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [0.5]\n", "exponents", &["give two numbers [e, n]"]),
+        ("type = \"superellipsoid\"\nmaterial = \"white\"\nexponents = [1, 1]\ntransform = { scale = 1e-30 }\n", "transform", &["scales the shape to zero or to infinity", "between about 1e-6 and 1e6"]),
+        ("type = \"torus\"\nmaterial = \"white\"\nmajor_radius = nan\nminor_radius = 0.2\n", "major_radius", &["`major_radius` is NaN", "finite number"]),
+        ("type = \"cylindre\"\nmaterial = \"white\"\n", "type = \"cyl", &["unknown type \"cylindre\"", "did you mean \"cylinder\"?"]),
+    ];
+    for (body, field, pieces) in cases {
+        let text = format!("{CAMERA}{WHITE}{neon}[[shapes]]\n{body}{LIGHT}");
+        let message = error_of(&text);
+        println!("{message}");
+        let at = format!("bad.toml:{}:", line_of(&text, field));
+        assert_mentions(&message, &[at.as_str(), "shape 0"]);
+        assert_mentions(&message, pieces);
+    }
+}

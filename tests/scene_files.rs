@@ -90,3 +90,25 @@ fn showcase_uses_every_feature() {
         }
     }
 }
+
+#[test]
+fn materials_showroom_has_every_material_kind_on_its_spheres() {
+    let scene = load("materials.toml");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let mut kinds: Vec<&str> = scene
+        .spheres()
+        .map(|(_, m)| match scene.materials[m as usize].kind {
+            MaterialKind::Diffuse { .. } => "diffuse",
+            MaterialKind::Mirror { .. } => "mirror",
+            MaterialKind::Dielectric { .. } => "dielectric",
+            MaterialKind::Conductor { .. } => "conductor",
+            MaterialKind::Plastic { .. } => "plastic",
+            MaterialKind::Mix { .. } => "mix",
+        })
+        .collect();
+    kinds.sort();
+    kinds.dedup();
+    assert_eq!(kinds, ["conductor", "dielectric", "diffuse", "mix", "plastic"]);
+    assert!(scene.materials.iter().any(|m| matches!(m.normal, photonix::scene::NormalMod::Bump { .. })));
+    assert_eq!(scene.spheres().count(), 12);
+}

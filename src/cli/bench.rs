@@ -7,18 +7,19 @@ use anyhow::Result;
 
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::render::bench::{bench, bench_photons, bench_setup};
+use photonix::render::memory;
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::load_scene;
 
-use super::parse::parse_resolution;
+use super::parse::{parse_photons, parse_resolution, parse_spp};
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
     /// Scene to measure
     #[arg(default_value = "scenes/cornell-box.toml")]
     scene: PathBuf,
-    /// Samples per pixel of each timed frame
-    #[arg(long, default_value_t = 16)]
+    /// Samples per pixel of each timed frame, 1 to 4096
+    #[arg(long, default_value = "16", value_parser = parse_spp, allow_negative_numbers = true)]
     spp: u32,
     /// Image size as WIDTHxHEIGHT [default: the scene's]
     #[arg(long, value_parser = parse_resolution)]
@@ -29,8 +30,8 @@ pub struct BenchArgs {
     /// Skip the CPU reference
     #[arg(long)]
     gpu_only: bool,
-    /// Also time photon tracing and the grid build at these photon path counts (comma-separated)
-    #[arg(long, value_delimiter = ',')]
+    /// Also time photon tracing and the grid build at these photon path counts (comma-separated, each 1 to 1000000000)
+    #[arg(long, value_delimiter = ',', value_parser = parse_photons)]
     photon_paths: Vec<u32>,
     /// Instead of ray rates: time this many progressive passes (the scene's settings) with a
     /// renderer made per pass and with one kept across passes
@@ -44,10 +45,13 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     let scene = load_scene(&args.scene)?;
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
+    // The CPU reference renders the frame too: it must fit in memory.
+    let estimate = memory::estimate(width, height, None, None);
+    memory::check_fits(&estimate, width, height, None, memory::available_host_memory(), None)?;
     let settings = FrameSettings { width, height, max_depth: 1, seed: scene.render.seed };
     let buffers = prepare(&scene, &settings)?;
     out!("scene {} at {width}x{height}, {} spp per timed frame", args.scene.display(), args.spp);
-    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
+    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone())?)?;
 
     // Rays per second
     let mut results = vec![bench(Some(&ctx), &buffers, args.spp)?];
@@ -104,7 +108,7 @@ fn run_passes(args: &BenchArgs, passes: u32) -> Result<()> {
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
     let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
     let buffers = prepare(&scene, &settings)?;
-    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone()))?;
+    let ctx = GpuContext::new(&GpuOptions::from_env(args.device.clone())?)?;
     let spp = scene.render.spp;
     out!(
         "scene {} at {width}x{height}, {spp} spp per pass, {passes} passes, on {}",

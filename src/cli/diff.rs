@@ -1,16 +1,17 @@
 //! `photonix diff`: compares a render with a reference (relMSE, RMSE, per-channel mean ratio)
 //! and optionally writes an error heatmap.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 
 use photonix::io::metrics::{downsample, error_heatmap, mean_ratio, rel_mse, rmse};
-use photonix::io::{check_output_path, read_exr, write_image};
+use photonix::io::{check_not_overwriting, check_output_path, read_exr, write_image, Image};
+use photonix::render::accumulation::{read_accumulation, AccumulationError};
 
 #[derive(clap::Args)]
 pub struct DiffArgs {
-    /// The image to check (EXR, linear radiance)
+    /// The image to check (EXR, linear radiance; an accumulation file counts as its mean image)
     test: PathBuf,
     /// The reference (EXR, linear radiance); a larger reference is box-filtered down when the
     /// sizes divide evenly
@@ -23,12 +24,16 @@ pub struct DiffArgs {
 pub fn run(args: DiffArgs) -> Result<()> {
     if let Some(h) = &args.heatmap {
         check_output_path(h)?;
+        check_not_overwriting(h, &args.test, "the test image")?;
+        check_not_overwriting(h, &args.reference, "the reference image")?;
     }
-    let test = read_exr(&args.test)?;
-    let mut reference = read_exr(&args.reference)?;
+    let test = read_image(&args.test)?;
+    let mut reference = read_image(&args.reference)?;
     if (test.width, test.height) != (reference.width, reference.height) {
         let factor = reference.width / test.width.max(1);
-        if factor < 2 || test.width * factor != reference.width || test.height * factor != reference.height {
+        let scaled = |side: u32| side as u64 * factor as u64;
+        if factor < 2 || scaled(test.width) != reference.width as u64 || scaled(test.height) != reference.height as u64
+        {
             bail!(
                 "{} is {}x{} but {} is {}x{}; render at the reference's size or an integer fraction of it",
                 args.test.display(),
@@ -49,4 +54,21 @@ pub fn run(args: DiffArgs) -> Result<()> {
         write_image(h, &error_heatmap(&test, &reference), 0.0)?;
     }
     Ok(())
+}
+
+/// An EXR as linear radiance. An accumulation file holds sums over its passes, not radiance: it is
+/// read as its mean image (what `photonix merge` would write), and a note says so.
+fn read_image(path: &Path) -> Result<Image> {
+    match read_accumulation(path) {
+        Ok((acc, _)) => {
+            note!(
+                "note: {} is an accumulation file of {} passes; comparing its mean image",
+                path.display(),
+                acc.passes
+            );
+            Ok(acc.mean().combined())
+        }
+        Err(AccumulationError::NotAccumulation { .. }) => Ok(read_exr(path)?),
+        Err(e) => Err(e.into()),
+    }
 }

@@ -3,35 +3,56 @@
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
-use photonix::io::{check_output_path, write_image};
+use photonix::io::image::{format_of, Format};
+use photonix::io::{check_not_overwriting, check_output_path, write_image};
 use photonix::render::accumulation::{format_ranges, merge, write_accumulation};
+
+use super::parse::parse_exposure;
 
 #[derive(clap::Args)]
 pub struct MergeArgs {
     /// Accumulation files written by `render --pass-range`
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
-    /// The merged image (.exr or .png), or with --accumulation a merged accumulation file
+    /// The merged image (.exr or .png), or with --accumulation a merged accumulation file (.exr)
     #[arg(short, long)]
     output: PathBuf,
     /// Write an accumulation file (sums and pass count) instead of the final image
     #[arg(long)]
     accumulation: bool,
-    /// PNG only: scale radiance by 2^EXPOSURE before sRGB encoding
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    exposure: f32,
+    /// PNG only: scale radiance by 2^EXPOSURE, -64 to 64, before sRGB encoding
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    exposure: Option<f32>,
 }
 
 pub fn run(args: MergeArgs) -> Result<()> {
+    // Refuse what would be wrong or ignored before reading anything.
     check_output_path(&args.output)?;
-    let acc = merge(&args.inputs)?;
-    if args.accumulation {
-        write_accumulation(&args.output, &acc)?;
-    } else {
-        write_image(&args.output, &acc.mean().combined(), args.exposure)?;
+    let is_exr = format_of(&args.output)? == Format::Exr;
+    if args.accumulation && !is_exr {
+        bail!(
+            "--accumulation writes an accumulation file, which is an EXR; give an output ending in .exr, or leave out \
+             --accumulation to write the final image as {}",
+            args.output.display()
+        );
     }
-    eprintln!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
+    if args.exposure.is_some() && is_exr {
+        bail!(
+            "--exposure scales PNG output only, and {} is an EXR; leave it out, or write a .png",
+            args.output.display()
+        );
+    }
+    for (i, input) in args.inputs.iter().enumerate() {
+        check_not_overwriting(&args.output, input, &format!("input {} of the merge", i + 1))?;
+    }
+    let (acc, provenance) = merge(&args.inputs)?;
+    if args.accumulation {
+        write_accumulation(&args.output, &acc, &provenance)?;
+    } else {
+        write_image(&args.output, &acc.mean().combined(), args.exposure.unwrap_or(0.0))?;
+    }
+    note!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
     Ok(())
 }

@@ -6,11 +6,19 @@
 use clap::{Parser, Subcommand};
 
 // Defined before the `mod` lines below, so the command modules can use it.
-/// `println!` that ignores a closed stdout (`photonix diff ... | head -1`) instead of panicking.
+/// `println!` that ignores a closed stdout (`photonix diff ... | head -1`) instead of panicking,
+/// and escapes control characters (names from files and arguments reach a terminal).
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stdout(), $($arg)*);
+        let _ = writeln!(std::io::stdout(), "{}", photonix::limits::printable_message(&format!($($arg)*)));
+    }};
+}
+
+/// `eprintln!` with control characters escaped, for notes, warnings and summaries.
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        eprintln!("{}", photonix::limits::printable_message(&format!($($arg)*)));
     }};
 }
 

@@ -9,16 +9,22 @@ use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use photonix::gpu::{list_devices, GpuContext, GpuOptions};
-use photonix::io::{check_output_path, contact_sheet, write_image, write_layers_exr};
-use photonix::render::accumulation::{format_ranges, write_accumulation};
+use photonix::io::{check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr};
+use photonix::limits::{printable_message, MAX_PASSES};
+use photonix::render::accumulation::{format_ranges, write_accumulation, Provenance};
 use photonix::render::gpu::GpuRenderer;
+use photonix::render::memory::{self, available_host_memory, check_fits};
+use photonix::render::photons::check_radii;
 use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
 use photonix::render::{
     auto_backend, prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats,
 };
 use photonix::scene::load_scene;
 
-use super::parse::{parse_duration, parse_pass_range, parse_resolution};
+use super::parse::{
+    parse_depth, parse_duration, parse_exposure, parse_gather_rays, parse_pass_range, parse_passes, parse_photons,
+    parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error,
+};
 
 #[derive(Clone, Copy, ValueEnum)]
 enum BackendArg {
@@ -38,24 +44,24 @@ pub struct RenderArgs {
     /// Vulkan device even when it is a CPU such as lavapipe (gpu); the CPU reference (cpu)
     #[arg(long, value_enum, default_value = "auto")]
     backend: BackendArg,
-    /// Samples per pixel [default: the scene's]
-    #[arg(long)]
+    /// Samples per pixel in each pass, 1 to 4096 [default: the scene's]
+    #[arg(long, value_parser = parse_spp, allow_negative_numbers = true)]
     spp: Option<u32>,
-    /// Seed of the random streams [default: the scene's]
-    #[arg(long)]
+    /// Seed of the random streams, 0 to 4294967295 [default: the scene's]
+    #[arg(long, value_parser = parse_seed, allow_negative_numbers = true)]
     seed: Option<u32>,
     /// Image size as WIDTHxHEIGHT [default: the scene's]
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
-    /// Most surfaces a camera path visits [default: the scene's]
-    #[arg(long)]
+    /// Most surfaces a camera path visits, 1 to 1024 [default: the scene's]
+    #[arg(long, value_parser = parse_depth, allow_negative_numbers = true)]
     max_depth: Option<u32>,
-    /// Vulkan device: index or name substring (see `photonix devices`)
+    /// Vulkan device: index or name substring (see `photonix devices`); GPU backend only
     #[arg(long)]
     device: Option<String>,
-    /// PNG only: scale radiance by 2^EXPOSURE before sRGB encoding
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    exposure: f32,
+    /// PNG only (output or contact sheet): scale radiance by 2^EXPOSURE, -64 to 64, before sRGB encoding
+    #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
+    exposure: Option<f32>,
     #[command(flatten)]
     photons: PhotonArgs,
     #[command(flatten)]
@@ -70,23 +76,23 @@ pub struct RenderArgs {
 
 #[derive(clap::Args)]
 struct PhotonArgs {
-    /// Photon paths for the global map [default: the scene's]
-    #[arg(long)]
+    /// Photon paths for the global map, 1 to 1000000000 [default: the scene's]
+    #[arg(long, value_parser = parse_photons, allow_negative_numbers = true)]
     photons: Option<u32>,
-    /// Photon paths for the caustic map [default: the scene's]
-    #[arg(long)]
+    /// Photon paths for the caustic map, 1 to 1000000000 [default: the scene's]
+    #[arg(long, value_parser = parse_photons, allow_negative_numbers = true)]
     caustic_photons: Option<u32>,
     /// Lookup radius of the global map, in scene units [default: derived from the scene]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_radius, allow_hyphen_values = true)]
     radius: Option<f32>,
     /// Lookup radius of the caustic map, in scene units [default: half the global radius]
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = parse_radius, allow_hyphen_values = true)]
     caustic_radius: Option<f32>,
-    /// Final-gather rays per sample; 0 reads the global map directly (fast preview)
-    #[arg(long)]
+    /// Final-gather rays per sample, 0 to 1024; 0 reads the global map directly (fast preview)
+    #[arg(long, value_parser = parse_gather_rays, allow_negative_numbers = true)]
     gather_rays: Option<u32>,
-    /// Most surfaces a photon path visits
-    #[arg(long)]
+    /// Most surfaces a photon path visits, 1 to 1024
+    #[arg(long, value_parser = parse_depth, allow_negative_numbers = true)]
     photon_depth: Option<u32>,
     /// Direct light and specular paths only: no photon maps
     #[arg(long)]
@@ -94,80 +100,73 @@ struct PhotonArgs {
 }
 
 impl PhotonArgs {
-    /// The scene's settings with the command line's overrides, checked.
+    /// The scene's settings with the command line's overrides. Any photon flag turns photon
+    /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
+    /// (Each value was range-checked by its parser.)
     fn apply(&self, scene: Option<PhotonSettings>) -> Result<Option<PhotonSettings>> {
+        let given: Vec<&str> = [
+            ("--photons", self.photons.is_some()),
+            ("--caustic-photons", self.caustic_photons.is_some()),
+            ("--radius", self.radius.is_some()),
+            ("--caustic-radius", self.caustic_radius.is_some()),
+            ("--gather-rays", self.gather_rays.is_some()),
+            ("--photon-depth", self.photon_depth.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(name, on)| on.then_some(name))
+        .collect();
         if self.no_photons {
+            if !given.is_empty() {
+                bail!(
+                    "--no-photons renders without photon maps, so {} would be ignored; give one or the other",
+                    given.join(", ")
+                );
+            }
+            return Ok(None);
+        }
+        if scene.is_none() && given.is_empty() {
             return Ok(None);
         }
         let mut p = scene.unwrap_or_default();
-        let overridden = self.photons.is_some() || self.caustic_photons.is_some() || self.radius.is_some();
-        if scene.is_none() && !overridden {
-            return Ok(None);
-        }
-        if let Some(n) = self.photons {
-            p.photons = n;
-        }
-        if let Some(n) = self.caustic_photons {
-            p.caustic_photons = n;
-        }
-        if p.photons == 0 || p.caustic_photons == 0 {
-            bail!("--photons and --caustic-photons must be at least 1; use --no-photons to render without photon maps");
-        }
-        for (name, value) in [("--radius", self.radius), ("--caustic-radius", self.caustic_radius)] {
-            if let Some(r) = value {
-                if !(r.is_finite() && r > 0.0) {
-                    bail!("{name} is {r}; give a positive radius in scene units, or leave it out to derive one");
-                }
-            }
-        }
+        p.photons = self.photons.unwrap_or(p.photons);
+        p.caustic_photons = self.caustic_photons.unwrap_or(p.caustic_photons);
         p.radius = self.radius.or(p.radius);
         p.caustic_radius = self.caustic_radius.or(p.caustic_radius);
         p.gather_rays = self.gather_rays.unwrap_or(p.gather_rays);
-        if let Some(d) = self.photon_depth {
-            if d == 0 {
-                bail!("--photon-depth must be at least 1");
-            }
-            p.max_depth = d;
-        }
+        p.max_depth = self.photon_depth.unwrap_or(p.max_depth);
         Ok(Some(p))
     }
 }
 
 #[derive(clap::Args)]
 struct ProgressiveArgs {
-    /// Progressive passes (each traces its own photons with a smaller radius) [default: the scene's]
-    #[arg(long)]
+    /// Progressive passes, 1 to 1000000 (each traces its own photons with a smaller radius) [default: the scene's]
+    #[arg(long, value_parser = parse_passes, allow_negative_numbers = true)]
     passes: Option<u32>,
-    /// Stop after the pass that crosses this wall time (e.g. 90s, 2m, 1h)
+    /// Stop after the pass that crosses this wall time (e.g. 90s, 2m, 1h; 1ms to 365 days)
     #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
     time: Option<std::time::Duration>,
-    /// Stop when the estimated relMSE (from odd and even passes) falls below this
-    #[arg(long, allow_hyphen_values = true)]
+    /// Stop when the estimated relMSE (from odd and even passes) falls below this (0 to 1000)
+    #[arg(long, value_parser = parse_target_error, allow_hyphen_values = true)]
     target_error: Option<f64>,
-    /// Rewrite the output with the passes so far this often (e.g. 30s)
+    /// Rewrite the output with the passes so far this often (e.g. 30s; 1ms to 365 days)
     #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
     checkpoint_every: Option<std::time::Duration>,
-    /// Render exactly passes A..B and write an accumulation file (see docs/progressive.md)
+    /// Render exactly passes A..B (B at most 1000000) and write an accumulation file (see docs/progressive.md)
     #[arg(long, value_parser = parse_pass_range)]
     pass_range: Option<(u32, u32)>,
 }
 
 impl ProgressiveArgs {
     fn budget(&self, scene_passes: u32) -> Result<Budget> {
-        if let Some(e) = self.target_error {
-            if !(e.is_finite() && e > 0.0) {
-                bail!("--target-error is {e}; give a positive relMSE such as 0.01");
-            }
-        }
         if self.pass_range.is_some() && self.passes.is_some() {
             bail!("--passes and --pass-range both choose passes; give one of them");
         }
         let (first, end) = match (self.pass_range, self.passes) {
             (Some((a, b)), _) => (a, b),
-            (None, Some(0)) => bail!("--passes must be at least 1"),
             (None, Some(n)) => (0, n),
-            // A time or error budget alone runs until it is met.
-            (None, None) if self.time.is_some() || self.target_error.is_some() => (0, u32::MAX),
+            // A time or error budget alone runs until it is met, or to the most passes there are.
+            (None, None) if self.time.is_some() || self.target_error.is_some() => (0, MAX_PASSES),
             (None, None) => (0, scene_passes),
         };
         Ok(Budget { first, end, time: self.time, target_error: self.target_error })
@@ -175,10 +174,14 @@ impl ProgressiveArgs {
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    // Check the flags and the output paths, before any long work
+    // Check the flags and the output paths, before any long work. A flag that would be ignored is
+    // an error: the user meant something by it.
+    if args.device.is_some() && matches!(args.backend, BackendArg::Cpu) {
+        bail!("--device picks a Vulkan device, but --backend cpu uses none; leave one of them out");
+    }
     let scene = load_scene(&args.scene)?;
     for warning in &scene.warnings {
-        eprintln!("warning: {warning}");
+        note!("warning: {warning}");
     }
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{}.png", scene.name)));
     let is_exr = matches!(photonix::io::image::format_of(&output), Ok(photonix::io::image::Format::Exr));
@@ -188,10 +191,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.progressive.pass_range.is_some() && !is_exr {
         bail!("--pass-range writes an accumulation file, which is an EXR; give an output ending in .exr");
     }
-    // Fail on a bad output path now, not after a long render.
+    if args.progressive.pass_range.is_some() && args.layers {
+        bail!("--pass-range writes an accumulation file, which holds every layer already; leave out --layers");
+    }
+    let png = |p: &Path| matches!(photonix::io::image::format_of(p), Ok(photonix::io::image::Format::Png));
+    if args.exposure.is_some() && !png(&output) && !args.contact_sheet.as_deref().is_some_and(png) {
+        bail!(
+            "--exposure scales PNG output only, and {} is a linear-radiance EXR; leave it out, or write a .png",
+            output.display()
+        );
+    }
+    // Fail on a bad output path now, not after a long render, and never overwrite the inputs.
     check_output_path(&output)?;
+    check_not_overwriting(&output, &args.scene, "the scene file")?;
     if let Some(sheet) = &args.contact_sheet {
         check_output_path(sheet)?;
+        check_not_overwriting(sheet, &args.scene, "the scene file")?;
+        check_not_overwriting(sheet, &output, "the output image")?;
     }
 
     let (width, height) = args.resolution.unwrap_or((scene.camera.width, scene.camera.height));
@@ -201,20 +217,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
         max_depth: args.max_depth.unwrap_or(scene.render.max_depth),
         seed: args.seed.unwrap_or(scene.render.seed),
     };
+    // Every number was checked against its range when parsed (flags) or loaded (the scene).
     let photons = args.photons.apply(scene.photons)?;
     let spp = args.spp.unwrap_or(scene.render.spp);
-    if spp == 0 {
-        bail!("--spp must be at least 1");
-    }
-    if settings.max_depth == 0 {
-        bail!("--max-depth must be at least 1");
-    }
     let budget = args.progressive.budget(scene.render.passes)?;
-
-    // Prepare the scene and open the device
-    let t = std::time::Instant::now();
-    let buffers = prepare(&scene, &settings)?;
-    let prepare_time = t.elapsed();
+    let exposure = args.exposure.unwrap_or(0.0);
+    // Read (and check) PHOTONIX_VALIDATION whatever the backend: a bad value is refused alike.
+    let options = GpuOptions::from_env(args.device.clone())?;
     let (mut backend, mut backend_why) = match args.backend {
         BackendArg::Gpu => (Backend::Gpu, "--backend gpu".to_string()),
         BackendArg::Cpu => (Backend::Cpu, "--backend cpu".to_string()),
@@ -223,12 +232,41 @@ pub fn run(args: RenderArgs) -> Result<()> {
             (backend, format!("auto: {why}"))
         }
     };
+
+    // Estimate the memory before taking any: host first (the device is not open yet)
+    let estimate = |storage_limit| memory::estimate(width, height, photons.as_ref(), storage_limit);
+    let host_estimate = estimate((backend == Backend::Gpu).then_some(u64::MAX));
+    check_fits(&host_estimate, width, height, photons.as_ref(), available_host_memory(), None)?;
+
+    // Prepare the scene and open the device
+    let t = std::time::Instant::now();
+    let buffers = prepare(&scene, &settings)?;
+    let prepare_time = t.elapsed();
+    if let Some(p) = &photons {
+        check_radii(&buffers, p)?;
+    }
     let ctx = match backend {
-        Backend::Gpu => match GpuContext::new(&GpuOptions::from_env(args.device.clone())) {
-            Ok(ctx) => Some(ctx),
+        Backend::Gpu => match GpuContext::new(&options) {
+            Ok(ctx) => {
+                let info = ctx.info();
+                let limit = info.max_storage_buffer_range.min(info.max_memory_allocation_size);
+                if let Some(p) = &photons {
+                    memory::check_photon_buffer(p, limit)?;
+                }
+                let device_estimate = estimate(Some(limit));
+                check_fits(
+                    &device_estimate,
+                    width,
+                    height,
+                    photons.as_ref(),
+                    None,
+                    Some(info.device_local_heap_bytes),
+                )?;
+                Some(ctx)
+            }
             // Auto chose a GPU that will not open: the CPU backend still renders the image.
             Err(e) if matches!(args.backend, BackendArg::Auto) && args.device.is_none() => {
-                eprintln!("warning: {e}; rendering on the CPU backend instead");
+                note!("warning: {e}; rendering on the CPU backend instead");
                 (backend, backend_why) = (Backend::Cpu, "auto: the GPU failed to open".to_string());
                 None
             }
@@ -236,6 +274,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         },
         Backend::Cpu => None,
     };
+    let provenance = Provenance::new(&buffers, spp, photons.as_ref());
     let mut renderer = match &ctx {
         Some(ctx) => Some(GpuRenderer::new(ctx, &buffers, photons.as_ref())?),
         None => None,
@@ -245,7 +284,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
     let write_result = |acc: &Accumulator| -> Result<()> {
         if budget_is_range(&args) {
-            write_accumulation(&output, acc)?;
+            write_accumulation(&output, acc, &provenance)?;
             return Ok(());
         }
         let mean = acc.mean();
@@ -255,7 +294,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             named.extend(mean.named());
             write_layers_exr(&output, &named)?;
         } else {
-            write_image(&output, &combined, args.exposure)?;
+            write_image(&output, &combined, exposure)?;
         }
         Ok(())
     };
@@ -299,7 +338,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 let photon_rate = paths_per_pass as f64 * acc.passes as f64 / elapsed.as_secs_f64().max(1e-9);
                 bar.set_message(format!(
                     "{} pass {}/{} {:.2} M photons/s",
-                    scene.name,
+                    printable_message(&scene.name),
                     acc.passes,
                     total_passes,
                     photon_rate / 1e6
@@ -326,7 +365,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(sheet) = &args.contact_sheet {
         let mean = acc.mean();
         let terms: Vec<&photonix::io::Image> = mean.named().iter().map(|(_, image)| *image).collect();
-        write_image(sheet, &contact_sheet(&terms), args.exposure)?;
+        write_image(sheet, &contact_sheet(&terms), exposure)?;
     }
     if let Some(renderer) = &renderer {
         stats.stages.insert(0, ("setup".into(), renderer.setup_time()));
@@ -342,7 +381,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         StopReason::Interrupted => "interrupted".to_string(),
     };
-    eprintln!(
+    note!(
         "{} pass{} ({}; passes {}); {}",
         acc.passes,
         if acc.passes == 1 { "" } else { "es" },
@@ -363,7 +402,7 @@ fn progress_bar(total_label: &str) -> Option<ProgressBar> {
         .expect("the progress template is valid")
         .progress_chars("=> ");
     bar.set_style(style);
-    bar.set_message(total_label.to_string());
+    bar.set_message(printable_message(total_label));
     Some(bar)
 }
 

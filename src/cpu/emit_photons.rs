@@ -81,7 +81,7 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
         if smp.flags & BSDF_ESTIMATE != 0 {
             specular_only = false;
         }
-        o = offset_origin(s, &h, wo, smp.flags);
+        o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
     }
 }

@@ -1,18 +1,15 @@
-//! Radiance estimates from the photon maps and the final gather; twin of `shaders/gather.glsl`.
+//! Radiance estimates from the photon maps; twin of `shaders/gather.glsl`. The camera path reads
+//! them at its end (`render::radiance`): caustics, the indirect preview, and the global map where a
+//! final-gather path ends.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::bsdf::{
-    bsdf_estimate_is_constant, bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_sample, facing, material_bsdf, Bsdf,
-};
+use super::bsdf::{bsdf_estimate_is_constant, bsdf_eval, bsdf_flags, facing, Bsdf};
 use super::grid::for_each_photon_near;
 use super::photon::{photon_flags, photon_flux, photon_wi};
-use super::rng::rand4;
-use super::shading::offset_origin;
-use super::shape::{shape_hit, Hit};
-use super::trace::trace_ray;
+use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
 
@@ -82,70 +79,4 @@ pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, e
         sum += bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
     });
     sum * (2.0 / (PI * r2))
-}
-
-/// Indirect radiance toward `wo` at `h`, read from the global map at `h` without the direct and
-/// caustic photons (the fast preview when `gather_rays` is 0).
-pub fn indirect_preview(s: &SceneView, h: &Hit, b: &Bsdf, wo: Vec3) -> Vec3 {
-    photon_radiance(s, MAP_GLOBAL, h, b, wo, PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC)
-}
-
-/// One final-gather ray's share of the indirect radiance toward `wo` at `h`: ray `j`, sampled
-/// from the estimate lobes of `b`, follows path lobes to a surface with estimate lobes and reads
-/// the global map there, weighted 1/gather_rays. Emission met on the way is not counted: direct
-/// light and caustics cover it.
-#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
-pub fn gather_ray(
-    s: &SceneView,
-    h: &Hit,
-    b: &Bsdf,
-    wo: Vec3,
-    stream: u32,
-    sample: u32,
-    j: u32,
-    rays: &mut u32,
-) -> Vec3 {
-    let f = s.frame;
-    let gdim = RNG_GATHER_DOMAIN + j * RNG_GATHER_DIMS_PER_RAY;
-    let u0 = rand4(stream, sample, f.seed, gdim);
-    let first = bsdf_sample(b, wo, [u0[2], u0[0], u0[1]], LOBES_ESTIMATE);
-    if first.flags == 0 {
-        return Vec3::ZERO;
-    }
-    let mut d = first.wi;
-    let mut o = offset_origin(s, h, wo, first.flags);
-    let mut throughput = Vec3::ONE;
-    for bounce in 0..f.max_depth {
-        *rays += 1;
-        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);
-        if prim == NO_LIGHT {
-            break;
-        }
-        let y = shape_hit(s, prim, o, d, t);
-        let wo_y = -d;
-        let by = material_bsdf(s, &s.materials[y.material as usize], &y);
-        let u = rand4(stream, sample, f.seed, gdim + 1 + bounce);
-        let q = bsdf_path_probability(&by, wo_y);
-        if u[3] < q {
-            let smp = bsdf_sample(&by, wo_y, [u[0], u[1], u[2]], LOBES_PATH);
-            if smp.flags == 0 {
-                break;
-            }
-            throughput *= smp.weight / q;
-            o = offset_origin(s, &y, wo_y, smp.flags);
-            d = smp.wi;
-            continue;
-        }
-        if bsdf_flags(&by) & BSDF_ESTIMATE == 0 {
-            break;
-        }
-        let radiance = photon_radiance(s, MAP_GLOBAL, &y, &by, wo_y, 0);
-        return first.weight * (throughput / (1.0 - q)) * radiance / f.gather_rays as f32;
-    }
-    Vec3::ZERO
-}
-
-/// Caustic radiance toward `wo` at `h` from the caustic map.
-pub fn caustic_light(s: &SceneView, h: &Hit, b: &Bsdf, wo: Vec3) -> Vec3 {
-    photon_radiance(s, MAP_CAUSTIC, h, b, wo, 0)
 }

@@ -22,19 +22,10 @@
 
 use glam::{Vec2, Vec4};
 
-/// Words before the first texel of a block.
-pub const IMAGE_HEADER_WORDS: u32 = 4;
-/// Wrap mode: indices modulo the size (tiling).
-pub const IMAGE_WRAP_REPEAT: u32 = 0;
-/// Wrap mode: indices clamped to the edge texels.
-pub const IMAGE_WRAP_CLAMP: u32 = 1;
-/// Wrap mode: indices reflected at the edges: ..., 1, 0, 0, 1, ..., W-1, W-1, W-2, ...
-pub const IMAGE_WRAP_MIRROR: u32 = 2;
-/// Flag: some texel has an alpha other than 1 (an alpha test may skip images without it).
-pub const IMAGE_FLAG_ALPHA: u32 = 1;
-/// Texel coordinates are clamped to +-2^24: beyond it an f32 has no fraction left, and the
-/// integer indices stay far from overflow.
-pub const IMAGE_COORD_LIMIT: f32 = 16_777_216.0;
+// Block layout, wrap modes and limits: shared with the kernel through src/layout/constants.rs.
+pub use crate::layout::constants::{
+    IMAGE_COORD_LIMIT, IMAGE_FLAG_ALPHA, IMAGE_HEADER_WORDS, IMAGE_WRAP_CLAMP, IMAGE_WRAP_MIRROR, IMAGE_WRAP_REPEAT,
+};
 
 /// Half-float bits to f32, exactly, subnormals included (the host writes no Inf or NaN).
 pub fn image_half_to_f32(h: u32) -> f32 {
@@ -169,26 +160,6 @@ mod tests {
     fn assert_near(got: Vec4, want: Vec4) {
         // The weights are multiples of 1/4 here, so only the final sums round: a few f32 ulps.
         assert!(got.abs_diff_eq(want, 1e-5 * want.abs().max_element().max(1.0)), "got {got}, expected {want}");
-    }
-
-    #[test]
-    fn constants_match_the_glsl_defines() {
-        let glsl = include_str!("../../shaders/image_texture.glsl");
-        let define = |name: &str| -> String {
-            let line =
-                glsl.lines().find(|l| l.starts_with(&format!("#define {name} "))).unwrap_or_else(|| panic!("{name}"));
-            line.split_whitespace().nth(2).unwrap().trim_end_matches('u').to_string()
-        };
-        for (name, value) in [
-            ("IMAGE_HEADER_WORDS", IMAGE_HEADER_WORDS),
-            ("IMAGE_WRAP_REPEAT", IMAGE_WRAP_REPEAT),
-            ("IMAGE_WRAP_CLAMP", IMAGE_WRAP_CLAMP),
-            ("IMAGE_WRAP_MIRROR", IMAGE_WRAP_MIRROR),
-            ("IMAGE_FLAG_ALPHA", IMAGE_FLAG_ALPHA),
-        ] {
-            assert_eq!(define(name), value.to_string(), "{name}");
-        }
-        assert_eq!(define("IMAGE_COORD_LIMIT").parse::<f32>().unwrap(), IMAGE_COORD_LIMIT);
     }
 
     #[test]

@@ -129,6 +129,9 @@ pub struct LightSample {
     pub p: Vec3,
     pub wi: Vec3,
     pub weight: Vec3,
+    /// Offset of a ray that ends at `p`: the area light's point's own (`Hit::eps`), else the
+    /// frame's `ray_epsilon`.
+    pub eps: f32,
 }
 
 pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSample {
@@ -136,27 +139,27 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
         LIGHT_ENVIRONMENT => {
             let (wi, weight) = environment_sample(s, l, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
-            LightSample { p: x + wi * beyond, wi, weight }
+            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon }
         }
         LIGHT_AREA => {
-            // Uniform by area: L cos' / d^2 times the area.
-            let h = shape_sample(s, l.primitive, u);
+            // By area (see `shape_sample` for the density): L cos' / d^2 over the point's pdf.
+            let (h, inv_pdf) = shape_sample(s, l.primitive, u);
             let to_light = h.p - x;
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
             let cos_l = -h.ng.dot(wi);
             let weight = if cos_l > 0.0 {
-                material_emission(s, &s.materials[h.material as usize], &h) * (cos_l * l.area / dist2)
+                material_emission(s, &s.materials[h.material as usize], &h) * (cos_l * inv_pdf / dist2)
             } else {
                 Vec3::ZERO
             };
-            LightSample { p: h.p, wi, weight }
+            LightSample { p: h.p, wi, weight, eps: h.eps }
         }
         LIGHT_DISTANT => {
             // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
             let wi = -cone_direction(Vec3::from(l.direction), l.cos_outer, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
-            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity) }
+            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity), eps: s.frame.ray_epsilon }
         }
         _ => {
             // Point and spot lights: I(w) / d^2.
@@ -164,23 +167,25 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             let to_light = p - x;
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
-            LightSample { p, wi, weight: Vec3::from(l.intensity) * (spot_falloff(l, -wi) / dist2) }
+            let weight = Vec3::from(l.intensity) * (spot_falloff(l, -wi) / dist2);
+            LightSample { p, wi, weight, eps: s.frame.ray_epsilon }
         }
     }
 }
 
 /// A photon leaving light `l`: (origin, direction, power before the division by the pick
-/// probability and the path count). Area lights emit from a uniform point in a
-/// cosine-distributed direction (Lambertian); point and spot lights uniformly in their cone,
-/// weighted by the spot's profile; distant lights from a uniform point of the disc of the
-/// scene's bounding sphere that faces them, uniformly in their cone of directions.
+/// probability and the path count). Area lights emit from a point drawn by `shape_sample` (their
+/// power over that point's pdf by area) in a cosine-distributed direction (Lambertian); point and
+/// spot lights uniformly in their cone, weighted by the spot's profile; distant lights from a
+/// uniform point of the disc of the scene's bounding sphere that faces them, uniformly in their
+/// cone of directions.
 pub fn light_emit(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) -> (Vec3, Vec3, Vec3) {
     let axis = Vec3::from(l.direction);
     match l.kind {
         LIGHT_AREA => {
-            let h = shape_sample(s, l.primitive, u_pos);
+            let (h, inv_pdf) = shape_sample(s, l.primitive, u_pos);
             let emitted = material_emission(s, &s.materials[h.material as usize], &h);
-            (h.p + h.ng * s.frame.ray_epsilon, cosine_direction(h.ng, u_dir), PI * l.area * emitted)
+            (h.p + h.ng * h.eps, cosine_direction(h.ng, u_dir), PI * inv_pdf * emitted)
         }
         LIGHT_DISTANT | LIGHT_ENVIRONMENT => {
             // The environment: a direction toward it, then a disc facing it, as for a distant light.

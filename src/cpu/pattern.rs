@@ -36,63 +36,17 @@
 
 use glam::Vec3;
 
-// Pattern kinds (word 0). Mirrored in shaders/pattern.glsl; a test compares the two lists.
-pub const PATTERN_AGATE: u32 = 0;
-pub const PATTERN_BOZO: u32 = 1;
-pub const PATTERN_BRICK: u32 = 2;
-pub const PATTERN_BUMPS: u32 = 3;
-pub const PATTERN_CHECKER: u32 = 4;
-pub const PATTERN_CRACKLE: u32 = 5;
-pub const PATTERN_DENTS: u32 = 6;
-pub const PATTERN_GRADIENT: u32 = 7;
-pub const PATTERN_GRANITE: u32 = 8;
-pub const PATTERN_HEXAGON: u32 = 9;
-pub const PATTERN_LEOPARD: u32 = 10;
-pub const PATTERN_MARBLE: u32 = 11;
-pub const PATTERN_ONION: u32 = 12;
-pub const PATTERN_RIPPLES: u32 = 13;
-pub const PATTERN_SPOTTED: u32 = 14;
-pub const PATTERN_WAVES: u32 = 15;
-pub const PATTERN_WOOD: u32 = 16;
-pub const PATTERN_WRINKLES: u32 = 17;
-/// Number of pattern kinds; kinds are 0..PATTERN_KIND_COUNT.
-pub const PATTERN_KIND_COUNT: u32 = 18;
-
-// Wave shapes (word 1), POV-Ray's ramp_wave, sine_wave, ...
-pub const WAVE_RAMP: u32 = 0;
-pub const WAVE_SINE: u32 = 1;
-pub const WAVE_TRIANGLE: u32 = 2;
-pub const WAVE_SCALLOP: u32 = 3;
-pub const WAVE_CUBIC: u32 = 4;
-pub const WAVE_POLY: u32 = 5;
-
-// Word offsets inside a pattern block.
-pub const PATTERN_KIND: u32 = 0;
-pub const PATTERN_WAVE: u32 = 1;
-pub const PATTERN_OCTAVES: u32 = 2;
-pub const PATTERN_OMEGA: u32 = 3;
-pub const PATTERN_LAMBDA: u32 = 4;
-pub const PATTERN_TURBULENCE: u32 = 5;
-pub const PATTERN_FREQUENCY: u32 = 8;
-pub const PATTERN_PHASE: u32 = 9;
-pub const PATTERN_EXPONENT: u32 = 10;
-pub const PATTERN_PARAMS: u32 = 12;
-/// Words of one pattern block.
-pub const PATTERN_WORDS: u32 = 20;
-/// Most octaves of turbulence (POV-Ray 3.7 allows 1 to 10); bounds the shader's loops.
-pub const MAX_OCTAVES: u32 = 10;
-/// Most entries of a colour map (POV-Ray's MAX_BLEND_MAP_ENTRIES).
-pub const MAX_COLOR_MAP_ENTRIES: u32 = 256;
-/// Wave sources of ripples and waves (POV-Ray's default `number_of_waves`).
-pub const WAVE_SOURCES: u32 = 10;
-
-/// Scale of the signed noise (standard deviation 0.270, measured) in [`noise_unit`]: gives the
-/// standard deviation 0.126 of POV-Ray 3.7's default (range-corrected) noise, 0.2568 x 0.4899 in
-/// its noise.cpp, so that the default colour maps band as they do in POV-Ray.
-const NOISE_UNIT_SCALE: f32 = 0.466;
-/// Scale of each component of [`noise_vector`]: standard deviation 0.257 like POV-Ray's DNoise
-/// (the same sum as its Noise before the range correction), so a turbulence amount warps as far.
-const NOISE_VECTOR_SCALE: f32 = 0.95;
+// Pattern kinds, wave shapes, block layout and limits: shared with the kernel through
+// src/layout/constants.rs.
+pub use crate::layout::constants::{
+    MAX_COLOR_MAP_ENTRIES, MAX_OCTAVES, PATTERN_AGATE, PATTERN_BOZO, PATTERN_BRICK, PATTERN_BUMPS, PATTERN_CHECKER,
+    PATTERN_CRACKLE, PATTERN_DENTS, PATTERN_EXPONENT, PATTERN_FREQUENCY, PATTERN_GRADIENT, PATTERN_GRANITE,
+    PATTERN_HEXAGON, PATTERN_KIND, PATTERN_KIND_COUNT, PATTERN_LAMBDA, PATTERN_LEOPARD, PATTERN_MARBLE,
+    PATTERN_OCTAVES, PATTERN_OMEGA, PATTERN_ONION, PATTERN_PARAMS, PATTERN_PHASE, PATTERN_RIPPLES, PATTERN_SPOTTED,
+    PATTERN_TURBULENCE, PATTERN_WAVE, PATTERN_WAVES, PATTERN_WOOD, PATTERN_WORDS, PATTERN_WRINKLES, WAVE_CUBIC,
+    WAVE_POLY, WAVE_RAMP, WAVE_SCALLOP, WAVE_SINE, WAVE_SOURCES, WAVE_TRIANGLE,
+};
+use crate::layout::constants::{NOISE_UNIT_SCALE, NOISE_VECTOR_SCALE};
 
 fn word(data: &[u32], i: u32) -> f32 {
     f32::from_bits(data[i as usize])
@@ -932,60 +886,5 @@ mod tests {
         let fraction = pts.iter().map(|&p| value(&brick, p) as f64).sum::<f64>() / pts.len() as f64;
         println!("brick fraction {fraction:.4}");
         assert!((fraction - 0.6944).abs() < 0.01, "{fraction}");
-    }
-
-    #[test]
-    fn glsl_constants_match_the_twin() {
-        let glsl = include_str!("../../shaders/pattern.glsl");
-        let uints = [
-            ("PATTERN_AGATE", PATTERN_AGATE),
-            ("PATTERN_BOZO", PATTERN_BOZO),
-            ("PATTERN_BRICK", PATTERN_BRICK),
-            ("PATTERN_BUMPS", PATTERN_BUMPS),
-            ("PATTERN_CHECKER", PATTERN_CHECKER),
-            ("PATTERN_CRACKLE", PATTERN_CRACKLE),
-            ("PATTERN_DENTS", PATTERN_DENTS),
-            ("PATTERN_GRADIENT", PATTERN_GRADIENT),
-            ("PATTERN_GRANITE", PATTERN_GRANITE),
-            ("PATTERN_HEXAGON", PATTERN_HEXAGON),
-            ("PATTERN_LEOPARD", PATTERN_LEOPARD),
-            ("PATTERN_MARBLE", PATTERN_MARBLE),
-            ("PATTERN_ONION", PATTERN_ONION),
-            ("PATTERN_RIPPLES", PATTERN_RIPPLES),
-            ("PATTERN_SPOTTED", PATTERN_SPOTTED),
-            ("PATTERN_WAVES", PATTERN_WAVES),
-            ("PATTERN_WOOD", PATTERN_WOOD),
-            ("PATTERN_WRINKLES", PATTERN_WRINKLES),
-            ("WAVE_RAMP", WAVE_RAMP),
-            ("WAVE_SINE", WAVE_SINE),
-            ("WAVE_TRIANGLE", WAVE_TRIANGLE),
-            ("WAVE_SCALLOP", WAVE_SCALLOP),
-            ("WAVE_CUBIC", WAVE_CUBIC),
-            ("WAVE_POLY", WAVE_POLY),
-            ("PATTERN_KIND", PATTERN_KIND),
-            ("PATTERN_WAVE", PATTERN_WAVE),
-            ("PATTERN_OCTAVES", PATTERN_OCTAVES),
-            ("PATTERN_OMEGA", PATTERN_OMEGA),
-            ("PATTERN_LAMBDA", PATTERN_LAMBDA),
-            ("PATTERN_TURBULENCE", PATTERN_TURBULENCE),
-            ("PATTERN_FREQUENCY", PATTERN_FREQUENCY),
-            ("PATTERN_PHASE", PATTERN_PHASE),
-            ("PATTERN_EXPONENT", PATTERN_EXPONENT),
-            ("PATTERN_PARAMS", PATTERN_PARAMS),
-            ("PATTERN_WORDS", PATTERN_WORDS),
-            ("MAX_OCTAVES", MAX_OCTAVES),
-            ("MAX_COLOR_MAP_ENTRIES", MAX_COLOR_MAP_ENTRIES),
-            ("WAVE_SOURCES", WAVE_SOURCES),
-        ];
-        let declared: Vec<&str> = glsl.lines().filter(|l| l.starts_with("const uint ")).collect();
-        assert_eq!(declared.len(), uints.len(), "every GLSL constant has a Rust twin");
-        for (name, v) in uints {
-            let line = format!("const uint {name} = {v}u;");
-            assert!(declared.contains(&line.as_str()), "shaders/pattern.glsl lacks `{line}`");
-        }
-        for (name, v) in [("NOISE_UNIT_SCALE", NOISE_UNIT_SCALE), ("NOISE_VECTOR_SCALE", NOISE_VECTOR_SCALE)] {
-            let line = format!("const float {name} = {v};");
-            assert!(glsl.contains(&line), "shaders/pattern.glsl lacks `{line}`");
-        }
     }
 }

@@ -9,7 +9,6 @@ use super::light::{light_sample, pick_light};
 use super::rng::{rand1, rand2};
 use super::sampling::polygon_point;
 use super::shape::Hit;
-use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
 
@@ -46,19 +45,31 @@ pub fn camera_ray(s: &SceneView, sx: f32, sy: f32, u: [f32; 2]) -> (Vec3, Vec3) 
 /// Origin of the ray that leaves `h` in a direction sampled from a lobe with `lobe_flags`:
 /// offset off the surface to the side the ray goes (`wo`'s side for reflection, the other for
 /// transmission).
-pub fn offset_origin(s: &SceneView, h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
+/// The offset is the hit's own (`Hit::eps`).
+pub fn offset_origin(h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
     let nf = if wo.dot(h.ng) > 0.0 { h.ng } else { -h.ng };
     if lobe_flags & BSDF_TRANSMISSION != 0 {
-        h.p - nf * s.frame.ray_epsilon
+        h.p - nf * h.eps
     } else {
-        h.p + nf * s.frame.ray_epsilon
+        h.p + nf * h.eps
     }
 }
 
-/// Radiance reflected at `h` toward `wo` from one sampled light through the estimate lobes of
-/// `b`: a one-sample estimate of the direct light. Counts the shadow ray it casts in `rays`.
-#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
-pub fn direct_light(
+/// The length of a shadow ray that is not cast: `trace_ray` meets nothing before it.
+pub const NO_RAY: f32 = -1.0;
+
+/// A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
+/// shading point toward `wo` through the estimate lobes of its BSDF if nothing blocks the ray: a
+/// one-sample estimate of the direct light. `t_max` is `NO_RAY` when no ray is needed (no light,
+/// a light picked with probability 0, or nothing to reflect).
+pub struct ShadowRay {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub t_max: f32,
+    pub unoccluded: Vec3,
+}
+
+pub fn direct_light_sample(
     s: &SceneView,
     h: &Hit,
     b: &Bsdf,
@@ -66,31 +77,31 @@ pub fn direct_light(
     stream: u32,
     sample: u32,
     dim: u32,
-    rays: &mut u32,
-) -> Vec3 {
+) -> ShadowRay {
     let f = s.frame;
+    let none = ShadowRay { origin: h.p, direction: Vec3::Y, t_max: NO_RAY, unoccluded: Vec3::ZERO };
     if f.light_count == 0 {
-        return Vec3::ZERO;
+        return none;
     }
     let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
     // A scene whose lights all give photons only picks one with probability 0.
     if l.pick_probability <= 0.0 {
-        return Vec3::ZERO;
+        return none;
     }
     let ls = light_sample(s, l, h.p, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U));
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {
-        return Vec3::ZERO;
+        return none;
     }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
-    let origin = offset_origin(s, h, ls.wi, BSDF_REFLECTION);
+    let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     let to_target = ls.p - origin;
     let shadow_length = to_target.length();
-    *rays += 1;
-    let (blocker, _) = trace_ray(s, origin, to_target / shadow_length, shadow_length - f.ray_epsilon, true);
-    if blocker != NO_LIGHT {
-        return Vec3::ZERO;
+    ShadowRay {
+        origin,
+        direction: to_target / shadow_length,
+        t_max: (shadow_length - ls.eps).max(0.0),
+        unoccluded: fr * (b.ns.dot(ls.wi).abs() / l.pick_probability),
     }
-    fr * (b.ns.dot(ls.wi).abs() / l.pick_probability)
 }

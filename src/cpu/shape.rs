@@ -2,7 +2,7 @@
 
 use std::f32::consts::PI;
 
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3, Vec4};
 
 use super::sampling::{onb, sphere_direction};
 use super::SceneView;
@@ -24,6 +24,10 @@ pub struct Hit {
     pub dpdv: Vec3,
     pub prim: u32,
     pub material: u32,
+    /// How far rays leaving this point start off the surface (scene units): the scene's
+    /// `ray_epsilon` for triangles and spheres, a multiple of the point's own size for the
+    /// analytic shapes (`SHAPE_EPSILON_SCALE`).
+    pub eps: f32,
 }
 
 /// Möller and Trumbore 1997, two-sided. Returns the hit distance in (t_min, t_max), or infinity.
@@ -74,12 +78,450 @@ pub fn ray_sphere(o: Vec3, d: Vec3, c: Vec3, r: f32, t_min: f32, t_max: f32) -> 
     }
 }
 
-/// Distance to the first surface of `p` along o + t d with t in (t_min, t_max), or infinity.
-pub fn shape_intersect(p: &Primitive, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> f32 {
+/// Distance to the first surface of primitive `i` along o + t d with t in (t_min, t_max), or
+/// infinity.
+pub fn shape_intersect(s: &SceneView, i: u32, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> f32 {
+    let p = &s.primitives[i as usize];
     match p.kind & PRIMITIVE_KIND_MASK {
         PRIMITIVE_SPHERE => ray_sphere(o, d, Vec3::from(p.p0), p.p1[0], t_min, t_max),
-        _ => ray_triangle(o, d, Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2), t_min, t_max),
+        PRIMITIVE_TRIANGLE => ray_triangle(o, d, Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2), t_min, t_max),
+        _ => analytic_intersect(s, p, o, d, t_min, t_max),
     }
+}
+
+// Analytic shapes (plane, disc, cone, torus, superellipsoid): intersected in their object space.
+
+/// An affine map stored as the rows of a 3x4 matrix, applied to a point.
+pub fn affine_point(m: &[f32], x: Vec3) -> Vec3 {
+    Vec3::new(
+        m[0] * x.x + m[1] * x.y + m[2] * x.z + m[3],
+        m[4] * x.x + m[5] * x.y + m[6] * x.z + m[7],
+        m[8] * x.x + m[9] * x.y + m[10] * x.z + m[11],
+    )
+}
+
+/// The linear part of an affine map stored as rows, applied to a vector.
+pub fn affine_vector(m: &[f32], v: Vec3) -> Vec3 {
+    Vec3::new(
+        m[0] * v.x + m[1] * v.y + m[2] * v.z,
+        m[4] * v.x + m[5] * v.y + m[6] * v.z,
+        m[8] * v.x + m[9] * v.y + m[10] * v.z,
+    )
+}
+
+/// The transposed linear part applied to v: with `object_from_world` this takes an object
+/// normal to the world (normals transform by the inverse transpose).
+pub fn affine_transpose_vector(m: &[f32], v: Vec3) -> Vec3 {
+    Vec3::new(m[0], m[1], m[2]) * v.x + Vec3::new(m[4], m[5], m[6]) * v.y + Vec3::new(m[8], m[9], m[10]) * v.z
+}
+
+/// The infinite plane y = 0.
+pub fn ray_plane(o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> f32 {
+    let t = -o.y / d.y;
+    if t > t_min && t < t_max {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The disc (annulus) of y = 0 with |(x, z)| in [inner, radius].
+pub fn ray_disc(o: Vec3, d: Vec3, radius: f32, inner: f32, t_min: f32, t_max: f32) -> f32 {
+    let t = ray_plane(o, d, t_min, t_max);
+    let (x, z) = (o.x + t * d.x, o.z + t * d.z);
+    let r2 = x * x + z * z;
+    if r2 <= radius * radius && r2 >= inner * inner {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The side of the truncated cone of radius r0 at y = 0 and r1 at y = h (a cylinder when they
+/// are equal). The quadratic is set up at the point of the ray closest to the cone's centre (as
+/// Haines et al. do for spheres), so its coefficients stay small however far the origin is, and
+/// solved in the form that never subtracts nearly equal numbers (Press et al., Numerical
+/// Recipes 5.6).
+#[allow(clippy::too_many_arguments)] // the kernel's signature, kept identical
+pub fn ray_cone(o: Vec3, d: Vec3, r0: f32, r1: f32, h: f32, t_min: f32, t_max: f32) -> f32 {
+    let c = Vec3::new(0.0, 0.5 * h, 0.0);
+    let ts = (c - o).dot(d) / d.dot(d);
+    let p = o + ts * d;
+    let rb = r0.max(r1);
+    if (p - c).length_squared() > rb * rb + 0.25 * h * h {
+        return f32::INFINITY;
+    }
+    let k = (r1 - r0) / h;
+    let rho = r0 + k * p.y;
+    let a = d.x * d.x + d.z * d.z - k * k * d.y * d.y;
+    let b = 2.0 * (p.x * d.x + p.z * d.z - k * rho * d.y);
+    let cc = p.x * p.x + p.z * p.z - rho * rho;
+    let disc = b * b - 4.0 * a * cc;
+    if disc < 0.0 {
+        return f32::INFINITY;
+    }
+    let sq = disc.sqrt();
+    let q = -0.5 * (b + if b >= 0.0 { sq } else { -sq });
+    let (mut s0, mut s1) = (q / a, cc / q);
+    if s0 > s1 {
+        (s0, s1) = (s1, s0);
+    }
+    let (t0, y0) = (ts + s0, p.y + s0 * d.y);
+    if t0 > t_min && t0 < t_max && y0 >= 0.0 && y0 <= h {
+        return t0;
+    }
+    let (t1, y1) = (ts + s1, p.y + s1 * d.y);
+    if t1 > t_min && t1 < t_max && y1 >= 0.0 && y1 <= h {
+        return t1;
+    }
+    f32::INFINITY
+}
+
+/// (value, derivative) at x of lead x^4 + c.w x^3 + c.z x^2 + c.y x + c.x (Horner).
+pub fn poly4(lead: f32, c: Vec4, x: f32) -> (f32, f32) {
+    let f = (((lead * x + c.w) * x + c.z) * x + c.y) * x + c.x;
+    let df = ((4.0 * lead * x + 3.0 * c.w) * x + 2.0 * c.z) * x + c.y;
+    (f, df)
+}
+
+/// The root of the polynomial in [a, b] when its values at a and b differ in sign, else
+/// `none`: Newton steps that fall back to bisection whenever they leave the bracket, which
+/// shrinks every step (at most `TORUS_ROOT_STEPS`).
+pub fn poly_root_in(lead: f32, c: Vec4, a: f32, b: f32, none: f32) -> f32 {
+    let fa = poly4(lead, c, a).0;
+    let fb = poly4(lead, c, b).0;
+    if (fa < 0.0) == (fb < 0.0) {
+        return none;
+    }
+    let (mut lo, mut hi) = (a, b);
+    let mut x = 0.5 * (a + b);
+    for _ in 0..TORUS_ROOT_STEPS {
+        let (f, df) = poly4(lead, c, x);
+        if (f < 0.0) == (fa < 0.0) {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mut next = x - f / df;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        let done = (next - x).abs() <= 1e-7;
+        x = next;
+        if done {
+            break;
+        }
+    }
+    x
+}
+
+/// The torus (|p|^2 + R^2 - r^2)^2 = 4 R^2 (x^2 + z^2). The quartic is set up in units of the
+/// bounding sphere's radius R + r from the ray's point closest to the centre, so its variable
+/// runs over the chord [-1, 1] and its coefficients stay near 1 (Haines et al.'s trick, which
+/// keeps the far-away rays of a camera as accurate as near ones). Its real roots are isolated
+/// by those of its derivatives (Yuksel 2022, "High-Performance Polynomial Root Finding for
+/// Graphics"): the roots of the quadratic f'' split the chord into pieces where f' is monotone,
+/// the roots of f' found there split it into pieces where f is monotone, and each piece holds
+/// at most one root of f, found by safeguarded Newton. No root is lost to a bad starting point,
+/// and a grazing ray's pair of nearby roots is either found or truly absent to float precision.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
+pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: f32) -> f32 {
+    let scale = big_r + small_r;
+    let len = d.length();
+    let dn = d / len;
+    let tc = -o.dot(dn);
+    let p = (o + tc * dn) / scale;
+    let m2 = p.dot(p);
+    // The chord runs to a sphere 0.1% larger than the bounding one: the outer equator touches
+    // the bounding sphere, and a ray leaving there would end its chord on a root, whose sign
+    // rounding may hide.
+    let reach = TORUS_CHORD * TORUS_CHORD;
+    if m2 >= reach {
+        return f32::INFINITY;
+    }
+    let half = (reach - m2).sqrt();
+    let lo = (-half).max((t_min * len - tc) / scale);
+    let hi = half.min((t_max * len - tc) / scale);
+    if !(lo < hi) {
+        return f32::INFINITY;
+    }
+    let (br, sr) = (big_r / scale, small_r / scale);
+    let g = m2 + br * br - sr * sr;
+    let k = p.dot(dn);
+    let four_r2 = 4.0 * br * br;
+    let c = Vec4::new(
+        g * g - four_r2 * (p.x * p.x + p.z * p.z),
+        4.0 * k * g - 2.0 * four_r2 * (p.x * dn.x + p.z * dn.z),
+        4.0 * k * k + 2.0 * g - four_r2 * (dn.x * dn.x + dn.z * dn.z),
+        4.0 * k,
+    );
+    // Roots of f'' = 12 x^2 + 6 c.w x + 2 c.z, clamped into the chord.
+    let (qa, qb, qc) = (12.0, 6.0 * c.w, 2.0 * c.z);
+    let disc = qb * qb - 4.0 * qa * qc;
+    let (mut x1, mut x2) = (lo, lo);
+    if disc > 0.0 {
+        let sq = disc.sqrt();
+        let q = -0.5 * (qb + if qb >= 0.0 { sq } else { -sq });
+        let (ra, rb) = (q / qa, qc / q);
+        x1 = ra.min(rb).clamp(lo, hi);
+        x2 = ra.max(rb).clamp(lo, hi);
+    }
+    // Roots of f' = 4 x^3 + 3 c.w x^2 + 2 c.z x + c.y between them (or the piece's start).
+    let dc = Vec4::new(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
+    let e0 = poly_root_in(0.0, dc, lo, x1, lo);
+    let e1 = poly_root_in(0.0, dc, x1, x2, x1);
+    let e2 = poly_root_in(0.0, dc, x2, hi, x2);
+    // The first root of f, piece by piece.
+    let mut root = poly_root_in(1.0, c, lo, e0, f32::INFINITY);
+    if root == f32::INFINITY {
+        root = poly_root_in(1.0, c, e0, e1, f32::INFINITY);
+    }
+    if root == f32::INFINITY {
+        root = poly_root_in(1.0, c, e1, e2, f32::INFINITY);
+    }
+    if root == f32::INFINITY {
+        root = poly_root_in(1.0, c, e2, hi, f32::INFINITY);
+    }
+    let t = (tc + scale * root) / len;
+    if t > t_min && t < t_max {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// x^y for x >= 0 as GLSL computes it, with 0^y = 0 for y > 0 and 0^0 = 1 (x is clamped to a
+/// tiny positive number so that the log is finite).
+pub fn safe_pow(x: f32, y: f32) -> f32 {
+    (y * x.max(1e-30).log2()).exp2()
+}
+
+/// The superellipsoid's gauge h(p) (homogeneous of degree 1, 1 on the surface, convex when both
+/// exponents are at most 2) and its gradient. `ex` = (2/e, e/2, 2/n, n/2). Written with ratios
+/// of at most 1 raised to the powers, so that no power overflows or loses everything to
+/// underflow: rho = max(|x|,|y|) (1 + (min/max)^(2/e))^(e/2), and likewise h from rho and |z|.
+pub fn superellipsoid_gauge(p: Vec3, ex: Vec4) -> (f32, Vec3) {
+    let a = p.abs();
+    let m = a.x.max(a.y);
+    let rho = m * safe_pow(1.0 + safe_pow(a.x.min(a.y) / m.max(1e-30), ex.x), ex.y);
+    let big = rho.max(a.z);
+    let h = big * safe_pow(1.0 + safe_pow(rho.min(a.z) / big.max(1e-30), ex.z), ex.w);
+    let (hs, rs) = (h.max(1e-30), rho.max(1e-30));
+    let hr = safe_pow(rho / hs, ex.z - 1.0);
+    let sign = |v: f32| {
+        if v > 0.0 {
+            1.0
+        } else if v < 0.0 {
+            -1.0
+        } else {
+            0.0
+        }
+    };
+    let grad = Vec3::new(
+        hr * safe_pow(a.x / rs, ex.x - 1.0) * sign(p.x),
+        hr * safe_pow(a.y / rs, ex.x - 1.0) * sign(p.y),
+        safe_pow(a.z / hs, ex.z - 1.0) * sign(p.z),
+    );
+    (h, grad)
+}
+
+/// POV-Ray's superellipsoid inside [-1, 1]^3. Along a ray, h - 1 is a convex function (both
+/// exponents at most 2), so Newton's method started outside the surface on its near side
+/// climbs monotonically to the first root and never steps over it, and a step that leaves the
+/// box (or a slope that turns upward) proves there is no root: no holes at silhouettes and no
+/// missed thin parts, in at most `SUPERELLIPSOID_STEPS` steps. From inside, the same from the
+/// box's far side finds the exit. The gauge grows linearly (not as |x|^(2/e)), so even boxy
+/// shapes converge in a few steps.
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
+pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) -> f32 {
+    // The box is grown by 1e-3 so that its entry point lies clearly outside even a boxy shape,
+    // whose faces fill the unit box's faces to float precision.
+    let inv = d.recip();
+    let ta = (Vec3::splat(-SUPERELLIPSOID_BOX) - o) * inv;
+    let tb = (Vec3::splat(SUPERELLIPSOID_BOX) - o) * inv;
+    let t_in = ta.min(tb).max_element().max(t_min);
+    let t_out = ta.max(tb).min_element();
+    if !(t_in < t_out) {
+        return f32::INFINITY;
+    }
+    let p = o + t_in * d;
+    let span = t_out - t_in;
+    let (h0, g0) = superellipsoid_gauge(p, ex);
+    let outside = h0 - 1.0 > SUPERELLIPSOID_TOLERANCE;
+    // From outside: the first root, left to right; from inside: the last, right to left.
+    let mut s = if outside { 0.0 } else { span };
+    let (mut phi, mut slope) = if outside {
+        (h0 - 1.0, g0.dot(d))
+    } else {
+        let (h, g) = superellipsoid_gauge(p + span * d, ex);
+        (h - 1.0, g.dot(d))
+    };
+    let mut found = phi <= SUPERELLIPSOID_TOLERANCE;
+    for _ in 0..SUPERELLIPSOID_STEPS {
+        if found || (outside && slope >= 0.0) || (!outside && slope <= 0.0) {
+            break;
+        }
+        s -= phi / slope;
+        if !(s >= 0.0 && s <= span) {
+            break;
+        }
+        let (h, g) = superellipsoid_gauge(p + s * d, ex);
+        (phi, slope) = (h - 1.0, g.dot(d));
+        found = phi <= SUPERELLIPSOID_TOLERANCE;
+    }
+    let t = t_in + s;
+    if found && t > t_min && t < t_max {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// Distance along o + t d to analytic primitive `p`, intersected in its object space (the ray
+/// moved by `object_from_world`; t is unchanged since d is not renormalised).
+pub fn analytic_intersect(s: &SceneView, p: &Primitive, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> f32 {
+    let a = p.data as usize;
+    let ow = &s.shape_data[a + SHAPE_DATA_OBJECT_FROM_WORLD as usize..];
+    let (oo, od) = (affine_point(ow, o), affine_vector(ow, d));
+    match p.kind & PRIMITIVE_KIND_MASK {
+        PRIMITIVE_PLANE => ray_plane(oo, od, t_min, t_max),
+        PRIMITIVE_DISC => ray_disc(oo, od, p.p0[0], p.p0[1], t_min, t_max),
+        PRIMITIVE_CONE => ray_cone(oo, od, p.p0[0], p.p0[1], p.p0[2], t_min, t_max),
+        PRIMITIVE_TORUS => ray_torus(oo, od, p.p0[0], p.p0[1], t_min, t_max),
+        PRIMITIVE_SUPERELLIPSOID => {
+            ray_superellipsoid(oo, od, Vec4::new(p.p0[0], p.p0[1], p.p0[2], p.p1[0]), t_min, t_max)
+        }
+        _ => f32::INFINITY,
+    }
+}
+
+/// The surface fields of `h` at world point `x` of analytic primitive `p`: x is moved into
+/// object space and projected onto the surface there (exactly for planes, discs and tori,
+/// radially for cones and superellipsoids), so the hit point's error no longer grows with the
+/// ray's length, and the offset of rays leaving it scales with the shape (`Hit::eps`).
+pub fn analytic_surface(s: &SceneView, p: &Primitive, x: Vec3, wants_uv: bool, h: &mut Hit) {
+    let a = p.data as usize;
+    let ow = &s.shape_data[a + SHAPE_DATA_OBJECT_FROM_WORLD as usize..];
+    let wo = &s.shape_data[a + SHAPE_DATA_WORLD_FROM_OBJECT as usize..];
+    let size = s.shape_data[a + SHAPE_DATA_SIZE as usize];
+    let mut q = affine_point(ow, x);
+    let mut n = Vec3::Y;
+    let (uv, dqdu, dqdv): (Vec2, Vec3, Vec3);
+    // Longitude about +y, as for spheres: u = 0.5 toward +z, growing toward +x.
+    let rho = (q.x * q.x + q.z * q.z).sqrt();
+    let (sin_phi, cos_phi) = if rho > 0.0 { (q.x / rho, q.z / rho) } else { (0.0, 1.0) };
+    let u_around = 0.5 + q.x.atan2(q.z) * (0.5 / PI);
+    match p.kind & PRIMITIVE_KIND_MASK {
+        PRIMITIVE_PLANE => {
+            q.y = 0.0;
+            (uv, dqdu, dqdv) = (Vec2::new(q.x, -q.z), Vec3::X, Vec3::NEG_Z);
+        }
+        PRIMITIVE_DISC => {
+            q.y = 0.0;
+            let (r, ri) = (p.p0[0], p.p0[1]);
+            uv = Vec2::new(u_around, (r - rho) / (r - ri));
+            dqdu = 2.0 * PI * Vec3::new(q.z, 0.0, -q.x);
+            dqdv = -(r - ri) * Vec3::new(sin_phi, 0.0, cos_phi);
+        }
+        PRIMITIVE_CONE => {
+            let (r0, r1, height) = (p.p0[0], p.p0[1], p.p0[2]);
+            let y = q.y.clamp(0.0, height);
+            let radius = r0 + (r1 - r0) * (y / height);
+            q = Vec3::new(radius * sin_phi, y, radius * cos_phi);
+            n = Vec3::new(height * sin_phi, -(r1 - r0), height * cos_phi);
+            uv = Vec2::new(u_around, y / height);
+            dqdu = 2.0 * PI * Vec3::new(q.z, 0.0, -q.x);
+            dqdv = Vec3::new((r1 - r0) * sin_phi, height, (r1 - r0) * cos_phi);
+        }
+        PRIMITIVE_TORUS => {
+            let (big_r, small_r) = (p.p0[0], p.p0[1]);
+            let out = Vec3::new(sin_phi, 0.0, cos_phi);
+            let ring = big_r * out;
+            let w = (q - ring).normalize_or(out);
+            q = ring + small_r * w;
+            n = w;
+            let cos_psi = w.dot(out);
+            uv = Vec2::new(u_around, 0.5 + w.y.atan2(cos_psi) * (0.5 / PI));
+            dqdu = 2.0 * PI * Vec3::new(q.z, 0.0, -q.x);
+            dqdv = 2.0 * PI * small_r * Vec3::new(-w.y * sin_phi, cos_psi, -w.y * cos_phi);
+        }
+        _ => {
+            let ex = Vec4::new(p.p0[0], p.p0[1], p.p0[2], p.p1[0]);
+            let (hq, _) = superellipsoid_gauge(q, ex);
+            q /= hq.max(1e-30);
+            let (_, g) = superellipsoid_gauge(q, ex);
+            n = g;
+            // Longitude and latitude of the direction from the centre, z the pole (POV-Ray's
+            // axis of the n exponent): sphere_uv's +y pole gets z through the cyclic swap
+            // (x, y, z) -> (y, z, x), which keeps the frame right-handed.
+            let r = q.length();
+            let w = q / r;
+            let (suv, dwdu, dwdv) = sphere_uv(Vec3::new(w.y, w.z, w.x));
+            let (dwdu, dwdv) = (Vec3::new(dwdu.z, dwdu.x, dwdu.y), Vec3::new(dwdv.z, dwdv.x, dwdv.y));
+            uv = suv;
+            // The surface point along direction w is w / h(w): its derivative is r (dw - q (grad h . dw)).
+            dqdu = r * (dwdu - q * g.dot(dwdu));
+            dqdv = r * (dwdv - q * g.dot(dwdv));
+        }
+    }
+    h.p = affine_point(wo, q);
+    h.ng = affine_transpose_vector(ow, n).normalize();
+    if wants_uv {
+        h.uv = uv;
+        h.dpdu = affine_vector(wo, dqdu);
+        h.dpdv = affine_vector(wo, dqdv);
+        if h.dpdu.cross(h.dpdv).length() == 0.0 {
+            (h.dpdu, h.dpdv) = onb(h.ng);
+        }
+    }
+    h.eps = SHAPE_EPSILON_SCALE * (h.p.abs().max_element() + size);
+}
+
+/// A point of analytic primitive `p` for the uniform numbers `u`, in the world, with 1/pdf by
+/// world area: discs and cones uniformly by area, tori uniformly in their two angles, and
+/// superellipsoids along a uniform direction from the centre (pdf cos / (4 pi r^2) by area);
+/// the transform's stretch of the area at the point (Nanson's formula) divides the density.
+pub fn analytic_sample(s: &SceneView, p: &Primitive, u: [f32; 2]) -> (Vec3, f32) {
+    let a = p.data as usize;
+    let ow = &s.shape_data[a + SHAPE_DATA_OBJECT_FROM_WORLD as usize..];
+    let wo = &s.shape_data[a + SHAPE_DATA_WORLD_FROM_OBJECT as usize..];
+    let det = s.shape_data[a + SHAPE_DATA_DET as usize];
+    let phi = 2.0 * PI * u[1];
+    let (sin_phi, cos_phi) = phi.sin_cos();
+    let (q, n, inv_pdf) = match p.kind & PRIMITIVE_KIND_MASK {
+        PRIMITIVE_DISC => {
+            let (r, ri) = (p.p0[0], p.p0[1]);
+            let rho = (ri * ri + u[0] * (r * r - ri * ri)).sqrt();
+            (Vec3::new(rho * sin_phi, 0.0, rho * cos_phi), Vec3::Y, PI * (r * r - ri * ri))
+        }
+        PRIMITIVE_CONE => {
+            let (r0, r1, height) = (p.p0[0], p.p0[1], p.p0[2]);
+            // The inverse of the cdf (r0 v + (r1 - r0) v^2 / 2) / ((r0 + r1) / 2), rationalised
+            // so that equal radii (a cylinder) and r0 = 0 need no special case.
+            let den = r0 + (r0 * r0 + u[0] * (r1 * r1 - r0 * r0)).sqrt();
+            let v = if den > 0.0 { u[0] * (r0 + r1) / den } else { 0.0 };
+            let rho = r0 + (r1 - r0) * v;
+            let slant = (height * height + (r1 - r0) * (r1 - r0)).sqrt();
+            let n = Vec3::new(height * sin_phi, -(r1 - r0), height * cos_phi) / slant;
+            (Vec3::new(rho * sin_phi, v * height, rho * cos_phi), n, PI * (r0 + r1) * slant)
+        }
+        PRIMITIVE_TORUS => {
+            let (big_r, small_r) = (p.p0[0], p.p0[1]);
+            let (sin_theta, cos_theta) = (2.0 * PI * u[0]).sin_cos();
+            let n = Vec3::new(cos_phi * sin_theta, sin_phi, cos_phi * cos_theta);
+            let q = big_r * Vec3::new(sin_theta, 0.0, cos_theta) + small_r * n;
+            (q, n, 4.0 * PI * PI * small_r * (big_r + small_r * cos_phi))
+        }
+        _ => {
+            let ex = Vec4::new(p.p0[0], p.p0[1], p.p0[2], p.p1[0]);
+            let w = sphere_direction(u);
+            let (hw, g) = superellipsoid_gauge(w, ex);
+            let r = 1.0 / hw;
+            (w * r, g, 4.0 * PI * g.length() * r * r * r)
+        }
+    };
+    let nw = affine_transpose_vector(ow, n);
+    (affine_point(wo, q), inv_pdf * det * nw.length() / n.length())
 }
 
 /// dpdu and dpdv of a flat triangle with vertex uvs (pbrt-v4's
@@ -137,6 +579,7 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
     let p = &s.primitives[i as usize];
     let mut h = Hit { p: x, prim: i, material: p.material, ..Default::default() };
     let wants_uv = p.kind & PRIMITIVE_FLAG_UV != 0;
+    h.eps = s.frame.ray_epsilon;
     match p.kind & PRIMITIVE_KIND_MASK {
         PRIMITIVE_SPHERE => {
             let (c, r) = (Vec3::from(p.p0), p.p1[0]);
@@ -152,7 +595,7 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
                 }
             }
         }
-        _ => {
+        PRIMITIVE_TRIANGLE => {
             let (p0, p1, p2) = (Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2));
             let (e1, e2) = (p1 - p0, p2 - p0);
             h.ng = e1.cross(e2).normalize();
@@ -169,6 +612,7 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
                 (h.dpdu, h.dpdv) = triangle_derivatives([p0, p1, p2], uv, h.ng);
             }
         }
+        _ => analytic_surface(s, p, x, wants_uv, &mut h),
     }
     h.ns = h.ng;
     h
@@ -179,17 +623,24 @@ pub fn shape_hit(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> Hit {
     shape_surface(s, i, o + t * d)
 }
 
-/// A point on primitive `i`, uniform by area (Turk 1990 for triangles), as a hit record.
-pub fn shape_sample(s: &SceneView, i: u32, u: [f32; 2]) -> Hit {
+/// A point on primitive `i` for the uniform numbers `u`, as a hit record, and 1/pdf of such
+/// points by area: triangles (Turk 1990) and spheres uniformly, so 1/pdf is their area; the
+/// analytic shapes as `analytic_sample` says.
+pub fn shape_sample(s: &SceneView, i: u32, u: [f32; 2]) -> (Hit, f32) {
     let p = &s.primitives[i as usize];
-    let x = match p.kind & PRIMITIVE_KIND_MASK {
-        PRIMITIVE_SPHERE => Vec3::from(p.p0) + p.p1[0] * sphere_direction(u),
-        _ => {
+    let (x, inv_pdf) = match p.kind & PRIMITIVE_KIND_MASK {
+        PRIMITIVE_SPHERE => {
+            let r = p.p1[0];
+            (Vec3::from(p.p0) + r * sphere_direction(u), 4.0 * PI * r * r)
+        }
+        PRIMITIVE_TRIANGLE => {
             let su = u[0].sqrt();
             let b0 = 1.0 - su;
             let b1 = u[1] * su;
-            b0 * Vec3::from(p.p0) + b1 * Vec3::from(p.p1) + (1.0 - b0 - b1) * Vec3::from(p.p2)
+            let (p0, p1, p2) = (Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2));
+            (b0 * p0 + b1 * p1 + (1.0 - b0 - b1) * p2, 0.5 * (p1 - p0).cross(p2 - p0).length())
         }
+        _ => analytic_sample(s, p, u),
     };
-    shape_surface(s, i, x)
+    (shape_surface(s, i, x), inv_pdf)
 }

@@ -63,15 +63,22 @@ pub fn hit_moved(h: &Hit, du: f32, dv: f32) -> Hit {
     m
 }
 
-/// The shading normal of a bump map: the surface displaced along `ng` by `strength` times the
-/// first channel of texture `tex` (scene units), its slopes from central differences along u and
-/// v (pbrt-v4's `BumpMap`). Works alike for uv-space images and 3D patterns, since moving in uv
-/// moves the point along dpdu and dpdv.
+/// The shading normal of a bump map at `h`: its four heights looked up, then
+/// `bump_normal_from_heights`. (The kernel makes the same lookups in `material_bsdf`'s one loop.)
 pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
     let d = BUMP_DELTA;
     let height = |du: f32, dv: f32| texture_eval(s, tex, &hit_moved(h, du, dv)).x;
-    let dhdu = strength * (height(d, 0.0) - height(-d, 0.0)) / (2.0 * d);
-    let dhdv = strength * (height(0.0, d) - height(0.0, -d)) / (2.0 * d);
+    bump_normal_from_heights(height(d, 0.0), height(-d, 0.0), height(0.0, d), height(0.0, -d), strength, h)
+}
+
+/// The shading normal of a bump map: the surface displaced along `ng` by `strength` times a
+/// height (scene units), its slopes from central differences along u and v (pbrt-v4's `BumpMap`)
+/// of the heights at u +- `BUMP_DELTA` and v +- `BUMP_DELTA`. Works alike for uv-space images and
+/// 3D patterns, since moving in uv moves the point along dpdu and dpdv.
+pub fn bump_normal_from_heights(u_plus: f32, u_minus: f32, v_plus: f32, v_minus: f32, strength: f32, h: &Hit) -> Vec3 {
+    let d = BUMP_DELTA;
+    let dhdu = strength * (u_plus - u_minus) / (2.0 * d);
+    let dhdv = strength * (v_plus - v_minus) / (2.0 * d);
     let n = (h.dpdu + dhdu * h.ng).cross(h.dpdv + dhdv * h.ng);
     let len = n.length();
     if len.is_nan() || len <= 0.0 {
@@ -85,10 +92,15 @@ pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
     }
 }
 
-/// The shading normal of a tangent-space normal map (OpenGL convention: red along +u, green
-/// along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
+/// The shading normal of a tangent-space normal map at `h`.
 pub fn normal_map_normal(s: &SceneView, tex: u32, h: &Hit) -> Vec3 {
-    let c = 2.0 * texture_eval(s, tex, h) - 1.0;
+    normal_map_normal_from_texel(texture_eval(s, tex, h), h)
+}
+
+/// The shading normal of a tangent-space normal map from its texel (OpenGL convention: red along
+/// +u, green along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
+pub fn normal_map_normal_from_texel(texel: Vec3, h: &Hit) -> Vec3 {
+    let c = 2.0 * texel - 1.0;
     let t = h.dpdu - h.ng * h.ng.dot(h.dpdu);
     if t.length().is_nan() || t.length() <= 0.0 {
         return h.ns;

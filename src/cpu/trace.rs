@@ -33,14 +33,37 @@ pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
     hash_point(s, h.p, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
 }
 
+/// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer.
+fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, hit: &mut u32, t_hit: &mut f32) {
+    let mut t = shape_intersect(s, i, o, d, 0.0, *t_hit);
+    // A ray that passes a transparent point may meet the shape again behind it (a
+    // sphere's far side); a shape has at most two surfaces along a ray.
+    let mut k = 0;
+    while k < 2 && t < *t_hit && passes_through(s, i, o, d, t) {
+        t = shape_intersect(s, i, o, d, t, *t_hit);
+        k += 1;
+    }
+    if t < *t_hit {
+        *t_hit = t;
+        *hit = i;
+    }
+}
+
 /// Closest hit in [0, t_max) as (primitive index, distance), or `NO_LIGHT` and t_max on a miss.
-/// With `any_hit` the first hit found is returned (shadow rays). Stackless: a missed box, or a
+/// With `any_hit` the first hit found is returned (shadow rays). The unbounded primitives
+/// (infinite planes, after the BVH's) come first, then the BVH, stackless: a missed box, or a
 /// finished leaf, continues at the node's miss link.
 pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> (u32, f32) {
     let nodes = s.nodes;
     let inv_d = d.recip();
     let mut t_hit = t_max;
     let mut hit = NO_LIGHT;
+    for i in s.frame.unbounded_first..s.frame.primitive_count {
+        visit(s, i, o, d, &mut hit, &mut t_hit);
+        if any_hit && hit != NO_LIGHT {
+            return (hit, t_hit);
+        }
+    }
     let mut node = 0usize;
     while node < nodes.len() {
         let n = &nodes[node];
@@ -54,21 +77,10 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> 
             continue;
         }
         for i in n.first..n.first + count {
-            let p = &s.primitives[i as usize];
-            let mut t = shape_intersect(p, o, d, 0.0, t_hit);
-            // A ray that passes a transparent point may meet the shape again behind it (a
-            // sphere's far side); a shape has at most two surfaces along a ray.
-            let mut k = 0;
-            while k < 2 && t < t_hit && passes_through(s, i, o, d, t) {
-                t = shape_intersect(p, o, d, t, t_hit);
-                k += 1;
-            }
-            if t < t_hit {
-                t_hit = t;
-                hit = i;
-                if any_hit {
-                    return (hit, t_hit);
-                }
+            let before = hit;
+            visit(s, i, o, d, &mut hit, &mut t_hit);
+            if any_hit && hit != before {
+                return (hit, t_hit);
             }
         }
         node = skip;

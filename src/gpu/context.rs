@@ -29,10 +29,26 @@ pub struct GpuOptions {
 }
 
 impl GpuOptions {
-    /// Options for `device`, with validation on when the environment has `PHOTONIX_VALIDATION=1`.
-    pub fn from_env(device: Option<String>) -> Self {
-        let validation = std::env::var("PHOTONIX_VALIDATION").is_ok_and(|v| v.trim() == "1");
-        GpuOptions { device, validation }
+    /// Options for `device`, with validation as `PHOTONIX_VALIDATION` says: `1`, `true`, `yes`,
+    /// `on` turn it on, `0`, `false`, `no`, `off` or an empty or unset variable leave it off (any
+    /// case); anything else is an error rather than a silent "off".
+    pub fn from_env(device: Option<String>) -> Result<Self, GpuError> {
+        let validation = match std::env::var_os("PHOTONIX_VALIDATION") {
+            None => false,
+            Some(value) => parse_switch(&value.to_string_lossy()).ok_or_else(|| GpuError::BadValidationSetting {
+                value: crate::limits::printable(&value.to_string_lossy()),
+            })?,
+        };
+        Ok(GpuOptions { device, validation })
+    }
+}
+
+/// An on/off setting as people write it, or `None` when it is neither.
+pub fn parse_switch(value: &str) -> Option<bool> {
+    match value.trim().to_ascii_lowercase().as_str() {
+        "1" | "true" | "yes" | "on" => Some(true),
+        "0" | "false" | "no" | "off" | "" => Some(false),
+        _ => None,
     }
 }
 

@@ -41,6 +41,19 @@ pub enum GpuError {
     )]
     ValidationLayerMissing,
 
+    #[error(
+        "PHOTONIX_VALIDATION is `{value}`; set it to 1, true, yes or on to turn the Vulkan validation layer on, or \
+         0, false, no or off (or unset it) to leave it off"
+    )]
+    BadValidationSetting { value: String },
+
+    #[error(
+        "{call} returned {result:?} at startup, before any device was opened; the Vulkan loader reports a driver \
+         manifest it cannot parse this way{manifests}: check that file, or run with VK_LOADER_DEBUG=error to see the \
+         loader's complaint, or use --backend cpu"
+    )]
+    LoaderFailed { call: &'static str, result: vk::Result, manifests: String },
+
     #[error("no Vulkan device matches `{requested}`; pass an index or part of a name, one of:\n{available}")]
     DeviceNotFound { requested: String, available: String },
 
@@ -69,10 +82,10 @@ pub enum GpuError {
     OutOfMemory { name: String, size: u64 },
 
     #[error(
-        "out of device memory during `{label}`; lower the photon count or image size, or use \
+        "out of {memory} memory during `{label}`; lower the photon count or image size, or use \
          --backend cpu"
     )]
-    OutOfMemoryDuring { label: String },
+    OutOfMemoryDuring { label: String, memory: &'static str },
 
     #[error("cannot write {len} bytes into buffer `{name}` of {size} bytes; create a larger buffer")]
     WriteTooLarge { name: String, len: u64, size: u64 },
@@ -126,12 +139,10 @@ pub enum GpuError {
     )]
     Vulkan { call: &'static str, label: String, result: vk::Result },
 
-    #[error("gpu memory allocator failed while allocating `{name}`: {source}; use --backend cpu if this persists")]
-    Allocator {
-        name: String,
-        #[source]
-        source: gpu_allocator::AllocationError,
-    },
+    // `cause`, not a `#[source]`: the message holds its text already, and `main` prints the
+    // chain of sources, which would repeat it.
+    #[error("gpu memory allocator failed while allocating `{name}`: {cause}; use --backend cpu if this persists")]
+    Allocator { name: String, cause: gpu_allocator::AllocationError },
 
     #[error(
         "Vulkan validation reported {} message(s); fix the first one:\n{}",
@@ -146,10 +157,34 @@ impl GpuError {
     pub(crate) fn vk(call: &'static str, label: &str, result: vk::Result) -> GpuError {
         match result {
             vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { label: label.to_string() },
-            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
-                GpuError::OutOfMemoryDuring { label: label.to_string() }
+            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => {
+                GpuError::OutOfMemoryDuring { label: label.to_string(), memory: "device" }
+            }
+            vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                GpuError::OutOfMemoryDuring { label: label.to_string(), memory: "host" }
             }
             _ => GpuError::Vulkan { call, label: label.to_string(), result },
+        }
+    }
+
+    /// Maps a failed call of the loader or the instance, before any device exists. Running out of
+    /// memory there is what the loader answers to a malformed driver manifest (a JSON file it
+    /// cannot parse), not a real shortage: say so, and name the manifests the environment chose.
+    pub(crate) fn loader(call: &'static str, result: vk::Result) -> GpuError {
+        match result {
+            vk::Result::ERROR_OUT_OF_HOST_MEMORY | vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => {
+                let chosen: Vec<String> = ["VK_DRIVER_FILES", "VK_ICD_FILENAMES", "VK_ADD_DRIVER_FILES"]
+                    .iter()
+                    .filter_map(|name| std::env::var(name).ok().map(|v| format!("{name}={v}")))
+                    .collect();
+                let manifests = if chosen.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (the environment sets {})", chosen.join(", "))
+                };
+                GpuError::LoaderFailed { call, result, manifests: crate::limits::printable_message(&manifests) }
+            }
+            _ => GpuError::vk(call, "startup", result),
         }
     }
 
@@ -167,7 +202,7 @@ impl GpuError {
     pub(crate) fn allocator(name: &str, size: u64, source: gpu_allocator::AllocationError) -> GpuError {
         match source {
             gpu_allocator::AllocationError::OutOfMemory => GpuError::OutOfMemory { name: name.to_string(), size },
-            source => GpuError::Allocator { name: name.to_string(), source },
+            cause => GpuError::Allocator { name: name.to_string(), cause },
         }
     }
 }

@@ -29,7 +29,7 @@ impl InstanceOwner {
         let loader_version = match unsafe { entry.try_enumerate_instance_version() } {
             Ok(Some(v)) => v,
             Ok(None) => vk::API_VERSION_1_0,
-            Err(e) => return Err(GpuError::vk("vkEnumerateInstanceVersion", "startup", e)),
+            Err(e) => return Err(GpuError::loader("vkEnumerateInstanceVersion", e)),
         };
         if loader_version < vk::API_VERSION_1_1 {
             return Err(GpuError::LoaderTooOld { found: version_string(loader_version) });
@@ -76,7 +76,7 @@ impl InstanceOwner {
         let instance = unsafe { entry.create_instance(&create_info, None) }.map_err(|e| match e {
             vk::Result::ERROR_INCOMPATIBLE_DRIVER | vk::Result::ERROR_INITIALIZATION_FAILED => GpuError::NoDriver,
             vk::Result::ERROR_LAYER_NOT_PRESENT => GpuError::ValidationLayerMissing,
-            e => GpuError::vk("vkCreateInstance", "startup", e),
+            e => GpuError::loader("vkCreateInstance", e),
         })?;
 
         let mut owner = InstanceOwner { entry, instance, messenger: None, log };
@@ -86,7 +86,7 @@ impl InstanceOwner {
             // SAFETY: the instance was created with VK_EXT_debug_utils enabled; the user data is
             // `owner.log`, dropped only after the messenger is destroyed in `Drop`.
             let messenger = unsafe { loader.create_debug_utils_messenger(&info, None) }
-                .map_err(|e| GpuError::vk("vkCreateDebugUtilsMessengerEXT", "startup", e))?;
+                .map_err(|e| GpuError::loader("vkCreateDebugUtilsMessengerEXT", e))?;
             owner.messenger = Some((loader, messenger));
         }
         Ok(owner)
@@ -103,7 +103,7 @@ impl InstanceOwner {
         // SAFETY: the instance is valid for the lifetime of `self`.
         let devices = unsafe { self.instance.enumerate_physical_devices() }.map_err(|e| match e {
             vk::Result::ERROR_INITIALIZATION_FAILED | vk::Result::ERROR_INCOMPATIBLE_DRIVER => GpuError::NoDriver,
-            e => GpuError::vk("vkEnumeratePhysicalDevices", "startup", e),
+            e => GpuError::loader("vkEnumeratePhysicalDevices", e),
         })?;
         if devices.is_empty() {
             return Err(GpuError::NoDriver);

@@ -4,7 +4,7 @@
 //! ```no_run
 //! use photonix::gpu::{GpuContext, GpuOptions};
 //! # fn main() -> Result<(), photonix::gpu::GpuError> {
-//! let gpu = GpuContext::new(&GpuOptions::from_env(None))?;
+//! let gpu = GpuContext::new(&GpuOptions::from_env(None)?)?;
 //! let data = gpu.upload("numbers", &[1u32, 2, 3])?;
 //! let spirv = photonix::shaders::spirv("test_add").expect("built by build.rs");
 //! let add = gpu.create_kernel("test_add", &spirv, 1, 8)?;
@@ -45,7 +45,7 @@ mod validation;
 
 pub use batch::Recorder;
 pub use buffer::Buffer;
-pub use context::{GpuContext, GpuOptions};
+pub use context::{parse_switch, GpuContext, GpuOptions};
 pub use device_info::DeviceInfo;
 pub use error::GpuError;
 pub use instance::list_devices;

@@ -43,6 +43,20 @@ pub enum ImageError {
     Write { path: PathBuf, reason: String },
     #[error("{path}: cannot read image: {reason}")]
     Read { path: PathBuf, reason: String },
+    #[error(
+        "{path} is {what}, not an EXR; diff and merge read the EXR files (linear radiance) that `photonix render -o \
+         NAME.exr` writes"
+    )]
+    NotExr { path: PathBuf, what: &'static str },
+    #[error(
+        "{path} is {width}x{height}, more than the {} pixels photonix reads (see docs/limits.md)",
+        crate::limits::MAX_PIXELS
+    )]
+    TooLarge { path: PathBuf, width: usize, height: usize },
+    #[error("exposure {exposure} is not a finite number of stops; the image would be black or white")]
+    BadExposure { exposure: f32 },
+    #[error("{path} is {what} too; writing it would overwrite that file, so give another name")]
+    Overwrites { path: PathBuf, what: String },
 }
 
 /// Output file formats.
@@ -80,6 +94,90 @@ pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     Ok(())
 }
 
+/// Whether `a` and `b` name the same file: the same inode when both exist (hard links too), else
+/// the same resolved path. A path that does not exist yet resolves through its parent folder, so
+/// `out.png` and `./dir/../out.png` compare equal before either is written.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    match (resolve(a), resolve(b)) {
+        (Some(a), Some(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// `path` made absolute with symbolic links resolved, through its parent when it does not exist.
+fn resolve(path: &Path) -> Option<PathBuf> {
+    if let Ok(p) = std::fs::canonicalize(path) {
+        return Some(p);
+    }
+    let name = path.file_name()?;
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(std::fs::canonicalize(parent).ok()?.join(name))
+}
+
+/// Refuses to write `output` when it is the same file as `input` (`what` names the input in the
+/// message: "the scene file", "input 2 of the merge").
+pub fn check_not_overwriting(output: &Path, input: &Path, what: &str) -> Result<(), ImageError> {
+    if same_file(output, input) {
+        return Err(ImageError::Overwrites { path: output.to_owned(), what: what.to_string() });
+    }
+    Ok(())
+}
+
+/// Refuses what is not an EXR before the EXR reader sees it (it would say "file identifier
+/// missing" about a PNG), and EXR files larger than `limits::MAX_PIXELS`, before allocating them.
+pub fn check_exr_input(path: &Path) -> Result<(), ImageError> {
+    use std::io::Read;
+    let read_error = |e: std::io::Error| ImageError::Read { path: path.to_owned(), reason: e.to_string() };
+    let mut magic = [0u8; 4];
+    let mut file = std::fs::File::open(path).map_err(read_error)?;
+    let n = file.read(&mut magic).map_err(read_error)?;
+    let what = match &magic[..n] {
+        [0x76, 0x2f, 0x31, 0x01] => None,
+        [0x89, b'P', b'N', b'G'] => Some("a PNG image"),
+        [0xff, 0xd8, ..] => Some("a JPEG image"),
+        [] => Some("empty"),
+        _ => Some("not an image photonix knows"),
+    };
+    if let Some(what) = what {
+        return Err(ImageError::NotExr { path: path.to_owned(), what });
+    }
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| ImageError::Read { path: path.to_owned(), reason: e.to_string() })?;
+    let mut bytes = 0u64;
+    for header in meta.headers.iter() {
+        let sizes = [header.layer_size, header.shared_attributes.display_window.size];
+        for size in sizes {
+            if (size.width() as u64).saturating_mul(size.height() as u64) > crate::limits::MAX_PIXELS {
+                return Err(ImageError::TooLarge { path: path.to_owned(), width: size.width(), height: size.height() });
+            }
+        }
+        // Decoded samples (4 bytes each, whatever the file's type) and our copy of them.
+        let pixels = header.layer_size.width() as u64 * header.layer_size.height() as u64;
+        bytes += 2 * 4 * pixels * header.channels.list.len() as u64;
+    }
+    if let Some(available) = crate::render::memory::available_host_memory().filter(|&a| bytes > a) {
+        return Err(ImageError::Read {
+            path: path.to_owned(),
+            reason: format!(
+                "reading it needs about {} of memory but {} is available",
+                crate::limits::fmt_bytes(bytes),
+                crate::limits::fmt_bytes(available)
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// sRGB transfer function (IEC 61966-2-1) of a linear value clamped to [0, 1].
 pub fn srgb_encode(linear: f32) -> u8 {
     let v = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
@@ -96,6 +194,9 @@ pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
 /// Writes `image` atomically; `.png` gets exposure 2^`exposure` and sRGB encoding, `.exr` is
 /// written as linear radiance, untouched.
 pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<(), ImageError> {
+    if !exposure.is_finite() {
+        return Err(ImageError::BadExposure { exposure });
+    }
     match format_of(path)? {
         Format::Exr => write_atomically(path, |tmp| write_exr(tmp, image)),
         Format::Png => write_atomically(path, |tmp| write_png(tmp, image, exposure)),
@@ -137,6 +238,7 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<(), String> {
 
 /// Reads the first RGB(A) layer of an EXR file as linear radiance.
 pub fn read_exr(path: &Path) -> Result<Image, ImageError> {
+    check_exr_input(path)?;
     let read = exr::prelude::read_first_rgba_layer_from_file(
         path,
         |resolution, _| Image::new(resolution.width() as u32, resolution.height() as u32),
@@ -173,6 +275,37 @@ mod tests {
         assert_eq!(srgb_encode(1.0), 255);
         assert_eq!(srgb_encode(0.2), 124); // 1.055 * 0.2^(1/2.4) - 0.055 = 0.4845
         assert_eq!(srgb_encode(f32::NAN), 0);
+    }
+
+    #[test]
+    fn same_file_sees_through_names_links_and_missing_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let a = dir.path().join("a.png");
+        std::fs::write(&a, b"x").unwrap();
+        std::fs::create_dir(dir.path().join("sub")).unwrap();
+        assert!(same_file(&a, &dir.path().join("sub/../a.png")));
+        std::fs::hard_link(&a, dir.path().join("hard.png")).unwrap();
+        assert!(same_file(&a, &dir.path().join("hard.png")));
+        std::os::unix::fs::symlink(&a, dir.path().join("soft.png")).unwrap();
+        assert!(same_file(&dir.path().join("soft.png"), &a));
+        // Neither exists yet: compared through their folders.
+        let (x, y) = (dir.path().join("new.png"), dir.path().join("sub/../new.png"));
+        assert!(same_file(&x, &y));
+        assert!(!same_file(&x, &a));
+        assert!(!same_file(&dir.path().join("missing/new.png"), &x));
+    }
+
+    #[test]
+    fn non_exr_inputs_are_named_for_what_they_are() {
+        let dir = tempfile::tempdir().unwrap();
+        let png = dir.path().join("a.png");
+        write_image(&png, &Image::new(2, 2), 0.0).unwrap();
+        let e = read_exr(&png).unwrap_err().to_string();
+        assert!(e.contains("is a PNG image, not an EXR"), "{e}");
+        let empty = dir.path().join("e.exr");
+        std::fs::write(&empty, b"").unwrap();
+        assert!(read_exr(&empty).unwrap_err().to_string().contains("is empty, not an EXR"));
+        assert!(write_image(&png, &Image::new(2, 2), f32::NAN).is_err());
     }
 
     #[test]

@@ -61,6 +61,53 @@ shared_constants! {
     /// An analytic sphere: `p0` is its centre, `p1[0]` its radius; `data` holds the rows of its
     /// `object_from_world` rotation (9 floats) that orients its longitude/latitude uv.
     PRIMITIVE_SPHERE: u32 = 1;
+    /// The analytic shapes below are intersected in their own object space: `data` holds a block
+    /// of `SHAPE_DATA_FLOATS` (see `SHAPE_DATA_*`) with the transform both ways; `p0..p2` hold
+    /// the shape's own numbers. They live in the `analytic` variant of the scene kernels.
+    /// An infinite plane y = 0 (normal +y); unbounded, so it stays out of the BVH (the primitives
+    /// from `FrameParams::unbounded_first` on are tested by every ray). No numbers.
+    PRIMITIVE_PLANE: u32 = 2;
+    /// A disc (or an annulus) in y = 0 around the origin, normal +y: `p0 = [radius, inner radius, 0]`.
+    PRIMITIVE_DISC: u32 = 3;
+    /// The side of a truncated cone (a cylinder when both radii are equal) around +y from y = 0
+    /// to y = h: `p0 = [radius at 0, radius at h, h]`. Caps are discs of their own.
+    PRIMITIVE_CONE: u32 = 4;
+    /// A torus around the y axis: `p0 = [major radius R, minor radius r, 0]`, r < R.
+    PRIMITIVE_TORUS: u32 = 5;
+    /// POV-Ray's superellipsoid inside [-1, 1]^3, (|x|^(2/e) + |y|^(2/e))^(e/n) + |z|^(2/n) = 1:
+    /// `p0 = [2/e, e/2, 2/n]`, `p1 = [n/2, 0, 0]`.
+    PRIMITIVE_SUPERELLIPSOID: u32 = 6;
+    /// Offsets in an analytic shape's data block: the rows of `object_from_world` (3x4), the rows
+    /// of `world_from_object` (3x4), |det| of its linear part, and the shape's size (the largest
+    /// coordinate of its world bounds; 0 for a plane), which scales its ray offsets.
+    SHAPE_DATA_OBJECT_FROM_WORLD: u32 = 0;
+    SHAPE_DATA_WORLD_FROM_OBJECT: u32 = 12;
+    SHAPE_DATA_DET: u32 = 24;
+    SHAPE_DATA_SIZE: u32 = 25;
+    SHAPE_DATA_FLOATS: u32 = 26;
+    /// Ray origins leave an analytic shape's hit point by this times (its largest coordinate +
+    /// the shape's size): its hit points are projected onto the surface in object space, so
+    /// their error scales with those, not with the scene (this is about 17 float ulps of each).
+    SHAPE_EPSILON_SCALE: f32 = 1.0e-6;
+    /// Most Newton steps of one superellipsoid root search (each from one side of a convex
+    /// function, so monotone; a grazing ray's double root still halves the gap each step).
+    SUPERELLIPSOID_STEPS: u32 = 24;
+    /// Superellipsoid Newton steps stop once the gauge is this close to 1 (about 1e-6 object
+    /// units off the surface).
+    SUPERELLIPSOID_TOLERANCE: f32 = 1.0e-6;
+    /// Half side of the box the superellipsoid's root search starts from: the unit box grown so
+    /// that its entry point lies clearly outside even a boxy shape, whose faces fill the unit
+    /// box's faces to float precision.
+    SUPERELLIPSOID_BOX: f32 = 1.001;
+    /// Radius, over the bounding sphere's, of the sphere on whose chord the torus's roots are
+    /// sought: the outer equator touches the bounding sphere, and a chord ending on a root would
+    /// leave its sign to rounding.
+    TORUS_CHORD: f32 = 1.001;
+    /// Most safeguarded Newton steps per bracketed root of the torus quartic and of its
+    /// derivative; bisection alone would need 24 to reach float precision on [-1, 1].
+    TORUS_ROOT_STEPS: u32 = 16;
+    /// Newton steps that invert the torus's area cdf (Kepler's equation) when it is sampled.
+    TORUS_SAMPLE_STEPS: u32 = 8;
     /// Low bits of `Primitive::kind` holding the shape kind; the bits above are flags.
     PRIMITIVE_KIND_MASK: u32 = 0xff;
     /// Flag of `Primitive::kind`: the material has an opacity below 1 somewhere (alpha), so every
@@ -70,7 +117,8 @@ shared_constants! {
     /// and normal maps); without it a hit record leaves them at zero, which saves their cost.
     PRIMITIVE_FLAG_UV: u32 = 0x200;
 
-    /// A light that is an emitting primitive (`Light::primitive`), sampled uniformly by area.
+    /// A light that is an emitting primitive (`Light::primitive`), sampled by `shape_sample` (a
+    /// point and its 1/pdf by area).
     LIGHT_AREA: u32 = 0;
     /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
     /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
@@ -197,4 +245,77 @@ shared_constants! {
 
     /// Relative offset of secondary ray origins, scaled by the scene's extent (avoids self-hits).
     RAY_EPSILON_SCALE: f32 = 1.0e-5;
+
+    // Procedural patterns (src/cpu/pattern.rs, shaders/pattern.glsl). Pattern kinds (word 0).
+    PATTERN_AGATE: u32 = 0;
+    PATTERN_BOZO: u32 = 1;
+    PATTERN_BRICK: u32 = 2;
+    PATTERN_BUMPS: u32 = 3;
+    PATTERN_CHECKER: u32 = 4;
+    PATTERN_CRACKLE: u32 = 5;
+    PATTERN_DENTS: u32 = 6;
+    PATTERN_GRADIENT: u32 = 7;
+    PATTERN_GRANITE: u32 = 8;
+    PATTERN_HEXAGON: u32 = 9;
+    PATTERN_LEOPARD: u32 = 10;
+    PATTERN_MARBLE: u32 = 11;
+    PATTERN_ONION: u32 = 12;
+    PATTERN_RIPPLES: u32 = 13;
+    PATTERN_SPOTTED: u32 = 14;
+    PATTERN_WAVES: u32 = 15;
+    PATTERN_WOOD: u32 = 16;
+    PATTERN_WRINKLES: u32 = 17;
+    /// Number of pattern kinds; kinds are 0..PATTERN_KIND_COUNT.
+    PATTERN_KIND_COUNT: u32 = 18;
+
+    // Wave shapes (word 1), POV-Ray's ramp_wave, sine_wave, ...
+    WAVE_RAMP: u32 = 0;
+    WAVE_SINE: u32 = 1;
+    WAVE_TRIANGLE: u32 = 2;
+    WAVE_SCALLOP: u32 = 3;
+    WAVE_CUBIC: u32 = 4;
+    WAVE_POLY: u32 = 5;
+
+    // Word offsets inside a pattern block.
+    PATTERN_KIND: u32 = 0;
+    PATTERN_WAVE: u32 = 1;
+    PATTERN_OCTAVES: u32 = 2;
+    PATTERN_OMEGA: u32 = 3;
+    PATTERN_LAMBDA: u32 = 4;
+    PATTERN_TURBULENCE: u32 = 5;
+    PATTERN_FREQUENCY: u32 = 8;
+    PATTERN_PHASE: u32 = 9;
+    PATTERN_EXPONENT: u32 = 10;
+    PATTERN_PARAMS: u32 = 12;
+    /// Words of one pattern block.
+    PATTERN_WORDS: u32 = 20;
+    /// Most octaves of turbulence (POV-Ray 3.7 allows 1 to 10); bounds the shader's loops.
+    MAX_OCTAVES: u32 = 10;
+    /// Most entries of a colour map (POV-Ray's MAX_BLEND_MAP_ENTRIES).
+    MAX_COLOR_MAP_ENTRIES: u32 = 256;
+    /// Wave sources of ripples and waves (POV-Ray's default `number_of_waves`).
+    WAVE_SOURCES: u32 = 10;
+
+    /// Scale of the signed noise (standard deviation 0.270, measured) in `noise_unit`: gives the
+    /// standard deviation 0.126 of POV-Ray 3.7's default (range-corrected) noise, 0.2568 x 0.4899 in
+    /// its noise.cpp, so that the default colour maps band as they do in POV-Ray.
+    NOISE_UNIT_SCALE: f32 = 0.466;
+    /// Scale of each component of `noise_vector`: standard deviation 0.257 like POV-Ray's DNoise
+    /// (the same sum as its Noise before the range correction), so a turbulence amount warps as far.
+    NOISE_VECTOR_SCALE: f32 = 0.95;
+
+    // Image textures (src/cpu/image_texture.rs, shaders/image_texture.glsl).
+    /// Words before the first texel of a block.
+    IMAGE_HEADER_WORDS: u32 = 4;
+    /// Wrap mode: indices modulo the size (tiling).
+    IMAGE_WRAP_REPEAT: u32 = 0;
+    /// Wrap mode: indices clamped to the edge texels.
+    IMAGE_WRAP_CLAMP: u32 = 1;
+    /// Wrap mode: indices reflected at the edges: ..., 1, 0, 0, 1, ..., W-1, W-1, W-2, ...
+    IMAGE_WRAP_MIRROR: u32 = 2;
+    /// Flag: some texel has an alpha other than 1 (an alpha test may skip images without it).
+    IMAGE_FLAG_ALPHA: u32 = 1;
+    /// Texel coordinates are clamped to +-2^24: beyond it an f32 has no fraction left, and the
+    /// integer indices stay far from overflow.
+    IMAGE_COORD_LIMIT: f32 = 16_777_216.0;
 }

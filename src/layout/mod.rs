@@ -120,7 +120,9 @@ gpu_structs! {
         pub primitive: u32,
         /// Unit direction the light travels along (spot axis, distant light's direction).
         pub direction: [f32; 3],
-        /// Surface area (scene units squared) of an area light; 0 for the others.
+        /// Surface area of an area light (scene units squared; estimated for superellipsoids and
+        /// stretched shapes); 0 for the others. It only sets the light's power for picking: each
+        /// sample on the light carries its own 1/pdf (`shape_sample`).
         pub area: f32,
         /// Probability of picking this light for a shadow ray (0: photons only).
         pub pick_probability: f32,
@@ -179,7 +181,10 @@ gpu_structs! {
         /// Index of the environment's light (`LIGHT_ENVIRONMENT`), or `NO_LIGHT`: rays that leave
         /// the scene see it.
         pub environment: u32,
-        pub _pad: [u32; 2],
+        /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
+        /// BVH, every ray tests them.
+        pub unbounded_first: u32,
+        pub _pad: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

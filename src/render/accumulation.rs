@@ -3,14 +3,19 @@
 //! Format: an OpenEXR file whose layers `combined`, `direct`, `specular`, `indirect` and
 //! `caustics` (channels R, G, B, float32) hold the **sum** over the passes of each pass's mean
 //! radiance. Each layer's header carries one text attribute, `photonix_accumulation`, e.g.
-//! `passes=64;ranges=0..32,64..96`: the pass count and the pass ranges summed. (One attribute,
-//! not several: the EXR writer orders custom attributes by hash, which would make the bytes of
-//! two identical renders differ.) The image is the sum divided by the pass count.
+//! `passes=64;ranges=0..32,64..96;scene=9c1f0e2d4b6a8c7e;spp=2;size=256x256;seed=0;...`: the pass
+//! count, the pass ranges summed, and what the passes were rendered from (a `Provenance`: a hash
+//! of the scene as the kernels see it and the settings that change the image), so that merge
+//! refuses parts of different renders. (One attribute, not several: the EXR writer orders custom
+//! attributes by hash, which would make the bytes of two identical renders differ.) The image is
+//! the sum divided by the pass count.
 
 use std::path::{Path, PathBuf};
 
+use super::photons::PhotonSettings;
+use super::prepare::SceneBuffers;
 use super::progressive::Accumulator;
-use crate::io::image::ImageError;
+use crate::io::image::{format_of, Format, ImageError};
 use crate::io::layers::write_layers_exr_with;
 use crate::io::Image;
 
@@ -30,6 +35,95 @@ pub enum AccumulationError {
     Overlap { path: PathBuf, theirs: String, ours: String },
     #[error("no accumulation files to merge")]
     Empty,
+    #[error("{path}: the record of its passes is damaged ({reason}); render that part again")]
+    Damaged { path: PathBuf, reason: String },
+    #[error(
+        "{path} has no record of the scene and settings it was rendered from (an older photonix wrote it); \
+         render it again to merge it"
+    )]
+    NoProvenance { path: PathBuf },
+    #[error(
+        "{path} was rendered with {what} {theirs} but {first} with {ours}; only parts of one render can be merged"
+    )]
+    SettingMismatch { path: PathBuf, what: String, theirs: String, first: PathBuf, ours: String },
+    #[error(
+        "{path} was rendered from a different scene than {first} (scene hash {theirs} vs {ours}: the scene file, a \
+         mesh it loads, or the renderer differs); only parts of one render can be merged"
+    )]
+    SceneMismatch { path: PathBuf, theirs: String, ours: String, first: PathBuf },
+    #[error("{path}: an accumulation file is an EXR; give a name ending in .exr")]
+    NotExr { path: PathBuf },
+}
+
+/// What the passes of an accumulation file were rendered from.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Provenance {
+    /// 64-bit FNV-1a hash of the prepared scene: every array the kernels bind and the frame
+    /// constants (camera, size, seed, depth), so it covers the scene file, its meshes and
+    /// textures, and how this version of photonix packs them.
+    pub scene: u64,
+    /// The settings that change the image, (name, value) in a fixed order.
+    pub settings: Vec<(String, String)>,
+}
+
+impl Provenance {
+    pub fn new(buffers: &SceneBuffers, spp: u32, photons: Option<&PhotonSettings>) -> Provenance {
+        let mut hash = Fnv1a::default();
+        hash.add(bytemuck::bytes_of(&buffers.frame));
+        hash.add(bytemuck::cast_slice(&buffers.nodes));
+        hash.add(bytemuck::cast_slice(&buffers.primitives));
+        hash.add(bytemuck::cast_slice(&buffers.materials));
+        hash.add(bytemuck::cast_slice(&buffers.lights));
+        hash.add(bytemuck::cast_slice(&buffers.textures));
+        hash.add(bytemuck::cast_slice(&buffers.texture_data));
+        hash.add(bytemuck::cast_slice(&buffers.shape_data));
+        let f = &buffers.frame;
+        let mut settings = vec![
+            ("spp", spp.to_string()),
+            ("size", format!("{}x{}", f.width, f.height)),
+            ("seed", f.seed.to_string()),
+            ("max_depth", f.max_depth.to_string()),
+        ];
+        // `{:?}` of an f32 is its shortest exact form: equal values, equal text.
+        let radius = |r: Option<f32>| r.map_or("auto".to_string(), |r| format!("{r:?}"));
+        match photons {
+            None => settings.push(("photons", "off".to_string())),
+            Some(p) => settings.extend([
+                ("photons", format!("{}/{}", p.photons, p.caustic_photons)),
+                ("radius", format!("{}/{}", radius(p.radius), radius(p.caustic_radius))),
+                ("gather_rays", p.gather_rays.to_string()),
+                ("photon_depth", p.max_depth.to_string()),
+                ("alpha", format!("{:?}", p.alpha)),
+            ]),
+        }
+        Provenance { scene: hash.0, settings: settings.into_iter().map(|(k, v)| (k.to_string(), v)).collect() }
+    }
+
+    fn text(&self) -> String {
+        let settings: Vec<String> = self.settings.iter().map(|(k, v)| format!("{k}={v}")).collect();
+        format!("scene={:016x};{}", self.scene, settings.join(";"))
+    }
+}
+
+/// 64-bit FNV-1a (Fowler, Noll, Vo): simple, and the same on every machine and Rust version.
+struct Fnv1a(u64);
+
+impl Default for Fnv1a {
+    fn default() -> Self {
+        Fnv1a(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv1a {
+    fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        // The length ends each array, so moving bytes from one array to the next changes the hash.
+        for b in (bytes.len() as u64).to_le_bytes() {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
 }
 
 pub fn format_ranges(ranges: &[(u32, u32)]) -> String {
@@ -45,20 +139,24 @@ fn parse_ranges(text: &str) -> Option<Vec<(u32, u32)>> {
         .collect()
 }
 
-/// Writes `acc` as an accumulation file, atomically.
-pub fn write_accumulation(path: &Path, acc: &Accumulator) -> Result<(), ImageError> {
+/// Writes `acc`, rendered as `provenance` says, as an accumulation file, atomically.
+pub fn write_accumulation(path: &Path, acc: &Accumulator, provenance: &Provenance) -> Result<(), AccumulationError> {
     use exr::meta::attribute::{AttributeValue, Text};
+    if format_of(path)? != Format::Exr {
+        return Err(AccumulationError::NotExr { path: path.to_owned() });
+    }
     let combined = acc.sum.combined();
     let mut named: Vec<(&str, &Image)> = vec![("combined", &combined)];
     named.extend(acc.sum.named());
-    let mark = format!("passes={};ranges={}", acc.passes, format_ranges(&acc.ranges));
+    let mark = format!("passes={};ranges={};{}", acc.passes, format_ranges(&acc.ranges), provenance.text());
     let attributes = vec![(MARK, AttributeValue::Text(Text::from(mark.as_str())))];
-    write_layers_exr_with(path, &named, attributes)
+    Ok(write_layers_exr_with(path, &named, attributes)?)
 }
 
-/// Reads an accumulation file back.
-pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> {
+/// Reads an accumulation file back, with its provenance when it has one.
+pub fn read_accumulation(path: &Path) -> Result<(Accumulator, Option<Provenance>), AccumulationError> {
     use exr::meta::attribute::AttributeValue;
+    crate::io::image::check_exr_input(path)?;
     let read = exr::prelude::read_all_flat_layers_from_file(path)
         .map_err(|e| ImageError::Read { path: path.to_owned(), reason: e.to_string() })?;
     let attr =
@@ -66,10 +164,35 @@ pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> 
     let not_acc = || AccumulationError::NotAccumulation { path: path.to_owned() };
     let Some(AttributeValue::Text(mark)) = attr(MARK) else { return Err(not_acc()) };
     let mark = mark.to_string();
-    let parsed = mark.split_once(';').and_then(|(count, ranges)| {
-        Some((count.strip_prefix("passes=")?.parse::<u32>().ok()?, parse_ranges(ranges.strip_prefix("ranges=")?)?))
-    });
+    let fields: Vec<(&str, &str)> = mark.split(';').filter_map(|kv| kv.split_once('=')).collect();
+    let field = |key: &str| fields.iter().find(|(k, _)| *k == key).map(|(_, v)| *v);
+    let parsed = field("passes").and_then(|p| p.parse::<u32>().ok()).zip(field("ranges").and_then(parse_ranges));
     let Some((passes, ranges)) = parsed else { return Err(not_acc()) };
+    // The pass count is what the sums are divided by: it must be what the ranges say.
+    let damaged = |reason: String| AccumulationError::Damaged { path: path.to_owned(), reason };
+    let mut counted = 0u64;
+    let mut sorted = ranges.clone();
+    sorted.sort_unstable();
+    for (i, &(a, b)) in sorted.iter().enumerate() {
+        if a >= b || b > crate::limits::MAX_PASSES {
+            return Err(damaged(format!("pass range {a}..{b} is empty or beyond {}", crate::limits::MAX_PASSES)));
+        }
+        if i > 0 && a < sorted[i - 1].1 {
+            return Err(damaged(format!("pass ranges {}..{} and {a}..{b} overlap", sorted[i - 1].0, sorted[i - 1].1)));
+        }
+        counted += (b - a) as u64;
+    }
+    if counted != passes as u64 || passes == 0 {
+        return Err(damaged(format!("it counts {passes} passes but its ranges hold {counted}")));
+    }
+    let provenance = field("scene").and_then(|h| u64::from_str_radix(h, 16).ok()).map(|scene| Provenance {
+        scene,
+        settings: fields
+            .iter()
+            .filter(|(k, _)| !matches!(*k, "passes" | "ranges" | "scene"))
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+    });
     let size = read.attributes.display_window.size;
     let (w, h) = (size.width() as u32, size.height() as u32);
     let mut acc = Accumulator::new(w, h);
@@ -93,15 +216,18 @@ pub fn read_accumulation(path: &Path) -> Result<Accumulator, AccumulationError> 
     }
     acc.passes = passes;
     acc.ranges = ranges;
-    Ok(acc)
+    Ok((acc, provenance))
 }
 
-/// Sums accumulation files into one, refusing different sizes and overlapping pass ranges.
-pub fn merge(paths: &[PathBuf]) -> Result<Accumulator, AccumulationError> {
+/// Sums accumulation files into one, refusing different sizes, overlapping pass ranges, and parts
+/// of different renders (scene or settings); returns the sum and the provenance they share.
+pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), AccumulationError> {
     let first_path = paths.first().ok_or(AccumulationError::Empty)?;
-    let mut total = read_accumulation(first_path)?;
+    let (mut total, first) = read_accumulation(first_path)?;
+    let first = first.ok_or_else(|| AccumulationError::NoProvenance { path: first_path.clone() })?;
     for path in &paths[1..] {
-        let next = read_accumulation(path)?;
+        let (next, provenance) = read_accumulation(path)?;
+        let provenance = provenance.ok_or_else(|| AccumulationError::NoProvenance { path: path.clone() })?;
         let (fw, fh) = (total.sum.direct.width, total.sum.direct.height);
         let (w, h) = (next.sum.direct.width, next.sum.direct.height);
         if (w, h) != (fw, fh) {
@@ -112,6 +238,31 @@ pub fn merge(paths: &[PathBuf]) -> Result<Accumulator, AccumulationError> {
                 first: first_path.clone(),
                 fw,
                 fh,
+            });
+        }
+        // Settings first, by name: a difference there is easier to act on than a scene hash.
+        let value = |p: &Provenance, key: &str| {
+            p.settings.iter().find(|(k, _)| k == key).map_or("(none)".to_string(), |(_, v)| v.clone())
+        };
+        let keys = first.settings.iter().chain(&provenance.settings).map(|(k, _)| k.as_str());
+        for key in keys {
+            let (ours, theirs) = (value(&first, key), value(&provenance, key));
+            if ours != theirs {
+                return Err(AccumulationError::SettingMismatch {
+                    path: path.clone(),
+                    what: key.replace('_', " "),
+                    theirs,
+                    first: first_path.clone(),
+                    ours,
+                });
+            }
+        }
+        if provenance.scene != first.scene {
+            return Err(AccumulationError::SceneMismatch {
+                path: path.clone(),
+                theirs: format!("{:016x}", provenance.scene),
+                ours: format!("{:016x}", first.scene),
+                first: first_path.clone(),
             });
         }
         let overlaps = next.ranges.iter().any(|&(a, b)| total.ranges.iter().any(|&(c, d)| a < d && c < b));
@@ -133,5 +284,43 @@ pub fn merge(paths: &[PathBuf]) -> Result<Accumulator, AccumulationError> {
         total.ranges.extend(next.ranges);
         total.ranges.sort_unstable();
     }
-    Ok(total)
+    Ok((total, first))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file_with_mark(dir: &Path, name: &str, mark: &str) -> PathBuf {
+        use exr::meta::attribute::{AttributeValue, Text};
+        let path = dir.join(name);
+        let image = Image::new(2, 2);
+        let layers: Vec<(&str, &Image)> =
+            ["combined", "direct", "specular", "indirect", "caustics"].iter().map(|n| (*n, &image)).collect();
+        write_layers_exr_with(&path, &layers, vec![(MARK, AttributeValue::Text(Text::from(mark)))]).unwrap();
+        path
+    }
+
+    #[test]
+    fn damaged_pass_records_are_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = file_with_mark(dir.path(), "good.exr", "passes=2;ranges=0..2;scene=00000000000000ff;spp=1");
+        let (acc, provenance) = read_accumulation(&good).unwrap();
+        assert_eq!((acc.passes, provenance.unwrap().scene), (2, 255));
+        for (mark, piece) in [
+            ("passes=0;ranges=0..1;scene=1", "counts 0 passes"),
+            ("passes=4294967295;ranges=0..4294967295;scene=1", "beyond 1000000"),
+            ("passes=10;ranges=0..5,0..5;scene=1", "overlap"),
+            ("passes=3;ranges=5..2;scene=1", "empty"),
+        ] {
+            let path = file_with_mark(dir.path(), "bad.exr", mark);
+            let e = read_accumulation(&path).unwrap_err().to_string();
+            assert!(e.contains("damaged") && e.contains(piece), "{mark}: {e}");
+        }
+        // Without a provenance a file reads, but merge refuses it.
+        let old = file_with_mark(dir.path(), "old.exr", "passes=1;ranges=2..3");
+        assert!(read_accumulation(&old).unwrap().1.is_none());
+        let e = merge(&[good, old]).unwrap_err().to_string();
+        assert!(e.contains("no record of the scene and settings"), "{e}");
+    }
 }

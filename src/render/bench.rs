@@ -74,6 +74,8 @@ pub fn bench_photons(ctx: Option<&GpuContext>, buffers: &SceneBuffers, paths: u3
     let settings = PhotonSettings { photons: paths, caustic_photons: 1, ..PhotonSettings::default() };
     match ctx {
         Some(ctx) => {
+            let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+            super::memory::check_photon_buffer(&settings, limit)?;
             let scene = super::gpu::DeviceScene::upload(ctx, buffers, Some(&settings))?;
             ctx.take_timings();
             let maps = super::gpu::build_maps_gpu(ctx, &scene, buffers, &settings, 0)?;
@@ -91,6 +93,8 @@ pub fn bench_photons(ctx: Option<&GpuContext>, buffers: &SceneBuffers, paths: u3
             })
         }
         None => {
+            let e = super::memory::estimate(1, 1, Some(&settings), None);
+            super::memory::check_fits(&e, 1, 1, Some(&settings), super::memory::available_host_memory(), None)?;
             let view = buffers.view();
             let t = std::time::Instant::now();
             let photons = crate::cpu::emit_photons::emit_photons(&view, &emit_params(&settings, 0, false)).global;

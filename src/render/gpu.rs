@@ -4,6 +4,7 @@ use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
 use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
+use super::prepare::KernelVariant;
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
     SceneBuffers,
@@ -47,23 +48,23 @@ pub struct GpuKernels {
     grid_scatter: OnceCell<Kernel>,
     grid_rank: OnceCell<Kernel>,
     render: OnceCell<Kernel>,
-    /// Use the `textured` variants of the scene kernels (`SceneBuffers::textured`).
-    textured: bool,
+    /// Which build of the scene kernels (`SceneBuffers::variant`).
+    variant: KernelVariant,
 }
 
 impl GpuKernels {
-    /// The kernels for a scene with (`textured`) or without image and pattern textures or alpha.
-    pub fn for_scene(textured: bool) -> GpuKernels {
-        GpuKernels { textured, ..Default::default() }
+    /// The kernels of one variant (`SceneBuffers::variant`).
+    pub fn for_scene(variant: KernelVariant) -> GpuKernels {
+        GpuKernels { variant, ..Default::default() }
     }
 
-    /// `name`, or its `textured` variant for a textured scene.
+    fn variant(&self) -> KernelVariant {
+        self.variant
+    }
+
+    /// `name` in the build this scene needs.
     fn scene_kernel(&self, name: &str) -> String {
-        if self.textured {
-            format!("{name}_textured")
-        } else {
-            name.to_string()
-        }
+        self.variant.kernel_name(name)
     }
 
     fn get<'k>(
@@ -151,8 +152,8 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
-    /// The scene needs the `textured` variant of the scene kernels.
-    pub textured: bool,
+    /// Which variant of the scene kernels the scene needs.
+    pub variant: KernelVariant,
 }
 
 impl DeviceScene {
@@ -187,7 +188,7 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
-            textured: buffers.textured,
+            variant: buffers.variant(),
         })
     }
 
@@ -211,7 +212,7 @@ impl DeviceScene {
             }
         }
         let frame = photon_frame(buffers, photons);
-        self.textured = buffers.textured;
+        self.variant = buffers.variant();
         Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
             + replace(ctx, &mut self.nodes, &buffers.nodes)?
             + replace(ctx, &mut self.primitives, &buffers.primitives)?
@@ -402,7 +403,7 @@ pub fn build_maps_gpu(
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
     let mut capacity = [0; 2];
-    build_maps(ctx, &GpuKernels::for_scene(scene.textured), scene, buffers, settings, pass, &mut capacity)
+    build_maps(ctx, &GpuKernels::for_scene(scene.variant), scene, buffers, settings, pass, &mut capacity)
 }
 
 /// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
@@ -482,7 +483,7 @@ impl<'a> GpuRenderer<'a> {
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.textured);
+        let kernels = GpuKernels::for_scene(buffers.variant());
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -512,8 +513,8 @@ impl<'a> GpuRenderer<'a> {
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
         let in_place = self.scene.update(self.ctx, buffers, photons)?;
-        if buffers.textured != self.kernels.textured {
-            self.kernels = GpuKernels::for_scene(buffers.textured);
+        if buffers.variant() != self.kernels.variant() {
+            self.kernels = GpuKernels::for_scene(buffers.variant());
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {
@@ -571,23 +572,25 @@ impl<'a> GpuRenderer<'a> {
         let t = Instant::now();
         let mut layers = Layers::new(f.width, f.height);
         let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
-        let total: u64 = units.iter().map(unit_paths).sum();
+        let total = units.total_rows();
+        let mut units = units.peekable();
         let mut done = 0;
         let mut rays = 0;
         let mut download_time = Duration::ZERO;
         // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
         // submissions, yet none long enough to trip a GPU watchdog.
         let mut complete = true;
-        let mut i = 0;
-        while i < units.len() {
-            let band = units[i].row_begin;
-            let mut end = i;
-            let mut paths = 0;
-            while end < units.len() && units[end].row_begin == band && (end == i || paths < PATHS_PER_SUBMIT) {
-                paths += units[end].row_count as u64 * f.width as u64;
-                end += 1;
+        let mut batch: Vec<DispatchRange> = Vec::new();
+        while let Some(first) = units.next() {
+            let band = first.row_begin;
+            let mut paths = first.row_count as u64 * f.width as u64;
+            batch.clear();
+            batch.push(first);
+            while paths < PATHS_PER_SUBMIT {
+                let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
+                paths += unit.row_count as u64 * f.width as u64;
+                batch.push(unit);
             }
-            let batch = &units[i..end];
             if super::stop_requested() {
                 complete = false;
                 break;
@@ -597,7 +600,7 @@ impl<'a> GpuRenderer<'a> {
             }
             let invocations = batch[0].row_count * f.width;
             ctx.run("render", |rec| {
-                for unit in batch {
+                for unit in &batch {
                     rec.dispatch(
                         render_kernel,
                         &self.scene.bindings(&[
@@ -616,8 +619,7 @@ impl<'a> GpuRenderer<'a> {
             })?;
             done += batch.iter().map(unit_paths).sum::<u64>();
             progress(done, total);
-            i = end;
-            if units.get(i).is_none_or(|next| next.row_begin != band) {
+            if units.peek().is_none_or(|next| next.row_begin != band) {
                 let td = Instant::now();
                 let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
                 let len = (invocations * LAYER_COUNT) as usize;

@@ -5,6 +5,7 @@
 pub mod accumulation;
 pub mod bench;
 pub mod gpu;
+pub mod memory;
 pub mod pack;
 pub mod photons;
 pub mod prepare;
@@ -14,7 +15,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
-pub use prepare::{prepare, FrameSettings, SceneBuffers};
+pub use prepare::{prepare, FrameSettings, KernelVariant, PrepareError, SceneBuffers};
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
@@ -73,7 +74,15 @@ pub enum RenderError {
     Bvh(#[from] crate::accel::BvhError),
     #[error(transparent)]
     Gpu(#[from] crate::gpu::GpuError),
+    #[error(transparent)]
+    Refused(#[from] Refused),
 }
+
+/// A render that would fail or come out wrong, refused before it starts; the message says why
+/// and what to change.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Refused(pub String);
 
 /// What a render measured.
 #[derive(Clone, Debug, Default)]
@@ -161,21 +170,56 @@ pub struct RenderOutput {
 
 /// The dispatches of pass `pass`, in the order both backends accumulate them: per band of rows,
 /// per sample, per part (part 0 plus one part per final-gather ray; see `DispatchRange`). Pass p
-/// draws samples p * spp .. (p + 1) * spp, so passes are independent.
-pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32, pass: u32) -> Vec<DispatchRange> {
+/// draws samples p * spp .. (p + 1) * spp, so passes are independent. An iterator, never a list:
+/// its memory does not grow with the sample count.
+pub fn work_units(height: u32, spp: u32, parts: u32, max_band_rows: u32, pass: u32) -> WorkUnits {
     let band_rows = max_band_rows.clamp(1, height.max(1));
-    let mut units = Vec::new();
-    let mut row = 0;
-    while row < height {
-        let rows = band_rows.min(height - row);
-        for sample in 0..spp {
-            for part in 0..parts {
-                units.push(DispatchRange { row_begin: row, row_count: rows, sample_index: pass * spp + sample, part });
+    WorkUnits { height, spp, parts: parts.max(1), band_rows, pass, row: 0, sample: 0, part: 0 }
+}
+
+/// The work units of one pass, made one at a time; see `work_units`.
+#[derive(Clone, Debug)]
+pub struct WorkUnits {
+    height: u32,
+    spp: u32,
+    parts: u32,
+    band_rows: u32,
+    pass: u32,
+    // The next unit.
+    row: u32,
+    sample: u32,
+    part: u32,
+}
+
+impl WorkUnits {
+    /// Camera-path rows over all units (the progress total): every row, sample and part once.
+    pub fn total_rows(&self) -> u64 {
+        self.height as u64 * self.spp as u64 * self.parts as u64
+    }
+}
+
+impl Iterator for WorkUnits {
+    type Item = DispatchRange;
+
+    fn next(&mut self) -> Option<DispatchRange> {
+        if self.row >= self.height || self.spp == 0 {
+            return None;
+        }
+        let row_count = self.band_rows.min(self.height - self.row);
+        // The sample ranges make this fit: pass * spp + sample < MAX_PASSES * MAX_SPP < 2^32.
+        let sample_index = self.pass * self.spp + self.sample;
+        let unit = DispatchRange { row_begin: self.row, row_count, sample_index, part: self.part };
+        self.part += 1;
+        if self.part == self.parts {
+            self.part = 0;
+            self.sample += 1;
+            if self.sample == self.spp {
+                self.sample = 0;
+                self.row += row_count;
             }
         }
-        row += rows;
+        Some(unit)
     }
-    units
 }
 
 /// Parts per sample: the camera part, plus one per final-gather ray.
@@ -239,18 +283,18 @@ pub fn render_cpu(
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
     let units = work_units(frame.height, spp, parts_per_sample(&frame), frame.height, pass);
-    let total: u64 = units.iter().map(unit_paths).sum();
+    let total = units.total_rows();
     let mut done = 0;
     let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
     let mut complete = true;
-    for unit in &units {
+    for unit in units {
         if stop_requested() {
             complete = false;
             break;
         }
         let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
-        crate::cpu::render::render(&view, unit, band);
-        done += unit_paths(unit);
+        crate::cpu::render::render(&view, &unit, band);
+        done += unit_paths(&unit);
         progress(done, total);
     }
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
@@ -308,5 +352,48 @@ mod tests {
         assert_eq!(auto_backend(&Ok(Vec::new()), false).0, Backend::Cpu);
         // A named device means the kernels, even on lavapipe.
         assert_eq!(auto_backend(&Ok(vec![lavapipe]), true).0, Backend::Gpu);
+    }
+
+    /// The order the list used to have, built eagerly, for comparison.
+    fn listed(height: u32, spp: u32, parts: u32, band_rows: u32, pass: u32) -> Vec<DispatchRange> {
+        let mut units = Vec::new();
+        let mut row = 0;
+        while row < height {
+            let rows = band_rows.min(height - row);
+            for sample in 0..spp {
+                for part in 0..parts {
+                    units.push(DispatchRange {
+                        row_begin: row,
+                        row_count: rows,
+                        sample_index: pass * spp + sample,
+                        part,
+                    });
+                }
+            }
+            row += rows;
+        }
+        units
+    }
+
+    #[test]
+    fn work_units_come_in_band_sample_part_order() {
+        for (height, spp, parts, band, pass) in
+            [(16, 3, 2, 5, 0), (7, 1, 1, 100, 4), (1, 4, 9, 1, 2), (10, 2, 1, 10, 1)]
+        {
+            let units = work_units(height, spp, parts, band, pass);
+            let rows: u64 = units.clone().map(|u| u.row_count as u64).sum();
+            assert_eq!(rows, units.total_rows());
+            assert_eq!(units.collect::<Vec<_>>(), listed(height, spp, parts, band.clamp(1, height), pass));
+        }
+    }
+
+    #[test]
+    fn work_units_take_no_memory_per_sample() {
+        // 4096 samples of 1000 parts: four million units, made one at a time.
+        let units = work_units(1, 4096, 1000, 1, 999_999);
+        assert!(size_of_val(&units) < 64);
+        assert_eq!(units.total_rows(), 4_096_000);
+        let last = units.last().unwrap();
+        assert_eq!((last.sample_index, last.part), (999_999 * 4096 + 4095, 999));
     }
 }

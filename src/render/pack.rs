@@ -8,8 +8,8 @@ use crate::layout::constants::*;
 use crate::layout::{Material, Primitive, Texture};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene, Shape, TextureDesc,
-    TextureKind, TextureSpace,
+    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene,
+    Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -29,6 +29,15 @@ pub struct PackedScene {
     /// True when some texture is an image or a pattern, or some material has alpha: the kernels
     /// then need their `textured` variant.
     pub textured: bool,
+    /// True when some shape has an opacity below 1: the kernels then need the alpha test, in
+    /// their `textured_alpha` variant.
+    pub alpha: bool,
+    /// True when some shape is a plane, disc, cone, torus or superellipsoid: the kernels then
+    /// need their `analytic` variant.
+    pub analytic: bool,
+    /// True when some shape is a torus or a superellipsoid: the kernels then need their
+    /// `analytic_implicit` variant.
+    pub implicit: bool,
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
@@ -47,11 +56,22 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         // holds none, so adding one leaves the automatic photon radius alone).
         let opacity = scene.materials[shape.material as usize].opacity;
         let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
-        packed.areas.push(shape.geometry.area());
-        packed.photon_area += shape.geometry.area() * visible;
+        let area = shape.geometry.area();
+        packed.areas.push(area);
+        // An infinite plane's share is added by `prepare`, which knows the scene's extent.
+        if area.is_finite() {
+            packed.photon_area += area * visible;
+        }
     }
-    packed.textured = packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT)
-        || packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
+    packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_)));
+    packed.implicit = scene.shapes.iter().any(|s| {
+        matches!(
+            s.geometry,
+            Geometry::Analytic(Analytic { kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }, .. })
+        )
+    });
+    packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
+    packed.textured = packed.alpha || packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.
     if packed.textures.is_empty() {
         packed.textures.push(Texture::default());
@@ -212,6 +232,26 @@ pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Ve
                 p.data = shape_data.len() as u32;
                 shape_data.extend(uv.iter().flat_map(|v| [v.x, v.y]));
             }
+        }
+        Geometry::Analytic(a) => {
+            let (kind, p0, p1) = match a.kind {
+                AnalyticKind::Plane => (PRIMITIVE_PLANE, [0.0; 3], [0.0; 3]),
+                AnalyticKind::Disc { radius, inner_radius } => (PRIMITIVE_DISC, [radius, inner_radius, 0.0], [0.0; 3]),
+                AnalyticKind::Cone { r0, r1, height } => (PRIMITIVE_CONE, [r0, r1, height], [0.0; 3]),
+                AnalyticKind::Torus { major, minor } => (PRIMITIVE_TORUS, [major, minor, 0.0], [0.0; 3]),
+                AnalyticKind::Superellipsoid { e, n } => {
+                    (PRIMITIVE_SUPERELLIPSOID, [2.0 / e, e / 2.0, 2.0 / n], [n / 2.0, 0.0, 0.0])
+                }
+            };
+            p.kind = kind | flags;
+            (p.p0, p.p1) = (p0, p1);
+            p.data = shape_data.len() as u32;
+            let world_from_object = a.world_from_object;
+            shape_data.extend(affine_rows(&world_from_object.inverse()));
+            shape_data.extend(affine_rows(&world_from_object));
+            shape_data.push(world_from_object.matrix3.determinant().abs());
+            shape_data.push(a.size());
+            debug_assert_eq!(shape_data.len() as u32 - p.data, SHAPE_DATA_FLOATS);
         }
         Geometry::Sphere(s) => {
             p.kind = PRIMITIVE_SPHERE | flags;

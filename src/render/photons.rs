@@ -49,6 +49,40 @@ pub fn radii(buffers: &SceneBuffers, settings: &PhotonSettings, global_stored: u
     (global * scale, caustic * scale)
 }
 
+/// Refuses lookup radii the photon grid cannot use: so small next to the scene's coordinates that
+/// cell indices (coordinate / radius) leave the 32-bit integers the kernels use, or larger than
+/// the whole scene (every lookup would visit every photon).
+pub fn check_radii(buffers: &SceneBuffers, settings: &PhotonSettings) -> Result<(), super::Refused> {
+    use crate::limits::fmt_f32;
+    let Some(root) = buffers.nodes.first() else { return Ok(()) };
+    let extent =
+        root.aabb_min.iter().chain(&root.aabb_max).map(|c| c.abs()).filter(|c| c.is_finite()).fold(0.0, f32::max);
+    let smallest = extent / (1u32 << 30) as f32;
+    let largest = 2.0 * buffers.bounding_radius;
+    for (name, radius) in [("radius", settings.radius), ("caustic radius", settings.caustic_radius)] {
+        let Some(r) = radius else { continue };
+        if r < smallest {
+            return Err(super::Refused(format!(
+                "the photon {name} {} is too small for this scene, whose coordinates reach {}: grid cells would \
+                 overflow; give at least {}",
+                fmt_f32(r),
+                fmt_f32(extent),
+                fmt_f32(smallest)
+            )));
+        }
+        if r > largest && largest > 0.0 {
+            return Err(super::Refused(format!(
+                "the photon {name} {} is larger than the whole scene (diameter {}); every lookup would visit every \
+                 photon: give at most {}, or leave it out to derive one",
+                fmt_f32(r),
+                fmt_f32(largest),
+                fmt_f32(largest)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Grid parameters of one map: its photons' flux is relative to total power / paths.
 pub fn map_grid(buffers: &SceneBuffers, radius: f32, stored: u32, paths: u32) -> GridParams {
     grid_params(radius, stored, buffers.frame.total_light_power / paths.max(1) as f32)

@@ -2,14 +2,14 @@
 
 use std::f32::consts::PI;
 
-use glam::Vec3;
+use glam::{Mat3, Vec3};
 
 use super::pack::{pack_environment, pack_scene};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
-use crate::scene::{LightKind, Projection, Scene, ThinLens};
+use crate::scene::{Geometry, LightKind, Projection, Scene, ThinLens};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -24,13 +24,60 @@ pub struct SceneBuffers {
     pub shape_data: Vec<f32>,
     /// True when the scene has image or pattern textures (see `PackedScene::textured`).
     pub textured: bool,
+    /// True when the scene has analytic shapes other than spheres (see `PackedScene::analytic`).
+    pub analytic: bool,
+    /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
+    pub implicit: bool,
+    /// True when some shape has an opacity below 1 (see `PackedScene::alpha`).
+    pub alpha: bool,
     /// Radius of a sphere around the whole scene (scene units).
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
     pub surface_area: f32,
 }
 
+/// Which variant of the scene kernels a scene needs: lavapipe runs every branch of a shader
+/// under masks, so each kind of costly code lives only in the kernels of the scenes that use it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KernelVariant {
+    /// Image and pattern textures, alpha.
+    pub textured: bool,
+    /// The alpha test inside BVH traversal (with the textures): it slowed textured scenes'
+    /// photon tracing 3x on lavapipe, so only scenes with a shape of opacity below 1 pay for it.
+    pub alpha: bool,
+    /// Planes, discs and cones.
+    pub analytic: bool,
+    /// Tori and superellipsoids (with the analytic shapes).
+    pub implicit: bool,
+}
+
+impl KernelVariant {
+    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]]`
+    /// (the `// variant:` lines of the kernels, see build.rs).
+    pub fn kernel_name(self, name: &str) -> String {
+        let mut out = name.to_string();
+        if self.textured || self.alpha {
+            out.push_str("_textured");
+        }
+        if self.alpha {
+            out.push_str("_alpha");
+        }
+        if self.analytic || self.implicit {
+            out.push_str("_analytic");
+        }
+        if self.implicit {
+            out.push_str("_implicit");
+        }
+        out
+    }
+}
+
 impl SceneBuffers {
+    /// The variant of the scene kernels this scene needs.
+    pub fn variant(&self) -> KernelVariant {
+        KernelVariant { textured: self.textured, alpha: self.alpha, analytic: self.analytic, implicit: self.implicit }
+    }
+
     pub fn view(&self) -> SceneView<'_> {
         SceneView {
             frame: &self.frame,
@@ -160,21 +207,57 @@ fn fill_cdf(
     total
 }
 
-pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, BvhError> {
-    // Primitives in BVH order, each emitter tagged with its light index
+/// Why a scene cannot be prepared. Loading checks scene files so that only hand-built scenes
+/// meet the last two.
+#[derive(Debug, thiserror::Error)]
+pub enum PrepareError {
+    #[error(transparent)]
+    Bvh(#[from] BvhError),
+    #[error(
+        "{path}: [camera]: no camera frame: `look_at` equals `position`, or `up` is zero or parallel to the view \
+         direction"
+    )]
+    Camera { path: String },
+    #[error(
+        "{path}: the scene's {what} is {value}, beyond what 32-bit floats hold; scale the scene or its lights down \
+         (see docs/limits.md)"
+    )]
+    Overflow { path: String, what: &'static str, value: String },
+}
+
+pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, PrepareError> {
+    let path = || crate::limits::printable_message(&scene.path.display().to_string());
+    // Primitives in BVH order, then the unbounded ones (infinite planes) that every ray tests
     let packed = pack_scene(scene);
-    let surface_area = packed.photon_area;
-    let bvh = build_bvh(&packed.primitives, &packed.bounds)?;
+    let is_unbounded: Vec<bool> = scene.shapes.iter().map(|s| s.geometry.is_unbounded()).collect();
+    let bounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| !is_unbounded[i]).collect();
+    let unbounded: Vec<usize> = (0..packed.primitives.len()).filter(|&i| is_unbounded[i]).collect();
+    let bvh = build_bvh(
+        &bounded.iter().map(|&i| packed.primitives[i]).collect::<Vec<_>>(),
+        &bounded.iter().map(|&i| packed.bounds[i]).collect::<Vec<_>>(),
+    )?;
     let mut primitives = bvh.primitives;
+    let unbounded_first = primitives.len() as u32;
+    primitives.extend(unbounded.iter().map(|&i| packed.primitives[i]));
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
     // original index, which the reorder keeps in `order`).
-    let areas: Vec<f32> = bvh.order.iter().map(|&i| packed.areas.get(i as usize).copied().unwrap_or(0.0)).collect();
+    let areas: Vec<f32> = bvh
+        .order
+        .iter()
+        .map(|&i| bounded.get(i as usize).map_or(0.0, |&j| packed.areas[j]))
+        .chain(unbounded.iter().map(|_| 0.0))
+        .collect();
 
-    // Bounds: distant lights send their photons through the bounding sphere's disc
+    // Bounds of the shapes in the BVH (not the infinite planes)
     let root = &bvh.nodes[0];
     let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
     let (bounding_center, bounding_radius) =
         if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    // Distant lights and the environment send their photons through the disc of that bounding
+    // sphere. A scene of infinite planes alone has none (its BVH is one empty leaf, radius 0): a
+    // unit sphere at the origin stands in, so that those lights keep a power and stay lights.
+    let (light_center, light_radius) =
+        if bounded.is_empty() { (Vec3::ZERO, 1.0) } else { (bounding_center, bounding_radius) };
 
     // Lights: emissive primitives (in BVH order), then the lights of the file
     let mut lights = Vec::new();
@@ -184,18 +267,23 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A textured emission's power is estimated from its constant (the texture scales it
         // by at most its values; the pick probability only steers sampling, it keeps no bias).
         let emission = material.emission.value;
-        if channel_mean(emission.into()) <= 0.0 || area <= 0.0 {
+        // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
+        // power (or one so faint its power rounds to 0) is left out: were every light such, the
+        // pick probabilities would be 0 / 0.
+        let power = PI * area * channel_mean(emission.into());
+        if power.is_nan() || power <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
         let options = scene.lights.iter().find(|l| l.kind == LightKind::Area { material: p.material });
-        // A Lambertian emitter of radiance L and area A emits power pi * A * L.
-        let power = PI * area * channel_mean(emission.into());
         powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
     for desc in &scene.lights {
-        let Some((light, power)) = light_record(&desc.kind, bounding_center, bounding_radius) else { continue };
+        let Some((light, power)) = light_record(&desc.kind, light_center, light_radius) else { continue };
+        if power.is_nan() || power <= 0.0 {
+            continue;
+        }
         powers.push(light_powers(power, desc.direct, desc.photons));
         lights.push(light);
     }
@@ -203,17 +291,31 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let mut environment = NO_LIGHT;
     if let Some(env) = &scene.environment {
         let (offset, integral) = pack_environment(&env.image, env.rotation_deg, &mut texture_data);
-        environment = lights.len() as u32;
-        lights.push(Light {
-            position: bounding_center.into(),
-            kind: LIGHT_ENVIRONMENT,
-            primitive: offset,
-            radius: bounding_radius,
-            ..Default::default()
-        });
-        // The power that enters the bounding sphere's disc from every direction.
-        let power = integral as f32 * PI * bounding_radius * bounding_radius;
-        powers.push(light_powers(power, env.direct, env.photons));
+        // The power that enters the bounding sphere's disc from every direction. A black
+        // environment is left out like any light of no power (rays that leave see black anyway).
+        let power = integral as f32 * PI * light_radius * light_radius;
+        if !power.is_nan() && power > 0.0 {
+            environment = lights.len() as u32;
+            lights.push(Light {
+                position: light_center.into(),
+                kind: LIGHT_ENVIRONMENT,
+                primitive: offset,
+                radius: light_radius,
+                ..Default::default()
+            });
+            powers.push(light_powers(power, env.direct, env.photons));
+        }
+    }
+    let total_power: f64 = powers.iter().map(|&(direct, photons)| direct.max(photons) as f64).sum();
+    let overflow = |what: &'static str, value: f64| {
+        (!(value as f32).is_finite()).then(|| PrepareError::Overflow {
+            path: path(),
+            what,
+            value: crate::limits::fmt_number(value),
+        })
+    };
+    if let Some(e) = overflow("total light power", total_power) {
+        return Err(e);
     }
     fill_cdf(
         &mut lights,
@@ -234,12 +336,41 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         },
     );
 
+    // An infinite plane holds photons over the part of it near the rest of the scene: its disc
+    // inside the sphere around the bounded shapes, the point and spot lights and the camera.
+    // (Distant lights and the environment send theirs through the bounding sphere's disc only.)
+    let mut surface_area = packed.photon_area;
+    if !unbounded.is_empty() {
+        let mut extent = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        if lo.cmple(hi).all() {
+            extent = (lo, hi);
+        }
+        let positions = scene.lights.iter().filter_map(|l| match l.kind {
+            LightKind::Point { position, .. } | LightKind::Spot { position, .. } => Some(position),
+            LightKind::Distant { .. } | LightKind::Area { .. } => None,
+        });
+        for p in positions.chain([scene.camera.position]) {
+            extent = (extent.0.min(p), extent.1.max(p));
+        }
+        let (center, radius) = ((extent.0 + extent.1) * 0.5, (extent.1 - extent.0).length() * 0.5);
+        for &i in &unbounded {
+            if let Geometry::Analytic(a) = &scene.shapes[i].geometry {
+                let m = a.world_from_object;
+                let normal = (Mat3::from(m.matrix3).inverse().transpose() * Vec3::Y).normalize();
+                let distance = (center - Vec3::from(m.translation)).dot(normal).abs();
+                let opacity = scene.materials[scene.shapes[i].material as usize].opacity;
+                let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
+                surface_area += PI * (radius * radius - distance * distance).max(0.0) * visible;
+            }
+        }
+    }
+    if let Some(e) = overflow("total surface area", surface_area as f64) {
+        return Err(e);
+    }
+
     // Camera
     let cam = &scene.camera;
-    let forward = (cam.look_at - cam.position).normalize();
-    // Right-handed: camera-right is forward x up, so with forward +z and up +y it is -x.
-    let right = forward.cross(cam.up).normalize();
-    let up = right.cross(forward);
+    let (forward, right, up) = cam.basis().ok_or_else(|| PrepareError::Camera { path: path() })?;
     let aspect = settings.width as f32 / settings.height as f32;
     // `right` and `up` carry the film's half-extent: tangents of the half field of view, half
     // the view's size in scene units, or nothing (latlong).
@@ -274,7 +405,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         aperture_blades: lens.blades,
         aperture_rotation: lens.rotation_deg.to_radians(),
         environment,
-        _pad: [0; 2],
+        unbounded_first,
+        _pad: 0,
     };
     Ok(SceneBuffers {
         frame,
@@ -286,6 +418,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         texture_data,
         shape_data: packed.shape_data,
         textured: packed.textured,
+        analytic: packed.analytic,
+        implicit: packed.implicit,
+        alpha: packed.alpha,
         bounding_radius,
         surface_area,
     })

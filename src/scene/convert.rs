@@ -19,10 +19,15 @@ use super::material::{
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
-    Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection, RenderSettings, Scene, Shape,
-    Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection,
+    RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
+use crate::limits::{
+    fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
+    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE,
+    MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
+};
 
 type Result<T> = std::result::Result<T, SceneError>;
 
@@ -61,13 +66,14 @@ const METAL_PRESETS: &[(&str, [f32; 3], [f32; 3])] = &[
 ];
 const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern"];
 const TEXTURE_SPACES: &[&str] = &["uv", "world"];
-const SHAPE_TYPES: &[&str] = &["quad", "triangle", "sphere", "box", "mesh"];
+const SHAPE_TYPES: &[&str] =
+    &["quad", "triangle", "sphere", "box", "mesh", "plane", "disc", "cylinder", "cone", "torus", "superellipsoid"];
+/// Smallest superellipsoid exponent: below it the shape is a box to float precision and its
+/// gauge's powers (2/e) pass 200.
+const SUPERELLIPSOID_MIN_EXPONENT: f64 = 0.01;
 const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
 const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
 const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform"];
-/// Environment maps above this many texels are halved (2x2 means) until they fit: the map, its
-/// cdfs and the scene's other data must fit one storage buffer (128 MiB on lavapipe).
-const ENV_MAX_TEXELS: u64 = 2048 * 1024;
 /// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
 const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
@@ -220,17 +226,22 @@ impl Builder<'_> {
         if let Some(hit) = valid.iter().find(|v| **v == given) {
             return Ok(hit);
         }
-        let hint = match suggest(given, valid) {
+        let given = printable(given);
+        let hint = match suggest(&given, valid) {
             Some(best) => format!("did you mean \"{best}\"?"),
             None => format!("use one of {}", valid.iter().map(|v| format!("\"{v}\"")).collect::<Vec<_>>().join(", ")),
         };
         Err(self.invalid(&value.span(), object, format!("unknown {field} \"{given}\" ({hint})")))
     }
 
+    /// A finite number within the scene range, +-`MAX_SCENE_VALUE`.
     fn number(&self, value: &Spanned<f64>, object: &str, field: &str) -> Result<f32> {
         let v = *value.get_ref();
-        if !v.is_finite() || !(v as f32).is_finite() {
+        if !v.is_finite() {
             return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; give a finite number")));
+        }
+        if v.abs() > MAX_SCENE_VALUE {
+            return Err(self.invalid(&value.span(), object, out_of_scene_range(field, v)));
         }
         Ok(v as f32)
     }
@@ -250,8 +261,11 @@ impl Builder<'_> {
     /// Three finite numbers; a single number `v` means `[v, v, v]`.
     fn vector(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
         let v = value.get_ref().value;
-        if let Some(bad) = v.iter().find(|c| !c.is_finite() || !(**c as f32).is_finite()) {
+        if let Some(bad) = v.iter().find(|c| !c.is_finite()) {
             return Err(self.invalid(&value.span(), object, format!("`{field}` contains {bad}; give finite numbers")));
+        }
+        if let Some(big) = v.iter().find(|c| c.abs() > MAX_SCENE_VALUE) {
+            return Err(self.invalid(&value.span(), object, out_of_scene_range(field, *big)));
         }
         Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32))
     }
@@ -263,23 +277,40 @@ impl Builder<'_> {
             return Err(self.invalid(
                 &value.span(),
                 object,
-                format!("`{field}` is negative ({c}); it must be >= 0 in every channel"),
+                format!("`{field}` is negative ({}); it must be >= 0 in every channel", vec3_text(c)),
             ));
         }
         if at_most_one && c.max_element() > 1.0 {
             return Err(self.invalid(
                 &value.span(),
                 object,
-                format!("`{field}` is above 1 ({c}); it is a fraction of light, in [0, 1] per channel"),
+                format!("`{field}` is above 1 ({}); it is a fraction of light, in [0, 1] per channel", vec3_text(c)),
             ));
         }
         Ok(c.to_array())
     }
 
-    fn integer(&self, value: &Spanned<i64>, object: &str, field: &str, min: i64, what: &str) -> Result<u32> {
+    /// A whole number in `min..=max`; `unit` follows the numbers in the message (" photon
+    /// paths"), `hint` follows a number below the minimum.
+    #[allow(clippy::too_many_arguments)]
+    fn integer(
+        &self,
+        value: &Spanned<i64>,
+        object: &str,
+        field: &str,
+        min: u32,
+        max: u32,
+        unit: &str,
+        hint: &str,
+    ) -> Result<u32> {
         let v = *value.get_ref();
-        if v < min || v > u32::MAX as i64 {
-            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be {what}")));
+        if v < min as i64 {
+            let message = format!("`{field}` is {v}; it must be at least {min}{unit} (and at most {max}){hint}");
+            return Err(self.invalid(&value.span(), object, message));
+        }
+        if v > max as i64 {
+            let message = format!("`{field}` is {v}; it must be at most {max}{unit} (see docs/limits.md)");
+            return Err(self.invalid(&value.span(), object, message));
         }
         Ok(v as u32)
     }
@@ -344,53 +375,78 @@ impl Builder<'_> {
         let position = self.point(position, object, "position")?;
         let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
         let look_at = self.point(look_at_def, object, "look_at")?;
-        if look_at == position {
+        // The same test as `Camera::basis`, which the renderer uses: nearly equal points (closer
+        // than 32-bit floats can tell apart) are as bad as equal ones.
+        if (look_at - position).try_normalize().is_none() {
             return Err(self.invalid(
                 &look_at_def.span(),
                 object,
-                "`look_at` equals `position`; the camera needs a direction to look in".to_string(),
+                "`look_at` equals `position` (or is too close to it to give a direction); the camera needs a \
+                 direction to look in"
+                    .to_string(),
             ));
         }
         let forward = (look_at - position).normalize();
         let up = match &c.up {
-            Some(up_def) => {
-                let up = self.point(up_def, object, "up")?;
-                if up.cross(forward).length() <= 1e-6 * up.length() {
-                    return Err(self.invalid(
-                        &up_def.span(),
-                        object,
-                        "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it"
-                            .to_string(),
-                    ));
-                }
-                up
-            }
+            Some(up_def) => self.point(up_def, object, "up")?,
             None => DEFAULT_UP,
         };
+        let probe = Camera {
+            position,
+            look_at,
+            up,
+            fov_deg: 45.0,
+            projection: Projection::Perspective,
+            lens: None,
+            width: 1,
+            height: 1,
+        };
+        if probe.basis().is_none() {
+            let (span, message) = match &c.up {
+                Some(up_def) => (
+                    up_def.span(),
+                    "`up` is zero or parallel to the view direction; give a direction roughly perpendicular to it",
+                ),
+                // Looking straight up or down with no `up` given.
+                None => (
+                    look_at_def.span(),
+                    "the view direction is vertical, parallel to the default `up` = [0, 1, 0]; add an `up` roughly \
+                     perpendicular to it, e.g. `up = [0, 0, -1]`",
+                ),
+            };
+            return Err(self.invalid(&span, object, message.to_string()));
+        }
         let mut fov_deg = DEFAULT_FOV;
         let projection = match kind {
             "perspective" => {
                 let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
                 fov_deg = self.number(fov_def, object, "fov")?;
-                if !(fov_deg > 0.0 && fov_deg < 180.0) {
+                let fov_range = MIN_FOV_DEGREES as f32..=(180.0 - MIN_FOV_DEGREES) as f32;
+                if !fov_range.contains(&fov_deg) {
                     return Err(self.invalid(
                         &fov_def.span(),
                         object,
-                        format!("`fov` is {fov_deg}; the vertical field of view must be between 0 and 180 degrees"),
+                        format!(
+                            "`fov` is {}; the vertical field of view must be between 0 and 180 degrees (from {} to {})",
+                            fmt_f32(fov_deg),
+                            fov_range.start(),
+                            fov_range.end()
+                        ),
                     ));
                 }
                 Projection::Perspective
             }
             "orthographic" => {
                 let h = self.require(&c.view_height, &table, object, "view_height", "view_height = 4")?;
-                let view_height = self.positive(h, object, "view_height", "the height of the view in scene units")?;
+                let view_height =
+                    self.positive_measure(h, object, "view_height", "the height of the view in scene units")?;
                 Projection::Orthographic { view_height }
             }
             _ => Projection::LatLong,
         };
         let lens = self.lens(c, forward, position, object)?;
         let blur_samples = match &c.blur_samples {
-            Some(b) => Some(self.integer(b, object, "blur_samples", 1, "at least 1 lens sample per pixel")?),
+            Some(b) => Some(self.integer(b, object, "blur_samples", 1, MAX_SPP, " lens samples per pixel", "")?),
             None => None,
         };
         let [width, height] = match &c.resolution {
@@ -405,14 +461,24 @@ impl Builder<'_> {
                 }
                 let mut wh = [0; 2];
                 for (out, &v) in wh.iter_mut().zip(values) {
-                    if v < 1 || v > u32::MAX as i64 {
+                    if v < 1 || v > MAX_IMAGE_SIDE as i64 {
                         return Err(self.invalid(
                             &res.span(),
                             object,
-                            format!("`resolution` is {values:?}; width and height must be at least 1"),
+                            format!(
+                                "`resolution` is {values:?}; width and height must be at least 1 and at most \
+                                 {MAX_IMAGE_SIDE}"
+                            ),
                         ));
                     }
                     *out = v as u32;
+                }
+                if wh[0] as u64 * wh[1] as u64 > MAX_PIXELS {
+                    return Err(self.invalid(
+                        &res.span(),
+                        object,
+                        format!("`resolution` is {values:?}; an image has at most {MAX_PIXELS} pixels (16384x16384)"),
+                    ));
                 }
                 wh
             }
@@ -422,10 +488,14 @@ impl Builder<'_> {
     }
 
     /// A number > 0; `what` says what it measures.
-    fn positive(&self, value: &Spanned<f64>, object: &str, field: &str, what: &str) -> Result<f32> {
+    fn positive_measure(&self, value: &Spanned<f64>, object: &str, field: &str, what: &str) -> Result<f32> {
         let v = self.number(value, object, field)?;
         if v <= 0.0 {
-            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be > 0 ({what})")));
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is {}; it must be > 0 ({what})", fmt_f32(v)),
+            ));
         }
         Ok(v)
     }
@@ -478,9 +548,9 @@ impl Builder<'_> {
             return Ok(None);
         };
         let radius = match name {
-            "aperture_radius" => self.positive(value, object, name, "the radius of the lens in scene units")?,
+            "aperture_radius" => self.positive_measure(value, object, name, "the radius of the lens in scene units")?,
             "f_number" => {
-                let n = self.positive(value, object, name, "the focal length over the aperture's diameter")?;
+                let n = self.positive_measure(value, object, name, "the focal length over the aperture's diameter")?;
                 let Some(fl) = &c.focal_length else {
                     return Err(self.invalid(
                         &value.span(),
@@ -490,12 +560,26 @@ impl Builder<'_> {
                             .to_string(),
                     ));
                 };
-                let focal_length = self.positive(fl, object, "focal_length", "scene units")?;
-                focal_length / (2.0 * n)
+                let focal_length = self.positive_measure(fl, object, "focal_length", "scene units")?;
+                let radius = focal_length as f64 / (2.0 * n as f64);
+                if radius > MAX_SCENE_VALUE {
+                    return Err(self.invalid(
+                        &value.span(),
+                        object,
+                        format!(
+                            "`f_number` {} with `focal_length` {} gives an aperture of radius {}, beyond the scene \
+                             range, +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
+                            fmt_f32(n),
+                            fmt_f32(focal_length),
+                            fmt_number(radius)
+                        ),
+                    ));
+                }
+                radius as f32
             }
             // POV-Ray offsets the eye by aperture/2 times lens samples within +-0.5
             // (tracepixel.cpp, JitterCameraRay): a disc of radius aperture/4.
-            _ => 0.25 * self.positive(value, object, name, "POV-Ray's aperture, four times the lens radius")?,
+            _ => 0.25 * self.positive_measure(value, object, name, "POV-Ray's aperture, four times the lens radius")?,
         };
         if name != "f_number" {
             if let Some(span) = span_of(&c.focal_length) {
@@ -516,7 +600,9 @@ impl Builder<'_> {
                     "give `focal_distance` or `focal_point`, not both".to_string(),
                 ));
             }
-            (Some(d), None) => self.positive(d, object, "focal_distance", "scene units along the view direction")?,
+            (Some(d), None) => {
+                self.positive_measure(d, object, "focal_distance", "scene units along the view direction")?
+            }
             (None, Some(p)) => {
                 let point = self.point(p, object, "focal_point")?;
                 let depth = (point - position).dot(forward);
@@ -524,7 +610,10 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &p.span(),
                         object,
-                        format!("`focal_point` {point} is not in front of the camera; give a point it looks at"),
+                        format!(
+                            "`focal_point` {} is not in front of the camera; give a point it looks at",
+                            vec3_text(point)
+                        ),
                     ));
                 }
                 depth
@@ -542,12 +631,15 @@ impl Builder<'_> {
         };
         let blades = match &c.aperture_blades {
             Some(b) => {
-                let n = self.integer(b, object, "aperture_blades", 0, "0 (a round aperture) or 3 to 64")?;
-                if n != 0 && !(3..=64).contains(&n) {
+                let n =
+                    self.integer(b, object, "aperture_blades", 0, MAX_APERTURE_BLADES, "", "; 0 is a round aperture")?;
+                if n != 0 && !(3..=MAX_APERTURE_BLADES).contains(&n) {
                     return Err(self.invalid(
                         &b.span(),
                         object,
-                        format!("`aperture_blades` is {n}; it must be 0 (a round aperture) or 3 to 64"),
+                        format!(
+                            "`aperture_blades` is {n}; it must be 0 (a round aperture) or 3 to {MAX_APERTURE_BLADES}"
+                        ),
                     ));
                 }
                 n
@@ -570,16 +662,16 @@ impl Builder<'_> {
         };
         let r = def.get_ref();
         if let Some(spp) = &r.spp {
-            settings.spp = self.integer(spp, object, "spp", 1, "at least 1 sample per pixel")?;
+            settings.spp = self.integer(spp, object, "spp", 1, MAX_SPP, " samples per pixel", "")?;
         }
         if let Some(depth) = &r.max_depth {
-            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, MAX_DEPTH, "", "")?;
         }
         if let Some(passes) = &r.passes {
-            settings.passes = self.integer(passes, object, "passes", 1, "at least 1")?;
+            settings.passes = self.integer(passes, object, "passes", 1, MAX_PASSES, "", "")?;
         }
         if let Some(seed) = &r.seed {
-            settings.seed = self.integer(seed, object, "seed", 0, "between 0 and 4294967295")?;
+            settings.seed = self.integer(seed, object, "seed", 0, u32::MAX, "", "")?;
         }
         Ok(settings)
     }
@@ -597,11 +689,14 @@ impl Builder<'_> {
                 object,
                 "count",
                 1,
-                "at least 1 photon path (set `enabled = false` to turn photon mapping off)",
+                MAX_PHOTON_PATHS,
+                " photon paths",
+                "; set `enabled = false` to turn photon mapping off",
             )?;
         }
         if let Some(count) = &p.caustic_count {
-            settings.caustic_photons = self.integer(count, object, "caustic_count", 1, "at least 1 photon path")?;
+            settings.caustic_photons =
+                self.integer(count, object, "caustic_count", 1, MAX_PHOTON_PATHS, " photon paths", "")?;
         }
         let radius = |value: &Spanned<f64>, field: &str| -> Result<f32> {
             let r = self.number(value, object, field)?;
@@ -609,7 +704,10 @@ impl Builder<'_> {
                 return Err(self.invalid(
                     &value.span(),
                     object,
-                    format!("`{field}` is {r}; give a positive radius in scene units, or leave it out to derive one"),
+                    format!(
+                        "`{field}` is {}; give a positive radius in scene units, or leave it out to derive one",
+                        fmt_f32(r)
+                    ),
                 ));
             }
             Ok(r)
@@ -622,10 +720,10 @@ impl Builder<'_> {
         }
         if let Some(rays) = &p.gather_rays {
             settings.gather_rays =
-                self.integer(rays, object, "gather_rays", 0, "0 (read the global map directly) or more")?;
+                self.integer(rays, object, "gather_rays", 0, MAX_GATHER_RAYS, "", "; 0 reads the global map directly")?;
         }
         if let Some(depth) = &p.max_depth {
-            settings.max_depth = self.integer(depth, object, "max_depth", 1, "at least 1")?;
+            settings.max_depth = self.integer(depth, object, "max_depth", 1, MAX_DEPTH, "", "")?;
         }
         if let Some(a) = &p.alpha {
             let alpha = self.number(a, object, "alpha")?;
@@ -633,7 +731,7 @@ impl Builder<'_> {
                 return Err(self.invalid(
                     &a.span(),
                     object,
-                    format!("`alpha` is {alpha}; it must be in (0, 1), e.g. 0.667"),
+                    format!("`alpha` is {}; it must be in (0, 1), e.g. 0.667", fmt_f32(alpha)),
                 ));
             }
             settings.alpha = alpha;
@@ -659,7 +757,7 @@ impl Builder<'_> {
 
     fn material(&mut self, key: &Spanned<String>, def: &Spanned<MaterialDef>) -> Result<()> {
         let name = key.get_ref().clone();
-        let object = format!("material \"{name}\"");
+        let object = format!("material \"{}\"", printable(&name));
         let m = def.get_ref();
         let kind_def = self.require(&m.r#type, &def.span(), &object, "type", "type = \"diffuse\"")?;
         let kind = self.one_of(kind_def, &object, "type", MATERIAL_TYPES)?;
@@ -850,11 +948,15 @@ impl Builder<'_> {
             return Ok(DEFAULT_IOR);
         };
         let ior = self.number(ior_def, object, "ior")?;
-        if !(ior > 0.0 && ior <= 10.0) {
+        if !(ior as f64 >= 1.0 / MAX_IOR && ior as f64 <= MAX_IOR) {
             return Err(self.invalid(
                 &ior_def.span(),
                 object,
-                format!("`ior` is {ior}; the index of refraction must be > 0 and at most 10 (glass is about 1.5)"),
+                format!(
+                    "`ior` is {}; the index of refraction must be > 0, from {} to {MAX_IOR} (glass is about 1.5)",
+                    fmt_f32(ior),
+                    1.0 / MAX_IOR
+                ),
             ));
         }
         Ok(ior)
@@ -958,7 +1060,8 @@ impl Builder<'_> {
         };
         let v = number as f32;
         if !(v >= min && v <= max) {
-            return Err(self.invalid(&value.span(), object, format!("`{field}` is {number}; it must be {what}")));
+            let shown = fmt_number(number);
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {shown}; it must be {what}")));
         }
         Ok(ScalarParam { value: v, texture })
     }
@@ -969,17 +1072,17 @@ impl Builder<'_> {
             return Ok(id as u32);
         }
         let hint = match suggest(name, &self.texture_names) {
-            Some(best) => format!("did you mean \"{best}\"?"),
-            None => format!("define it with a [textures.{name}] table"),
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
+            None => format!("define it with a [textures.{}] table", printable(name)),
         };
-        Err(self.invalid(span, object, format!("unknown texture \"{name}\" ({hint})")))
+        Err(self.invalid(span, object, format!("unknown texture \"{}\" ({hint})", printable(name))))
     }
 
     // Textures
 
     fn texture(&mut self, key: &Spanned<String>, def: &Spanned<TextureDef>) -> Result<()> {
         let name = key.get_ref().clone();
-        let object = format!("texture \"{name}\"");
+        let object = format!("texture \"{}\"", printable(&name));
         let t = def.get_ref();
         let table = def.span();
         let kind_def = self.require(&t.r#type, &table, &object, "type", "type = \"pattern\"")?;
@@ -1119,17 +1222,23 @@ impl Builder<'_> {
             self.material_used[id] = true;
             return Ok(id as u32);
         }
+        let shown = printable(name);
         let hint = match suggest(name, &self.material_names) {
-            Some(best) => format!("did you mean \"{best}\"?"),
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
             None if self.material_names.is_empty() => {
-                format!("define it with a [materials.{name}] table")
+                format!("define it with a [materials.{shown}] table")
             }
             None => format!(
-                "defined materials: {}; or add a [materials.{name}] table",
-                self.material_names.iter().map(|n| format!("\"{n}\"")).collect::<Vec<_>>().join(", ")
+                "defined materials: {}; or add a [materials.{shown}] table",
+                self.material_names
+                    .iter()
+                    .take(20)
+                    .map(|n| format!("\"{}\"", printable(n)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         };
-        Err(self.invalid(&value.span(), object, format!("unknown material \"{name}\" ({hint})")))
+        Err(self.invalid(&value.span(), object, format!("unknown material \"{shown}\" ({hint})")))
     }
 
     // Shapes
@@ -1151,11 +1260,29 @@ impl Builder<'_> {
             ("max", span_of(&s.max)),
             ("file", span_of(&s.file)),
             ("transform", span_of(&s.transform)),
+            ("normal", span_of(&s.normal)),
+            ("offset", span_of(&s.offset)),
+            ("inner_radius", span_of(&s.inner_radius)),
+            ("base", span_of(&s.base)),
+            ("cap", span_of(&s.cap)),
+            ("base_radius", span_of(&s.base_radius)),
+            ("cap_radius", span_of(&s.cap_radius)),
+            ("open", span_of(&s.open)),
+            ("axis", span_of(&s.axis)),
+            ("major_radius", span_of(&s.major_radius)),
+            ("minor_radius", span_of(&s.minor_radius)),
+            ("exponents", span_of(&s.exponents)),
         ];
         let (what, fields): (&str, &[&str]) = match kind {
             "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
             "sphere" => ("a sphere", &["center", "radius"]),
             "box" => ("a box", &["min", "max"]),
+            "plane" => ("a plane", &["normal", "offset"]),
+            "disc" => ("a disc", &["center", "normal", "radius", "inner_radius"]),
+            "cylinder" => ("a cylinder", &["base", "cap", "radius", "open"]),
+            "cone" => ("a cone", &["base", "cap", "base_radius", "cap_radius", "open"]),
+            "torus" => ("a torus", &["center", "axis", "major_radius", "minor_radius"]),
+            "superellipsoid" => ("a superellipsoid", &["center", "exponents"]),
             _ => ("a mesh", &["file"]),
         };
         let mut allowed = vec!["name", "type", "material", "transform"];
@@ -1192,7 +1319,11 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &max_def.span(),
                         &object,
-                        format!("`max` ({max}) must be greater than `min` ({min}) in x, y and z"),
+                        format!(
+                            "`max` ({}) must be greater than `min` ({}) in x, y and z",
+                            vec3_text(max),
+                            vec3_text(min)
+                        ),
                     ));
                 }
                 for corners in box_faces(min, max) {
@@ -1200,11 +1331,203 @@ impl Builder<'_> {
                 }
                 Ok(())
             }
-            _ => {
+            "mesh" => {
                 let file = self.require(&s.file, &table, &object, "file", "file = \"meshes/bunny.obj\"")?;
                 self.mesh(file, &object, material, transform)
             }
+            _ => {
+                if kind == "plane" && self.materials[material as usize].emits() {
+                    return Err(self.invalid(
+                        &material_def.span(),
+                        &object,
+                        format!(
+                            "material \"{}\" emits light, but an infinite plane cannot be a light (its power would be infinite); use a quad or a disc, or a material without `emission`",
+                            material_def.get_ref()
+                        ),
+                    ));
+                }
+                for (kind, placement) in self.analytic(kind, s, &table, &object)? {
+                    let world_from_object = transform.unwrap_or(Affine3A::IDENTITY) * placement;
+                    let shape = Analytic { kind, world_from_object };
+                    let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
+                    self.check_placement(&shape, &span, &object)?;
+                    self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material });
+                }
+                Ok(())
+            }
         }
+    }
+
+    /// A number > 0 from a required field.
+    fn positive(&self, value: &Spanned<f64>, object: &str, field: &str) -> Result<f32> {
+        let v = self.number(value, object, field)?;
+        if v <= 0.0 {
+            return Err(self.invalid(&value.span(), object, format!("`{field}` is {v}; it must be > 0")));
+        }
+        Ok(v)
+    }
+
+    /// A direction: three finite numbers, not all zero, normalised.
+    fn direction(&self, value: &Spanned<Vec3Def>, object: &str, field: &str) -> Result<Vec3> {
+        let v = self.point(value, object, field)?;
+        let n = v.normalize_or_zero();
+        if n == Vec3::ZERO || !n.is_finite() {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is [0, 0, 0], which has no direction; give e.g. `{field} = [0, 1, 0]`"),
+            ));
+        }
+        Ok(n)
+    }
+
+    /// The object-space pieces of an analytic shape, each with its `world_from_object` before
+    /// the shape's own `transform`: a closed cylinder or cone is its side and two discs.
+    fn analytic(
+        &self,
+        kind: &str,
+        s: &ShapeDef,
+        table: &Range<usize>,
+        object: &str,
+    ) -> Result<Vec<(AnalyticKind, Affine3A)>> {
+        let optional_point = |field: &Option<Spanned<Vec3Def>>, name: &str| -> Result<Vec3> {
+            field.as_ref().map_or(Ok(Vec3::ZERO), |v| self.point(v, object, name))
+        };
+        match kind {
+            "plane" => {
+                let normal = self.require(&s.normal, table, object, "normal", "normal = [0, 1, 0]")?;
+                let normal = self.direction(normal, object, "normal")?;
+                let offset = s.offset.as_ref().map_or(Ok(0.0), |o| self.number(o, object, "offset"))?;
+                Ok(vec![(AnalyticKind::Plane, frame(normal * offset, normal))])
+            }
+            "disc" => {
+                let center = self.require(&s.center, table, object, "center", "center = [0, 0, 0]")?;
+                let center = self.point(center, object, "center")?;
+                let normal = self.require(&s.normal, table, object, "normal", "normal = [0, 1, 0]")?;
+                let normal = self.direction(normal, object, "normal")?;
+                let radius_def = self.require(&s.radius, table, object, "radius", "radius = 1.0")?;
+                let radius = self.positive(radius_def, object, "radius")?;
+                let inner_radius = match &s.inner_radius {
+                    Some(r) => {
+                        let v = self.number(r, object, "inner_radius")?;
+                        if v < 0.0 || v >= radius {
+                            return Err(self.invalid(
+                                &r.span(),
+                                object,
+                                format!("`inner_radius` is {v}; it must be in [0, radius) = [0, {radius})"),
+                            ));
+                        }
+                        v
+                    }
+                    None => 0.0,
+                };
+                Ok(vec![(AnalyticKind::Disc { radius, inner_radius }, frame(center, normal))])
+            }
+            "cylinder" | "cone" => {
+                let base_def = self.require(&s.base, table, object, "base", "base = [0, 0, 0]")?;
+                let base = self.point(base_def, object, "base")?;
+                let cap_def = self.require(&s.cap, table, object, "cap", "cap = [0, 1, 0]")?;
+                let cap = self.point(cap_def, object, "cap")?;
+                let height = base.distance(cap);
+                if height <= 0.0 || !height.is_finite() {
+                    return Err(self.invalid(
+                        &cap_def.span(),
+                        object,
+                        format!("`cap` ({cap}) is the same point as `base`; a {kind} needs a height"),
+                    ));
+                }
+                let (r0, r1) = if kind == "cylinder" {
+                    let r = self.require(&s.radius, table, object, "radius", "radius = 0.5")?;
+                    let r = self.positive(r, object, "radius")?;
+                    (r, r)
+                } else {
+                    let r0_def = self.require(&s.base_radius, table, object, "base_radius", "base_radius = 0.5")?;
+                    let r1_def = self.require(&s.cap_radius, table, object, "cap_radius", "cap_radius = 0")?;
+                    let r0 = self.number(r0_def, object, "base_radius")?;
+                    let r1 = self.number(r1_def, object, "cap_radius")?;
+                    for (r, def, name) in [(r0, r0_def, "base_radius"), (r1, r1_def, "cap_radius")] {
+                        if r < 0.0 {
+                            return Err(self.invalid(&def.span(), object, format!("`{name}` is {r}; it must be >= 0")));
+                        }
+                    }
+                    if r0 == 0.0 && r1 == 0.0 {
+                        return Err(self.invalid(
+                            &r1_def.span(),
+                            object,
+                            "`base_radius` and `cap_radius` are both 0, which leaves a line; give one of them a radius"
+                                .to_string(),
+                        ));
+                    }
+                    (r0, r1)
+                };
+                let placement = frame(base, (cap - base) / height);
+                let mut pieces = vec![(AnalyticKind::Cone { r0, r1, height }, placement)];
+                if !s.open.as_ref().is_some_and(|o| *o.get_ref()) {
+                    // Caps face outward: the base's disc turned upside down (a half turn about x).
+                    let down = placement * Affine3A::from_rotation_x(std::f32::consts::PI);
+                    let up = placement * Affine3A::from_translation(Vec3::new(0.0, height, 0.0));
+                    for (radius, placement) in [(r0, down), (r1, up)] {
+                        if radius > 0.0 {
+                            pieces.push((AnalyticKind::Disc { radius, inner_radius: 0.0 }, placement));
+                        }
+                    }
+                }
+                Ok(pieces)
+            }
+            "torus" => {
+                let center = optional_point(&s.center, "center")?;
+                let axis = s.axis.as_ref().map_or(Ok(Vec3::Y), |a| self.direction(a, object, "axis"))?;
+                let major_def = self.require(&s.major_radius, table, object, "major_radius", "major_radius = 1.0")?;
+                let minor_def = self.require(&s.minor_radius, table, object, "minor_radius", "minor_radius = 0.25")?;
+                let major = self.positive(major_def, object, "major_radius")?;
+                let minor = self.positive(minor_def, object, "minor_radius")?;
+                if minor >= major {
+                    return Err(self.invalid(
+                        &minor_def.span(),
+                        object,
+                        format!(
+                            "`minor_radius` ({minor}) must be smaller than `major_radius` ({major}); a horn or spindle torus intersects itself"
+                        ),
+                    ));
+                }
+                Ok(vec![(AnalyticKind::Torus { major, minor }, frame(center, axis))])
+            }
+            _ => {
+                let center = optional_point(&s.center, "center")?;
+                let def = self.require(&s.exponents, table, object, "exponents", "exponents = [0.5, 0.5]")?;
+                let values = def.get_ref();
+                let in_range = |v: f64| (SUPERELLIPSOID_MIN_EXPONENT..=2.0).contains(&v);
+                if values.len() != 2 || !values.iter().all(|&v| in_range(v)) {
+                    return Err(self.invalid(
+                        &def.span(),
+                        object,
+                        format!(
+                            "`exponents` is {values:?}; give two numbers [e, n] (POV-Ray's east-west and north-south exponents), each in [{SUPERELLIPSOID_MIN_EXPONENT}, 2] (1 is round, small is boxy, 2 is an octahedron)"
+                        ),
+                    ));
+                }
+                let (e, n) = (values[0] as f32, values[1] as f32);
+                Ok(vec![(AnalyticKind::Superellipsoid { e, n }, Affine3A::from_translation(center))])
+            }
+        }
+    }
+
+    /// Refuses a placed analytic shape that float arithmetic cannot handle: a transform that
+    /// flattens it (no inverse) or sends its bounds to infinity.
+    fn check_placement(&self, shape: &Analytic, span: &Range<usize>, object: &str) -> Result<()> {
+        let det = shape.world_from_object.matrix3.determinant();
+        let (lo, hi) = shape.bounds();
+        let bounded = shape.is_unbounded() || (lo.is_finite() && hi.is_finite());
+        let invertible = det.is_finite() && det.abs() > 1e-30 && shape.world_from_object.inverse().is_finite();
+        if !bounded || !invertible {
+            return Err(self.invalid(
+                span,
+                object,
+                "`transform` scales the shape to zero or to infinity in float precision; use scale factors between about 1e-6 and 1e6"
+                    .to_string(),
+            ));
+        }
+        Ok(())
     }
 
     /// `count` vertices from a `vertices` field.
@@ -1283,6 +1606,9 @@ impl Builder<'_> {
         transform: Option<Affine3A>,
     ) -> Result<()> {
         let (vertices, uv) = apply(transform, vertices, uv);
+        if let Some(far) = beyond_scene_range(&vertices) {
+            return Err(self.invalid(span, object, transformed_out_of_range(far)));
+        }
         if is_degenerate(&vertices) {
             return Err(self.invalid(
                 span,
@@ -1304,8 +1630,15 @@ impl Builder<'_> {
     ) -> Result<()> {
         let mut c = self.point(center, object, "center")?;
         let mut r = self.number(radius, object, "radius")?;
-        if r <= 0.0 {
-            return Err(self.invalid(&radius.span(), object, format!("`radius` is {r}; it must be > 0")));
+        if (r as f64) < MIN_SPHERE_RADIUS {
+            return Err(self.invalid(
+                &radius.span(),
+                object,
+                format!(
+                    "`radius` is {}; it must be > 0 (at least {MIN_SPHERE_RADIUS:e}, at most {MAX_SCENE_VALUE:e})",
+                    fmt_f32(r)
+                ),
+            ));
         }
         let mut object_from_world = None;
         if let Some(t) = transform {
@@ -1326,6 +1659,24 @@ impl Builder<'_> {
             let rotation = if rotation.determinant() < 0.0 { -rotation } else { rotation };
             object_from_world = Some(rotation.transpose());
         }
+        if let Some(far) = beyond_scene_range(&[c - Vec3::splat(r), c + Vec3::splat(r)]) {
+            let message = match transform {
+                Some(_) => transformed_out_of_range(far),
+                None => format!(
+                    "the sphere reaches coordinate {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} (see \
+                     docs/limits.md)",
+                    fmt_f32(far)
+                ),
+            };
+            return Err(self.invalid(&radius.span(), object, message));
+        }
+        if (r as f64) < MIN_SPHERE_RADIUS {
+            let message = format!(
+                "`transform` shrinks the sphere to radius {}, below the smallest, {MIN_SPHERE_RADIUS:e}",
+                fmt_f32(r)
+            );
+            return Err(self.invalid(&radius.span(), object, message));
+        }
         let sphere = Sphere { center: c, radius: r, object_from_world };
         self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material });
         Ok(())
@@ -1343,8 +1694,8 @@ impl Builder<'_> {
             },
             ObjError::Malformed { line, message } => SceneError::Obj {
                 obj_location: match line {
-                    Some(line) => format!("{}:{line}", obj_path.display()),
-                    None => obj_path.display().to_string(),
+                    Some(line) => format!("{}:{line}", printable_message(&obj_path.display().to_string())),
+                    None => printable_message(&obj_path.display().to_string()),
                 },
                 message,
                 object: object.to_string(),
@@ -1355,6 +1706,17 @@ impl Builder<'_> {
         let mut skipped = 0;
         for t in triangles {
             let (vertices, uv) = apply(transform, t.vertices, t.uv);
+            if let Some(far) = beyond_scene_range(&vertices) {
+                return Err(SceneError::Invalid {
+                    location,
+                    object: object.to_string(),
+                    message: format!(
+                        "mesh {}: {}",
+                        printable_message(&obj_path.display().to_string()),
+                        transformed_out_of_range(far)
+                    ),
+                });
+            }
             // Zero-area triangles are common in exported meshes and harmless to skip.
             if is_degenerate(&vertices) {
                 skipped += 1;
@@ -1364,7 +1726,7 @@ impl Builder<'_> {
         }
         if skipped == total {
             return Err(SceneError::Obj {
-                obj_location: obj_path.display().to_string(),
+                obj_location: printable_message(&obj_path.display().to_string()),
                 message: format!("all {total} triangles have zero area"),
                 object: object.to_string(),
                 location,
@@ -1373,7 +1735,7 @@ impl Builder<'_> {
         if skipped > 0 {
             self.warnings.push(format!(
                 "{location}: {object}: skipped {skipped} of {total} triangles of {} with zero area",
-                obj_path.display()
+                printable_message(&obj_path.display().to_string())
             ));
         }
         Ok(())
@@ -1469,7 +1831,7 @@ impl Builder<'_> {
             "distant" => {
                 let allowed = [&common[..], &["direction", "irradiance", "angular_diameter"]].concat();
                 self.only_fields(&object, "a distant light", &present, &allowed)?;
-                let direction = self.direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
+                let direction = self.light_direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
                 let irradiance = self.light_color(&l.irradiance, &table, &object, "irradiance", "irradiance = 3")?;
                 let half_angle_deg = match &l.angular_diameter {
                     Some(a) => {
@@ -1479,8 +1841,9 @@ impl Builder<'_> {
                                 &a.span(),
                                 &object,
                                 format!(
-                                    "`angular_diameter` is {deg}; it is the apparent size of the light in degrees, \
-                                     in [0, 90] (the sun is about 0.53)"
+                                    "`angular_diameter` is {}; it is the apparent size of the light in degrees, \
+                                     in [0, 90] (the sun is about 0.53)",
+                                    fmt_f32(deg)
                                 ),
                             ));
                         }
@@ -1514,8 +1877,8 @@ impl Builder<'_> {
         Ok(value)
     }
 
-    /// A required direction: three numbers, not all zero; returned normalised.
-    fn direction(
+    /// A light's required `direction`: three numbers, not all zero; returned normalised.
+    fn light_direction(
         &self,
         field: &Option<Spanned<Vec3Def>>,
         table: &Range<usize>,
@@ -1577,14 +1940,16 @@ impl Builder<'_> {
                 }
                 (target - position).normalize()
             }
-            _ => self.direction(&l.direction, table, object, "direction = [0, -1, 0]` or `point_at = [0, 0, 0]")?,
+            _ => {
+                self.light_direction(&l.direction, table, object, "direction = [0, -1, 0]` or `point_at = [0, 0, 0]")?
+            }
         };
         let intensity = self.light_color(&l.intensity, table, object, "intensity", "intensity = [50, 50, 50]")?;
         // Half-angles in degrees, at most 90; an outer angle must also be above 0.
         let angle = |value: &Spanned<f64>, field: &str, outer: bool, what: &str| -> Result<f32> {
             let deg = self.number(value, object, field)?;
             if !(0.0..=90.0).contains(&deg) || (outer && deg == 0.0) {
-                return Err(self.invalid(&value.span(), object, format!("`{field}` is {deg}; {what}")));
+                return Err(self.invalid(&value.span(), object, format!("`{field}` is {}; {what}", fmt_f32(deg))));
             }
             Ok(deg)
         };
@@ -1626,19 +1991,25 @@ impl Builder<'_> {
                 &outer_span.unwrap_or(table.clone()),
                 object,
                 format!(
-                    "`{outer_name}` ({outer}) is below `{inner_name}` ({inner}); the light falls off from \
-                     `{inner_name}` out to `{outer_name}`, so raise `{outer_name}` to at least {inner} or lower `{inner_name}`"
+                    "`{outer_name}` ({}) is below `{inner_name}` ({}); the light falls off from \
+                     `{inner_name}` out to `{outer_name}`, so raise `{outer_name}` to at least {} or lower `{inner_name}`",
+                    fmt_f32(outer),
+                    fmt_f32(inner),
+                    fmt_f32(inner)
                 ),
             ));
         }
         let exponent = match &l.tightness {
             Some(t) => {
                 let e = self.number(t, object, "tightness")?;
-                if !(0.0..=1000.0).contains(&e) {
+                if !(0.0..=MAX_SPOT_TIGHTNESS as f32).contains(&e) {
                     return Err(self.invalid(
                         &t.span(),
                         object,
-                        format!("`tightness` is {e}; it is the exponent of cos in [0, 1000] (0 for none)"),
+                        format!(
+                            "`tightness` is {}; it is the exponent of cos in [0, {MAX_SPOT_TIGHTNESS}] (0 for none)",
+                            fmt_f32(e)
+                        ),
                     ));
                 }
                 e
@@ -1740,7 +2111,7 @@ impl Builder<'_> {
                     return Err(self.invalid(
                         &v.span(),
                         object,
-                        format!("`strength` is {k}; it scales the radiance and must be >= 0"),
+                        format!("`strength` is {}; it scales the radiance and must be >= 0", fmt_f32(k)),
                     ));
                 }
                 k
@@ -1774,7 +2145,10 @@ impl Builder<'_> {
                 })?;
                 let mut image = image;
                 let (w0, h0) = (image.width, image.height);
-                while image.width as u64 * image.height as u64 > ENV_MAX_TEXELS && image.width > 1 && image.height > 1 {
+                while image.width as u64 * image.height as u64 > MAX_ENVIRONMENT_TEXELS
+                    && image.width > 1
+                    && image.height > 1
+                {
                     image = halve(&image);
                 }
                 if image.width != w0 {
@@ -1798,11 +2172,14 @@ impl Builder<'_> {
                 let mut colors = Vec::new();
                 for c in colors_def.get_ref() {
                     let v = Vec3::new(c.value[0] as f32, c.value[1] as f32, c.value[2] as f32);
-                    if !v.is_finite() || v.min_element() < 0.0 {
+                    if !v.is_finite() || v.min_element() < 0.0 || v.max_element() as f64 > MAX_SCENE_VALUE {
                         return Err(self.invalid(
                             &colors_def.span(),
                             object,
-                            format!("`colors` holds {v}; give finite radiances >= 0"),
+                            format!(
+                                "`colors` holds {}; give finite radiances >= 0 (at most {MAX_SCENE_VALUE:e})",
+                                vec3_text(v)
+                            ),
                         ));
                     }
                     colors.push(v);
@@ -1826,7 +2203,8 @@ impl Builder<'_> {
                                 &el.span(),
                                 object,
                                 format!(
-                                    "`elevations` is {values:?}; give one elevation per colour ({}), increasing, in [-90, 90] degrees",
+                                    "`elevations` is [{}]; give one elevation per colour ({}), increasing, in [-90, 90] degrees",
+                                    values.iter().map(|&v| fmt_f32(v)).collect::<Vec<_>>().join(", "),
                                     colors.len()
                                 ),
                             ));
@@ -1849,10 +2227,38 @@ impl Builder<'_> {
                 }
             }
         };
+        // Radiance is in [0, MAX_SCENE_VALUE] like every colour of a scene: a map's NaN and
+        // negative texels (EXR allows them) become 0, and a texel too bright is refused.
+        let mut cleared = 0usize;
+        let mut brightest = 0.0f32;
         for t in &mut image.texels {
             for c in &mut t[..3] {
-                *c *= strength;
+                if c.is_nan() || *c < 0.0 {
+                    cleared += 1;
+                    *c = 0.0;
+                }
+                // (An infinite texel at strength 0 is black, not NaN.)
+                *c = if strength == 0.0 { 0.0 } else { *c * strength };
+                brightest = brightest.max(*c);
             }
+        }
+        let at_field = span_of(&e.file).or(span_of(&e.strength)).unwrap_or(table.clone());
+        if cleared > 0 {
+            let at = self.src.at(&at_field);
+            self.warnings.push(format!(
+                "{at}: {object}: {cleared} texel channels of the map are negative or NaN; they are taken as 0"
+            ));
+        }
+        if brightest as f64 > MAX_SCENE_VALUE {
+            return Err(self.invalid(
+                &at_field,
+                object,
+                format!(
+                    "the environment's radiance reaches {} (times `strength`), beyond the largest scene value, \
+                     {MAX_SCENE_VALUE:e} (see docs/limits.md); lower `strength`",
+                    fmt_f32(brightest)
+                ),
+            ));
         }
         Ok(Environment { image: std::sync::Arc::new(image), rotation_deg, direct, photons })
     }
@@ -1897,6 +2303,17 @@ fn gradient_image(colors: &[Vec3], elevations: &[f32]) -> ImageTexture {
     ImageTexture { width: 1, height: GRADIENT_ROWS, texels }
 }
 
+/// The placement of an object space whose origin goes to `origin` and whose +y axis goes to the
+/// unit vector `axis` (the shortest rotation: none for +y, a half turn about x for -y).
+fn frame(origin: Vec3, axis: Vec3) -> Affine3A {
+    let rotation = if axis.dot(Vec3::Y) < -0.999_999 {
+        glam::Quat::from_rotation_x(std::f32::consts::PI)
+    } else {
+        glam::Quat::from_rotation_arc(Vec3::Y, axis)
+    };
+    Affine3A::from_rotation_translation(rotation, origin)
+}
+
 /// The triangle moved by `transform`, with its vertex uvs kept in step with its vertices.
 fn apply(transform: Option<Affine3A>, vertices: [Vec3; 3], uv: Option<[Vec2; 3]>) -> ([Vec3; 3], Option<[Vec2; 3]>) {
     let Some(t) = transform else {
@@ -1923,6 +2340,32 @@ fn is_degenerate(v: &[Vec3; 3]) -> bool {
     let twice_area = e0.cross(e1).length();
     let has_area = twice_area.is_finite() && twice_area > 1e-7 * longest;
     !has_area
+}
+
+/// A number outside +-`MAX_SCENE_VALUE`, as a message.
+fn out_of_scene_range(field: &str, v: f64) -> String {
+    format!(
+        "`{field}` holds {}; every number in a scene (coordinates, lengths, colours, angles) must be within \
+         +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
+        fmt_number(v)
+    )
+}
+
+/// The first coordinate of `points` beyond +-`MAX_SCENE_VALUE` (or not finite), if any.
+fn beyond_scene_range(points: &[Vec3]) -> Option<f32> {
+    points.iter().flat_map(|p| p.to_array()).find(|c| !c.is_finite() || c.abs() as f64 > MAX_SCENE_VALUE)
+}
+
+fn transformed_out_of_range(coordinate: f32) -> String {
+    format!(
+        "`transform` moves the shape to coordinate {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} \
+         (see docs/limits.md); use a smaller `scale` or `translate`",
+        fmt_f32(coordinate)
+    )
+}
+
+fn vec3_text(c: Vec3) -> String {
+    format!("[{}, {}, {}]", fmt_f32(c.x), fmt_f32(c.y), fmt_f32(c.z))
 }
 
 /// The six faces of an axis-aligned box as quads whose winding normal points outward.

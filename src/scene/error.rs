@@ -7,14 +7,25 @@ use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+use crate::limits::{printable, printable_message, shorten_numbers};
+
 /// Why a scene could not be loaded. `Display` is the whole user-facing message: it starts with
 /// `path:line` (or `path:line:column` for TOML errors), names the object and field, and says what
 /// to do.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    /// The scene file could not be read.
-    #[error("{}: cannot read the scene file: {source}", path.display())]
-    Read { path: PathBuf, source: std::io::Error },
+    /// The scene file could not be read. (`cause`, not `source`: the message already holds its
+    /// text, and an error chain printed by `main` would repeat it.)
+    #[error("{}: cannot read the scene file: {cause}", path.display())]
+    Read { path: PathBuf, cause: std::io::Error },
+    /// The scene file is larger than `limit` bytes, or endless (a device file).
+    #[error(
+        "{}: the scene file is larger than {} (the most photonix reads; see docs/limits.md); \
+         is it the right file?",
+        path.display(),
+        crate::limits::fmt_bytes(*limit)
+    )]
+    TooLarge { path: PathBuf, limit: u64 },
     /// TOML syntax error, or a value of the wrong type (`radius = "big"`).
     #[error("{location}: {message}")]
     Syntax { location: String, message: String },
@@ -34,7 +45,10 @@ pub enum SceneError {
     #[error("{location}: the scene has no [camera]; add a [camera] table with `position`, `look_at` and `fov`")]
     MissingCamera { location: String },
     /// A mesh's OBJ file does not exist.
-    #[error("{location}: {object}: mesh file not found: {} (paths are relative to the scene file)", looked_for.display())]
+    #[error(
+        "{location}: {object}: mesh file not found: {} (paths are relative to the scene file)",
+        printable_message(&looked_for.display().to_string())
+    )]
     MeshNotFound { location: String, object: String, looked_for: PathBuf },
     /// A mesh's OBJ file exists but cannot be used. `obj_location` is `file.obj:line` when the
     /// line is known, else the OBJ path.
@@ -61,25 +75,36 @@ impl Source<'_> {
 
     /// `path:line`.
     pub fn at(&self, span: &Range<usize>) -> String {
-        format!("{}:{}", self.path.display(), self.line_column(span.start).0)
+        format!("{}:{}", self.path_text(), self.line_column(span.start).0)
     }
 
     /// `path:line:column`.
     pub fn at_column(&self, span: &Range<usize>) -> String {
         let (line, column) = self.line_column(span.start);
-        format!("{}:{line}:{column}", self.path.display())
+        format!("{}:{line}:{column}", self.path_text())
     }
 
-    /// An `Invalid` error at `span`.
+    fn path_text(&self) -> String {
+        printable_message(&self.path.display().to_string())
+    }
+
+    /// An `Invalid` error at `span`. Control characters that reach the object or the message
+    /// (from names in the file) are escaped here, whatever the caller did.
     pub fn invalid(&self, span: &Range<usize>, object: &str, message: String) -> SceneError {
-        SceneError::Invalid { location: self.at(span), object: object.to_string(), message }
+        SceneError::Invalid {
+            location: self.at(span),
+            object: printable_message(object),
+            message: printable_message(&message),
+        }
     }
 
     /// Turns an error of `toml::from_str` into a `SceneError` that names the object and field.
     pub fn toml_error(&self, error: &toml::de::Error) -> SceneError {
         let span = error.span().unwrap_or(0..0);
         let location = self.at_column(&span);
-        let message = error.message().trim().to_string();
+        // The parser quotes values as written: escape what a terminal would act on, and write
+        // long numbers (`1e300` arrives as 1 followed by 300 zeros) in exponent form.
+        let message = shorten_numbers(&printable_message(error.message().trim()));
         // The syntax is valid whenever serde, not the parser, complains, so this parse succeeds
         // and tells us which table the offset is in.
         let key_path = DeTable::parse(self.text)
@@ -88,10 +113,11 @@ impl Source<'_> {
             .unwrap_or_default();
 
         if let Some(rest) = message.strip_prefix("unknown field `") {
-            let field = rest.split('`').next().unwrap_or_default().to_string();
+            let field = printable(rest.split('`').next().unwrap_or_default());
             let valid = expected_names(rest);
             let object = describe_table(self.text, &key_path[..key_path.len().saturating_sub(1)]);
-            let hint = match suggest(&field, &valid) {
+            let unknown = rest.split('`').next().unwrap_or_default();
+            let hint = match suggest(unknown, &valid) {
                 Some(best) => format!("did you mean `{best}`?"),
                 None if valid.is_empty() => "this table takes no fields".to_string(),
                 None => format!("valid fields: {}", backticked(&valid)),
@@ -178,14 +204,14 @@ fn describe_table(text: &str, path: &[KeyPart]) -> String {
         (Some("camera"), 1) => "[camera]".to_string(),
         (Some("render"), 1) => "[render]".to_string(),
         (Some("materials"), 1) => "[materials]".to_string(),
-        (Some("materials"), _) => format!("material \"{}\"", key(1).unwrap_or_default()),
+        (Some("materials"), _) => format!("material \"{}\"", printable(key(1).unwrap_or_default())),
         (Some(list @ ("shapes" | "lights")), _) => match index(1) {
             Some(n) => {
                 object_name(if list == "shapes" { "shape" } else { "light" }, n, element_name(text, list, n).as_deref())
             }
             None => format!("`{list}`"),
         },
-        (Some(other), _) => format!("`{other}`"),
+        (Some(other), _) => format!("`{}`", printable(other)),
     };
     // A nested table such as `transform`.
     let nested: Vec<&str> = path
@@ -199,7 +225,7 @@ fn describe_table(text: &str, path: &[KeyPart]) -> String {
     if nested.is_empty() {
         base
     } else {
-        format!("`{}` of {base}", nested.join("."))
+        format!("`{}` of {base}", printable(&nested.join(".")))
     }
 }
 
@@ -214,7 +240,7 @@ fn element_name(text: &str, list: &str, index: usize) -> Option<String> {
 /// `shape 3 ("ball")` or `shape 3`.
 pub(crate) fn object_name(kind: &str, index: usize, name: Option<&str>) -> String {
     match name {
-        Some(name) => format!("{kind} {index} (\"{name}\")"),
+        Some(name) => format!("{kind} {index} (\"{}\")", printable(name)),
         None => format!("{kind} {index}"),
     }
 }
@@ -301,6 +327,11 @@ const SYNONYMS: &[(&str, &[&str])] = &[
 
 /// The valid name closest to `unknown`, or `None` when nothing is close enough to be a typo.
 pub(crate) fn suggest(unknown: &str, valid: &[impl AsRef<str>]) -> Option<String> {
+    // Nothing that long is a typo of a field name (and the edit distance would cost its length
+    // times theirs).
+    if unknown.len() > 4 * crate::limits::MAX_ECHOED_CHARS {
+        return None;
+    }
     let lower = unknown.to_lowercase();
     if let Some((_, targets)) = SYNONYMS.iter().find(|(word, _)| *word == lower) {
         if let Some(hit) = targets.iter().find(|t| valid.iter().any(|v| v.as_ref() == **t)) {

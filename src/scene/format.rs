@@ -184,6 +184,19 @@ pub(crate) struct ShapeDef {
     pub max: Option<Spanned<Vec3Def>>,
     pub file: Option<Spanned<String>>,
     pub transform: Option<Spanned<TransformDef>>,
+    // analytic shapes
+    pub normal: Option<Spanned<Vec3Def>>,
+    pub offset: Option<Spanned<f64>>,
+    pub inner_radius: Option<Spanned<f64>>,
+    pub base: Option<Spanned<Vec3Def>>,
+    pub cap: Option<Spanned<Vec3Def>>,
+    pub base_radius: Option<Spanned<f64>>,
+    pub cap_radius: Option<Spanned<f64>>,
+    pub open: Option<Spanned<bool>>,
+    pub axis: Option<Spanned<Vec3Def>>,
+    pub major_radius: Option<Spanned<f64>>,
+    pub minor_radius: Option<Spanned<f64>>,
+    pub exponents: Option<Spanned<Vec<f64>>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -27,13 +27,28 @@ pub(crate) struct MeshTriangle {
 /// Every triangle of every object in the OBJ file, in object space, in file order. Polygons are
 /// fanned into triangles by `tobj`, keeping their winding.
 pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<MeshTriangle>, ObjError> {
-    let bytes = match std::fs::read(path) {
+    let limit = crate::limits::MAX_OBJ_FILE_BYTES;
+    let bytes = match crate::limits::read_limited(path, limit) {
         Ok(bytes) => bytes,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(ObjError::NotFound),
-        Err(e) => return Err(ObjError::Malformed { line: None, message: format!("cannot read the OBJ file: {e}") }),
+        Err(Some(e)) if e.kind() == std::io::ErrorKind::NotFound => return Err(ObjError::NotFound),
+        Err(Some(e)) => {
+            return Err(ObjError::Malformed { line: None, message: format!("cannot read the OBJ file: {e}") })
+        }
+        Err(None) => {
+            let message = format!(
+                "the OBJ file is larger than {} (the most photonix reads; see docs/limits.md)",
+                crate::limits::fmt_bytes(limit)
+            );
+            return Err(ObjError::Malformed { line: None, message });
+        }
     };
     let models = parse(&bytes)
         .map_err(|error| ObjError::Malformed { line: find_error_line(&bytes, &error), message: describe(&error) })?;
+    // tobj reads `nan`, `inf` and 1e39 (which overflows) as floats; refuse them here, on their
+    // line, rather than as the "zero-area triangles" they would turn into.
+    if let Some((line, message)) = bad_number_line(&bytes) {
+        return Err(ObjError::Malformed { line: Some(line), message });
+    }
 
     let mut triangles = Vec::new();
     for model in &models {
@@ -66,6 +81,42 @@ pub(crate) fn load_obj_triangles(path: &Path) -> Result<Vec<MeshTriangle>, ObjEr
         });
     }
     Ok(triangles)
+}
+
+/// The first `v` or `vt` line holding a number that is not finite in 32-bit floats or lies beyond
+/// the scene range, with what is wrong.
+fn bad_number_line(bytes: &[u8]) -> Option<(usize, String)> {
+    use crate::limits::{fmt_number, printable, MAX_SCENE_VALUE};
+    let text = String::from_utf8_lossy(bytes);
+    for (i, line) in text.lines().enumerate() {
+        let mut words = line.split_whitespace();
+        let what = match words.next() {
+            Some("v") => "vertex position",
+            Some("vt") => "texture coordinate",
+            _ => continue,
+        };
+        for word in words {
+            let Ok(v) = word.parse::<f64>() else { continue };
+            if !v.is_finite() {
+                // `nan` and `inf` as written; digits that overflow even 64-bit floats are not
+                // echoed (they can run to any length).
+                let message = if word.contains(|c: char| c.is_ascii_digit()) {
+                    format!("a {what} overflows 64-bit floats; the largest scene coordinate is +-{MAX_SCENE_VALUE:e}")
+                } else {
+                    format!("a {what} is `{}`, not a finite number", printable(word))
+                };
+                return Some((i + 1, message));
+            }
+            if v.abs() > MAX_SCENE_VALUE {
+                let message = format!(
+                    "a {what} is {}, beyond the largest scene coordinate, +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
+                    fmt_number(v)
+                );
+                return Some((i + 1, message));
+            }
+        }
+    }
+    None
 }
 
 fn parse(bytes: &[u8]) -> Result<Vec<tobj::Model>, tobj::LoadError> {
@@ -143,6 +194,26 @@ mod tests {
             let t = &t.vertices;
             let normal = (t[1] - t[0]).cross(t[2] - t[0]);
             assert!(normal.z > 0.0, "winding kept: {normal}");
+        }
+    }
+
+    #[test]
+    fn nan_infinite_and_huge_numbers_report_their_line() {
+        for (text, line, piece) in [
+            ("v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", 2, "`nan`, not a finite number"),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 -inf\nf 1 2 3\n", 3, "`-inf`, not a finite number"),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 1e39\nf 1 2 3\n", 3, "1e39, beyond the largest scene coordinate"),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 1.79769342949672961348623157e308\nf 1 2 3\n", 3, "overflows 64-bit floats"),
+            ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 NaN\nf 1/1 2/1 3/1\n", 4, "texture coordinate is `NaN`"),
+        ] {
+            let file = obj_file(text);
+            match load_obj_triangles(file.path()) {
+                Err(ObjError::Malformed { line: Some(l), message }) => {
+                    assert_eq!(l, line, "{text}");
+                    assert!(message.contains(piece), "{message}");
+                }
+                other => panic!("expected a malformed OBJ at line {line}, got {other:?}"),
+            }
         }
     }
 

@@ -8,6 +8,7 @@
 //! distant lights; the renderer builds its light list from those. An area light of the file becomes ordinary shapes
 //! with its own material, named `light <index>` (diffuse, reflectance 0, emission = its radiance).
 
+pub mod analytic;
 mod convert;
 mod error;
 mod format;
@@ -22,6 +23,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Mat3, Vec2, Vec3};
 
+pub use analytic::{Analytic, AnalyticKind};
 pub use error::SceneError;
 pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
@@ -61,7 +63,7 @@ impl Scene {
     pub fn triangles(&self) -> impl Iterator<Item = (&Triangle, u32)> {
         self.shapes.iter().filter_map(|s| match &s.geometry {
             Geometry::Triangle(t) => Some((t, s.material)),
-            Geometry::Sphere(_) => None,
+            _ => None,
         })
     }
 
@@ -69,7 +71,7 @@ impl Scene {
     pub fn spheres(&self) -> impl Iterator<Item = (&Sphere, u32)> {
         self.shapes.iter().filter_map(|s| match &s.geometry {
             Geometry::Sphere(sphere) => Some((sphere, s.material)),
-            Geometry::Triangle(_) => None,
+            _ => None,
         })
     }
 }
@@ -88,6 +90,23 @@ pub struct Camera {
     pub lens: Option<ThinLens>,
     pub width: u32,
     pub height: u32,
+}
+
+impl Camera {
+    /// The camera's frame, (forward, right, up), unit length and orthogonal; right-handed:
+    /// right = forward x up, so with forward +z and up +y it is -x. `None` when 32-bit floats
+    /// cannot make one: `look_at` (nearly) equals `position`, or `up` is (nearly) zero or parallel
+    /// to the view direction. Loading refuses such a camera; the renderer reads this same frame.
+    pub fn basis(&self) -> Option<(Vec3, Vec3, Vec3)> {
+        let forward = (self.look_at - self.position).try_normalize()?;
+        // Parallel to within 1e-6 radians: the right vector would be mostly rounding noise.
+        let sine = forward.cross(self.up.try_normalize()?).length();
+        if sine.is_nan() || sine <= 1e-6 {
+            return None;
+        }
+        let right = forward.cross(self.up).try_normalize()?;
+        Some((forward, right, right.cross(forward)))
+    }
 }
 
 /// How film positions map to rays.
@@ -140,6 +159,8 @@ pub struct Shape {
 pub enum Geometry {
     Triangle(Triangle),
     Sphere(Sphere),
+    /// Plane, disc, cone or cylinder side, torus, superellipsoid (`analytic.rs`).
+    Analytic(Analytic),
 }
 
 impl Geometry {
@@ -151,10 +172,16 @@ impl Geometry {
                 (a.min(b).min(c), a.max(b).max(c))
             }
             Geometry::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
+            Geometry::Analytic(a) => a.bounds(),
         }
     }
 
-    /// Surface area in scene units squared.
+    /// True for shapes no box bounds (the infinite plane): they stay out of the BVH.
+    pub fn is_unbounded(&self) -> bool {
+        matches!(self, Geometry::Analytic(a) if a.is_unbounded())
+    }
+
+    /// Surface area in scene units squared (infinite for the plane).
     pub fn area(&self) -> f32 {
         match self {
             Geometry::Triangle(t) => {
@@ -162,6 +189,7 @@ impl Geometry {
                 0.5 * (b - a).cross(c - a).length()
             }
             Geometry::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
+            Geometry::Analytic(a) => a.area(),
         }
     }
 }
@@ -234,10 +262,20 @@ pub enum LightKind {
     Area { material: u32 },
 }
 
-/// Reads and parses a scene file; mesh paths in it are relative to the file's folder.
+/// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
+/// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let source =
-        std::fs::read_to_string(path).map_err(|source| SceneError::Read { path: path.to_path_buf(), source })?;
+    let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+        Some(cause) => SceneError::Read { path: path.to_path_buf(), cause },
+        None => SceneError::TooLarge { path: path.to_path_buf(), limit: crate::limits::MAX_SCENE_FILE_BYTES },
+    })?;
+    let source = String::from_utf8(bytes).map_err(|e| SceneError::Read {
+        path: path.to_path_buf(),
+        cause: std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("it is not UTF-8 text (bad byte at offset {})", e.utf8_error().valid_up_to()),
+        ),
+    })?;
     parse_scene(&source, path)
 }
 

@@ -11,6 +11,7 @@
 use glam::Vec3;
 
 use crate::cpu::pattern as shader;
+use crate::limits::{fmt_number, MAX_SCENE_VALUE};
 
 /// Every pattern name, in the order of the `PATTERN_*` kind numbers.
 pub const PATTERN_NAMES: &[&str] = &[
@@ -608,13 +609,14 @@ fn parse_color_map(value: &toml::Value) -> Result<ColorMap, String> {
     for (i, entry) in list.iter().enumerate() {
         let bad = || format!("`color_map` entry {} must be [position, [r, g, b]] or [position, r, g, b]", i + 1);
         let Some(items) = entry.as_array() else { return Err(bad()) };
-        let numbers: Option<Vec<f32>> = match items.as_slice() {
+        let numbers: Option<Vec<f64>> = match items.as_slice() {
             [p, toml::Value::Array(c)] if c.len() == 3 => std::iter::once(p).chain(c.iter()).map(as_number).collect(),
             [p, v] => [p, v, v, v].into_iter().map(as_number).collect(),
             [_, _, _, _] => items.iter().map(as_number).collect(),
             _ => None,
         };
         let Some(n) = numbers else { return Err(bad()) };
+        let n = n.into_iter().map(|v| in_scene_range("color_map", v)).collect::<Result<Vec<f32>, String>>()?;
         entries.push((n[0], [n[1], n[2], n[3]]));
     }
     ColorMap::new(entries)
@@ -640,12 +642,23 @@ fn describe(value: &toml::Value) -> String {
     }
 }
 
-fn as_number(value: &toml::Value) -> Option<f32> {
+fn as_number(value: &toml::Value) -> Option<f64> {
     match value {
-        toml::Value::Integer(i) => Some(*i as f32),
-        toml::Value::Float(f) => Some(*f as f32),
+        toml::Value::Integer(i) => Some(*i as f64),
+        toml::Value::Float(f) => Some(*f),
         _ => None,
     }
+}
+
+/// Finite and within the scene range (docs/limits.md), checked before narrowing to f32.
+fn in_scene_range(field: &str, v: f64) -> Result<f32, String> {
+    if !v.is_finite() {
+        return Err(format!("`{field}` must be a finite number, got {}", v as f32));
+    }
+    if v.abs() > MAX_SCENE_VALUE {
+        return Err(format!("`{field}` is {}; every number in a scene must be within +-1e9", fmt_number(v)));
+    }
+    Ok(v as f32)
 }
 
 fn finite(field: &str, v: f32) -> Result<(), String> {
@@ -678,21 +691,19 @@ fn number(t: &toml::Table, field: &str) -> Result<Option<f32>, String> {
     let Some(v) = as_number(value) else {
         return Err(format!("`{field}` must be a number, got {}", describe(value)));
     };
-    finite(field, v)?;
-    Ok(Some(v))
+    Ok(Some(in_scene_range(field, v)?))
 }
 
 /// An optional [x, y, z] field.
 fn vector(t: &toml::Table, field: &str) -> Result<Option<Vec3>, String> {
     let Some(value) = t.get(field) else { return Ok(None) };
     let parsed =
-        value.as_array().filter(|a| a.len() == 3).and_then(|a| a.iter().map(as_number).collect::<Option<Vec<f32>>>());
+        value.as_array().filter(|a| a.len() == 3).and_then(|a| a.iter().map(as_number).collect::<Option<Vec<f64>>>());
     let Some(v) = parsed else {
         return Err(format!("`{field}` must be an array of 3 numbers [x, y, z], got {}", describe(value)));
     };
-    let v = Vec3::new(v[0], v[1], v[2]);
-    finite_vec(field, v)?;
-    Ok(Some(v))
+    let [x, y, z] = [v[0], v[1], v[2]].map(|c| in_scene_range(field, c));
+    Ok(Some(Vec3::new(x?, y?, z?)))
 }
 
 /// An optional [x, y, z] field that may also be one number v, meaning [v, v, v].

@@ -76,3 +76,15 @@ pub fn diffuse(rho: f32, emission: f32) -> photonix::scene::MaterialDesc {
     m.emission = ColorParam::constant(glam::Vec3::splat(emission));
     m
 }
+
+/// A temporary folder holding `scene` as scene.toml.
+pub fn scene_dir(scene: &str) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.toml"), scene).unwrap();
+    dir
+}
+
+/// What a finished command wrote to standard error.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).to_string()
+}

@@ -1,0 +1,944 @@
+//! Fuzz targets, run as ordinary tests (there is no nightly toolchain for cargo-fuzz here): the
+//! scene parser (`parse_scene`) and the OBJ importer (a `type = "mesh"` shape behind
+//! `load_scene`). Inputs come from a generator that follows each format's grammar and from
+//! byte-level mutations of the shipped files, drawn from the crate's counter-based hash, so a
+//! (seed, case) pair replays exactly. Every case must give a scene that keeps the documented
+//! invariants (finite geometry, a usable camera, finite light power) or an error that names the
+//! file; a panic, or an error that names no file, fails.
+//!
+//! CI runs a few hundred cases per target. A long run (see `ci/fuzz`):
+//!
+//! ```sh
+//! PHOTONIX_FUZZ_CASES=1000000000 PHOTONIX_FUZZ_SECONDS=3600 PHOTONIX_FUZZ_SEED=1 \
+//!   PHOTONIX_FUZZ_FINDINGS=target/fuzz-findings \
+//!   cargo test --release --test fuzz -- --exact fuzz_scene_parser --nocapture
+//! ```
+//!
+//! With `PHOTONIX_FUZZ_FINDINGS` set, each new kind of failure is written to that folder and the
+//! run goes on. Every input that once failed is kept in `tests/fuzz_corpus/{scene,obj}/`, and
+//! `fuzz_corpus_replays_cleanly` replays them all.
+
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+use std::time::{Duration, Instant};
+
+use photonix::cpu::rng::pcg4d;
+use photonix::render::memory;
+use photonix::render::photons::check_radii;
+use photonix::render::{prepare, FrameSettings};
+use photonix::scene::{load_scene, parse_scene, Geometry, LightKind, Scene};
+
+// Random choices
+
+/// A stream of random numbers for case `case` of run `seed`.
+struct Rng {
+    case: u32,
+    seed: u32,
+    counter: u32,
+}
+
+impl Rng {
+    fn new(seed: u32, case: u32) -> Rng {
+        Rng { case, seed, counter: 0 }
+    }
+
+    fn next(&mut self) -> u32 {
+        self.counter += 1;
+        pcg4d([self.case, self.counter, self.seed, 0xF022])[0]
+    }
+
+    /// A whole number in 0..n (n > 0).
+    fn below(&mut self, n: usize) -> usize {
+        ((self.next() as u64 * n as u64) >> 32) as usize
+    }
+
+    fn chance(&mut self, percent: usize) -> bool {
+        self.below(100) < percent
+    }
+
+    fn pick<'a, T>(&mut self, items: &'a [T]) -> &'a T {
+        &items[self.below(items.len())]
+    }
+}
+
+// The scene grammar
+
+fn words(list: &str) -> Vec<&str> {
+    list.split_whitespace().collect()
+}
+
+/// Numbers a scene file may hold, sensible ones most of the time.
+fn number(r: &mut Rng) -> String {
+    // Separated by spaces; `words` splits them.
+    const EXTREME: &str =
+        "0 -0.0 1e30 -1e30 1e300 -1e300 1e-300 3.4e38 3.5e38 1.7976931348623157e308 5e-324 1e-45 nan +nan \
+        -nan inf -inf +inf 9223372036854775807 -9223372036854775808 4294967295 4294967296 -4294967296 \
+        2147483648 65536 65537 1000000000 1000000001 16777217 1e9 1.0000001e9 1e-9 1e-10 0.01 179.99 180 \
+        0x7fffffff 0o777 0b1 1_000 1e --1 1. .5 0.000_1";
+    match r.below(10) {
+        0..=5 => {
+            // A value of a typical scene: a few digits, either sign.
+            let v = (r.next() as f64 / u32::MAX as f64 - 0.3) * 10f64.powi(r.below(4) as i32);
+            if r.chance(40) {
+                format!("{}", v.round() as i64)
+            } else {
+                format!("{v:.3}")
+            }
+        }
+        6..=8 => r.pick(&words(EXTREME)).to_string(),
+        _ => {
+            // Any magnitude.
+            let mantissa = r.next() as f64 / u32::MAX as f64 * 2.0 - 1.0;
+            format!("{:e}", mantissa * 10f64.powi(r.below(640) as i32 - 320))
+        }
+    }
+}
+
+fn integer(r: &mut Rng) -> String {
+    // Separated by spaces; `words` splits them.
+    const INTERESTING: &str =
+        "0 1 2 -1 3 4 16 64 1024 1025 4096 4097 65535 65536 65537 1000000 1000001 200000 2147483647 \
+        2147483648 4294967295 4294967296 9223372036854775807 -9223372036854775808 1000000000 1000000001 \
+        16384";
+    if r.chance(50) {
+        format!("{}", r.below(20))
+    } else {
+        r.pick(&words(INTERESTING)).to_string()
+    }
+}
+
+fn vec3(r: &mut Rng) -> String {
+    match r.below(20) {
+        0 => number(r),
+        1 => format!("[{}, {}]", number(r), number(r)),
+        2 => format!("[{}, {}, {}, {}]", number(r), number(r), number(r), number(r)),
+        3 => "[]".to_string(),
+        4 => format!("[[{}], {}, {}]", number(r), number(r), number(r)),
+        _ => format!("[{}, {}, {}]", number(r), number(r), number(r)),
+    }
+}
+
+/// A point that keeps most shapes small and in front of the camera.
+fn point(r: &mut Rng) -> String {
+    if r.chance(80) {
+        let mut c = || format!("{:.2}", r.next() as f64 / u32::MAX as f64 * 4.0 - 2.0);
+        format!("[{}, {}, {}]", c(), c(), c())
+    } else {
+        vec3(r)
+    }
+}
+
+fn name(r: &mut Rng) -> String {
+    #[rustfmt::skip]
+    const NAMES: &[&str] = &[
+        "white", "glass", "mirror", "lamp", "checks", "light 0", "light 1", "", " ", "white ", "Wall",
+        "\\u001b[31mred\\u001b[0m", "tab\\there", "new\\nline", "nul\\u0000", "\\u0007bell", "ünïcödé",
+        "\\uD7FF", "quote\\\"d", "back\\\\slash",
+    ];
+    match r.below(20) {
+        0 => "k".repeat(r.below(3000)),
+        _ => r.pick(NAMES).to_string(),
+    }
+}
+
+fn file(r: &mut Rng) -> String {
+    // Separated by spaces; `words` splits them.
+    const FILES: &str = "mesh.obj meshes/icosahedron.obj missing.obj /dev/zero /dev/null . .. /  mesh.obj\\u0000x \
+        scene.toml /proc/self/status mesh.OBJ ./mesh.obj meshes/";
+    if r.chance(5) {
+        return String::new();
+    }
+    r.pick(&words(FILES)).to_string()
+}
+
+/// A value of any type, for a field that expects another one.
+fn wrong_value(r: &mut Rng) -> String {
+    match r.below(9) {
+        0 => format!("\"{}\"", name(r)),
+        1 => "true".to_string(),
+        2 => "{}".to_string(),
+        3 => format!("{{ texture = \"{}\" }}", name(r)),
+        4 => format!("{{ texture = \"checks\", scale = {} }}", vec3(r)),
+        5 => "1979-05-27T07:32:00Z".to_string(),
+        6 => format!("[{}]", "[".repeat(r.below(5)) + &"]".repeat(r.below(5))),
+        7 => format!("'''{}'''", name(r)),
+        _ => format!("[\"a\", {}]", number(r)),
+    }
+}
+
+/// `field = value` where the value is of the field's kind most of the time.
+fn field(r: &mut Rng, out: &mut String, key: &str, value: impl FnOnce(&mut Rng) -> String) {
+    if r.chance(92) {
+        let v = if r.chance(94) { value(r) } else { wrong_value(r) };
+        out.push_str(&format!("{key} = {v}\n"));
+    }
+}
+
+fn param(r: &mut Rng) -> String {
+    match r.below(10) {
+        0 => format!("{{ texture = \"{}\" }}", if r.chance(70) { "checks".to_string() } else { name(r) }),
+        1 => format!("{{ texture = \"checks\", scale = {} }}", if r.chance(50) { number(r) } else { vec3(r) }),
+        2..=4 => format!("{:.2}", r.next() as f64 / u32::MAX as f64),
+        _ => vec3(r),
+    }
+}
+
+fn transform(r: &mut Rng) -> String {
+    let mut parts = Vec::new();
+    if r.chance(50) {
+        parts.push(format!("scale = {}", if r.chance(50) { number(r) } else { vec3(r) }));
+    }
+    if r.chance(50) {
+        parts.push(format!("rotate = {}", vec3(r)));
+    }
+    if r.chance(50) {
+        parts.push(format!("translate = {}", vec3(r)));
+    }
+    if r.chance(5) {
+        parts.push(format!("{} = 1", name(r).replace(['"', '\\'], "")));
+    }
+    format!("{{ {} }}", parts.join(", "))
+}
+
+/// A whole scene file from the grammar of docs/scene-format.md, with wrong turns.
+fn grammar_scene(r: &mut Rng) -> String {
+    let mut s = String::new();
+    if r.chance(95) {
+        s.push_str("[camera]\n");
+        // Cameras that are nearly degenerate: look_at next to position, up nearly along the view.
+        const NEAR: &[(&str, &str)] = &[
+            ("[0, 1, 5]", "[0, 1, 5.0000001]"),
+            ("[0, 1, 5]", "[0, 1, 4.9999999]"),
+            ("[1e-30, 0, 0]", "[0, 0, 0]"),
+            ("[3e38, 0, 0]", "[-3e38, 0, 0]"),
+            ("[1e9, 1e9, 1e9]", "[-1e9, -1e9, -1e9]"),
+            ("[0, 0, 5]", "[0, 0, -5]"),
+            ("[0, 5, 0]", "[0, 0, 0]"),
+        ];
+        let (position, look_at) = if r.chance(15) { *r.pick(NEAR) } else { ("[0, 1, 5]", "[0, 0.5, 0]") };
+        field(r, &mut s, "position", |r| if r.chance(80) { position.into() } else { vec3(r) });
+        field(r, &mut s, "look_at", |r| if r.chance(80) { look_at.into() } else { vec3(r) });
+        if r.chance(40) {
+            const UPS: &[&str] =
+                &["[0, 1e-30, 0]", "[1e-20, 0, 0]", "[0, 0, 1]", "[0, 1e-7, 1]", "[0, 0, -1e30]", "[1e38, 1e38, 0]"];
+            field(r, &mut s, "up", |r| if r.chance(50) { r.pick(UPS).to_string() } else { vec3(r) });
+        }
+        field(r, &mut s, "fov", |r| if r.chance(70) { "45".into() } else { number(r) });
+        if r.chance(60) {
+            field(r, &mut s, "resolution", |r| match r.below(6) {
+                0 => format!("[{}]", integer(r)),
+                1 => format!("[{}, {}, {}]", integer(r), integer(r), integer(r)),
+                _ => format!("[{}, {}]", integer(r), integer(r)),
+            });
+        }
+    }
+    if r.chance(50) {
+        s.push_str("[render]\n");
+        for key in ["spp", "passes", "max_depth", "seed"] {
+            if r.chance(60) {
+                field(r, &mut s, key, integer);
+            }
+        }
+    }
+    if r.chance(50) {
+        s.push_str("[photons]\n");
+        for key in ["count", "caustic_count", "gather_rays", "max_depth"] {
+            if r.chance(50) {
+                field(r, &mut s, key, integer);
+            }
+        }
+        for key in ["radius", "caustic_radius", "alpha"] {
+            if r.chance(40) {
+                field(r, &mut s, key, number);
+            }
+        }
+        if r.chance(30) {
+            field(r, &mut s, "enabled", |r| if r.chance(50) { "true".into() } else { "false".into() });
+        }
+    }
+    if r.chance(30) {
+        s.push_str("[textures.checks]\n");
+        field(r, &mut s, "type", |r| format!("\"{}\"", r.pick(&["checker", "constant", "image", "checkers"])));
+        field(r, &mut s, "colors", |r| format!("[{}, {}]", vec3(r), vec3(r)));
+        if r.chance(30) {
+            field(r, &mut s, "color", vec3);
+        }
+        if r.chance(40) {
+            field(r, &mut s, "space", |r| format!("\"{}\"", r.pick(&["uv", "world", "object"])));
+        }
+        if r.chance(30) {
+            field(r, &mut s, "transform", transform);
+        }
+    }
+    let materials = ["white", "glass", "mirror", "lamp"];
+    for m in materials {
+        if !r.chance(60) {
+            continue;
+        }
+        s.push_str(&format!("[materials.{}]\n", if r.chance(95) { m.to_string() } else { format!("\"{}\"", name(r)) }));
+        let kind = *r.pick(&["diffuse", "dielectric", "mirror", "metal"]);
+        field(r, &mut s, "type", |_| format!("\"{kind}\""));
+        match kind {
+            "diffuse" => field(r, &mut s, "reflectance", param),
+            "mirror" => field(r, &mut s, "tint", param),
+            _ => field(r, &mut s, "ior", number),
+        }
+        if r.chance(40) {
+            field(r, &mut s, "emission", param);
+        }
+        if r.chance(20) {
+            field(r, &mut s, "opacity", param);
+        }
+    }
+    for _ in 0..r.below(6) {
+        s.push_str("[[shapes]]\n");
+        if r.chance(20) {
+            field(r, &mut s, "name", |r| format!("\"{}\"", name(r)));
+        }
+        let kind = *r.pick(&["quad", "triangle", "sphere", "box", "mesh", "cylinder"]);
+        field(r, &mut s, "type", |_| format!("\"{kind}\""));
+        field(r, &mut s, "material", |r| {
+            format!("\"{}\"", if r.chance(90) { r.pick(&materials).to_string() } else { name(r) })
+        });
+        match kind {
+            "quad" | "triangle" => {
+                let n = if r.chance(90) {
+                    if kind == "quad" {
+                        4
+                    } else {
+                        3
+                    }
+                } else {
+                    r.below(6)
+                };
+                field(r, &mut s, "vertices", |r| {
+                    format!("[{}]", (0..n).map(|_| point(r)).collect::<Vec<_>>().join(", "))
+                });
+            }
+            "sphere" => {
+                field(r, &mut s, "center", point);
+                field(r, &mut s, "radius", |r| if r.chance(60) { "0.5".into() } else { number(r) });
+            }
+            "box" => {
+                field(r, &mut s, "min", |r| if r.chance(60) { "[-1, 0, -1]".into() } else { point(r) });
+                field(r, &mut s, "max", |r| if r.chance(60) { "[1, 1, 1]".into() } else { point(r) });
+            }
+            _ => field(r, &mut s, "file", |r| format!("\"{}\"", file(r))),
+        }
+        if r.chance(35) {
+            if r.chance(50) {
+                field(r, &mut s, "transform", transform);
+            } else {
+                s.push_str("[shapes.transform]\n");
+                let t = transform(r);
+                s.push_str(&t[1..t.len() - 1].replace(", ", "\n"));
+                s.push('\n');
+            }
+        }
+    }
+    for _ in 0..r.below(3) {
+        s.push_str("[[lights]]\n");
+        if r.chance(20) {
+            field(r, &mut s, "name", |r| format!("\"{}\"", name(r)));
+        }
+        if r.chance(50) {
+            field(r, &mut s, "type", |_| "\"point\"".into());
+            field(r, &mut s, "position", point);
+            field(r, &mut s, "intensity", |r| if r.chance(60) { "[5, 5, 5]".into() } else { vec3(r) });
+        } else {
+            field(r, &mut s, "type", |_| "\"area\"".into());
+            let shape = *r.pick(&["quad", "sphere", "disk"]);
+            field(r, &mut s, "shape", |_| format!("\"{shape}\""));
+            if shape == "quad" {
+                field(r, &mut s, "vertices", |r| {
+                    if r.chance(70) {
+                        "[[-0.5, 2, -0.5], [0.5, 2, -0.5], [0.5, 2, 0.5], [-0.5, 2, 0.5]]".into()
+                    } else {
+                        format!("[{}]", (0..4).map(|_| point(r)).collect::<Vec<_>>().join(", "))
+                    }
+                });
+            } else {
+                field(r, &mut s, "center", point);
+                field(r, &mut s, "radius", |r| if r.chance(60) { "0.25".into() } else { number(r) });
+            }
+            field(r, &mut s, "radiance", |r| if r.chance(60) { "[5, 5, 5]".into() } else { vec3(r) });
+            if r.chance(25) {
+                field(r, &mut s, "transform", transform);
+            }
+        }
+    }
+    // Wrong turns that belong to no table.
+    match r.below(30) {
+        0 => s.push_str(&format!("{} = 1\n", "k".repeat(r.below(2_000_000)))),
+        1 => s.push_str(&format!("x = {}1{}\n", "[".repeat(r.below(20_000)), "]".repeat(r.below(20_000)))),
+        2 => s.push_str(&format!("x = {}\n", "{ a = ".repeat(r.below(5000)))),
+        3 => s.push_str("[camera]\nfov = 40\n"),
+        4 => s.push_str(&format!("[{}]\n", name(r))),
+        5 => s.push_str(&format!("\"{}\" = 1\n", name(r))),
+        _ => {}
+    }
+    s
+}
+
+// Byte-level mutations
+
+/// Bytes that mean something in TOML or OBJ, for insertions.
+#[rustfmt::skip]
+const TOKENS: &[&[u8]] = &[
+    b"[", b"]", b"[[", b"]]", b"\"", b"'", b"=", b"\n", b"\r\n", b".", b"-", b"e", b"0", b"9", b",",
+    b"{", b"}", b"#", b"\\", b"\xff", b"\x00", b"\x1b", b" ", b"\t", b"nan", b"inf", b"1e308",
+    b"-1e308", b"4294967296", b"9999999999999999999999", b"/", b"//", b"f ", b"v ", b"vt ", b"\\\n",
+    b"-1", b"0", b"1e-45", b"\xc3\x28",
+];
+
+/// Mutated inputs stop growing here: repeating a long line of a repeated line grows without
+/// bound (a 1.4 GB OBJ once), and file sizes have their own tests.
+const MAX_INPUT_BYTES: usize = 2 << 20;
+
+fn mutate(r: &mut Rng, input: &[u8]) -> Vec<u8> {
+    let mut b = input.to_vec();
+    for _ in 0..1 + r.below(8) {
+        if b.len() > MAX_INPUT_BYTES {
+            b.truncate(MAX_INPUT_BYTES);
+            break;
+        }
+        let len = b.len();
+        match r.below(9) {
+            0 if len > 0 => {
+                let i = r.below(len);
+                b[i] ^= 1 << r.below(8);
+            }
+            1 => {
+                let i = r.below(len + 1);
+                let token = r.pick(TOKENS);
+                b.splice(i..i, token.iter().copied());
+            }
+            2 if len > 0 => {
+                let i = r.below(len);
+                let n = (1 + r.below(16)).min(len - i);
+                b.drain(i..i + n);
+            }
+            3 if len > 0 => {
+                // Repeat a line, many times now and then.
+                let lines: Vec<&[u8]> = b.split_inclusive(|&c| c == b'\n').collect();
+                let line = lines[r.below(lines.len())].to_vec();
+                let times = if r.chance(10) { 1 + r.below(5000) } else { 1 };
+                let at = r.below(len + 1);
+                let copies: Vec<u8> = line.iter().copied().cycle().take(line.len() * times).collect();
+                b.splice(at..at, copies);
+            }
+            4 if len > 0 => {
+                // Replace a number with another, often an extreme one.
+                let starts: Vec<usize> =
+                    (0..len).filter(|&i| b[i].is_ascii_digit() && (i == 0 || !b[i - 1].is_ascii_digit())).collect();
+                if let Some(&i) = starts.get(r.below(starts.len().max(1))) {
+                    let end = (i..len).find(|&j| !(b[j].is_ascii_digit() || b[j] == b'.')).unwrap_or(len);
+                    let replacement = number(r).into_bytes();
+                    b.splice(i..end, replacement);
+                }
+            }
+            5 if len > 0 => {
+                let at = r.below(len);
+                b.truncate(at);
+            }
+            6 if len > 0 => {
+                // Swap two lines.
+                let mut lines: Vec<Vec<u8>> = b.split_inclusive(|&c| c == b'\n').map(<[u8]>::to_vec).collect();
+                let (i, j) = (r.below(lines.len()), r.below(lines.len()));
+                lines.swap(i, j);
+                b = lines.concat();
+            }
+            7 if len > 0 => {
+                let i = r.below(len);
+                b[i] = r.next() as u8;
+            }
+            _ => {
+                let i = r.below(len + 1);
+                b.splice(i..i, number(r).into_bytes());
+            }
+        }
+    }
+    b
+}
+
+// The OBJ grammar
+
+fn obj_number(r: &mut Rng) -> String {
+    if r.chance(80) {
+        format!("{:.3}", r.next() as f64 / u32::MAX as f64 * 2.0 - 1.0)
+    } else {
+        number(r)
+    }
+}
+
+fn obj_index(r: &mut Rng, vertices: usize) -> String {
+    match r.below(20) {
+        0 => "0".to_string(),
+        1 => format!("-{}", 1 + r.below(vertices + 2)),
+        2 => r.pick(&["4294967296", "-4294967296", "99999999999999999999", "2147483648", "x", "", "1.5"]).to_string(),
+        _ => format!("{}", 1 + r.below(vertices + 1)),
+    }
+}
+
+/// An OBJ file from the grammar tobj reads, with wrong turns.
+fn grammar_obj(r: &mut Rng) -> Vec<u8> {
+    let mut s = String::new();
+    let vertices = r.below(12);
+    let texcoords = r.below(6);
+    let eol = if r.chance(10) { "\r\n" } else { "\n" };
+    for _ in 0..vertices {
+        let n = if r.chance(92) { 3 } else { r.below(6) };
+        let coords: Vec<String> = (0..n).map(|_| obj_number(r)).collect();
+        s.push_str(&format!("v {}{eol}", coords.join(" ")));
+    }
+    for _ in 0..texcoords {
+        let n = if r.chance(90) { 2 } else { r.below(5) };
+        let coords: Vec<String> = (0..n).map(|_| obj_number(r)).collect();
+        s.push_str(&format!("vt {}{eol}", coords.join(" ")));
+    }
+    if r.chance(30) {
+        s.push_str(&format!("vn {} {} {}{eol}", obj_number(r), obj_number(r), obj_number(r)));
+    }
+    for _ in 0..r.below(8) {
+        match r.below(12) {
+            0 => s.push_str(&format!("o {}{eol}", name(r))),
+            1 => s.push_str(&format!("g {}{eol}", name(r))),
+            2 => s.push_str(&format!("usemtl {}{eol}mtllib {}.mtl{eol}", name(r), name(r))),
+            3 => s.push_str(&format!("s 1{eol}# comment{eol}{eol}")),
+            4 => s.push_str(&format!(
+                "l {} {}{eol}p {}{eol}",
+                obj_index(r, vertices),
+                obj_index(r, vertices),
+                obj_index(r, vertices)
+            )),
+            5 => s.push_str(&format!("v {} \\{eol}{} {}{eol}", obj_number(r), obj_number(r), obj_number(r))),
+            _ => {
+                let n = if r.chance(80) { 3 + r.below(3) } else { r.below(9) };
+                let form = r.below(5);
+                let refs: Vec<String> = (0..n)
+                    .map(|_| {
+                        let v = obj_index(r, vertices);
+                        match form {
+                            0 => format!("{v}/{}", obj_index(r, texcoords)),
+                            1 => format!("{v}//1"),
+                            2 => format!("{v}/{}/1", obj_index(r, texcoords)),
+                            3 if r.chance(10) => format!("{v}/{}/{}/", obj_index(r, texcoords), 1),
+                            _ => v,
+                        }
+                    })
+                    .collect();
+                s.push_str(&format!("f {}{eol}", refs.join(if r.chance(95) { " " } else { "\t" })));
+            }
+        }
+    }
+    s.into_bytes()
+}
+
+// Running cases
+
+/// How many cases, for how long, and where findings go: from the environment, see the top.
+struct Config {
+    /// The first case (`PHOTONIX_FUZZ_START`), to replay one case of a run.
+    start: u64,
+    cases: u64,
+    time: Option<Duration>,
+    seed: u32,
+    findings: Option<PathBuf>,
+}
+
+fn config(default_cases: u64) -> Config {
+    let var = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+    let parse =
+        |name: &str, v: String| -> f64 { v.trim().parse().unwrap_or_else(|_| panic!("{name}={v} is not a number")) };
+    Config {
+        start: var("PHOTONIX_FUZZ_START").map_or(0, |v| parse("PHOTONIX_FUZZ_START", v) as u64),
+        cases: var("PHOTONIX_FUZZ_CASES").map_or(default_cases, |v| parse("PHOTONIX_FUZZ_CASES", v) as u64),
+        time: var("PHOTONIX_FUZZ_SECONDS").map(|v| Duration::from_secs_f64(parse("PHOTONIX_FUZZ_SECONDS", v))),
+        seed: var("PHOTONIX_FUZZ_SEED").map_or(0, |v| parse("PHOTONIX_FUZZ_SEED", v) as u32),
+        findings: var("PHOTONIX_FUZZ_FINDINGS").map(PathBuf::from),
+    }
+}
+
+thread_local! {
+    /// The message and place of the last panic on this thread.
+    static LAST_PANIC: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// A panic hook that records the panic for `run_case` instead of printing it.
+fn quiet_panics() {
+    static HOOK: Once = Once::new();
+    HOOK.call_once(|| {
+        std::panic::set_hook(Box::new(|info| {
+            let message = info
+                .payload()
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| info.payload().downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            let place = info.location().map(|l| format!("{}:{}", l.file(), l.line())).unwrap_or_default();
+            LAST_PANIC.with(|p| *p.borrow_mut() = Some(format!("panic at {place}: {message}")));
+        }));
+    });
+}
+
+/// Time this thread has spent on a CPU (Linux's schedstat), else wall time: a case is slow by
+/// its own work, not because a build shared the machine (a long run goes at `nice -n 19`).
+fn cpu_time() -> Duration {
+    static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+    let on_cpu = std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|ns| ns.parse::<u64>().ok()));
+    match on_cpu {
+        Some(ns) => Duration::from_nanos(ns),
+        None => START.get_or_init(Instant::now).elapsed(),
+    }
+}
+
+/// A failure: `key` groups failures of one kind (a panic's place, an error's text without numbers).
+struct Failure {
+    key: String,
+    message: String,
+}
+
+/// Runs `check`, turning a panic into a failure.
+fn run_case(check: impl FnOnce() -> Result<(), Failure>) -> Result<(), Failure> {
+    match catch_unwind(AssertUnwindSafe(check)) {
+        Ok(result) => result,
+        Err(_) => {
+            let message = LAST_PANIC.with(|p| p.borrow_mut().take()).unwrap_or_else(|| "panic".to_string());
+            let key = message.split(": ").next().unwrap_or_default().to_string();
+            Err(Failure { key, message })
+        }
+    }
+}
+
+/// The invariants a loaded scene keeps, whatever its file held; `None` when all hold.
+fn broken_invariant(scene: &Scene) -> Option<String> {
+    let c = &scene.camera;
+    let finite = |v: glam::Vec3| v.is_finite();
+    if !(finite(c.position) && finite(c.look_at) && finite(c.up)) {
+        return Some("camera vector not finite".into());
+    }
+    let forward = (c.look_at - c.position).normalize_or_zero();
+    let right = forward.cross(c.up).normalize_or_zero();
+    if forward == glam::Vec3::ZERO || right == glam::Vec3::ZERO {
+        return Some(format!("degenerate camera accepted: {c:?}"));
+    }
+    if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) || c.width == 0 || c.height == 0 {
+        return Some(format!("camera out of range accepted: {c:?}"));
+    }
+    for shape in &scene.shapes {
+        match &shape.geometry {
+            Geometry::Triangle(t) => {
+                let area = shape.geometry.area();
+                if !(t.vertices.iter().all(|v| v.is_finite()) && area.is_finite() && area > 0.0) {
+                    return Some(format!("bad triangle accepted: {t:?}"));
+                }
+                if t.uv.is_some_and(|uv| !uv.iter().all(|v| v.is_finite())) {
+                    return Some(format!("triangle with non-finite uv accepted: {t:?}"));
+                }
+            }
+            Geometry::Sphere(s) => {
+                if !(s.center.is_finite() && s.radius.is_finite() && s.radius > 0.0) {
+                    return Some(format!("bad sphere accepted: {s:?}"));
+                }
+            }
+            Geometry::Analytic(a) => {
+                // The infinite plane is unbounded; every other analytic shape is finite.
+                let (lo, hi) = a.bounds();
+                let bounded_ok = a.is_unbounded() || (lo.is_finite() && hi.is_finite());
+                if !a.world_from_object.is_finite() || !bounded_ok {
+                    return Some(format!("bad analytic shape accepted: {a:?}"));
+                }
+            }
+        }
+    }
+    for l in &scene.lights {
+        let finite = match l.kind {
+            LightKind::Point { position, intensity } => position.is_finite() && intensity.is_finite(),
+            LightKind::Spot { position, direction, intensity, cos_inner, cos_outer, exponent } => {
+                position.is_finite()
+                    && direction.is_finite()
+                    && intensity.is_finite()
+                    && cos_inner.is_finite()
+                    && cos_outer.is_finite()
+                    && exponent.is_finite()
+            }
+            LightKind::Distant { direction, irradiance, half_angle_deg } => {
+                direction.is_finite() && irradiance.is_finite() && half_angle_deg.is_finite()
+            }
+            LightKind::Area { .. } => true,
+        };
+        if !finite {
+            return Some(format!("bad light accepted: {l:?}"));
+        }
+    }
+    None
+}
+
+/// Loads a scene the way `check` says, then demands a scene that keeps the invariants and
+/// prepares, or an error naming `names` (one of them).
+fn check_scene(
+    load: impl FnOnce() -> Result<Scene, photonix::scene::SceneError>,
+    names: &[&Path],
+) -> Result<(), Failure> {
+    match load() {
+        Ok(scene) => {
+            if let Some(broken) = broken_invariant(&scene) {
+                let key = broken.split(':').next().unwrap_or_default().to_string();
+                return Err(Failure { key, message: broken });
+            }
+            let settings = FrameSettings { width: 8, height: 8, max_depth: scene.render.max_depth, seed: 0 };
+            // The checks a render makes before it starts must not panic either.
+            let (w, h) = (scene.camera.width, scene.camera.height);
+            let estimate = memory::estimate(w, h, scene.photons.as_ref(), None);
+            let _ = memory::check_fits(&estimate, w, h, scene.photons.as_ref(), Some(1 << 30), Some(1 << 30));
+            if let Ok(buffers) = prepare(&scene, &settings) {
+                if let Some(p) = &scene.photons {
+                    let _ = check_radii(&buffers, p);
+                }
+                let f = &buffers.frame;
+                let vectors = [f.camera_position, f.camera_forward, f.camera_right, f.camera_up];
+                let frame_ok = vectors.iter().flatten().all(|x| x.is_finite())
+                    && f.ray_epsilon.is_finite()
+                    && f.total_light_power.is_finite()
+                    && buffers.lights.iter().all(|l| {
+                        [l.pick_probability, l.cdf, l.photon_probability, l.photon_cdf].iter().all(|x| x.is_finite())
+                    });
+                if !frame_ok {
+                    return Err(Failure {
+                        key: "non-finite frame or light".into(),
+                        message: format!("prepared scene has non-finite values: {f:?}"),
+                    });
+                }
+            }
+            Ok(())
+        }
+        Err(e) => {
+            let message = e.to_string();
+            let fail = |what: &str| {
+                let key = format!("{what}: {}", error_kind(&message));
+                let shown: String = message.chars().take(2000).collect();
+                Err(Failure { key, message: format!("{what}: {shown}") })
+            };
+            if !names.iter().any(|n| message.contains(&n.display().to_string())) {
+                return fail("error names no file");
+            }
+            // Messages stay readable: no raw control characters, no number printed in hundreds
+            // of digits, no megabyte of echoed input.
+            if message.chars().any(|c| c.is_control() && c != '\n') {
+                return fail("raw control character in message");
+            }
+            let longest_digits = message.split(|c: char| !c.is_ascii_digit()).map(str::len).max().unwrap_or(0);
+            if longest_digits > 24 {
+                return fail("number printed in full");
+            }
+            if message.len() > 4096 {
+                return fail("message too long");
+            }
+            Ok(())
+        }
+    }
+}
+
+/// What a message says with the place, the quoted names and the numbers left out, so that one
+/// kind of message found in many files counts once.
+fn error_kind(message: &str) -> String {
+    let after_place = message.split_once(": ").map_or(message, |(_, rest)| rest);
+    let mut kind = String::new();
+    let mut quoted = false;
+    for c in after_place.chars() {
+        if c == '"' {
+            quoted = !quoted;
+        } else if !quoted && !c.is_ascii_digit() {
+            kind.push(c);
+        }
+    }
+    kind.chars().take(50).collect()
+}
+
+/// A folder with the files scenes refer to: `mesh.obj` and `meshes/icosahedron.obj`.
+fn workspace() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let ico = std::fs::read(repo("scenes/meshes/icosahedron.obj")).unwrap();
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    std::fs::write(dir.path().join("meshes/icosahedron.obj"), &ico).unwrap();
+    std::fs::write(dir.path().join("mesh.obj"), &ico).unwrap();
+    dir
+}
+
+fn repo(relative: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
+}
+
+/// Scene target: `bytes` parsed as the scene file `dir/scene.toml`.
+fn check_scene_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
+    let path = dir.join("scene.toml");
+    match std::str::from_utf8(bytes) {
+        Ok(text) => check_scene(|| parse_scene(text, &path), &[&path]),
+        Err(_) => {
+            std::fs::write(&path, bytes).unwrap();
+            check_scene(|| load_scene(&path), &[&path])
+        }
+    }
+}
+
+/// The scene that wraps an OBJ input.
+const OBJ_SCENE: &str = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n\
+    [materials.white]\ntype = \"diffuse\"\n\
+    [[shapes]]\ntype = \"mesh\"\nmaterial = \"white\"\nfile = \"input.obj\"\n\
+    [[lights]]\ntype = \"point\"\nposition = [0, 5, 0]\nintensity = 1\n";
+
+/// OBJ target: `bytes` as the mesh file of a scene.
+fn check_obj_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
+    let (scene, obj) = (dir.join("obj-scene.toml"), dir.join("input.obj"));
+    std::fs::write(&scene, OBJ_SCENE).unwrap();
+    std::fs::write(&obj, bytes).unwrap();
+    check_scene(|| load_scene(&scene), &[&scene, &obj])
+}
+
+/// Runs `cases` cases of one target; returns the failures by kind, with the first input of each.
+fn fuzz(
+    target: &str,
+    extension: &str,
+    default_cases: u64,
+    generate: impl Fn(&mut Rng) -> Vec<u8>,
+    check: impl Fn(&[u8], &Path) -> Result<(), Failure>,
+) {
+    quiet_panics();
+    let cfg = config(default_cases);
+    let dir = workspace();
+    let start = Instant::now();
+    let mut found: BTreeMap<String, (u64, String)> = BTreeMap::new();
+    let mut slowest = (Duration::ZERO, 0u64);
+    let mut case = cfg.start;
+    while case < cfg.start + cfg.cases && cfg.time.is_none_or(|t| start.elapsed() < t) {
+        let mut r = Rng::new(cfg.seed, case as u32);
+        let input = generate(&mut r);
+        if let Some(findings) = &cfg.findings {
+            // Kept until the next case, so a crash that kills the process leaves its input.
+            std::fs::write(findings.join(format!("current-{target}.{extension}")), &input).unwrap();
+        }
+        let t = cpu_time();
+        let mut result = run_case(|| check(&input, dir.path()));
+        let took = cpu_time() - t;
+        if took > slowest.0 {
+            slowest = (took, case);
+        }
+        if took > Duration::from_secs(5) {
+            let what = result.err().map_or(String::new(), |f| format!(" (and failed: {})", f.message));
+            let message = format!("took {:.1} s of CPU time{what}", took.as_secs_f64());
+            result = Err(Failure { key: "slow".into(), message });
+        }
+        if let Err(failure) = result {
+            let Some(findings) = &cfg.findings else {
+                let shown = String::from_utf8_lossy(&input[..input.len().min(4000)]).to_string();
+                panic!(
+                    "{target} case {case} (seed {}): {}\ninput ({} bytes):\n{shown}",
+                    cfg.seed,
+                    failure.message,
+                    input.len()
+                );
+            };
+            let entry = found.entry(failure.key.clone()).or_insert((0, failure.message.clone()));
+            entry.0 += 1;
+            if entry.0 == 1 {
+                let stem = format!("{target}-seed{}-case{case}", cfg.seed);
+                std::fs::write(findings.join(format!("{stem}.{extension}")), &input).unwrap();
+                std::fs::write(findings.join(format!("{stem}.txt")), &failure.message).unwrap();
+                eprintln!("{target}: new finding at case {case}: {}", failure.message);
+            }
+        }
+        case += 1;
+    }
+    let summary = format!(
+        "{target}: seed {}, {} cases in {:.1} s, slowest case {} ({:.3} s), {} kinds of failure{}",
+        cfg.seed,
+        case - cfg.start,
+        start.elapsed().as_secs_f64(),
+        slowest.1,
+        slowest.0.as_secs_f64(),
+        found.len(),
+        found.iter().map(|(k, (n, m))| format!("\n  {n} x {k}: {m}")).collect::<String>()
+    );
+    eprintln!("{summary}");
+    if let Some(findings) = &cfg.findings {
+        std::fs::write(findings.join(format!("summary-{target}-seed{}.txt", cfg.seed)), &summary).unwrap();
+        let _ = std::fs::remove_file(findings.join(format!("current-{target}.{extension}")));
+    }
+}
+
+/// The shipped scene files, as seeds for mutation.
+fn shipped_scenes() -> Vec<Vec<u8>> {
+    ["scenes/cornell-box.toml", "scenes/cornell-caustics.toml", "scenes/showcase.toml"]
+        .iter()
+        .map(|p| std::fs::read(repo(p)).unwrap())
+        .collect()
+}
+
+#[test]
+fn fuzz_scene_parser() {
+    let seeds = shipped_scenes();
+    fuzz(
+        "scene",
+        "toml",
+        300,
+        |r| {
+            if r.chance(50) {
+                grammar_scene(r).into_bytes()
+            } else {
+                let base = r.pick(&seeds).clone();
+                mutate(r, &base)
+            }
+        },
+        check_scene_input,
+    );
+}
+
+#[test]
+fn fuzz_obj_importer() {
+    let ico = std::fs::read(repo("scenes/meshes/icosahedron.obj")).unwrap();
+    fuzz(
+        "obj",
+        "obj",
+        300,
+        |r| {
+            if r.chance(60) {
+                let base = grammar_obj(r);
+                if r.chance(30) {
+                    mutate(r, &base)
+                } else {
+                    base
+                }
+            } else {
+                mutate(r, &ico)
+            }
+        },
+        check_obj_input,
+    );
+}
+
+#[test]
+fn fuzz_corpus_replays_cleanly() {
+    quiet_panics();
+    let dir = workspace();
+    let mut replayed = 0;
+    for (folder, check) in
+        [("scene", check_scene_input as fn(&[u8], &Path) -> Result<(), Failure>), ("obj", check_obj_input)]
+    {
+        let Ok(entries) = std::fs::read_dir(repo("tests/fuzz_corpus").join(folder)) else { continue };
+        let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();
+        paths.sort();
+        for path in paths.iter().filter(|p| p.extension().is_some_and(|e| e != "txt" && e != "md")) {
+            let input = std::fs::read(path).unwrap();
+            if let Err(failure) = run_case(|| check(&input, dir.path())) {
+                panic!("{}: {}", path.display(), failure.message);
+            }
+            replayed += 1;
+        }
+    }
+    println!("replayed {replayed} corpus inputs");
+}
