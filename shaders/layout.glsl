@@ -58,10 +58,16 @@ struct Light {
     uint kind;
     float intensity[3];
     uint primitive;
+    float direction[3];
+    float area;
     float pick_probability;
     float cdf;
-    float area;
-    uint _pad;
+    float photon_probability;
+    float photon_cdf;
+    float cos_outer;
+    float falloff_scale;
+    float exponent;
+    float radius;
 };
 
 struct FrameParams {
@@ -81,8 +87,14 @@ struct FrameParams {
     uint photon_mapping;
     uint gather_rays;
     float glossy_threshold;
+    uint camera_kind;
+    float lens_radius;
+    float focal_distance;
+    uint aperture_blades;
+    float aperture_rotation;
+    uint environment;
     uint unbounded_first;
-    uint _pad[3];
+    uint _pad;
 };
 
 struct DispatchRange {

@@ -1,55 +1,195 @@
-// Lights behind one interface: pick by power, a point on a light, a photon leaving it.
-// CPU twin: src/cpu/light.rs. The including kernel declares the scene bindings and includes
-// shape.glsl and bsdf.glsl.
+// Lights behind one interface: pick by power, a light sample toward a point, a photon leaving a
+// light. CPU twin: src/cpu/light.rs. The including kernel declares the scene bindings and
+// includes shape.glsl and bsdf.glsl.
 
-// Index of the light whose cdf interval holds u: lights are picked in proportion to power.
-uint pick_light(float u) {
+// Index of the light whose cdf interval holds u: lights are picked in proportion to power, among
+// those that cast direct light (`photons` false: `cdf`) or emit photons (`photons` true:
+// `photon_cdf`). A light left out of a distribution has an empty interval and is never picked.
+uint pick_light(float u, bool photons) {
     uint lo = 0u;
     uint hi = frame.light_count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (u < lights[mid].cdf) hi = mid; else lo = mid + 1u;
+        if (u < (photons ? lights[mid].photon_cdf : lights[mid].cdf)) hi = mid; else lo = mid + 1u;
     }
     return lo;
 }
 
-// A point on a light: its position, its normal (zero for a point light) and what it emits
-// there: radiance toward its front side, or a point light's intensity (W/sr).
-// inv_pdf: 1/pdf of the point by area (1 for a point light); eps: the offset of rays that
-// start or end there.
-struct LightPoint {
+// Intensity profile of point and spot lights along unit direction w (away from the light):
+// a smooth step (3t^2 - 2t^3, as pbrt-v4 and POV-Ray's cubic_spline) in cos from the outer
+// cone to the inner one, times cos^exponent (POV-Ray's tightness). A point light's cone is
+// the whole sphere, so its profile is 1.
+float spot_falloff(Light l, vec3 w) {
+    float c = dot(w, load3(l.direction));
+    float t = clamp((c - l.cos_outer) * l.falloff_scale, 0.0, 1.0);
+    float tight = l.exponent > 0.0 ? pow(max(c, 0.0), l.exponent) : 1.0;
+    return t * t * (3.0 - 2.0 * t) * tight;
+}
+
+// The environment (LIGHT_ENVIRONMENT): a latitude-longitude image of radiance, its block at
+// word `base` of the texture data (layout at ENV_TEXELS). Texel (i, j) covers the directions of
+// polar angle theta in pi [j, j + 1] / H from +y and longitude phi in pi (2 [i, i + 1] / W - 1)
+// around +y, phi = 0 toward -z, pi/2 toward +x, before the rotation about +y.
+float env_float(uint word) { return uintBitsToFloat(texture_data[word]); }
+
+// The direction of image position (u, v) in [0, 1]^2, in world space.
+vec3 env_direction(uint base, vec2 uv) {
+    float theta = PI * uv.y;
+    float phi = PI * (2.0 * uv.x - 1.0);
+    vec3 local = vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+    float c = env_float(base + ENV_COS_ROTATION);
+    float s = env_float(base + ENV_SIN_ROTATION);
+    return vec3(c * local.x + s * local.z, local.y, c * local.z - s * local.x);
+}
+
+// The texel (column, row) that world direction d falls in.
+uvec2 env_texel(uint base, vec3 d) {
+    uint w = texture_data[base + ENV_WIDTH];
+    uint h = texture_data[base + ENV_HEIGHT];
+    float c = env_float(base + ENV_COS_ROTATION);
+    float s = env_float(base + ENV_SIN_ROTATION);
+    vec3 local = vec3(c * d.x - s * d.z, d.y, c * d.z + s * d.x);
+    float u = 0.5 * (atan(local.x, -local.z) / PI + 1.0);
+    float v = acos(clamp(local.y, -1.0, 1.0)) / PI;
+    return uvec2(min(uint(u * float(w)), w - 1u), min(uint(v * float(h)), h - 1u));
+}
+
+vec3 env_radiance_at(uint base, uvec2 t) {
+    uint k = base + ENV_TEXELS + 3u * (t.y * texture_data[base + ENV_WIDTH] + t.x);
+    return vec3(env_float(k), env_float(k + 1u), env_float(k + 2u));
+}
+
+// Radiance of the environment of light l arriving along -d (d points away from the scene).
+vec3 environment_radiance(Light l, vec3 d) {
+    return env_radiance_at(l.primitive, env_texel(l.primitive, d));
+}
+
+// Index of the interval [cdf[k], cdf[k + 1]) of the n + 1 values from `first` that holds u.
+uint env_search(uint first, uint n, float u) {
+    uint lo = 0u;
+    uint hi = n - 1u;
+    while (lo < hi) {
+        uint mid = (lo + hi + 1u) / 2u;
+        if (env_float(first + mid) <= u) lo = mid; else hi = mid - 1u;
+    }
+    return lo;
+}
+
+// A direction toward the environment of light l, drawn in proportion to luminance times
+// sin(theta) per texel (a piecewise-constant 2D distribution, pbrt's Distribution2D), with
+// the radiance from it divided by its solid-angle pdf.
+void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
+    uint base = l.primitive;
+    uint w = texture_data[base + ENV_WIDTH];
+    uint h = texture_data[base + ENV_HEIGHT];
+    uint marginal = base + ENV_TEXELS + 3u * w * h;
+    uint j = env_search(marginal, h, u.y);
+    float m0 = env_float(marginal + j);
+    float m1 = env_float(marginal + j + 1u);
+    uint row = marginal + h + 1u + j * (w + 1u);
+    uint i = env_search(row, w, u.x);
+    float c0 = env_float(row + i);
+    float c1 = env_float(row + i + 1u);
+    vec2 uv = vec2((float(i) + clamp((u.x - c0) / (c1 - c0), 0.0, 1.0)) / float(w),
+                   (float(j) + clamp((u.y - m0) / (m1 - m0), 0.0, 1.0)) / float(h));
+    d = env_direction(base, uv);
+    // pdf in (u, v) is W H (m1 - m0)(c1 - c0); the map to directions has Jacobian 2 pi^2 sin(theta).
+    float sin_theta = sin(PI * uv.y);
+    float pdf = float(w * h) * (m1 - m0) * (c1 - c0) / (2.0 * PI * PI * sin_theta);
+    weight = sin_theta > 0.0 && pdf > 0.0 ? env_radiance_at(base, uvec2(i, j)) / pdf : vec3(0.0);
+}
+
+// Light l as seen from x: the direction wi toward it, a point p to aim the shadow ray at (beyond
+// the scene for a distant light) and `weight`, the radiance arriving along -wi divided by the
+// solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability);
+// `eps`, the offset of a ray that ends at p (the area light's point's own, else the frame's).
+struct LightSample {
     vec3 p;
-    vec3 n;
-    vec3 emitted;
-    float inv_pdf;
+    vec3 wi;
+    vec3 weight;
     float eps;
 };
 
-// A point on light l (see shape_sample for the density of area lights' points).
-LightPoint light_point(Light l, vec2 u) {
+LightSample light_sample(Light l, vec3 x, vec2 u) {
+    // The environment's searches are loops: no lane enters them unless it holds the environment.
+    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon);
+    WHEN(l.kind == LIGHT_ENVIRONMENT) {
+        environment_sample(l, u, env.wi, env.weight);
+        env.p = x + env.wi * (length(x - load3(l.position)) + 2.0 * l.radius);
+    }
     switch (l.kind) {
+    case LIGHT_ENVIRONMENT:
+        return env;
     case LIGHT_AREA: {
+        // By area (see shape_sample for the density): L cos' / d^2 over the point's pdf by area.
         float inv_pdf;
         Hit h = shape_sample(l.primitive, u, inv_pdf);
-        return LightPoint(h.p, h.ng, material_emission(materials[h.material], h), inv_pdf, h.eps);
+        vec3 to_light = h.p - x;
+        float dist2 = dot(to_light, to_light);
+        vec3 wi = to_light / sqrt(dist2);
+        float cos_l = -dot(h.ng, wi);
+        vec3 weight = cos_l > 0.0 ? material_emission(materials[h.material], h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
+        // The shadow ray stops short of the point by its offset over the cosine there: a hit on
+        // the light's own surface moves along a grazing ray by its error over that cosine.
+        return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2));
+    }
+    case LIGHT_DISTANT: {
+        // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
+        vec3 wi = -cone_direction(load3(l.direction), l.cos_outer, u);
+        float beyond = length(x - load3(l.position)) + 2.0 * l.radius;
+        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon);
     }
     }
-    return LightPoint(load3(l.position), vec3(0.0), load3(l.intensity), 1.0, frame.ray_epsilon);
+    // Point and spot lights: I(w) / d^2.
+    vec3 p = load3(l.position);
+    vec3 to_light = p - x;
+    float dist2 = dot(to_light, to_light);
+    vec3 wi = to_light / sqrt(dist2);
+    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon);
 }
 
 // A photon leaving light l: its origin, direction and the power it carries before the division
-// by the pick probability and the path count. Area lights emit from a uniform point in a
-// cosine-distributed direction (Lambertian), point lights uniformly in all directions.
+// by the pick probability and the path count. Area lights emit from a point drawn by
+// shape_sample (their power over that point's pdf by area) in a cosine-distributed direction
+// (Lambertian); point and spot lights uniformly in their cone, weighted by the spot's profile;
+// distant lights from a uniform point of the disc of the scene's bounding sphere that faces
+// them, uniformly in their cone of directions.
 void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec3 power) {
-    LightPoint s = light_point(l, u_pos);
-    o = s.p;
+    vec3 axis = load3(l.direction);
+    // The environment: a direction toward it, then a disc facing it, as for a distant light.
+    vec3 env_weight = vec3(0.0);
+    WHEN(l.kind == LIGHT_ENVIRONMENT) {
+        environment_sample(l, u_dir, axis, env_weight);
+        axis = -axis;
+    }
     switch (l.kind) {
-    case LIGHT_AREA:
-        d = cosine_direction(s.n, u_dir);
-        o += s.n * s.eps;
-        power = PI * s.inv_pdf * s.emitted;
+    case LIGHT_AREA: {
+        float inv_pdf;
+        Hit h = shape_sample(l.primitive, u_pos, inv_pdf);
+        o = h.p + h.ng * h.eps;
+        d = cosine_direction(h.ng, u_dir);
+        power = PI * inv_pdf * material_emission(materials[h.material], h);
         return;
     }
-    d = sphere_direction(u_dir);
-    power = 4.0 * PI * s.emitted;
+    case LIGHT_ENVIRONMENT:
+    case LIGHT_DISTANT: {
+        vec3 t, b;
+        onb(axis, t, b);
+        vec2 q = disc_point(u_pos) * l.radius;
+        o = load3(l.position) - axis * l.radius + q.x * t + q.y * b;
+        if (l.kind == LIGHT_ENVIRONMENT) {
+            // Radiance over the direction's pdf, through the whole disc.
+            d = axis;
+            power = env_weight * (PI * l.radius * l.radius);
+            return;
+        }
+        d = cone_direction(axis, l.cos_outer, u_dir);
+        // Flux through the disc: radiance times solid angle times the projected disc area.
+        power = load3(l.intensity) * (PI * l.radius * l.radius * dot(d, axis));
+        return;
+    }
+    }
+    o = load3(l.position);
+    d = cone_direction(axis, l.cos_outer, u_dir);
+    power = load3(l.intensity) * (2.0 * PI * (1.0 - l.cos_outer) * spot_falloff(l, d));
 }

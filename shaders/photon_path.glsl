@@ -8,12 +8,14 @@ void trace_photon_path(uint path, EmitParams params) {
     if (frame.light_count == 0u) return;
     uint seed = frame.seed;
     uint dim = RNG_PHOTON_DOMAIN;
-    Light l = lights[pick_light(rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK))];
+    Light l = lights[pick_light(rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK), true)];
+    // A scene whose lights all give direct light only picks one with probability 0.
+    if (l.photon_probability <= 0.0) return;
     vec3 o, d, flux;
     light_emit(l, rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION),
                rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux);
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
-    flux /= l.pick_probability * float(params.total_paths);
+    flux /= l.photon_probability * float(params.total_paths);
     bool specular_only = true;
     for (uint depth = 0u; depth < params.max_depth; depth++) {
         float t;

@@ -47,11 +47,12 @@ const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an esti
 // three times the code, and as much slower to compile and to run.
 void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
-    vec2 jitter = rand2(stream, sample_index, frame.seed, RNG_PIXEL_X);
-    float sx = 2.0 * (float(px) + jitter.x) / float(frame.width) - 1.0;
-    float sy = 1.0 - 2.0 * (float(py) + jitter.y) / float(frame.height);
-    vec3 o = load3(frame.camera_position);
-    vec3 d = camera_direction(sx, sy);
+    // xy jitter the film position, zw sample the lens.
+    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
+    float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
+    vec3 o, d;
+    camera_ray(sx, sy, film.zw, o, d);
     float t_max = INF;
     uint ray = RAY_CAMERA;
     uint depth = 0u;           // path-lobe bounces of the current path so far
@@ -92,7 +93,14 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             lookups = frame.gather_rays == 0u ? 2u : 1u;
             break;
         }
-        if (prim == NO_LIGHT) break;
+        if (prim == NO_LIGHT) {
+            // A camera path that leaves the scene sees the environment (a path lobe's view of a
+            // light); a gather path counts none of it, as it counts no emission.
+            WHEN(frame.environment != NO_LIGHT && ray == RAY_CAMERA && part == 0u) {
+                terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * environment_radiance(lights[frame.environment], d);
+            }
+            break;
+        }
         Hit h = shape_hit(prim, o, d, t);
         Material m = materials[h.material];
         vec3 wo = -d;

@@ -2,9 +2,33 @@
 // The including kernel declares the scene bindings and includes rng, sampling, shape, texture,
 // bsdf, trace and light (in that order).
 
-// Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row.
-vec3 camera_direction(float sx, float sy) {
-    return normalize(load3(frame.camera_forward) + sx * load3(frame.camera_right) + sy * load3(frame.camera_up));
+// Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row, with lens
+// sample u (see FrameParams and the CAMERA_* kinds).
+void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
+    vec3 forward = load3(frame.camera_forward);
+    vec3 right = load3(frame.camera_right);
+    vec3 up = load3(frame.camera_up);
+    o = load3(frame.camera_position);
+    d = normalize(forward + sx * right + sy * up);
+    // The other projections and the lens are loops of at most one turn: lavapipe runs both sides
+    // of an `if` under masks, but skips a loop no lane enters, so a pinhole pays for none of them.
+    WHEN(frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
+        o += sx * right + sy * up;
+        d = forward;
+    }
+    WHEN(frame.camera_kind == CAMERA_LATLONG) {
+        float phi = PI * sx;
+        float theta = 0.5 * PI * sy;
+        d = cos(theta) * (sin(phi) * right + cos(phi) * forward) + sin(theta) * up;
+    }
+    // Thin lens (never latlong): the ray from a point of the aperture aims where the pinhole ray
+    // meets the plane in focus.
+    WHEN(frame.lens_radius > 0.0) {
+        vec3 focus = o + d * (frame.focal_distance / dot(d, forward));
+        vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation) * frame.lens_radius;
+        o += a.x * normalize(right) + a.y * normalize(up);
+        d = normalize(focus - o);
+    }
 }
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
@@ -18,7 +42,7 @@ vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
 // A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
 // shading point toward wo through the estimate lobes of its BSDF if nothing blocks the ray: a
 // one-sample estimate of the direct light. `t_max` is NO_RAY when no ray is needed (no light,
-// or nothing to reflect).
+// a light picked with probability 0, or nothing to reflect).
 // The length of a shadow ray that is not cast: trace_ray meets nothing before it.
 const float NO_RAY = -1.0;
 
@@ -32,31 +56,17 @@ struct ShadowRay {
 ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim) {
     ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0));
     if (frame.light_count == 0u) return none;
-    uint li = pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK));
-    Light l = lights[li];
-    LightPoint s = light_point(l, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
-    vec3 to_light = s.p - h.p;
-    float dist2 = dot(to_light, to_light);
-    float dist = sqrt(dist2);
-    vec3 wi = to_light / dist;
-    vec3 f = bsdf_eval(b, wo, wi);
+    Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
+    // A scene whose lights all give photons only picks one with probability 0.
+    if (l.pick_probability <= 0.0) return none;
+    LightSample s = light_sample(l, h.p, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
+    vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
-    float geometry = abs(dot(b.ns, wi)) / dist2;
-    // The shadow ray stops short of the light's point by its offset over the cosine there (see
-    // the twin).
-    float shadow_end = s.eps;
-    if (l.kind != LIGHT_POINT) {
-        float cos_l = -dot(s.n, wi);
-        if (cos_l <= 0.0) return none;
-        geometry *= cos_l * s.inv_pdf;
-        shadow_end = s.eps / max(cos_l, 1e-2);
-    }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
-    vec3 origin = offset_origin(h, wi, BSDF_REFLECTION);
+    vec3 origin = offset_origin(h, s.wi, BSDF_REFLECTION);
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
-    float t_max = max(shadow_length - shadow_end, 0.0);
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * s.emitted * (geometry / l.pick_probability));
+    float t_max = max(shadow_length - s.eps, 0.0);
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (abs(dot(b.ns, s.wi)) / l.pick_probability));
 }

@@ -32,6 +32,14 @@ pub const MIN_SPHERE_RADIUS: f64 = 1e-9;
 pub const MAX_IOR: f64 = 100.0;
 /// Vertical field of view in degrees: at least this much, and at most 180 minus this much.
 pub const MIN_FOV_DEGREES: f64 = 0.01;
+/// Most blades of a polygonal lens aperture (`aperture_blades`; 0 is round, else at least 3).
+pub const MAX_APERTURE_BLADES: u32 = 64;
+/// Largest spot light `tightness` (the exponent of cos): cos^1000 is 0.6 at 1 degree, a beam.
+pub const MAX_SPOT_TIGHTNESS: f64 = 1000.0;
+/// Most texels of an environment map as the renderer uses it (2048 x 1024); a larger map is
+/// halved until it fits: the map, its cdfs and the scene's other data share one storage buffer
+/// (128 MiB on lavapipe).
+pub const MAX_ENVIRONMENT_TEXELS: u64 = 2048 * 1024;
 /// Largest `--exposure` magnitude (stops).
 pub const MAX_EXPOSURE: f32 = 64.0;
 /// Largest `--target-error` (relMSE).

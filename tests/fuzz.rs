@@ -29,7 +29,7 @@ use photonix::cpu::rng::pcg4d;
 use photonix::render::memory;
 use photonix::render::photons::check_radii;
 use photonix::render::{prepare, FrameSettings};
-use photonix::scene::{load_scene, parse_scene, Geometry, Scene};
+use photonix::scene::{load_scene, parse_scene, Geometry, LightKind, Scene};
 
 // Random choices
 
@@ -656,9 +656,24 @@ fn broken_invariant(scene: &Scene) -> Option<String> {
             }
         }
     }
-    for l in &scene.point_lights {
-        if !(l.position.is_finite() && l.intensity.is_finite()) {
-            return Some(format!("bad point light accepted: {l:?}"));
+    for l in &scene.lights {
+        let finite = match l.kind {
+            LightKind::Point { position, intensity } => position.is_finite() && intensity.is_finite(),
+            LightKind::Spot { position, direction, intensity, cos_inner, cos_outer, exponent } => {
+                position.is_finite()
+                    && direction.is_finite()
+                    && intensity.is_finite()
+                    && cos_inner.is_finite()
+                    && cos_outer.is_finite()
+                    && exponent.is_finite()
+            }
+            LightKind::Distant { direction, irradiance, half_angle_deg } => {
+                direction.is_finite() && irradiance.is_finite() && half_angle_deg.is_finite()
+            }
+            LightKind::Area { .. } => true,
+        };
+        if !finite {
+            return Some(format!("bad light accepted: {l:?}"));
         }
     }
     None
@@ -690,7 +705,9 @@ fn check_scene(
                 let frame_ok = vectors.iter().flatten().all(|x| x.is_finite())
                     && f.ray_epsilon.is_finite()
                     && f.total_light_power.is_finite()
-                    && buffers.lights.iter().all(|l| l.pick_probability.is_finite() && l.cdf.is_finite());
+                    && buffers.lights.iter().all(|l| {
+                        [l.pick_probability, l.cdf, l.photon_probability, l.photon_cdf].iter().all(|x| x.is_finite())
+                    });
                 if !frame_ok {
                     return Err(Failure {
                         key: "non-finite frame or light".into(),

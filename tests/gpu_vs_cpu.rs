@@ -52,6 +52,11 @@ fn gpu_matches_cpu_on_showcase() {
 }
 
 #[test]
+fn gpu_matches_cpu_on_spotlights() {
+    compare("scenes/spotlights.toml");
+}
+
+#[test]
 fn gpu_matches_cpu_on_materials() {
     // Measured 3e-9 on lavapipe. Patterns agree bit for bit except through pow (1.5e-6 at most,
     // tests/pattern_gpu.rs), and a bumped normal or a mix's choice can flip on that on another

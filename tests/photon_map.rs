@@ -11,7 +11,7 @@ use photonix::layout::{GridParams, Photon};
 use photonix::render::gpu::{build_maps_gpu, DeviceScene};
 use photonix::render::photons::build_maps_cpu;
 use photonix::render::PhotonSettings;
-use photonix::scene::{load_scene, Camera, PointLight, RenderSettings, Scene};
+use photonix::scene::{load_scene, Camera, LightDesc, LightKind, Projection, RenderSettings, Scene};
 
 /// Fraction of `gpu` photons that have a twin in `cpu`: same flags, flux within 0.1%, position
 /// within 1e-4 of the scene size (float rounding along a path of a few bounces; a half-float
@@ -96,6 +96,8 @@ fn closed_box(rho: f32) -> Scene {
             look_at: Vec3::ZERO,
             up: Vec3::Y,
             fov_deg: 60.0,
+            projection: Projection::Perspective,
+            lens: None,
             width: 8,
             height: 8,
         },
@@ -105,7 +107,11 @@ fn closed_box(rho: f32) -> Scene {
         material_names: vec!["wall".into()],
         textures: vec![],
         shapes: triangles,
-        point_lights: vec![PointLight { position: Vec3::new(0.1, 0.2, -0.3), intensity: Vec3::new(1.0, 2.0, 3.0) }],
+        lights: vec![LightDesc::new(LightKind::Point {
+            position: Vec3::new(0.1, 0.2, -0.3),
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+        })],
+        environment: None,
         warnings: vec![],
     }
 }

@@ -6,7 +6,7 @@ use std::f64::consts::PI;
 
 use glam::{DVec3, Vec3};
 use photonix::io::Image;
-use photonix::scene::{Camera, RenderSettings, Scene, Shape};
+use photonix::scene::{Camera, LightDesc, LightKind, Projection, RenderSettings, Scene, Shape};
 
 const ALBEDO: f32 = 0.5;
 const RADIANCE: f32 = 10.0;
@@ -44,6 +44,8 @@ fn light_over_plane() -> Scene {
             look_at: Vec3::ZERO,
             up: Vec3::Z,
             fov_deg: FOV_DEG,
+            projection: Projection::Perspective,
+            lens: None,
             width: SIZE,
             height: SIZE,
         },
@@ -53,7 +55,8 @@ fn light_over_plane() -> Scene {
         material_names: vec!["plane".into(), "light".into()],
         textures: vec![],
         shapes: triangles,
-        point_lights: vec![],
+        lights: vec![],
+        environment: None,
         warnings: vec![],
     }
 }
@@ -129,8 +132,8 @@ fn point_light_follows_inverse_square_law() {
     let mut scene = light_over_plane();
     scene.shapes.truncate(2);
     scene
-        .point_lights
-        .push(photonix::scene::PointLight { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(30.0) });
+        .lights
+        .push(LightDesc::new(LightKind::Point { position: Vec3::new(0.0, 2.0, 0.0), intensity: Vec3::splat(30.0) }));
     let buffers = common::buffers(&scene, SIZE, SIZE);
     let image = common::cpu_image(&buffers, 64);
     for (px, py) in [(5, 5), (32, 32), (60, 10), (20, 45)] {

@@ -200,8 +200,11 @@ fn unknown_type_is_rejected_with_a_suggestion() {
     );
     let text = format!("{CAMERA}[materials.m]\ntype = \"metal\"\n");
     assert_mentions(&error_of(&text), &["bad.toml:6:", "material \"m\"", "unknown type \"metal\"", "\"mirror\""]);
-    let text = format!("{CAMERA}[[lights]]\ntype = \"spot\"\n");
-    assert_mentions(&error_of(&text), &["bad.toml:6:", "light 0", "unknown type \"spot\""]);
+    let text = format!("{CAMERA}[[lights]]\ntype = \"spotlight\"\n");
+    assert_mentions(
+        &error_of(&text),
+        &["bad.toml:6:", "light 0", "unknown type \"spotlight\"", "did you mean \"spot\"?"],
+    );
 }
 
 #[test]

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use photonix::scene::{load_scene, ColorParam, MaterialKind, Scene};
+use photonix::scene::{load_scene, ColorParam, LightDesc, LightKind, MaterialKind, Scene};
 
 fn load(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
@@ -20,7 +20,8 @@ fn cornell_box_has_16_quads_and_its_light() {
     assert_eq!(scene.name, "cornell-box");
     assert_eq!(scene.triangles().count(), 32, "16 quads, light included");
     assert_eq!(scene.spheres().count(), 0);
-    assert!(scene.point_lights.is_empty());
+    // Its only light is the area light of [[lights]], whose options are kept with its material.
+    assert!(matches!(scene.lights[..], [LightDesc { kind: LightKind::Area { .. }, direct: true, photons: true }]));
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     assert_eq!((scene.camera.width, scene.camera.height), (256, 256));
     assert_eq!(scene.camera.fov_deg, 39.307648);
@@ -76,7 +77,7 @@ fn showcase_uses_every_feature() {
     // floor 2 + wall 2 + mirror 2 + box 12 + icosahedron 20 + triangle 1 + light 2
     assert_eq!(scene.triangles().count(), 41);
     assert_eq!(scene.spheres().count(), 1);
-    assert_eq!(scene.point_lights.len(), 1);
+    assert_eq!(scene.lights.iter().filter(|l| matches!(l.kind, LightKind::Point { .. })).count(), 1);
     assert_eq!(scene.material_names.last().unwrap(), "light 0");
     // The icosahedron (circumradius 1, scaled 0.4) stays outward-facing after its transform.
     let copper = scene.material_names.iter().position(|n| n == "copper").unwrap() as u32;

@@ -24,7 +24,11 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
     }
     let seed = f.seed;
     let dim = RNG_PHOTON_DOMAIN;
-    let l = &s.lights[pick_light(s, rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK)) as usize];
+    let l = &s.lights[pick_light(s, rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK), true) as usize];
+    // A scene whose lights all give direct light only picks one with probability 0.
+    if l.photon_probability <= 0.0 {
+        return;
+    }
     let (mut o, mut d, mut flux) = light_emit(
         s,
         l,
@@ -32,7 +36,7 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
         rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION),
     );
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
-    flux /= l.pick_probability * params.total_paths as f32;
+    flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
     for depth in 0..params.max_depth {
         let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);

@@ -1,23 +1,26 @@
-//! Lights behind one interface: pick by power, a point on a light, a photon leaving it; twin of
-//! `shaders/light.glsl`.
+//! Lights behind one interface: pick by power, a light sample toward a point, a photon leaving a
+//! light; twin of `shaders/light.glsl`.
 
 use std::f32::consts::PI;
 
 use glam::Vec3;
 
 use super::bsdf::material_emission;
-use super::sampling::{cosine_direction, sphere_direction};
+use super::sampling::{cone_direction, cosine_direction, disc_point, onb};
 use super::shape::shape_sample;
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Light;
 
-/// Index of the light whose cdf interval holds `u`: lights are picked in proportion to power.
-pub fn pick_light(s: &SceneView, u: f32) -> u32 {
+/// Index of the light whose cdf interval holds `u`: lights are picked in proportion to power,
+/// among those that cast direct light (`photons` false: `cdf`) or emit photons (`photons` true:
+/// `photon_cdf`). A light left out of a distribution has an empty interval and is never picked.
+pub fn pick_light(s: &SceneView, u: f32, photons: bool) -> u32 {
     let (mut lo, mut hi) = (0u32, s.frame.light_count - 1);
     while lo < hi {
         let mid = (lo + hi) / 2;
-        if u < s.lights[mid as usize].cdf {
+        let l = &s.lights[mid as usize];
+        if u < (if photons { l.photon_cdf } else { l.cdf }) {
             hi = mid;
         } else {
             lo = mid + 1;
@@ -26,44 +29,189 @@ pub fn pick_light(s: &SceneView, u: f32) -> u32 {
     lo
 }
 
-/// A point on a light: its position, its normal (zero for a point light) and what it emits
-/// there: radiance toward its front side, or a point light's intensity (W/sr).
+/// Intensity profile of point and spot lights along unit direction `w` (away from the light):
+/// a smooth step (3t^2 - 2t^3, as pbrt-v4 and POV-Ray's `cubic_spline`) in cos from the outer
+/// cone to the inner one, times cos^exponent (POV-Ray's tightness). A point light's cone is the
+/// whole sphere, so its profile is 1.
+pub fn spot_falloff(l: &Light, w: Vec3) -> f32 {
+    let c = w.dot(Vec3::from(l.direction));
+    let t = ((c - l.cos_outer) * l.falloff_scale).clamp(0.0, 1.0);
+    let tight = if l.exponent > 0.0 { c.max(0.0).powf(l.exponent) } else { 1.0 };
+    t * t * (3.0 - 2.0 * t) * tight
+}
+
+// The environment (`LIGHT_ENVIRONMENT`): a latitude-longitude image of radiance, its block at
+// word `base` of the texture data (layout at `ENV_TEXELS`). Texel (i, j) covers the directions
+// of polar angle theta in pi [j, j + 1] / H from +y and longitude phi in pi (2 [i, i + 1] / W - 1)
+// around +y, phi = 0 toward -z, pi/2 toward +x, before the rotation about +y.
+
+fn env_float(s: &SceneView, word: u32) -> f32 {
+    f32::from_bits(s.texture_data[word as usize])
+}
+
+/// The direction of image position `uv` in [0, 1]^2, in world space.
+pub fn env_direction(s: &SceneView, base: u32, uv: [f32; 2]) -> Vec3 {
+    let theta = PI * uv[1];
+    let phi = PI * (2.0 * uv[0] - 1.0);
+    let local = Vec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+    let c = env_float(s, base + ENV_COS_ROTATION);
+    let sn = env_float(s, base + ENV_SIN_ROTATION);
+    Vec3::new(c * local.x + sn * local.z, local.y, c * local.z - sn * local.x)
+}
+
+/// The texel (column, row) that world direction `d` falls in.
+pub fn env_texel(s: &SceneView, base: u32, d: Vec3) -> (u32, u32) {
+    let w = s.texture_data[(base + ENV_WIDTH) as usize];
+    let h = s.texture_data[(base + ENV_HEIGHT) as usize];
+    let c = env_float(s, base + ENV_COS_ROTATION);
+    let sn = env_float(s, base + ENV_SIN_ROTATION);
+    let local = Vec3::new(c * d.x - sn * d.z, d.y, c * d.z + sn * d.x);
+    let u = 0.5 * (local.x.atan2(-local.z) / PI + 1.0);
+    let v = local.y.clamp(-1.0, 1.0).acos() / PI;
+    (((u * w as f32) as u32).min(w - 1), ((v * h as f32) as u32).min(h - 1))
+}
+
+fn env_radiance_at(s: &SceneView, base: u32, (i, j): (u32, u32)) -> Vec3 {
+    let k = base + ENV_TEXELS + 3 * (j * s.texture_data[(base + ENV_WIDTH) as usize] + i);
+    Vec3::new(env_float(s, k), env_float(s, k + 1), env_float(s, k + 2))
+}
+
+/// Radiance of the environment of light `l` arriving along -`d` (`d` points away from the scene).
+pub fn environment_radiance(s: &SceneView, l: &Light, d: Vec3) -> Vec3 {
+    env_radiance_at(s, l.primitive, env_texel(s, l.primitive, d))
+}
+
+/// Index of the interval [cdf[k], cdf[k + 1]) of the n + 1 values from `first` that holds `u`.
+fn env_search(s: &SceneView, first: u32, n: u32, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, n - 1);
+    while lo < hi {
+        let mid = (lo + hi).div_ceil(2);
+        if env_float(s, first + mid) <= u {
+            lo = mid;
+        } else {
+            hi = mid - 1;
+        }
+    }
+    lo
+}
+
+/// A direction toward the environment of light `l`, drawn in proportion to luminance times
+/// sin(theta) per texel (a piecewise-constant 2D distribution, pbrt's `Distribution2D`), and
+/// the radiance from it divided by its solid-angle pdf: (direction, weight).
+pub fn environment_sample(s: &SceneView, l: &Light, u: [f32; 2]) -> (Vec3, Vec3) {
+    let base = l.primitive;
+    let w = s.texture_data[(base + ENV_WIDTH) as usize];
+    let h = s.texture_data[(base + ENV_HEIGHT) as usize];
+    let marginal = base + ENV_TEXELS + 3 * w * h;
+    let j = env_search(s, marginal, h, u[1]);
+    let (m0, m1) = (env_float(s, marginal + j), env_float(s, marginal + j + 1));
+    let row = marginal + h + 1 + j * (w + 1);
+    let i = env_search(s, row, w, u[0]);
+    let (c0, c1) = (env_float(s, row + i), env_float(s, row + i + 1));
+    let uv = [
+        (i as f32 + ((u[0] - c0) / (c1 - c0)).clamp(0.0, 1.0)) / w as f32,
+        (j as f32 + ((u[1] - m0) / (m1 - m0)).clamp(0.0, 1.0)) / h as f32,
+    ];
+    let d = env_direction(s, base, uv);
+    // pdf in (u, v) is W H (m1 - m0)(c1 - c0); the map to directions has Jacobian 2 pi^2 sin(theta).
+    let sin_theta = (PI * uv[1]).sin();
+    let pdf = (w * h) as f32 * (m1 - m0) * (c1 - c0) / (2.0 * PI * PI * sin_theta);
+    let weight = if sin_theta > 0.0 && pdf > 0.0 { env_radiance_at(s, base, (i, j)) / pdf } else { Vec3::ZERO };
+    (d, weight)
+}
+
+/// Light `l` as seen from `x`: the direction `wi` toward it, a point `p` to aim the shadow ray
+/// at (beyond the scene for a distant light) and `weight`, the radiance arriving along -wi
+/// divided by the solid-angle pdf of the sample (so the direct light is f |cos| weight / pick
+/// probability).
 #[derive(Clone, Copy, Debug)]
-pub struct LightPoint {
+pub struct LightSample {
     pub p: Vec3,
-    pub n: Vec3,
-    pub emitted: Vec3,
-    /// 1/pdf of the point by area (scene units squared); 1 for a point light.
-    pub inv_pdf: f32,
-    /// Offset of rays that start or end at the point (`Hit::eps`).
+    pub wi: Vec3,
+    pub weight: Vec3,
+    /// Offset of a ray that ends at `p`: the area light's point's own (`Hit::eps`), else the
+    /// frame's `ray_epsilon`.
     pub eps: f32,
 }
 
-/// A point on light `l` (see `shape_sample` for the density of area lights' points).
-pub fn light_point(s: &SceneView, l: &Light, u: [f32; 2]) -> LightPoint {
+pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSample {
     match l.kind {
-        LIGHT_AREA => {
-            let (h, inv_pdf) = shape_sample(s, l.primitive, u);
-            let emitted = material_emission(s, &s.materials[h.material as usize], &h);
-            LightPoint { p: h.p, n: h.ng, emitted, inv_pdf, eps: h.eps }
+        LIGHT_ENVIRONMENT => {
+            let (wi, weight) = environment_sample(s, l, u);
+            let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
+            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon }
         }
-        _ => LightPoint {
-            p: Vec3::from(l.position),
-            n: Vec3::ZERO,
-            emitted: Vec3::from(l.intensity),
-            inv_pdf: 1.0,
-            eps: s.frame.ray_epsilon,
-        },
+        LIGHT_AREA => {
+            // By area (see `shape_sample` for the density): L cos' / d^2 over the point's pdf.
+            let (h, inv_pdf) = shape_sample(s, l.primitive, u);
+            let to_light = h.p - x;
+            let dist2 = to_light.dot(to_light);
+            let wi = to_light / dist2.sqrt();
+            let cos_l = -h.ng.dot(wi);
+            let weight = if cos_l > 0.0 {
+                material_emission(s, &s.materials[h.material as usize], &h) * (cos_l * inv_pdf / dist2)
+            } else {
+                Vec3::ZERO
+            };
+            // The shadow ray stops short of the point by its offset over the cosine there: a hit on
+            // the light's own surface moves along a grazing ray by its error over that cosine.
+            LightSample { p: h.p, wi, weight, eps: h.eps / cos_l.max(1e-2) }
+        }
+        LIGHT_DISTANT => {
+            // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
+            let wi = -cone_direction(Vec3::from(l.direction), l.cos_outer, u);
+            let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
+            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity), eps: s.frame.ray_epsilon }
+        }
+        _ => {
+            // Point and spot lights: I(w) / d^2.
+            let p = Vec3::from(l.position);
+            let to_light = p - x;
+            let dist2 = to_light.dot(to_light);
+            let wi = to_light / dist2.sqrt();
+            let weight = Vec3::from(l.intensity) * (spot_falloff(l, -wi) / dist2);
+            LightSample { p, wi, weight, eps: s.frame.ray_epsilon }
+        }
     }
 }
 
 /// A photon leaving light `l`: (origin, direction, power before the division by the pick
-/// probability and the path count). Area lights emit from a uniform point in a
-/// cosine-distributed direction (Lambertian), point lights uniformly in all directions.
+/// probability and the path count). Area lights emit from a point drawn by `shape_sample` (their
+/// power over that point's pdf by area) in a cosine-distributed direction (Lambertian); point and
+/// spot lights uniformly in their cone, weighted by the spot's profile; distant lights from a
+/// uniform point of the disc of the scene's bounding sphere that faces them, uniformly in their
+/// cone of directions.
 pub fn light_emit(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) -> (Vec3, Vec3, Vec3) {
-    let lp = light_point(s, l, u_pos);
+    let axis = Vec3::from(l.direction);
     match l.kind {
-        LIGHT_AREA => (lp.p + lp.n * lp.eps, cosine_direction(lp.n, u_dir), PI * lp.inv_pdf * lp.emitted),
-        _ => (lp.p, sphere_direction(u_dir), 4.0 * PI * lp.emitted),
+        LIGHT_AREA => {
+            let (h, inv_pdf) = shape_sample(s, l.primitive, u_pos);
+            let emitted = material_emission(s, &s.materials[h.material as usize], &h);
+            (h.p + h.ng * h.eps, cosine_direction(h.ng, u_dir), PI * inv_pdf * emitted)
+        }
+        LIGHT_DISTANT | LIGHT_ENVIRONMENT => {
+            // The environment: a direction toward it, then a disc facing it, as for a distant light.
+            let (axis, env_weight) = if l.kind == LIGHT_ENVIRONMENT {
+                let (w, weight) = environment_sample(s, l, u_dir);
+                (-w, weight)
+            } else {
+                (axis, Vec3::ZERO)
+            };
+            let (t, b) = onb(axis);
+            let q = disc_point(u_pos);
+            let (qx, qy) = (q[0] * l.radius, q[1] * l.radius);
+            let o = Vec3::from(l.position) - axis * l.radius + qx * t + qy * b;
+            if l.kind == LIGHT_ENVIRONMENT {
+                // Radiance over the direction's pdf, through the whole disc.
+                return (o, axis, env_weight * (PI * l.radius * l.radius));
+            }
+            let d = cone_direction(axis, l.cos_outer, u_dir);
+            // Flux through the disc: radiance times solid angle times the projected disc area.
+            (o, d, Vec3::from(l.intensity) * (PI * l.radius * l.radius * d.dot(axis)))
+        }
+        _ => {
+            let d = cone_direction(axis, l.cos_outer, u_dir);
+            (Vec3::from(l.position), d, Vec3::from(l.intensity) * (2.0 * PI * (1.0 - l.cos_outer) * spot_falloff(l, d)))
+        }
     }
 }

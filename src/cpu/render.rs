@@ -7,8 +7,9 @@ use rayon::prelude::*;
 use super::bsdf::Bsdf;
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
 use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL};
-use super::rng::{rand2, rand4};
-use super::shading::{camera_direction, direct_light_sample, offset_origin, NO_RAY};
+use super::light::environment_radiance;
+use super::rng::rand4;
+use super::shading::{camera_ray, direct_light_sample, offset_origin, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -45,11 +46,11 @@ struct Lookup {
 pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
-    let jitter = rand2(stream, sample, f.seed, RNG_PIXEL_X);
-    let sx = 2.0 * (px as f32 + jitter[0]) / f.width as f32 - 1.0;
-    let sy = 1.0 - 2.0 * (py as f32 + jitter[1]) / f.height as f32;
-    let mut o = Vec3::from(f.camera_position);
-    let mut d = camera_direction(s, sx, sy);
+    // xy jitter the film position, zw sample the lens.
+    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
+    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
     let mut t_max = f32::INFINITY;
     let mut ray = Ray::Camera;
     // Path-lobe bounces of the current path so far.
@@ -87,6 +88,12 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             break;
         }
         if prim == NO_LIGHT {
+            // A camera path that leaves the scene sees the environment (a path lobe's view of a
+            // light); a gather path counts none of it, as it counts no emission.
+            if f.environment != NO_LIGHT && ray == Ray::Camera && part == 0 {
+                terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] +=
+                    throughput * environment_radiance(s, &s.lights[f.environment as usize], d);
+            }
             break;
         }
         let h = shape_hit(s, prim, o, d, t);

@@ -1,18 +1,45 @@
 //! Camera rays, path vertices and direct light; twin of `shaders/shading.glsl`.
 
+use std::f32::consts::PI;
+
 use glam::Vec3;
 
 use super::bsdf::{bsdf_eval, Bsdf};
-use super::light::{light_point, pick_light};
+use super::light::{light_sample, pick_light};
 use super::rng::{rand1, rand2};
+use super::sampling::polygon_point;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
 
-/// Primary ray direction through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row.
-pub fn camera_direction(s: &SceneView, sx: f32, sy: f32) -> Vec3 {
+/// Primary ray (origin, direction) through film position (sx, sy) in [-1, 1]^2, sy = +1 at the
+/// top row, with lens sample `u` (see `FrameParams` and the `CAMERA_*` kinds).
+pub fn camera_ray(s: &SceneView, sx: f32, sy: f32, u: [f32; 2]) -> (Vec3, Vec3) {
     let f = s.frame;
-    (Vec3::from(f.camera_forward) + sx * Vec3::from(f.camera_right) + sy * Vec3::from(f.camera_up)).normalize()
+    let forward = Vec3::from(f.camera_forward);
+    let right = Vec3::from(f.camera_right);
+    let up = Vec3::from(f.camera_up);
+    let mut o = Vec3::from(f.camera_position);
+    if f.camera_kind == CAMERA_LATLONG {
+        let phi = PI * sx;
+        let theta = 0.5 * PI * sy;
+        return (o, theta.cos() * (phi.sin() * right + phi.cos() * forward) + theta.sin() * up);
+    }
+    let mut d = if f.camera_kind == CAMERA_ORTHOGRAPHIC {
+        o += sx * right + sy * up;
+        forward
+    } else {
+        (forward + sx * right + sy * up).normalize()
+    };
+    // Thin lens: the ray from a point of the aperture aims where the pinhole ray meets the plane
+    // in focus.
+    if f.lens_radius > 0.0 {
+        let focus = o + d * (f.focal_distance / d.dot(forward));
+        let a = polygon_point(u, f.aperture_blades, f.aperture_rotation);
+        o += a[0] * f.lens_radius * right.normalize() + a[1] * f.lens_radius * up.normalize();
+        d = (focus - o).normalize();
+    }
+    (o, d)
 }
 
 /// Origin of the ray that leaves `h` in a direction sampled from a lobe with `lobe_flags`:
@@ -34,7 +61,7 @@ pub const NO_RAY: f32 = -1.0;
 /// A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
 /// shading point toward `wo` through the estimate lobes of its BSDF if nothing blocks the ray: a
 /// one-sample estimate of the direct light. `t_max` is `NO_RAY` when no ray is needed (no light,
-/// or nothing to reflect).
+/// a light picked with probability 0, or nothing to reflect).
 pub struct ShadowRay {
     pub origin: Vec3,
     pub direction: Vec3,
@@ -56,39 +83,25 @@ pub fn direct_light_sample(
     if f.light_count == 0 {
         return none;
     }
-    let li = pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK));
-    let l = &s.lights[li as usize];
-    let lp = light_point(s, l, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U));
-    let to_light = lp.p - h.p;
-    let dist2 = to_light.dot(to_light);
-    let dist = dist2.sqrt();
-    let wi = to_light / dist;
-    let fr = bsdf_eval(b, wo, wi);
+    let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
+    // A scene whose lights all give photons only picks one with probability 0.
+    if l.pick_probability <= 0.0 {
+        return none;
+    }
+    let ls = light_sample(s, l, h.p, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U));
+    let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {
         return none;
     }
-    // Point light: E = I cos / d^2. Area light: L cos cos' / d^2 over the point's pdf by area.
-    let mut geometry = b.ns.dot(wi).abs() / dist2;
-    // The shadow ray stops short of the light's point by its offset, over the cosine there: a
-    // hit on the light's own surface moves along a grazing ray by its error over that cosine.
-    let mut shadow_end = lp.eps;
-    if l.kind != LIGHT_POINT {
-        let cos_l = -lp.n.dot(wi);
-        if cos_l <= 0.0 {
-            return none;
-        }
-        geometry *= cos_l * lp.inv_pdf;
-        shadow_end = lp.eps / cos_l.max(1e-2);
-    }
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
     // the offset origin would meet the light's plane early at grazing angles.
-    let origin = offset_origin(h, wi, BSDF_REFLECTION);
-    let to_target = lp.p - origin;
+    let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
+    let to_target = ls.p - origin;
     let shadow_length = to_target.length();
     ShadowRay {
         origin,
         direction: to_target / shadow_length,
-        t_max: (shadow_length - shadow_end).max(0.0),
-        unoccluded: fr * lp.emitted * (geometry / l.pick_probability),
+        t_max: (shadow_length - ls.eps).max(0.0),
+        unoccluded: fr * (b.ns.dot(ls.wi).abs() / l.pick_probability),
     }
 }

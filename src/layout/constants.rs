@@ -118,10 +118,43 @@ shared_constants! {
     /// and normal maps); without it a hit record leaves them at zero, which saves their cost.
     PRIMITIVE_FLAG_UV: u32 = 0x200;
 
-    /// A light that is an emitting primitive (`Light::primitive`), sampled uniformly by area.
+    /// A light that is an emitting primitive (`Light::primitive`), sampled by `shape_sample` (a
+    /// point and its 1/pdf by area).
     LIGHT_AREA: u32 = 0;
-    /// A point light; `Light::intensity` holds its intensity in W/sr.
+    /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
+    /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
     LIGHT_POINT: u32 = 2;
+    /// A spot light: a point light whose intensity along direction w is `intensity` times
+    /// `spot_falloff` (a smooth step in cos from `cos_outer` to the inner cone, times
+    /// cos^`exponent`), zero outside the cone of `cos_outer` around `direction`.
+    LIGHT_SPOT: u32 = 3;
+    /// A distant (directional) light: light travels along `direction` from a cone of directions
+    /// of half-angle acos(`cos_outer`) (0 for a sharp light); `intensity` holds its radiance times
+    /// the cone's solid angle (W/m^2 per unit solid-angle pdf, see `prepare.rs`). Its photons leave
+    /// a disc of radius `radius` around the scene's bounding sphere centred at `position`.
+    LIGHT_DISTANT: u32 = 4;
+    /// The environment: radiance from every direction, a latitude-longitude image. `primitive`
+    /// is the word offset of its block in the texture data (`ENV_*` below); `position` and
+    /// `radius` are the bounding sphere its photons enter through, as for a distant light.
+    LIGHT_ENVIRONMENT: u32 = 5;
+    /// Words of an environment block, from its offset: width W, height H, cos and sin of its
+    /// rotation about +y (f32 bits), then W x H texels of RGB radiance (f32 bits, row 0 = the
+    /// zenith, column W/2 = -z), the marginal cdf over rows (H + 1 floats) and each row's
+    /// conditional cdf over columns (W + 1 floats per row), of luminance times sin(theta).
+    ENV_WIDTH: u32 = 0;
+    ENV_HEIGHT: u32 = 1;
+    ENV_COS_ROTATION: u32 = 2;
+    ENV_SIN_ROTATION: u32 = 3;
+    ENV_TEXELS: u32 = 4;
+
+    /// `FrameParams::camera_kind`: a perspective camera (pinhole, or thin lens with
+    /// `lens_radius` > 0): film position (sx, sy) looks along `forward + sx right + sy up`.
+    CAMERA_PERSPECTIVE: u32 = 0;
+    /// Orthographic: rays start at `position + sx right + sy up` and run along `forward`.
+    CAMERA_ORTHOGRAPHIC: u32 = 1;
+    /// 360-degree latitude-longitude: sx spans longitude -180..180 degrees around `up`
+    /// (0 = `forward`, +90 = `right`), sy latitude -90..90 degrees; `right` and `up` are unit.
+    CAMERA_LATLONG: u32 = 2;
 
     /// A texture of one colour, `Texture::value`.
     TEXTURE_CONSTANT: u32 = 0;
@@ -173,6 +206,7 @@ shared_constants! {
 
     /// Random dimensions drawn per path vertex; the dimensions below are offsets inside that block.
     RNG_DIMS_PER_BOUNCE: u32 = 8;
+    /// One hash gives four numbers: x and y jitter the film position, z and w sample the lens.
     RNG_PIXEL_X: u32 = 0;
     RNG_PIXEL_Y: u32 = 1;
     RNG_LIGHT_PICK: u32 = 2;

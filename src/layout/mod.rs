@@ -104,28 +104,48 @@ gpu_structs! {
         pub transform: [f32; 12],
     }
 
-    /// A light, 48 bytes. Area light: the emitting primitive `primitive`, whose material gives the
-    /// radiance. Point light: `position` and `intensity` (W/sr). `cdf` is the running sum of the
-    /// normalised light powers up to and including this light, so lights are picked in
-    /// proportion to their power by a binary search.
+    /// A light, 80 bytes (`LIGHT_*` says what each kind reads). Area light: the emitting
+    /// primitive `primitive`, whose material gives the radiance. Point and spot lights:
+    /// `position`, `intensity` (W/sr on the axis), the cone `direction`, `cos_outer`,
+    /// `falloff_scale` and `exponent`. Distant light: `direction`, `cos_outer`, `intensity`,
+    /// and the bounding sphere (`position`, `radius`) its photons enter through. Environment: its
+    /// block in the texture data at word `primitive`, and the bounding sphere. `cdf` is the
+    /// running sum of the normalised powers of the lights that cast direct light, up to and
+    /// including this one, so a binary search picks them in proportion to power; `photon_cdf`
+    /// does the same for the lights that emit photons.
     pub struct Light {
         pub position: [f32; 3],
         pub kind: u32,
         pub intensity: [f32; 3],
         pub primitive: u32,
-        /// Probability of picking this light.
+        /// Unit direction the light travels along (spot axis, distant light's direction).
+        pub direction: [f32; 3],
+        /// Surface area of an area light (scene units squared; estimated for superellipsoids and
+        /// stretched shapes); 0 for the others. It only sets the light's power for picking: each
+        /// sample on the light carries its own 1/pdf (`shape_sample`).
+        pub area: f32,
+        /// Probability of picking this light for a shadow ray (0: photons only).
         pub pick_probability: f32,
         pub cdf: f32,
-        /// Surface area (scene units squared; estimated for superellipsoids and stretched
-        /// shapes); 0 for point lights. It only sets the light's power for picking: each sample
-        /// on the light carries its own 1/pdf (`shape_sample`).
-        pub area: f32,
-        pub _pad: u32,
+        /// Probability of picking this light for a photon path (0: direct light only).
+        pub photon_probability: f32,
+        pub photon_cdf: f32,
+        /// Cosine of the cone's half-angle: the spot's outer angle (-1 for a point light), the
+        /// distant light's angular radius (1 for a sharp one).
+        pub cos_outer: f32,
+        /// 1 / (cos inner - cos outer) of a spot's smooth falloff; huge for a hard edge.
+        pub falloff_scale: f32,
+        /// Spot intensity is also scaled by cos^exponent (POV-Ray's `tightness`; 0 for none).
+        pub exponent: f32,
+        /// Radius of the scene's bounding sphere (distant lights, the environment), scene units.
+        pub radius: f32,
     }
 
-    /// Per-render constants of every kernel, 96 bytes.
-    /// A primary ray through film position (sx, sy) in [-1, 1]^2 has direction
-    /// `forward + sx * right + sy * up` (not normalised): `right` and `up` carry the field of view.
+    /// Per-render constants of every kernel, 128 bytes.
+    /// A primary ray through film position (sx, sy) in [-1, 1]^2 depends on `camera_kind`
+    /// (`CAMERA_*`): a perspective camera's has direction `forward + sx * right + sy * up` (not
+    /// normalised: `right` and `up` carry the field of view), an orthographic one starts at
+    /// `position + sx * right + sy * up`.
     pub struct FrameParams {
         pub camera_position: [f32; 3],
         pub width: u32,
@@ -140,7 +160,7 @@ gpu_structs! {
         pub ray_epsilon: f32,
         pub primitive_count: u32,
         pub node_count: u32,
-        /// Sum of all light powers (mean of the channels); 0 when the scene has no light.
+        /// Sum of the powers of the lights that emit photons (mean of the channels); 0 when none.
         pub total_light_power: f32,
         /// 1 when photon maps are bound: caustics and indirect light come from them.
         pub photon_mapping: u32,
@@ -148,10 +168,23 @@ gpu_structs! {
         pub gather_rays: u32,
         /// Glossy lobes with GGX width up to this are path lobes, rougher ones estimate lobes.
         pub glossy_threshold: f32,
+        /// `CAMERA_*`.
+        pub camera_kind: u32,
+        /// Thin lens: radius of the aperture (scene units; 0 is a pinhole) and the distance of
+        /// the plane in focus along `camera_forward`.
+        pub lens_radius: f32,
+        pub focal_distance: f32,
+        /// Polygonal aperture: number of blades (0 for a round one) and the angle of the first
+        /// corner from `camera_up` toward `camera_right`, radians.
+        pub aperture_blades: u32,
+        pub aperture_rotation: f32,
+        /// Index of the environment's light (`LIGHT_ENVIRONMENT`), or `NO_LIGHT`: rays that leave
+        /// the scene see it.
+        pub environment: u32,
         /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
         /// BVH, every ray tests them.
         pub unbounded_first: u32,
-        pub _pad: [u32; 3],
+        pub _pad: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
@@ -224,5 +257,5 @@ const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
 const _: () = assert!(size_of::<Texture>() == 80);
-const _: () = assert!(size_of::<Light>() == 48);
+const _: () = assert!(size_of::<Light>() == 80);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));

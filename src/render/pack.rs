@@ -6,6 +6,7 @@ use glam::{Affine3A, Mat3, Vec3};
 
 use crate::layout::constants::*;
 use crate::layout::{Material, Primitive, Texture};
+use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
     Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene,
     Shape, TextureDesc, TextureKind, TextureSpace,
@@ -265,4 +266,52 @@ pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Ve
         }
     }
     p
+}
+
+/// Appends the block of an environment (layout at `ENV_TEXELS`) to the texture data and returns
+/// its word offset and the integral of its luminance (mean of the channels) over the sphere of
+/// directions, W/(m^2 sr) times sr: the irradiance it would give a disc from every side.
+pub fn pack_environment(image: &ImageTexture, rotation_deg: f32, data: &mut Vec<u32>) -> (u32, f64) {
+    let (w, h) = (image.width, image.height);
+    let base = data.len() as u32;
+    let rotation = rotation_deg.to_radians();
+    data.extend([w, h, rotation.cos().to_bits(), rotation.sin().to_bits()]);
+    for t in &image.texels {
+        data.extend([t[0].to_bits(), t[1].to_bits(), t[2].to_bits()]);
+    }
+    // Luminance times sin(theta) at each row's centre: the distribution directions are drawn
+    // from; texel (i, j) covers solid angle (2 pi / W)(pi / H) sin(theta_j) to first order.
+    let mut rows = Vec::with_capacity(h as usize);
+    let mut integral = 0.0f64;
+    for j in 0..h {
+        let sin_theta = (std::f64::consts::PI * (j as f64 + 0.5) / h as f64).sin();
+        let row: Vec<f64> = (0..w)
+            .map(|i| {
+                let t = image.texels[(j * w + i) as usize];
+                (t[0] as f64 + t[1] as f64 + t[2] as f64) / 3.0 * sin_theta
+            })
+            .collect();
+        integral += row.iter().sum::<f64>();
+        rows.push(row);
+    }
+    integral *= 2.0 * std::f64::consts::PI * std::f64::consts::PI / (w as f64 * h as f64);
+    let cdf = |values: &[f64]| -> Vec<u32> {
+        let total: f64 = values.iter().sum();
+        let mut running = 0.0;
+        let mut out = vec![0.0f32.to_bits()];
+        for (k, v) in values.iter().enumerate() {
+            running += v;
+            // A row (or a whole map) without light is drawn uniformly, never picked by the
+            // marginal; the last value is exactly 1 so no u in [0, 1) falls past it.
+            let c = if total > 0.0 { running / total } else { (k + 1) as f64 / values.len() as f64 };
+            out.push(if k + 1 == values.len() { 1.0f32.to_bits() } else { (c as f32).to_bits() });
+        }
+        out
+    };
+    let row_sums: Vec<f64> = rows.iter().map(|r| r.iter().sum()).collect();
+    data.extend(cdf(&row_sums));
+    for row in &rows {
+        data.extend(cdf(row));
+    }
+    (base, integral)
 }

@@ -1,13 +1,15 @@
 //! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
 
+use std::f32::consts::PI;
+
 use glam::{Mat3, Vec3};
 
-use super::pack::pack_scene;
+use super::pack::{pack_environment, pack_scene};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
-use crate::scene::{Geometry, Scene};
+use crate::scene::{Geometry, LightKind, Projection, Scene, ThinLens};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -105,6 +107,106 @@ fn channel_mean(v: [f32; 3]) -> f32 {
     (v[0] + v[1] + v[2]) / 3.0
 }
 
+/// A light's power in the two distributions (direct light, photons): 0 where it takes no part.
+fn light_powers(power: f32, direct: bool, photons: bool) -> (f32, f32) {
+    (if direct { power } else { 0.0 }, if photons { power } else { 0.0 })
+}
+
+/// The light record of a point, spot or distant light and its power (W, mean of the channels),
+/// or `None` for the options of an area light (its primitives are its records).
+pub fn light_record(kind: &LightKind, bounding_center: Vec3, bounding_radius: f32) -> Option<(Light, f32)> {
+    let (light, power) = match *kind {
+        LightKind::Point { position, intensity } => {
+            // An isotropic point light of intensity I emits power 4 pi I. Its cone is the sphere.
+            let light = Light {
+                position: position.into(),
+                kind: LIGHT_POINT,
+                intensity: intensity.into(),
+                direction: [0.0, 1.0, 0.0],
+                cos_outer: -1.0,
+                falloff_scale: HARD_EDGE,
+                ..Default::default()
+            };
+            (light, 4.0 * PI * channel_mean(intensity.into()))
+        }
+        LightKind::Spot { position, direction, intensity, cos_inner, cos_outer, exponent } => {
+            let falloff_scale = if cos_inner > cos_outer { 1.0 / (cos_inner - cos_outer) } else { HARD_EDGE };
+            let light = Light {
+                position: position.into(),
+                kind: LIGHT_SPOT,
+                intensity: intensity.into(),
+                direction: direction.into(),
+                cos_outer,
+                falloff_scale,
+                exponent,
+                ..Default::default()
+            };
+            (light, channel_mean(intensity.into()) * spot_solid_angle(&light))
+        }
+        LightKind::Distant { direction, irradiance, half_angle_deg } => {
+            // A cone of half-angle a and radiance L gives E = L pi sin^2 a on a surface facing it
+            // and has solid angle 2 pi (1 - cos a): radiance times solid angle is
+            // E 2 (1 - cos a) / sin^2 a, which tends to E as a -> 0.
+            let a = (half_angle_deg as f64).to_radians();
+            let ratio = if a > 0.0 { 2.0 * (1.0 - a.cos()) / (a.sin() * a.sin()) } else { 1.0 };
+            let light = Light {
+                position: bounding_center.into(),
+                kind: LIGHT_DISTANT,
+                intensity: (irradiance * ratio as f32).into(),
+                direction: direction.into(),
+                cos_outer: a.cos() as f32,
+                radius: bounding_radius,
+                ..Default::default()
+            };
+            // The power that crosses the disc of the bounding sphere.
+            (light, channel_mean(irradiance.into()) * PI * bounding_radius * bounding_radius)
+        }
+        LightKind::Area { .. } => return None,
+    };
+    Some((light, power))
+}
+
+/// `falloff_scale` of a cone with no smooth part: any cos inside the cone gives t >= 1.
+const HARD_EDGE: f32 = 1.0e30;
+
+/// The integral of a spot light's profile over the sphere (steradians): power = I times this.
+/// 2 pi times the integral over cos in [cos_outer, 1], by the midpoint rule in f64 (the profile
+/// is smooth; 4096 steps leave an error far below the f32 of the result).
+fn spot_solid_angle(l: &Light) -> f32 {
+    const STEPS: u32 = 4096;
+    let (lo, scale, exponent) = (l.cos_outer as f64, l.falloff_scale as f64, l.exponent as f64);
+    let h = (1.0 - lo) / STEPS as f64;
+    let sum: f64 = (0..STEPS)
+        .map(|i| {
+            let c = lo + (i as f64 + 0.5) * h;
+            let t = ((c - lo) * scale).clamp(0.0, 1.0);
+            t * t * (3.0 - 2.0 * t) * if exponent > 0.0 { c.max(0.0).powf(exponent) } else { 1.0 }
+        })
+        .sum();
+    (2.0 * std::f64::consts::PI * sum * h) as f32
+}
+
+/// Fills one pick distribution (probability and running cdf) from `power(powers[i])`; returns
+/// the total. A light of power 0 gets an empty interval; the last light with power gets cdf 1
+/// (and every light after it), so a pick of u close to 1 never falls past it.
+fn fill_cdf(
+    lights: &mut [Light],
+    powers: &[(f32, f32)],
+    power: impl Fn(&(f32, f32)) -> f32,
+    mut set: impl FnMut(&mut Light, f32, f32),
+) -> f64 {
+    let total: f64 = powers.iter().map(|p| power(p) as f64).sum();
+    let last = powers.iter().rposition(|p| power(p) > 0.0);
+    let mut running = 0.0f64;
+    for (i, (light, p)) in lights.iter_mut().zip(powers).enumerate() {
+        running += power(p) as f64;
+        let (probability, cdf) = if total > 0.0 { (power(p) as f64 / total, running / total) } else { (0.0, 0.0) };
+        let cdf = if last.is_some_and(|last| i >= last) { 1.0 } else { cdf as f32 };
+        set(light, probability as f32, cdf);
+    }
+    total
+}
+
 /// Why a scene cannot be prepared. Loading checks scene files so that only hand-built scenes
 /// meet the last two.
 #[derive(Debug, thiserror::Error)]
@@ -146,7 +248,18 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         .chain(unbounded.iter().map(|_| 0.0))
         .collect();
 
-    // Lights: emissive primitives (in BVH order) and point lights, with power-proportional picking
+    // Bounds of the shapes in the BVH (not the infinite planes)
+    let root = &bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
+    let (bounding_center, bounding_radius) =
+        if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
+    // Distant lights and the environment send their photons through the disc of that bounding
+    // sphere. A scene of infinite planes alone has none (its BVH is one empty leaf, radius 0): a
+    // unit sphere at the origin stands in, so that those lights keep a power and stay lights.
+    let (light_center, light_radius) =
+        if bounded.is_empty() { (Vec3::ZERO, 1.0) } else { (bounding_center, bounding_radius) };
+
+    // Lights: emissive primitives (in BVH order), then the lights of the file
     let mut lights = Vec::new();
     let mut powers = Vec::new();
     for (i, (p, &area)) in primitives.iter_mut().zip(&areas).enumerate() {
@@ -157,29 +270,43 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
         // power (or one so faint its power rounds to 0) is left out: were every light such, the
         // pick probabilities would be 0 / 0.
-        let power = std::f32::consts::PI * area * channel_mean(emission.into());
+        let power = PI * area * channel_mean(emission.into());
         if power.is_nan() || power <= 0.0 {
             continue;
         }
         p.light = lights.len() as u32;
-        powers.push(power);
+        let options = scene.lights.iter().find(|l| l.kind == LightKind::Area { material: p.material });
+        powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
     }
-    for pl in &scene.point_lights {
-        // An isotropic point light of intensity I emits power 4 pi I.
-        let power = 4.0 * std::f32::consts::PI * channel_mean(pl.intensity.into());
+    for desc in &scene.lights {
+        let Some((light, power)) = light_record(&desc.kind, light_center, light_radius) else { continue };
         if power.is_nan() || power <= 0.0 {
             continue;
         }
-        powers.push(power);
-        lights.push(Light {
-            position: pl.position.into(),
-            kind: LIGHT_POINT,
-            intensity: pl.intensity.into(),
-            ..Default::default()
-        });
+        powers.push(light_powers(power, desc.direct, desc.photons));
+        lights.push(light);
     }
-    let total_power: f64 = powers.iter().map(|&p| p as f64).sum();
+    let mut texture_data = packed.texture_data;
+    let mut environment = NO_LIGHT;
+    if let Some(env) = &scene.environment {
+        let (offset, integral) = pack_environment(&env.image, env.rotation_deg, &mut texture_data);
+        // The power that enters the bounding sphere's disc from every direction. A black
+        // environment is left out like any light of no power (rays that leave see black anyway).
+        let power = integral as f32 * PI * light_radius * light_radius;
+        if !power.is_nan() && power > 0.0 {
+            environment = lights.len() as u32;
+            lights.push(Light {
+                position: light_center.into(),
+                kind: LIGHT_ENVIRONMENT,
+                primitive: offset,
+                radius: light_radius,
+                ..Default::default()
+            });
+            powers.push(light_powers(power, env.direct, env.photons));
+        }
+    }
+    let total_power: f64 = powers.iter().map(|&(direct, photons)| direct.max(photons) as f64).sum();
     let overflow = |what: &'static str, value: f64| {
         (!(value as f32).is_finite()).then(|| PrepareError::Overflow {
             path: path(),
@@ -190,30 +317,39 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     if let Some(e) = overflow("total light power", total_power) {
         return Err(e);
     }
-    let mut running = 0.0f64;
-    for (light, &power) in lights.iter_mut().zip(&powers) {
-        running += power as f64;
-        light.pick_probability = (power as f64 / total_power) as f32;
-        light.cdf = (running / total_power) as f32;
-    }
-    if let Some(last) = lights.last_mut() {
-        last.cdf = 1.0; // so a pick of u close to 1 never falls past the end
-    }
+    fill_cdf(
+        &mut lights,
+        &powers,
+        |p| p.0,
+        |l, probability, cdf| {
+            l.pick_probability = probability;
+            l.cdf = cdf;
+        },
+    );
+    let total_photon = fill_cdf(
+        &mut lights,
+        &powers,
+        |p| p.1,
+        |l, probability, cdf| {
+            l.photon_probability = probability;
+            l.photon_cdf = cdf;
+        },
+    );
 
-    // Bounds and camera
-    let root = &bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
-    let (bounding_center, bounding_radius) =
-        if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
     // An infinite plane holds photons over the part of it near the rest of the scene: its disc
-    // inside the sphere around the bounded shapes, the point lights and the camera.
+    // inside the sphere around the bounded shapes, the point and spot lights and the camera.
+    // (Distant lights and the environment send theirs through the bounding sphere's disc only.)
     let mut surface_area = packed.photon_area;
     if !unbounded.is_empty() {
         let mut extent = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         if lo.cmple(hi).all() {
             extent = (lo, hi);
         }
-        for p in scene.point_lights.iter().map(|l| l.position).chain([scene.camera.position]) {
+        let positions = scene.lights.iter().filter_map(|l| match l.kind {
+            LightKind::Point { position, .. } | LightKind::Spot { position, .. } => Some(position),
+            LightKind::Distant { .. } | LightKind::Area { .. } => None,
+        });
+        for p in positions.chain([scene.camera.position]) {
             extent = (extent.0.min(p), extent.1.max(p));
         }
         let (center, radius) = ((extent.0 + extent.1) * 0.5, (extent.1 - extent.0).length() * 0.5);
@@ -224,37 +360,53 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
                 let distance = (center - Vec3::from(m.translation)).dot(normal).abs();
                 let opacity = scene.materials[scene.shapes[i].material as usize].opacity;
                 let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
-                surface_area += std::f32::consts::PI * (radius * radius - distance * distance).max(0.0) * visible;
+                surface_area += PI * (radius * radius - distance * distance).max(0.0) * visible;
             }
         }
     }
     if let Some(e) = overflow("total surface area", surface_area as f64) {
         return Err(e);
     }
+
+    // Camera
     let cam = &scene.camera;
     let (forward, right, up) = cam.basis().ok_or_else(|| PrepareError::Camera { path: path() })?;
-    let tan_half = (cam.fov_deg.to_radians() * 0.5).tan();
     let aspect = settings.width as f32 / settings.height as f32;
+    // `right` and `up` carry the film's half-extent: tangents of the half field of view, half
+    // the view's size in scene units, or nothing (latlong).
+    let (camera_kind, half_height) = match cam.projection {
+        Projection::Perspective => (CAMERA_PERSPECTIVE, (cam.fov_deg.to_radians() * 0.5).tan()),
+        Projection::Orthographic { view_height } => (CAMERA_ORTHOGRAPHIC, 0.5 * view_height),
+        Projection::LatLong => (CAMERA_LATLONG, 1.0),
+    };
+    let half_width = if camera_kind == CAMERA_LATLONG { 1.0 } else { half_height * aspect };
+    let lens = cam.lens.unwrap_or(ThinLens { radius: 0.0, focal_distance: 1.0, blades: 0, rotation_deg: 0.0 });
     let scale = bounding_radius.max(cam.position.distance(bounding_center));
     let frame = FrameParams {
         camera_position: cam.position.into(),
         width: settings.width,
         camera_forward: forward.into(),
         height: settings.height,
-        camera_right: (right * tan_half * aspect).into(),
+        camera_right: (right * half_width).into(),
         max_depth: settings.max_depth,
-        camera_up: (up * tan_half).into(),
+        camera_up: (up * half_height).into(),
         seed: settings.seed,
         light_count: lights.len() as u32,
         ray_epsilon: scale * RAY_EPSILON_SCALE,
         primitive_count: primitives.len() as u32,
         node_count: bvh.nodes.len() as u32,
-        total_light_power: total_power as f32,
+        total_light_power: total_photon as f32,
         photon_mapping: 0,
         gather_rays: 0,
         glossy_threshold: scene.photons.map_or(GLOSSY_THRESHOLD, |p| p.glossy_threshold),
+        camera_kind,
+        lens_radius: lens.radius,
+        focal_distance: lens.focal_distance,
+        aperture_blades: lens.blades,
+        aperture_rotation: lens.rotation_deg.to_radians(),
+        environment,
         unbounded_first,
-        _pad: [0; 3],
+        _pad: 0,
     };
     Ok(SceneBuffers {
         frame,
@@ -263,7 +415,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         materials: packed.materials,
         lights,
         textures: packed.textures,
-        texture_data: packed.texture_data,
+        texture_data,
         shape_data: packed.shape_data,
         textured: packed.textured,
         analytic: packed.analytic,

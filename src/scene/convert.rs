@@ -8,8 +8,10 @@ use glam::{Affine3A, Mat3, Vec2, Vec3};
 use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
-use super::format::{LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def};
-use super::image_texture::{load_image_texture, ColorSpace, Wrap};
+use super::format::{
+    EnvironmentDef, LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
+};
+use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
 use super::material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
@@ -17,13 +19,14 @@ use super::material::{
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
-    Analytic, AnalyticKind, Camera, Geometry, PhotonSettings, PointLight, RenderSettings, Scene, Shape, Sphere,
-    Triangle,
+    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection,
+    RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
-    fmt_f32, fmt_number, printable, printable_message, MAX_DEPTH, MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES,
-    MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
+    fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
+    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE,
+    MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
 };
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -36,6 +39,13 @@ const DEFAULT_PASSES: u32 = 4;
 const DEFAULT_MAX_DEPTH: u32 = 16;
 const DEFAULT_REFLECTANCE: f32 = 0.8;
 const DEFAULT_IOR: f32 = 1.5;
+/// Unused by orthographic and latlong cameras; kept so `Camera::fov_deg` is always valid.
+const DEFAULT_FOV: f32 = 40.0;
+/// Spot lights: the inner angle is this fraction of the outer one unless given (Mitsuba 3's
+/// default beam width); POV-Ray's defaults for `radius`, `falloff` and `tightness`.
+const DEFAULT_INNER_FRACTION: f32 = 0.75;
+const POV_SPOT_RADIUS: f32 = 30.0;
+const POV_SPOT_FALLOFF: f32 = 45.0;
 
 const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix"];
 
@@ -61,7 +71,11 @@ const SHAPE_TYPES: &[&str] =
 /// Smallest superellipsoid exponent: below it the shape is a box to float precision and its
 /// gauge's powers (2/e) pass 200.
 const SUPERELLIPSOID_MIN_EXPONENT: f64 = 0.01;
-const LIGHT_TYPES: &[&str] = &["area", "point"];
+const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
+const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
+const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform"];
+/// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
+const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
@@ -74,15 +88,19 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         texture_names: Vec::new(),
         texture_used: Vec::new(),
         shapes: Vec::new(),
-        point_lights: Vec::new(),
+        lights: Vec::new(),
         warnings: Vec::new(),
     };
 
     let Some(camera) = &file.camera else {
         return Err(SceneError::MissingCamera { location: src.path.display().to_string() });
     };
-    let camera = builder.camera(camera)?;
-    let render = builder.render(file.render.as_ref())?;
+    let (camera, blur_samples) = builder.camera(camera)?;
+    let mut render = builder.render(file.render.as_ref())?;
+    // POV-Ray's blur_samples: lens samples per pixel, here over all passes.
+    if let Some(samples) = blur_samples {
+        render.spp = render.spp.max(samples.div_ceil(render.passes));
+    }
     let photons = builder.photons(file.photons.as_ref())?;
 
     // Textures, then materials, in file order, so ids follow the file.
@@ -103,6 +121,10 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     for (index, light) in file.lights.iter().enumerate() {
         builder.light(index, light)?;
     }
+    let environment = match &file.environment {
+        Some(def) => Some(builder.environment(def)?),
+        None => None,
+    };
 
     // Warnings
     for (name, used) in builder.material_names.iter().zip(&builder.material_used) {
@@ -116,7 +138,12 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         }
     }
     let has_light = builder.shapes.iter().any(|s| builder.materials[s.material as usize].emits())
-        || builder.point_lights.iter().any(|p| p.intensity.max_element() > 0.0);
+        || builder.lights.iter().any(|l| match l.kind {
+            LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity.max_element() > 0.0,
+            LightKind::Distant { irradiance, .. } => irradiance.max_element() > 0.0,
+            LightKind::Area { .. } => false,
+        })
+        || environment.as_ref().is_some_and(|e| e.image.texels.iter().any(|t| t[..3].iter().any(|&c| c > 0.0)));
     if !has_light {
         builder.warnings.push("scene has no lights; the image will be black".to_string());
     }
@@ -132,7 +159,8 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         material_names: builder.material_names,
         textures: builder.textures,
         shapes: builder.shapes,
-        point_lights: builder.point_lights,
+        lights: builder.lights,
+        environment,
         warnings: builder.warnings,
     })
 }
@@ -146,7 +174,7 @@ struct Builder<'a> {
     texture_names: Vec<String>,
     texture_used: Vec<bool>,
     shapes: Vec<Shape>,
-    point_lights: Vec<PointLight>,
+    lights: Vec<LightDesc>,
     warnings: Vec<String>,
 }
 
@@ -289,10 +317,60 @@ impl Builder<'_> {
 
     // Camera and render settings
 
-    fn camera(&self, def: &Spanned<super::format::CameraDef>) -> Result<Camera> {
+    /// The camera, and POV-Ray's `blur_samples` when given (it raises the samples per pixel).
+    fn camera(&mut self, def: &Spanned<super::format::CameraDef>) -> Result<(Camera, Option<u32>)> {
         let object = "[camera]";
         let table = def.span();
         let c = def.get_ref();
+        let kind = match &c.r#type {
+            Some(t) => self.one_of(t, object, "type", CAMERA_TYPES)?,
+            None => "perspective",
+        };
+        let present = [
+            ("type", span_of(&c.r#type)),
+            ("position", span_of(&c.position)),
+            ("look_at", span_of(&c.look_at)),
+            ("up", span_of(&c.up)),
+            ("fov", span_of(&c.fov)),
+            ("resolution", span_of(&c.resolution)),
+            ("view_height", span_of(&c.view_height)),
+            ("aperture_radius", span_of(&c.aperture_radius)),
+            ("f_number", span_of(&c.f_number)),
+            ("focal_length", span_of(&c.focal_length)),
+            ("focal_distance", span_of(&c.focal_distance)),
+            ("focal_point", span_of(&c.focal_point)),
+            ("aperture_blades", span_of(&c.aperture_blades)),
+            ("aperture_rotation", span_of(&c.aperture_rotation)),
+            ("aperture", span_of(&c.aperture)),
+            ("blur_samples", span_of(&c.blur_samples)),
+        ];
+        let common = ["type", "position", "look_at", "up", "resolution"];
+        let lens_fields = [
+            "aperture_radius",
+            "f_number",
+            "focal_length",
+            "focal_distance",
+            "focal_point",
+            "aperture_blades",
+            "aperture_rotation",
+            "aperture",
+            "blur_samples",
+        ];
+        match kind {
+            "perspective" => self.only_fields(
+                object,
+                "a perspective camera",
+                &present,
+                &[&common[..], &["fov"], &lens_fields[..]].concat(),
+            )?,
+            "orthographic" => self.only_fields(
+                object,
+                "an orthographic camera",
+                &present,
+                &[&common[..], &["view_height"], &lens_fields[..]].concat(),
+            )?,
+            _ => self.only_fields(object, "a latlong camera (it has no lens)", &present, &common)?,
+        }
         let position = self.require(&c.position, &table, object, "position", "position = [0, 1, 5]")?;
         let position = self.point(position, object, "position")?;
         let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
@@ -308,11 +386,21 @@ impl Builder<'_> {
                     .to_string(),
             ));
         }
+        let forward = (look_at - position).normalize();
         let up = match &c.up {
             Some(up_def) => self.point(up_def, object, "up")?,
             None => DEFAULT_UP,
         };
-        let probe = Camera { position, look_at, up, fov_deg: 45.0, width: 1, height: 1 };
+        let probe = Camera {
+            position,
+            look_at,
+            up,
+            fov_deg: 45.0,
+            projection: Projection::Perspective,
+            lens: None,
+            width: 1,
+            height: 1,
+        };
         if probe.basis().is_none() {
             let (span, message) = match &c.up {
                 Some(up_def) => (
@@ -328,21 +416,39 @@ impl Builder<'_> {
             };
             return Err(self.invalid(&span, object, message.to_string()));
         }
-        let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
-        let fov_deg = self.number(fov_def, object, "fov")?;
-        let fov_range = MIN_FOV_DEGREES as f32..=(180.0 - MIN_FOV_DEGREES) as f32;
-        if !fov_range.contains(&fov_deg) {
-            return Err(self.invalid(
-                &fov_def.span(),
-                object,
-                format!(
-                    "`fov` is {}; the vertical field of view must be between 0 and 180 degrees (from {} to {})",
-                    fmt_f32(fov_deg),
-                    fov_range.start(),
-                    fov_range.end()
-                ),
-            ));
-        }
+        let mut fov_deg = DEFAULT_FOV;
+        let projection = match kind {
+            "perspective" => {
+                let fov_def = self.require(&c.fov, &table, object, "fov", "fov = 40")?;
+                fov_deg = self.number(fov_def, object, "fov")?;
+                let fov_range = MIN_FOV_DEGREES as f32..=(180.0 - MIN_FOV_DEGREES) as f32;
+                if !fov_range.contains(&fov_deg) {
+                    return Err(self.invalid(
+                        &fov_def.span(),
+                        object,
+                        format!(
+                            "`fov` is {}; the vertical field of view must be between 0 and 180 degrees (from {} to {})",
+                            fmt_f32(fov_deg),
+                            fov_range.start(),
+                            fov_range.end()
+                        ),
+                    ));
+                }
+                Projection::Perspective
+            }
+            "orthographic" => {
+                let h = self.require(&c.view_height, &table, object, "view_height", "view_height = 4")?;
+                let view_height =
+                    self.positive_measure(h, object, "view_height", "the height of the view in scene units")?;
+                Projection::Orthographic { view_height }
+            }
+            _ => Projection::LatLong,
+        };
+        let lens = self.lens(c, forward, position, object)?;
+        let blur_samples = match &c.blur_samples {
+            Some(b) => Some(self.integer(b, object, "blur_samples", 1, MAX_SPP, " lens samples per pixel", "")?),
+            None => None,
+        };
         let [width, height] = match &c.resolution {
             Some(res) => {
                 let values = res.get_ref();
@@ -378,7 +484,173 @@ impl Builder<'_> {
             }
             None => DEFAULT_RESOLUTION,
         };
-        Ok(Camera { position, look_at, up, fov_deg, width, height })
+        Ok((Camera { position, look_at, up, fov_deg, projection, lens, width, height }, blur_samples))
+    }
+
+    /// A number > 0; `what` says what it measures.
+    fn positive_measure(&self, value: &Spanned<f64>, object: &str, field: &str, what: &str) -> Result<f32> {
+        let v = self.number(value, object, field)?;
+        if v <= 0.0 {
+            return Err(self.invalid(
+                &value.span(),
+                object,
+                format!("`{field}` is {}; it must be > 0 ({what})", fmt_f32(v)),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// The thin lens of a camera, or `None` for a pinhole: an aperture (`aperture_radius`,
+    /// `f_number` with `focal_length`, or POV-Ray's `aperture`) and a plane in focus
+    /// (`focal_distance` or `focal_point`).
+    fn lens(
+        &mut self,
+        c: &super::format::CameraDef,
+        forward: Vec3,
+        position: Vec3,
+        object: &str,
+    ) -> Result<Option<ThinLens>> {
+        let apertures = [("aperture_radius", &c.aperture_radius), ("f_number", &c.f_number), ("aperture", &c.aperture)];
+        let given: Vec<_> = apertures.iter().filter_map(|(n, f)| f.as_ref().map(|v| (*n, v))).collect();
+        if given.len() > 1 {
+            return Err(self.invalid(
+                &given[1].1.span(),
+                object,
+                format!(
+                    "give one of `aperture_radius`, `f_number` and `aperture`, not both `{}` and `{}`",
+                    given[0].0, given[1].0
+                ),
+            ));
+        }
+        let Some(&(name, value)) = given.first() else {
+            if let Some(span) = span_of(&c.focal_length) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    "`focal_length` only sets the aperture with `f_number`; add `f_number = 2.8` or remove it"
+                        .to_string(),
+                ));
+            }
+            for (field, span) in [
+                ("focal_distance", span_of(&c.focal_distance)),
+                ("focal_point", span_of(&c.focal_point)),
+                ("aperture_blades", span_of(&c.aperture_blades)),
+                ("aperture_rotation", span_of(&c.aperture_rotation)),
+                ("blur_samples", span_of(&c.blur_samples)),
+            ] {
+                if let Some(span) = span {
+                    let at = self.src.at(&span);
+                    self.warnings.push(format!(
+                        "{at}: {object}: `{field}` has no effect without an aperture (add `aperture_radius`)"
+                    ));
+                }
+            }
+            return Ok(None);
+        };
+        let radius = match name {
+            "aperture_radius" => self.positive_measure(value, object, name, "the radius of the lens in scene units")?,
+            "f_number" => {
+                let n = self.positive_measure(value, object, name, "the focal length over the aperture's diameter")?;
+                let Some(fl) = &c.focal_length else {
+                    return Err(self.invalid(
+                        &value.span(),
+                        object,
+                        "`f_number` needs the lens's `focal_length` in scene units to size the aperture, e.g. \
+                         `focal_length = 0.05` (a 50 mm lens in a scene in metres), or give `aperture_radius`"
+                            .to_string(),
+                    ));
+                };
+                let focal_length = self.positive_measure(fl, object, "focal_length", "scene units")?;
+                let radius = focal_length as f64 / (2.0 * n as f64);
+                if radius > MAX_SCENE_VALUE {
+                    return Err(self.invalid(
+                        &value.span(),
+                        object,
+                        format!(
+                            "`f_number` {} with `focal_length` {} gives an aperture of radius {}, beyond the scene \
+                             range, +-{MAX_SCENE_VALUE:e} (see docs/limits.md)",
+                            fmt_f32(n),
+                            fmt_f32(focal_length),
+                            fmt_number(radius)
+                        ),
+                    ));
+                }
+                radius as f32
+            }
+            // POV-Ray offsets the eye by aperture/2 times lens samples within +-0.5
+            // (tracepixel.cpp, JitterCameraRay): a disc of radius aperture/4.
+            _ => 0.25 * self.positive_measure(value, object, name, "POV-Ray's aperture, four times the lens radius")?,
+        };
+        if name != "f_number" {
+            if let Some(span) = span_of(&c.focal_length) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    format!(
+                        "`focal_length` only sets the aperture with `f_number`; remove it (the aperture is `{name}`)"
+                    ),
+                ));
+            }
+        }
+        let focal_distance = match (&c.focal_distance, &c.focal_point) {
+            (Some(_), Some(p)) => {
+                return Err(self.invalid(
+                    &p.span(),
+                    object,
+                    "give `focal_distance` or `focal_point`, not both".to_string(),
+                ));
+            }
+            (Some(d), None) => {
+                self.positive_measure(d, object, "focal_distance", "scene units along the view direction")?
+            }
+            (None, Some(p)) => {
+                let point = self.point(p, object, "focal_point")?;
+                let depth = (point - position).dot(forward);
+                if depth <= 0.0 {
+                    return Err(self.invalid(
+                        &p.span(),
+                        object,
+                        format!(
+                            "`focal_point` {} is not in front of the camera; give a point it looks at",
+                            vec3_text(point)
+                        ),
+                    ));
+                }
+                depth
+            }
+            (None, None) => {
+                return Err(self.invalid(
+                    &value.span(),
+                    object,
+                    format!(
+                        "`{name}` needs a plane in focus; add `focal_distance = 5` (scene units along the view) \
+                         or `focal_point = [x, y, z]`"
+                    ),
+                ));
+            }
+        };
+        let blades = match &c.aperture_blades {
+            Some(b) => {
+                let n =
+                    self.integer(b, object, "aperture_blades", 0, MAX_APERTURE_BLADES, "", "; 0 is a round aperture")?;
+                if n != 0 && !(3..=MAX_APERTURE_BLADES).contains(&n) {
+                    return Err(self.invalid(
+                        &b.span(),
+                        object,
+                        format!(
+                            "`aperture_blades` is {n}; it must be 0 (a round aperture) or 3 to {MAX_APERTURE_BLADES}"
+                        ),
+                    ));
+                }
+                n
+            }
+            None => 0,
+        };
+        let rotation_deg = match &c.aperture_rotation {
+            Some(r) => self.number(r, object, "aperture_rotation")?,
+            None => 0.0,
+        };
+        Ok(Some(ThinLens { radius, focal_distance, blades, rotation_deg }))
     }
 
     fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
@@ -1522,26 +1794,253 @@ impl Builder<'_> {
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
             ("transform", span_of(&l.transform)),
+            ("direction", span_of(&l.direction)),
+            ("point_at", span_of(&l.point_at)),
+            ("inner_angle", span_of(&l.inner_angle)),
+            ("outer_angle", span_of(&l.outer_angle)),
+            ("falloff", span_of(&l.falloff)),
+            ("tightness", span_of(&l.tightness)),
+            ("irradiance", span_of(&l.irradiance)),
+            ("angular_diameter", span_of(&l.angular_diameter)),
+            ("photons", span_of(&l.photons)),
+            ("direct", span_of(&l.direct)),
         ];
-
-        if kind == "point" {
-            self.only_fields(&object, "a point light", &present, &["name", "type", "position", "intensity"])?;
-            let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
-            let intensity = self.require(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
-            let position = self.point(position, &object, "position")?;
-            let intensity_def = intensity;
-            let intensity = Vec3::from(self.color(intensity_def, &object, "intensity", false)?);
-            if intensity.max_element() == 0.0 {
-                let at = self.src.at(&intensity_def.span());
-                self.warnings.push(format!("{at}: {object}: `intensity` is 0, so this light emits nothing"));
-            }
-            self.point_lights.push(PointLight { position, intensity });
-            return Ok(());
+        let common = ["name", "type", "photons", "direct"];
+        let direct = l.direct.as_ref().is_none_or(|d| *d.get_ref());
+        let photons = l.photons.as_ref().is_none_or(|p| *p.get_ref());
+        if !direct && !photons {
+            let span = span_of(&l.direct).unwrap_or(table.clone());
+            return Err(self.invalid(
+                &span,
+                &object,
+                "`direct = false` and `photons = false` leave the light nothing to do; keep one of them true or remove the light"
+                    .to_string(),
+            ));
         }
+        let kind = match kind {
+            "point" => {
+                let allowed = [&common[..], &["position", "intensity"]].concat();
+                self.only_fields(&object, "a point light", &present, &allowed)?;
+                let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
+                let position = self.point(position, &object, "position")?;
+                let intensity =
+                    self.light_color(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
+                LightKind::Point { position, intensity }
+            }
+            "spot" => self.spot_light(l, &table, &object, &present, &common)?,
+            "distant" => {
+                let allowed = [&common[..], &["direction", "irradiance", "angular_diameter"]].concat();
+                self.only_fields(&object, "a distant light", &present, &allowed)?;
+                let direction = self.light_direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
+                let irradiance = self.light_color(&l.irradiance, &table, &object, "irradiance", "irradiance = 3")?;
+                let half_angle_deg = match &l.angular_diameter {
+                    Some(a) => {
+                        let deg = self.number(a, &object, "angular_diameter")?;
+                        if !(0.0..=90.0).contains(&deg) {
+                            return Err(self.invalid(
+                                &a.span(),
+                                &object,
+                                format!(
+                                    "`angular_diameter` is {}; it is the apparent size of the light in degrees, \
+                                     in [0, 90] (the sun is about 0.53)",
+                                    fmt_f32(deg)
+                                ),
+                            ));
+                        }
+                        0.5 * deg
+                    }
+                    None => 0.0,
+                };
+                LightKind::Distant { direction, irradiance, half_angle_deg }
+            }
+            _ => return self.area_light(index, l, &table, &object, &present, &common, direct, photons),
+        };
+        self.lights.push(LightDesc { kind, direct, photons });
+        Ok(())
+    }
 
-        let shape_def = self.require(&l.shape, &table, &object, "shape", "shape = \"quad\"")?;
-        let shape = self.one_of(shape_def, &object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = vec!["name", "type", "shape", "radiance", "transform"];
+    /// A light's colour field (intensity, irradiance): required, >= 0, with a warning when 0.
+    fn light_color(
+        &mut self,
+        field: &Option<Spanned<Vec3Def>>,
+        table: &Range<usize>,
+        object: &str,
+        name: &str,
+        example: &str,
+    ) -> Result<Vec3> {
+        let def = self.require(field, table, object, name, example)?;
+        let value = Vec3::from(self.color(def, object, name, false)?);
+        if value.max_element() == 0.0 {
+            let at = self.src.at(&def.span());
+            self.warnings.push(format!("{at}: {object}: `{name}` is 0, so this light emits nothing"));
+        }
+        Ok(value)
+    }
+
+    /// A light's required `direction`: three numbers, not all zero; returned normalised.
+    fn light_direction(
+        &self,
+        field: &Option<Spanned<Vec3Def>>,
+        table: &Range<usize>,
+        object: &str,
+        example: &str,
+    ) -> Result<Vec3> {
+        let def = self.require(field, table, object, "direction", example)?;
+        let d = self.point(def, object, "direction")?;
+        if d.length() == 0.0 {
+            return Err(self.invalid(
+                &def.span(),
+                object,
+                "`direction` is zero; give the direction the light shines in".to_string(),
+            ));
+        }
+        Ok(d.normalize())
+    }
+
+    /// A spot light: `position`, `direction` or `point_at`, `intensity`, and either
+    /// `outer_angle` (with `inner_angle`) or POV-Ray's `radius` and `falloff`; `tightness` with either.
+    fn spot_light(
+        &mut self,
+        l: &LightDef,
+        table: &Range<usize>,
+        object: &str,
+        present: &[Present<'_>],
+        common: &[&str],
+    ) -> Result<LightKind> {
+        let allowed = [
+            common,
+            &[
+                "position",
+                "direction",
+                "point_at",
+                "intensity",
+                "inner_angle",
+                "outer_angle",
+                "radius",
+                "falloff",
+                "tightness",
+            ],
+        ]
+        .concat();
+        self.only_fields(object, "a spot light", present, &allowed)?;
+        let position = self.require(&l.position, table, object, "position", "position = [0, 5, 0]")?;
+        let position = self.point(position, object, "position")?;
+        let direction = match (&l.direction, &l.point_at) {
+            (Some(_), Some(p)) => {
+                return Err(self.invalid(&p.span(), object, "give `direction` or `point_at`, not both".to_string()));
+            }
+            (None, Some(p)) => {
+                let target = self.point(p, object, "point_at")?;
+                if target == position {
+                    return Err(self.invalid(
+                        &p.span(),
+                        object,
+                        "`point_at` equals `position`; give the point the spot light aims at".to_string(),
+                    ));
+                }
+                (target - position).normalize()
+            }
+            _ => {
+                self.light_direction(&l.direction, table, object, "direction = [0, -1, 0]` or `point_at = [0, 0, 0]")?
+            }
+        };
+        let intensity = self.light_color(&l.intensity, table, object, "intensity", "intensity = [50, 50, 50]")?;
+        // Half-angles in degrees, at most 90; an outer angle must also be above 0.
+        let angle = |value: &Spanned<f64>, field: &str, outer: bool, what: &str| -> Result<f32> {
+            let deg = self.number(value, object, field)?;
+            if !(0.0..=90.0).contains(&deg) || (outer && deg == 0.0) {
+                return Err(self.invalid(&value.span(), object, format!("`{field}` is {}; {what}", fmt_f32(deg))));
+            }
+            Ok(deg)
+        };
+        let pov = l.radius.is_some() || l.falloff.is_some();
+        let (inner, outer, inner_name, outer_name, outer_span) = if pov {
+            if let Some(span) = span_of(&l.outer_angle).or(span_of(&l.inner_angle)) {
+                return Err(self.invalid(
+                    &span,
+                    object,
+                    "give `inner_angle`/`outer_angle` or POV-Ray's `radius`/`falloff`, not both".to_string(),
+                ));
+            }
+            let inner = match &l.radius {
+                Some(r) => angle(r, "radius", false, "POV-Ray's hotspot half-angle in degrees, in [0, 90]")?,
+                None => POV_SPOT_RADIUS,
+            };
+            let outer = match &l.falloff {
+                Some(f) => angle(f, "falloff", true, "POV-Ray's falloff half-angle in degrees, in (0, 90]")?,
+                None => POV_SPOT_FALLOFF,
+            };
+            (inner, outer, "radius", "falloff", span_of(&l.falloff).or(span_of(&l.radius)))
+        } else {
+            let outer_def = self.require(
+                &l.outer_angle,
+                table,
+                object,
+                "outer_angle",
+                "outer_angle = 30` (degrees from the axis)",
+            )?;
+            let outer = angle(outer_def, "outer_angle", true, "the cone's half-angle in degrees, in (0, 90]")?;
+            let inner = match &l.inner_angle {
+                Some(i) => angle(i, "inner_angle", false, "the half-angle of full intensity in degrees, in [0, 90]")?,
+                None => DEFAULT_INNER_FRACTION * outer,
+            };
+            (inner, outer, "inner_angle", "outer_angle", Some(outer_def.span()))
+        };
+        if outer < inner {
+            return Err(self.invalid(
+                &outer_span.unwrap_or(table.clone()),
+                object,
+                format!(
+                    "`{outer_name}` ({}) is below `{inner_name}` ({}); the light falls off from \
+                     `{inner_name}` out to `{outer_name}`, so raise `{outer_name}` to at least {} or lower `{inner_name}`",
+                    fmt_f32(outer),
+                    fmt_f32(inner),
+                    fmt_f32(inner)
+                ),
+            ));
+        }
+        let exponent = match &l.tightness {
+            Some(t) => {
+                let e = self.number(t, object, "tightness")?;
+                if !(0.0..=MAX_SPOT_TIGHTNESS as f32).contains(&e) {
+                    return Err(self.invalid(
+                        &t.span(),
+                        object,
+                        format!(
+                            "`tightness` is {}; it is the exponent of cos in [0, {MAX_SPOT_TIGHTNESS}] (0 for none)",
+                            fmt_f32(e)
+                        ),
+                    ));
+                }
+                e
+            }
+            None => 0.0,
+        };
+        Ok(LightKind::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner: inner.to_radians().cos(),
+            cos_outer: outer.to_radians().cos(),
+            exponent,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)] // the light's fields and options, already read
+    fn area_light(
+        &mut self,
+        index: usize,
+        l: &LightDef,
+        table: &Range<usize>,
+        object: &str,
+        present: &[Present<'_>],
+        common: &[&str],
+        direct: bool,
+        photons: bool,
+    ) -> Result<()> {
+        let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
+        let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
+        let mut allowed = [common, &["shape", "radiance", "transform"]].concat();
         let what = if shape == "quad" {
             allowed.push("vertices");
             "a quad area light"
@@ -1549,9 +2048,9 @@ impl Builder<'_> {
             allowed.extend_from_slice(&["center", "radius"]);
             "a sphere area light"
         };
-        self.only_fields(&object, what, &present, &allowed)?;
-        let radiance_def = self.require(&l.radiance, &table, &object, "radiance", "radiance = [10, 10, 10]")?;
-        let radiance = self.color(radiance_def, &object, "radiance", false)?;
+        self.only_fields(object, what, present, &allowed)?;
+        let radiance_def = self.require(&l.radiance, table, object, "radiance", "radiance = [10, 10, 10]")?;
+        let radiance = self.color(radiance_def, object, "radiance", false)?;
         if radiance.iter().all(|&c| c == 0.0) {
             let at = self.src.at(&radiance_def.span());
             self.warnings.push(format!("{at}: {object}: `radiance` is 0, so this light emits nothing"));
@@ -1561,8 +2060,8 @@ impl Builder<'_> {
         let material_name = format!("light {index}");
         if self.material_names.contains(&material_name) {
             return Err(self.invalid(
-                &table,
-                &object,
+                table,
+                object,
                 format!("the material name \"{material_name}\" is reserved for this area light; rename that material"),
             ));
         }
@@ -1571,16 +2070,237 @@ impl Builder<'_> {
         light_material.emission = ColorParam::constant(Vec3::from(radiance));
         let material = self.add_material(material_name, light_material);
         self.material_used[material as usize] = true;
-        let transform = self.transform(l.transform.as_ref(), &object)?;
+        self.lights.push(LightDesc { kind: LightKind::Area { material }, direct, photons });
+        let transform = self.transform(l.transform.as_ref(), object)?;
         if shape == "quad" {
-            let vertices = self.vertices(&l.vertices, &table, &object, 4)?;
-            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table), &object, material, transform)
+            let vertices = self.vertices(&l.vertices, table, object, 4)?;
+            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
         } else {
-            let center = self.require(&l.center, &table, &object, "center", "center = [0, 5, 0]")?;
-            let radius = self.require(&l.radius, &table, &object, "radius", "radius = 0.5")?;
-            self.sphere(center, radius, &object, material, transform)
+            let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
+            let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
+            self.sphere(center, radius, object, material, transform)
         }
     }
+}
+
+impl Builder<'_> {
+    // Environment
+
+    fn environment(&mut self, def: &Spanned<EnvironmentDef>) -> Result<Environment> {
+        let object = "[environment]";
+        let table = def.span();
+        let e = def.get_ref();
+        let kind_def = self.require(&e.r#type, &table, object, "type", "type = \"map\"")?;
+        let kind = self.one_of(kind_def, object, "type", ENVIRONMENT_TYPES)?;
+        let present = [
+            ("type", span_of(&e.r#type)),
+            ("file", span_of(&e.file)),
+            ("radiance", span_of(&e.radiance)),
+            ("colors", span_of(&e.colors)),
+            ("elevations", span_of(&e.elevations)),
+            ("strength", span_of(&e.strength)),
+            ("rotation", span_of(&e.rotation)),
+            ("photons", span_of(&e.photons)),
+            ("direct", span_of(&e.direct)),
+        ];
+        let common = ["type", "strength", "rotation", "photons", "direct"];
+        let strength = match &e.strength {
+            Some(v) => {
+                let k = self.number(v, object, "strength")?;
+                if k < 0.0 {
+                    return Err(self.invalid(
+                        &v.span(),
+                        object,
+                        format!("`strength` is {}; it scales the radiance and must be >= 0", fmt_f32(k)),
+                    ));
+                }
+                k
+            }
+            None => 1.0,
+        };
+        let rotation_deg = match &e.rotation {
+            Some(r) => self.number(r, object, "rotation")?,
+            None => 0.0,
+        };
+        let direct = e.direct.as_ref().is_none_or(|d| *d.get_ref());
+        let photons = e.photons.as_ref().is_none_or(|p| *p.get_ref());
+        if !direct && !photons {
+            return Err(self.invalid(
+                &span_of(&e.direct).unwrap_or(table.clone()),
+                object,
+                "`direct = false` and `photons = false` leave the environment only visible to camera rays; keep one true".to_string(),
+            ));
+        }
+        let mut image = match kind {
+            "map" => {
+                self.only_fields(object, "an environment map", &present, &[&common[..], &["file"]].concat())?;
+                let file = self.require(&e.file, &table, object, "file", "file = \"textures/sky.hdr\"")?;
+                let base = self.src.path.parent().unwrap_or(Path::new(""));
+                let image = load_image_texture(&base.join(file.get_ref()), ColorSpace::Srgb).map_err(|err| {
+                    self.invalid(
+                        &file.span(),
+                        object,
+                        format!("`file`: {err}; give a latitude-longitude EXR or Radiance HDR image, its path relative to the scene file"),
+                    )
+                })?;
+                let mut image = image;
+                let (w0, h0) = (image.width, image.height);
+                while image.width as u64 * image.height as u64 > MAX_ENVIRONMENT_TEXELS
+                    && image.width > 1
+                    && image.height > 1
+                {
+                    image = halve(&image);
+                }
+                if image.width != w0 {
+                    let at = self.src.at(&file.span());
+                    self.warnings.push(format!(
+                        "{at}: {object}: the map is {w0}x{h0}; it is used at {}x{} to fit one storage buffer",
+                        image.width, image.height
+                    ));
+                }
+                image
+            }
+            "gradient" => {
+                self.only_fields(
+                    object,
+                    "a gradient sky",
+                    &present,
+                    &[&common[..], &["colors", "elevations"]].concat(),
+                )?;
+                let colors_def =
+                    self.require(&e.colors, &table, object, "colors", "colors = [[0.9, 0.9, 1.0], [0.3, 0.5, 1.0]]")?;
+                let mut colors = Vec::new();
+                for c in colors_def.get_ref() {
+                    let v = Vec3::new(c.value[0] as f32, c.value[1] as f32, c.value[2] as f32);
+                    if !v.is_finite() || v.min_element() < 0.0 || v.max_element() as f64 > MAX_SCENE_VALUE {
+                        return Err(self.invalid(
+                            &colors_def.span(),
+                            object,
+                            format!(
+                                "`colors` holds {}; give finite radiances >= 0 (at most {MAX_SCENE_VALUE:e})",
+                                vec3_text(v)
+                            ),
+                        ));
+                    }
+                    colors.push(v);
+                }
+                if colors.len() < 2 {
+                    return Err(self.invalid(
+                        &colors_def.span(),
+                        object,
+                        "`colors` needs at least 2 colours (horizon to zenith)".to_string(),
+                    ));
+                }
+                let elevations: Vec<f32> = match &e.elevations {
+                    Some(el) => {
+                        let values: Vec<f32> = el.get_ref().iter().map(|&v| v as f32).collect();
+                        let increasing = values.windows(2).all(|w| w[0] < w[1]);
+                        if values.len() != colors.len()
+                            || !increasing
+                            || values.iter().any(|v| !(-90.0..=90.0).contains(v))
+                        {
+                            return Err(self.invalid(
+                                &el.span(),
+                                object,
+                                format!(
+                                    "`elevations` is [{}]; give one elevation per colour ({}), increasing, in [-90, 90] degrees",
+                                    values.iter().map(|&v| fmt_f32(v)).collect::<Vec<_>>().join(", "),
+                                    colors.len()
+                                ),
+                            ));
+                        }
+                        values
+                    }
+                    None => (0..colors.len()).map(|k| 90.0 * k as f32 / (colors.len() - 1) as f32).collect(),
+                };
+                gradient_image(&colors, &elevations)
+            }
+            _ => {
+                self.only_fields(object, "a uniform environment", &present, &[&common[..], &["radiance"]].concat())?;
+                let r = self.require(&e.radiance, &table, object, "radiance", "radiance = 1")?;
+                let c = self.color(r, object, "radiance", false)?;
+                // Rows, so that directions are drawn in proportion to sin(theta): uniformly.
+                ImageTexture {
+                    width: 1,
+                    height: GRADIENT_ROWS,
+                    texels: vec![[c[0], c[1], c[2], 1.0]; GRADIENT_ROWS as usize],
+                }
+            }
+        };
+        // Radiance is in [0, MAX_SCENE_VALUE] like every colour of a scene: a map's NaN and
+        // negative texels (EXR allows them) become 0, and a texel too bright is refused.
+        let mut cleared = 0usize;
+        let mut brightest = 0.0f32;
+        for t in &mut image.texels {
+            for c in &mut t[..3] {
+                if c.is_nan() || *c < 0.0 {
+                    cleared += 1;
+                    *c = 0.0;
+                }
+                // (An infinite texel at strength 0 is black, not NaN.)
+                *c = if strength == 0.0 { 0.0 } else { *c * strength };
+                brightest = brightest.max(*c);
+            }
+        }
+        let at_field = span_of(&e.file).or(span_of(&e.strength)).unwrap_or(table.clone());
+        if cleared > 0 {
+            let at = self.src.at(&at_field);
+            self.warnings.push(format!(
+                "{at}: {object}: {cleared} texel channels of the map are negative or NaN; they are taken as 0"
+            ));
+        }
+        if brightest as f64 > MAX_SCENE_VALUE {
+            return Err(self.invalid(
+                &at_field,
+                object,
+                format!(
+                    "the environment's radiance reaches {} (times `strength`), beyond the largest scene value, \
+                     {MAX_SCENE_VALUE:e} (see docs/limits.md); lower `strength`",
+                    fmt_f32(brightest)
+                ),
+            ));
+        }
+        Ok(Environment { image: std::sync::Arc::new(image), rotation_deg, direct, photons })
+    }
+}
+
+/// The image halved in both directions (odd last rows and columns dropped), each texel the mean
+/// of the 2x2 it replaces.
+fn halve(image: &ImageTexture) -> ImageTexture {
+    let (w, h) = (image.width / 2, image.height / 2);
+    let mut texels = Vec::with_capacity((w * h) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let mut sum = [0.0f32; 4];
+            for (di, dj) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                let t = image.texels[((2 * j + dj) * image.width + 2 * i + di) as usize];
+                (0..4).for_each(|c| sum[c] += 0.25 * t[c]);
+            }
+            texels.push(sum);
+        }
+    }
+    ImageTexture { width: w, height: h, texels }
+}
+
+/// A one-column latitude-longitude image of `colors` at `elevations` (degrees), linear in
+/// elevation between them and constant beyond the first and the last.
+fn gradient_image(colors: &[Vec3], elevations: &[f32]) -> ImageTexture {
+    let texels = (0..GRADIENT_ROWS)
+        .map(|j| {
+            let elevation = 90.0 - 180.0 * (j as f32 + 0.5) / GRADIENT_ROWS as f32;
+            let k = elevations.iter().rposition(|&e| e <= elevation).unwrap_or(0);
+            let c = if elevation <= elevations[0] {
+                colors[0]
+            } else if k + 1 >= colors.len() {
+                colors[colors.len() - 1]
+            } else {
+                let t = (elevation - elevations[k]) / (elevations[k + 1] - elevations[k]);
+                colors[k].lerp(colors[k + 1], t)
+            };
+            [c.x, c.y, c.z, 1.0]
+        })
+        .collect();
+    ImageTexture { width: 1, height: GRADIENT_ROWS, texels }
 }
 
 /// The placement of an object space whose origin goes to `origin` and whose +y axis goes to the

@@ -23,16 +23,45 @@ pub(crate) struct SceneFile {
     pub shapes: Vec<Spanned<ShapeDef>>,
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
+    pub environment: Option<Spanned<EnvironmentDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct EnvironmentDef {
+    pub r#type: Option<Spanned<String>>,
+    pub file: Option<Spanned<String>>,
+    pub radiance: Option<Spanned<Vec3Def>>,
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub elevations: Option<Spanned<Vec<f64>>>,
+    pub strength: Option<Spanned<f64>>,
+    pub rotation: Option<Spanned<f64>>,
+    pub photons: Option<Spanned<bool>>,
+    pub direct: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CameraDef {
+    pub r#type: Option<Spanned<String>>,
     pub position: Option<Spanned<Vec3Def>>,
     pub look_at: Option<Spanned<Vec3Def>>,
     pub up: Option<Spanned<Vec3Def>>,
     pub fov: Option<Spanned<f64>>,
     pub resolution: Option<Spanned<Vec<i64>>>,
+    // orthographic
+    pub view_height: Option<Spanned<f64>>,
+    // thin lens
+    pub aperture_radius: Option<Spanned<f64>>,
+    pub f_number: Option<Spanned<f64>>,
+    pub focal_length: Option<Spanned<f64>>,
+    pub focal_distance: Option<Spanned<f64>>,
+    pub focal_point: Option<Spanned<Vec3Def>>,
+    pub aperture_blades: Option<Spanned<i64>>,
+    pub aperture_rotation: Option<Spanned<f64>>,
+    // POV-Ray's focal blur
+    pub aperture: Option<Spanned<f64>>,
+    pub blur_samples: Option<Spanned<i64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -183,6 +212,18 @@ pub(crate) struct LightDef {
     pub position: Option<Spanned<Vec3Def>>,
     pub intensity: Option<Spanned<Vec3Def>>,
     pub transform: Option<Spanned<TransformDef>>,
+    // spot and distant
+    pub direction: Option<Spanned<Vec3Def>>,
+    pub point_at: Option<Spanned<Vec3Def>>,
+    pub inner_angle: Option<Spanned<f64>>,
+    pub outer_angle: Option<Spanned<f64>>,
+    pub falloff: Option<Spanned<f64>>,
+    pub tightness: Option<Spanned<f64>>,
+    pub irradiance: Option<Spanned<Vec3Def>>,
+    pub angular_diameter: Option<Spanned<f64>>,
+    // every kind
+    pub photons: Option<Spanned<bool>>,
+    pub direct: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -1,11 +1,12 @@
 //! Scene format v1: TOML scene files (documented in `docs/scene-format.md`), checked and turned
 //! into a renderer-agnostic description: shapes (triangles, analytic spheres and the analytic
 //! shapes of `analytic.rs`: planes, discs, cones and cylinders, tori, superellipsoids), materials,
-//! textures, point lights and the photon settings. Nothing here knows the GPU's structs; the
+//! textures, lights (point, spot, distant, and the options of area lights) and the photon
+//! settings. Nothing here knows the GPU's structs; the
 //! renderer packs this description for its kernels in one place (`render::pack`).
 //!
-//! Light sources are every shape whose material has `emission` > 0, plus the point lights; the
-//! renderer builds its light list from those. An area light of the file becomes ordinary shapes
+//! Light sources are every shape whose material has `emission` > 0, plus the point, spot and
+//! distant lights; the renderer builds its light list from those. An area light of the file becomes ordinary shapes
 //! with its own material, named `light <index>` (diffuse, reflectance 0, emission = its radiance).
 
 pub mod analytic;
@@ -49,7 +50,11 @@ pub struct Scene {
     /// Index = texture id, in file order.
     pub textures: Vec<TextureDesc>,
     pub shapes: Vec<Shape>,
-    pub point_lights: Vec<PointLight>,
+    /// The lights of `[[lights]]` in file order: point, spot and distant lights, and for each
+    /// area light the options of the shapes that carry its material.
+    pub lights: Vec<LightDesc>,
+    /// What rays that leave the scene see, and a light of its own; `None` is black.
+    pub environment: Option<Environment>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
 }
@@ -72,15 +77,18 @@ impl Scene {
     }
 }
 
-/// A pinhole camera.
+/// The camera: where it is, how film positions become rays, and the image size.
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub position: Vec3,
     pub look_at: Vec3,
     /// Not necessarily perpendicular to the view direction, nor normalised; never parallel to it.
     pub up: Vec3,
-    /// Vertical field of view in degrees, in (0, 180).
+    /// Vertical field of view in degrees, in (0, 180); used by the perspective projection.
     pub fov_deg: f32,
+    pub projection: Projection,
+    /// A thin lens (depth of field); `None` is a pinhole.
+    pub lens: Option<ThinLens>,
     pub width: u32,
     pub height: u32,
 }
@@ -100,6 +108,33 @@ impl Camera {
         let right = forward.cross(self.up).try_normalize()?;
         Some((forward, right, right.cross(forward)))
     }
+}
+
+/// How film positions map to rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Pinhole or thin lens with the vertical field of view `Camera::fov_deg`.
+    Perspective,
+    /// Parallel rays; `view_height` is the height of the view in scene units (its width follows
+    /// the image's aspect ratio).
+    Orthographic { view_height: f32 },
+    /// Every direction: longitude across the image (-180..180 degrees, 0 straight ahead),
+    /// latitude up it (-90..90).
+    LatLong,
+}
+
+/// A thin lens: rays leave a point of the aperture and meet where the pinhole ray meets the
+/// plane in focus.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThinLens {
+    /// Aperture radius, scene units, > 0.
+    pub radius: f32,
+    /// Distance of the plane in focus along the view direction, scene units, > 0.
+    pub focal_distance: f32,
+    /// Blades of a polygonal aperture (3 or more); 0 for a round one.
+    pub blades: u32,
+    /// Angle of the first corner from the image's up toward its right, degrees.
+    pub rotation_deg: f32,
 }
 
 #[derive(Clone, Debug)]
@@ -179,12 +214,53 @@ pub struct Sphere {
     pub object_from_world: Option<Mat3>,
 }
 
-/// An isotropic point light.
+/// The environment: radiance from every direction, as a latitude-longitude image (an HDR map,
+/// or a gradient or uniform sky drawn into one). Row 0 is the zenith (+y), the middle column
+/// looks toward -z and the column at three quarters toward +x, before `rotation_deg`.
 #[derive(Clone, Debug)]
-pub struct PointLight {
-    pub position: Vec3,
-    /// W/sr per channel, >= 0.
-    pub intensity: Vec3,
+pub struct Environment {
+    /// Linear RGB radiance, already scaled by the file's `strength`.
+    pub image: std::sync::Arc<image_texture::ImageTexture>,
+    /// Rotation about +y, degrees, right-handed: 90 turns the image's middle from -z to -x.
+    pub rotation_deg: f32,
+    /// As `LightDesc::direct` and `LightDesc::photons`.
+    pub direct: bool,
+    pub photons: bool,
+}
+
+/// A light of `[[lights]]`, with the options every kind takes.
+#[derive(Clone, Debug)]
+pub struct LightDesc {
+    pub kind: LightKind,
+    /// Whether the light casts direct light (shadow rays); false: it lights the scene through
+    /// its photons only (indirect light and caustics).
+    pub direct: bool,
+    /// Whether the light emits photons; false: direct light only.
+    pub photons: bool,
+}
+
+impl LightDesc {
+    /// A light with both direct light and photons.
+    pub fn new(kind: LightKind) -> LightDesc {
+        LightDesc { kind, direct: true, photons: true }
+    }
+}
+
+/// Every kind of light, behind one match per host-side operation (the light records of
+/// `render::prepare`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightKind {
+    /// An isotropic point light; `intensity` in W/sr per channel, >= 0.
+    Point { position: Vec3, intensity: Vec3 },
+    /// A spot light: `intensity` (W/sr) along unit `direction`, falling off smoothly from the
+    /// inner cone to the outer one (half-angles; cosines stored, `cos_inner` >= `cos_outer` > 0)
+    /// and scaled by cos^`exponent` (POV-Ray's `tightness`, >= 0).
+    Spot { position: Vec3, direction: Vec3, intensity: Vec3, cos_inner: f32, cos_outer: f32, exponent: f32 },
+    /// A distant light: light travels along unit `direction` with `irradiance` (W/m^2) on a
+    /// surface facing it, from a cone of directions of half-angle `half_angle_deg` (0: sharp).
+    Distant { direction: Vec3, irradiance: Vec3, half_angle_deg: f32 },
+    /// The options of an area light: they apply to the shapes of material `material`.
+    Area { material: u32 },
 }
 
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above

@@ -1,0 +1,421 @@
+//! Spot and distant lights against their closed forms, their photons against their intensity
+//! profiles, and the per-light options (direct light only, photons only), on both backends.
+
+mod common;
+
+use std::f64::consts::PI;
+
+use glam::{DVec3, Vec3};
+use photonix::cpu::light::light_emit;
+use photonix::cpu::rng::rand4;
+use photonix::io::Image;
+use photonix::layout::constants::{LIGHT_AREA, LIGHT_DISTANT, LIGHT_SPOT};
+use photonix::render::photons::build_maps_cpu;
+use photonix::render::{PhotonSettings, SceneBuffers};
+use photonix::scene::{parse_scene, Scene};
+
+const SIZE: u32 = 64;
+const ALBEDO: f64 = 0.5;
+const CAMERA_HEIGHT: f64 = 6.0;
+const FOV_DEG: f64 = 60.0;
+
+fn parse(text: &str) -> Scene {
+    parse_scene(text, &common::repo_path("scenes/test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A large diffuse plane (albedo 0.5) at y = 0 seen from straight above (camera-right is -x,
+/// image up is +z), lit by `lights` (TOML `[[lights]]` entries).
+fn plane_scene(lights: &str, photons: bool) -> Scene {
+    let photons = if photons { "count = 20000\ncaustic_count = 1000\ngather_rays = 1" } else { "enabled = false" };
+    parse(&format!(
+        r#"
+[camera]
+position = [0, {CAMERA_HEIGHT}, 0]
+look_at = [0, 0, 0]
+up = [0, 0, 1]
+fov = {FOV_DEG}
+resolution = [{SIZE}, {SIZE}]
+
+[render]
+max_depth = 4
+seed = 5
+
+[photons]
+{photons}
+
+[materials.plane]
+type = "diffuse"
+reflectance = {ALBEDO}
+
+[[shapes]]
+type = "quad"
+material = "plane"
+vertices = [[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]]
+
+{lights}
+"#
+    ))
+}
+
+/// Where film position (sx, sy) in [-1, 1]^2 looks at on the plane y = 0.
+fn plane_point(sx: f64, sy: f64) -> DVec3 {
+    let t = (FOV_DEG * 0.5).to_radians().tan() * CAMERA_HEIGHT;
+    DVec3::new(-sx * t, 0.0, sy * t)
+}
+
+/// The mean over pixel (px, py) of `radiance(x)` on the plane, by an 8 x 8 grid of points.
+fn pixel_mean(px: u32, py: u32, radiance: impl Fn(DVec3) -> f64) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..8 {
+        for j in 0..8 {
+            let sx = 2.0 * (px as f64 + (i as f64 + 0.5) / 8.0) / SIZE as f64 - 1.0;
+            let sy = 1.0 - 2.0 * (py as f64 + (j as f64 + 0.5) / 8.0) / SIZE as f64;
+            sum += radiance(plane_point(sx, sy));
+        }
+    }
+    sum / 64.0
+}
+
+fn render(buffers: &SceneBuffers, spp: u32, gpu: bool) -> Image {
+    if gpu {
+        common::gpu_image(&common::gpu(), buffers, spp)
+    } else {
+        common::cpu_image(buffers, spp)
+    }
+}
+
+// Spot light
+
+const SPOT_HEIGHT: f64 = 2.0;
+const SPOT_INTENSITY: f64 = 30.0;
+const SPOT_INNER: f64 = 20.0;
+const SPOT_OUTER: f64 = 35.0;
+
+/// The spot's profile: pbrt-v4's and POV-Ray's smooth step in cos between the cones.
+fn spot_profile(cos: f64, inner_deg: f64, outer_deg: f64, tightness: f64) -> f64 {
+    let (ci, co) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
+    let t = ((cos - co) / (ci - co)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t) * cos.powf(tightness)
+}
+
+fn check_spot(gpu: bool, lights: &str, inner: f64, outer: f64, tightness: f64) {
+    let backend = if gpu { "gpu" } else { "cpu" };
+    let scene = plane_scene(lights, false);
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    assert_eq!(buffers.lights[0].kind, LIGHT_SPOT);
+    let image = render(&buffers, 256, gpu);
+    let spot = DVec3::new(0.0, SPOT_HEIGHT, 0.0);
+    // E = I(theta) cos(theta) / d^2 with cos(theta) = h / d; L = rho / pi E.
+    let radiance = |x: DVec3| {
+        let d = (spot - x).length();
+        let cos = SPOT_HEIGHT / d;
+        ALBEDO / PI * SPOT_INTENSITY * spot_profile(cos, inner, outer, tightness) * cos / (d * d)
+    };
+    // Every pixel of the middle row, grouped by where it lies: wholly inside the inner cone,
+    // across the falloff (or straddling an edge), wholly outside the outer cone.
+    let pixel = 2.0 * plane_point(1.0, 0.0).length() / SIZE as f64;
+    let r_inner = SPOT_HEIGHT * inner.to_radians().tan();
+    let mut worst = [0.0f64; 3];
+    let mut counts = [0; 3];
+    for px in 0..SIZE {
+        let py = SIZE / 2;
+        let centre = plane_point(2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0, 0.0);
+        let expected = pixel_mean(px, py, radiance);
+        let region = if centre.length() < r_inner - pixel {
+            0
+        } else if expected > 0.0 {
+            1
+        } else {
+            2
+        };
+        let rendered = image.pixel(px, py)[1] as f64;
+        // Across the falloff, relative to the radiance on the axis: the edge pixels hold little
+        // light that rises steeply within them, so their own relative error is large noise.
+        let error = match region {
+            0 => (rendered / expected - 1.0).abs(),
+            1 => (rendered - expected).abs() / radiance(DVec3::ZERO),
+            _ => rendered,
+        };
+        worst[region] = worst[region].max(error);
+        counts[region] += 1;
+    }
+    println!(
+        "{backend}: spot over plane, worst relative error inside {:.3}% ({} px), across the falloff {:.3}% of the \
+         peak ({} px); outside, largest radiance {:.2e} ({} px)",
+        100.0 * worst[0],
+        counts[0],
+        100.0 * worst[1],
+        counts[1],
+        worst[2],
+        counts[2]
+    );
+    assert!(counts.iter().all(|&c| c >= 4), "every region needs pixels: {counts:?}");
+    // A point light has no sampling noise: only the 256 random positions spread over each
+    // pixel, whose mean differs from the 8x8-point mean by well under 1% inside (measured
+    // 0.09%, and 0.39% under the steeper cos^10 of POV-Ray's tightness); across the falloff, where radiance changes by up to 20% of the peak within a
+    // pixel, by up to 0.5% of the peak (measured 0.4%). A wrong profile misses by far more: the
+    // step in angle instead of cos by 9% of the peak mid-falloff, a hard edge by 50%.
+    assert!(worst[0] < 0.0075, "{backend}: inside the inner cone off by {:.3}%", 100.0 * worst[0]);
+    assert!(worst[1] < 0.01, "{backend}: across the falloff off by {:.3}% of the peak", 100.0 * worst[1]);
+    // Outside the outer cone the plane gets no light at all.
+    assert!(worst[2] < 1e-6, "{backend}: light outside the outer cone: {}", worst[2]);
+}
+
+const SPOT: &str = r#"
+[[lights]]
+type = "spot"
+position = [0, 2, 0]
+point_at = [0, 0, 0]
+intensity = 30
+inner_angle = 20
+outer_angle = 35
+"#;
+
+/// POV-Ray's spelling: radius (hotspot), falloff and tightness.
+const POV_SPOT: &str = r#"
+[[lights]]
+type = "spot"
+position = [0, 2, 0]
+direction = [0, -1, 0]
+intensity = 30
+radius = 20
+falloff = 35
+tightness = 10
+"#;
+
+#[test]
+fn spot_light_irradiance_matches_closed_form_cpu() {
+    check_spot(false, SPOT, SPOT_INNER, SPOT_OUTER, 0.0);
+    check_spot(false, POV_SPOT, SPOT_INNER, SPOT_OUTER, 10.0);
+}
+
+#[test]
+fn spot_light_irradiance_matches_closed_form_gpu() {
+    check_spot(true, SPOT, SPOT_INNER, SPOT_OUTER, 0.0);
+    check_spot(true, POV_SPOT, SPOT_INNER, SPOT_OUTER, 10.0);
+}
+
+// Distant light
+
+const IRRADIANCE: f64 = 3.0;
+
+/// A distant light at `theta_deg` from the zenith, sharp or with an angular diameter, gives the
+/// unshadowed plane E cos(theta) everywhere (a cone that stays above the horizon integrates
+/// L cos over its directions to the cos of its axis times its irradiance), so L = rho/pi E cos.
+fn check_distant(gpu: bool) {
+    let backend = if gpu { "gpu" } else { "cpu" };
+    for (theta_deg, diameter) in [(0.0f64, 0.0), (40.0, 0.0), (70.0, 0.0), (40.0, 30.0)] {
+        let t = theta_deg.to_radians();
+        let lights = format!(
+            "[[lights]]\ntype = \"distant\"\ndirection = [{}, {}, 0]\nirradiance = {IRRADIANCE}\nangular_diameter = {diameter}\n",
+            t.sin(),
+            -t.cos()
+        );
+        let scene = plane_scene(&lights, false);
+        let buffers = common::buffers(&scene, SIZE, SIZE);
+        assert_eq!(buffers.lights[0].kind, LIGHT_DISTANT);
+        let image = render(&buffers, 16, gpu);
+        let mean = image.channel_means()[1];
+        let expected = ALBEDO / PI * IRRADIANCE * t.cos();
+        let error = mean / expected - 1.0;
+        println!("{backend}: distant light at {theta_deg} degrees, diameter {diameter}: mean {mean:.5}, E cos rho/pi {expected:.5}, error {:+.3}%", 100.0 * error);
+        // Sharp: no noise at all. Soft: 65536 samples of a cos over a 30-degree cone vary by
+        // about 25%, a standard error near 0.1%.
+        assert!(
+            error.abs() < 0.005,
+            "{backend}: {theta_deg} degrees, diameter {diameter}: off by {:.3}%",
+            100.0 * error
+        );
+    }
+}
+
+#[test]
+fn distant_light_gives_e_cos_theta_cpu() {
+    check_distant(false);
+}
+
+#[test]
+fn distant_light_gives_e_cos_theta_gpu() {
+    check_distant(true);
+}
+
+/// An infinite plane (an analytic shape outside the BVH) alone under a distant light: the scene
+/// has no bounded shape, yet the light keeps its power (a stand-in sphere sends its photons) and
+/// the plane shows E cos(theta) rho / pi on both backends.
+#[test]
+fn distant_light_on_an_infinite_plane() {
+    let t = 40.0f64.to_radians();
+    let scene = parse(&format!(
+        r#"
+[camera]
+position = [0, {CAMERA_HEIGHT}, 0]
+look_at = [0, 0, 0]
+up = [0, 0, 1]
+fov = {FOV_DEG}
+resolution = [{SIZE}, {SIZE}]
+
+[photons]
+count = 2000
+caustic_count = 100
+gather_rays = 1
+
+[materials.plane]
+type = "diffuse"
+reflectance = {ALBEDO}
+
+[[shapes]]
+type = "plane"
+material = "plane"
+normal = [0, 1, 0]
+
+[[lights]]
+type = "distant"
+direction = [{}, {}, 0]
+irradiance = {IRRADIANCE}
+"#,
+        t.sin(),
+        -t.cos()
+    ));
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    assert_eq!(buffers.lights.len(), 1);
+    let light = &buffers.lights[0];
+    assert_eq!(light.kind, LIGHT_DISTANT);
+    assert!(light.radius > 0.0 && light.pick_probability == 1.0 && light.photon_probability == 1.0);
+    let expected = ALBEDO / PI * IRRADIANCE * t.cos();
+    for gpu in [false, true] {
+        let mean = render(&buffers, 4, gpu).channel_means()[1];
+        let error = mean / expected - 1.0;
+        println!("gpu {gpu}: distant light on an infinite plane: mean {mean:.5}, expected {expected:.5}");
+        assert!(error.abs() < 0.005, "gpu {gpu}: off by {:.3}%", 100.0 * error);
+    }
+}
+
+// Photons
+
+/// The power photons carry into each angular bin around the spot's axis, per steradian, equals
+/// the spot's intensity profile there.
+#[test]
+fn spot_photons_follow_the_intensity_profile() {
+    let scene = plane_scene(POV_SPOT, false);
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    let view = buffers.view();
+    let light = &buffers.lights[0];
+    const BINS: usize = 14;
+    const N: u32 = 400_000;
+    let outer = SPOT_OUTER.to_radians();
+    let mut power = [0.0f64; BINS];
+    for i in 0..N {
+        let u = rand4(i, 0, 9, 0);
+        let (o, d, p) = light_emit(&view, light, [u[0], u[1]], [u[2], u[3]]);
+        assert_eq!(o, Vec3::new(0.0, 2.0, 0.0));
+        let angle = (-d.y as f64).clamp(-1.0, 1.0).acos();
+        assert!(angle <= outer + 1e-4, "photon outside the cone at {} degrees", angle.to_degrees());
+        power[((angle / outer * BINS as f64) as usize).min(BINS - 1)] += p.y as f64 / N as f64;
+    }
+    let mut worst = 0.0f64;
+    for (b, &bin_power) in power.iter().enumerate() {
+        let (a0, a1) = (outer * b as f64 / BINS as f64, outer * (b + 1) as f64 / BINS as f64);
+        let solid_angle = 2.0 * PI * (a0.cos() - a1.cos());
+        // The profile's mean over the bin, by the midpoint rule in cos.
+        let mean_profile: f64 = (0..64)
+            .map(|k| {
+                let c = a0.cos() + (a1.cos() - a0.cos()) * (k as f64 + 0.5) / 64.0;
+                spot_profile(c, SPOT_INNER, SPOT_OUTER, 10.0)
+            })
+            .sum::<f64>()
+            / 64.0;
+        let expected = SPOT_INTENSITY * mean_profile;
+        let measured = bin_power / solid_angle;
+        if expected > 0.05 * SPOT_INTENSITY {
+            worst = worst.max((measured / expected - 1.0).abs());
+        }
+        println!(
+            "bin {b}: {:.1}-{:.1} degrees: {measured:.3} W/sr, profile {expected:.3}",
+            a0.to_degrees(),
+            a1.to_degrees()
+        );
+    }
+    // About 400000 / 14 photons per bin: a standard error near 1% on the smallest bins.
+    assert!(worst < 0.03, "photon intensity off the profile by {:.2}%", 100.0 * worst);
+}
+
+/// A distant light's photons cross a disc facing it at the scene's centre with flux E pi r^2,
+/// sharp or soft (the cone of directions traced back from the disc stays inside the source disc).
+#[test]
+fn distant_photons_carry_the_irradiance() {
+    for diameter in [0.0, 20.0] {
+        let lights =
+            format!("[[lights]]\ntype = \"distant\"\ndirection = [0.3, -1, 0.2]\nirradiance = {IRRADIANCE}\nangular_diameter = {diameter}\n");
+        let scene = plane_scene(&lights, false);
+        let buffers = common::buffers(&scene, SIZE, SIZE);
+        let view = buffers.view();
+        let light = &buffers.lights[0];
+        let (axis, center) = (Vec3::from(light.direction).as_dvec3(), Vec3::from(light.position).as_dvec3());
+        let r = 0.3 * light.radius as f64;
+        const N: u32 = 400_000;
+        let mut flux = 0.0;
+        for i in 0..N {
+            let u = rand4(i, 0, 4, 0);
+            let (o, d, p) = light_emit(&view, light, [u[0], u[1]], [u[2], u[3]]);
+            let (o, d) = (o.as_dvec3(), d.as_dvec3());
+            assert!((o - center).length() >= light.radius as f64 * 0.999, "photons start outside the bounding sphere");
+            // Where the photon crosses the plane through the centre facing the light.
+            let t = (center - o).dot(axis) / d.dot(axis);
+            if (o + d * t - center).length() < r {
+                flux += p.y as f64 / N as f64;
+            }
+        }
+        let expected = IRRADIANCE * PI * r * r;
+        let error = flux / expected - 1.0;
+        println!("distant photons, diameter {diameter}: flux {flux:.4} through the central disc, E pi r^2 {expected:.4}, error {:+.2}%", 100.0 * error);
+        // 9% of 400000 photons land in the disc: a standard error near 0.5%.
+        assert!(error.abs() < 0.02, "diameter {diameter}: flux off by {:.2}%", 100.0 * error);
+    }
+}
+
+// Per-light options
+
+/// `direct = false`: no direct light from that light, but its photons; `photons = false`: its
+/// direct light, but no photons. Two lights, one of each, get one distribution each.
+#[test]
+fn direct_only_and_photons_only_lights_split_the_work() {
+    let settings = PhotonSettings { photons: 20_000, caustic_photons: 1000, gather_rays: 1, ..Default::default() };
+    let photons_only = SPOT.replace("outer_angle = 35", "outer_angle = 35\ndirect = false");
+    let direct_only = SPOT.replace("outer_angle = 35", "outer_angle = 35\nphotons = false");
+
+    let buffers = common::buffers(&plane_scene(&photons_only, true), SIZE, SIZE);
+    assert_eq!((buffers.lights[0].pick_probability, buffers.lights[0].photon_probability), (0.0, 1.0));
+    let maps = build_maps_cpu(&buffers, &settings, 0);
+    let direct = common::cpu_render(&buffers, 1, &settings).layers.direct;
+    println!(
+        "photons only: {} photons stored, direct layer mean {:?}",
+        maps.global_photons.len(),
+        direct.channel_means()
+    );
+    assert!(maps.global_photons.len() > 10_000, "a photons-only light emits photons");
+    assert_eq!(direct.channel_means(), [0.0; 3], "a photons-only light casts no direct light");
+
+    let buffers = common::buffers(&plane_scene(&direct_only, true), SIZE, SIZE);
+    assert_eq!((buffers.lights[0].pick_probability, buffers.lights[0].photon_probability), (1.0, 0.0));
+    let maps = build_maps_cpu(&buffers, &settings, 0);
+    let direct = common::cpu_render(&buffers, 1, &settings).layers.direct;
+    println!(
+        "direct only: {} photons stored, direct layer mean {:?}",
+        maps.global_photons.len(),
+        direct.channel_means()
+    );
+    assert_eq!(maps.global_photons.len(), 0, "a direct-only light emits no photons");
+    assert!(direct.channel_means()[1] > 0.01, "a direct-only light casts direct light");
+
+    // An area light takes the options too: they follow its material to its shapes.
+    let area = "[[lights]]\ntype = \"area\"\nshape = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.2\nradiance = 5\nphotons = false\n";
+    let buffers = common::buffers(&plane_scene(&format!("{area}\n{photons_only}"), true), SIZE, SIZE);
+    let picks: Vec<_> = buffers.lights.iter().map(|l| (l.kind, l.pick_probability, l.photon_probability)).collect();
+    assert_eq!(picks, vec![(LIGHT_AREA, 1.0, 0.0), (LIGHT_SPOT, 0.0, 1.0)]);
+
+    // Both lights: each distribution holds one of them with probability 1.
+    let buffers = common::buffers(&plane_scene(&format!("{photons_only}\n{direct_only}"), true), SIZE, SIZE);
+    let picks: Vec<_> =
+        buffers.lights.iter().map(|l| (l.pick_probability, l.cdf, l.photon_probability, l.photon_cdf)).collect();
+    assert_eq!(picks, vec![(0.0, 0.0, 1.0, 1.0), (1.0, 1.0, 0.0, 1.0)]);
+}
