@@ -102,7 +102,8 @@ void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
 // Light l as seen from x: the direction wi toward it, a point p to aim the shadow ray at (beyond
 // the scene for a distant light) and `weight`, the radiance arriving along -wi divided by the
 // solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability);
-// `eps`, the offset of a ray that ends at p (the area light's point's own, else the frame's).
+// `eps`, how far short of p a shadow ray stops (an area light's point's own offset over the
+// cosine there, else the frame's ray_epsilon).
 struct LightSample {
     vec3 p;
     vec3 wi;

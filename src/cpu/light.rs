@@ -129,8 +129,8 @@ pub struct LightSample {
     pub p: Vec3,
     pub wi: Vec3,
     pub weight: Vec3,
-    /// Offset of a ray that ends at `p`: the area light's point's own (`Hit::eps`), else the
-    /// frame's `ray_epsilon`.
+    /// How far short of `p` a shadow ray stops: an area light's point's own offset (`Hit::eps`)
+    /// over the cosine there, else the frame's `ray_epsilon`.
     pub eps: f32,
 }
 

@@ -1,13 +1,14 @@
 //! Scene format v1: TOML scene files (documented in `docs/scene-format.md`), checked and turned
 //! into a renderer-agnostic description: shapes (triangles, analytic spheres and the analytic
 //! shapes of `analytic.rs`: planes, discs, cones and cylinders, tori, superellipsoids), materials,
-//! textures, lights (point, spot, distant, and the options of area lights) and the photon
-//! settings. Nothing here knows the GPU's structs; the
+//! textures, lights (point, spot, distant, and the options of area lights), the environment and
+//! the photon settings. Nothing here knows the GPU's structs; the
 //! renderer packs this description for its kernels in one place (`render::pack`).
 //!
 //! Light sources are every shape whose material has `emission` > 0, plus the point, spot and
-//! distant lights; the renderer builds its light list from those. An area light of the file becomes ordinary shapes
-//! with its own material, named `light <index>` (diffuse, reflectance 0, emission = its radiance).
+//! distant lights and the environment; the renderer builds its light list from those. An area
+//! light of the file becomes ordinary shapes with its own material, named `light <index>`
+//! (diffuse, reflectance 0, emission = its radiance).
 
 pub mod analytic;
 mod convert;
