@@ -1,6 +1,8 @@
 //! From the file as written (`format`) to the `Scene` the renderer uses: checks every value,
 //! applies defaults, turns quads, boxes, meshes and area lights into triangles and materials.
 
+mod sky;
+
 use std::ops::Range;
 use std::path::Path;
 
@@ -9,7 +11,7 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{
-    EnvironmentDef, LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
+    EnvironmentDef, LightDef, MaterialDef, ParamDef, RainbowDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
 };
 use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
 use super::material::{
@@ -73,7 +75,7 @@ const SHAPE_TYPES: &[&str] =
 const SUPERELLIPSOID_MIN_EXPONENT: f64 = 0.01;
 const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
 const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
-const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform"];
+const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform", "sky"];
 /// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
 const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
@@ -121,9 +123,16 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     for (index, light) in file.lights.iter().enumerate() {
         builder.light(index, light)?;
     }
-    let environment = match &file.environment {
-        Some(def) => Some(builder.environment(def)?),
-        None => None,
+    let environment = match (&file.environment, &file.rainbow) {
+        (Some(def), rainbow) => Some(builder.environment(def, rainbow.as_ref())?),
+        (None, Some(rainbow)) => {
+            return Err(src.invalid(
+                &rainbow.span(),
+                "[rainbow]",
+                "a rainbow is drawn into the environment; add an `[environment]` (e.g. `type = \"sky\"`)".to_string(),
+            ))
+        }
+        (None, None) => None,
     };
 
     // Warnings
@@ -2086,7 +2095,11 @@ impl Builder<'_> {
 impl Builder<'_> {
     // Environment
 
-    fn environment(&mut self, def: &Spanned<EnvironmentDef>) -> Result<Environment> {
+    fn environment(
+        &mut self,
+        def: &Spanned<EnvironmentDef>,
+        rainbow: Option<&Spanned<RainbowDef>>,
+    ) -> Result<Environment> {
         let object = "[environment]";
         let table = def.span();
         let e = def.get_ref();
@@ -2102,6 +2115,18 @@ impl Builder<'_> {
             ("rotation", span_of(&e.rotation)),
             ("photons", span_of(&e.photons)),
             ("direct", span_of(&e.direct)),
+            ("turbidity", span_of(&e.turbidity)),
+            ("ground_albedo", span_of(&e.ground_albedo)),
+            ("sun", span_of(&e.sun)),
+            ("sun_direction", span_of(&e.sun_direction)),
+            ("sun_elevation", span_of(&e.sun_elevation)),
+            ("sun_azimuth", span_of(&e.sun_azimuth)),
+            ("latitude", span_of(&e.latitude)),
+            ("longitude", span_of(&e.longitude)),
+            ("date", span_of(&e.date)),
+            ("time", span_of(&e.time)),
+            ("utc_offset", span_of(&e.utc_offset)),
+            ("north", span_of(&e.north)),
         ];
         let common = ["type", "strength", "rotation", "photons", "direct"];
         let strength = match &e.strength {
@@ -2215,6 +2240,10 @@ impl Builder<'_> {
                 };
                 gradient_image(&colors, &elevations)
             }
+            "sky" => {
+                self.only_fields(object, "a sky", &present, &[&common[..], sky::SKY_FIELDS].concat())?;
+                self.sky(e, &table, object, strength, direct, photons, rainbow)?
+            }
             _ => {
                 self.only_fields(object, "a uniform environment", &present, &[&common[..], &["radiance"]].concat())?;
                 let r = self.require(&e.radiance, &table, object, "radiance", "radiance = 1")?;
@@ -2227,6 +2256,16 @@ impl Builder<'_> {
                 }
             }
         };
+        if kind != "sky" {
+            if let Some(r) = rainbow {
+                if let Some(addition) = self.rainbow(r, None)? {
+                    if (image.width as u64) * (image.height as u64) < (sky::SKY_WIDTH * sky::SKY_HEIGHT) as u64 {
+                        image = resample(&image, sky::SKY_WIDTH, sky::SKY_HEIGHT);
+                    }
+                    sky::add_to_image(&mut image, rotation_deg, &addition);
+                }
+            }
+        }
         // Radiance is in [0, MAX_SCENE_VALUE] like every colour of a scene: a map's NaN and
         // negative texels (EXR allows them) become 0, and a texel too bright is refused.
         let mut cleared = 0usize;
@@ -2262,6 +2301,20 @@ impl Builder<'_> {
         }
         Ok(Environment { image: std::sync::Arc::new(image), rotation_deg, direct, photons })
     }
+}
+
+/// The image at `width` x `height`, each texel the source texel its centre falls in (for a
+/// gradient or uniform sky that a rainbow is drawn over).
+fn resample(image: &ImageTexture, width: u32, height: u32) -> ImageTexture {
+    let mut texels = Vec::with_capacity((width * height) as usize);
+    for j in 0..height {
+        let sj = (((j as f64 + 0.5) / height as f64 * image.height as f64) as u32).min(image.height - 1);
+        for i in 0..width {
+            let si = (((i as f64 + 0.5) / width as f64 * image.width as f64) as u32).min(image.width - 1);
+            texels.push(image.texels[(sj * image.width + si) as usize]);
+        }
+    }
+    ImageTexture { width, height, texels }
 }
 
 /// The image halved in both directions (odd last rows and columns dropped), each texel the mean

@@ -24,6 +24,7 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
     pub environment: Option<Spanned<EnvironmentDef>>,
+    pub rainbow: Option<Spanned<RainbowDef>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -38,6 +39,35 @@ pub(crate) struct EnvironmentDef {
     pub rotation: Option<Spanned<f64>>,
     pub photons: Option<Spanned<bool>>,
     pub direct: Option<Spanned<bool>>,
+    // the physical sky
+    pub turbidity: Option<Spanned<f64>>,
+    pub ground_albedo: Option<Spanned<Vec3Def>>,
+    pub sun: Option<Spanned<bool>>,
+    pub sun_direction: Option<Spanned<Vec3Def>>,
+    pub sun_elevation: Option<Spanned<f64>>,
+    pub sun_azimuth: Option<Spanned<f64>>,
+    pub latitude: Option<Spanned<f64>>,
+    pub longitude: Option<Spanned<f64>>,
+    pub date: Option<Spanned<String>>,
+    pub time: Option<Spanned<String>>,
+    pub utc_offset: Option<Spanned<f64>>,
+    pub north: Option<Spanned<Vec3Def>>,
+}
+
+/// `[rainbow]`: bows drawn into the environment, from the physics of drops or POV-Ray's way.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RainbowDef {
+    pub r#type: Option<Spanned<String>>,
+    pub strength: Option<Spanned<f64>>,
+    // POV-Ray's rainbow
+    pub direction: Option<Spanned<Vec3Def>>,
+    pub angle: Option<Spanned<f64>>,
+    pub width: Option<Spanned<f64>>,
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub up: Option<Spanned<Vec3Def>>,
+    pub arc_angle: Option<Spanned<f64>>,
+    pub falloff_angle: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]

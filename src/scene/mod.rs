@@ -18,6 +18,7 @@ mod material;
 mod mesh;
 pub mod pattern;
 mod photons;
+pub mod sky;
 
 pub mod image_texture;
 
