@@ -40,7 +40,7 @@ pub(super) const SKY_FIELDS: &[&str] = &[
 const RAINBOW_TYPES: &[&str] = &["physical", "pov"];
 
 /// What the environment's radiance gains from a rainbow, per direction.
-pub(super) type Addition = Box<dyn Fn(DVec3) -> DVec3>;
+pub(super) type Addition = Box<dyn Fn(DVec3) -> DVec3 + Sync>;
 
 impl Builder<'_> {
     /// The physical sky's image (scaled later with the rest by `strength`); pushes the sun as a

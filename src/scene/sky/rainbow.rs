@@ -79,19 +79,29 @@ pub struct RainbowTable {
 
 impl RainbowTable {
     pub fn new(mut sun: impl FnMut(f64) -> f64, sun_radius: f64) -> RainbowTable {
-        let mut xyz = vec![DVec3::ZERO; BINS];
+        use rayon::prelude::*;
         let grid: Vec<f64> = wavelengths().collect();
-        for (k, &lambda) in grid.iter().enumerate() {
-            let end = k == 0 || k + 1 == grid.len();
-            let e = sun(lambda) * LAMBDA_STEP * if end { 0.5 } else { 1.0 };
-            if e == 0.0 {
-                continue;
-            }
-            let cmf = cie_xyz(lambda);
-            for (acc, p) in xyz.iter_mut().zip(drop_phase(water_ior(lambda))) {
-                *acc += e * p * cmf;
-            }
-        }
+        // The sun's spectrum first (it may not be Sync), then the drops per wavelength in parallel.
+        let weights: Vec<f64> = grid
+            .iter()
+            .enumerate()
+            .map(|(k, &lambda)| sun(lambda) * LAMBDA_STEP * if k == 0 || k + 1 == grid.len() { 0.5 } else { 1.0 })
+            .collect();
+        let xyz = grid
+            .par_iter()
+            .zip(weights.par_iter())
+            .filter(|(_, &e)| e != 0.0)
+            .map(|(&lambda, &e)| {
+                let cmf = cie_xyz(lambda);
+                drop_phase(water_ior(lambda)).into_iter().map(|p| e * p * cmf).collect::<Vec<DVec3>>()
+            })
+            .reduce(
+                || vec![DVec3::ZERO; BINS],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
         // The sun's disc (and the drops' spread of sizes) blur the caustic: a triangle as wide as
         // the disc, which also tames the bins on the 1 / sqrt singularity of minimum deviation.
         let half = ((sun_radius / BIN).round() as i64).max(1);
