@@ -63,7 +63,7 @@ material = "white"
 #[test]
 fn a_plane_under_sky_and_sun_reflects_their_irradiance() {
     let text = format!(
-        "{PLANE}\n[render]\nspp = 64\nseed = 2\n\n[environment]\ntype = \"sky\"\nsun_elevation = 35\nsun_azimuth = 120\nstrength = 0.05\n"
+        "{PLANE}\n[render]\nspp = 64\nseed = 2\n\n[environment]\ntype = \"sky\"\nsun_elevation = 35\nsun_azimuth = 120\n"
     );
     let scene = parse(&text);
     let (to_sun, irradiance) = sun(&scene);

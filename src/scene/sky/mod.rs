@@ -1,7 +1,8 @@
 //! A physical sky and sun: the Hosek-Wilkie sky dome (RGB version) drawn into a
 //! latitude-longitude environment image, and the sun as a distant light whose irradiance is the
 //! Hosek-Wilkie solar radiance (with its limb darkening) integrated over the solar disc. Both are
-//! in the model's radiometric units, so a sunlit and a sky-lit scene compare. The sun's direction
+//! in one set of units (Mitsuba 3's for its `sunsky`: spectra through the CIE observer, divided
+//! by the integral of y-bar), so a sunlit and a sky-lit scene compare. The sun's direction
 //! is given, or comes from a place and a time (`solar`). `rainbow` adds the bows of sunlight in
 //! rain drops.
 
@@ -12,10 +13,13 @@ pub mod spectrum;
 
 use glam::{DVec3, Vec3};
 use hosek_data::{LIMB_DARKENING, SKY_RGB, SKY_RGB_RADIANCE, SOLAR};
+use spectrum::CIE_Y_INTEGRAL;
 use std::f64::consts::{FRAC_PI_2, PI};
 
-/// The sun's angular radius in the Hosek-Wilkie solar model, radians (0.51 degrees across).
-pub const SUN_ANGULAR_RADIUS: f64 = 0.51 * PI / 180.0 / 2.0;
+/// The sun's angular radius, radians: 0.5358 degrees across, as Mitsuba 3's `sunsky` (the
+/// Hosek-Wilkie sample code draws 0.51; the real sun is 0.524 to 0.542). The model's radiance
+/// and limb darkening are spread over this disc.
+pub const SUN_ANGULAR_RADIUS: f64 = 0.5358 * PI / 180.0 / 2.0;
 /// The turbidities the model was fitted for.
 pub const TURBIDITY_RANGE: (f64, f64) = (1.0, 10.0);
 
@@ -81,7 +85,8 @@ impl Sky {
             for (i, v) in config.iter_mut().enumerate() {
                 *v = cook(&SKY_RGB[c], 54, i, params.turbidity, albedo, elevation);
             }
-            let radiance = cook(&SKY_RGB_RADIANCE[c], 6, 0, params.turbidity, albedo, elevation);
+            // The RGB data are spectra through the observer, not yet normalised.
+            let radiance = cook(&SKY_RGB_RADIANCE[c], 6, 0, params.turbidity, albedo, elevation) / CIE_Y_INTEGRAL;
             Channel { config, radiance }
         };
         Sky { params, channels: [channel(0), channel(1), channel(2)] }
@@ -255,7 +260,7 @@ mod tests {
             let sky = sky_horizontal_y(&s);
             let share = sun / (sun + sky);
             assert!((0.7..0.92).contains(&share), "elevation {elevation}: sun share {share} (sun {sun}, sky {sky})");
-            let lux = 683.0 * (sun + sky);
+            let lux = 683.0 * CIE_Y_INTEGRAL * (sun + sky);
             println!("elevation {elevation}, turbidity {turbidity}: sun share {share:.3}, {lux:.0} lx");
             if elevation == 60.0 {
                 assert!((70e3..130e3).contains(&lux), "total {lux} lx");

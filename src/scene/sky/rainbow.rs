@@ -6,7 +6,7 @@
 //! reflection sends light. Water's dispersion moves each bow with wavelength; the spectra are
 //! turned into RGB through the CIE observer.
 
-use super::spectrum::{cie_xyz, wavelengths, xyz_to_rgb, LAMBDA_STEP};
+use super::spectrum::{cie_xyz, wavelengths, weight, xyz_to_rgb};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -82,11 +82,7 @@ impl RainbowTable {
         use rayon::prelude::*;
         let grid: Vec<f64> = wavelengths().collect();
         // The sun's spectrum first (it may not be Sync), then the drops per wavelength in parallel.
-        let weights: Vec<f64> = grid
-            .iter()
-            .enumerate()
-            .map(|(k, &lambda)| sun(lambda) * LAMBDA_STEP * if k == 0 || k + 1 == grid.len() { 0.5 } else { 1.0 })
-            .collect();
+        let weights: Vec<f64> = grid.iter().map(|&lambda| sun(lambda) * weight(lambda)).collect();
         let xyz = grid
             .par_iter()
             .zip(weights.par_iter())

@@ -1,8 +1,9 @@
 //! Spectra to linear sRGB: the CIE 1931 2-degree colour-matching functions as the multi-lobe
 //! Gaussian fit of Wyman, Sloan and Shirley ("Simple Analytic Approximations to the CIE XYZ Color
-//! Matching Functions", JCGT 2013), then XYZ to linear sRGB (D65). The sky model's RGB data were
-//! made the same way (spectra through the CIE observer, no 683 lm/W factor), so radiances
-//! converted here sit in the sky's units.
+//! Matching Functions", JCGT 2013), then XYZ to linear sRGB (D65). XYZ is normalised by the
+//! integral of y-bar (Mitsuba's convention), so a flat spectrum of 1 per nanometre has Y = 1:
+//! RGB radiance is then a mean spectral radiance over the visible range, and 683 x 106.857 x Y
+//! is the luminance in cd/m^2 for spectra in W / (m^2 sr nm).
 
 use glam::DVec3;
 
@@ -30,6 +31,9 @@ pub fn xyz_to_rgb(xyz: DVec3) -> DVec3 {
     )
 }
 
+/// The integral of the CIE 1931 y-bar over 360 to 830 nm (Mitsuba's `CIE_Y_integral`).
+pub const CIE_Y_INTEGRAL: f64 = 106.856895;
+
 /// The visible range integrated over, nanometres, and its step.
 pub const LAMBDA_MIN: f64 = 380.0;
 pub const LAMBDA_MAX: f64 = 720.0;
@@ -41,14 +45,16 @@ pub fn wavelengths() -> impl Iterator<Item = f64> {
     (0..=n).map(|k| LAMBDA_MIN + k as f64 * LAMBDA_STEP)
 }
 
-/// CIE XYZ of the spectrum `f` (per nanometre), by the trapezoidal rule on `wavelengths()`.
+/// The weight of `lambda` in the trapezoidal rule on `wavelengths()`, with the normalisation.
+pub fn weight(lambda: f64) -> f64 {
+    let end = lambda == LAMBDA_MIN || lambda == LAMBDA_MAX;
+    LAMBDA_STEP * if end { 0.5 } else { 1.0 } / CIE_Y_INTEGRAL
+}
+
+/// Normalised CIE XYZ of the spectrum `f` (per nanometre): the trapezoidal rule on
+/// `wavelengths()`, divided by `CIE_Y_INTEGRAL`.
 pub fn spectrum_to_xyz(mut f: impl FnMut(f64) -> f64) -> DVec3 {
-    let mut sum = DVec3::ZERO;
-    for lambda in wavelengths() {
-        let w = if lambda == LAMBDA_MIN || lambda == LAMBDA_MAX { 0.5 } else { 1.0 };
-        sum += w * LAMBDA_STEP * f(lambda) * cie_xyz(lambda);
-    }
-    sum
+    wavelengths().map(|lambda| weight(lambda) * f(lambda) * cie_xyz(lambda)).sum()
 }
 
 /// Linear sRGB of the spectrum `f`.
@@ -70,9 +76,10 @@ mod tests {
     }
 
     #[test]
-    fn an_equal_energy_spectrum_is_nearly_white() {
+    fn an_equal_energy_spectrum_is_nearly_white_with_y_one() {
         // Illuminant E has x = y = 1/3; through the fit and a truncated range it stays close.
         let xyz = spectrum_to_xyz(|_| 1.0);
+        assert!((xyz.y - 1.0).abs() < 0.002, "Y = {}", xyz.y);
         let (x, y) = (xyz.x / xyz.element_sum(), xyz.y / xyz.element_sum());
         assert!((x - 1.0 / 3.0).abs() < 0.01 && (y - 1.0 / 3.0).abs() < 0.01, "x {x}, y {y}");
     }
