@@ -78,7 +78,7 @@ const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
 const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform", "sky"];
 /// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
 const GRADIENT_ROWS: u32 = 512;
-const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
+const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere", "disc"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     let mut builder = Builder {
@@ -1799,6 +1799,7 @@ impl Builder<'_> {
             ("vertices", span_of(&l.vertices)),
             ("center", span_of(&l.center)),
             ("radius", span_of(&l.radius)),
+            ("normal", span_of(&l.normal)),
             ("radiance", span_of(&l.radiance)),
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
@@ -2050,12 +2051,19 @@ impl Builder<'_> {
         let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
         let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
         let mut allowed = [common, &["shape", "radiance", "transform"]].concat();
-        let what = if shape == "quad" {
-            allowed.push("vertices");
-            "a quad area light"
-        } else {
-            allowed.extend_from_slice(&["center", "radius"]);
-            "a sphere area light"
+        let what = match shape {
+            "quad" => {
+                allowed.push("vertices");
+                "a quad area light"
+            }
+            "disc" => {
+                allowed.extend_from_slice(&["center", "radius", "normal"]);
+                "a disc area light"
+            }
+            _ => {
+                allowed.extend_from_slice(&["center", "radius"]);
+                "a sphere area light"
+            }
         };
         self.only_fields(object, what, present, &allowed)?;
         let radiance_def = self.require(&l.radiance, table, object, "radiance", "radiance = [10, 10, 10]")?;
@@ -2081,13 +2089,35 @@ impl Builder<'_> {
         self.material_used[material as usize] = true;
         self.lights.push(LightDesc { kind: LightKind::Area { material }, direct, photons });
         let transform = self.transform(l.transform.as_ref(), object)?;
-        if shape == "quad" {
-            let vertices = self.vertices(&l.vertices, table, object, 4)?;
-            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
-        } else {
-            let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
-            let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
-            self.sphere(center, radius, object, material, transform)
+        match shape {
+            "quad" => {
+                let vertices = self.vertices(&l.vertices, table, object, 4)?;
+                self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
+            }
+            "disc" => {
+                // The seed's circular light: a one-sided disc facing `normal` (an ellipse under a
+                // non-uniform `transform` scale), sampled over its area like a disc shape.
+                let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
+                let center = self.point(center, object, "center")?;
+                let normal = self.require(&l.normal, table, object, "normal", "normal = [0, -1, 0]")?;
+                let normal = self.direction(normal, object, "normal")?;
+                let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
+                let radius = self.positive(radius, object, "radius")?;
+                let kind = AnalyticKind::Disc { radius, inner_radius: 0.0 };
+                let shape = Analytic {
+                    kind,
+                    world_from_object: transform.unwrap_or(Affine3A::IDENTITY) * frame(center, normal),
+                };
+                let span = l.transform.as_ref().map_or(table.clone(), |t| t.span());
+                self.check_placement(&shape, &span, object)?;
+                self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material });
+                Ok(())
+            }
+            _ => {
+                let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
+                let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
+                self.sphere(center, radius, object, material, transform)
+            }
         }
     }
 }

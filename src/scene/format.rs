@@ -238,6 +238,7 @@ pub(crate) struct LightDef {
     pub vertices: Option<Spanned<Vec<Vec3Def>>>,
     pub center: Option<Spanned<Vec3Def>>,
     pub radius: Option<Spanned<f64>>,
+    pub normal: Option<Spanned<Vec3Def>>,
     pub radiance: Option<Spanned<Vec3Def>>,
     pub position: Option<Spanned<Vec3Def>>,
     pub intensity: Option<Spanned<Vec3Def>>,
