@@ -162,14 +162,7 @@ impl Builder<'_> {
         if by_angles {
             let elevation = self.require(&e.sun_elevation, table, object, "sun_elevation", "sun_elevation = 35")?;
             let azimuth = self.require(&e.sun_azimuth, table, object, "sun_azimuth", "sun_azimuth = 200")?;
-            let el = self.number(elevation, object, "sun_elevation")? as f64;
-            if !(-90.0..=90.0).contains(&el) {
-                return Err(self.invalid(
-                    &elevation.span(),
-                    object,
-                    format!("`sun_elevation` is {}; it is in degrees above the horizon, -90 to 90", fmt_f32(el as f32)),
-                ));
-            }
+            let el = self.within(elevation, object, "sun_elevation", (-90.0, 90.0), "degrees above the horizon")?;
             let az = self.number(azimuth, object, "sun_azimuth")? as f64;
             return Ok(direction_from_angles(el, az, north));
         }
@@ -177,43 +170,32 @@ impl Builder<'_> {
         let longitude = self.require(&e.longitude, table, object, "longitude", "longitude = 2.35")?;
         let date = self.require(&e.date, table, object, "date", "date = \"2026-06-21\"")?;
         let time = self.require(&e.time, table, object, "time", "time = \"14:30\"")?;
-        let lat = self.number(latitude, object, "latitude")? as f64;
-        if !(-90.0..=90.0).contains(&lat) {
-            return Err(self.invalid(
-                &latitude.span(),
-                object,
-                format!("`latitude` is {}; give degrees north, -90 to 90 (south negative)", fmt_f32(lat as f32)),
-            ));
-        }
-        let lon = self.number(longitude, object, "longitude")? as f64;
-        if !(-180.0..=180.0).contains(&lon) {
-            return Err(self.invalid(
-                &longitude.span(),
-                object,
-                format!("`longitude` is {}; give degrees east, -180 to 180 (west negative)", fmt_f32(lon as f32)),
-            ));
-        }
+        let lat = self.within(latitude, object, "latitude", (-90.0, 90.0), "degrees north (south negative)")?;
+        let lon = self.within(longitude, object, "longitude", (-180.0, 180.0), "degrees east (west negative)")?;
         let (year, month, day) =
             parse_date(date.get_ref()).map_err(|m| self.invalid(&date.span(), object, format!("`date`: {m}")))?;
         let (hour, minute, second) =
             parse_time(time.get_ref()).map_err(|m| self.invalid(&time.span(), object, format!("`time`: {m}")))?;
         let utc_offset_hours = match &e.utc_offset {
-            Some(o) => {
-                let v = self.number(o, object, "utc_offset")? as f64;
-                if !(-14.0..=14.0).contains(&v) {
-                    return Err(self.invalid(
-                        &o.span(),
-                        object,
-                        format!("`utc_offset` is {}; time zones are -12 to +14 hours from UTC", fmt_f32(v as f32)),
-                    ));
-                }
-                v
-            }
+            Some(o) => self.within(o, object, "utc_offset", (-14.0, 14.0), "hours east of UTC")?,
             None => 0.0,
         };
         let t = DateTime { year, month, day, hour, minute, second, utc_offset_hours };
         let p = sun_position(&t, lat, lon);
         Ok(direction_from_angles(p.elevation, p.azimuth, north))
+    }
+
+    /// A number of `field` in `range`, else an error saying what it measures.
+    fn within(&self, v: &Spanned<f64>, object: &str, field: &str, range: (f64, f64), what: &str) -> Result<f64> {
+        let x = self.number(v, object, field)? as f64;
+        if !(range.0..=range.1).contains(&x) {
+            return Err(self.invalid(
+                &v.span(),
+                object,
+                format!("`{field}` is {}; give {what}, {} to {}", fmt_f32(x as f32), range.0, range.1),
+            ));
+        }
+        Ok(x)
     }
 
     /// `[rainbow]` as radiance added per direction. A physical bow needs `sky` (its sun).
