@@ -68,5 +68,7 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
     float t_max = max(shadow_length - s.eps, 0.0);
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * (abs(dot(b.ns, s.wi)) / l.pick_probability));
+    // A medium's phase function has no cosine: it is per solid angle already.
+    float cosine = b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, s.wi));
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / l.pick_probability));
 }

@@ -102,6 +102,7 @@ pub fn direct_light_sample(
         origin,
         direction: to_target / shadow_length,
         t_max: (shadow_length - ls.eps).max(0.0),
-        unoccluded: fr * (b.ns.dot(ls.wi).abs() / l.pick_probability),
+        // A medium's phase function has no cosine: it is per solid angle already.
+        unoccluded: fr * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() } / l.pick_probability),
     }
 }
