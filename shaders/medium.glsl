@@ -92,3 +92,18 @@ uint medium_after(uint prim, vec3 ng, vec3 d, uint medium) {
     if ((p.kind & PRIMITIVE_FLAG_MEDIUM) == 0u) return medium;
     return dot(d, ng) < 0.0 ? p.interior : p.exterior;
 }
+
+// Equiangular sampling (Kulla and Fajardo 2012) of a distance t in [0, t_end) along o + t d
+// toward the point c: uniform in the angle under which c sees the ray, so the samples crowd
+// where the ray passes the light (pdf = D / ((theta_b - theta_a) (D^2 + (t - delta)^2))).
+// t_end may be infinite.
+float equiangular_sample(vec3 o, vec3 d, float t_end, vec3 c, float u, out float pdf) {
+    float delta = dot(c - o, d);
+    float dist = max(length(c - o - delta * d), 1e-7 * (abs(delta) + 1.0));
+    float a = atan(-delta, dist);
+    float b = t_end == INF ? 0.5 * PI : atan(t_end - delta, dist);
+    float t = clamp(delta + dist * tan(mix(a, b, u)), 0.0, t_end);
+    float e = t - delta;
+    pdf = b > a ? dist / ((b - a) * (dist * dist + e * e)) : 0.0;
+    return t;
+}

@@ -52,6 +52,15 @@ layout(push_constant) uniform Push { DispatchRange range; };
 const uint RAY_CAMERA = 0u; // camera path: through path lobes to the first estimate lobe
 const uint RAY_SHADOW = 1u; // the shadow ray of the direct light at the estimate vertex
 const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an estimate lobe
+const uint RAY_SHAFT = 3u;  // the shadow ray of an equiangular sample of a camera segment (media)
+
+// Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries; with
+// media each camera segment may take three (its equiangular shadow ray, then its retrace).
+#ifdef VARIANT_MEDIA
+#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS))
+#else
+#define LOOP_STEPS (2u * frame.max_depth + 1u)
+#endif
 
 // Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
 // DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
@@ -72,6 +81,13 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     uint depth = 0u;           // path-lobe bounces of the current path so far
     vec3 throughput = vec3(1.0);
     uint medium = frame.camera_medium;  // the medium the current ray runs through
+    uint segment = 0u;         // free flights of the path so far (their random dimensions)
+    // The camera segment an equiangular sample interrupted, resumed after its shadow ray.
+    bool shaft_done = false;
+    vec3 shaft_o = vec3(0.0);
+    vec3 shaft_d = vec3(0.0);
+    uint shaft_medium = NO_MEDIUM;
+    uint shaft_layer = LAYER_DIRECT;
     // The estimate vertex: the camera path's (then the gather path's) last vertex.
     Hit he;
     Bsdf be;
@@ -91,11 +107,11 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     uint lookup_layer[2];
     vec3 lookup_weight[2];
 
-    for (uint step = 0u; step < 2u * frame.max_depth + 1u + MEDIUM_CROSSINGS; step++) {
+    for (uint step = 0u; step < LOOP_STEPS; step++) {
         float t;
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if (t_max != NO_RAY) rays++;
-        bool any_hit = ray == RAY_SHADOW;
+        bool any_hit = ray != RAY_CAMERA && ray != RAY_GATHER;
 #ifdef VARIANT_MEDIA
         // Shadow rays take the closest hit: they pass null boundaries and sum the media between.
         any_hit = false;
@@ -106,10 +122,45 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         // The medium up to the hit (or to the light, or to infinity): shadow rays take its
         // transmittance, camera and gather rays sample a free flight through it.
         if (medium != NO_MEDIUM && t_max != NO_RAY) {
-            if (ray == RAY_SHADOW) {
+            if (ray == RAY_SHADOW || ray == RAY_SHAFT) {
                 unoccluded *= medium_transmittance(medium, t);
             } else {
-                uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + step;
+                // Single scattering from point and spot lights along the whole camera segment,
+                // by equiangular sampling (the light shafts; the free flight's scattering
+                // point leaves these lights out): the sample's shadow ray runs first, then the
+                // segment is traced again and goes on.
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done) {
+                    vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
+                    Light l = lights[pick_light(ue.x, false)];
+                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0) {
+                        float pdf;
+                        float te = equiangular_sample(o, d, t, load3(l.position), ue.y, pdf);
+                        vec3 x = o + d * te;
+                        vec3 to_light = load3(l.position) - x;
+                        float r2 = dot(to_light, to_light);
+                        float r = sqrt(r2);
+                        vec3 wi = to_light / r;
+                        Medium md = media[medium];
+                        vec3 c = throughput * medium_transmittance(medium, te) * load3(md.sigma_s)
+                            * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
+                            * load3(l.intensity);
+                        if (pdf > 0.0 && r > 0.0 && c != vec3(0.0)) {
+                            shaft_o = o;
+                            shaft_d = d;
+                            shaft_medium = medium;
+                            shaft_layer = depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT;
+                            unoccluded = c;
+                            o = x;
+                            d = wi;
+                            t_max = max(r - frame.ray_epsilon, 0.0);
+                            ray = RAY_SHAFT;
+                            continue;
+                        }
+                    }
+                }
+                shaft_done = false;
+                uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + segment;
+                segment++;
                 MediumEvent e = medium_sample(medium, t, rand2(stream, sample_index, frame.seed, key));
                 if (ray == RAY_CAMERA && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * e.emission;
                 throughput *= e.weight;
@@ -132,8 +183,20 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             // An invisible boundary: straight through into the medium beyond, not a bounce.
             medium = medium_after(prim, h.ng, d, medium);
             vec3 next = offset_origin(h, -d, BSDF_TRANSMISSION);
-            if (ray == RAY_SHADOW) t_max = max(t_max - dot(next - o, d), 0.0);
+            if (ray == RAY_SHADOW || ray == RAY_SHAFT) t_max = max(t_max - dot(next - o, d), 0.0);
             o = next;
+            continue;
+        }
+        if (ray == RAY_SHAFT) {
+            // The equiangular sample's shadow ray: its light if nothing blocked it; then back to
+            // the camera segment it interrupted.
+            if (prim == NO_LIGHT) terms[shaft_layer] += unoccluded;
+            o = shaft_o;
+            d = shaft_d;
+            medium = shaft_medium;
+            t_max = INF;
+            ray = RAY_CAMERA;
+            shaft_done = true;
             continue;
         }
 #else

@@ -120,3 +120,43 @@ pub fn medium_after(s: &SceneView, prim: u32, ng: Vec3, d: Vec3, medium: u32) ->
         p.exterior
     }
 }
+
+/// Equiangular sampling (Kulla and Fajardo 2012) of a distance t in [0, `t_end`) along
+/// `o + t d` toward the point `c`: uniform in the angle under which `c` sees the ray, so the
+/// samples crowd where the ray passes the light. Returns t and its pdf, D / ((theta_b -
+/// theta_a) (D^2 + (t - delta)^2)); `t_end` may be infinite.
+pub fn equiangular_sample(o: Vec3, d: Vec3, t_end: f32, c: Vec3, u: f32) -> (f32, f32) {
+    let delta = (c - o).dot(d);
+    let dist = (c - o - delta * d).length().max(1e-7 * (delta.abs() + 1.0));
+    let a = (-delta).atan2(dist);
+    let b = if t_end == f32::INFINITY { 0.5 * std::f32::consts::PI } else { (t_end - delta).atan2(dist) };
+    let t = (delta + dist * (a + (b - a) * u).tan()).clamp(0.0, t_end);
+    let e = t - delta;
+    let pdf = if b > a { dist / ((b - a) * (dist * dist + e * e)) } else { 0.0 };
+    (t, pdf)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The equiangular pdf integrates to 1 over the segment and its samples follow it: the
+    /// mean of 1/pdf over samples is the segment's length (an unbiased length estimate).
+    #[test]
+    fn equiangular_samples_estimate_the_segment_length() {
+        let (o, d, c) = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.3, 0.1, 2.0));
+        for t_end in [1.0f32, 5.0, 40.0] {
+            let n = 100_000;
+            let mean: f64 = (0..n)
+                .map(|i| {
+                    let (t, pdf) = equiangular_sample(o, d, t_end, c, (i as f32 + 0.5) / n as f32);
+                    assert!((0.0..=t_end).contains(&t));
+                    1.0 / pdf as f64
+                })
+                .sum::<f64>()
+                / n as f64;
+            println!("t_end {t_end}: mean 1/pdf {mean:.4}");
+            assert!((mean / t_end as f64 - 1.0).abs() < 1e-3, "{mean} vs {t_end}");
+        }
+    }
+}

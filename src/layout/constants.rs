@@ -252,10 +252,14 @@ shared_constants! {
     /// Random dimensions per final-gather ray (direction, then one Fresnel choice per bounce).
     RNG_GATHER_DIMS_PER_RAY: u32 = 32;
     /// Free-flight distances of camera and gather rays in media: dimension
-    /// `RNG_MEDIUM_DOMAIN + part * RNG_MEDIUM_DIMS_PER_PART + step` (the loop's step, unique per
-    /// segment: a segment cut by a medium boundary draws anew). Above every step of `MAX_DEPTH`.
+    /// `RNG_MEDIUM_DOMAIN + part * RNG_MEDIUM_DIMS_PER_PART + segment` (gather rays; camera rays
+    /// use part 0, so every part retraces the same camera path), where `segment` counts the
+    /// path's free flights (a segment cut by a medium boundary draws anew).
     RNG_MEDIUM_DOMAIN: u32 = 0x2000_0000;
     RNG_MEDIUM_DIMS_PER_PART: u32 = 4096;
+    /// Equiangular samples of camera segments toward point and spot lights:
+    /// `RNG_EQUIANGULAR_DOMAIN + segment` (x picks the light, y the distance).
+    RNG_EQUIANGULAR_DOMAIN: u32 = 0x3000_0000;
     /// Free-flight distances of photon paths: `RNG_PHOTON_DOMAIN + RNG_PHOTON_MEDIUM + step`.
     RNG_PHOTON_MEDIUM: u32 = 0x1000_0000;
 
