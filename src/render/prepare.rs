@@ -465,6 +465,10 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         media,
         media_volume,
     };
+    // Lights start in vacuum unless a medium is found around them.
+    for l in &mut buffers.lights {
+        l.medium = NO_MEDIUM;
+    }
     locate_media(&mut buffers, scene.atmosphere.unwrap_or(NO_MEDIUM));
     Ok(buffers)
 }
