@@ -544,7 +544,7 @@ impl<'a> GpuRenderer<'a> {
     }
 
     /// Replaces the scene (and the photon settings) without recreating the kernels: arrays that
-    /// keep their size are rewritten in their buffers. Returns how many of the 8 scene arrays
+    /// keep their size are rewritten in their buffers. Returns how many of the 9 scene arrays
     /// were written in place.
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
