@@ -19,6 +19,7 @@ layout(std430, binding = 6) buffer Ranges { DispatchRange ranges[]; };
 layout(std430, binding = 7) buffer Photons { Photon photons[]; };
 layout(std430, binding = 8) buffer Grids { GridParams grids[]; };
 layout(std430, binding = 9) buffer Emits { EmitParams emits[]; };
+layout(std430, binding = 10) buffer Media { Medium media[]; };
 
 void main() {
     // Element 1 of each buffer becomes a field-by-field copy of element 0.
@@ -32,4 +33,5 @@ void main() {
     photons[1] = photons[0];
     grids[1] = grids[0];
     emits[1] = emits[0];
+    media[1] = media[0];
 }

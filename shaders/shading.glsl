@@ -59,6 +59,9 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
     // A scene whose lights all give photons only picks one with probability 0.
     if (l.pick_probability <= 0.0) return none;
+    // A scattering point in a medium leaves point and spot lights to the camera segment's
+    // equiangular sample (render.comp).
+    if (b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
     LightSample s = light_sample(l, h.p, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;
@@ -68,5 +71,7 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
     float t_max = max(shadow_length - s.eps, 0.0);
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * (abs(dot(b.ns, s.wi)) / l.pick_probability));
+    // A medium's phase function has no cosine: it is per solid angle already.
+    float cosine = b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, s.wi));
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / l.pick_probability));
 }

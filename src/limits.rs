@@ -26,6 +26,10 @@ pub const MAX_PHOTON_PATHS: u32 = 1_000_000_000;
 /// Largest magnitude of a coordinate, a length or a colour in a scene, after transforms: products
 /// of two (areas) and sums of many (light power) then stay finite in 32-bit floats.
 pub const MAX_SCENE_VALUE: f64 = 1e9;
+/// Largest absorption, scattering or extinction coefficient of a medium, per scene unit: a
+/// mean free path of 1e-6 scene units, far below anything a render resolves, keeps
+/// sigma_t * distance finite in 32-bit floats over the whole scene range.
+pub const MAX_MEDIUM_COEFFICIENT: f32 = 1e6;
 /// Smallest sphere radius, in scene units (its square stays a normal f32).
 pub const MIN_SPHERE_RADIUS: f64 = 1e-9;
 /// Largest index of refraction, and the smallest is its inverse.

@@ -88,6 +88,11 @@ pub fn direct_light_sample(
     if l.pick_probability <= 0.0 {
         return none;
     }
+    // A scattering point in a medium leaves point and spot lights to the camera segment's
+    // equiangular sample (`render::radiance`).
+    if b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
+        return none;
+    }
     let ls = light_sample(s, l, h.p, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U));
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {
@@ -102,6 +107,7 @@ pub fn direct_light_sample(
         origin,
         direction: to_target / shadow_length,
         t_max: (shadow_length - ls.eps).max(0.0),
-        unoccluded: fr * (b.ns.dot(ls.wi).abs() / l.pick_probability),
+        // A medium's phase function has no cosine: it is per solid angle already.
+        unoccluded: fr * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() } / l.pick_probability),
     }
 }

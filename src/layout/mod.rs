@@ -56,7 +56,11 @@ gpu_structs! {
         /// Index into the light array when the primitive emits, else `NO_LIGHT`.
         pub light: u32,
         pub data: u32,
-        pub _pad: [u32; 3],
+        /// With `PRIMITIVE_FLAG_MEDIUM`: the medium inside the shape and outside it (indices
+        /// into the media, or `NO_MEDIUM`).
+        pub interior: u32,
+        pub exterior: u32,
+        pub _pad: u32,
     }
 
     /// A material, 112 bytes. Each parameter is a constant and a texture (`*_tex`, or `NO_TEXTURE`
@@ -139,6 +143,9 @@ gpu_structs! {
         pub exponent: f32,
         /// Radius of the scene's bounding sphere (distant lights, the environment), scene units.
         pub radius: f32,
+        /// The medium its photons start in (`NO_MEDIUM`: vacuum), found by the host.
+        pub medium: u32,
+        pub _pad: [u32; 3],
     }
 
     /// Per-render constants of every kernel, 128 bytes.
@@ -184,7 +191,8 @@ gpu_structs! {
         /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
         /// BVH, every ray tests them.
         pub unbounded_first: u32,
-        pub _pad: u32,
+        /// The medium around the camera (`NO_MEDIUM`: vacuum), found by the host.
+        pub camera_medium: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
@@ -223,7 +231,7 @@ gpu_structs! {
         pub _pad: [u32; 3],
     }
 
-    /// Push constants of one `emit_photons` dispatch, 32 bytes.
+    /// Push constants of one `emit_photons` dispatch, 48 bytes.
     pub struct EmitParams {
         /// First photon path of this dispatch and how many it traces.
         pub path_begin: u32,
@@ -239,6 +247,21 @@ gpu_structs! {
         pub pass: u32,
         /// 1 for a pass that fills only the caustic map (its paths end at the first diffuse surface).
         pub caustics_only: u32,
+        /// Capacity of the volume photon buffer (collisions in media, global pass).
+        pub volume_capacity: u32,
+        pub _pad: [u32; 3],
+    }
+
+    /// A homogeneous participating medium, 48 bytes: absorption and scattering coefficients per
+    /// channel (1 / scene unit), the radiance it emits per unit length, and its phase function
+    /// (`PHASE_*`, asymmetry `g`). Extinction is `sigma_a + sigma_s`.
+    pub struct Medium {
+        pub sigma_a: [f32; 3],
+        pub phase: u32,
+        pub sigma_s: [f32; 3],
+        pub g: f32,
+        pub emission: [f32; 3],
+        pub _pad: u32,
     }
 }
 
@@ -257,5 +280,6 @@ const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
 const _: () = assert!(size_of::<Texture>() == 80);
-const _: () = assert!(size_of::<Light>() == 80);
+const _: () = assert!(size_of::<Light>() == 96);
+const _: () = assert!(size_of::<Medium>() == 48);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));

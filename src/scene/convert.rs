@@ -11,7 +11,8 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{
-    EnvironmentDef, LightDef, MaterialDef, ParamDef, RainbowDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
+    AtmosphereDef, EnvironmentDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
+    TextureDef, TransformDef, Vec3Def,
 };
 use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
 use super::material::{
@@ -21,14 +22,14 @@ use super::material::{
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
-    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection,
-    RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface, Phase,
+    PhotonSettings, Projection, RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
     fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
-    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE,
-    MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
+    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_MEDIUM_COEFFICIENT, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS,
+    MAX_SCENE_VALUE, MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
 };
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -49,7 +50,7 @@ const DEFAULT_INNER_FRACTION: f32 = 0.75;
 const POV_SPOT_RADIUS: f32 = 30.0;
 const POV_SPOT_FALLOFF: f32 = 45.0;
 
-const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix"];
+const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix", "null"];
 
 /// Complex indices of refraction (eta, k) of common metals at the wavelengths of the R, G and B
 /// primaries (about 650, 550 and 450 nm), from published optical constants: gold, silver and
@@ -92,6 +93,9 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         shapes: Vec::new(),
         lights: Vec::new(),
         warnings: Vec::new(),
+        media: Vec::new(),
+        medium_names: Vec::new(),
+        atmosphere: None,
     };
 
     let Some(camera) = &file.camera else {
@@ -115,6 +119,16 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     materials.sort_by_key(|(key, _)| key.span().start);
     for (key, def) in materials {
         builder.material(key, def)?;
+    }
+
+    // Media, then the atmosphere, before the shapes that name them.
+    let mut media: Vec<_> = file.media.iter().collect();
+    media.sort_by_key(|(key, _)| key.span().start);
+    for (key, def) in media {
+        builder.medium(key, def)?;
+    }
+    if let Some(def) = &file.atmosphere {
+        builder.atmosphere(def)?;
     }
 
     for (index, shape) in file.shapes.iter().enumerate() {
@@ -171,6 +185,9 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         lights: builder.lights,
         environment,
         warnings: builder.warnings,
+        media: builder.media,
+        medium_names: builder.medium_names,
+        atmosphere: builder.atmosphere,
     })
 }
 
@@ -185,6 +202,9 @@ struct Builder<'a> {
     shapes: Vec<Shape>,
     lights: Vec<LightDesc>,
     warnings: Vec<String>,
+    media: Vec<MediumDesc>,
+    medium_names: Vec<String>,
+    atmosphere: Option<u32>,
 }
 
 /// A field as written: its name, and its span when present.
@@ -727,6 +747,9 @@ impl Builder<'_> {
         if let Some(r) = &p.caustic_radius {
             settings.caustic_radius = Some(radius(r, "caustic_radius")?);
         }
+        if let Some(r) = &p.volume_radius {
+            settings.volume_radius = Some(radius(r, "volume_radius")?);
+        }
         if let Some(rays) = &p.gather_rays {
             settings.gather_rays =
                 self.integer(rays, object, "gather_rays", 0, MAX_GATHER_RAYS, "", "; 0 reads the global map directly")?;
@@ -909,6 +932,10 @@ impl Builder<'_> {
                 let roughness = self.roughness(m, &object)?;
                 MaterialKind::Plastic { reflectance, ior, roughness }
             }
+            "null" => {
+                self.only_fields(&object, "a null material (an invisible medium boundary)", &present, &["type"])?;
+                MaterialKind::Null
+            }
             _ => {
                 self.only_fields(&object, "a mix material", &present, &["type", "materials", "weight"])?;
                 let example = "materials = [\"rust\", \"paint\"]";
@@ -926,6 +953,13 @@ impl Builder<'_> {
                 let mut ids = [0u32; 2];
                 for (id, mixed) in ids.iter_mut().zip(list.get_ref()) {
                     *id = self.material_id(&Spanned::new(list.span(), mixed.clone()), &object)?;
+                    if self.materials[*id as usize].kind == MaterialKind::Null {
+                        return Err(self.invalid(
+                            &list.span(),
+                            &object,
+                            format!("\"{}\" is a null material, which a mix cannot hold", printable(mixed)),
+                        ));
+                    }
                     if self.mix_depth(*id) + 1 > MIX_MAX_DEPTH {
                         return Err(self.invalid(
                             &list.span(),
@@ -1250,6 +1284,236 @@ impl Builder<'_> {
         Err(self.invalid(&value.span(), object, format!("unknown material \"{shown}\" ({hint})")))
     }
 
+    // Media
+
+    fn medium(&mut self, key: &Spanned<String>, def: &Spanned<MediumDef>) -> Result<()> {
+        let name = key.get_ref().clone();
+        let object = format!("medium \"{}\"", printable(&name));
+        let m = def.get_ref();
+        if let Some(kind) = &m.r#type {
+            self.one_of(kind, &object, "type", &["homogeneous"])?;
+        }
+        let coefficient = |builder: &Self, value: &Spanned<Vec3Def>, field: &str| -> Result<Vec3> {
+            let c = builder.vector(value, &object, field)?;
+            if c.min_element() < 0.0 {
+                return Err(builder.invalid(
+                    &value.span(),
+                    &object,
+                    format!(
+                        "`{field}` is negative ({}); a coefficient is >= 0 per channel (1 / scene unit)",
+                        vec3_text(c)
+                    ),
+                ));
+            }
+            if c.max_element() > MAX_MEDIUM_COEFFICIENT {
+                return Err(builder.invalid(
+                    &value.span(),
+                    &object,
+                    format!(
+                        "`{field}` is {}; coefficients are at most {} per scene unit (see docs/limits.md)",
+                        vec3_text(c),
+                        fmt_number(MAX_MEDIUM_COEFFICIENT as f64)
+                    ),
+                ));
+            }
+            Ok(c)
+        };
+        let (sigma_a, sigma_s) = match (&m.sigma_a, &m.sigma_s, &m.sigma_t, &m.albedo) {
+            (None, None, Some(t), albedo) => {
+                let sigma_t = coefficient(self, t, "sigma_t")?;
+                let albedo = match albedo {
+                    Some(a) => Vec3::from(self.color(a, &object, "albedo", true)?),
+                    None => Vec3::ONE,
+                };
+                (sigma_t * (Vec3::ONE - albedo), sigma_t * albedo)
+            }
+            (a, s, None, None) if a.is_some() || s.is_some() => (
+                a.as_ref().map_or(Ok(Vec3::ZERO), |a| coefficient(self, a, "sigma_a"))?,
+                s.as_ref().map_or(Ok(Vec3::ZERO), |s| coefficient(self, s, "sigma_s"))?,
+            ),
+            (_, _, None, Some(albedo)) => {
+                return Err(self.invalid(
+                    &albedo.span(),
+                    &object,
+                    "`albedo` goes with `sigma_t`; give `sigma_t` and `albedo`, or `sigma_a` and `sigma_s`".to_string(),
+                ))
+            }
+            (None, None, None, None) => {
+                return Err(self.invalid(
+                    &def.span(),
+                    &object,
+                    "a medium needs `sigma_t` (and `albedo`) or `sigma_a` and `sigma_s`, e.g. `sigma_t = 0.1`"
+                        .to_string(),
+                ))
+            }
+            _ => {
+                let span = span_of(&m.sigma_t).unwrap_or(def.span());
+                return Err(self.invalid(
+                    &span,
+                    &object,
+                    "give either `sigma_t` (with `albedo`) or `sigma_a` and `sigma_s`, not both".to_string(),
+                ));
+            }
+        };
+        let emission = match &m.emission {
+            Some(e) => {
+                let c = Vec3::from(self.color(e, &object, "emission", false)?);
+                // Emission is estimated at collisions, so a channel without extinction has none.
+                let st = sigma_a + sigma_s;
+                if (0..3).any(|i| c[i] > 0.0 && st[i] <= 0.0) {
+                    return Err(self.invalid(
+                        &e.span(),
+                        &object,
+                        format!(
+                            "`emission` ({}) is positive in a channel where the medium has no extinction ({}); give that channel some `sigma_a`",
+                            vec3_text(c),
+                            vec3_text(st)
+                        ),
+                    ));
+                }
+                c
+            }
+            None => Vec3::ZERO,
+        };
+        let phase_name = match &m.phase {
+            Some(p) => self.one_of(p, &object, "phase", &["isotropic", "henyey-greenstein"])?,
+            None if m.g.is_some() => "henyey-greenstein",
+            None => "isotropic",
+        };
+        let phase = match (phase_name, &m.g) {
+            ("isotropic", Some(g)) => {
+                return Err(self.invalid(
+                    &g.span(),
+                    &object,
+                    "`g` needs `phase = \"henyey-greenstein\"` (the isotropic phase has none)".to_string(),
+                ))
+            }
+            ("isotropic", None) => Phase::Isotropic,
+            (_, g) => {
+                let g = match g {
+                    Some(g) => {
+                        let v = *g.get_ref();
+                        if !(v.is_finite() && v > -1.0 && v < 1.0) {
+                            return Err(self.invalid(
+                                &g.span(),
+                                &object,
+                                format!("`g` is {}; the asymmetry lies strictly between -1 and 1 (0 is isotropic, > 0 scatters forward)", fmt_number(v)),
+                            ));
+                        }
+                        v as f32
+                    }
+                    None => 0.0,
+                };
+                Phase::HenyeyGreenstein { g }
+            }
+        };
+        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase });
+        self.medium_names.push(name);
+        Ok(())
+    }
+
+    fn medium_id(&self, value: &Spanned<String>, object: &str, field: &str) -> Result<Option<u32>> {
+        let name = value.get_ref();
+        if name == "vacuum" {
+            return Ok(None);
+        }
+        if let Some(id) = self.medium_names.iter().position(|n| n == name) {
+            return Ok(Some(id as u32));
+        }
+        let shown = printable(name);
+        let hint = match suggest(name, &self.medium_names) {
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
+            None => format!("define it with a [media.{shown}] table, or use \"vacuum\""),
+        };
+        Err(self.invalid(&value.span(), object, format!("unknown medium \"{shown}\" in `{field}` ({hint})")))
+    }
+
+    fn atmosphere(&mut self, def: &Spanned<AtmosphereDef>) -> Result<()> {
+        let object = "[atmosphere]";
+        let medium = self.require(&def.get_ref().medium, &def.span(), object, "medium", "medium = \"fog\"")?;
+        self.atmosphere = self.medium_id(medium, object, "medium")?;
+        Ok(())
+    }
+
+    /// The media a shape bounds (`interior`, `exterior`), refused on shapes that enclose nothing.
+    fn medium_interface(&self, kind: &str, s: &ShapeDef, object: &str) -> Result<Option<MediumInterface>> {
+        let (interior, exterior) = match (&s.interior, &s.exterior) {
+            (None, None) => return Ok(None),
+            (None, Some(e)) => {
+                return Err(self.invalid(
+                    &e.span(),
+                    object,
+                    "`exterior` needs `interior`: name the medium inside the shape too (or \"vacuum\")".to_string(),
+                ))
+            }
+            (Some(i), e) => (i, e),
+        };
+        let open = match kind {
+            "quad" | "triangle" | "disc" => true,
+            "cylinder" | "cone" => s.open.as_ref().is_some_and(|o| *o.get_ref()),
+            _ => false,
+        };
+        if open {
+            return Err(self.invalid(
+                &interior.span(),
+                object,
+                format!(
+                    "a medium needs a closed shape, and {} encloses no volume; use a box, a sphere, a closed mesh or another solid",
+                    if kind == "cylinder" || kind == "cone" { format!("an open {kind}") } else { format!("a {kind}") }
+                ),
+            ));
+        }
+        let interior = self.medium_id(interior, object, "interior")?;
+        let exterior = match exterior {
+            Some(e) => self.medium_id(e, object, "exterior")?,
+            None => self.atmosphere,
+        };
+        Ok(Some(MediumInterface { interior, exterior }))
+    }
+
+    /// Checks that the triangles from `first` on (one mesh) close up, every edge shared by two
+    /// triangles that run it in opposite directions, and turns them around when they face
+    /// inward (negative volume), so that the winding normal points out of the medium.
+    fn close_mesh(&mut self, first: usize, file: &Spanned<String>, object: &str) -> Result<()> {
+        use std::collections::HashMap;
+        let key = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+        let mut volume = 0.0f64;
+        for shape in &self.shapes[first..] {
+            let Geometry::Triangle(t) = &shape.geometry else { continue };
+            let [a, b, c] = t.vertices;
+            volume += a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0;
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                // +1 for p -> q, -1 for q -> p, under one key: a closed, consistently wound mesh
+                // sums every edge to 0.
+                let (k, sign) = if key(p) < key(q) { ((key(p), key(q)), 1) } else { ((key(q), key(p)), -1) };
+                *edges.entry(k).or_insert(0) += sign;
+            }
+        }
+        let open = edges.values().filter(|&&n| n != 0).count();
+        if open > 0 {
+            return Err(self.invalid(
+                &file.span(),
+                object,
+                format!(
+                    "mesh {}: a medium needs a closed mesh, but {open} edges border a single triangle or triangles wound against their neighbours; close the mesh or drop `interior`",
+                    printable(file.get_ref())
+                ),
+            ));
+        }
+        if volume < 0.0 {
+            for shape in &mut self.shapes[first..] {
+                if let Geometry::Triangle(t) = &mut shape.geometry {
+                    t.vertices.swap(1, 2);
+                    if let Some(uv) = &mut t.uv {
+                        uv.swap(1, 2);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     // Shapes
 
     fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
@@ -1281,6 +1545,8 @@ impl Builder<'_> {
             ("major_radius", span_of(&s.major_radius)),
             ("minor_radius", span_of(&s.minor_radius)),
             ("exponents", span_of(&s.exponents)),
+            ("interior", span_of(&s.interior)),
+            ("exterior", span_of(&s.exterior)),
         ];
         let (what, fields): (&str, &[&str]) = match kind {
             "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
@@ -1294,9 +1560,27 @@ impl Builder<'_> {
             "superellipsoid" => ("a superellipsoid", &["center", "exponents"]),
             _ => ("a mesh", &["file"]),
         };
-        let mut allowed = vec!["name", "type", "material", "transform"];
+        let mut allowed = vec!["name", "type", "material", "transform", "interior", "exterior"];
         allowed.extend_from_slice(fields);
         self.only_fields(&object, what, &present, &allowed)?;
+        let first_shape = self.shapes.len();
+        let media = self.medium_interface(kind, s, &object)?;
+        self.shape_kind(kind, s, &table, &object)?;
+        if let Some(media) = media {
+            if kind == "mesh" {
+                let file = s.file.as_ref().expect("shape_kind required the file");
+                self.close_mesh(first_shape, file, &object)?;
+            }
+            for shape in &mut self.shapes[first_shape..] {
+                shape.media = Some(media);
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the shapes of one `[[shapes]]` table of type `kind`.
+    fn shape_kind(&mut self, kind: &str, s: &ShapeDef, table: &Range<usize>, object: &str) -> Result<()> {
+        let (table, object) = (table.clone(), object.to_string());
 
         let material_def = self.require(&s.material, &table, &object, "material", "material = \"white\"")?;
         let material = self.material_id(material_def, &object)?;
@@ -1360,7 +1644,7 @@ impl Builder<'_> {
                     let shape = Analytic { kind, world_from_object };
                     let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
                     self.check_placement(&shape, &span, &object)?;
-                    self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material });
+                    self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
                 }
                 Ok(())
             }
@@ -1625,7 +1909,7 @@ impl Builder<'_> {
                 format!("`vertices`: {which} has zero area (its points are equal or on a line); fix the points"),
             ));
         }
-        self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material });
+        self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material, media: None });
         Ok(())
     }
 
@@ -1687,7 +1971,7 @@ impl Builder<'_> {
             return Err(self.invalid(&radius.span(), object, message));
         }
         let sphere = Sphere { center: c, radius: r, object_from_world };
-        self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material });
+        self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material, media: None });
         Ok(())
     }
 
@@ -1731,7 +2015,7 @@ impl Builder<'_> {
                 skipped += 1;
                 continue;
             }
-            self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material });
+            self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv }), material, media: None });
         }
         if skipped == total {
             return Err(SceneError::Obj {
@@ -2110,7 +2394,7 @@ impl Builder<'_> {
                 };
                 let span = l.transform.as_ref().map_or(table.clone(), |t| t.span());
                 self.check_placement(&shape, &span, object)?;
-                self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material });
+                self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
                 Ok(())
             }
             _ => {

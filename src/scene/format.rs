@@ -25,6 +25,28 @@ pub(crate) struct SceneFile {
     pub lights: Vec<Spanned<LightDef>>,
     pub environment: Option<Spanned<EnvironmentDef>>,
     pub rainbow: Option<Spanned<RainbowDef>>,
+    #[serde(default)]
+    pub media: BTreeMap<Spanned<String>, Spanned<MediumDef>>,
+    pub atmosphere: Option<Spanned<AtmosphereDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MediumDef {
+    pub r#type: Option<Spanned<String>>,
+    pub sigma_a: Option<Spanned<Vec3Def>>,
+    pub sigma_s: Option<Spanned<Vec3Def>>,
+    pub sigma_t: Option<Spanned<Vec3Def>>,
+    pub albedo: Option<Spanned<Vec3Def>>,
+    pub emission: Option<Spanned<Vec3Def>>,
+    pub phase: Option<Spanned<String>>,
+    pub g: Option<Spanned<f64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct AtmosphereDef {
+    pub medium: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -112,6 +134,7 @@ pub(crate) struct PhotonsDef {
     pub caustic_count: Option<Spanned<i64>>,
     pub radius: Option<Spanned<f64>>,
     pub caustic_radius: Option<Spanned<f64>>,
+    pub volume_radius: Option<Spanned<f64>>,
     pub gather_rays: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
     pub glossy_threshold: Option<Spanned<f64>>,
@@ -227,6 +250,9 @@ pub(crate) struct ShapeDef {
     pub major_radius: Option<Spanned<f64>>,
     pub minor_radius: Option<Spanned<f64>>,
     pub exponents: Option<Spanned<Vec<f64>>>,
+    // media
+    pub interior: Option<Spanned<String>>,
+    pub exterior: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -15,6 +15,7 @@ mod convert;
 mod error;
 mod format;
 mod material;
+mod medium;
 mod mesh;
 pub mod pattern;
 mod photons;
@@ -32,6 +33,7 @@ pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
 };
+pub use medium::{MediumDesc, MediumInterface, Phase};
 pub use photons::PhotonSettings;
 
 /// A loaded, validated scene. Right-handed, y up, lengths in scene units.
@@ -57,6 +59,11 @@ pub struct Scene {
     pub lights: Vec<LightDesc>,
     /// What rays that leave the scene see, and a light of its own; `None` is black.
     pub environment: Option<Environment>,
+    /// Index = medium id, in file order (`[media.NAME]`).
+    pub media: Vec<MediumDesc>,
+    pub medium_names: Vec<String>,
+    /// The medium that fills space outside every closed medium shape (`[atmosphere]`).
+    pub atmosphere: Option<u32>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
 }
@@ -150,11 +157,14 @@ pub struct RenderSettings {
     pub seed: u32,
 }
 
-/// One shape of the scene: its geometry and its material id.
+/// One shape of the scene: its geometry, its material id, and the media it bounds.
 #[derive(Clone, Debug)]
 pub struct Shape {
     pub geometry: Geometry,
     pub material: u32,
+    /// The media inside and outside the closed shape this is (part of); `None` for a surface
+    /// that leaves a ray's medium as it is.
+    pub media: Option<MediumInterface>,
 }
 
 /// Every kind of geometry, behind one match per host-side operation (bounds, area).
