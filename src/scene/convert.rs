@@ -20,7 +20,7 @@ use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
     Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection,
-    RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
+    RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
@@ -79,6 +79,12 @@ const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
+    convert_with_origins(file, src).map(|(scene, _)| scene)
+}
+
+/// `convert`, also saying which shapes each `[[shapes]]` and `[[lights]]` entry became.
+pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<(Scene, SceneOrigins)> {
+    let mut origins = SceneOrigins::default();
     let mut builder = Builder {
         src,
         materials: Vec::new(),
@@ -116,10 +122,14 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     }
 
     for (index, shape) in file.shapes.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.shape(index, shape)?;
+        origins.shapes.push(first..builder.shapes.len());
     }
     for (index, light) in file.lights.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.light(index, light)?;
+        origins.lights.push(first..builder.shapes.len());
     }
     let environment = match &file.environment {
         Some(def) => Some(builder.environment(def)?),
@@ -149,7 +159,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     }
 
     let name = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(Scene {
+    let scene = Scene {
         name,
         path: src.path.to_path_buf(),
         camera,
@@ -162,7 +172,8 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         lights: builder.lights,
         environment,
         warnings: builder.warnings,
-    })
+    };
+    Ok((scene, origins))
 }
 
 struct Builder<'a> {
