@@ -68,6 +68,14 @@ fn set_changes_material_light_camera_and_render_fields() {
     ok(&f.edit(json!({ "op": "set", "target": "camera", "field": "fov", "value": 30 })));
     ok(&f.edit(json!({ "op": "set", "target": "camera", "field": "position", "value": [0, 1.5, 5] })));
     ok(&f.edit(json!({ "op": "set", "target": "render", "field": "spp", "value": 2 })));
+    // Several fields in one step: one undo takes them all back.
+    let before = f.text();
+    ok(&f.edit(
+        json!({ "op": "set_fields", "target": "camera", "fields": { "look_at": [0, 0, 0], "up": [0, 1, 0.1] } }),
+    ));
+    assert!(f.text().contains("look_at = [0, 0, 0]") && f.text().contains("up = [0, 1, 0.1]"), "{}", f.text());
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.text(), before);
     ok(&f.edit(json!({ "op": "set", "target": { "shape": 0 }, "field": "name", "value": "ground" })));
     let text = f.text();
     // The comment after a replaced value stays with it.

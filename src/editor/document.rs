@@ -100,6 +100,11 @@ pub enum Command {
         field: String,
         value: Json,
     },
+    /// Sets several fields of one table in one step (one undo), e.g. "camera to view".
+    SetFields {
+        target: Target,
+        fields: serde_json::Map<String, Json>,
+    },
     Delete {
         target: Target,
     },
@@ -363,6 +368,15 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
             }
             if transform.is_empty() {
                 table.remove("transform");
+            }
+            Ok(())
+        }
+        Command::SetFields { target, fields } => {
+            if fields.is_empty() {
+                return Err(bad("`fields` is empty"));
+            }
+            for (field, value) in fields {
+                edit(doc, &Command::Set { target: target.clone(), field: field.clone(), value: value.clone() })?;
             }
             Ok(())
         }

@@ -444,9 +444,10 @@ fn preview_step(
     let step = preview.step;
     let (divisor, photons, pass) = match step {
         // A quick look: a sixteenth of the pixels, an eighth of the photons, the global map read
-        // directly (no final gathering).
+        // directly (no final gathering); then a quarter of the pixels and of the photons, one
+        // final-gather ray.
         0 => (4, scene.photons.map(|p| scaled(p, 8, 0)), 0),
-        1 => (2, scene.photons.map(|p| scaled(p, 2, p.gather_rays.min(2))), 0),
+        1 => (2, scene.photons.map(|p| scaled(p, 4, p.gather_rays.min(1))), 0),
         _ => (1, scene.photons, step - 2),
     };
     let (width, height) = preview_resolution(view, preview_size, divisor);
