@@ -374,9 +374,18 @@ export class Viewport {
       this.outline.geometry.dispose();
       this.outline = null;
     }
+    if (this.selectionBox) {
+      this.scene.remove(this.selectionBox);
+      this.selectionBox.geometry.dispose();
+      this.selectionBox = null;
+    }
     this.gizmo.detach();
     const object = this.objectOf(sel);
     if (!object) return;
+    // The box shows curved shapes too, whose edges alone draw nothing.
+    this.selectionBox = new THREE.BoxHelper(object.mesh, OUTLINE_COLOR);
+    this.selectionBox.layers.enableAll();
+    this.scene.add(this.selectionBox);
     const edges = new THREE.EdgesGeometry(object.mesh.geometry, 25);
     const outline = new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: OUTLINE_COLOR, depthTest: false }));
     outline.renderOrder = 10;
@@ -470,6 +479,7 @@ export class Viewport {
   draw() {
     const height = this.canvas.clientHeight;
     this.headlight.position.copy(this.perspective.position);
+    if (this.selectionBox) this.selectionBox.update();
     for (const r of this.rects()) {
       const view = r.view;
       const rendered = this.rendered && view === this.views[3] && this.frameTexture;
