@@ -23,7 +23,7 @@ use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
     Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface, Phase,
-    PhotonSettings, Projection, RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
+    PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
@@ -82,6 +82,12 @@ const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere", "disc"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
+    convert_with_origins(file, src).map(|(scene, _)| scene)
+}
+
+/// `convert`, also saying which shapes each `[[shapes]]` and `[[lights]]` entry became.
+pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<(Scene, SceneOrigins)> {
+    let mut origins = SceneOrigins::default();
     let mut builder = Builder {
         src,
         materials: Vec::new(),
@@ -132,10 +138,14 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     }
 
     for (index, shape) in file.shapes.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.shape(index, shape)?;
+        origins.shapes.push(first..builder.shapes.len());
     }
     for (index, light) in file.lights.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.light(index, light)?;
+        origins.lights.push(first..builder.shapes.len());
     }
     let environment = match (&file.environment, &file.rainbow) {
         (Some(def), rainbow) => Some(builder.environment(def, rainbow.as_ref())?),
@@ -172,7 +182,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     }
 
     let name = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(Scene {
+    let scene = Scene {
         name,
         path: src.path.to_path_buf(),
         camera,
@@ -188,7 +198,8 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         media: builder.media,
         medium_names: builder.medium_names,
         atmosphere: builder.atmosphere,
-    })
+    };
+    Ok((scene, origins))
 }
 
 struct Builder<'a> {

@@ -275,6 +275,16 @@ pub enum LightKind {
     Area { material: u32 },
 }
 
+/// Where the shapes of a `Scene` came from in its file: for each `[[shapes]]` entry and each
+/// `[[lights]]` entry, in file order, the range of `Scene::shapes` it became (a quad is two
+/// triangles, a closed cylinder three shapes, a mesh many; a point, spot or distant light none).
+/// The editor uses it to map a click on a triangle back to the entry to edit.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneOrigins {
+    pub shapes: Vec<std::ops::Range<usize>>,
+    pub lights: Vec<std::ops::Range<usize>>,
+}
+
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
 /// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
@@ -298,6 +308,13 @@ pub fn parse_scene(source: &str, path: &Path) -> Result<Scene, SceneError> {
     let src = error::Source { text: source, path };
     let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
     convert::convert(file, &src)
+}
+
+/// `parse_scene`, also returning which shapes each entry of the file became.
+pub fn parse_scene_with_origins(source: &str, path: &Path) -> Result<(Scene, SceneOrigins), SceneError> {
+    let src = error::Source { text: source, path };
+    let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
+    convert::convert_with_origins(file, &src)
 }
 
 #[cfg(test)]
