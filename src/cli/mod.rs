@@ -30,6 +30,15 @@ mod parse;
 pub mod render;
 pub mod serve;
 
+/// `--backend` of render and serve: where the kernels run (`auto`: a real GPU when there is one,
+/// else the CPU backend).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum BackendArg {
+    Auto,
+    Gpu,
+    Cpu,
+}
+
 // No doc comments on the clap types: clap would show them as help text.
 #[derive(Parser)]
 #[command(name = "photonix", version, about = "Physically based photon mapping on Vulkan compute shaders")]

@@ -4,18 +4,11 @@ use std::net::IpAddr;
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
-use clap::ValueEnum;
 
+use super::BackendArg;
 use photonix::editor::{BackendChoice, ServeOptions, Server};
 use photonix::gpu::{list_devices, GpuOptions};
 use photonix::render::{auto_backend, Backend};
-
-#[derive(Clone, Copy, ValueEnum)]
-enum BackendArg {
-    Auto,
-    Gpu,
-    Cpu,
-}
 
 #[derive(clap::Args)]
 pub struct ServeArgs {
