@@ -71,7 +71,8 @@ struct Light {
     float exponent;
     float radius;
     uint medium;
-    uint _pad[3];
+    uint grid;
+    uint _pad[2];
 };
 
 struct Medium {

@@ -40,6 +40,8 @@ pub const MIN_FOV_DEGREES: f64 = 0.01;
 pub const MAX_APERTURE_BLADES: u32 = 64;
 /// Largest spot light `tightness` (the exponent of cos): cos^1000 is 0.6 at 1 degree, a beam.
 pub const MAX_SPOT_TIGHTNESS: f64 = 1000.0;
+/// Cells along each side of an area light's POV-Ray grid (`samples = [n, m]`).
+pub const MAX_LIGHT_GRID: u32 = 64;
 /// Most texels of an environment map as the renderer uses it (2048 x 1024); a larger map is
 /// halved until it fits: the map, its cdfs and the scene's other data share one storage buffer
 /// (128 MiB on lavapipe).

@@ -133,6 +133,9 @@ shared_constants! {
     /// A light that is an emitting primitive (`Light::primitive`), sampled by `shape_sample` (a
     /// point and its 1/pdf by area).
     LIGHT_AREA: u32 = 0;
+    /// Flag of `Light::grid`: a POV-Ray grid's samples are jittered within their cells (else
+    /// they sit at the cells' centres). The grid itself is n | m << 8, n and m in 1..=64.
+    LIGHT_GRID_JITTER: u32 = 0x10000;
     /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
     /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
     LIGHT_POINT: u32 = 2;

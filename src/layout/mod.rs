@@ -145,7 +145,9 @@ gpu_structs! {
         pub radius: f32,
         /// The medium its photons start in (`NO_MEDIUM`: vacuum), found by the host.
         pub medium: u32,
-        pub _pad: [u32; 3],
+        /// An area light's POV-Ray grid (`LIGHT_GRID_*`): n | m << 8 | jitter << 16; 0 for none.
+        pub grid: u32,
+        pub _pad: [u32; 2],
     }
 
     /// Per-render constants of every kernel, 128 bytes.

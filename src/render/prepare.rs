@@ -291,9 +291,16 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             continue;
         }
         p.light = lights.len() as u32;
-        let options = scene.lights.iter().find(|l| l.kind == LightKind::Area { material: p.material });
+        let options =
+            scene.lights.iter().find(|l| matches!(l.kind, LightKind::Area { material, .. } if material == p.material));
         powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
-        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
+        let grid = match options.map(|o| &o.kind) {
+            Some(&LightKind::Area { grid: [n, m], jitter, .. }) if n * m > 1 => {
+                n | m << 8 | if jitter { LIGHT_GRID_JITTER } else { 0 }
+            }
+            _ => 0,
+        };
+        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, grid, ..Default::default() });
     }
     for desc in &scene.lights {
         let Some((light, power)) = light_record(&desc.kind, light_center, light_radius) else { continue };

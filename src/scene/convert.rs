@@ -28,8 +28,8 @@ use super::{
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
     fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
-    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_MEDIUM_COEFFICIENT, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS,
-    MAX_SCENE_VALUE, MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
+    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_LIGHT_GRID, MAX_MEDIUM_COEFFICIENT, MAX_PASSES, MAX_PHOTON_PATHS,
+    MAX_PIXELS, MAX_SCENE_VALUE, MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_SPHERE_RADIUS,
 };
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -2095,6 +2095,8 @@ impl Builder<'_> {
             ("center", span_of(&l.center)),
             ("radius", span_of(&l.radius)),
             ("normal", span_of(&l.normal)),
+            ("samples", span_of(&l.samples)),
+            ("jitter", span_of(&l.jitter)),
             ("radiance", span_of(&l.radiance)),
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
@@ -2345,7 +2347,7 @@ impl Builder<'_> {
     ) -> Result<()> {
         let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
         let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = [common, &["shape", "radiance", "transform"]].concat();
+        let mut allowed = [common, &["shape", "radiance", "transform", "samples", "jitter"]].concat();
         let what = match shape {
             "quad" => {
                 allowed.push("vertices");
@@ -2382,7 +2384,24 @@ impl Builder<'_> {
         light_material.emission = ColorParam::constant(Vec3::from(radiance));
         let material = self.add_material(material_name, light_material);
         self.material_used[material as usize] = true;
-        self.lights.push(LightDesc { kind: LightKind::Area { material }, direct, photons });
+        let grid = match &l.samples {
+            Some(s) => {
+                let v = s.get_ref();
+                if v.len() != 2 || v.iter().any(|&k| !(1..=MAX_LIGHT_GRID as i64).contains(&k)) {
+                    return Err(self.invalid(
+                        &s.span(),
+                        object,
+                        format!(
+                            "`samples` is {v:?}; give POV-Ray's grid as [n, m], each 1 to {MAX_LIGHT_GRID} (e.g. `samples = [4, 4]`)"
+                        ),
+                    ));
+                }
+                [v[0] as u32, v[1] as u32]
+            }
+            None => [1, 1],
+        };
+        let jitter = l.jitter.as_ref().is_none_or(|j| *j.get_ref());
+        self.lights.push(LightDesc { kind: LightKind::Area { material, grid, jitter }, direct, photons });
         let transform = self.transform(l.transform.as_ref(), object)?;
         match shape {
             "quad" => {

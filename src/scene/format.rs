@@ -266,6 +266,9 @@ pub(crate) struct LightDef {
     pub radius: Option<Spanned<f64>>,
     pub normal: Option<Spanned<Vec3Def>>,
     pub radiance: Option<Spanned<Vec3Def>>,
+    // POV-Ray's area_light grid
+    pub samples: Option<Spanned<Vec<i64>>>,
+    pub jitter: Option<Spanned<bool>>,
     pub position: Option<Spanned<Vec3Def>>,
     pub intensity: Option<Spanned<Vec3Def>>,
     pub transform: Option<Spanned<TransformDef>>,

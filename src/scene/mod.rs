@@ -271,8 +271,10 @@ pub enum LightKind {
     /// A distant light: light travels along unit `direction` with `irradiance` (W/m^2) on a
     /// surface facing it, from a cone of directions of half-angle `half_angle_deg` (0: sharp).
     Distant { direction: Vec3, irradiance: Vec3, half_angle_deg: f32 },
-    /// The options of an area light: they apply to the shapes of material `material`.
-    Area { material: u32 },
+    /// The options of an area light: they apply to the shapes of material `material`. `grid` is
+    /// POV-Ray's `area_light` grid, [n, m] cells of stratified shadow samples over each of its
+    /// shapes ([1, 1]: plain sampling), jittered in their cells or at the centres.
+    Area { material: u32, grid: [u32; 2], jitter: bool },
 }
 
 /// Where the shapes of a `Scene` came from in its file: for each `[[shapes]]` entry and each
