@@ -555,7 +555,8 @@ fn area_light_grid_errors_name_the_field() {
         let text = format!(
             "[camera]\nposition = [0, 1, 4]\nlook_at = [0, 0, 0]\nfov = 40\n[[lights]]\ntype = \"area\"\nshape = \"quad\"\nvertices = [[-1, 1.5, -1], [1, 1.5, -1], [1, 1.5, 1], [-1, 1.5, 1]]\nradiance = 5\n{samples}"
         );
-        let e = parse_scene(&text, &common::repo_path("scenes/test.toml")).err().expect("refused").to_string();
+        let Err(e) = parse_scene(&text, &common::repo_path("scenes/test.toml")) else { panic!("{samples:?} accepted") };
+        let e = e.to_string();
         assert!(e.contains("`samples`") && e.contains(expected), "{samples:?}: {e}");
     }
 }
