@@ -64,6 +64,11 @@ fn plane_point(sx: f64, sy: f64) -> DVec3 {
     DVec3::new(-sx * t, 0.0, sy * t)
 }
 
+/// Where the centre of pixel (px, py) looks at on the plane y = 0.
+fn pixel_centre(px: u32, py: u32) -> DVec3 {
+    plane_point(2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0, 1.0 - 2.0 * (py as f64 + 0.5) / SIZE as f64)
+}
+
 /// The mean over pixel (px, py) of `radiance(x)` on the plane, by an 8 x 8 grid of points.
 fn pixel_mean(px: u32, py: u32, radiance: impl Fn(DVec3) -> f64) -> f64 {
     let mut sum = 0.0;
@@ -445,8 +450,7 @@ fn check_disc_light(gpu: bool) {
     let (mut ours, mut exact) = (0.0, 0.0);
     for py in 0..SIZE {
         for px in 0..SIZE {
-            let c =
-                plane_point(2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0, 1.0 - 2.0 * (py as f64 + 0.5) / SIZE as f64);
+            let c = pixel_centre(px, py);
             // The disc at height h covers film points whose ray passes within r of the axis there.
             if c.length() * (CAMERA_HEIGHT - h) / CAMERA_HEIGHT < r + 0.1 {
                 continue;
@@ -487,8 +491,7 @@ fn check_disc_light(gpu: bool) {
     let (mut ours, mut exact) = (0.0, 0.0);
     for py in 0..SIZE {
         for px in 0..SIZE {
-            let c =
-                plane_point(2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0, 1.0 - 2.0 * (py as f64 + 0.5) / SIZE as f64);
+            let c = pixel_centre(px, py);
             if c.length() > 1.2 {
                 ours += image.pixel(px, py)[1] as f64;
                 exact += ALBEDO / PI * ellipse_irradiance(c);

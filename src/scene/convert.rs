@@ -1650,16 +1650,62 @@ impl Builder<'_> {
                         ),
                     ));
                 }
-                for (kind, placement) in self.analytic(kind, s, &table, &object)? {
-                    let world_from_object = transform.unwrap_or(Affine3A::IDENTITY) * placement;
-                    let shape = Analytic { kind, world_from_object };
-                    let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
-                    self.check_placement(&shape, &span, &object)?;
-                    self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
-                }
-                Ok(())
+                let pieces = self.analytic(kind, s, &table, &object)?;
+                let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
+                self.push_analytic(pieces, transform, &span, &object, material)
             }
         }
+    }
+
+    /// Places the object-space analytic `pieces` under `transform` as shapes of `material`, each
+    /// checked against the scene range (an error at `span`).
+    fn push_analytic(
+        &mut self,
+        pieces: Vec<(AnalyticKind, Affine3A)>,
+        transform: Option<Affine3A>,
+        span: &Range<usize>,
+        object: &str,
+        material: u32,
+    ) -> Result<()> {
+        for (kind, placement) in pieces {
+            let shape = Analytic { kind, world_from_object: transform.unwrap_or(Affine3A::IDENTITY) * placement };
+            self.check_placement(&shape, span, object)?;
+            self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
+        }
+        Ok(())
+    }
+
+    /// A disc (a disc shape, or a disc area light without `inner_radius`) and its placement.
+    fn disc(
+        &self,
+        center: &Option<Spanned<Vec3Def>>,
+        normal: &Option<Spanned<Vec3Def>>,
+        radius: &Option<Spanned<f64>>,
+        inner_radius: &Option<Spanned<f64>>,
+        table: &Range<usize>,
+        object: &str,
+    ) -> Result<(AnalyticKind, Affine3A)> {
+        let center = self.require(center, table, object, "center", "center = [0, 0, 0]")?;
+        let center = self.point(center, object, "center")?;
+        let normal = self.require(normal, table, object, "normal", "normal = [0, 1, 0]")?;
+        let normal = self.direction(normal, object, "normal")?;
+        let radius_def = self.require(radius, table, object, "radius", "radius = 1.0")?;
+        let radius = self.positive(radius_def, object, "radius")?;
+        let inner_radius = match inner_radius {
+            Some(r) => {
+                let v = self.number(r, object, "inner_radius")?;
+                if v < 0.0 || v >= radius {
+                    return Err(self.invalid(
+                        &r.span(),
+                        object,
+                        format!("`inner_radius` is {v}; it must be in [0, radius) = [0, {radius})"),
+                    ));
+                }
+                v
+            }
+            None => 0.0,
+        };
+        Ok((AnalyticKind::Disc { radius, inner_radius }, frame(center, normal)))
     }
 
     /// A number > 0 from a required field.
@@ -1704,29 +1750,7 @@ impl Builder<'_> {
                 let offset = s.offset.as_ref().map_or(Ok(0.0), |o| self.number(o, object, "offset"))?;
                 Ok(vec![(AnalyticKind::Plane, frame(normal * offset, normal))])
             }
-            "disc" => {
-                let center = self.require(&s.center, table, object, "center", "center = [0, 0, 0]")?;
-                let center = self.point(center, object, "center")?;
-                let normal = self.require(&s.normal, table, object, "normal", "normal = [0, 1, 0]")?;
-                let normal = self.direction(normal, object, "normal")?;
-                let radius_def = self.require(&s.radius, table, object, "radius", "radius = 1.0")?;
-                let radius = self.positive(radius_def, object, "radius")?;
-                let inner_radius = match &s.inner_radius {
-                    Some(r) => {
-                        let v = self.number(r, object, "inner_radius")?;
-                        if v < 0.0 || v >= radius {
-                            return Err(self.invalid(
-                                &r.span(),
-                                object,
-                                format!("`inner_radius` is {v}; it must be in [0, radius) = [0, {radius})"),
-                            ));
-                        }
-                        v
-                    }
-                    None => 0.0,
-                };
-                Ok(vec![(AnalyticKind::Disc { radius, inner_radius }, frame(center, normal))])
-            }
+            "disc" => Ok(vec![self.disc(&s.center, &s.normal, &s.radius, &s.inner_radius, table, object)?]),
             "cylinder" | "cone" => {
                 let base_def = self.require(&s.base, table, object, "base", "base = [0, 0, 0]")?;
                 let base = self.point(base_def, object, "base")?;
@@ -2411,21 +2435,9 @@ impl Builder<'_> {
             "disc" => {
                 // The seed's circular light: a one-sided disc facing `normal` (an ellipse under a
                 // non-uniform `transform` scale), sampled over its area like a disc shape.
-                let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
-                let center = self.point(center, object, "center")?;
-                let normal = self.require(&l.normal, table, object, "normal", "normal = [0, -1, 0]")?;
-                let normal = self.direction(normal, object, "normal")?;
-                let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
-                let radius = self.positive(radius, object, "radius")?;
-                let kind = AnalyticKind::Disc { radius, inner_radius: 0.0 };
-                let shape = Analytic {
-                    kind,
-                    world_from_object: transform.unwrap_or(Affine3A::IDENTITY) * frame(center, normal),
-                };
+                let piece = self.disc(&l.center, &l.normal, &l.radius, &None, table, object)?;
                 let span = l.transform.as_ref().map_or(table.clone(), |t| t.span());
-                self.check_placement(&shape, &span, object)?;
-                self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
-                Ok(())
+                self.push_analytic(vec![piece], transform, &span, object, material)
             }
             _ => {
                 let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
