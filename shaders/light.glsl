@@ -64,6 +64,18 @@ vec3 environment_radiance(Light l, vec3 d) {
     return env_radiance_at(l.primitive, env_texel(l.primitive, d));
 }
 
+// Radiance of the discs of distant lights that a ray leaving the scene along d meets. The host
+// puts the lights with a visible disc at the front of the list (see render::prepare), each with
+// its cone's solid angle in `area`, so the search stops at the first light without one.
+vec3 distant_discs_radiance(vec3 d) {
+    vec3 sum = vec3(0.0);
+    for (uint i = 0u; i < frame.light_count; i++) {
+        if (lights[i].kind != LIGHT_DISTANT || lights[i].area <= 0.0) break;
+        if (dot(d, load3(lights[i].direction)) <= -lights[i].cos_outer) sum += load3(lights[i].intensity) / lights[i].area;
+    }
+    return sum;
+}
+
 // Index of the interval [cdf[k], cdf[k + 1]) of the n + 1 values from `first` that holds u.
 uint env_search(uint first, uint n, float u) {
     uint lo = 0u;

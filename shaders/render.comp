@@ -227,10 +227,15 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             break;
         }
         if (prim == NO_LIGHT && !scattered) {
-            // A camera path that leaves the scene sees the environment (a path lobe's view of a
-            // light); a gather path counts none of it, as it counts no emission.
-            WHEN(frame.environment != NO_LIGHT && ray == RAY_CAMERA && part == 0u) {
-                terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * environment_radiance(lights[frame.environment], d);
+            // A camera path that leaves the scene sees the environment and the discs of distant
+            // lights (a path lobe's view of a light); a gather path counts none of it, as it
+            // counts no emission.
+            if (ray == RAY_CAMERA && part == 0u) {
+                vec3 seen = distant_discs_radiance(d);
+                WHEN(frame.environment != NO_LIGHT) {
+                    seen += environment_radiance(lights[frame.environment], d);
+                }
+                terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * seen;
             }
             break;
         }

@@ -667,7 +667,7 @@ fn broken_invariant(scene: &Scene) -> Option<String> {
                     && cos_outer.is_finite()
                     && exponent.is_finite()
             }
-            LightKind::Distant { direction, irradiance, half_angle_deg } => {
+            LightKind::Distant { direction, irradiance, half_angle_deg, .. } => {
                 direction.is_finite() && irradiance.is_finite() && half_angle_deg.is_finite()
             }
             LightKind::Area { .. } => true,

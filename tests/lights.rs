@@ -563,3 +563,107 @@ fn area_light_grid_errors_name_the_field() {
         assert!(e.contains("`samples`") && e.contains(expected), "{samples:?}: {e}");
     }
 }
+
+// A distant light's disc seen by camera paths
+
+const DISC_DIAMETER_DEG: f64 = 20.0;
+const MIRROR_TINT: f64 = 0.8;
+
+/// A distant light straight overhead with a 20-degree disc, seen by a camera at the origin
+/// looking straight up at it (`mirror` false) or looking down at a mirror of tint 0.8 below it.
+fn disc_scene(mirror: bool, visible: bool) -> Scene {
+    let (look_at, up) = if mirror { ("[0, 0, 0]", "[0, 0, 1]") } else { ("[0, 2, 0]", "[0, 0, 1]") };
+    parse(&format!(
+        r#"
+[camera]
+position = [0, 1, 0]
+look_at = {look_at}
+up = {up}
+fov = {FOV_DEG}
+resolution = [{SIZE}, {SIZE}]
+
+[photons]
+enabled = false
+
+[materials.mirror]
+type = "mirror"
+tint = {MIRROR_TINT}
+
+[[shapes]]
+type = "quad"
+material = "mirror"
+vertices = [[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]]
+
+[[lights]]
+type = "distant"
+direction = [0, -1, 0]
+irradiance = {IRRADIANCE}
+angular_diameter = {DISC_DIAMETER_DEG}
+visible = {visible}
+"#
+    ))
+}
+
+/// The irradiance a pinhole image of radiance gathers on a plane facing the view axis:
+/// the sum of L cos(theta) over the pixels' solid angles, cos^3 times the pixel's area on the
+/// film at distance 1.
+fn image_irradiance(image: &Image) -> f64 {
+    let t = (FOV_DEG * 0.5).to_radians().tan();
+    let pixel_area = (2.0 * t / SIZE as f64).powi(2);
+    let mut sum = 0.0;
+    for py in 0..SIZE {
+        for px in 0..SIZE {
+            let sx = (2.0 * (px as f64 + 0.5) / SIZE as f64 - 1.0) * t;
+            let sy = (2.0 * (py as f64 + 0.5) / SIZE as f64 - 1.0) * t;
+            let cos = 1.0 / (1.0 + sx * sx + sy * sy).sqrt();
+            sum += image.pixel(px, py)[1] as f64 * cos.powi(4) * pixel_area;
+        }
+    }
+    sum
+}
+
+/// Looking at the disc directly and in a mirror: its radiance is E / (pi sin^2 a) (times the
+/// tint), it gathers the light's irradiance, and `visible = false` hides it.
+fn check_disc_seen(gpu: bool) {
+    let backend = if gpu { "gpu" } else { "cpu" };
+    let a = (DISC_DIAMETER_DEG * 0.5).to_radians();
+    for mirror in [false, true] {
+        let tint = if mirror { MIRROR_TINT } else { 1.0 };
+        let buffers = common::buffers(&disc_scene(mirror, true), SIZE, SIZE);
+        let image = render(&buffers, 16, gpu);
+        let centre = image.pixel(SIZE / 2, SIZE / 2)[1] as f64;
+        let radiance = tint * IRRADIANCE / (PI * a.sin() * a.sin());
+        let gathered = image_irradiance(&image);
+        println!(
+            "{backend}, mirror {mirror}: centre {centre:.4} (disc radiance {radiance:.4}), irradiance gathered {gathered:.4} (expected {:.4})",
+            tint * IRRADIANCE
+        );
+        assert!(
+            (centre / radiance - 1.0).abs() < 1e-3,
+            "{backend}, mirror {mirror}: the disc's radiance is {centre}, not {radiance}"
+        );
+        assert!(
+            (gathered / (tint * IRRADIANCE) - 1.0).abs() < 0.01,
+            "{backend}, mirror {mirror}: the disc gathers {gathered}, not E = {}",
+            tint * IRRADIANCE
+        );
+        // Far outside the disc: black (no environment).
+        assert_eq!(image.pixel(0, 0), [0.0; 3]);
+        let hidden = render(&common::buffers(&disc_scene(mirror, false), SIZE, SIZE), 4, gpu);
+        assert_eq!(
+            hidden.channel_means(),
+            [0.0; 3],
+            "{backend}, mirror {mirror}: `visible = false` still shows the disc"
+        );
+    }
+}
+
+#[test]
+fn distant_light_disc_is_seen_directly_and_in_mirrors_cpu() {
+    check_disc_seen(false);
+}
+
+#[test]
+fn distant_light_disc_is_seen_directly_and_in_mirrors_gpu() {
+    check_disc_seen(true);
+}

@@ -81,6 +81,18 @@ pub fn environment_radiance(s: &SceneView, l: &Light, d: Vec3) -> Vec3 {
     env_radiance_at(s, l.primitive, env_texel(s, l.primitive, d))
 }
 
+/// Radiance of the discs of distant lights that a ray leaving the scene along `d` meets. The
+/// host puts the lights with a visible disc at the front of the list (see `render::prepare`),
+/// each with its cone's solid angle in `area`, so the search stops at the first light without one.
+pub fn distant_discs_radiance(s: &SceneView, d: Vec3) -> Vec3 {
+    s.lights
+        .iter()
+        .take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0)
+        .filter(|l| d.dot(Vec3::from(l.direction)) <= -l.cos_outer)
+        .map(|l| Vec3::from(l.intensity) / l.area)
+        .sum()
+}
+
 /// Index of the interval [cdf[k], cdf[k + 1]) of the n + 1 values from `first` that holds `u`.
 fn env_search(s: &SceneView, first: u32, n: u32, u: f32) -> u32 {
     let (mut lo, mut hi) = (0u32, n - 1);

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::bsdf::Bsdf;
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
 use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
-use super::light::{environment_radiance, pick_light, spot_falloff};
+use super::light::{distant_discs_radiance, environment_radiance, pick_light, spot_falloff};
 use super::medium::{
     equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t, medium_transmittance, phase_bsdf,
 };
@@ -207,11 +207,15 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             break;
         }
         let Some(h) = h else {
-            // A camera path that leaves the scene sees the environment (a path lobe's view of a
-            // light); a gather path counts none of it, as it counts no emission.
-            if f.environment != NO_LIGHT && ray == Ray::Camera && part == 0 {
-                terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] +=
-                    throughput * environment_radiance(s, &s.lights[f.environment as usize], d);
+            // A camera path that leaves the scene sees the environment and the discs of distant
+            // lights (a path lobe's view of a light); a gather path counts none of it, as it
+            // counts no emission.
+            if ray == Ray::Camera && part == 0 {
+                let mut seen = distant_discs_radiance(s, d);
+                if f.environment != NO_LIGHT {
+                    seen += environment_radiance(s, &s.lights[f.environment as usize], d);
+                }
+                terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += throughput * seen;
             }
             break;
         };

@@ -159,12 +159,15 @@ pub fn light_record(kind: &LightKind, bounding_center: Vec3, bounding_radius: f3
             };
             (light, channel_mean(intensity.into()) * spot_solid_angle(&light))
         }
-        LightKind::Distant { direction, irradiance, half_angle_deg } => {
+        LightKind::Distant { direction, irradiance, half_angle_deg, visible } => {
             // A cone of half-angle a and radiance L gives E = L pi sin^2 a on a surface facing it
             // and has solid angle 2 pi (1 - cos a): radiance times solid angle is
             // E 2 (1 - cos a) / sin^2 a, which tends to E as a -> 0.
             let a = (half_angle_deg as f64).to_radians();
             let ratio = if a > 0.0 { 2.0 * (1.0 - a.cos()) / (a.sin() * a.sin()) } else { 1.0 };
+            // `area` holds the cone's solid angle (in f64: 1 - cos a of the sun's half-angle is
+            // 1e-5, where f32's cos_outer keeps only two digits of it), so that the disc a
+            // camera path sees has radiance intensity / area; 0 for a light with no disc.
             let light = Light {
                 position: bounding_center.into(),
                 kind: LIGHT_DISTANT,
@@ -172,6 +175,7 @@ pub fn light_record(kind: &LightKind, bounding_center: Vec3, bounding_radius: f3
                 direction: direction.into(),
                 cos_outer: a.cos() as f32,
                 radius: bounding_radius,
+                area: if visible && a > 0.0 { (2.0 * std::f64::consts::PI * (1.0 - a.cos())) as f32 } else { 0.0 },
                 ..Default::default()
             };
             // The power that crosses the disc of the bounding sphere.
@@ -180,6 +184,11 @@ pub fn light_record(kind: &LightKind, bounding_center: Vec3, bounding_radius: f3
         LightKind::Area { .. } => return None,
     };
     Some((light, power))
+}
+
+/// True for a distant light whose disc camera paths see (see `light_record`).
+fn has_visible_disc(l: &Light) -> bool {
+    l.kind == LIGHT_DISTANT && l.area > 0.0
 }
 
 /// `falloff_scale` of a cone with no smooth part: any cos inside the cone gives t >= 1.
@@ -275,9 +284,24 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let (light_center, light_radius) =
         if bounded.is_empty() { (Vec3::ZERO, 1.0) } else { (bounding_center, bounding_radius) };
 
-    // Lights: emissive primitives (in BVH order), then the lights of the file
+    // Lights: distant lights with a disc (camera paths that leave the scene look for them at
+    // the front of the list, see `distant_discs_radiance`), emissive primitives (in BVH order),
+    // then the other lights of the file.
     let mut lights = Vec::new();
     let mut powers = Vec::new();
+    let file_lights: Vec<_> = scene
+        .lights
+        .iter()
+        .filter_map(|desc| {
+            let (light, power) = light_record(&desc.kind, light_center, light_radius)?;
+            (!power.is_nan() && power > 0.0).then_some((light, light_powers(power, desc.direct, desc.photons)))
+        })
+        .collect();
+    let (discs, others): (Vec<_>, Vec<_>) = file_lights.into_iter().partition(|(l, _)| has_visible_disc(l));
+    for (light, power) in discs {
+        lights.push(light);
+        powers.push(power);
+    }
     for (i, (p, &area)) in primitives.iter_mut().zip(&areas).enumerate() {
         let Some(material) = scene.materials.get(p.material as usize) else { continue };
         // A textured emission's power is estimated from its constant (the texture scales it
@@ -302,13 +326,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         };
         lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, grid, ..Default::default() });
     }
-    for desc in &scene.lights {
-        let Some((light, power)) = light_record(&desc.kind, light_center, light_radius) else { continue };
-        if power.is_nan() || power <= 0.0 {
-            continue;
-        }
-        powers.push(light_powers(power, desc.direct, desc.photons));
+    for (light, power) in others {
         lights.push(light);
+        powers.push(power);
     }
     let mut texture_data = packed.texture_data;
     let mut environment = NO_LIGHT;

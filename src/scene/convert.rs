@@ -2133,6 +2133,7 @@ impl Builder<'_> {
             ("tightness", span_of(&l.tightness)),
             ("irradiance", span_of(&l.irradiance)),
             ("angular_diameter", span_of(&l.angular_diameter)),
+            ("visible", span_of(&l.visible)),
             ("photons", span_of(&l.photons)),
             ("direct", span_of(&l.direct)),
         ];
@@ -2160,7 +2161,7 @@ impl Builder<'_> {
             }
             "spot" => self.spot_light(l, &table, &object, &present, &common)?,
             "distant" => {
-                let allowed = [&common[..], &["direction", "irradiance", "angular_diameter"]].concat();
+                let allowed = [&common[..], &["direction", "irradiance", "angular_diameter", "visible"]].concat();
                 self.only_fields(&object, "a distant light", &present, &allowed)?;
                 let direction = self.light_direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
                 let irradiance = self.light_color(&l.irradiance, &table, &object, "irradiance", "irradiance = 3")?;
@@ -2182,7 +2183,8 @@ impl Builder<'_> {
                     }
                     None => 0.0,
                 };
-                LightKind::Distant { direction, irradiance, half_angle_deg }
+                let visible = l.visible.as_ref().is_none_or(|v| *v.get_ref());
+                LightKind::Distant { direction, irradiance, half_angle_deg, visible }
             }
             _ => return self.area_light(index, l, &table, &object, &present, &common, direct, photons),
         };

@@ -281,6 +281,7 @@ pub(crate) struct LightDef {
     pub tightness: Option<Spanned<f64>>,
     pub irradiance: Option<Spanned<Vec3Def>>,
     pub angular_diameter: Option<Spanned<f64>>,
+    pub visible: Option<Spanned<bool>>,
     // every kind
     pub photons: Option<Spanned<bool>>,
     pub direct: Option<Spanned<bool>>,

@@ -270,7 +270,9 @@ pub enum LightKind {
     Spot { position: Vec3, direction: Vec3, intensity: Vec3, cos_inner: f32, cos_outer: f32, exponent: f32 },
     /// A distant light: light travels along unit `direction` with `irradiance` (W/m^2) on a
     /// surface facing it, from a cone of directions of half-angle `half_angle_deg` (0: sharp).
-    Distant { direction: Vec3, irradiance: Vec3, half_angle_deg: f32 },
+    /// Camera paths that leave the scene (directly or through mirrors and glass) see its disc
+    /// when it has one and `visible` is true.
+    Distant { direction: Vec3, irradiance: Vec3, half_angle_deg: f32, visible: bool },
     /// The options of an area light: they apply to the shapes of material `material`. `grid` is
     /// POV-Ray's `area_light` grid, [n, m] cells of stratified shadow samples over each of its
     /// shapes ([1, 1]: plain sampling), jittered in their cells or at the centres.

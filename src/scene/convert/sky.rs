@@ -111,6 +111,7 @@ impl Builder<'_> {
                 direction: (-sun).as_vec3(),
                 irradiance,
                 half_angle_deg: SUN_ANGULAR_RADIUS.to_degrees() as f32,
+                visible: true,
             };
             self.lights.push(LightDesc { kind, direct, photons });
         }
