@@ -17,11 +17,13 @@ void trace_photon_path(uint path, EmitParams params) {
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * float(params.total_paths);
     bool specular_only = true;
+    uint skip = NO_LIGHT;
     for (uint depth = 0u; depth < params.max_depth; depth++) {
         float t;
-        uint prim = trace_ray(o, d, INF, false, t);
+        uint prim = trace_ray(o, d, INF, false, skip, t);
         if (prim == NO_LIGHT) return;
         Hit h = shape_hit(prim, o, d, t);
+        skip = ray_skip(prim);
         vec3 wo = -d;
         Bsdf b = material_bsdf(materials[h.material], h);
         uint lobes = bsdf_flags(b);

@@ -74,11 +74,13 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     uint lookup_layer[2];
     vec3 lookup_weight[2];
 
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    uint skip = NO_LIGHT;
     for (uint step = 0u; step < 2u * frame.max_depth + 1u; step++) {
         float t;
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if (t_max != NO_RAY) rays++;
-        uint prim = trace_ray(o, d, t_max, ray == RAY_SHADOW, t);
+        uint prim = trace_ray(o, d, t_max, ray == RAY_SHADOW, skip, t);
         if (ray == RAY_SHADOW) {
             if (prim == NO_LIGHT) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * unoccluded;
             if (frame.photon_mapping == 0u) break;
@@ -102,6 +104,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             break;
         }
         Hit h = shape_hit(prim, o, d, t);
+        skip = ray_skip(prim);
         Material m = materials[h.material];
         vec3 wo = -d;
         bool camera = ray == RAY_CAMERA;

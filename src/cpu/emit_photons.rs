@@ -8,7 +8,7 @@ use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf};
 use super::light::{light_emit, pick_light};
 use super::photon::pack_photon;
 use super::rng::{rand1, rand2, rand4};
-use super::shading::offset_origin;
+use super::shading::{offset_origin, ray_skip};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
@@ -38,12 +38,14 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
+    let mut skip = NO_LIGHT;
     for depth in 0..params.max_depth {
-        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false);
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
         if prim == NO_LIGHT {
             return;
         }
         let h = shape_hit(s, prim, o, d, t);
+        skip = ray_skip(s, prim);
         let wo = -d;
         let b = material_bsdf(s, &s.materials[h.material as usize], &h);
         let lobes = bsdf_flags(&b);

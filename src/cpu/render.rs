@@ -9,7 +9,7 @@ use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf,
 use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL};
 use super::light::environment_radiance;
 use super::rng::rand4;
-use super::shading::{camera_ray, direct_light_sample, offset_origin, NO_RAY};
+use super::shading::{camera_ray, direct_light_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -66,12 +66,14 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     let mut gdim = 0;
     let mut lookups: [Option<Lookup>; 2] = [None; 2];
 
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    let mut skip = NO_LIGHT;
     for _ in 0..2 * f.max_depth + 1 {
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if t_max != NO_RAY {
             *rays += 1;
         }
-        let (prim, t) = trace_ray(s, o, d, t_max, ray == Ray::Shadow);
+        let (prim, t) = trace_ray(s, o, d, t_max, ray == Ray::Shadow, skip);
         if ray == Ray::Shadow {
             if prim == NO_LIGHT {
                 terms[(if via_specular { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += weight * unoccluded;
@@ -97,6 +99,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             break;
         }
         let h = shape_hit(s, prim, o, d, t);
+        skip = ray_skip(s, prim);
         let m = &s.materials[h.material as usize];
         let wo = -d;
         let camera = ray == Ray::Camera;

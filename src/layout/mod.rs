@@ -223,6 +223,15 @@ gpu_structs! {
         pub _pad: [u32; 3],
     }
 
+    /// The shape-data block of a smooth triangle (`PRIMITIVE_FLAG_SMOOTH`), 60 bytes of scalars:
+    /// the uv of its three vertices, then their unit normals (x, y, z each), which the host turns
+    /// to the side of the winding normal. A flat triangle's block, when it has vertex uvs, is
+    /// the first 6 floats alone.
+    pub struct TriangleShading {
+        pub uv: [f32; 6],
+        pub normals: [f32; 9],
+    }
+
     /// Push constants of one `emit_photons` dispatch, 32 bytes.
     pub struct EmitParams {
         /// First photon path of this dispatch and how many it traces.
@@ -253,6 +262,9 @@ impl BvhNode {
 }
 
 const _: () = assert!(size_of::<Photon>() == 20);
+const _: () = assert!(size_of::<TriangleShading>() == 4 * constants::TRIANGLE_DATA_FLOATS as usize);
+const _: () = assert!(core::mem::offset_of!(TriangleShading, uv) == 4 * constants::TRIANGLE_DATA_UV as usize);
+const _: () = assert!(core::mem::offset_of!(TriangleShading, normals) == 4 * constants::TRIANGLE_DATA_NORMALS as usize);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
