@@ -92,7 +92,7 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         return Err(ModelError::new(
             path,
             "",
-            "the OBJ file has no faces (it needs `v` lines and `f` lines with 3 or more vertices)",
+            "the OBJ file has no triangles (it needs `v` lines and `f` lines with 3 or more vertices)",
         ));
     }
     Ok(model)
