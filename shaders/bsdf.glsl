@@ -307,6 +307,10 @@ BsdfSample plastic_bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
     return s;
 }
 
+// A medium's scattering point scatters into every direction and ends camera paths (light
+// sampling, the volume photon map) like a diffuse surface.
+const uint PHASE_FLAGS = BSDF_GLOSSY | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_ESTIMATE;
+
 // The lobes of b (BSDF_* flags); 0 for a black surface, which ends paths and stores nothing.
 uint bsdf_flags(Bsdf b) {
     switch (b.kind) {
@@ -321,6 +325,8 @@ uint bsdf_flags(Bsdf b) {
     case MATERIAL_PLASTIC:
         return BSDF_REFLECTION | (is_smooth(b) ? BSDF_SPECULAR | BSDF_PATH : BSDF_GLOSSY | BSDF_ESTIMATE)
             | (b.color0 == vec3(0.0) ? 0u : BSDF_DIFFUSE | BSDF_ESTIMATE);
+    case MATERIAL_PHASE:
+        return PHASE_FLAGS;
     }
     return 0u;  // unreachable: the host packs only known kinds (tested)
 }
@@ -351,6 +357,8 @@ vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
         return conductor_bsdf_eval(b, wo, wi);
     case MATERIAL_PLASTIC:
         return plastic_bsdf_eval(b, wo, wi);
+    case MATERIAL_PHASE:
+        return vec3(phase_hg(dot(wo, wi), b.ior));
     }
     return vec3(0.0);
 }
@@ -367,6 +375,8 @@ float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
         return conductor_bsdf_pdf(b, wo, wi);
     case MATERIAL_PLASTIC:
         return plastic_bsdf_pdf(b, wo, wi);
+    case MATERIAL_PHASE:
+        return phase_hg(dot(wo, wi), b.ior);
     }
     return 0.0;
 }
@@ -387,6 +397,11 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
         return conductor_bsdf_sample(b, wo, u);
     case MATERIAL_PLASTIC:
         return plastic_bsdf_sample(b, wo, u, lobes);
+    case MATERIAL_PHASE: {
+        // Sampled exactly by its own pdf: the weight is 1.
+        vec3 wi = phase_hg_sample(wo, b.ior, u.yz);
+        return BsdfSample(wi, vec3(1.0), phase_hg(dot(wo, wi), b.ior), PHASE_FLAGS);
+    }
     }
     return no_sample();
 }

@@ -1,9 +1,9 @@
 #version 450
 // emit_photons: trace photon paths from the lights and store their photons in the global and
 // caustic maps. CPU twin: src/cpu/emit_photons.rs. Bindings: the scene (scene_bindings.glsl),
-// then global photons, caustic photons and counters (photons for the global and the caustic
-// map; one past a buffer's capacity is counted but not stored, so the host can grow the buffer
-// and trace again).
+// then global photons, caustic photons, counters (photons for the global, the caustic and the
+// volume map; one past a buffer's capacity is counted but not stored, so the host can grow the
+// buffer and trace again) and volume photons (collisions in media, `media` variant).
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -12,6 +12,15 @@
 // variant: analytic implicit
 // variant: textured analytic implicit
 // variant: textured alpha analytic implicit
+// variant: media
+// variant: textured media
+// variant: textured alpha media
+// variant: analytic media
+// variant: textured analytic media
+// variant: textured alpha analytic media
+// variant: analytic implicit media
+// variant: textured analytic implicit media
+// variant: textured alpha analytic implicit media
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -20,16 +29,22 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) writeonly buffer GlobalPhotons { Photon global_photons[]; };
 layout(std430, binding = SCENE_BINDINGS + 1) writeonly buffer CausticPhotons { Photon caustic_photons[]; };
-layout(std430, binding = SCENE_BINDINGS + 2) buffer Counters { uint counters[2]; };
+layout(std430, binding = SCENE_BINDINGS + 2) buffer Counters { uint counters[3]; };
+layout(std430, binding = SCENE_BINDINGS + 3) writeonly buffer VolumePhotons { Photon volume_photons[]; };
 layout(push_constant) uniform Push { EmitParams params; };
 
 #include "scene.glsl"
 #include "photon.glsl"
 
-void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags) {
+void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags, bool volume) {
     // Flux relative to the mean power per path keeps the half floats near 1.
     float inv_scale = float(params.total_paths) / frame.total_light_power;
     Photon p = pack_photon(x, flux, inv_scale, wi, flags);
+    if (volume) {
+        uint vslot = atomicAdd(counters[2], 1u);
+        if (vslot < params.volume_capacity) STORE_PHOTON(volume_photons, vslot, p)
+        return;
+    }
     if (params.caustics_only == 0u) {
         uint slot = atomicAdd(counters[0], 1u);
         if (slot < params.global_capacity) STORE_PHOTON(global_photons, slot, p)

@@ -5,20 +5,30 @@
 // `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes shading.glsl,
 // grid.glsl and photon.glsl.
 
-const uint MAP_GLOBAL = 0u;
-const uint MAP_CAUSTIC = 1u;
-
 // Field by field: a whole-struct copy out of either of two blocks makes glslang emit an OpStore
 // between different struct types, which the validation layer rejects.
 #define COPY_PHOTON(p, array, i) { p.position[0] = array[i].position[0]; p.position[1] = array[i].position[1]; \
     p.position[2] = array[i].position[2]; p.flux_rg = array[i].flux_rg; p.flux_b_dir = array[i].flux_b_dir; }
 
+// The volume map exists in the `media` variant only (its buffers are bound, and empty, in the
+// others), so scenes without media keep the two-map lookup.
 Photon map_photon(uint map, uint i) {
     Photon p;
+#ifdef VARIANT_MEDIA
+    if (map == MAP_VOLUME) {
+        COPY_PHOTON(p, volume_photons, i)
+        return p;
+    }
+#endif
     if (map == MAP_GLOBAL) COPY_PHOTON(p, global_photons, i) else COPY_PHOTON(p, caustic_photons, i)
     return p;
 }
-uint map_start(uint map, uint h) { return map == MAP_GLOBAL ? global_starts[h] : caustic_starts[h]; }
+uint map_start(uint map, uint h) {
+#ifdef VARIANT_MEDIA
+    if (map == MAP_VOLUME) return volume_starts[h];
+#endif
+    return map == MAP_GLOBAL ? global_starts[h] : caustic_starts[h];
+}
 
 // Irradiance at x (normal n, facing the side photons must arrive from) from the photons of
 // `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
@@ -53,16 +63,18 @@ vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
 
 // Radiance toward wo at h through the estimate lobes of b, from the photons of `map` (those
 // with flags in `exclude` skipped): each photon weighted by the BSDF's value for its direction.
+// The volume map is read over the ball with the 3D Epanechnikov kernel (see the twin).
 vec3 photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
+    bool volume = map == MAP_VOLUME;
     vec3 nf = facing(b, wo);
     // A Lambertian BSDF has one value for every photon: sum the irradiance, apply it once.
-    if (bsdf_estimate_is_constant(b)) return bsdf_eval(b, wo, nf) * photon_irradiance(map, h.p, nf, exclude);
+    if (!volume && bsdf_estimate_is_constant(b)) return bsdf_eval(b, wo, nf) * photon_irradiance(map, h.p, nf, exclude);
     GridParams g = grids[map];
     if (g.photon_count == 0u) return vec3(0.0);
     float r2 = g.radius * g.radius;
-    float thickness = PHOTON_DISC_THICKNESS * g.radius;
+    float thickness = volume ? INF : PHOTON_DISC_THICKNESS * g.radius;
     // Photons arriving from behind count only where the BSDF transmits.
-    bool both_sides = (bsdf_flags(b) & BSDF_TRANSMISSION) != 0u;
+    bool both_sides = volume || (bsdf_flags(b) & BSDF_TRANSMISSION) != 0u;
     ivec3 c = grid_cell(h.p, g.cell_size);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < 27u; k++) {
@@ -81,5 +93,5 @@ vec3 photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
             sum += bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
         }
     }
-    return sum * (2.0 / (PI * r2));
+    return sum * (volume ? 15.0 / (8.0 * PI * r2 * g.radius) : 2.0 / (PI * r2));
 }

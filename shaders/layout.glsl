@@ -16,7 +16,9 @@ struct Primitive {
     float p2[3];
     uint light;
     uint data;
-    uint _pad[3];
+    uint interior;
+    uint exterior;
+    uint _pad;
 };
 
 struct Material {
@@ -68,6 +70,18 @@ struct Light {
     float falloff_scale;
     float exponent;
     float radius;
+    uint medium;
+    uint grid;
+    uint _pad[2];
+};
+
+struct Medium {
+    float sigma_a[3];
+    uint phase;
+    float sigma_s[3];
+    float g;
+    float emission[3];
+    uint _pad;
 };
 
 struct FrameParams {
@@ -94,7 +108,7 @@ struct FrameParams {
     float aperture_rotation;
     uint environment;
     uint unbounded_first;
-    uint _pad;
+    uint camera_medium;
 };
 
 struct DispatchRange {
@@ -133,6 +147,8 @@ struct EmitParams {
     uint caustic_capacity;
     uint pass;
     uint caustics_only;
+    uint volume_capacity;
+    uint _pad[3];
 };
 
 // Stores a Photon field by field: glslang emits an invalid whole-struct OpStore when the value

@@ -177,55 +177,65 @@ bool conductor_sample(vec3 wo, vec2 alpha, vec3 eta, vec3 k, vec2 u, out vec3 wi
 // ---------------------------------------------------------------------------------------------
 // Rough dielectric (Walter et al. 2007), radiance form: see dielectric_eval in the twin
 
-float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, float ior) {
-    float cos_o = wo.z;
-    float cos_i = wi.z;
-    if (cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha)) return 0.0;
-    alpha = mf_rough_alpha(alpha);
-    float eta_o = cos_o > 0.0 ? 1.0 : ior;
-    float eta_t = cos_o > 0.0 ? ior : 1.0;
-    float eta = eta_t / eta_o;
-    bool reflection = cos_o * cos_i > 0.0;
-    vec3 h = reflection ? wo + wi : wo + eta * wi;
+// The generalised half vector of the pair (wo, wi) at a dielectric of index `ior` (Walter et al.
+// 2007), turned to face +z, with the indices of wo's side and the other (eta = eta_t / eta_o) and
+// the cosines of wo and wi to it; valid is false where it is undefined (either direction in the
+// surface's plane, or wo + eta wi = 0). CPU twin: dielectric_pair.
+struct DielectricPair {
+    vec3 h;
+    float eta_o;
+    float eta_t;
+    float eta;
+    float dot_o;
+    float dot_i;
+    bool reflection;
+    bool valid;
+};
+
+DielectricPair dielectric_pair(vec3 wo, vec3 wi, float ior) {
+    DielectricPair p;
+    p.valid = wo.z != 0.0 && wi.z != 0.0;
+    p.eta_o = wo.z > 0.0 ? 1.0 : ior;
+    p.eta_t = wo.z > 0.0 ? ior : 1.0;
+    p.eta = p.eta_t / p.eta_o;
+    p.reflection = wo.z * wi.z > 0.0;
+    vec3 h = p.reflection ? wo + wi : wo + p.eta * wi;
     float len2 = dot(h, h);
-    if (len2 == 0.0) return 0.0;
-    h = h / sqrt(len2);
-    if (h.z < 0.0) h = -h;
-    float dot_o = dot(wo, h);
-    float dot_i = dot(wi, h);
-    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    p.valid = p.valid && len2 != 0.0;
+    h = len2 != 0.0 ? h / sqrt(len2) : vec3(0.0, 0.0, 1.0);
+    p.h = h.z < 0.0 ? -h : h;
+    p.dot_o = dot(wo, p.h);
+    p.dot_i = dot(wi, p.h);
+    return p;
+}
+
+float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, float ior) {
+    if (mf_is_smooth(alpha)) return 0.0;
+    DielectricPair p = dielectric_pair(wo, wi, ior);
+    if (!p.valid) return 0.0;
+    alpha = mf_rough_alpha(alpha);
+    float dg = ggx_d(p.h, alpha) * ggx_g1(wo, p.h, alpha) * ggx_g1(wi, p.h, alpha);
     if (dg == 0.0) return 0.0;
     float cos_t;
-    float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
-    if (reflection) return f * dg / (4.0 * abs(cos_o * cos_i));
-    float denom = dot_o + eta * dot_i;
-    return (1.0 - f) * dg * abs(dot_o * dot_i) / (abs(cos_o * cos_i) * denom * denom);
+    float f = mf_fresnel_dielectric(abs(p.dot_o), p.eta_o, p.eta_t, cos_t);
+    float cos_oi = abs(wo.z * wi.z);
+    if (p.reflection) return f * dg / (4.0 * cos_oi);
+    float denom = p.dot_o + p.eta * p.dot_i;
+    return (1.0 - f) * dg * abs(p.dot_o * p.dot_i) / (cos_oi * denom * denom);
 }
 
 float dielectric_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior) {
-    float cos_o = wo.z;
-    float cos_i = wi.z;
-    if (cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha)) return 0.0;
-    alpha = mf_rough_alpha(alpha);
-    float eta_o = cos_o > 0.0 ? 1.0 : ior;
-    float eta_t = cos_o > 0.0 ? ior : 1.0;
-    float eta = eta_t / eta_o;
-    bool reflection = cos_o * cos_i > 0.0;
-    vec3 h = reflection ? wo + wi : wo + eta * wi;
-    float len2 = dot(h, h);
-    if (len2 == 0.0) return 0.0;
-    h = h / sqrt(len2);
-    if (h.z < 0.0) h = -h;
-    float dot_o = dot(wo, h);
-    float dot_i = dot(wi, h);
+    if (mf_is_smooth(alpha)) return 0.0;
+    DielectricPair p = dielectric_pair(wo, wi, ior);
+    if (!p.valid) return 0.0;
     // The sampler only makes pairs that see the front of their microfacet.
-    if (dot_o * cos_o <= 0.0 || dot_i * cos_i <= 0.0) return 0.0;
-    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    if (p.dot_o * wo.z <= 0.0 || p.dot_i * wi.z <= 0.0) return 0.0;
+    float pdf_m = ggx_pdf_visible(wo, p.h, mf_rough_alpha(alpha));
     float cos_t;
-    float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
-    if (reflection) return f * pdf_m / (4.0 * abs(dot_o));
-    float denom = dot_o + eta * dot_i;
-    return (1.0 - f) * pdf_m * eta * eta * abs(dot_i) / (denom * denom);
+    float f = mf_fresnel_dielectric(abs(p.dot_o), p.eta_o, p.eta_t, cos_t);
+    if (p.reflection) return f * pdf_m / (4.0 * abs(p.dot_o));
+    float denom = p.dot_o + p.eta * p.dot_i;
+    return (1.0 - f) * pdf_m * p.eta * p.eta * abs(p.dot_i) / (denom * denom);
 }
 
 bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out vec3 weight, out float pdf,

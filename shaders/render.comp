@@ -6,7 +6,10 @@
 // the global map. Terms reached through a mirror or glass are the specular term.
 // CPU twin: src/cpu/render.rs. Bindings: the scene (scene_bindings.glsl), then the
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
-// layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts.
+// layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts,
+// volume photons, volume starts. The `media` variant adds participating media: free flights
+// of camera and gather rays (a scattering point is an estimate vertex whose BSDF is the phase
+// function), transmittance of shadow rays, null boundaries, and the volume photon map.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -15,6 +18,15 @@
 // variant: analytic implicit
 // variant: textured analytic implicit
 // variant: textured alpha analytic implicit
+// variant: media
+// variant: textured media
+// variant: textured alpha media
+// variant: analytic media
+// variant: textured analytic media
+// variant: textured alpha analytic media
+// variant: analytic implicit media
+// variant: textured analytic implicit media
+// variant: textured alpha analytic implicit media
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -22,11 +34,13 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
-layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Grids { GridParams grids[2]; };
+layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Grids { GridParams grids[MAP_COUNT]; };
 layout(std430, binding = SCENE_BINDINGS + 2) readonly buffer GlobalPhotons { Photon global_photons[]; };
 layout(std430, binding = SCENE_BINDINGS + 3) readonly buffer GlobalStarts { uint global_starts[]; };
 layout(std430, binding = SCENE_BINDINGS + 4) readonly buffer CausticPhotons { Photon caustic_photons[]; };
 layout(std430, binding = SCENE_BINDINGS + 5) readonly buffer CausticStarts { uint caustic_starts[]; };
+layout(std430, binding = SCENE_BINDINGS + 6) readonly buffer VolumePhotons { Photon volume_photons[]; };
+layout(std430, binding = SCENE_BINDINGS + 7) readonly buffer VolumeStarts { uint volume_starts[]; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -38,6 +52,15 @@ layout(push_constant) uniform Push { DispatchRange range; };
 const uint RAY_CAMERA = 0u; // camera path: through path lobes to the first estimate lobe
 const uint RAY_SHADOW = 1u; // the shadow ray of the direct light at the estimate vertex
 const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an estimate lobe
+const uint RAY_SHAFT = 3u;  // the shadow ray of an equiangular sample of a camera segment (media)
+
+// Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries; with
+// media each camera segment may take three (its equiangular shadow ray, then its retrace).
+#ifdef VARIANT_MEDIA
+#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS))
+#else
+#define LOOP_STEPS (2u * frame.max_depth + 1u)
+#endif
 
 // Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
 // DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
@@ -57,12 +80,22 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     uint ray = RAY_CAMERA;
     uint depth = 0u;           // path-lobe bounces of the current path so far
     vec3 throughput = vec3(1.0);
+    uint medium = frame.camera_medium;  // the medium the current ray runs through
+    uint segment = 0u;         // free flights of the path so far (their random dimensions)
+    // The camera segment an equiangular sample interrupted, resumed after its shadow ray.
+    bool shaft_done = false;
+    vec3 shaft_o = vec3(0.0);
+    vec3 shaft_d = vec3(0.0);
+    uint shaft_medium = NO_MEDIUM;
+    uint shaft_layer = LAYER_DIRECT;
     // The estimate vertex: the camera path's (then the gather path's) last vertex.
     Hit he;
     Bsdf be;
     vec3 wo_e = vec3(0.0);
     vec3 weight = vec3(0.0);   // throughput up to the estimate vertex
     bool via_specular = false; // the estimate vertex was reached through mirrors or glass
+    bool volume_e = false;     // the estimate vertex is a scattering point in a medium
+    vec3 inv_sigma_t_e = vec3(0.0);
     vec3 unoccluded = vec3(0.0);
     vec3 gather_weight = vec3(0.0);
     uint gdim = 0u;
@@ -76,14 +109,116 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
 
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     uint skip = NO_LIGHT;
-    for (uint step = 0u; step < 2u * frame.max_depth + 1u; step++) {
+    for (uint step = 0u; step < LOOP_STEPS; step++) {
         float t;
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if (t_max != NO_RAY) rays++;
-        uint prim = trace_ray(o, d, t_max, ray == RAY_SHADOW, skip, t);
+        bool any_hit = ray != RAY_CAMERA && ray != RAY_GATHER;
+#ifdef VARIANT_MEDIA
+        // Shadow rays take the closest hit: they pass null boundaries and sum the media between.
+        any_hit = false;
+#endif
+        // A shaft ray leaves a point in a medium, which has no triangle to skip.
+        uint prim = trace_ray(o, d, t_max, any_hit, ray == RAY_SHAFT ? NO_LIGHT : skip, t);
+        bool scattered = false;
+#ifdef VARIANT_MEDIA
+        // The medium up to the hit (or to the light, or to infinity): shadow rays take its
+        // transmittance, camera and gather rays sample a free flight through it.
+        if (medium != NO_MEDIUM && t_max != NO_RAY) {
+            if (ray == RAY_SHADOW || ray == RAY_SHAFT) {
+                unoccluded *= medium_transmittance(medium, t);
+            } else {
+                // Single scattering from point and spot lights along the whole camera segment,
+                // by equiangular sampling (the light shafts; the free flight's scattering
+                // point leaves these lights out): the sample's shadow ray runs first, then the
+                // segment is traced again and goes on.
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done) {
+                    vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
+                    Light l = lights[pick_light(ue.x, false)];
+                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0) {
+                        float pdf;
+                        float te = equiangular_sample(o, d, t, load3(l.position), ue.y, pdf);
+                        vec3 x = o + d * te;
+                        vec3 to_light = load3(l.position) - x;
+                        float r2 = dot(to_light, to_light);
+                        float r = sqrt(r2);
+                        vec3 wi = to_light / r;
+                        Medium md = media[medium];
+                        vec3 c = throughput * medium_transmittance(medium, te) * load3(md.sigma_s)
+                            * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
+                            * load3(l.intensity);
+                        if (pdf > 0.0 && r > 0.0 && c != vec3(0.0)) {
+                            shaft_o = o;
+                            shaft_d = d;
+                            shaft_medium = medium;
+                            shaft_layer = depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT;
+                            unoccluded = c;
+                            o = x;
+                            d = wi;
+                            t_max = max(r - frame.ray_epsilon, 0.0);
+                            ray = RAY_SHAFT;
+                            continue;
+                        }
+                    }
+                }
+                shaft_done = false;
+                uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + segment;
+                segment++;
+                MediumEvent e = medium_sample(medium, t, rand2(stream, sample_index, frame.seed, key));
+                if (ray == RAY_CAMERA && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * e.emission;
+                throughput *= e.weight;
+                scattered = e.scattered;
+                t = e.t;
+                if (throughput == vec3(0.0)) break;
+            }
+        }
+#endif
+        Hit h;
+        bool null_hit = false;
+#ifdef VARIANT_MEDIA
+        if (scattered) {
+            h = medium_hit(o + d * t, -d);
+        } else if (prim != NO_LIGHT) {
+            h = shape_hit(prim, o, d, t);
+            null_hit = materials[h.material].kind == MATERIAL_NULL;
+        }
+        if (null_hit) {
+            // An invisible boundary: straight through into the medium beyond, not a bounce.
+            medium = medium_after(prim, h.ng, d, medium);
+            if (ray != RAY_SHAFT) skip = ray_skip(prim);
+            vec3 next = offset_origin(h, -d, BSDF_TRANSMISSION);
+            if (ray == RAY_SHADOW || ray == RAY_SHAFT) t_max = max(t_max - dot(next - o, d), 0.0);
+            o = next;
+            continue;
+        }
+        if (ray == RAY_SHAFT) {
+            // The equiangular sample's shadow ray: its light if nothing blocked it; then back to
+            // the camera segment it interrupted.
+            if (prim == NO_LIGHT) terms[shaft_layer] += unoccluded;
+            o = shaft_o;
+            d = shaft_d;
+            medium = shaft_medium;
+            t_max = INF;
+            ray = RAY_CAMERA;
+            shaft_done = true;
+            continue;
+        }
+#else
+        if (prim != NO_LIGHT && ray != RAY_SHADOW) h = shape_hit(prim, o, d, t);
+#endif
         if (ray == RAY_SHADOW) {
             if (prim == NO_LIGHT) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * unoccluded;
             if (frame.photon_mapping == 0u) break;
+            if (volume_e) {
+                // A scattering point: the volume map without the single scattering, which the
+                // light sample gave; sigma_t-weighted collisions become radiance over sigma_t.
+                lookup_map[0] = MAP_VOLUME;
+                lookup_exclude[0] = PHOTON_FLAG_DIRECT;
+                lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
+                lookup_weight[0] = weight * inv_sigma_t_e;
+                lookups = 1u;
+                break;
+            }
             lookup_map[0] = MAP_CAUSTIC;
             lookup_exclude[0] = 0u;
             lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_CAUSTICS;
@@ -95,7 +230,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             lookups = frame.gather_rays == 0u ? 2u : 1u;
             break;
         }
-        if (prim == NO_LIGHT) {
+        if (prim == NO_LIGHT && !scattered) {
             // A camera path that leaves the scene sees the environment (a path lobe's view of a
             // light); a gather path counts none of it, as it counts no emission.
             WHEN(frame.environment != NO_LIGHT && ray == RAY_CAMERA && part == 0u) {
@@ -103,16 +238,27 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             }
             break;
         }
-        Hit h = shape_hit(prim, o, d, t);
-        skip = ray_skip(prim);
-        Material m = materials[h.material];
+        skip = scattered ? NO_LIGHT : ray_skip(prim);
         vec3 wo = -d;
         bool camera = ray == RAY_CAMERA;
-        // Everything a mirror or glass shows is the specular term. Emission leaves the front
-        // face only; it counts wherever a camera path meets it, since estimate lobes end the path
-        // and light sampling covers them. A gather path counts none: direct light and caustics do.
-        if (camera && dot(wo, h.ng) > 0.0 && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
-        Bsdf b = material_bsdf(m, h);
+        Bsdf b;
+        vec3 inv_sigma_t = vec3(1.0);
+#ifdef VARIANT_MEDIA
+        if (scattered) {
+            b = phase_bsdf(medium, wo);
+            vec3 st = medium_sigma_t(media[medium]);
+            inv_sigma_t = vec3(st.r > 0.0 ? 1.0 / st.r : 0.0, st.g > 0.0 ? 1.0 / st.g : 0.0, st.b > 0.0 ? 1.0 / st.b : 0.0);
+        } else
+#endif
+        {
+            Material m = materials[h.material];
+            // Everything a mirror or glass shows is the specular term. Emission leaves the front
+            // face only; it counts wherever a camera path meets it, since estimate lobes end the
+            // path and light sampling covers them. A gather path counts none: direct light and
+            // caustics do.
+            if (camera && dot(wo, h.ng) > 0.0 && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
+            b = material_bsdf(m, h);
+        }
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
         vec4 u = rand4(stream, sample_index, frame.seed, camera ? dim + RNG_FRESNEL : gdim + 1u + depth);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
@@ -121,6 +267,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             BsdfSample s = bsdf_sample(b, wo, u.xyz, LOBES_PATH);
             if (s.flags == 0u) break;
             throughput *= s.weight / q;
+#ifdef VARIANT_MEDIA
+            if ((s.flags & BSDF_TRANSMISSION) != 0u) medium = medium_after(prim, h.ng, s.wi, medium);
+#endif
             o = offset_origin(h, wo, s.flags);
             d = s.wi;
             depth++;
@@ -129,14 +278,15 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         }
         if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) break;
         if (!camera) {
-            // The gather path's end: the global map there, weighted 1/gather_rays.
+            // The gather path's end: the global map there (the volume map at a scattering
+            // point), weighted 1/gather_rays.
             he = h;
             be = b;
             wo_e = wo;
-            lookup_map[0] = MAP_GLOBAL;
+            lookup_map[0] = scattered ? MAP_VOLUME : MAP_GLOBAL;
             lookup_exclude[0] = 0u;
             lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
-            lookup_weight[0] = weight * (gather_weight * (throughput / (1.0 - q)) / float(frame.gather_rays));
+            lookup_weight[0] = weight * (gather_weight * (throughput / (1.0 - q)) / float(frame.gather_rays)) * inv_sigma_t;
             lookups = 1u;
             break;
         }
@@ -145,6 +295,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         wo_e = wo;
         weight = throughput / (1.0 - q);
         via_specular = depth > 0u;
+        volume_e = scattered;
+        inv_sigma_t_e = inv_sigma_t;
         if (part == 0u) {
             ShadowRay sr = direct_light_sample(h, b, wo, stream, sample_index, dim);
             unoccluded = sr.unoccluded;
@@ -154,7 +306,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             ray = RAY_SHADOW;
             continue;
         }
-        if (frame.photon_mapping == 0u) break;
+        // A scattering point reads the volume map in part 0 and has no final gather.
+        if (frame.photon_mapping == 0u || scattered) break;
         // Final-gather ray part - 1, sampled from the estimate lobes.
         gdim = RNG_GATHER_DOMAIN + (part - 1u) * RNG_GATHER_DIMS_PER_RAY;
         vec4 u0 = rand4(stream, sample_index, frame.seed, gdim);

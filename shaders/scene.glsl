@@ -5,6 +5,7 @@ const float INF = 1.0 / 0.0;
 
 #include "rng.glsl"
 #include "sampling.glsl"
+#include "phase.glsl"
 #include "shape.glsl"
 // Image and pattern textures only in the `textured` variant of a kernel: lavapipe runs every
 // branch of a shader under masks, so their code costs every lookup even where no lane needs it
@@ -19,3 +20,4 @@ const float INF = 1.0 / 0.0;
 #include "trace.glsl"
 #include "light.glsl"
 #include "shading.glsl"
+#include "medium.glsl"

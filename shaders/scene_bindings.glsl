@@ -10,3 +10,4 @@ layout(std430, binding = BINDING_LIGHTS) readonly buffer Lights { Light lights[]
 layout(std430, binding = BINDING_TEXTURES) readonly buffer Textures { Texture textures[]; };
 layout(std430, binding = BINDING_TEXTURE_DATA) readonly buffer TextureData { uint texture_data[]; };
 layout(std430, binding = BINDING_SHAPE_DATA) readonly buffer ShapeData { float shape_data[]; };
+layout(std430, binding = BINDING_MEDIA) readonly buffer Media { Medium media[]; };

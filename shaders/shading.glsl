@@ -60,13 +60,28 @@ struct ShadowRay {
     vec3 unoccluded;
 };
 
+// A light's sample numbers `u` moved into one cell of its POV-Ray grid (`Light::grid`; 0: `u`
+// as it is): cell (sample_index + a hash of the pixel) mod (n m), so each pixel's consecutive
+// n m samples visit every cell once, at a jittered point in it or at its centre.
+vec2 grid_sample(uint grid, vec2 u, uint stream, uint sample_index) {
+    if (grid == 0u) return u;
+    uint n = grid & 0xffu;
+    uint m = (grid >> 8u) & 0xffu;
+    uint k = (sample_index + stream * 0x9E3779B1u) % (n * m);
+    vec2 j = (grid & LIGHT_GRID_JITTER) != 0u ? u : vec2(0.5);
+    return vec2((float(k % n) + j.x) / float(n), (float(k / n) + j.y) / float(m));
+}
+
 ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim) {
     ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0));
     if (frame.light_count == 0u) return none;
     Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
     // A scene whose lights all give photons only picks one with probability 0.
     if (l.pick_probability <= 0.0) return none;
-    LightSample s = light_sample(l, h.p, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U));
+    // A scattering point in a medium leaves point and spot lights to the camera segment's
+    // equiangular sample (render.comp).
+    if (b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
+    LightSample s = light_sample(l, h.p, grid_sample(l.grid, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U), stream, sample_index));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
@@ -75,5 +90,7 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     vec3 to_target = s.p - origin;
     float shadow_length = length(to_target);
     float t_max = max(shadow_length - s.eps, 0.0);
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * (abs(dot(b.ns, s.wi)) / l.pick_probability));
+    // A medium's phase function has no cosine: it is per solid angle already.
+    float cosine = b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, s.wi));
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / l.pick_probability));
 }

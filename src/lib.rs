@@ -2,6 +2,7 @@
 
 pub mod accel;
 pub mod cpu;
+pub mod editor;
 pub mod gpu;
 pub mod io;
 pub mod layout;

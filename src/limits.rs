@@ -26,6 +26,10 @@ pub const MAX_PHOTON_PATHS: u32 = 1_000_000_000;
 /// Largest magnitude of a coordinate, a length or a colour in a scene, after transforms: products
 /// of two (areas) and sums of many (light power) then stay finite in 32-bit floats.
 pub const MAX_SCENE_VALUE: f64 = 1e9;
+/// Largest absorption, scattering or extinction coefficient of a medium, per scene unit: a
+/// mean free path of 1e-6 scene units, far below anything a render resolves, keeps
+/// sigma_t * distance finite in 32-bit floats over the whole scene range.
+pub const MAX_MEDIUM_COEFFICIENT: f32 = 1e6;
 /// Smallest sphere radius, in scene units (its square stays a normal f32).
 pub const MIN_SPHERE_RADIUS: f64 = 1e-9;
 /// Largest index of refraction, and the smallest is its inverse.
@@ -36,6 +40,8 @@ pub const MIN_FOV_DEGREES: f64 = 0.01;
 pub const MAX_APERTURE_BLADES: u32 = 64;
 /// Largest spot light `tightness` (the exponent of cos): cos^1000 is 0.6 at 1 degree, a beam.
 pub const MAX_SPOT_TIGHTNESS: f64 = 1000.0;
+/// Cells along each side of an area light's POV-Ray grid (`samples = [n, m]`).
+pub const MAX_LIGHT_GRID: u32 = 64;
 /// Most texels of an environment map as the renderer uses it (2048 x 1024); a larger map is
 /// halved until it fits: the map, its cdfs and the scene's other data share one storage buffer
 /// (128 MiB on lavapipe).

@@ -152,8 +152,8 @@ fn environment_errors_name_the_field_and_the_fix() {
     );
     let m = error_of(&format!("{CAMERA}[environment]\ntype = \"map\"\n"));
     assert_mentions(&m, &["bad.toml:5:", "missing field `file`", "file = \"textures/sky.hdr\""]);
-    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"sky\"\n"));
-    assert_mentions(&m, &["bad.toml:6:", "unknown type \"sky\""]);
+    let m = error_of(&format!("{CAMERA}[environment]\ntype = \"skye\"\n"));
+    assert_mentions(&m, &["bad.toml:6:", "unknown type \"skye\"", "did you mean \"sky\"?"]);
     let m = error_of(&format!("{CAMERA}[environment]\ntype = \"uniform\"\nradiance = 1\nstrength = -2\n"));
     assert_mentions(&m, &["bad.toml:8:", "`strength` is -2", ">= 0"]);
     let m = error_of(&format!("{CAMERA}[environment]\ntype = \"gradient\"\ncolors = [[1, 1, 1]]\n"));

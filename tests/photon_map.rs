@@ -113,6 +113,9 @@ fn closed_box(rho: f32) -> Scene {
         })],
         environment: None,
         warnings: vec![],
+        media: vec![],
+        medium_names: vec![],
+        atmosphere: None,
     }
 }
 

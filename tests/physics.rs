@@ -58,6 +58,9 @@ fn light_over_plane() -> Scene {
         lights: vec![],
         environment: None,
         warnings: vec![],
+        media: vec![],
+        medium_names: vec![],
+        atmosphere: None,
     }
 }
 

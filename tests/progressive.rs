@@ -169,10 +169,10 @@ fn kept_renderer_equals_a_renderer_per_pass() {
         let fresh = render_gpu(&ctx, &buffers, 1, Some(&photons), pass, &mut |_, _| {}).unwrap();
         assert!(kept.layers == fresh.layers, "pass {pass}: the kept renderer's image differs");
     }
-    // Another seed changes only the frame constants: written in place, all 8 arrays kept.
+    // Another seed changes only the frame constants: written in place, all 9 arrays kept.
     let mut reseeded = buffers.clone();
     reseeded.frame.seed += 1;
-    assert_eq!(renderer.update_scene(&reseeded, Some(&photons)).unwrap(), 8);
+    assert_eq!(renderer.update_scene(&reseeded, Some(&photons)).unwrap(), 9);
     let kept = renderer.render_pass(1, 0, &mut |_, _| {}).unwrap();
     let fresh = render_gpu(&ctx, &reseeded, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
     assert!(kept.layers == fresh.layers, "the updated scene renders differently from a fresh renderer");

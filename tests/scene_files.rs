@@ -104,6 +104,7 @@ fn materials_showroom_has_every_material_kind_on_its_spheres() {
             MaterialKind::Conductor { .. } => "conductor",
             MaterialKind::Plastic { .. } => "plastic",
             MaterialKind::Mix { .. } => "mix",
+            MaterialKind::Null => "null",
         })
         .collect();
     kinds.sort();

@@ -353,6 +353,7 @@ fn analytic_shapes_render_like_their_fine_tessellations() {
                     .map(|vertices| Shape {
                         geometry: Geometry::Triangle(Triangle { vertices, uv: None, normals: None }),
                         material: s.material,
+                        media: None,
                     })
                     .collect::<Vec<_>>(),
                 _ => vec![s.clone()],
@@ -521,6 +522,7 @@ fn analytic_emitters_light_like_their_references() {
                             .map(|vertices| Shape {
                                 geometry: Geometry::Triangle(Triangle { vertices, uv: None, normals: None }),
                                 material: shape.material,
+                                media: None,
                             })
                             .collect::<Vec<_>>(),
                         _ => vec![shape.clone()],

@@ -28,6 +28,16 @@ pub mod diff;
 pub mod merge;
 mod parse;
 pub mod render;
+pub mod serve;
+
+/// `--backend` of render and serve: where the kernels run (`auto`: a real GPU when there is one,
+/// else the CPU backend).
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum BackendArg {
+    Auto,
+    Gpu,
+    Cpu,
+}
 
 // No doc comments on the clap types: clap would show them as help text.
 #[derive(Parser)]
@@ -49,4 +59,6 @@ pub enum Command {
     Diff(diff::DiffArgs),
     /// Combine accumulation files of disjoint pass ranges into one image
     Merge(merge::MergeArgs),
+    /// Edit a scene in the browser with a live rendered preview (prints the URL to open)
+    Serve(serve::ServeArgs),
 }

@@ -5,9 +5,9 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::BackendArg;
 use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::{check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr};
 use photonix::limits::{printable_message, MAX_PASSES};
@@ -25,13 +25,6 @@ use super::parse::{
     parse_depth, parse_duration, parse_exposure, parse_gather_rays, parse_pass_range, parse_passes, parse_photons,
     parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error,
 };
-
-#[derive(Clone, Copy, ValueEnum)]
-enum BackendArg {
-    Auto,
-    Gpu,
-    Cpu,
-}
 
 #[derive(clap::Args)]
 pub struct RenderArgs {

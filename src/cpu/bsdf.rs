@@ -13,6 +13,7 @@ use super::microfacet::{
     mf_cosine_direction, mf_fresnel_dielectric, mf_is_smooth, mf_plastic_coat_probability, plastic_eval, plastic_pdf,
     plastic_sample, MfSample, MF_TRANSMISSION,
 };
+use super::phase::{phase_hg, phase_hg_sample};
 use super::rng::{pcg4d, rand_unit};
 use super::sampling::{cosine_direction, onb, reflect};
 use super::shape::Hit;
@@ -346,6 +347,10 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
     smp
 }
 
+/// A medium's scattering point scatters into every direction and ends camera paths (light
+/// sampling, the volume photon map) like a diffuse surface.
+pub const PHASE_FLAGS: u32 = BSDF_GLOSSY | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_ESTIMATE;
+
 /// The lobes of `b` (`BSDF_*` flags); 0 for a black surface, which ends paths and stores nothing.
 pub fn bsdf_flags(b: &Bsdf) -> u32 {
     match b.kind {
@@ -361,6 +366,7 @@ pub fn bsdf_flags(b: &Bsdf) -> u32 {
             let base = if b.color0 == Vec3::ZERO { 0 } else { BSDF_DIFFUSE | BSDF_ESTIMATE };
             BSDF_REFLECTION | coat | base
         }
+        MATERIAL_PHASE => PHASE_FLAGS,
         _ => 0, // unreachable: the host packs only known kinds (tested)
     }
 }
@@ -395,6 +401,7 @@ pub fn bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
         MATERIAL_DIELECTRIC => b.color0 * rough_dielectric_eval(b, wo, wi),
         MATERIAL_CONDUCTOR => conductor_bsdf_eval(b, wo, wi),
         MATERIAL_PLASTIC => plastic_bsdf_eval(b, wo, wi),
+        MATERIAL_PHASE => Vec3::splat(phase_hg(wo.dot(wi), b.ior)),
         _ => Vec3::ZERO,
     }
 }
@@ -409,6 +416,7 @@ pub fn bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
         MATERIAL_DIELECTRIC => rough_dielectric_pdf(b, wo, wi),
         MATERIAL_CONDUCTOR => conductor_bsdf_pdf(b, wo, wi),
         MATERIAL_PLASTIC => plastic_bsdf_pdf(b, wo, wi),
+        MATERIAL_PHASE => phase_hg(wo.dot(wi), b.ior),
         _ => 0.0,
     }
 }
@@ -427,6 +435,11 @@ pub fn bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfSample {
         MATERIAL_DIELECTRIC => rough_dielectric_sample(b, wo, u),
         MATERIAL_CONDUCTOR => conductor_bsdf_sample(b, wo, u),
         MATERIAL_PLASTIC => plastic_bsdf_sample(b, wo, u, lobes),
+        MATERIAL_PHASE => {
+            // Sampled exactly by its own pdf: the weight is 1.
+            let wi = phase_hg_sample(wo, b.ior, [u[1], u[2]]);
+            BsdfSample { wi, weight: Vec3::ONE, pdf: phase_hg(wo.dot(wi), b.ior), flags: PHASE_FLAGS }
+        }
         _ => BsdfSample::default(),
     }
 }

@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf};
 use super::light::{light_emit, pick_light};
+use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
 use super::rng::{rand1, rand2, rand4};
 use super::shading::{offset_origin, ray_skip};
@@ -15,9 +16,15 @@ use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{EmitParams, Photon};
 
-/// Traces photon path `path` and calls `store(x, flux, wi, flags)` at every surface with
-/// estimate lobes it meets, exactly as the kernel does.
-pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut store: impl FnMut(Vec3, Vec3, Vec3, u32)) {
+/// Traces photon path `path` and calls `store(x, flux, wi, flags, volume)` at every surface with
+/// estimate lobes it meets and (`volume` true) every collision in a medium, exactly as the kernel
+/// does.
+pub fn trace_photon_path(
+    s: &SceneView,
+    path: u32,
+    params: &EmitParams,
+    mut store: impl FnMut(Vec3, Vec3, Vec3, u32, bool),
+) {
     let f = s.frame;
     if f.light_count == 0 {
         return;
@@ -38,16 +45,50 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
+    let mut medium = l.medium;
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     let mut skip = NO_LIGHT;
-    for depth in 0..params.max_depth {
-        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
-        if prim == NO_LIGHT {
+    // Scattering events so far (surfaces and media; null boundaries are none).
+    let mut depth = 0;
+    let mut step = 0;
+    while step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth {
+        let (prim, mut t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
+        let mut scattered = false;
+        let mut collision = Vec3::ZERO;
+        let mut medium_weight = Vec3::ONE;
+        // A free flight through the medium: a collision before the surface scatters the photon
+        // (or absorbs it, by roulette on the albedo below); passing it, the flux keeps its mean.
+        if medium != NO_MEDIUM {
+            let e = medium_sample(s, medium, t, rand2(path, params.pass, seed, dim + RNG_PHOTON_MEDIUM + step));
+            scattered = e.scattered;
+            t = e.t;
+            if scattered {
+                collision = e.collision;
+                medium_weight = e.weight;
+            } else {
+                flux *= e.weight;
+            }
+        }
+        step += 1;
+        if !scattered && prim == NO_LIGHT {
             return;
         }
-        let h = shape_hit(s, prim, o, d, t);
-        skip = ray_skip(s, prim);
+        skip = if scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let wo = -d;
-        let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+        let (h, b) = if scattered {
+            (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))
+        } else {
+            let h = shape_hit(s, prim, o, d, t);
+            let m = &s.materials[h.material as usize];
+            if m.kind == MATERIAL_NULL {
+                // An invisible boundary: straight through into the medium beyond, not a bounce.
+                medium = medium_after(s, prim, h.ng, d, medium);
+                o = offset_origin(&h, wo, BSDF_TRANSMISSION);
+                continue;
+            }
+            let b = material_bsdf(s, m, &h);
+            (h, b)
+        };
         let lobes = bsdf_flags(&b);
         if lobes == 0 {
             return; // a black surface keeps nothing and reflects nothing
@@ -61,8 +102,14 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
             } else {
                 0
             };
-            if params.caustics_only == 0 || flags == PHOTON_FLAG_CAUSTIC {
-                store(h.p, flux, wo, flags);
+            // A collision in a medium stores a volume photon carrying its sigma_t-weighted flux,
+            // in the global pass only: the caustic map is of surfaces.
+            if scattered {
+                if params.caustics_only == 0 {
+                    store(h.p, flux * collision, wo, flags, true);
+                }
+            } else if params.caustics_only == 0 || flags == PHOTON_FLAG_CAUSTIC {
+                store(h.p, flux, wo, flags, false);
             }
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if params.caustics_only != 0 {
@@ -74,43 +121,55 @@ pub fn trace_photon_path(s: &SceneView, path: u32, params: &EmitParams, mut stor
         if smp.flags == 0 {
             return;
         }
-        // Russian roulette on the sample's weight: survivors keep their flux up to its colour.
-        let survive = smp.weight.max_element();
+        // Russian roulette on the sample's weight (with a collision's albedo): survivors keep
+        // their flux up to its colour.
+        let w = smp.weight * medium_weight;
+        let survive = w.max_element();
         if rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive {
             return;
         }
-        flux *= smp.weight / survive;
+        flux *= w / survive;
         if smp.flags & BSDF_ESTIMATE != 0 {
             specular_only = false;
         }
+        if !scattered && smp.flags & BSDF_TRANSMISSION != 0 {
+            medium = medium_after(s, prim, h.ng, smp.wi, medium);
+        }
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
+        depth += 1;
     }
 }
 
-/// The two photon maps of one emission, unsorted.
+/// The photon maps of one emission, unsorted.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PhotonMaps {
     pub global: Vec<Photon>,
     pub caustic: Vec<Photon>,
+    /// Collisions in media (global pass only).
+    pub volume: Vec<Photon>,
 }
 
 /// Traces paths `params.path_begin ..+ path_count` (in parallel) and returns their photons in
 /// path order; the kernel stores the same photons in an order set by its atomics.
 pub fn emit_photons(s: &SceneView, params: &EmitParams) -> PhotonMaps {
     let inv_scale = params.total_paths as f32 / s.frame.total_light_power;
-    let per_path: Vec<Vec<(Photon, u32)>> = (params.path_begin..params.path_begin + params.path_count)
+    let per_path: Vec<Vec<(Photon, u32, bool)>> = (params.path_begin..params.path_begin + params.path_count)
         .into_par_iter()
         .map(|path| {
             let mut stored = Vec::new();
-            trace_photon_path(s, path, params, |x, flux, wi, flags| {
-                stored.push((pack_photon(x, flux, inv_scale, wi, flags), flags));
+            trace_photon_path(s, path, params, |x, flux, wi, flags, volume| {
+                stored.push((pack_photon(x, flux, inv_scale, wi, flags), flags, volume));
             });
             stored
         })
         .collect();
     let mut maps = PhotonMaps::default();
-    for (photon, flags) in per_path.into_iter().flatten() {
+    for (photon, flags, volume) in per_path.into_iter().flatten() {
+        if volume {
+            maps.volume.push(photon);
+            continue;
+        }
         if params.caustics_only == 0 {
             maps.global.push(photon);
         }

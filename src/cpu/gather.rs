@@ -13,15 +13,16 @@ use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
 
-pub const MAP_GLOBAL: usize = 0;
-pub const MAP_CAUSTIC: usize = 1;
+pub const MAP_GLOBAL: usize = crate::layout::constants::MAP_GLOBAL as usize;
+pub const MAP_CAUSTIC: usize = crate::layout::constants::MAP_CAUSTIC as usize;
+pub const MAP_VOLUME: usize = crate::layout::constants::MAP_VOLUME as usize;
 
 /// The photons and bucket starts of `map`.
 fn map_arrays<'a>(s: &SceneView<'a>, map: usize) -> (&'a [crate::layout::Photon], &'a [u32]) {
-    if map == MAP_GLOBAL {
-        (s.maps.global_photons, s.maps.global_starts)
-    } else {
-        (s.maps.caustic_photons, s.maps.caustic_starts)
+    match map {
+        MAP_GLOBAL => (s.maps.global_photons, s.maps.global_starts),
+        MAP_CAUSTIC => (s.maps.caustic_photons, s.maps.caustic_starts),
+        _ => (s.maps.volume_photons, s.maps.volume_starts),
     }
 }
 
@@ -50,11 +51,15 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
 
 /// Radiance toward `wo` at `h` through the estimate lobes of `b`, from the photons of `map`
 /// (those with flags in `exclude` skipped): each photon weighted by the BSDF's value for its
-/// direction.
+/// direction. The volume map (`b` a medium's phase function) is read over the ball of radius r
+/// with the 3D Epanechnikov kernel 15/(8 pi r^3) (1 - d^2/r^2): the sum of flux times phase
+/// over the collisions near the point, which estimates sigma_t times the in-scattered radiance
+/// (Jensen and Christensen 1998); the caller divides by sigma_t.
 pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, exclude: u32) -> Vec3 {
+    let volume = map == MAP_VOLUME;
     let nf = facing(b, wo);
     // A Lambertian BSDF has one value for every photon: sum the irradiance, apply it once.
-    if bsdf_estimate_is_constant(b) {
+    if !volume && bsdf_estimate_is_constant(b) {
         return bsdf_eval(b, wo, nf) * photon_irradiance(s, map, h.p, nf, exclude);
     }
     let g = &s.maps.grids[map];
@@ -63,9 +68,9 @@ pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, e
     }
     let (photons, starts) = map_arrays(s, map);
     let r2 = g.radius * g.radius;
-    let thickness = PHOTON_DISC_THICKNESS * g.radius;
+    let thickness = if volume { f32::INFINITY } else { PHOTON_DISC_THICKNESS * g.radius };
     // Photons arriving from behind count only where the BSDF transmits.
-    let both_sides = bsdf_flags(b) & BSDF_TRANSMISSION != 0;
+    let both_sides = volume || bsdf_flags(b) & BSDF_TRANSMISSION != 0;
     let mut sum = Vec3::ZERO;
     for_each_photon_near(h.p, g, photons, starts, |p, d2| {
         let d = Vec3::from(p.position) - h.p;
@@ -78,5 +83,5 @@ pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, e
         }
         sum += bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
     });
-    sum * (2.0 / (PI * r2))
+    sum * if volume { 15.0 / (8.0 * PI * r2 * g.radius) } else { 2.0 / (PI * r2) }
 }

@@ -283,72 +283,78 @@ pub fn conductor_sample(wo: Vec3, alpha: Vec2, eta: Vec3, k: Vec3, u: Vec2) -> O
 /// for importance or photons is f(wi, wo) = eta² f(wo, wi), Walter's form. Both give the same
 /// image when every path that enters a dielectric leaves it again, since the factors cancel.
 pub fn dielectric_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
-    let cos_o = wo.z;
-    let cos_i = wi.z;
-    if cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha) {
+    if mf_is_smooth(alpha) {
         return 0.0;
     }
+    let Some(p) = dielectric_pair(wo, wi, ior) else {
+        return 0.0;
+    };
     let alpha = mf_rough_alpha(alpha);
-    let (eta_o, eta_t) = if cos_o > 0.0 { (1.0, ior) } else { (ior, 1.0) };
-    let eta = eta_t / eta_o;
-    let reflection = cos_o * cos_i > 0.0;
-    let mut h = if reflection { wo + wi } else { wo + eta * wi };
-    let len2 = dot(h, h);
-    if len2 == 0.0 {
-        return 0.0;
-    }
-    h /= len2.sqrt();
-    if h.z < 0.0 {
-        h = -h;
-    }
-    let dot_o = dot(wo, h);
-    let dot_i = dot(wi, h);
-    let dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    let dg = ggx_d(p.h, alpha) * ggx_g1(wo, p.h, alpha) * ggx_g1(wi, p.h, alpha);
     if dg == 0.0 {
         return 0.0;
     }
-    let (f, _) = mf_fresnel_dielectric(dot_o.abs(), eta_o, eta_t);
-    if reflection {
-        return f * dg / (4.0 * (cos_o * cos_i).abs());
+    let (f, _) = mf_fresnel_dielectric(p.dot_o.abs(), p.eta_o, p.eta_t);
+    let cos_oi = (wo.z * wi.z).abs();
+    if p.reflection {
+        return f * dg / (4.0 * cos_oi);
     }
-    let denom = dot_o + eta * dot_i;
-    (1.0 - f) * dg * (dot_o * dot_i).abs() / ((cos_o * cos_i).abs() * denom * denom)
+    let denom = p.dot_o + p.eta * p.dot_i;
+    (1.0 - f) * dg * (p.dot_o * p.dot_i).abs() / (cos_oi * denom * denom)
+}
+
+/// The generalised half vector of the pair (wo, wi) at a dielectric of index `ior` (Walter et
+/// al. 2007), turned to face +z, with the indices of wo's side and the other (`eta = eta_t /
+/// eta_o`) and the cosines of wo and wi to it; `None` where it is undefined (either direction in
+/// the surface's plane, or wo + eta wi = 0).
+pub struct DielectricPair {
+    pub h: Vec3,
+    pub eta_o: f32,
+    pub eta_t: f32,
+    pub eta: f32,
+    pub dot_o: f32,
+    pub dot_i: f32,
+    pub reflection: bool,
+}
+
+pub fn dielectric_pair(wo: Vec3, wi: Vec3, ior: f32) -> Option<DielectricPair> {
+    let (cos_o, cos_i) = (wo.z, wi.z);
+    if cos_o == 0.0 || cos_i == 0.0 {
+        return None;
+    }
+    let (eta_o, eta_t) = if cos_o > 0.0 { (1.0, ior) } else { (ior, 1.0) };
+    let eta = eta_t / eta_o;
+    let reflection = cos_o * cos_i > 0.0;
+    let h = if reflection { wo + wi } else { wo + eta * wi };
+    let len2 = dot(h, h);
+    if len2 == 0.0 {
+        return None;
+    }
+    let h = h / len2.sqrt();
+    let h = if h.z < 0.0 { -h } else { h };
+    Some(DielectricPair { h, eta_o, eta_t, eta, dot_o: dot(wo, h), dot_i: dot(wi, h), reflection })
 }
 
 /// Density of [`dielectric_sample`]: F D_wo(h) / (4 |dot(wo, h)|) for reflection,
 /// (1 - F) D_wo(h) eta² |dot(wi, h)| / (dot(wo, h) + eta dot(wi, h))² for transmission.
 pub fn dielectric_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
-    let cos_o = wo.z;
-    let cos_i = wi.z;
-    if cos_o == 0.0 || cos_i == 0.0 || mf_is_smooth(alpha) {
+    if mf_is_smooth(alpha) {
         return 0.0;
     }
-    let alpha = mf_rough_alpha(alpha);
-    let (eta_o, eta_t) = if cos_o > 0.0 { (1.0, ior) } else { (ior, 1.0) };
-    let eta = eta_t / eta_o;
-    let reflection = cos_o * cos_i > 0.0;
-    let mut h = if reflection { wo + wi } else { wo + eta * wi };
-    let len2 = dot(h, h);
-    if len2 == 0.0 {
+    let Some(p) = dielectric_pair(wo, wi, ior) else {
         return 0.0;
-    }
-    h /= len2.sqrt();
-    if h.z < 0.0 {
-        h = -h;
-    }
-    let dot_o = dot(wo, h);
-    let dot_i = dot(wi, h);
+    };
     // The sampler only makes pairs that see the front of their microfacet.
-    if dot_o * cos_o <= 0.0 || dot_i * cos_i <= 0.0 {
+    if p.dot_o * wo.z <= 0.0 || p.dot_i * wi.z <= 0.0 {
         return 0.0;
     }
-    let pdf_m = ggx_pdf_visible(wo, h, alpha);
-    let (f, _) = mf_fresnel_dielectric(dot_o.abs(), eta_o, eta_t);
-    if reflection {
-        return f * pdf_m / (4.0 * dot_o.abs());
+    let pdf_m = ggx_pdf_visible(wo, p.h, mf_rough_alpha(alpha));
+    let (f, _) = mf_fresnel_dielectric(p.dot_o.abs(), p.eta_o, p.eta_t);
+    if p.reflection {
+        return f * pdf_m / (4.0 * p.dot_o.abs());
     }
-    let denom = dot_o + eta * dot_i;
-    (1.0 - f) * pdf_m * eta * eta * dot_i.abs() / (denom * denom)
+    let denom = p.dot_o + p.eta * p.dot_i;
+    (1.0 - f) * pdf_m * p.eta * p.eta * p.dot_i.abs() / (denom * denom)
 }
 
 /// Draws a visible normal m with `u.yz`, then reflects with probability F(|dot(wo, m)|) (`u.x`)

@@ -8,8 +8,10 @@ pub mod grid;
 pub mod grid_build;
 pub mod image_texture;
 pub mod light;
+pub mod medium;
 pub mod microfacet;
 pub mod pattern;
+pub mod phase;
 pub mod photon;
 pub mod render;
 pub mod rng;
@@ -19,7 +21,7 @@ pub mod shape;
 pub mod texture;
 pub mod trace;
 
-use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Photon, Primitive, Texture};
+use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Photon, Primitive, Texture};
 
 /// The arrays a kernel sees through its bindings, borrowed.
 #[derive(Clone, Copy)]
@@ -32,28 +34,33 @@ pub struct SceneView<'a> {
     pub textures: &'a [Texture],
     pub texture_data: &'a [u32],
     pub shape_data: &'a [f32],
+    pub media: &'a [Medium],
     pub maps: MapsView<'a>,
 }
 
-/// The two photon maps as the camera kernel binds them: grid parameters (0 global, 1 caustic),
-/// photons sorted by bucket and bucket starts.
+/// The photon maps as the camera kernel binds them: grid parameters (`MAP_*`: global, caustic,
+/// volume), photons sorted by bucket and bucket starts.
 #[derive(Clone, Copy)]
 pub struct MapsView<'a> {
-    pub grids: &'a [GridParams; 2],
+    pub grids: &'a [GridParams; 3],
     pub global_photons: &'a [Photon],
     pub global_starts: &'a [u32],
     pub caustic_photons: &'a [Photon],
     pub caustic_starts: &'a [u32],
+    pub volume_photons: &'a [Photon],
+    pub volume_starts: &'a [u32],
 }
 
 /// No photon maps: grids with no photons, which every lookup skips.
 pub const NO_MAPS: MapsView<'static> = MapsView {
     grids: &[GridParams { cell_size: 1.0, radius: 0.5, table_mask: 0, photon_count: 0, flux_scale: 1.0, _pad: [0; 3] };
-        2],
+        3],
     global_photons: &[],
     global_starts: &[0, 0],
     caustic_photons: &[],
     caustic_starts: &[0, 0],
+    volume_photons: &[],
+    volume_starts: &[0, 0],
 };
 
 impl<'a> SceneView<'a> {
@@ -69,6 +76,7 @@ impl<'a> SceneView<'a> {
             textures: &[],
             texture_data: &[],
             shape_data: &[],
+            media: &[],
             maps: NO_MAPS,
         }
     }

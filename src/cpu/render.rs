@@ -1,14 +1,18 @@
 //! The four terms of each pixel, accumulated over rows and samples; twin of
-//! `shaders/render.comp`.
+//! `shaders/render.comp` (with participating media: its `media` variant).
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bsdf::Bsdf;
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
-use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL};
-use super::light::environment_radiance;
-use super::rng::rand4;
+use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
+use super::light::{environment_radiance, pick_light, spot_falloff};
+use super::medium::{
+    equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t, medium_transmittance, phase_bsdf,
+};
+use super::phase::phase_hg;
+use super::rng::{rand2, rand4};
 use super::shading::{camera_ray, direct_light_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -25,6 +29,8 @@ enum Ray {
     Shadow,
     /// A final-gather ray: through path lobes to an estimate lobe.
     Gather,
+    /// The shadow ray of an equiangular sample of a camera segment (media).
+    Shaft,
 }
 
 /// A photon-map lookup at the estimate vertex: which map, which photons skipped, into which
@@ -56,11 +62,22 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     // Path-lobe bounces of the current path so far.
     let mut depth = 0;
     let mut throughput = Vec3::ONE;
+    // The medium the current ray runs through, and the path's free flights so far (their
+    // random dimensions).
+    let mut medium = f.camera_medium;
+    let mut segment = 0;
+    // The camera segment an equiangular sample interrupted, resumed after its shadow ray.
+    let mut shaft_done = false;
+    let (mut shaft_o, mut shaft_d, mut shaft_medium, mut shaft_layer) =
+        (Vec3::ZERO, Vec3::ZERO, NO_MEDIUM, LAYER_DIRECT);
     // The estimate vertex (the camera path's, then the gather path's last vertex) and what the
     // shadow ray and the gather path carry from it.
     let mut estimate: Option<(Hit, Bsdf, Vec3)> = None;
     let mut weight = Vec3::ZERO;
     let mut via_specular = false;
+    // The estimate vertex is a scattering point in a medium, and 1/sigma_t there.
+    let mut volume_e = false;
+    let mut inv_sigma_t_e = Vec3::ZERO;
     let mut unoccluded = Vec3::ZERO;
     let mut gather_weight = Vec3::ZERO;
     let mut gdim = 0;
@@ -68,12 +85,107 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
 
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     let mut skip = NO_LIGHT;
-    for _ in 0..2 * f.max_depth + 1 {
+    // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries;
+    // with media each camera segment may take three (its equiangular shadow ray, then its retrace).
+    let steps = if s.media.is_empty() { 2 * f.max_depth + 1 } else { 3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) };
+    for _ in 0..steps {
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if t_max != NO_RAY {
             *rays += 1;
         }
-        let (prim, t) = trace_ray(s, o, d, t_max, ray == Ray::Shadow, skip);
+        // Shadow rays take the closest hit where there are media: they pass null boundaries and
+        // sum the media between (the kernel's `media` variant).
+        let any_hit = (ray == Ray::Shadow || ray == Ray::Shaft) && s.media.is_empty();
+        // A shaft ray leaves a point in a medium, which has no triangle to skip.
+        let ignore = if ray == Ray::Shaft { NO_LIGHT } else { skip };
+        let (prim, mut t) = trace_ray(s, o, d, t_max, any_hit, ignore);
+        let mut scattered = false;
+        // The medium up to the hit (or to the light, or to infinity): shadow rays take its
+        // transmittance, camera and gather rays sample a free flight through it.
+        if medium != NO_MEDIUM && t_max != NO_RAY {
+            if ray == Ray::Shadow || ray == Ray::Shaft {
+                unoccluded *= medium_transmittance(s, medium, t);
+            } else {
+                // Single scattering from point and spot lights along the whole camera segment,
+                // by equiangular sampling (the light shafts; the free flight's scattering point
+                // leaves these lights out): the sample's shadow ray runs first, then the segment
+                // is traced again and goes on.
+                if ray == Ray::Camera && part == 0 && !shaft_done {
+                    let ue = rand4(stream, sample, f.seed, RNG_EQUIANGULAR_DOMAIN + segment);
+                    let l = &s.lights[pick_light(s, ue[0], false) as usize];
+                    if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 {
+                        let (te, pdf) = equiangular_sample(o, d, t, Vec3::from(l.position), ue[1]);
+                        let x = o + d * te;
+                        let to_light = Vec3::from(l.position) - x;
+                        let r2 = to_light.dot(to_light);
+                        let r = r2.sqrt();
+                        let wi = to_light / r;
+                        let md = &s.media[medium as usize];
+                        let c = throughput
+                            * medium_transmittance(s, medium, te)
+                            * Vec3::from(md.sigma_s)
+                            * (phase_hg((-d).dot(wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
+                            * Vec3::from(l.intensity);
+                        if pdf > 0.0 && r > 0.0 && c != Vec3::ZERO {
+                            (shaft_o, shaft_d, shaft_medium) = (o, d, medium);
+                            shaft_layer = if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT };
+                            unoccluded = c;
+                            o = x;
+                            d = wi;
+                            t_max = (r - f.ray_epsilon).max(0.0);
+                            ray = Ray::Shaft;
+                            continue;
+                        }
+                    }
+                }
+                shaft_done = false;
+                let key =
+                    RNG_MEDIUM_DOMAIN + if ray == Ray::Gather { part } else { 0 } * RNG_MEDIUM_DIMS_PER_PART + segment;
+                segment += 1;
+                let e = medium_sample(s, medium, t, rand2(stream, sample, f.seed, key));
+                if ray == Ray::Camera && part == 0 {
+                    terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += throughput * e.emission;
+                }
+                throughput *= e.weight;
+                scattered = e.scattered;
+                t = e.t;
+                if throughput == Vec3::ZERO {
+                    break;
+                }
+            }
+        }
+        let h = if scattered {
+            Some(medium_hit(o + d * t, -d))
+        } else if prim != NO_LIGHT && (ray != Ray::Shadow || !s.media.is_empty()) {
+            Some(shape_hit(s, prim, o, d, t))
+        } else {
+            None
+        };
+        if let Some(h) = h.filter(|h| !scattered && s.materials[h.material as usize].kind == MATERIAL_NULL) {
+            // An invisible boundary: straight through into the medium beyond, not a bounce.
+            medium = medium_after(s, prim, h.ng, d, medium);
+            if ray != Ray::Shaft {
+                skip = ray_skip(s, prim);
+            }
+            let next = offset_origin(&h, -d, BSDF_TRANSMISSION);
+            if ray == Ray::Shadow || ray == Ray::Shaft {
+                t_max = (t_max - (next - o).dot(d)).max(0.0);
+            }
+            o = next;
+            continue;
+        }
+        if ray == Ray::Shaft {
+            // The equiangular sample's shadow ray: its light if nothing blocked it; then back to
+            // the camera segment it interrupted.
+            if prim == NO_LIGHT {
+                terms[shaft_layer as usize] += unoccluded;
+            }
+            (o, d, medium) = (shaft_o, shaft_d, shaft_medium);
+            t_max = f32::INFINITY;
+            ray = Ray::Camera;
+            shaft_done = true;
+            continue;
+        }
         if ray == Ray::Shadow {
             if prim == NO_LIGHT {
                 terms[(if via_specular { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += weight * unoccluded;
@@ -82,6 +194,18 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 break;
             }
             let layer = |own: u32| if via_specular { LAYER_SPECULAR } else { own };
+            if volume_e {
+                // A scattering point: the volume map without the single scattering, which the
+                // light sample gave; sigma_t-weighted collisions become radiance over sigma_t.
+                let w = weight * inv_sigma_t_e;
+                lookups[0] = Some(Lookup {
+                    map: MAP_VOLUME,
+                    exclude: PHOTON_FLAG_DIRECT,
+                    layer: layer(LAYER_INDIRECT),
+                    weight: w,
+                });
+                break;
+            }
             lookups[0] = Some(Lookup { map: MAP_CAUSTIC, exclude: 0, layer: layer(LAYER_CAUSTICS), weight });
             if f.gather_rays == 0 {
                 let exclude = PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC;
@@ -89,7 +213,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             }
             break;
         }
-        if prim == NO_LIGHT {
+        let Some(h) = h else {
             // A camera path that leaves the scene sees the environment (a path lobe's view of a
             // light); a gather path counts none of it, as it counts no emission.
             if f.environment != NO_LIGHT && ray == Ray::Camera && part == 0 {
@@ -97,20 +221,27 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                     throughput * environment_radiance(s, &s.lights[f.environment as usize], d);
             }
             break;
-        }
-        let h = shape_hit(s, prim, o, d, t);
-        skip = ray_skip(s, prim);
-        let m = &s.materials[h.material as usize];
+        };
+        skip = if scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let wo = -d;
         let camera = ray == Ray::Camera;
-        // Everything a mirror or glass shows is the specular term. Emission leaves the front face
-        // only; it counts wherever a camera path meets it, since estimate lobes end the path and
-        // light sampling covers them. A gather path counts none: direct light and caustics do.
-        if camera && wo.dot(h.ng) > 0.0 && part == 0 {
-            terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] +=
-                throughput * material_emission(s, m, &h);
-        }
-        let b = material_bsdf(s, m, &h);
+        let mut inv_sigma_t = Vec3::ONE;
+        let b = if scattered {
+            let st = medium_sigma_t(&s.media[medium as usize]);
+            inv_sigma_t = Vec3::select(st.cmpgt(Vec3::ZERO), st.recip(), Vec3::ZERO);
+            phase_bsdf(s, medium, wo)
+        } else {
+            let m = &s.materials[h.material as usize];
+            // Everything a mirror or glass shows is the specular term. Emission leaves the front
+            // face only; it counts wherever a camera path meets it, since estimate lobes end the
+            // path and light sampling covers them. A gather path counts none: direct light and
+            // caustics do.
+            if camera && wo.dot(h.ng) > 0.0 && part == 0 {
+                terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] +=
+                    throughput * material_emission(s, m, &h);
+            }
+            material_bsdf(s, m, &h)
+        };
         let dim = depth * RNG_DIMS_PER_BOUNCE;
         let u = rand4(stream, sample, f.seed, if camera { dim + RNG_FRESNEL } else { gdim + 1 + depth });
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
@@ -121,6 +252,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 break;
             }
             throughput *= smp.weight / q;
+            if smp.flags & BSDF_TRANSMISSION != 0 {
+                medium = medium_after(s, prim, h.ng, smp.wi, medium);
+            }
             o = offset_origin(&h, wo, smp.flags);
             d = smp.wi;
             depth += 1;
@@ -133,15 +267,19 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             break;
         }
         if !camera {
-            // The gather path's end: the global map there, weighted 1/gather_rays.
+            // The gather path's end: the global map there (the volume map at a scattering
+            // point), weighted 1/gather_rays.
             let layer = if via_specular { LAYER_SPECULAR } else { LAYER_INDIRECT };
-            let w = weight * (gather_weight * (throughput / (1.0 - q)) / f.gather_rays as f32);
-            lookups[0] = Some(Lookup { map: MAP_GLOBAL, exclude: 0, layer, weight: w });
+            let w = weight * (gather_weight * (throughput / (1.0 - q)) / f.gather_rays as f32) * inv_sigma_t;
+            let map = if scattered { MAP_VOLUME } else { MAP_GLOBAL };
+            lookups[0] = Some(Lookup { map, exclude: 0, layer, weight: w });
             estimate = Some((h, b, wo));
             break;
         }
         weight = throughput / (1.0 - q);
         via_specular = depth > 0;
+        volume_e = scattered;
+        inv_sigma_t_e = inv_sigma_t;
         if part == 0 {
             let sr = direct_light_sample(s, &h, &b, wo, stream, sample, dim);
             unoccluded = sr.unoccluded;
@@ -152,7 +290,8 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             estimate = Some((h, b, wo));
             continue;
         }
-        if f.photon_mapping == 0 {
+        // A scattering point reads the volume map in part 0 and has no final gather.
+        if f.photon_mapping == 0 || scattered {
             break;
         }
         // Final-gather ray part - 1, sampled from the estimate lobes.

@@ -77,6 +77,19 @@ pub struct ShadowRay {
     pub unoccluded: Vec3,
 }
 
+/// A light's sample numbers `u` moved into one cell of its POV-Ray grid (`Light::grid`; 0: `u`
+/// as it is): cell (sample + a hash of the pixel) mod (n m), so each pixel's consecutive n m
+/// samples visit every cell once, at a jittered point in it or at its centre.
+pub fn grid_sample(grid: u32, u: [f32; 2], stream: u32, sample: u32) -> [f32; 2] {
+    if grid == 0 {
+        return u;
+    }
+    let (n, m) = (grid & 0xff, (grid >> 8) & 0xff);
+    let k = sample.wrapping_add(stream.wrapping_mul(0x9E37_79B1)) % (n * m);
+    let j = if grid & LIGHT_GRID_JITTER != 0 { u } else { [0.5, 0.5] };
+    [((k % n) as f32 + j[0]) / n as f32, ((k / n) as f32 + j[1]) / m as f32]
+}
+
 pub fn direct_light_sample(
     s: &SceneView,
     h: &Hit,
@@ -96,7 +109,13 @@ pub fn direct_light_sample(
     if l.pick_probability <= 0.0 {
         return none;
     }
-    let ls = light_sample(s, l, h.p, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U));
+    // A scattering point in a medium leaves point and spot lights to the camera segment's
+    // equiangular sample (`render::radiance`).
+    if b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
+        return none;
+    }
+    let ls =
+        light_sample(s, l, h.p, grid_sample(l.grid, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U), stream, sample));
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {
         return none;
@@ -110,6 +129,7 @@ pub fn direct_light_sample(
         origin,
         direction: to_target / shadow_length,
         t_max: (shadow_length - ls.eps).max(0.0),
-        unoccluded: fr * (b.ns.dot(ls.wi).abs() / l.pick_probability),
+        // A medium's phase function has no cosine: it is per solid angle already.
+        unoccluded: fr * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() } / l.pick_probability),
     }
 }

@@ -32,6 +32,13 @@ shared_constants! {
     /// Material `mix_b` where a hash of the point falls below `weight` (times `weight_tex`), else
     /// `mix_a`: a stochastic blend, the same for camera rays and photons at a point.
     MATERIAL_MIX: u32 = 5;
+    /// An invisible interface (Mitsuba's `null`): rays pass straight through it, unbent and
+    /// uncounted; it only bounds the medium of its shape (`Primitive::interior`).
+    MATERIAL_NULL: u32 = 6;
+    /// Never packed from a file: the `Bsdf` of a scattering point inside a medium, whose "BSDF"
+    /// is the medium's phase function (`PHASE_*` in `color1.x`, asymmetry g in `ior`), so that
+    /// light sampling and photon lookups treat it as any estimate vertex.
+    MATERIAL_PHASE: u32 = 7;
     /// Deepest nesting of mixes the kernels resolve (the host refuses deeper ones).
     MIX_MAX_DEPTH: u32 = 4;
     /// Default of `[photons] glossy_threshold`: glossy lobes with GGX width up to this are followed
@@ -114,6 +121,11 @@ shared_constants! {
     /// Flag of `Primitive::kind`: the material has an opacity below 1 somewhere (alpha), so every
     /// ray that meets the primitive decides by the opacity whether it passes.
     PRIMITIVE_FLAG_ALPHA: u32 = 0x100;
+    /// Flag of `Primitive::kind`: the shape bounds a medium. A ray that crosses it against its
+    /// outward normal (triangles: the winding side) enters `Primitive::interior`, one that
+    /// crosses it along the normal leaves for `Primitive::exterior`; primitives without the flag
+    /// leave the ray's medium as it is.
+    PRIMITIVE_FLAG_MEDIUM: u32 = 0x400;
     /// Flag of `Primitive::kind`: its material reads uv or the surface derivatives (textures, bump
     /// and normal maps); without it a hit record leaves them at zero, which saves their cost.
     PRIMITIVE_FLAG_UV: u32 = 0x200;
@@ -121,7 +133,7 @@ shared_constants! {
     /// `TriangleShading` (vertex uvs, then unit vertex normals on the winding side); the shading
     /// normal interpolates the vertex normals, and rays leave from Hanika's shifted point
     /// (`Hit::shift`), which hides the shadow terminator of low-poly meshes.
-    PRIMITIVE_FLAG_SMOOTH: u32 = 0x400;
+    PRIMITIVE_FLAG_SMOOTH: u32 = 0x800;
     /// Float offsets inside a smooth triangle's `TriangleShading` block (checked against the
     /// struct by a const assertion in src/layout/mod.rs).
     TRIANGLE_DATA_UV: u32 = 0;
@@ -131,6 +143,9 @@ shared_constants! {
     /// A light that is an emitting primitive (`Light::primitive`), sampled by `shape_sample` (a
     /// point and its 1/pdf by area).
     LIGHT_AREA: u32 = 0;
+    /// Flag of `Light::grid`: a POV-Ray grid's samples are jittered within their cells (else
+    /// they sit at the cells' centres). The grid itself is n | m << 8, n and m in 1..=64.
+    LIGHT_GRID_JITTER: u32 = 0x10000;
     /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
     /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
     LIGHT_POINT: u32 = 2;
@@ -187,6 +202,16 @@ shared_constants! {
     TEXTURE_SPACE_UV: u32 = 0;
     TEXTURE_SPACE_WORLD: u32 = 1;
 
+    /// Marks no medium (vacuum): the camera, a light, or the inside of a shape outside every medium.
+    NO_MEDIUM: u32 = 0xffff_ffff;
+    /// Phase functions of a medium (`Medium::phase`): isotropic, 1 / (4 pi); Henyey and
+    /// Greenstein 1941 with asymmetry `Medium::g` in (-1, 1) (g > 0 scatters forward).
+    PHASE_ISOTROPIC: u32 = 0;
+    PHASE_HENYEY_GREENSTEIN: u32 = 1;
+    /// Medium boundaries a path may cross beyond its `max_depth` bounces (each crossing is one
+    /// step of the camera kernel's loop; a path past it ends, as one past `max_depth` does).
+    MEDIUM_CROSSINGS: u32 = 16;
+
     /// Marks a primitive that is not a light.
     NO_LIGHT: u32 = 0xffff_ffff;
     /// Marks a material parameter without a texture (the constant alone), or a missing data block.
@@ -203,7 +228,8 @@ shared_constants! {
     BINDING_TEXTURES: u32 = 5;
     BINDING_TEXTURE_DATA: u32 = 6;
     BINDING_SHAPE_DATA: u32 = 7;
-    SCENE_BINDINGS: u32 = 8;
+    BINDING_MEDIA: u32 = 8;
+    SCENE_BINDINGS: u32 = 9;
 
     /// Threads per workgroup of the one-dimensional kernels.
     WORKGROUP_SIZE: u32 = 64;
@@ -238,6 +264,17 @@ shared_constants! {
     RNG_PHOTON_ROULETTE: u32 = 4;
     /// Random dimensions per final-gather ray (direction, then one Fresnel choice per bounce).
     RNG_GATHER_DIMS_PER_RAY: u32 = 32;
+    /// Free-flight distances of camera and gather rays in media: dimension
+    /// `RNG_MEDIUM_DOMAIN + part * RNG_MEDIUM_DIMS_PER_PART + segment` (gather rays; camera rays
+    /// use part 0, so every part retraces the same camera path), where `segment` counts the
+    /// path's free flights (a segment cut by a medium boundary draws anew).
+    RNG_MEDIUM_DOMAIN: u32 = 0x2000_0000;
+    RNG_MEDIUM_DIMS_PER_PART: u32 = 4096;
+    /// Equiangular samples of camera segments toward point and spot lights:
+    /// `RNG_EQUIANGULAR_DOMAIN + segment` (x picks the light, y the distance).
+    RNG_EQUIANGULAR_DOMAIN: u32 = 0x3000_0000;
+    /// Free-flight distances of photon paths: `RNG_PHOTON_DOMAIN + RNG_PHOTON_MEDIUM + step`.
+    RNG_PHOTON_MEDIUM: u32 = 0x1000_0000;
 
     /// Photon flag: stored at the first surface its path met (direct light).
     PHOTON_FLAG_DIRECT: u32 = 1;
@@ -250,6 +287,12 @@ shared_constants! {
     LAYER_INDIRECT: u32 = 2;
     LAYER_CAUSTICS: u32 = 3;
     LAYER_COUNT: u32 = 4;
+    /// Photon maps of the camera kernel's lookups (`grids[]` index).
+    MAP_GLOBAL: u32 = 0;
+    MAP_CAUSTIC: u32 = 1;
+    /// Photons stored where photon paths scattered inside media (their own hashed grid).
+    MAP_VOLUME: u32 = 2;
+    MAP_COUNT: u32 = 3;
     /// Photons farther than this fraction of the radius off the lookup's tangent plane are
     /// ignored: the disc-shaped filter of Jensen keeps photons on a nearby wall out of a corner.
     PHOTON_DISC_THICKNESS: f32 = 0.25;

@@ -56,7 +56,11 @@ gpu_structs! {
         /// Index into the light array when the primitive emits, else `NO_LIGHT`.
         pub light: u32,
         pub data: u32,
-        pub _pad: [u32; 3],
+        /// With `PRIMITIVE_FLAG_MEDIUM`: the medium inside the shape and outside it (indices
+        /// into the media, or `NO_MEDIUM`).
+        pub interior: u32,
+        pub exterior: u32,
+        pub _pad: u32,
     }
 
     /// A material, 112 bytes. Each parameter is a constant and a texture (`*_tex`, or `NO_TEXTURE`
@@ -139,6 +143,11 @@ gpu_structs! {
         pub exponent: f32,
         /// Radius of the scene's bounding sphere (distant lights, the environment), scene units.
         pub radius: f32,
+        /// The medium its photons start in (`NO_MEDIUM`: vacuum), found by the host.
+        pub medium: u32,
+        /// An area light's POV-Ray grid (`LIGHT_GRID_*`): n | m << 8 | jitter << 16; 0 for none.
+        pub grid: u32,
+        pub _pad: [u32; 2],
     }
 
     /// Per-render constants of every kernel, 128 bytes.
@@ -184,7 +193,8 @@ gpu_structs! {
         /// Primitives from here to `primitive_count` are unbounded (infinite planes): outside the
         /// BVH, every ray tests them.
         pub unbounded_first: u32,
-        pub _pad: u32,
+        /// The medium around the camera (`NO_MEDIUM`: vacuum), found by the host.
+        pub camera_medium: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
@@ -223,16 +233,7 @@ gpu_structs! {
         pub _pad: [u32; 3],
     }
 
-    /// The shape-data block of a smooth triangle (`PRIMITIVE_FLAG_SMOOTH`), 60 bytes of scalars:
-    /// the uv of its three vertices, then their unit normals (x, y, z each), which the host turns
-    /// to the side of the winding normal. A flat triangle's block, when it has vertex uvs, is
-    /// the first 6 floats alone.
-    pub struct TriangleShading {
-        pub uv: [f32; 6],
-        pub normals: [f32; 9],
-    }
-
-    /// Push constants of one `emit_photons` dispatch, 32 bytes.
+    /// Push constants of one `emit_photons` dispatch, 48 bytes.
     pub struct EmitParams {
         /// First photon path of this dispatch and how many it traces.
         pub path_begin: u32,
@@ -248,6 +249,30 @@ gpu_structs! {
         pub pass: u32,
         /// 1 for a pass that fills only the caustic map (its paths end at the first diffuse surface).
         pub caustics_only: u32,
+        /// Capacity of the volume photon buffer (collisions in media, global pass).
+        pub volume_capacity: u32,
+        pub _pad: [u32; 3],
+    }
+
+    /// A homogeneous participating medium, 48 bytes: absorption and scattering coefficients per
+    /// channel (1 / scene unit), the radiance it emits per unit length, and its phase function
+    /// (`PHASE_*`, asymmetry `g`). Extinction is `sigma_a + sigma_s`.
+    pub struct Medium {
+        pub sigma_a: [f32; 3],
+        pub phase: u32,
+        pub sigma_s: [f32; 3],
+        pub g: f32,
+        pub emission: [f32; 3],
+        pub _pad: u32,
+    }
+
+    /// The shape-data block of a smooth triangle (`PRIMITIVE_FLAG_SMOOTH`), 60 bytes of scalars:
+    /// the uv of its three vertices, then their unit normals (x, y, z each), which the host turns
+    /// to the side of the winding normal. A flat triangle's block, when it has vertex uvs, is
+    /// the first 6 floats alone.
+    pub struct TriangleShading {
+        pub uv: [f32; 6],
+        pub normals: [f32; 9],
     }
 }
 
@@ -269,5 +294,18 @@ const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
 const _: () = assert!(size_of::<Texture>() == 80);
-const _: () = assert!(size_of::<Light>() == 80);
+const _: () = assert!(size_of::<Light>() == 96);
+const _: () = assert!(size_of::<Medium>() == 48);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));
+// The primitive flags are distinct bits above the kind.
+const _: () = {
+    use constants::*;
+    let flags = [PRIMITIVE_FLAG_ALPHA, PRIMITIVE_FLAG_UV, PRIMITIVE_FLAG_MEDIUM, PRIMITIVE_FLAG_SMOOTH];
+    let mut seen = PRIMITIVE_KIND_MASK;
+    let mut i = 0;
+    while i < flags.len() {
+        assert!(flags[i].is_power_of_two() && seen & flags[i] == 0);
+        seen |= flags[i];
+        i += 1;
+    }
+};

@@ -77,6 +77,10 @@ impl Provenance {
         hash.add(bytemuck::cast_slice(&buffers.textures));
         hash.add(bytemuck::cast_slice(&buffers.texture_data));
         hash.add(bytemuck::cast_slice(&buffers.shape_data));
+        // Scenes without media hash as they did before media existed.
+        if !buffers.media.is_empty() {
+            hash.add(bytemuck::cast_slice(&buffers.media));
+        }
         let f = &buffers.frame;
         let mut settings = vec![
             ("spp", spp.to_string()),
@@ -95,6 +99,9 @@ impl Provenance {
                 ("photon_depth", p.max_depth.to_string()),
                 ("alpha", format!("{:?}", p.alpha)),
             ]),
+        }
+        if let Some(r) = photons.and_then(|p| p.volume_radius) {
+            settings.push(("volume_radius", format!("{r:?}")));
         }
         Provenance { scene: hash.0, settings: settings.into_iter().map(|(k, v)| (k.to_string(), v)).collect() }
     }

@@ -3,7 +3,7 @@
 use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
-use super::photons::{emit_params, map_grid, radii, PhotonMaps, PhotonSettings};
+use super::photons::{emit_params, map_grid, radii, volume_radius, PhotonMaps, PhotonSettings};
 use super::prepare::KernelVariant;
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
@@ -11,7 +11,7 @@ use super::{
 };
 use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
 use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
-use crate::layout::{DispatchRange, EmitParams, GridParams, Photon};
+use crate::layout::{DispatchRange, EmitParams, GridParams, Medium, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
 const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
@@ -83,7 +83,7 @@ impl GpuKernels {
 
     fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("emit_photons");
-        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 3, size_of::<EmitParams>())
+        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, size_of::<EmitParams>())
     }
     fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         Self::get(&self.grid_count, ctx, "grid_count", 3, 0)
@@ -102,7 +102,7 @@ impl GpuKernels {
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
-        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 6, size_of::<DispatchRange>())
+        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, size_of::<DispatchRange>())
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
@@ -152,6 +152,7 @@ pub struct DeviceScene {
     pub textures: Buffer,
     pub texture_data: Buffer,
     pub shape_data: Buffer,
+    pub media: Buffer,
     /// Which variant of the scene kernels the scene needs.
     pub variant: KernelVariant,
 }
@@ -188,13 +189,14 @@ impl DeviceScene {
             textures: ctx.upload("textures", &buffers.textures)?,
             texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
             shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
+            media: ctx.upload("media", device_media(buffers))?,
             variant: buffers.variant(),
         })
     }
 
     /// Replaces the scene's arrays with those of `buffers`: an array of the same byte size is
     /// written into its existing buffer, any other gets a new buffer. Returns how many arrays were
-    /// written in place (of 8).
+    /// written in place (of 9).
     pub fn update(
         &mut self,
         ctx: &GpuContext,
@@ -220,7 +222,8 @@ impl DeviceScene {
             + replace(ctx, &mut self.lights, &buffers.lights)?
             + replace(ctx, &mut self.textures, &buffers.textures)?
             + replace(ctx, &mut self.texture_data, &buffers.texture_data)?
-            + replace(ctx, &mut self.shape_data, &buffers.shape_data)?)
+            + replace(ctx, &mut self.shape_data, &buffers.shape_data)?
+            + replace(ctx, &mut self.media, device_media(buffers))?)
     }
 
     /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
@@ -235,9 +238,21 @@ impl DeviceScene {
             &self.textures,
             &self.texture_data,
             &self.shape_data,
+            &self.media,
         ];
         debug_assert_eq!(scene.len(), SCENE_BINDINGS as usize);
         scene.into_iter().chain(own.iter().copied()).collect()
+    }
+}
+
+/// The media as bound: Vulkan has no empty buffers, so a scene without media binds one unused.
+fn device_media(buffers: &SceneBuffers) -> &[Medium] {
+    const NONE: &[Medium] =
+        &[Medium { sigma_a: [0.0; 3], phase: 0, sigma_s: [0.0; 3], g: 0.0, emission: [0.0; 3], _pad: 0 }];
+    if buffers.media.is_empty() {
+        NONE
+    } else {
+        &buffers.media
     }
 }
 
@@ -248,15 +263,17 @@ pub struct DeviceMap {
     pub starts: Buffer,
 }
 
-/// Both maps on the device, plus their grid parameters in one buffer for the camera kernel.
+/// The maps on the device (global, caustic, volume), plus their grid parameters in one buffer
+/// for the camera kernel.
 pub struct DeviceMaps {
     pub global: DeviceMap,
     pub caustic: DeviceMap,
+    pub volume: DeviceMap,
     pub grids: Buffer,
 }
 
 impl DeviceMaps {
-    /// Reads both maps back (for tests and tools).
+    /// Reads the maps back (for tests and tools).
     pub fn download(&self, ctx: &GpuContext) -> Result<PhotonMaps, GpuError> {
         let photons = |m: &DeviceMap| -> Result<Vec<Photon>, GpuError> {
             let mut v: Vec<Photon> = ctx.download(&m.photons)?;
@@ -269,17 +286,21 @@ impl DeviceMaps {
             Ok(v)
         };
         Ok(PhotonMaps {
-            grids: [self.global.grid, self.caustic.grid],
+            grids: [self.global.grid, self.caustic.grid, self.volume.grid],
             global_photons: photons(&self.global)?,
             global_starts: starts(&self.global)?,
             caustic_photons: photons(&self.caustic)?,
             caustic_starts: starts(&self.caustic)?,
+            volume_photons: photons(&self.volume)?,
+            volume_starts: starts(&self.volume)?,
         })
     }
 }
 
-/// Traces one emission pass into a buffer of room for `capacity` photons (a first guess); returns
-/// the photon buffer and the number of photons stored.
+/// Traces one emission pass into buffers of room for `capacity` photons and, in the global
+/// pass, `volume_capacity` collisions in media (first guesses); returns the photon buffer and
+/// the number stored, then the same for the volume photons.
+#[allow(clippy::type_complexity)]
 fn emit(
     ctx: &GpuContext,
     kernels: &GpuKernels,
@@ -287,16 +308,21 @@ fn emit(
     params: EmitParams,
     caustic: bool,
     capacity: u64,
-) -> Result<(Buffer, u32), GpuError> {
+    volume_capacity: u64,
+) -> Result<((Buffer, u32), (Buffer, u32)), GpuError> {
     let emit_kernel = kernels.emit_photons(ctx)?;
     let photon_bytes = size_of::<Photon>() as u64;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let name = if caustic { "caustic_photons" } else { "global_photons" };
     let mut capacity = capacity.clamp(1, limit / photon_bytes);
+    // Only the global pass of a scene with media stores collisions.
+    let volume = !caustic && scene.variant.media;
+    let mut volume_capacity = if volume { volume_capacity.clamp(1, limit / photon_bytes) } else { 1 };
     loop {
         let photons = ctx.create_buffer(name, capacity * photon_bytes)?;
+        let volume_photons = ctx.create_buffer("volume_photons", volume_capacity * photon_bytes)?;
         let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
-        let counters = ctx.create_buffer("photon_counters", 8)?;
+        let counters = ctx.create_buffer("photon_counters", 12)?;
         let mut begin = 0;
         while begin < params.total_paths {
             let mut p = params;
@@ -304,11 +330,12 @@ fn emit(
             p.path_count = PATHS_PER_DISPATCH.min(params.total_paths - begin);
             p.global_capacity = if caustic { 0 } else { capacity as u32 };
             p.caustic_capacity = if caustic { capacity as u32 } else { 0 };
+            p.volume_capacity = if volume { volume_capacity as u32 } else { 0 };
             let (global_buffer, caustic_buffer) = if caustic { (&unused, &photons) } else { (&photons, &unused) };
             ctx.run("emit_photons", |rec| {
                 rec.dispatch(
                     emit_kernel,
-                    &scene.bindings(&[global_buffer, caustic_buffer, &counters]),
+                    &scene.bindings(&[global_buffer, caustic_buffer, &counters, &volume_photons]),
                     bytemuck::bytes_of(&p),
                     groups(p.path_count),
                 )
@@ -317,19 +344,23 @@ fn emit(
         }
         let counts: Vec<u32> = ctx.download(&counters)?;
         let wanted = counts[caustic as usize] as u64;
-        if wanted <= capacity {
-            return Ok((photons, wanted as u32));
+        let wanted_volume = if volume { counts[2] as u64 } else { 0 };
+        if wanted <= capacity && wanted_volume <= volume_capacity {
+            return Ok(((photons, wanted as u32), (volume_photons, wanted_volume as u32)));
         }
-        if wanted > limit / photon_bytes {
-            return Err(GpuError::Unsupported(format!(
-                "the {name} map needs {wanted} photons ({} MiB), more than one storage buffer holds on this device ({} MiB = {} photons); lower the photon count",
-                (wanted * photon_bytes) >> 20,
-                limit >> 20,
-                limit / photon_bytes
-            )));
+        for (what, n) in [(name, wanted), ("volume_photons", wanted_volume)] {
+            if n > limit / photon_bytes {
+                return Err(GpuError::Unsupported(format!(
+                    "the {what} map needs {n} photons ({} MiB), more than one storage buffer holds on this device ({} MiB = {} photons); lower the photon count",
+                    (n * photon_bytes) >> 20,
+                    limit >> 20,
+                    limit / photon_bytes
+                )));
+            }
         }
         // The pass is deterministic, so tracing it again with room for every photon stores the same set.
-        capacity = wanted;
+        capacity = capacity.max(wanted);
+        volume_capacity = volume_capacity.max(wanted_volume);
     }
 }
 
@@ -402,12 +433,12 @@ pub fn build_maps_gpu(
     settings: &PhotonSettings,
     pass: u32,
 ) -> Result<DeviceMaps, GpuError> {
-    let mut capacity = [0; 2];
+    let mut capacity = [0; 3];
     build_maps(ctx, &GpuKernels::for_scene(scene.variant), scene, buffers, settings, pass, &mut capacity)
 }
 
-/// Traces both maps of pass `pass` and builds their grids. `capacity` holds the photon counts
-/// (global, caustic) to make room for, and on return the counts this pass stored: the next
+/// Traces the maps of pass `pass` and builds their grids. `capacity` holds the photon counts
+/// (global, caustic, volume) to make room for, and on return the counts this pass stored: the next
 /// pass then allocates once instead of tracing again (0 = guess from the path count).
 fn build_maps(
     ctx: &GpuContext,
@@ -416,7 +447,7 @@ fn build_maps(
     buffers: &SceneBuffers,
     settings: &PhotonSettings,
     pass: u32,
-    capacity: &mut [u64; 2],
+    capacity: &mut [u64; 3],
 ) -> Result<DeviceMaps, GpuError> {
     let room = |stored: u64, paths: u32| {
         // 1/16 above the last pass's count: passes store a few thousandths more or fewer.
@@ -428,18 +459,22 @@ fn build_maps(
     };
     let global_room = room(capacity[0], settings.photons);
     let caustic_room = room(capacity[1], settings.caustic_photons);
-    let (global_photons, global_count) =
-        emit(ctx, kernels, scene, emit_params(settings, pass, false), false, global_room)?;
-    let (caustic_photons, caustic_count) =
-        emit(ctx, kernels, scene, emit_params(settings, pass, true), true, caustic_room)?;
-    *capacity = [global_count as u64, caustic_count as u64];
+    let volume_room = room(capacity[2], settings.photons);
+    let ((global_photons, global_count), (volume_photons, volume_count)) =
+        emit(ctx, kernels, scene, emit_params(settings, pass, false), false, global_room, volume_room)?;
+    let ((caustic_photons, caustic_count), _) =
+        emit(ctx, kernels, scene, emit_params(settings, pass, true), true, caustic_room, 0)?;
+    *capacity = [global_count as u64, caustic_count as u64, volume_count as u64];
     let (r_global, r_caustic) = radii(buffers, settings, global_count, pass);
     let g_global = map_grid(buffers, r_global, global_count, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
+    let r_volume = volume_radius(buffers, settings, volume_count, pass);
+    let g_volume = map_grid(buffers, r_volume, volume_count, settings.photons);
     let global = build_map(ctx, kernels, global_photons, g_global, "global")?;
     let caustic = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")?;
-    let grids = ctx.upload("grids", &[g_global, g_caustic])?;
-    Ok(DeviceMaps { global, caustic, grids })
+    let volume = build_map(ctx, kernels, volume_photons, g_volume, "volume")?;
+    let grids = ctx.upload("grids", &[g_global, g_caustic, g_volume])?;
+    Ok(DeviceMaps { global, caustic, volume, grids })
 }
 
 /// Empty maps for a render without photon mapping: every lookup finds no photon.
@@ -451,6 +486,7 @@ fn no_maps(ctx: &GpuContext) -> Result<DeviceMaps, GpuError> {
     Ok(DeviceMaps {
         global: empty("no_photons")?,
         caustic: empty("no_photons")?,
+        volume: empty("no_photons")?,
         grids: ctx.upload("grids", crate::cpu::NO_MAPS.grids)?,
     })
 }
@@ -467,8 +503,8 @@ pub struct GpuRenderer<'a> {
     scene: DeviceScene,
     /// Created by the first pass, then reused while the image size stays.
     accumulation: Option<(Buffer, u32)>,
-    /// Photons stored by the last pass (global, caustic): the next pass's buffer sizes.
-    photon_capacity: [u64; 2],
+    /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
+    photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
     setup_time: Duration,
 }
@@ -492,7 +528,7 @@ impl<'a> GpuRenderer<'a> {
             photons: photons.copied(),
             scene,
             accumulation: None,
-            photon_capacity: [0; 2],
+            photon_capacity: [0; 3],
             setup_time: t.elapsed(),
         })
     }
@@ -508,7 +544,7 @@ impl<'a> GpuRenderer<'a> {
     }
 
     /// Replaces the scene (and the photon settings) without recreating the kernels: arrays that
-    /// keep their size are rewritten in their buffers. Returns how many of the 8 scene arrays
+    /// keep their size are rewritten in their buffers. Returns how many of the 9 scene arrays
     /// were written in place.
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
@@ -522,7 +558,7 @@ impl<'a> GpuRenderer<'a> {
         }
         self.buffers = buffers.clone();
         self.photons = photons.copied();
-        self.photon_capacity = [0; 2];
+        self.photon_capacity = [0; 3];
         self.setup_time += t.elapsed();
         Ok(in_place)
     }
@@ -610,6 +646,8 @@ impl<'a> GpuRenderer<'a> {
                             &maps.global.starts,
                             &maps.caustic.photons,
                             &maps.caustic.starts,
+                            &maps.volume.photons,
+                            &maps.volume.starts,
                         ]),
                         bytemuck::bytes_of(unit),
                         groups(invocations),

@@ -254,8 +254,19 @@ pub fn photon_frame(buffers: &SceneBuffers, photons: Option<&PhotonSettings>) ->
 /// return an incomplete output.
 pub static STOP: AtomicBool = AtomicBool::new(false);
 
+thread_local! {
+    /// A stop flag of this thread's own, besides `STOP`: a server running renders on threads of
+    /// its own (the editor) stops one without stopping the others.
+    static THREAD_STOP: std::cell::RefCell<Option<std::sync::Arc<AtomicBool>>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Makes renders on the calling thread also stop when `flag` is set (`None`: only `STOP`).
+pub fn set_thread_stop_flag(flag: Option<std::sync::Arc<AtomicBool>>) {
+    THREAD_STOP.with(|f| *f.borrow_mut() = flag);
+}
+
 pub fn stop_requested() -> bool {
-    STOP.load(Ordering::Relaxed)
+    STOP.load(Ordering::Relaxed) || THREAD_STOP.with(|f| f.borrow().as_ref().is_some_and(|f| f.load(Ordering::Relaxed)))
 }
 
 /// Renders pass `pass` on the CPU reference, with photon maps when `photons` is given;

@@ -5,11 +5,11 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use crate::layout::constants::*;
-use crate::layout::{Material, Primitive, Texture, TriangleShading};
+use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, NormalMod, ScalarParam, Scene,
-    Shape, TextureDesc, TextureKind, TextureSpace,
+    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase,
+    ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -111,6 +111,21 @@ fn scalar(param: &ScalarParam) -> (f32, u32) {
     (param.value, texture_index(param.texture))
 }
 
+/// The only place that turns a medium into the GPU's `Medium`.
+pub fn pack_medium(m: &MediumDesc) -> Medium {
+    Medium {
+        sigma_a: m.sigma_a.into(),
+        phase: match m.phase {
+            Phase::Isotropic => PHASE_ISOTROPIC,
+            Phase::HenyeyGreenstein { .. } => PHASE_HENYEY_GREENSTEIN,
+        },
+        sigma_s: m.sigma_s.into(),
+        g: m.phase.g(),
+        emission: m.emission.into(),
+        _pad: 0,
+    }
+}
+
 /// The only place that turns a material into the GPU's `Material`: which slot holds what, per kind.
 pub fn pack_material(m: &MaterialDesc) -> Material {
     let (emission, emission_tex) = color(&m.emission);
@@ -166,6 +181,7 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
             (out.mix_a, out.mix_b) = (*a, *b);
             (out.weight, out.weight_tex) = scalar(weight);
         }
+        MaterialKind::Null => out.kind = MATERIAL_NULL,
     }
     out
 }
@@ -224,6 +240,13 @@ pub fn pack_texture(t: &TextureDesc, data: &mut Vec<u32>) -> Texture {
 pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Vec<f32>) -> Primitive {
     let flags = if alpha { PRIMITIVE_FLAG_ALPHA } else { 0 } | if uses_uv { PRIMITIVE_FLAG_UV } else { 0 };
     let mut p = Primitive { material: shape.material, light: NO_LIGHT, data: NO_DATA, ..Default::default() };
+    let medium_flag = if let Some(m) = shape.media {
+        (p.interior, p.exterior) = (m.interior.unwrap_or(NO_MEDIUM), m.exterior.unwrap_or(NO_MEDIUM));
+        PRIMITIVE_FLAG_MEDIUM
+    } else {
+        0
+    };
+    let flags = flags | medium_flag;
     match &shape.geometry {
         Geometry::Triangle(t) => {
             p.kind = PRIMITIVE_TRIANGLE | flags;

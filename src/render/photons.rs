@@ -1,4 +1,5 @@
-//! Photon-map parameters and the CPU build of both maps (emission, then the hashed grid).
+//! Photon-map parameters and the CPU build of the maps (emission, then the hashed grid): global,
+//! caustic, and volume (collisions in media).
 
 use crate::cpu::emit_photons::emit_photons;
 use crate::cpu::grid_build::{build_grid, grid_params};
@@ -28,7 +29,28 @@ pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) ->
         // Global and caustic passes draw disjoint random streams.
         pass: 2 * pass + caustics_only as u32,
         caustics_only: caustics_only as u32,
+        volume_capacity: 0,
+        _pad: [0; 3],
     }
+}
+
+/// Average photons inside a lookup ball the automatic volume radius aims at.
+pub const VOLUME_NEIGHBOURS: f32 = 64.0;
+
+/// How the volume lookup radius shrinks: in 3D the estimate's variance goes as 1 / r^3, so
+/// Knaus and Zwicker's schedule becomes r_i = r_1 i^((alpha - 1) / 3) (their section 4.3).
+pub fn volume_radius_scale(alpha: f32, pass: u32) -> f32 {
+    ((pass as f64 + 1.0).powf((alpha as f64 - 1.0) / 3.0)) as f32
+}
+
+/// The volume map's lookup radius of pass `pass` for `stored` collisions: the ball that holds
+/// VOLUME_NEIGHBOURS of them on average were they spread evenly through the media's volume.
+pub fn volume_radius(buffers: &SceneBuffers, settings: &PhotonSettings, stored: u32, pass: u32) -> f32 {
+    let auto =
+        (3.0 * VOLUME_NEIGHBOURS * buffers.media_volume / (4.0 * std::f32::consts::PI * stored.max(1) as f32)).cbrt();
+    // Never wider than the bounding sphere: a map of a handful of photons would read them all.
+    let auto = auto.min(buffers.bounding_radius.max(f32::MIN_POSITIVE));
+    settings.volume_radius.unwrap_or(auto) * volume_radius_scale(settings.alpha, pass)
 }
 
 /// How the lookup radius shrinks from pass to pass: r_i = r_1 i^((alpha - 1) / 2) for pass
@@ -59,7 +81,11 @@ pub fn check_radii(buffers: &SceneBuffers, settings: &PhotonSettings) -> Result<
         root.aabb_min.iter().chain(&root.aabb_max).map(|c| c.abs()).filter(|c| c.is_finite()).fold(0.0, f32::max);
     let smallest = extent / (1u32 << 30) as f32;
     let largest = 2.0 * buffers.bounding_radius;
-    for (name, radius) in [("radius", settings.radius), ("caustic radius", settings.caustic_radius)] {
+    for (name, radius) in [
+        ("radius", settings.radius),
+        ("caustic radius", settings.caustic_radius),
+        ("volume radius", settings.volume_radius),
+    ] {
         let Some(r) = radius else { continue };
         if r < smallest {
             return Err(super::Refused(format!(
@@ -88,14 +114,16 @@ pub fn map_grid(buffers: &SceneBuffers, radius: f32, stored: u32, paths: u32) ->
     grid_params(radius, stored, buffers.frame.total_light_power / paths.max(1) as f32)
 }
 
-/// Both maps built on the CPU: sorted photons and bucket starts.
+/// The maps built on the CPU: sorted photons and bucket starts (`MAP_*` order).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PhotonMaps {
-    pub grids: [GridParams; 2],
+    pub grids: [GridParams; 3],
     pub global_photons: Vec<Photon>,
     pub global_starts: Vec<u32>,
     pub caustic_photons: Vec<Photon>,
     pub caustic_starts: Vec<u32>,
+    pub volume_photons: Vec<Photon>,
+    pub volume_starts: Vec<u32>,
 }
 
 impl PhotonMaps {
@@ -106,6 +134,8 @@ impl PhotonMaps {
             global_starts: &self.global_starts,
             caustic_photons: &self.caustic_photons,
             caustic_starts: &self.caustic_starts,
+            volume_photons: &self.volume_photons,
+            volume_starts: &self.volume_starts,
         }
     }
 }
@@ -113,12 +143,24 @@ impl PhotonMaps {
 /// Traces both passes of `pass` and builds their grids, as the GPU does.
 pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> PhotonMaps {
     let view = buffers.view();
-    let global = emit_photons(&view, &emit_params(settings, pass, false)).global;
+    let emitted = emit_photons(&view, &emit_params(settings, pass, false));
+    let (global, volume) = (emitted.global, emitted.volume);
     let caustic = emit_photons(&view, &emit_params(settings, pass, true)).caustic;
     let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32, pass);
     let g_global = map_grid(buffers, r_global, global.len() as u32, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);
+    let r_volume = volume_radius(buffers, settings, volume.len() as u32, pass);
+    let g_volume = map_grid(buffers, r_volume, volume.len() as u32, settings.photons);
     let (global_photons, global_starts) = build_grid(&global, &g_global);
     let (caustic_photons, caustic_starts) = build_grid(&caustic, &g_caustic);
-    PhotonMaps { grids: [g_global, g_caustic], global_photons, global_starts, caustic_photons, caustic_starts }
+    let (volume_photons, volume_starts) = build_grid(&volume, &g_volume);
+    PhotonMaps {
+        grids: [g_global, g_caustic, g_volume],
+        global_photons,
+        global_starts,
+        caustic_photons,
+        caustic_starts,
+        volume_photons,
+        volume_starts,
+    }
 }

@@ -8,7 +8,7 @@ use super::pack::{pack_environment, pack_scene};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
-use crate::layout::{BvhNode, FrameParams, Light, Material, Primitive, Texture};
+use crate::layout::{BvhNode, FrameParams, Light, Material, Medium, Primitive, Texture};
 use crate::scene::{Geometry, LightKind, Projection, Scene, ThinLens};
 
 /// Everything a render dispatch binds, owned.
@@ -22,6 +22,8 @@ pub struct SceneBuffers {
     pub textures: Vec<Texture>,
     pub texture_data: Vec<u32>,
     pub shape_data: Vec<f32>,
+    /// The participating media; empty when the scene has none (and no null surface).
+    pub media: Vec<Medium>,
     /// True when the scene has image or pattern textures (see `PackedScene::textured`).
     pub textured: bool,
     /// True when the scene has analytic shapes other than spheres (see `PackedScene::analytic`).
@@ -34,6 +36,8 @@ pub struct SceneBuffers {
     pub bounding_radius: f32,
     /// Total area of all surfaces (scene units squared), for the automatic photon radius.
     pub surface_area: f32,
+    /// Volume the media fill (scene units cubed; bounding boxes), for the automatic volume radius.
+    pub media_volume: f32,
 }
 
 /// Which variant of the scene kernels a scene needs: lavapipe runs every branch of a shader
@@ -49,10 +53,12 @@ pub struct KernelVariant {
     pub analytic: bool,
     /// Tori and superellipsoids (with the analytic shapes).
     pub implicit: bool,
+    /// Participating media and null surfaces.
+    pub media: bool,
 }
 
 impl KernelVariant {
-    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]]`
+    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]][_media]`
     /// (the `// variant:` lines of the kernels, see build.rs).
     pub fn kernel_name(self, name: &str) -> String {
         let mut out = name.to_string();
@@ -68,6 +74,9 @@ impl KernelVariant {
         if self.implicit {
             out.push_str("_implicit");
         }
+        if self.media {
+            out.push_str("_media");
+        }
         out
     }
 }
@@ -75,7 +84,13 @@ impl KernelVariant {
 impl SceneBuffers {
     /// The variant of the scene kernels this scene needs.
     pub fn variant(&self) -> KernelVariant {
-        KernelVariant { textured: self.textured, alpha: self.alpha, analytic: self.analytic, implicit: self.implicit }
+        KernelVariant {
+            textured: self.textured,
+            alpha: self.alpha,
+            analytic: self.analytic,
+            implicit: self.implicit,
+            media: !self.media.is_empty(),
+        }
     }
 
     pub fn view(&self) -> SceneView<'_> {
@@ -88,6 +103,7 @@ impl SceneBuffers {
             textures: &self.textures,
             texture_data: &self.texture_data,
             shape_data: &self.shape_data,
+            media: &self.media,
             maps: crate::cpu::NO_MAPS,
         }
     }
@@ -275,9 +291,16 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             continue;
         }
         p.light = lights.len() as u32;
-        let options = scene.lights.iter().find(|l| l.kind == LightKind::Area { material: p.material });
+        let options =
+            scene.lights.iter().find(|l| matches!(l.kind, LightKind::Area { material, .. } if material == p.material));
         powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
-        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, ..Default::default() });
+        let grid = match options.map(|o| &o.kind) {
+            Some(&LightKind::Area { grid: [n, m], jitter, .. }) if n * m > 1 => {
+                n | m << 8 | if jitter { LIGHT_GRID_JITTER } else { 0 }
+            }
+            _ => 0,
+        };
+        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, grid, ..Default::default() });
     }
     for desc in &scene.lights {
         let Some((light, power)) = light_record(&desc.kind, light_center, light_radius) else { continue };
@@ -406,9 +429,32 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         aperture_rotation: lens.rotation_deg.to_radians(),
         environment,
         unbounded_first,
-        _pad: 0,
+        camera_medium: NO_MEDIUM,
     };
-    Ok(SceneBuffers {
+    // Media: the null material needs the media variant's kernels even without a medium.
+    let mut media: Vec<Medium> = scene.media.iter().map(super::pack::pack_medium).collect();
+    let has_null = scene.materials.iter().any(|m| m.kind == crate::scene::MaterialKind::Null);
+    if media.is_empty() && has_null {
+        media.push(Medium::default());
+    }
+    let mut media_volume = 0.0f32;
+    if !scene.media.is_empty() {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for (shape, (blo, bhi)) in scene.shapes.iter().zip(&packed.bounds) {
+            if shape.media.is_some_and(|m| m.interior.is_some()) {
+                (lo, hi) = (lo.min(*blo), hi.max(*bhi));
+            }
+        }
+        if scene.atmosphere.is_some() && root.aabb_min[0] <= root.aabb_max[0] {
+            (lo, hi) = (lo.min(Vec3::from(root.aabb_min)), hi.max(Vec3::from(root.aabb_max)));
+        }
+        if lo.cmple(hi).all() {
+            let size = (hi - lo).max(Vec3::splat(bounding_radius * 1e-3));
+            media_volume = size.x * size.y * size.z;
+        }
+    }
+    let mut buffers = SceneBuffers {
         frame,
         nodes: bvh.nodes,
         primitives,
@@ -423,5 +469,74 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         alpha: packed.alpha,
         bounding_radius,
         surface_area,
-    })
+        media,
+        media_volume,
+    };
+    // Lights start in vacuum unless a medium is found around them.
+    for l in &mut buffers.lights {
+        l.medium = NO_MEDIUM;
+    }
+    locate_media(&mut buffers, scene.atmosphere.unwrap_or(NO_MEDIUM));
+    Ok(buffers)
+}
+
+/// Finds the medium around the camera and around each light (where its photons start): a ray
+/// from the point goes out until it meets a medium boundary; crossing it outward means the
+/// point was inside (its interior), inward that it was outside (its exterior). A point that
+/// meets no boundary is in the atmosphere. Distant lights and the environment start theirs
+/// outside everything, in the atmosphere.
+fn locate_media(buffers: &mut SceneBuffers, atmosphere: u32) {
+    if buffers.media.is_empty() {
+        return;
+    }
+    let camera = Vec3::from(buffers.frame.camera_position);
+    let view = buffers.view();
+    let at = |p: Vec3| medium_at(&view, p, atmosphere);
+    let camera_medium = at(camera);
+    let light_media: Vec<u32> = buffers
+        .lights
+        .iter()
+        .map(|l| match l.kind {
+            LIGHT_POINT | LIGHT_SPOT => at(Vec3::from(l.position)),
+            LIGHT_AREA => {
+                // A point just off the emitter's front face, at its centre.
+                let p = &view.primitives[l.primitive as usize];
+                let centre = if p.kind & PRIMITIVE_KIND_MASK == PRIMITIVE_TRIANGLE {
+                    let (a, b, c) = (Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2));
+                    (a + b + c) / 3.0 + (b - a).cross(c - a).normalize_or_zero() * (4.0 * view.frame.ray_epsilon)
+                } else {
+                    Vec3::from(p.p0)
+                };
+                at(centre)
+            }
+            _ => atmosphere,
+        })
+        .collect();
+    buffers.frame.camera_medium = camera_medium;
+    for (l, m) in buffers.lights.iter_mut().zip(light_media) {
+        l.medium = m;
+    }
+}
+
+/// The medium at `p` (see `locate_media`): the ray runs along a fixed direction of no symmetry,
+/// so it does not graze the edges of axis-aligned boxes.
+pub fn medium_at(view: &crate::cpu::SceneView, p: Vec3, atmosphere: u32) -> u32 {
+    use crate::cpu::shading::offset_origin;
+    let d = Vec3::new(0.5773, 0.6157, 0.5362).normalize();
+    let mut o = p;
+    let mut skip = NO_LIGHT;
+    for _ in 0..100_000 {
+        let (prim, t) = crate::cpu::trace::trace_ray(view, o, d, f32::INFINITY, false, skip);
+        if prim == NO_LIGHT {
+            return atmosphere;
+        }
+        let h = crate::cpu::shape::shape_hit(view, prim, o, d, t);
+        let q = &view.primitives[prim as usize];
+        if q.kind & PRIMITIVE_FLAG_MEDIUM != 0 {
+            return if d.dot(h.ng) > 0.0 { q.interior } else { q.exterior };
+        }
+        o = offset_origin(&h, -d, BSDF_TRANSMISSION);
+        skip = crate::cpu::shading::ray_skip(view, prim);
+    }
+    atmosphere
 }

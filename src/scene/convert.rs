@@ -1,6 +1,8 @@
 //! From the file as written (`format`) to the `Scene` the renderer uses: checks every value,
 //! applies defaults, turns quads, boxes, meshes and area lights into triangles and materials.
 
+mod sky;
+
 use std::ops::Range;
 use std::path::Path;
 
@@ -9,7 +11,8 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{
-    EnvironmentDef, LightDef, MaterialDef, ParamDef, SceneFile, ShapeDef, TextureDef, TransformDef, Vec3Def,
+    AtmosphereDef, EnvironmentDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
+    TextureDef, TransformDef, Vec3Def,
 };
 use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
 use super::material::{
@@ -23,14 +26,14 @@ use super::model::{
 };
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use super::{
-    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, PhotonSettings, Projection,
-    RenderSettings, Scene, Shape, Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface, Phase,
+    PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
     fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
-    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SCENE_VALUE,
-    MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_PATCH_FLATNESS, MIN_SPHERE_RADIUS,
+    MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_LIGHT_GRID, MAX_MEDIUM_COEFFICIENT, MAX_PASSES, MAX_PHOTON_PATHS,
+    MAX_PIXELS, MAX_SCENE_VALUE, MAX_SPOT_TIGHTNESS, MAX_SPP, MIN_FOV_DEGREES, MIN_PATCH_FLATNESS, MIN_SPHERE_RADIUS,
 };
 
 type Result<T> = std::result::Result<T, SceneError>;
@@ -51,7 +54,7 @@ const DEFAULT_INNER_FRACTION: f32 = 0.75;
 const POV_SPOT_RADIUS: f32 = 30.0;
 const POV_SPOT_FALLOFF: f32 = 45.0;
 
-const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix"];
+const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix", "null"];
 
 /// Complex indices of refraction (eta, k) of common metals at the wavelengths of the R, G and B
 /// primaries (about 650, 550 and 450 nm), from published optical constants: gold, silver and
@@ -96,12 +99,18 @@ const SUBDIVISION_SCHEMES: &[&str] = &["catmull-clark", "loop"];
 const SUPERELLIPSOID_MIN_EXPONENT: f64 = 0.01;
 const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
 const CAMERA_TYPES: &[&str] = &["perspective", "orthographic", "latlong"];
-const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform"];
+const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform", "sky"];
 /// Rows of the image a gradient sky is drawn into (its colours vary with elevation only).
 const GRADIENT_ROWS: u32 = 512;
-const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere"];
+const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere", "disc"];
 
 pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
+    convert_with_origins(file, src).map(|(scene, _)| scene)
+}
+
+/// `convert`, also saying which shapes each `[[shapes]]` and `[[lights]]` entry became.
+pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<(Scene, SceneOrigins)> {
+    let mut origins = SceneOrigins::default();
     let mut builder = Builder {
         src,
         materials: Vec::new(),
@@ -113,6 +122,9 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         shapes: Vec::new(),
         lights: Vec::new(),
         warnings: Vec::new(),
+        media: Vec::new(),
+        medium_names: Vec::new(),
+        atmosphere: None,
     };
 
     let Some(camera) = &file.camera else {
@@ -138,15 +150,36 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         builder.material(key, def)?;
     }
 
+    // Media, then the atmosphere, before the shapes that name them.
+    let mut media: Vec<_> = file.media.iter().collect();
+    media.sort_by_key(|(key, _)| key.span().start);
+    for (key, def) in media {
+        builder.medium(key, def)?;
+    }
+    if let Some(def) = &file.atmosphere {
+        builder.atmosphere(def)?;
+    }
+
     for (index, shape) in file.shapes.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.shape(index, shape)?;
+        origins.shapes.push(first..builder.shapes.len());
     }
     for (index, light) in file.lights.iter().enumerate() {
+        let first = builder.shapes.len();
         builder.light(index, light)?;
+        origins.lights.push(first..builder.shapes.len());
     }
-    let environment = match &file.environment {
-        Some(def) => Some(builder.environment(def)?),
-        None => None,
+    let environment = match (&file.environment, &file.rainbow) {
+        (Some(def), rainbow) => Some(builder.environment(def, rainbow.as_ref())?),
+        (None, Some(rainbow)) => {
+            return Err(src.invalid(
+                &rainbow.span(),
+                "[rainbow]",
+                "a rainbow is drawn into the environment; add an `[environment]` (e.g. `type = \"sky\"`)".to_string(),
+            ))
+        }
+        (None, None) => None,
     };
 
     // Warnings
@@ -172,7 +205,7 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
     }
 
     let name = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    Ok(Scene {
+    let scene = Scene {
         name,
         path: src.path.to_path_buf(),
         camera,
@@ -185,7 +218,11 @@ pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
         lights: builder.lights,
         environment,
         warnings: builder.warnings,
-    })
+        media: builder.media,
+        medium_names: builder.medium_names,
+        atmosphere: builder.atmosphere,
+    };
+    Ok((scene, origins))
 }
 
 struct Builder<'a> {
@@ -199,6 +236,9 @@ struct Builder<'a> {
     shapes: Vec<Shape>,
     lights: Vec<LightDesc>,
     warnings: Vec<String>,
+    media: Vec<MediumDesc>,
+    medium_names: Vec<String>,
+    atmosphere: Option<u32>,
 }
 
 /// A field as written: its name, and its span when present.
@@ -741,6 +781,9 @@ impl Builder<'_> {
         if let Some(r) = &p.caustic_radius {
             settings.caustic_radius = Some(radius(r, "caustic_radius")?);
         }
+        if let Some(r) = &p.volume_radius {
+            settings.volume_radius = Some(radius(r, "volume_radius")?);
+        }
         if let Some(rays) = &p.gather_rays {
             settings.gather_rays =
                 self.integer(rays, object, "gather_rays", 0, MAX_GATHER_RAYS, "", "; 0 reads the global map directly")?;
@@ -923,6 +966,10 @@ impl Builder<'_> {
                 let roughness = self.roughness(m, &object)?;
                 MaterialKind::Plastic { reflectance, ior, roughness }
             }
+            "null" => {
+                self.only_fields(&object, "a null material (an invisible medium boundary)", &present, &["type"])?;
+                MaterialKind::Null
+            }
             _ => {
                 self.only_fields(&object, "a mix material", &present, &["type", "materials", "weight"])?;
                 let example = "materials = [\"rust\", \"paint\"]";
@@ -940,6 +987,13 @@ impl Builder<'_> {
                 let mut ids = [0u32; 2];
                 for (id, mixed) in ids.iter_mut().zip(list.get_ref()) {
                     *id = self.material_id(&Spanned::new(list.span(), mixed.clone()), &object)?;
+                    if self.materials[*id as usize].kind == MaterialKind::Null {
+                        return Err(self.invalid(
+                            &list.span(),
+                            &object,
+                            format!("\"{}\" is a null material, which a mix cannot hold", printable(mixed)),
+                        ));
+                    }
                     if self.mix_depth(*id) + 1 > MIX_MAX_DEPTH {
                         return Err(self.invalid(
                             &list.span(),
@@ -1264,6 +1318,239 @@ impl Builder<'_> {
         Err(self.invalid(&value.span(), object, format!("unknown material \"{shown}\" ({hint})")))
     }
 
+    // Media
+
+    fn medium(&mut self, key: &Spanned<String>, def: &Spanned<MediumDef>) -> Result<()> {
+        let name = key.get_ref().clone();
+        let object = format!("medium \"{}\"", printable(&name));
+        let m = def.get_ref();
+        if let Some(kind) = &m.r#type {
+            self.one_of(kind, &object, "type", &["homogeneous"])?;
+        }
+        let coefficient = |builder: &Self, value: &Spanned<Vec3Def>, field: &str| -> Result<Vec3> {
+            let c = builder.vector(value, &object, field)?;
+            if c.min_element() < 0.0 {
+                return Err(builder.invalid(
+                    &value.span(),
+                    &object,
+                    format!(
+                        "`{field}` is negative ({}); a coefficient is >= 0 per channel (1 / scene unit)",
+                        vec3_text(c)
+                    ),
+                ));
+            }
+            if c.max_element() > MAX_MEDIUM_COEFFICIENT {
+                return Err(builder.invalid(
+                    &value.span(),
+                    &object,
+                    format!(
+                        "`{field}` is {}; coefficients are at most {} per scene unit (see docs/limits.md)",
+                        vec3_text(c),
+                        fmt_number(MAX_MEDIUM_COEFFICIENT as f64)
+                    ),
+                ));
+            }
+            Ok(c)
+        };
+        let (sigma_a, sigma_s) = match (&m.sigma_a, &m.sigma_s, &m.sigma_t, &m.albedo) {
+            (None, None, Some(t), albedo) => {
+                let sigma_t = coefficient(self, t, "sigma_t")?;
+                let albedo = match albedo {
+                    Some(a) => Vec3::from(self.color(a, &object, "albedo", true)?),
+                    None => Vec3::ONE,
+                };
+                (sigma_t * (Vec3::ONE - albedo), sigma_t * albedo)
+            }
+            (a, s, None, None) if a.is_some() || s.is_some() => (
+                a.as_ref().map_or(Ok(Vec3::ZERO), |a| coefficient(self, a, "sigma_a"))?,
+                s.as_ref().map_or(Ok(Vec3::ZERO), |s| coefficient(self, s, "sigma_s"))?,
+            ),
+            (_, _, None, Some(albedo)) => {
+                return Err(self.invalid(
+                    &albedo.span(),
+                    &object,
+                    "`albedo` goes with `sigma_t`; give `sigma_t` and `albedo`, or `sigma_a` and `sigma_s`".to_string(),
+                ))
+            }
+            (None, None, None, None) => {
+                return Err(self.invalid(
+                    &def.span(),
+                    &object,
+                    "a medium needs `sigma_t` (and `albedo`) or `sigma_a` and `sigma_s`, e.g. `sigma_t = 0.1`"
+                        .to_string(),
+                ))
+            }
+            _ => {
+                let span = span_of(&m.sigma_t).unwrap_or(def.span());
+                return Err(self.invalid(
+                    &span,
+                    &object,
+                    "give either `sigma_t` (with `albedo`) or `sigma_a` and `sigma_s`, not both".to_string(),
+                ));
+            }
+        };
+        let emission = match &m.emission {
+            Some(e) => {
+                let c = Vec3::from(self.color(e, &object, "emission", false)?);
+                // Emission is estimated at collisions, so a channel without extinction has none.
+                let st = sigma_a + sigma_s;
+                if (0..3).any(|i| c[i] > 0.0 && st[i] <= 0.0) {
+                    return Err(self.invalid(
+                        &e.span(),
+                        &object,
+                        format!(
+                            "`emission` ({}) is positive in a channel where the medium has no extinction ({}); give that channel some `sigma_a`",
+                            vec3_text(c),
+                            vec3_text(st)
+                        ),
+                    ));
+                }
+                c
+            }
+            None => Vec3::ZERO,
+        };
+        let phase_name = match &m.phase {
+            Some(p) => self.one_of(p, &object, "phase", &["isotropic", "henyey-greenstein"])?,
+            None if m.g.is_some() => "henyey-greenstein",
+            None => "isotropic",
+        };
+        let phase = match (phase_name, &m.g) {
+            ("isotropic", Some(g)) => {
+                return Err(self.invalid(
+                    &g.span(),
+                    &object,
+                    "`g` needs `phase = \"henyey-greenstein\"` (the isotropic phase has none)".to_string(),
+                ))
+            }
+            ("isotropic", None) => Phase::Isotropic,
+            (_, g) => {
+                let g = match g {
+                    Some(g) => {
+                        let v = *g.get_ref();
+                        if !(v.is_finite() && v > -1.0 && v < 1.0) {
+                            return Err(self.invalid(
+                                &g.span(),
+                                &object,
+                                format!("`g` is {}; the asymmetry lies strictly between -1 and 1 (0 is isotropic, > 0 scatters forward)", fmt_number(v)),
+                            ));
+                        }
+                        v as f32
+                    }
+                    None => 0.0,
+                };
+                Phase::HenyeyGreenstein { g }
+            }
+        };
+        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase });
+        self.medium_names.push(name);
+        Ok(())
+    }
+
+    fn medium_id(&self, value: &Spanned<String>, object: &str, field: &str) -> Result<Option<u32>> {
+        let name = value.get_ref();
+        if name == "vacuum" {
+            return Ok(None);
+        }
+        if let Some(id) = self.medium_names.iter().position(|n| n == name) {
+            return Ok(Some(id as u32));
+        }
+        let shown = printable(name);
+        let hint = match suggest(name, &self.medium_names) {
+            Some(best) => format!("did you mean \"{}\"?", printable(&best)),
+            None => format!("define it with a [media.{shown}] table, or use \"vacuum\""),
+        };
+        Err(self.invalid(&value.span(), object, format!("unknown medium \"{shown}\" in `{field}` ({hint})")))
+    }
+
+    fn atmosphere(&mut self, def: &Spanned<AtmosphereDef>) -> Result<()> {
+        let object = "[atmosphere]";
+        let medium = self.require(&def.get_ref().medium, &def.span(), object, "medium", "medium = \"fog\"")?;
+        self.atmosphere = self.medium_id(medium, object, "medium")?;
+        Ok(())
+    }
+
+    /// The media a shape bounds (`interior`, `exterior`), refused on shapes that enclose nothing.
+    fn medium_interface(&self, kind: &str, s: &ShapeDef, object: &str) -> Result<Option<MediumInterface>> {
+        let (interior, exterior) = match (&s.interior, &s.exterior) {
+            (None, None) => return Ok(None),
+            (None, Some(e)) => {
+                return Err(self.invalid(
+                    &e.span(),
+                    object,
+                    "`exterior` needs `interior`: name the medium inside the shape too (or \"vacuum\")".to_string(),
+                ))
+            }
+            (Some(i), e) => (i, e),
+        };
+        let open = match kind {
+            "quad" | "triangle" | "disc" | "bicubic_patch" => true,
+            "cylinder" | "cone" => s.open.as_ref().is_some_and(|o| *o.get_ref()),
+            _ => false,
+        };
+        if open {
+            return Err(self.invalid(
+                &interior.span(),
+                object,
+                format!(
+                    "a medium needs a closed shape, and {} encloses no volume; use a box, a sphere, a closed mesh or another solid",
+                    if kind == "cylinder" || kind == "cone" { format!("an open {kind}") } else { format!("a {kind}") }
+                ),
+            ));
+        }
+        let interior = self.medium_id(interior, object, "interior")?;
+        let exterior = match exterior {
+            Some(e) => self.medium_id(e, object, "exterior")?,
+            None => self.atmosphere,
+        };
+        Ok(Some(MediumInterface { interior, exterior }))
+    }
+
+    /// Checks that the triangles from `first` on (one mesh) close up, every edge shared by two
+    /// triangles that run it in opposite directions, and turns them around when they face
+    /// inward (negative volume), so that the winding normal points out of the medium.
+    fn close_mesh(&mut self, first: usize, file: &Spanned<String>, object: &str) -> Result<()> {
+        use std::collections::HashMap;
+        let key = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+        let mut volume = 0.0f64;
+        for shape in &self.shapes[first..] {
+            let Geometry::Triangle(t) = &shape.geometry else { continue };
+            let [a, b, c] = t.vertices;
+            volume += a.as_dvec3().dot(b.as_dvec3().cross(c.as_dvec3())) / 6.0;
+            for (p, q) in [(a, b), (b, c), (c, a)] {
+                // +1 for p -> q, -1 for q -> p, under one key: a closed, consistently wound mesh
+                // sums every edge to 0.
+                let (k, sign) = if key(p) < key(q) { ((key(p), key(q)), 1) } else { ((key(q), key(p)), -1) };
+                *edges.entry(k).or_insert(0) += sign;
+            }
+        }
+        let open = edges.values().filter(|&&n| n != 0).count();
+        if open > 0 {
+            return Err(self.invalid(
+                &file.span(),
+                object,
+                format!(
+                    "mesh {}: a medium needs a closed mesh, but {open} edges border a single triangle or triangles wound against their neighbours; close the mesh or drop `interior`",
+                    printable(file.get_ref())
+                ),
+            ));
+        }
+        if volume < 0.0 {
+            for shape in &mut self.shapes[first..] {
+                if let Geometry::Triangle(t) = &mut shape.geometry {
+                    t.vertices.swap(1, 2);
+                    if let Some(uv) = &mut t.uv {
+                        uv.swap(1, 2);
+                    }
+                    if let Some(normals) = &mut t.normals {
+                        normals.swap(1, 2);
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     // Shapes
 
     fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
@@ -1303,6 +1590,8 @@ impl Builder<'_> {
             ("flatness", span_of(&s.flatness)),
             ("lights", span_of(&s.lights)),
             ("points", span_of(&s.points)),
+            ("interior", span_of(&s.interior)),
+            ("exterior", span_of(&s.exterior)),
         ];
         let (what, fields): (&str, &[&str]) = match kind {
             "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
@@ -1329,9 +1618,27 @@ impl Builder<'_> {
                 ],
             ),
         };
-        let mut allowed = vec!["name", "type", "material", "transform"];
+        let mut allowed = vec!["name", "type", "material", "transform", "interior", "exterior"];
         allowed.extend_from_slice(fields);
         self.only_fields(&object, what, &present, &allowed)?;
+        let first_shape = self.shapes.len();
+        let media = self.medium_interface(kind, s, &object)?;
+        self.shape_kind(kind, s, &table, &object)?;
+        if let Some(media) = media {
+            if kind == "mesh" {
+                let file = s.file.as_ref().expect("shape_kind required the file");
+                self.close_mesh(first_shape, file, &object)?;
+            }
+            for shape in &mut self.shapes[first_shape..] {
+                shape.media = Some(media);
+            }
+        }
+        Ok(())
+    }
+
+    /// Adds the shapes of one `[[shapes]]` table of type `kind`.
+    fn shape_kind(&mut self, kind: &str, s: &ShapeDef, table: &Range<usize>, object: &str) -> Result<()> {
+        let (table, object) = (table.clone(), object.to_string());
 
         // A mesh may leave out `material`: its file's materials apply.
         if kind == "mesh" {
@@ -1397,16 +1704,62 @@ impl Builder<'_> {
                         ),
                     ));
                 }
-                for (kind, placement) in self.analytic(kind, s, &table, &object)? {
-                    let world_from_object = transform.unwrap_or(Affine3A::IDENTITY) * placement;
-                    let shape = Analytic { kind, world_from_object };
-                    let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
-                    self.check_placement(&shape, &span, &object)?;
-                    self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material });
-                }
-                Ok(())
+                let pieces = self.analytic(kind, s, &table, &object)?;
+                let span = s.transform.as_ref().map_or(table.clone(), |t| t.span());
+                self.push_analytic(pieces, transform, &span, &object, material)
             }
         }
+    }
+
+    /// Places the object-space analytic `pieces` under `transform` as shapes of `material`, each
+    /// checked against the scene range (an error at `span`).
+    fn push_analytic(
+        &mut self,
+        pieces: Vec<(AnalyticKind, Affine3A)>,
+        transform: Option<Affine3A>,
+        span: &Range<usize>,
+        object: &str,
+        material: u32,
+    ) -> Result<()> {
+        for (kind, placement) in pieces {
+            let shape = Analytic { kind, world_from_object: transform.unwrap_or(Affine3A::IDENTITY) * placement };
+            self.check_placement(&shape, span, object)?;
+            self.shapes.push(Shape { geometry: Geometry::Analytic(shape), material, media: None });
+        }
+        Ok(())
+    }
+
+    /// A disc (a disc shape, or a disc area light without `inner_radius`) and its placement.
+    fn disc(
+        &self,
+        center: &Option<Spanned<Vec3Def>>,
+        normal: &Option<Spanned<Vec3Def>>,
+        radius: &Option<Spanned<f64>>,
+        inner_radius: &Option<Spanned<f64>>,
+        table: &Range<usize>,
+        object: &str,
+    ) -> Result<(AnalyticKind, Affine3A)> {
+        let center = self.require(center, table, object, "center", "center = [0, 0, 0]")?;
+        let center = self.point(center, object, "center")?;
+        let normal = self.require(normal, table, object, "normal", "normal = [0, 1, 0]")?;
+        let normal = self.direction(normal, object, "normal")?;
+        let radius_def = self.require(radius, table, object, "radius", "radius = 1.0")?;
+        let radius = self.positive(radius_def, object, "radius")?;
+        let inner_radius = match inner_radius {
+            Some(r) => {
+                let v = self.number(r, object, "inner_radius")?;
+                if v < 0.0 || v >= radius {
+                    return Err(self.invalid(
+                        &r.span(),
+                        object,
+                        format!("`inner_radius` is {v}; it must be in [0, radius) = [0, {radius})"),
+                    ));
+                }
+                v
+            }
+            None => 0.0,
+        };
+        Ok((AnalyticKind::Disc { radius, inner_radius }, frame(center, normal)))
     }
 
     /// A number > 0 from a required field.
@@ -1451,29 +1804,7 @@ impl Builder<'_> {
                 let offset = s.offset.as_ref().map_or(Ok(0.0), |o| self.number(o, object, "offset"))?;
                 Ok(vec![(AnalyticKind::Plane, frame(normal * offset, normal))])
             }
-            "disc" => {
-                let center = self.require(&s.center, table, object, "center", "center = [0, 0, 0]")?;
-                let center = self.point(center, object, "center")?;
-                let normal = self.require(&s.normal, table, object, "normal", "normal = [0, 1, 0]")?;
-                let normal = self.direction(normal, object, "normal")?;
-                let radius_def = self.require(&s.radius, table, object, "radius", "radius = 1.0")?;
-                let radius = self.positive(radius_def, object, "radius")?;
-                let inner_radius = match &s.inner_radius {
-                    Some(r) => {
-                        let v = self.number(r, object, "inner_radius")?;
-                        if v < 0.0 || v >= radius {
-                            return Err(self.invalid(
-                                &r.span(),
-                                object,
-                                format!("`inner_radius` is {v}; it must be in [0, radius) = [0, {radius})"),
-                            ));
-                        }
-                        v
-                    }
-                    None => 0.0,
-                };
-                Ok(vec![(AnalyticKind::Disc { radius, inner_radius }, frame(center, normal))])
-            }
+            "disc" => Ok(vec![self.disc(&s.center, &s.normal, &s.radius, &s.inner_radius, table, object)?]),
             "cylinder" | "cone" => {
                 let base_def = self.require(&s.base, table, object, "base", "base = [0, 0, 0]")?;
                 let base = self.point(base_def, object, "base")?;
@@ -1667,7 +1998,11 @@ impl Builder<'_> {
                 format!("`vertices`: {which} has zero area (its points are equal or on a line); fix the points"),
             ));
         }
-        self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv, normals: None }), material });
+        self.shapes.push(Shape {
+            geometry: Geometry::Triangle(Triangle { vertices, uv, normals: None }),
+            material,
+            media: None,
+        });
         Ok(())
     }
 
@@ -1729,7 +2064,7 @@ impl Builder<'_> {
             return Err(self.invalid(&radius.span(), object, message));
         }
         let sphere = Sphere { center: c, radius: r, object_from_world };
-        self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material });
+        self.shapes.push(Shape { geometry: Geometry::Sphere(sphere), material, media: None });
         Ok(())
     }
 
@@ -1844,7 +2179,11 @@ impl Builder<'_> {
                 skipped += 1;
                 continue;
             }
-            self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv, normals }), material: id });
+            self.shapes.push(Shape {
+                geometry: Geometry::Triangle(Triangle { vertices, uv, normals }),
+                material: id,
+                media: None,
+            });
         }
         if skipped == total {
             return Err(SceneError::Obj {
@@ -2026,7 +2365,11 @@ impl Builder<'_> {
             if is_degenerate(&vertices) {
                 continue;
             }
-            self.shapes.push(Shape { geometry: Geometry::Triangle(Triangle { vertices, uv, normals }), material });
+            self.shapes.push(Shape {
+                geometry: Geometry::Triangle(Triangle { vertices, uv, normals }),
+                material,
+                media: None,
+            });
             added += 1;
         }
         if added == 0 {
@@ -2167,6 +2510,9 @@ impl Builder<'_> {
             ("vertices", span_of(&l.vertices)),
             ("center", span_of(&l.center)),
             ("radius", span_of(&l.radius)),
+            ("normal", span_of(&l.normal)),
+            ("samples", span_of(&l.samples)),
+            ("jitter", span_of(&l.jitter)),
             ("radiance", span_of(&l.radiance)),
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
@@ -2417,13 +2763,20 @@ impl Builder<'_> {
     ) -> Result<()> {
         let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
         let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = [common, &["shape", "radiance", "transform"]].concat();
-        let what = if shape == "quad" {
-            allowed.push("vertices");
-            "a quad area light"
-        } else {
-            allowed.extend_from_slice(&["center", "radius"]);
-            "a sphere area light"
+        let mut allowed = [common, &["shape", "radiance", "transform", "samples", "jitter"]].concat();
+        let what = match shape {
+            "quad" => {
+                allowed.push("vertices");
+                "a quad area light"
+            }
+            "disc" => {
+                allowed.extend_from_slice(&["center", "radius", "normal"]);
+                "a disc area light"
+            }
+            _ => {
+                allowed.extend_from_slice(&["center", "radius"]);
+                "a sphere area light"
+            }
         };
         self.only_fields(object, what, present, &allowed)?;
         let radiance_def = self.require(&l.radiance, table, object, "radiance", "radiance = [10, 10, 10]")?;
@@ -2447,15 +2800,42 @@ impl Builder<'_> {
         light_material.emission = ColorParam::constant(Vec3::from(radiance));
         let material = self.add_material(material_name, light_material);
         self.material_used[material as usize] = true;
-        self.lights.push(LightDesc { kind: LightKind::Area { material }, direct, photons });
+        let grid = match &l.samples {
+            Some(s) => {
+                let v = s.get_ref();
+                if v.len() != 2 || v.iter().any(|&k| !(1..=MAX_LIGHT_GRID as i64).contains(&k)) {
+                    return Err(self.invalid(
+                        &s.span(),
+                        object,
+                        format!(
+                            "`samples` is {v:?}; give POV-Ray's grid as [n, m], each 1 to {MAX_LIGHT_GRID} (e.g. `samples = [4, 4]`)"
+                        ),
+                    ));
+                }
+                [v[0] as u32, v[1] as u32]
+            }
+            None => [1, 1],
+        };
+        let jitter = l.jitter.as_ref().is_none_or(|j| *j.get_ref());
+        self.lights.push(LightDesc { kind: LightKind::Area { material, grid, jitter }, direct, photons });
         let transform = self.transform(l.transform.as_ref(), object)?;
-        if shape == "quad" {
-            let vertices = self.vertices(&l.vertices, table, object, 4)?;
-            self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
-        } else {
-            let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
-            let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
-            self.sphere(center, radius, object, material, transform)
+        match shape {
+            "quad" => {
+                let vertices = self.vertices(&l.vertices, table, object, 4)?;
+                self.polygon(&vertices, span_of(&l.vertices).unwrap_or(table.clone()), object, material, transform)
+            }
+            "disc" => {
+                // The seed's circular light: a one-sided disc facing `normal` (an ellipse under a
+                // non-uniform `transform` scale), sampled over its area like a disc shape.
+                let piece = self.disc(&l.center, &l.normal, &l.radius, &None, table, object)?;
+                let span = l.transform.as_ref().map_or(table.clone(), |t| t.span());
+                self.push_analytic(vec![piece], transform, &span, object, material)
+            }
+            _ => {
+                let center = self.require(&l.center, table, object, "center", "center = [0, 5, 0]")?;
+                let radius = self.require(&l.radius, table, object, "radius", "radius = 0.5")?;
+                self.sphere(center, radius, object, material, transform)
+            }
         }
     }
 }
@@ -2463,7 +2843,11 @@ impl Builder<'_> {
 impl Builder<'_> {
     // Environment
 
-    fn environment(&mut self, def: &Spanned<EnvironmentDef>) -> Result<Environment> {
+    fn environment(
+        &mut self,
+        def: &Spanned<EnvironmentDef>,
+        rainbow: Option<&Spanned<RainbowDef>>,
+    ) -> Result<Environment> {
         let object = "[environment]";
         let table = def.span();
         let e = def.get_ref();
@@ -2479,6 +2863,18 @@ impl Builder<'_> {
             ("rotation", span_of(&e.rotation)),
             ("photons", span_of(&e.photons)),
             ("direct", span_of(&e.direct)),
+            ("turbidity", span_of(&e.turbidity)),
+            ("ground_albedo", span_of(&e.ground_albedo)),
+            ("sun", span_of(&e.sun)),
+            ("sun_direction", span_of(&e.sun_direction)),
+            ("sun_elevation", span_of(&e.sun_elevation)),
+            ("sun_azimuth", span_of(&e.sun_azimuth)),
+            ("latitude", span_of(&e.latitude)),
+            ("longitude", span_of(&e.longitude)),
+            ("date", span_of(&e.date)),
+            ("time", span_of(&e.time)),
+            ("utc_offset", span_of(&e.utc_offset)),
+            ("north", span_of(&e.north)),
         ];
         let common = ["type", "strength", "rotation", "photons", "direct"];
         let strength = match &e.strength {
@@ -2592,6 +2988,10 @@ impl Builder<'_> {
                 };
                 gradient_image(&colors, &elevations)
             }
+            "sky" => {
+                self.only_fields(object, "a sky", &present, &[&common[..], sky::SKY_FIELDS].concat())?;
+                self.sky(e, &table, object, strength, direct, photons, rainbow)?
+            }
             _ => {
                 self.only_fields(object, "a uniform environment", &present, &[&common[..], &["radiance"]].concat())?;
                 let r = self.require(&e.radiance, &table, object, "radiance", "radiance = 1")?;
@@ -2604,6 +3004,16 @@ impl Builder<'_> {
                 }
             }
         };
+        if kind != "sky" {
+            if let Some(r) = rainbow {
+                if let Some(addition) = self.rainbow(r, None)? {
+                    if (image.width as u64) * (image.height as u64) < (sky::SKY_WIDTH * sky::SKY_HEIGHT) as u64 {
+                        image = resample(&image, sky::SKY_WIDTH, sky::SKY_HEIGHT);
+                    }
+                    sky::add_to_image(&mut image, rotation_deg, &addition);
+                }
+            }
+        }
         // Radiance is in [0, MAX_SCENE_VALUE] like every colour of a scene: a map's NaN and
         // negative texels (EXR allows them) become 0, and a texel too bright is refused.
         let mut cleared = 0usize;
@@ -2639,6 +3049,20 @@ impl Builder<'_> {
         }
         Ok(Environment { image: std::sync::Arc::new(image), rotation_deg, direct, photons })
     }
+}
+
+/// The image at `width` x `height`, each texel the source texel its centre falls in (for a
+/// gradient or uniform sky that a rainbow is drawn over).
+fn resample(image: &ImageTexture, width: u32, height: u32) -> ImageTexture {
+    let mut texels = Vec::with_capacity((width * height) as usize);
+    for j in 0..height {
+        let sj = (((j as f64 + 0.5) / height as f64 * image.height as f64) as u32).min(image.height - 1);
+        for i in 0..width {
+            let si = (((i as f64 + 0.5) / width as f64 * image.width as f64) as u32).min(image.width - 1);
+            texels.push(image.texels[(sj * image.width + si) as usize]);
+        }
+    }
+    ImageTexture { width, height, texels }
 }
 
 /// The image halved in both directions (odd last rows and columns dropped), each texel the mean

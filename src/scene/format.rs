@@ -24,6 +24,29 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub lights: Vec<Spanned<LightDef>>,
     pub environment: Option<Spanned<EnvironmentDef>>,
+    pub rainbow: Option<Spanned<RainbowDef>>,
+    #[serde(default)]
+    pub media: BTreeMap<Spanned<String>, Spanned<MediumDef>>,
+    pub atmosphere: Option<Spanned<AtmosphereDef>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MediumDef {
+    pub r#type: Option<Spanned<String>>,
+    pub sigma_a: Option<Spanned<Vec3Def>>,
+    pub sigma_s: Option<Spanned<Vec3Def>>,
+    pub sigma_t: Option<Spanned<Vec3Def>>,
+    pub albedo: Option<Spanned<Vec3Def>>,
+    pub emission: Option<Spanned<Vec3Def>>,
+    pub phase: Option<Spanned<String>>,
+    pub g: Option<Spanned<f64>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct AtmosphereDef {
+    pub medium: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -38,6 +61,35 @@ pub(crate) struct EnvironmentDef {
     pub rotation: Option<Spanned<f64>>,
     pub photons: Option<Spanned<bool>>,
     pub direct: Option<Spanned<bool>>,
+    // the physical sky
+    pub turbidity: Option<Spanned<f64>>,
+    pub ground_albedo: Option<Spanned<Vec3Def>>,
+    pub sun: Option<Spanned<bool>>,
+    pub sun_direction: Option<Spanned<Vec3Def>>,
+    pub sun_elevation: Option<Spanned<f64>>,
+    pub sun_azimuth: Option<Spanned<f64>>,
+    pub latitude: Option<Spanned<f64>>,
+    pub longitude: Option<Spanned<f64>>,
+    pub date: Option<Spanned<String>>,
+    pub time: Option<Spanned<String>>,
+    pub utc_offset: Option<Spanned<f64>>,
+    pub north: Option<Spanned<Vec3Def>>,
+}
+
+/// `[rainbow]`: bows drawn into the environment, from the physics of drops or POV-Ray's way.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RainbowDef {
+    pub r#type: Option<Spanned<String>>,
+    pub strength: Option<Spanned<f64>>,
+    // POV-Ray's rainbow
+    pub direction: Option<Spanned<Vec3Def>>,
+    pub angle: Option<Spanned<f64>>,
+    pub width: Option<Spanned<f64>>,
+    pub colors: Option<Spanned<Vec<Vec3Def>>>,
+    pub up: Option<Spanned<Vec3Def>>,
+    pub arc_angle: Option<Spanned<f64>>,
+    pub falloff_angle: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -82,6 +134,7 @@ pub(crate) struct PhotonsDef {
     pub caustic_count: Option<Spanned<i64>>,
     pub radius: Option<Spanned<f64>>,
     pub caustic_radius: Option<Spanned<f64>>,
+    pub volume_radius: Option<Spanned<f64>>,
     pub gather_rays: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
     pub glossy_threshold: Option<Spanned<f64>>,
@@ -206,6 +259,9 @@ pub(crate) struct ShapeDef {
     pub flatness: Option<Spanned<f64>>,
     pub lights: Option<Spanned<bool>>,
     pub points: Option<Spanned<Vec<Vec3Def>>>,
+    // media
+    pub interior: Option<Spanned<String>>,
+    pub exterior: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -217,7 +273,11 @@ pub(crate) struct LightDef {
     pub vertices: Option<Spanned<Vec<Vec3Def>>>,
     pub center: Option<Spanned<Vec3Def>>,
     pub radius: Option<Spanned<f64>>,
+    pub normal: Option<Spanned<Vec3Def>>,
     pub radiance: Option<Spanned<Vec3Def>>,
+    // POV-Ray's area_light grid
+    pub samples: Option<Spanned<Vec<i64>>>,
+    pub jitter: Option<Spanned<bool>>,
     pub position: Option<Spanned<Vec3Def>>,
     pub intensity: Option<Spanned<Vec3Def>>,
     pub transform: Option<Spanned<TransformDef>>,

@@ -61,6 +61,8 @@ pub enum MaterialKind {
     Plastic { reflectance: ColorParam, ior: f32, roughness: Roughness },
     /// Material `b` where a hash of the point falls below `weight`, else `a` (material ids).
     Mix { a: u32, b: u32, weight: ScalarParam },
+    /// An invisible interface: rays pass straight through; it only bounds a medium.
+    Null,
 }
 
 /// A material: its kind, the radiance it emits from its front side, its opacity and what bends
@@ -119,6 +121,7 @@ impl MaterialDesc {
             MaterialKind::Plastic { reflectance, roughness, .. } => textured(reflectance) || rough(roughness),
             // A mix hashes the point; what its materials read is decided by theirs (see `pack`).
             MaterialKind::Mix { weight, .. } => weight.texture.is_some(),
+            MaterialKind::Null => false,
         };
         kind_textured || textured(&self.emission) || self.opacity.texture.is_some() || self.normal != NormalMod::None
     }

@@ -15,9 +15,11 @@ mod convert;
 mod error;
 mod format;
 mod material;
+mod medium;
 pub mod model;
 pub mod pattern;
 mod photons;
+pub mod sky;
 
 pub mod image_texture;
 
@@ -31,6 +33,7 @@ pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
 };
+pub use medium::{MediumDesc, MediumInterface, Phase};
 pub use photons::PhotonSettings;
 
 /// A loaded, validated scene. Right-handed, y up, lengths in scene units.
@@ -56,6 +59,11 @@ pub struct Scene {
     pub lights: Vec<LightDesc>,
     /// What rays that leave the scene see, and a light of its own; `None` is black.
     pub environment: Option<Environment>,
+    /// Index = medium id, in file order (`[media.NAME]`).
+    pub media: Vec<MediumDesc>,
+    pub medium_names: Vec<String>,
+    /// The medium that fills space outside every closed medium shape (`[atmosphere]`).
+    pub atmosphere: Option<u32>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
 }
@@ -149,11 +157,14 @@ pub struct RenderSettings {
     pub seed: u32,
 }
 
-/// One shape of the scene: its geometry and its material id.
+/// One shape of the scene: its geometry, its material id, and the media it bounds.
 #[derive(Clone, Debug)]
 pub struct Shape {
     pub geometry: Geometry,
     pub material: u32,
+    /// The media inside and outside the closed shape this is (part of); `None` for a surface
+    /// that leaves a ray's medium as it is.
+    pub media: Option<MediumInterface>,
 }
 
 /// Every kind of geometry, behind one match per host-side operation (bounds, area).
@@ -262,8 +273,20 @@ pub enum LightKind {
     /// A distant light: light travels along unit `direction` with `irradiance` (W/m^2) on a
     /// surface facing it, from a cone of directions of half-angle `half_angle_deg` (0: sharp).
     Distant { direction: Vec3, irradiance: Vec3, half_angle_deg: f32 },
-    /// The options of an area light: they apply to the shapes of material `material`.
-    Area { material: u32 },
+    /// The options of an area light: they apply to the shapes of material `material`. `grid` is
+    /// POV-Ray's `area_light` grid, [n, m] cells of stratified shadow samples over each of its
+    /// shapes ([1, 1]: plain sampling), jittered in their cells or at the centres.
+    Area { material: u32, grid: [u32; 2], jitter: bool },
+}
+
+/// Where the shapes of a `Scene` came from in its file: for each `[[shapes]]` entry and each
+/// `[[lights]]` entry, in file order, the range of `Scene::shapes` it became (a quad is two
+/// triangles, a closed cylinder three shapes, a mesh many; a point, spot or distant light none).
+/// The editor uses it to map a click on a triangle back to the entry to edit.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SceneOrigins {
+    pub shapes: Vec<std::ops::Range<usize>>,
+    pub lights: Vec<std::ops::Range<usize>>,
 }
 
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
@@ -289,6 +312,13 @@ pub fn parse_scene(source: &str, path: &Path) -> Result<Scene, SceneError> {
     let src = error::Source { text: source, path };
     let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
     convert::convert(file, &src)
+}
+
+/// `parse_scene`, also returning which shapes each entry of the file became.
+pub fn parse_scene_with_origins(source: &str, path: &Path) -> Result<(Scene, SceneOrigins), SceneError> {
+    let src = error::Source { text: source, path };
+    let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
+    convert::convert_with_origins(file, &src)
 }
 
 #[cfg(test)]

@@ -13,6 +13,9 @@ pub struct PhotonSettings {
     pub radius: Option<f32>,
     /// Lookup radius of the caustic map; `None` is half the global radius.
     pub caustic_radius: Option<f32>,
+    /// Lookup radius of the volume map (collisions in media); `None` derives it from the
+    /// media's volume and the stored photon count.
+    pub volume_radius: Option<f32>,
     /// Final-gather rays per camera sample; 0 reads the global map directly.
     pub gather_rays: u32,
     /// Most surfaces a photon path visits.
@@ -30,6 +33,7 @@ impl Default for PhotonSettings {
             caustic_photons: 200_000,
             radius: None,
             caustic_radius: None,
+            volume_radius: None,
             gather_rays: 8,
             max_depth: 16,
             alpha: 2.0 / 3.0,

@@ -1,0 +1,110 @@
+// Participating media: free-flight sampling, transmittance, the phase function as a Bsdf, and
+// which medium a ray is in after crossing a surface. CPU twin: src/cpu/medium.rs.
+// The including kernel declares the scene bindings (media[]) and includes sampling, phase,
+// shape and bsdf.
+
+// What happened on a ray segment of length t_seg inside a medium (see medium_sample).
+struct MediumEvent {
+    bool scattered;  // a collision before the segment's end, at distance t
+    float t;
+    vec3 weight;     // what the path's throughput is multiplied by
+    vec3 collision;  // a scattering event: sigma_t T / pdf (the photon stored there carries it)
+    vec3 emission;   // a scattering event: the medium's emission T / pdf (a collision estimate)
+};
+
+vec3 medium_sigma_t(Medium m) { return load3(m.sigma_a) + load3(m.sigma_s); }
+
+// Beer-Lambert transmittance exp(-sigma_t t) per channel; a channel with sigma_t = 0 is 1 even
+// over an infinite distance.
+vec3 medium_transmittance(uint medium, float t) {
+    vec3 st = medium_sigma_t(media[medium]);
+    return vec3(st.r > 0.0 ? exp(-st.r * t) : 1.0, st.g > 0.0 ? exp(-st.g * t) : 1.0, st.b > 0.0 ? exp(-st.b * t) : 1.0);
+}
+
+// Free-flight sampling over a segment of length t_seg (infinite for a ray that leaves the
+// scene): u.x picks a channel, u.y a distance exp(sigma_t of that channel). The pdf is the mean
+// of the three channels' (the one-sample spectral MIS of pbrt-v4), so chromatic media stay
+// unbiased; grey media get weights of exactly the albedo (scattering) and 1 (passing).
+MediumEvent medium_sample(uint medium, float t_seg, vec2 u) {
+    Medium m = media[medium];
+    vec3 sa = load3(m.sigma_a);
+    vec3 ss = load3(m.sigma_s);
+    vec3 st = sa + ss;
+    float sc = u.x < 1.0 / 3.0 ? st.r : (u.x < 2.0 / 3.0 ? st.g : st.b);
+    float t = sc > 0.0 ? -log(1.0 - u.y) / sc : INF;
+    MediumEvent e;
+    e.collision = vec3(0.0);
+    e.emission = vec3(0.0);
+    if (t < t_seg) {
+        vec3 tr = exp(-st * t);
+        float pdf = dot(st * tr, vec3(1.0 / 3.0));
+        e.scattered = true;
+        e.t = t;
+        e.weight = pdf > 0.0 ? ss * tr / pdf : vec3(0.0);
+        e.collision = pdf > 0.0 ? st * tr / pdf : vec3(0.0);
+        e.emission = pdf > 0.0 ? load3(m.emission) * tr / pdf : vec3(0.0);
+        return e;
+    }
+    vec3 tr = medium_transmittance(medium, t_seg);
+    float p = dot(tr, vec3(1.0 / 3.0));
+    e.scattered = false;
+    e.t = t_seg;
+    e.weight = p > 0.0 ? tr / p : vec3(0.0);
+    return e;
+}
+
+// The scattering point at p seen from wo as a hit record: no surface, no offset.
+Hit medium_hit(vec3 p, vec3 wo) {
+    Hit h;
+    h.p = p;
+    h.ng = wo;
+    h.ns = wo;
+    h.uv = vec2(0.0);
+    h.dpdu = vec3(0.0);
+    h.dpdv = vec3(0.0);
+    h.prim = NO_LIGHT;
+    h.material = NO_LIGHT;
+    h.eps = 0.0;
+    h.shift = vec3(0.0);
+    return h;
+}
+
+// The medium's phase function as a Bsdf (MATERIAL_PHASE, see bsdf.glsl).
+Bsdf phase_bsdf(uint medium, vec3 wo) {
+    Medium m = media[medium];
+    Bsdf b;
+    b.kind = MATERIAL_PHASE;
+    b.color0 = vec3(1.0);
+    b.color1 = vec3(float(m.phase), 0.0, 0.0);
+    b.alpha = vec2(0.0);
+    b.ior = m.g;
+    b.ng = wo;
+    b.ns = wo;
+    b.ts = vec3(0.0);
+    b.glossy_path = false;
+    return b;
+}
+
+// The medium a ray is in after it crossed primitive `prim` (geometric normal ng) going along d:
+// a medium boundary's interior when it went against the outward normal, its exterior when it
+// went along it; any other surface leaves the medium as it was.
+uint medium_after(uint prim, vec3 ng, vec3 d, uint medium) {
+    Primitive p = primitives[prim];
+    if ((p.kind & PRIMITIVE_FLAG_MEDIUM) == 0u) return medium;
+    return dot(d, ng) < 0.0 ? p.interior : p.exterior;
+}
+
+// Equiangular sampling (Kulla and Fajardo 2012) of a distance t in [0, t_end) along o + t d
+// toward the point c: uniform in the angle under which c sees the ray, so the samples crowd
+// where the ray passes the light (pdf = D / ((theta_b - theta_a) (D^2 + (t - delta)^2))).
+// t_end may be infinite.
+float equiangular_sample(vec3 o, vec3 d, float t_end, vec3 c, float u, out float pdf) {
+    float delta = dot(c - o, d);
+    float dist = max(length(c - o - delta * d), 1e-7 * (abs(delta) + 1.0));
+    float a = atan(-delta, dist);
+    float b = t_end == INF ? 0.5 * PI : atan(t_end - delta, dist);
+    float t = clamp(delta + dist * tan(mix(a, b, u)), 0.0, t_end);
+    float e = t - delta;
+    pdf = b > a ? dist / ((b - a) * (dist * dist + e * e)) : 0.0;
+    return t;
+}

@@ -1,0 +1,724 @@
+//! The scene the editor holds: the file's text as a `toml_edit` document (so comments and
+//! formatting survive every edit and the save), the `Scene` parsed from it, and the undo and
+//! redo stacks. An edit is a small command applied to the document; the result is parsed by
+//! the same code as any scene file (`scene::parse_scene_with_origins`), and an edit the parser
+//! refuses changes nothing.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use serde_json::Value as Json;
+use toml_edit::{DocumentMut, Item, Table, TableLike, Value};
+
+use crate::scene::{parse_scene_with_origins, Scene, SceneOrigins};
+
+/// Undo steps kept; older ones are dropped.
+const MAX_UNDO: usize = 200;
+/// Array nesting accepted in an edit's value (a colour map is two deep).
+const MAX_VALUE_DEPTH: usize = 4;
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum EditError {
+    /// The edited text is not a valid scene; the message is the parser's, file:line and all.
+    #[error("{0}")]
+    Invalid(String),
+    /// The command itself is malformed: bad target, field or value.
+    #[error("{0}")]
+    Command(String),
+    #[error("nothing to undo")]
+    NothingToUndo,
+    #[error("nothing to redo")]
+    NothingToRedo,
+}
+
+fn bad(message: impl Into<String>) -> EditError {
+    EditError::Command(message.into())
+}
+
+/// What an edit applies to.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Target {
+    /// Entry of `[[shapes]]`, from 0 in file order.
+    Shape(usize),
+    /// Entry of `[[lights]]`, from 0 in file order.
+    Light(usize),
+    /// `[materials.<name>]`.
+    Material(String),
+    Camera,
+    Render,
+    Photons,
+    Environment,
+}
+
+impl Target {
+    fn describe(&self) -> String {
+        match self {
+            Target::Shape(i) => format!("shape {i}"),
+            Target::Light(i) => format!("light {i}"),
+            Target::Material(name) => format!("material \"{}\"", crate::limits::printable(name)),
+            Target::Camera => "[camera]".into(),
+            Target::Render => "[render]".into(),
+            Target::Photons => "[photons]".into(),
+            Target::Environment => "[environment]".into(),
+        }
+    }
+}
+
+/// A scale: one number (uniform) or one per axis.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f64),
+    Axes([f64; 3]),
+}
+
+/// What `add` adds.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    Shape,
+    Light,
+    Material,
+}
+
+/// One edit, as the page sends it (JSON, `op` names the command).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Command {
+    /// Sets the `transform` of a shape or an area light; parts left out keep their value.
+    SetTransform {
+        target: Target,
+        translate: Option<[f64; 3]>,
+        rotate: Option<[f64; 3]>,
+        scale: Option<Scale>,
+    },
+    /// Sets one field of a table (`null` removes it), e.g. a material's `reflectance`.
+    Set {
+        target: Target,
+        field: String,
+        value: Json,
+    },
+    /// Sets several fields of one table in one step (one undo), e.g. "camera to view".
+    SetFields {
+        target: Target,
+        fields: serde_json::Map<String, Json>,
+    },
+    Delete {
+        target: Target,
+    },
+    /// Appends a copy of a shape or light (named "<name> copy"), or of a material (as
+    /// "<name>_copy"), to the file.
+    Duplicate {
+        target: Target,
+    },
+    /// Appends a new shape, light or material (`name` is the material's) made of `table`.
+    Add {
+        kind: Kind,
+        table: serde_json::Map<String, Json>,
+        name: Option<String>,
+    },
+}
+
+/// The scene under edit.
+pub struct SceneDocument {
+    path: PathBuf,
+    /// The folder files may be read from and written to (canonical).
+    folder: PathBuf,
+    text: String,
+    scene: Scene,
+    origins: SceneOrigins,
+    undo: Vec<String>,
+    redo: Vec<String>,
+    /// The text last loaded or saved.
+    saved: String,
+    /// Counts every change of the text (edits, undo, redo).
+    revision: u64,
+}
+
+/// The result of parsing a candidate text.
+type Parsed = (Scene, SceneOrigins);
+
+impl SceneDocument {
+    /// Loads `path`, which must parse as a scene.
+    pub fn load(path: &Path) -> Result<SceneDocument, EditError> {
+        let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
+            EditError::Invalid(match e {
+                Some(cause) => format!("cannot read {}: {cause}", path.display()),
+                None => format!("{} is larger than {} bytes", path.display(), crate::limits::MAX_SCENE_FILE_BYTES),
+            })
+        })?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| EditError::Invalid(format!("{} is not UTF-8 text", path.display())))?;
+        let folder = path
+            .parent()
+            .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p })
+            .unwrap_or(Path::new("."))
+            .canonicalize()
+            .map_err(|e| EditError::Invalid(format!("cannot open the folder of {}: {e}", path.display())))?;
+        let (scene, origins) = parse(&text, path)?;
+        Ok(SceneDocument {
+            path: path.to_path_buf(),
+            folder,
+            saved: text.clone(),
+            text,
+            scene,
+            origins,
+            undo: Vec::new(),
+            redo: Vec::new(),
+            revision: 0,
+        })
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+    /// The scene's folder, canonical: the only folder the editor reads or writes.
+    pub fn folder(&self) -> &Path {
+        &self.folder
+    }
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    pub fn origins(&self) -> &SceneOrigins {
+        &self.origins
+    }
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+    /// True when the text differs from the file as last loaded or saved.
+    pub fn dirty(&self) -> bool {
+        self.text != self.saved
+    }
+
+    /// Applies `command`; on any error the document is unchanged.
+    pub fn apply(&mut self, command: &Command) -> Result<(), EditError> {
+        let mut doc: DocumentMut =
+            self.text.parse().map_err(|e| EditError::Invalid(format!("the scene text no longer parses: {e}")))?;
+        edit(&mut doc, command)?;
+        let text = doc.to_string();
+        self.replace(text)
+    }
+
+    /// Replaces the text with `text` after parsing it as a scene and checking the files it
+    /// names; pushes the old text on the undo stack.
+    pub fn replace(&mut self, text: String) -> Result<(), EditError> {
+        if text == self.text {
+            return Ok(());
+        }
+        let parsed = self.check(&text)?;
+        let old = std::mem::replace(&mut self.text, text);
+        self.undo.push(old);
+        if self.undo.len() > MAX_UNDO {
+            self.undo.remove(0);
+        }
+        self.redo.clear();
+        self.install(parsed);
+        Ok(())
+    }
+
+    pub fn undo(&mut self) -> Result<(), EditError> {
+        let text = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
+        // The text was valid when it was current; files it names may have gone since.
+        let parsed = parse(&text, &self.path)?;
+        self.undo.pop();
+        self.redo.push(std::mem::replace(&mut self.text, text));
+        self.install(parsed);
+        Ok(())
+    }
+
+    pub fn redo(&mut self) -> Result<(), EditError> {
+        let text = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
+        let parsed = parse(&text, &self.path)?;
+        self.redo.pop();
+        self.undo.push(std::mem::replace(&mut self.text, text));
+        self.install(parsed);
+        Ok(())
+    }
+
+    /// Writes the text to the scene file atomically (a temporary file in the same folder, then
+    /// a rename): the file is either the old one or the new one, never a mix.
+    pub fn save(&mut self) -> Result<(), String> {
+        let text = self.text.clone();
+        crate::io::image::write_atomically(&self.path, |tmp| {
+            std::fs::write(tmp, text.as_bytes()).map_err(|e| e.to_string())
+        })
+        .map_err(|e| e.to_string())?;
+        self.saved = self.text.clone();
+        Ok(())
+    }
+
+    fn install(&mut self, (scene, origins): Parsed) {
+        self.scene = scene;
+        self.origins = origins;
+        self.revision += 1;
+    }
+
+    /// Parses `text` and checks that every file it names that the current text does not name
+    /// lies inside the scene's folder (no `..` out of it, no absolute path elsewhere, no
+    /// symbolic link leading out).
+    fn check(&self, text: &str) -> Result<Parsed, EditError> {
+        if text.len() as u64 > crate::limits::MAX_SCENE_FILE_BYTES {
+            return Err(bad(format!(
+                "the edited scene would be larger than {} bytes",
+                crate::limits::MAX_SCENE_FILE_BYTES
+            )));
+        }
+        let before = file_fields(&self.text);
+        for file in file_fields(text).difference(&before) {
+            self.check_inside(file)?;
+        }
+        parse(text, &self.path)
+    }
+
+    /// Resolves `file` (relative to the scene's folder) and refuses it unless it exists inside
+    /// the folder once every symbolic link is followed.
+    pub fn check_inside(&self, file: &str) -> Result<PathBuf, EditError> {
+        let resolved = self.folder.join(file).canonicalize().map_err(|e| {
+            bad(format!("file \"{}\": {e} (paths are relative to the scene's folder)", crate::limits::printable(file)))
+        })?;
+        if !resolved.starts_with(&self.folder) {
+            return Err(bad(format!(
+                "file \"{}\" is outside the scene's folder; the editor reads only files inside {}",
+                crate::limits::printable(file),
+                self.folder.display()
+            )));
+        }
+        Ok(resolved)
+    }
+}
+
+fn parse(text: &str, path: &Path) -> Result<Parsed, EditError> {
+    parse_scene_with_origins(text, path).map_err(|e| EditError::Invalid(e.to_string()))
+}
+
+/// Every `file = "..."` value of the text (meshes, textures, the environment map).
+fn file_fields(text: &str) -> BTreeSet<String> {
+    fn walk(item: &Item, out: &mut BTreeSet<String>) {
+        match item {
+            Item::Table(t) => t.iter().for_each(|(k, v)| visit(k, v, out)),
+            Item::ArrayOfTables(a) => a.iter().for_each(|t| t.iter().for_each(|(k, v)| visit(k, v, out))),
+            Item::Value(Value::InlineTable(t)) => {
+                t.iter().for_each(|(k, v)| visit(k, &Item::Value(v.clone()), out));
+            }
+            _ => {}
+        }
+    }
+    fn visit(key: &str, item: &Item, out: &mut BTreeSet<String>) {
+        if key == "file" {
+            if let Some(s) = item.as_str() {
+                out.insert(s.to_string());
+            }
+        }
+        walk(item, out);
+    }
+    let mut out = BTreeSet::new();
+    if let Ok(doc) = text.parse::<DocumentMut>() {
+        doc.iter().for_each(|(k, v)| visit(k, v, &mut out));
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Edits on the document
+
+fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
+    match command {
+        Command::SetTransform { target, translate, rotate, scale } => {
+            if !matches!(target, Target::Shape(_) | Target::Light(_)) {
+                return Err(bad(format!("{} has no transform; only shapes and area lights do", target.describe())));
+            }
+            let table = target_table(doc, target)?;
+            if matches!(target, Target::Light(_)) && table.get("type").and_then(|t| t.as_str()) != Some("area") {
+                return Err(bad(format!(
+                    "{} is not an area light, so it has no transform; set its `position` or `direction` instead",
+                    target.describe()
+                )));
+            }
+            if table.get("transform").is_none() {
+                table.insert("transform", Item::Value(Value::InlineTable(Default::default())));
+            }
+            let transform = table
+                .get_mut("transform")
+                .and_then(|t| t.as_table_like_mut())
+                .ok_or_else(|| bad(format!("the `transform` of {} is not a table", target.describe())))?;
+            if let Some(t) = translate {
+                set_key(transform, "translate", vector(t)?, [0.0; 3] == *t);
+            }
+            if let Some(r) = rotate {
+                set_key(transform, "rotate", vector(r)?, [0.0; 3] == *r);
+            }
+            if let Some(s) = scale {
+                let (value, identity) = match s {
+                    Scale::Uniform(v) => (number(*v)?, *v == 1.0),
+                    Scale::Axes(a) if a[0] == a[1] && a[1] == a[2] => (number(a[0])?, a[0] == 1.0),
+                    Scale::Axes(a) => (vector(a)?, false),
+                };
+                set_key(transform, "scale", value, identity);
+            }
+            if transform.is_empty() {
+                table.remove("transform");
+            }
+            Ok(())
+        }
+        Command::SetFields { target, fields } => {
+            if fields.is_empty() {
+                return Err(bad("`fields` is empty"));
+            }
+            for (field, value) in fields {
+                edit(doc, &Command::Set { target: target.clone(), field: field.clone(), value: value.clone() })?;
+            }
+            Ok(())
+        }
+        Command::Set { target, field, value } => {
+            check_key(field)?;
+            if let Target::Material(_) = target {
+                if field == "name" {
+                    return Err(bad("a material's name is its table's name; duplicate it and delete the old one"));
+                }
+            }
+            if field == "file" {
+                if let Json::String(_) = value {
+                } else if !value.is_null() {
+                    return Err(bad("`file` takes a path relative to the scene's folder"));
+                }
+            }
+            let table = target_table(doc, target)?;
+            if value.is_null() {
+                if field == "type" {
+                    return Err(bad("`type` cannot be removed"));
+                }
+                table.remove(field);
+            } else {
+                let keep_absent = false;
+                set_key(table, field, json_to_toml(value, 0)?, keep_absent);
+            }
+            Ok(())
+        }
+        Command::Delete { target } => match target {
+            Target::Shape(i) | Target::Light(i) => {
+                let (key, count) = array_of(doc, target)?;
+                if *i >= count {
+                    return Err(bad(format!("there is no {} (the file has {count})", target.describe())));
+                }
+                let array = doc[key].as_array_of_tables_mut().expect("checked by array_of");
+                array.remove(*i);
+                if array.is_empty() {
+                    doc.remove(key);
+                }
+                Ok(())
+            }
+            Target::Material(name) => {
+                let materials = doc
+                    .get_mut("materials")
+                    .and_then(|m| m.as_table_like_mut())
+                    .ok_or_else(|| bad("the scene has no materials"))?;
+                materials.remove(name).ok_or_else(|| bad(format!("there is no {}", target.describe())))?;
+                Ok(())
+            }
+            Target::Environment | Target::Photons | Target::Render => {
+                let key = match target {
+                    Target::Environment => "environment",
+                    Target::Photons => "photons",
+                    _ => "render",
+                };
+                doc.remove(key).ok_or_else(|| bad(format!("the scene has no {}", target.describe())))?;
+                Ok(())
+            }
+            Target::Camera => Err(bad("a scene needs its [camera]; it cannot be deleted")),
+        },
+        Command::Duplicate { target } => match target {
+            Target::Shape(_) | Target::Light(_) => {
+                let mut copy = fresh_copy(target_table(doc, target)?);
+                if let Some(name) = copy.get("name").and_then(|n| n.as_str()).map(str::to_string) {
+                    set_key(&mut copy, "name", Value::from(format!("{name} copy")), false);
+                }
+                let (key, _) = array_of(doc, target)?;
+                doc[key].as_array_of_tables_mut().expect("checked by array_of").push(copy);
+                Ok(())
+            }
+            Target::Material(name) => {
+                let copy = fresh_copy(target_table(doc, target)?);
+                let materials = doc["materials"].as_table_like_mut().expect("target_table found it");
+                let mut new_name = format!("{name}_copy");
+                let mut n = 2;
+                while materials.contains_key(&new_name) {
+                    new_name = format!("{name}_copy{n}");
+                    n += 1;
+                }
+                materials.insert(&new_name, Item::Table(copy));
+                Ok(())
+            }
+            _ => Err(bad(format!("{} cannot be duplicated", target.describe()))),
+        },
+        Command::Add { kind, table, name } => {
+            let mut new = Table::new();
+            for (key, value) in table {
+                check_key(key)?;
+                new.insert(key, Item::Value(json_to_toml(value, 0)?));
+            }
+            match kind {
+                Kind::Shape | Kind::Light => {
+                    if name.is_some() {
+                        return Err(bad("`name` goes in the table of a shape or light"));
+                    }
+                    let key = if *kind == Kind::Shape { "shapes" } else { "lights" };
+                    if doc.get(key).is_none() {
+                        doc.insert(key, Item::ArrayOfTables(Default::default()));
+                    }
+                    let array = doc[key]
+                        .as_array_of_tables_mut()
+                        .ok_or_else(|| bad(format!("`{key}` is not an array of tables")))?;
+                    array.push(new);
+                }
+                Kind::Material => {
+                    let name = name.as_deref().ok_or_else(|| bad("a new material needs a `name`"))?;
+                    check_name(name)?;
+                    if doc.get("materials").is_none() {
+                        let mut materials = Table::new();
+                        materials.set_implicit(true);
+                        doc.insert("materials", Item::Table(materials));
+                    }
+                    let materials =
+                        doc["materials"].as_table_like_mut().ok_or_else(|| bad("`materials` is not a table"))?;
+                    if materials.contains_key(name) {
+                        return Err(bad(format!(
+                            "a material named \"{}\" exists already",
+                            crate::limits::printable(name)
+                        )));
+                    }
+                    materials.insert(name, Item::Table(new));
+                }
+            }
+            Ok(())
+        }
+    }
+}
+
+/// A copy of `table`'s fields as a new table (no comments, no place in the file yet, so it
+/// goes at the end), its sub-tables (`[shapes.transform]`) made inline.
+fn fresh_copy(table: &dyn TableLike) -> Table {
+    let mut copy = Table::new();
+    for (key, item) in table.iter() {
+        let item = match item {
+            Item::Table(t) => Item::Value(Value::InlineTable(t.clone().into_inline_table())),
+            other => other.clone(),
+        };
+        copy.insert(key, item);
+    }
+    copy
+}
+
+/// The array of tables a shape or light target lives in, and its length.
+fn array_of(doc: &DocumentMut, target: &Target) -> Result<(&'static str, usize), EditError> {
+    let key = match target {
+        Target::Shape(_) => "shapes",
+        Target::Light(_) => "lights",
+        _ => unreachable!("array_of is only called for shapes and lights"),
+    };
+    match doc.get(key) {
+        None => Ok((key, 0)),
+        Some(item) => match item.as_array_of_tables() {
+            Some(a) => Ok((key, a.len())),
+            None => Err(bad(format!("`{key}` is not an array of tables ([[{key}]])"))),
+        },
+    }
+}
+
+/// The table a target names, created for `[render]`, `[photons]` and `[environment]`.
+fn target_table<'d>(doc: &'d mut DocumentMut, target: &Target) -> Result<&'d mut dyn TableLike, EditError> {
+    match target {
+        Target::Shape(i) | Target::Light(i) => {
+            let (key, count) = array_of(doc, target)?;
+            if *i >= count {
+                return Err(bad(format!("there is no {} (the file has {count})", target.describe())));
+            }
+            let table = doc[key].as_array_of_tables_mut().expect("checked by array_of").get_mut(*i).expect("in range");
+            Ok(table as &mut dyn TableLike)
+        }
+        Target::Material(name) => doc
+            .get_mut("materials")
+            .and_then(|m| m.as_table_like_mut())
+            .and_then(|m| m.get_mut(name))
+            .and_then(|t| t.as_table_like_mut())
+            .ok_or_else(|| bad(format!("there is no {}", target.describe()))),
+        Target::Camera | Target::Render | Target::Photons | Target::Environment => {
+            let key = match target {
+                Target::Camera => "camera",
+                Target::Render => "render",
+                Target::Photons => "photons",
+                _ => "environment",
+            };
+            if doc.get(key).is_none() {
+                doc.insert(key, Item::Table(Table::new()));
+            }
+            doc[key].as_table_like_mut().ok_or_else(|| bad(format!("`{key}` is not a table")))
+        }
+    }
+}
+
+/// Sets `key` to `value`, keeping the comments around the old value; with `remove_if_absent`,
+/// a key that is absent stays absent (an identity transform part is not written out).
+fn set_key(table: &mut dyn TableLike, key: &str, mut value: Value, remove_if_absent: bool) {
+    match table.get_mut(key) {
+        Some(Item::Value(old)) => {
+            let decor = old.decor().clone();
+            *value.decor_mut() = decor;
+            *old = value;
+        }
+        Some(item) => *item = Item::Value(value),
+        None if remove_if_absent => {}
+        None => {
+            table.insert(key, Item::Value(value));
+        }
+    }
+}
+
+fn check_key(key: &str) -> Result<(), EditError> {
+    let ok = !key.is_empty()
+        && key.len() <= 64
+        && key.bytes().all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_');
+    if ok {
+        Ok(())
+    } else {
+        Err(bad(format!("\"{}\" is not a field name (lowercase letters, digits and _)", crate::limits::printable(key))))
+    }
+}
+
+fn check_name(name: &str) -> Result<(), EditError> {
+    if name.is_empty() || name.len() > 64 || name.chars().any(|c| c.is_control()) {
+        return Err(bad("a name must be 1 to 64 characters with no control characters"));
+    }
+    Ok(())
+}
+
+/// Rounds to 7 significant digits, so a value dragged in the page (0.30000000000000004) is
+/// written as a person would type it (0.3); f32, which the renderer reads, keeps about 7.
+fn round_number(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    format!("{v:.6e}").parse().unwrap_or(v)
+}
+
+fn number(v: f64) -> Result<Value, EditError> {
+    if !v.is_finite() {
+        return Err(bad("numbers must be finite"));
+    }
+    let v = round_number(v);
+    if v.fract() == 0.0 && v.abs() < 1e15 {
+        Ok(Value::from(v as i64))
+    } else {
+        Ok(Value::from(v))
+    }
+}
+
+fn vector(v: &[f64; 3]) -> Result<Value, EditError> {
+    let mut array = toml_edit::Array::new();
+    for &c in v {
+        array.push(number(c)?);
+    }
+    Ok(Value::Array(array))
+}
+
+/// A JSON value of an edit as a TOML value: numbers, strings, booleans, arrays and tables.
+fn json_to_toml(value: &Json, depth: usize) -> Result<Value, EditError> {
+    if depth > MAX_VALUE_DEPTH {
+        return Err(bad("the value is nested too deeply"));
+    }
+    Ok(match value {
+        Json::Null => return Err(bad("`null` is only allowed as a whole value (it removes the field)")),
+        Json::Bool(b) => Value::from(*b),
+        Json::Number(n) => match n.as_i64() {
+            Some(i) => Value::from(i),
+            None => number(n.as_f64().ok_or_else(|| bad("the number is out of range"))?)?,
+        },
+        Json::String(s) => {
+            if s.len() > 4096 {
+                return Err(bad("strings are limited to 4096 bytes"));
+            }
+            Value::from(s.as_str())
+        }
+        Json::Array(items) => {
+            let mut array = toml_edit::Array::new();
+            for item in items {
+                array.push(json_to_toml(item, depth + 1)?);
+            }
+            Value::Array(array)
+        }
+        Json::Object(map) => {
+            let mut table = toml_edit::InlineTable::new();
+            for (k, v) in map {
+                check_key(k)?;
+                table.insert(k, json_to_toml(v, depth + 1)?);
+            }
+            Value::InlineTable(table)
+        }
+    })
+}
+
+/// A TOML item as JSON, for the page: numbers, strings, booleans, arrays and tables.
+pub fn toml_to_json(item: &Item) -> Json {
+    match item {
+        Item::None => Json::Null,
+        Item::Value(v) => value_to_json(v),
+        Item::Table(t) => Json::Object(t.iter().map(|(k, v)| (k.to_string(), toml_to_json(v))).collect()),
+        Item::ArrayOfTables(a) => Json::Array(
+            a.iter().map(|t| Json::Object(t.iter().map(|(k, v)| (k.to_string(), toml_to_json(v))).collect())).collect(),
+        ),
+    }
+}
+
+fn value_to_json(v: &Value) -> Json {
+    match v {
+        Value::String(s) => Json::String(s.value().clone()),
+        Value::Integer(i) => Json::from(*i.value()),
+        Value::Float(f) => serde_json::Number::from_f64(*f.value()).map_or(Json::Null, Json::Number),
+        Value::Boolean(b) => Json::Bool(*b.value()),
+        Value::Datetime(d) => Json::String(d.value().to_string()),
+        Value::Array(a) => Json::Array(a.iter().map(value_to_json).collect()),
+        Value::InlineTable(t) => Json::Object(t.iter().map(|(k, v)| (k.to_string(), value_to_json(v))).collect()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_are_rounded_to_seven_digits() {
+        assert_eq!(round_number(0.1 + 0.2), 0.3);
+        assert_eq!(round_number(552.8000000001), 552.8);
+        assert_eq!(number(2.0).unwrap().to_string().trim(), "2");
+        assert!(number(f64::NAN).is_err());
+    }
+
+    #[test]
+    fn commands_parse_from_the_json_the_page_sends() {
+        let c: Command =
+            serde_json::from_str(r#"{"op":"set_transform","target":{"shape":3},"translate":[1,2,3]}"#).unwrap();
+        assert_eq!(
+            c,
+            Command::SetTransform {
+                target: Target::Shape(3),
+                translate: Some([1.0, 2.0, 3.0]),
+                rotate: None,
+                scale: None
+            }
+        );
+        let c: Command = serde_json::from_str(r#"{"op":"delete","target":"camera"}"#).unwrap();
+        assert_eq!(c, Command::Delete { target: Target::Camera });
+        assert!(serde_json::from_str::<Command>(r#"{"op":"delete","target":"camera","extra":1}"#).is_err());
+        assert!(serde_json::from_str::<Command>(r#"{"op":"explode"}"#).is_err());
+    }
+}

@@ -1,0 +1,591 @@
+//! The editor's one renderer, on a thread of its own: the rendered preview of the page's view,
+//! and the final render of the scene's camera.
+//!
+//! The preview restarts whenever the scene or the view changes (a new *generation*), first at a
+//! quarter of the preview size with few photons and no final gathering (the edit shows within a
+//! fraction of a second), then at half size, then at the full preview size with the scene's
+//! photon settings, pass after pass (progressive photon mapping, docs/progressive.md) until
+//! `MAX_PREVIEW_PASSES`. A change during a pass stops it after the dispatch under way (the
+//! renderer's stop flag) and the new generation starts at once.
+//!
+//! On the GPU backend the `GpuRenderer` (device, kernels, buffers) lives as long as the thread:
+//! a change re-prepares the scene and `update_scene` rewrites its arrays in place where their
+//! sizes allow. The final render runs on the same thread and renderer, with the scene as it was
+//! when it started; it goes on when every page is closed, and the preview waits for it.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use serde::Deserialize;
+use serde_json::json;
+use tokio::sync::broadcast;
+
+use crate::gpu::{GpuContext, GpuOptions};
+use crate::io::Image;
+use crate::render::gpu::GpuRenderer;
+use crate::render::progressive::{Accumulator, Budget};
+use crate::render::{prepare, render_cpu, set_thread_stop_flag, FrameSettings, PhotonSettings, RenderOutput};
+use crate::scene::{Projection, Scene};
+
+/// Passes of the full-size preview before it stops refining.
+pub const MAX_PREVIEW_PASSES: u32 = 64;
+/// Largest final render the editor accepts, in pixels (the scene's resolution).
+const MAX_FINAL_PIXELS: u64 = 4096 * 4096;
+
+/// The page's viewport camera, which the preview renders from.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct View {
+    pub position: [f32; 3],
+    pub look_at: [f32; 3],
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    pub fov: f32,
+    /// The viewport's size in CSS pixels; the preview keeps its aspect ratio.
+    pub width: u32,
+    pub height: u32,
+}
+
+impl View {
+    fn check(&self) -> Result<(), String> {
+        let finite = self.position.iter().chain(&self.look_at).chain(&self.up).all(|v| v.is_finite());
+        if !finite || !(0.01..179.0).contains(&self.fov) {
+            return Err("the view needs finite vectors and a field of view in (0, 179) degrees".into());
+        }
+        if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
+            return Err("the view's size must be 1 to 16384 pixels a side".into());
+        }
+        Ok(())
+    }
+}
+
+/// Which backend the renderer thread uses.
+#[derive(Clone, Debug)]
+pub enum BackendChoice {
+    /// The Vulkan kernels; with `fallback`, the CPU backend when the device will not open.
+    Gpu {
+        options: GpuOptions,
+        fallback: bool,
+    },
+    Cpu,
+}
+
+/// A final render's limits: the first reached wins.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FinalRequest {
+    /// Passes to render; default the scene's `[render] passes` (or the most there are with a time).
+    pub passes: Option<u32>,
+    /// Seconds of wall time.
+    pub seconds: Option<f64>,
+}
+
+/// What the renderer tells the pages.
+#[derive(Clone, Debug)]
+pub enum Event {
+    /// A preview or final-render image: a JSON header and the PNG bytes.
+    Frame { header: serde_json::Value, png: Arc<Vec<u8>> },
+    /// A JSON message (final render status, preview errors).
+    Message(serde_json::Value),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mode {
+    Preview,
+    Final,
+}
+
+struct State {
+    scene: Option<Arc<Scene>>,
+    view: Option<View>,
+    /// Bumped by every change of the scene or the view.
+    generation: u64,
+    /// When the current generation began, for the edit-to-frame latency.
+    changed_at: Instant,
+    mode: Mode,
+    final_request: Option<(FinalRequest, Arc<Scene>)>,
+    cancel_final: bool,
+    final_status: serde_json::Value,
+    final_image: Option<Arc<Image>>,
+    shutdown: bool,
+    /// Longest side of the full-size preview, pixels.
+    preview_size: u32,
+}
+
+struct Shared {
+    state: Mutex<State>,
+    /// Stops the renderer thread's render after the dispatch under way (its own flag, so one
+    /// server never stops another's renders, nor `photonix render`'s).
+    stop: Arc<AtomicBool>,
+    wake: Condvar,
+    events: broadcast::Sender<Event>,
+}
+
+/// The handle the server holds; dropping it stops the thread.
+pub struct Renderer {
+    shared: Arc<Shared>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    /// "cpu" or the Vulkan device's name.
+    pub device: String,
+}
+
+impl Renderer {
+    /// Starts the renderer thread on `backend`; fails when the GPU backend was asked for and no
+    /// device opens.
+    pub fn start(backend: BackendChoice, preview_size: u32) -> Result<Renderer, String> {
+        let (events, _) = broadcast::channel(64);
+        let shared = Arc::new(Shared {
+            state: Mutex::new(State {
+                scene: None,
+                view: None,
+                generation: 0,
+                changed_at: Instant::now(),
+                mode: Mode::Preview,
+                final_request: None,
+                cancel_final: false,
+                final_status: json!({ "type": "render", "state": "idle" }),
+                final_image: None,
+                shutdown: false,
+                preview_size: preview_size.clamp(16, 4096),
+            }),
+            wake: Condvar::new(),
+            stop: Arc::new(AtomicBool::new(false)),
+            events,
+        });
+        let (ready_tx, ready_rx) = std::sync::mpsc::channel();
+        let thread_shared = shared.clone();
+        let thread = std::thread::Builder::new()
+            .name("photonix-renderer".into())
+            .spawn(move || run(thread_shared, backend, ready_tx))
+            .map_err(|e| format!("cannot start the renderer thread: {e}"))?;
+        let device = ready_rx.recv().map_err(|_| "the renderer thread stopped while starting".to_string())??;
+        Ok(Renderer { shared, thread: Some(thread), device })
+    }
+
+    pub fn subscribe(&self) -> broadcast::Receiver<Event> {
+        self.shared.events.subscribe()
+    }
+
+    /// Starts a new preview generation with `scene`.
+    pub fn set_scene(&self, scene: Arc<Scene>) {
+        self.change(|s| s.scene = Some(scene));
+    }
+
+    /// Starts a new preview generation from `view`.
+    pub fn set_view(&self, view: View) -> Result<(), String> {
+        view.check()?;
+        self.change(|s| s.view = Some(view));
+        Ok(())
+    }
+
+    fn change(&self, apply: impl FnOnce(&mut State)) {
+        let mut s = self.shared.state.lock().expect("renderer state lock");
+        apply(&mut s);
+        s.generation += 1;
+        s.changed_at = Instant::now();
+        // Stop the preview pass under way; the thread clears the flag before reading the
+        // generation, so a change is never lost between the two. A final render is not stopped.
+        if s.mode == Mode::Preview {
+            self.shared.stop.store(true, Ordering::SeqCst);
+        }
+        self.shared.wake.notify_all();
+    }
+
+    /// Queues a final render of `scene` (its own camera and settings).
+    pub fn start_final(&self, request: FinalRequest, scene: Arc<Scene>) -> Result<(), String> {
+        if let Some(s) = request.seconds {
+            if !(s.is_finite() && s > 0.0 && s <= crate::limits::MAX_DURATION_SECONDS) {
+                return Err("the time budget must be a positive number of seconds".into());
+            }
+        }
+        if request.passes.is_some_and(|p| p == 0 || p > crate::limits::MAX_PASSES) {
+            return Err(format!("passes must be 1 to {}", crate::limits::MAX_PASSES));
+        }
+        let pixels = scene.camera.width as u64 * scene.camera.height as u64;
+        if pixels > MAX_FINAL_PIXELS {
+            return Err(format!(
+                "the editor renders at most {MAX_FINAL_PIXELS} pixels; use `photonix render` for this one"
+            ));
+        }
+        let mut s = self.shared.state.lock().expect("renderer state lock");
+        if s.mode == Mode::Final || s.final_request.is_some() {
+            return Err("a final render is running; cancel it first".into());
+        }
+        s.final_request = Some((request, scene));
+        s.cancel_final = false;
+        s.final_image = None;
+        s.final_status = json!({ "type": "render", "state": "queued" });
+        self.shared.stop.store(true, Ordering::SeqCst);
+        self.shared.wake.notify_all();
+        Ok(())
+    }
+
+    /// Asks the final render to stop after the dispatch under way; the passes done are kept.
+    pub fn cancel_final(&self) -> bool {
+        let mut s = self.shared.state.lock().expect("renderer state lock");
+        if s.mode != Mode::Final && s.final_request.is_none() {
+            return false;
+        }
+        s.cancel_final = true;
+        self.shared.stop.store(true, Ordering::SeqCst);
+        true
+    }
+
+    pub fn final_status(&self) -> serde_json::Value {
+        self.shared.state.lock().expect("renderer state lock").final_status.clone()
+    }
+
+    /// The last final render's image (the mean of its passes).
+    pub fn final_image(&self) -> Option<Arc<Image>> {
+        self.shared.state.lock().expect("renderer state lock").final_image.clone()
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        {
+            let mut s = self.shared.state.lock().expect("renderer state lock");
+            s.shutdown = true;
+            s.cancel_final = true;
+        }
+        self.shared.stop.store(true, Ordering::SeqCst);
+        self.shared.wake.notify_all();
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+/// One backend: the CPU twin, or a `GpuRenderer` kept across frames.
+enum Backend<'a> {
+    Cpu,
+    Gpu { ctx: &'a GpuContext, renderer: Option<Box<GpuRenderer<'a>>> },
+}
+
+impl Backend<'_> {
+    fn render(
+        &mut self,
+        scene: &Scene,
+        settings: &FrameSettings,
+        photons: Option<&PhotonSettings>,
+        spp: u32,
+        pass: u32,
+    ) -> Result<RenderOutput, String> {
+        let buffers = prepare(scene, settings).map_err(|e| e.to_string())?;
+        if let Some(p) = photons {
+            crate::render::photons::check_radii(&buffers, p).map_err(|e| e.to_string())?;
+        }
+        match self {
+            Backend::Cpu => Ok(render_cpu(&buffers, spp, photons, pass, &mut |_, _| {})),
+            Backend::Gpu { ctx, renderer } => {
+                match renderer {
+                    Some(r) => {
+                        r.update_scene(&buffers, photons).map_err(|e| e.to_string())?;
+                    }
+                    None => {
+                        *renderer = Some(Box::new(GpuRenderer::new(ctx, &buffers, photons).map_err(|e| e.to_string())?))
+                    }
+                }
+                let r = renderer.as_mut().expect("made just above");
+                r.render_pass(spp, pass, &mut |_, _| {}).map_err(|e| e.to_string())
+            }
+        }
+    }
+}
+
+fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Sender<Result<String, String>>) {
+    let ctx = match &backend {
+        BackendChoice::Cpu => None,
+        BackendChoice::Gpu { options, fallback } => match GpuContext::new(options) {
+            Ok(ctx) => Some(ctx),
+            Err(e) if *fallback => {
+                eprintln!("warning: {e}; the editor renders on the CPU backend instead");
+                None
+            }
+            Err(e) => {
+                let _ = ready.send(Err(e.to_string()));
+                return;
+            }
+        },
+    };
+    let device = match &ctx {
+        Some(ctx) => format!("gpu: {}", ctx.info().name),
+        None => format!("cpu ({} threads)", rayon::current_num_threads()),
+    };
+    set_thread_stop_flag(Some(shared.stop.clone()));
+    let _ = ready.send(Ok(device.clone()));
+    let mut backend = match &ctx {
+        Some(ctx) => Backend::Gpu { ctx, renderer: None },
+        None => Backend::Cpu,
+    };
+    let mut preview = PreviewState::default();
+    loop {
+        // Wait for work: a final render, or a preview step still to do.
+        let mut s = shared.state.lock().expect("renderer state lock");
+        loop {
+            if s.shutdown {
+                return;
+            }
+            if s.final_request.is_some() {
+                break;
+            }
+            if s.scene.is_some() && s.view.is_some() && (preview.generation != s.generation || !preview.finished()) {
+                break;
+            }
+            s = shared.wake.wait(s).expect("renderer state lock");
+        }
+        if let Some((request, scene)) = s.final_request.take() {
+            s.mode = Mode::Final;
+            shared.stop.store(false, Ordering::SeqCst);
+            drop(s);
+            final_render(&shared, &mut backend, &request, &scene);
+            let mut s = shared.state.lock().expect("renderer state lock");
+            s.mode = Mode::Preview;
+            // The preview starts again from its first step.
+            s.generation += 1;
+            s.changed_at = Instant::now();
+            continue;
+        }
+        // Clear the stop flag, then read the generation (see `Renderer::change`).
+        shared.stop.store(false, Ordering::SeqCst);
+        let generation = s.generation;
+        let changed_at = s.changed_at;
+        let scene = s.scene.clone().expect("checked above");
+        let view = s.view.expect("checked above");
+        let preview_size = s.preview_size;
+        drop(s);
+        if preview.generation != generation {
+            preview = PreviewState { generation, ..Default::default() };
+        }
+        let step = preview.step;
+        let t = Instant::now();
+        let result = preview_step(&mut backend, &scene, &view, preview_size, &mut preview);
+        let current = shared.state.lock().expect("renderer state lock").generation == generation;
+        match result {
+            Ok(Some(image)) if current => {
+                preview.step += 1;
+                let png = encode_png(&image, 0.0);
+                let header = json!({
+                    "type": "frame",
+                    "kind": "preview",
+                    "generation": generation,
+                    "step": step,
+                    "passes": preview.accumulator.as_ref().map_or(0, |a| a.passes),
+                    "width": image.width,
+                    "height": image.height,
+                    "render_ms": t.elapsed().as_secs_f64() * 1e3,
+                    "since_change_ms": changed_at.elapsed().as_secs_f64() * 1e3,
+                    "device": device,
+                });
+                let _ = shared.events.send(Event::Frame { header, png: Arc::new(png) });
+            }
+            // Stopped by a change, or a change came during the step: start the new generation.
+            Ok(_) => {}
+            Err(message) => {
+                preview.failed = true;
+                let _ = shared
+                    .events
+                    .send(Event::Message(json!({ "type": "error", "message": format!("preview: {message}") })));
+            }
+        }
+    }
+}
+
+#[derive(Default)]
+struct PreviewState {
+    generation: u64,
+    /// 0: quarter size, 1: half size, 2..: progressive passes at full size.
+    step: u32,
+    accumulator: Option<Accumulator>,
+    failed: bool,
+}
+
+impl PreviewState {
+    fn finished(&self) -> bool {
+        self.failed || self.step >= 2 + MAX_PREVIEW_PASSES
+    }
+}
+
+/// The scene seen from the view at `width` x `height`, as a pinhole camera.
+fn view_scene(scene: &Scene, view: &View, width: u32, height: u32) -> Scene {
+    let mut s = scene.clone();
+    let c = &mut s.camera;
+    c.position = Vec3::from(view.position);
+    c.look_at = Vec3::from(view.look_at);
+    c.up = Vec3::from(view.up);
+    c.fov_deg = view.fov;
+    c.projection = Projection::Perspective;
+    c.lens = None;
+    c.width = width;
+    c.height = height;
+    s
+}
+
+/// Preview size for a step: the view's aspect, the long side `preview_size` (never more than
+/// the view's own pixels), halved per level below full.
+fn preview_resolution(view: &View, preview_size: u32, level_divisor: u32) -> (u32, u32) {
+    let long = view.width.max(view.height).min(preview_size).max(8) / level_divisor;
+    let long = long.max(8) as f32;
+    let aspect = view.width as f32 / view.height as f32;
+    let (w, h) = if aspect >= 1.0 { (long, long / aspect) } else { (long * aspect, long) };
+    ((w.round() as u32).max(1), (h.round() as u32).max(1))
+}
+
+/// Renders one preview step; `None` when a change stopped it.
+fn preview_step(
+    backend: &mut Backend,
+    scene: &Scene,
+    view: &View,
+    preview_size: u32,
+    preview: &mut PreviewState,
+) -> Result<Option<Image>, String> {
+    let step = preview.step;
+    let (divisor, photons, pass) = match step {
+        // A quick look: a sixteenth of the pixels, an eighth of the photons, the global map read
+        // directly (no final gathering); then a quarter of the pixels and of the photons, one
+        // final-gather ray.
+        0 => (4, scene.photons.map(|p| scaled(p, 8, 0)), 0),
+        1 => (2, scene.photons.map(|p| scaled(p, 4, p.gather_rays.min(1))), 0),
+        _ => (1, scene.photons, step - 2),
+    };
+    let (width, height) = preview_resolution(view, preview_size, divisor);
+    let viewed = view_scene(scene, view, width, height);
+    if viewed.camera.basis().is_none() {
+        return Err("the view's up direction is parallel to its direction of view".into());
+    }
+    let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
+    let out = backend.render(&viewed, &settings, photons.as_ref(), 1, pass)?;
+    if !out.complete {
+        return Ok(None);
+    }
+    if step < 2 {
+        return Ok(Some(out.image));
+    }
+    let acc = preview.accumulator.get_or_insert_with(|| Accumulator::new(width, height));
+    acc.add(pass, &out);
+    Ok(Some(acc.mean().combined()))
+}
+
+/// Photon settings with `1/divisor` of the paths (at least 1000) and `gather_rays` final
+/// gathering rays.
+fn scaled(p: PhotonSettings, divisor: u32, gather_rays: u32) -> PhotonSettings {
+    PhotonSettings {
+        photons: (p.photons / divisor).max(1000.min(p.photons)),
+        caustic_photons: (p.caustic_photons / divisor).max(1000.min(p.caustic_photons)),
+        gather_rays,
+        ..p
+    }
+}
+
+/// Runs a final render, publishing its status after every pass.
+fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, scene: &Scene) {
+    let start = Instant::now();
+    let passes = request.passes.unwrap_or(if request.seconds.is_some() {
+        crate::limits::MAX_PASSES
+    } else {
+        scene.render.passes
+    });
+    let budget =
+        Budget { first: 0, end: passes, time: request.seconds.map(Duration::from_secs_f64), target_error: None };
+    let settings = FrameSettings {
+        width: scene.camera.width,
+        height: scene.camera.height,
+        max_depth: scene.render.max_depth,
+        seed: scene.render.seed,
+    };
+    let status = |state: &str, acc: Option<&Accumulator>, message: Option<&str>| {
+        let elapsed = start.elapsed().as_secs_f64();
+        let done = acc.map_or(0, |a| a.passes);
+        // Remaining: the passes left at the mean pass time, or the time budget left, whichever
+        // ends the render first.
+        let by_passes = (done > 0).then(|| elapsed / done as f64 * (passes - done) as f64);
+        let by_time = request.seconds.map(|t| (t - elapsed).max(0.0));
+        let remaining = match (by_passes, by_time) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        json!({
+            "type": "render",
+            "state": state,
+            "passes": done,
+            "total_passes": passes,
+            "seconds": request.seconds,
+            "elapsed": elapsed,
+            "remaining": if state == "running" { remaining } else { Some(0.0) },
+            "error_estimate": acc.and_then(|a| a.error_estimate()),
+            "width": settings.width,
+            "height": settings.height,
+            "message": message,
+        })
+    };
+    let publish = |value: serde_json::Value, image: Option<Image>| {
+        let mut s = shared.state.lock().expect("renderer state lock");
+        s.final_status = value.clone();
+        if let Some(image) = image {
+            let png = encode_png(&image, 0.0);
+            s.final_image = Some(Arc::new(image));
+            let mut header = value.clone();
+            header["type"] = json!("frame");
+            header["kind"] = json!("final");
+            let _ = shared.events.send(Event::Frame { header, png: Arc::new(png) });
+        }
+        drop(s);
+        let _ = shared.events.send(Event::Message(value));
+    };
+    publish(status("running", None, None), None);
+    let result = crate::render::progressive::render_progressive(
+        settings.width,
+        settings.height,
+        &budget,
+        |pass| backend.render(scene, &settings, scene.photons.as_ref(), scene.render.spp, pass),
+        |acc, _| {
+            publish(status("running", Some(acc), None), Some(acc.mean().combined()));
+            Ok(())
+        },
+    );
+    let cancelled = shared.state.lock().expect("renderer state lock").cancel_final;
+    match result {
+        Ok((acc, _)) => {
+            let state = if cancelled { "cancelled" } else { "done" };
+            let image = (acc.passes > 0).then(|| acc.mean().combined());
+            publish(status(state, Some(&acc), None), image);
+        }
+        Err(message) => publish(status("failed", None, Some(&message)), None),
+    }
+}
+
+/// 8-bit sRGB PNG bytes of `image`.
+pub fn encode_png(image: &Image, exposure: f32) -> Vec<u8> {
+    use ::image::ImageEncoder;
+    let mut out = Vec::new();
+    let pixels = crate::io::image::to_srgb8(image, exposure);
+    // Fast compression: preview frames are small and sent many times a second.
+    let encoder = ::image::codecs::png::PngEncoder::new_with_quality(
+        &mut out,
+        ::image::codecs::png::CompressionType::Fast,
+        ::image::codecs::png::FilterType::Sub,
+    );
+    encoder
+        .write_image(&pixels, image.width, image.height, ::image::ExtendedColorType::Rgb8)
+        .expect("an in-memory PNG of matching size always encodes");
+    out
+}
+
+/// Linear-radiance OpenEXR bytes of `image`.
+pub fn encode_exr(image: &Image) -> Result<Vec<u8>, String> {
+    use exr::prelude::*;
+    let w = image.width as usize;
+    let channels = SpecificChannels::rgb(|pos: Vec2<usize>| {
+        let p = image.pixels[pos.y() * w + pos.x()];
+        (p[0], p[1], p[2])
+    });
+    let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+    let mut out = std::io::Cursor::new(Vec::new());
+    exr::image::Image::from_encoded_channels((w, image.height as usize), encoding, channels)
+        .write()
+        .to_buffered(&mut out)
+        .map_err(|e| e.to_string())?;
+    Ok(out.into_inner())
+}

@@ -1,0 +1,613 @@
+//! The HTTP and WebSocket server of `photonix serve` (axum on tokio).
+//!
+//! Routes (every one behind the token, see `auth`):
+//! - `GET /` and the page's assets, embedded in the binary (`assets.rs`);
+//! - `GET /api/scene`: the scene as the page sees it (`geometry::scene_json`);
+//! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save`;
+//! - `GET /api/scene.toml`: the scene's current text (a download);
+//! - `POST /api/import?name=F.obj&material=M`: the body is written to F.obj in the scene's folder
+//!   and a mesh shape using it is added;
+//! - `POST /api/render` (`FinalRequest`), `/api/render/cancel`, `GET /api/render/status`,
+//!   `GET /api/render/image.exr`, `/api/render/image.png`: the final render;
+//! - `GET /ws`: the WebSocket; the server sends the scene (text, `{"type": "scene", ...}`), the
+//!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
+//!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`,
+//!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
+//!   `{"type": "reply", "id", "ok", "error"}`).
+
+use std::net::{IpAddr, SocketAddr};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use axum::body::Bytes;
+use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
+use axum::extract::{DefaultBodyLimit, Query, Request, State};
+use axum::http::{header, HeaderMap, HeaderValue, StatusCode};
+use axum::middleware::{self, Next};
+use axum::response::{IntoResponse, Response};
+use axum::routing::{get, post};
+use axum::Router;
+use serde::Deserialize;
+use serde_json::{json, Value as Json};
+use tokio::sync::broadcast;
+
+use super::assets::asset;
+use super::document::{Command, EditError, SceneDocument};
+use super::geometry::scene_json;
+use super::preview::{encode_exr, encode_png, BackendChoice, Event, FinalRequest, Renderer, View};
+
+/// Largest request body other than an import, and largest WebSocket message.
+pub const MAX_REQUEST_BYTES: usize = 1 << 20;
+/// Default largest import (`--max-upload`).
+pub const DEFAULT_MAX_UPLOAD_BYTES: usize = 64 << 20;
+
+/// How to serve.
+#[derive(Clone, Debug)]
+pub struct ServeOptions {
+    pub scene: PathBuf,
+    /// 127.0.0.1 unless told otherwise.
+    pub host: IpAddr,
+    /// 0 picks a free port.
+    pub port: u16,
+    pub backend: BackendChoice,
+    /// Longest side of the full-size preview, pixels.
+    pub preview_size: u32,
+    pub max_upload_bytes: usize,
+    /// `None` makes a random one.
+    pub token: Option<String>,
+}
+
+impl ServeOptions {
+    pub fn new(scene: PathBuf) -> ServeOptions {
+        ServeOptions {
+            scene,
+            host: IpAddr::from([127, 0, 0, 1]),
+            port: 0,
+            backend: BackendChoice::Cpu,
+            preview_size: 256,
+            max_upload_bytes: DEFAULT_MAX_UPLOAD_BYTES,
+            token: None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    #[error("{0}")]
+    Scene(String),
+    #[error("cannot listen on {addr}: {cause}")]
+    Bind { addr: SocketAddr, cause: std::io::Error },
+    #[error("renderer: {0}")]
+    Renderer(String),
+    #[error("cannot make an access token: {0}")]
+    Token(String),
+}
+
+struct App {
+    doc: Mutex<SceneDocument>,
+    renderer: Renderer,
+    token: String,
+    cookie: String,
+    /// The scene as the page sees it, for the current revision.
+    scene_json: Mutex<Arc<String>>,
+    /// Scene updates and replies that every page gets.
+    updates: broadcast::Sender<Arc<String>>,
+    max_upload_bytes: usize,
+}
+
+/// A running editor server.
+pub struct Server {
+    pub addr: SocketAddr,
+    pub token: String,
+    app: Arc<App>,
+    shutdown: Option<tokio::sync::oneshot::Sender<()>>,
+    task: Option<tokio::task::JoinHandle<()>>,
+}
+
+impl Server {
+    /// Loads the scene, starts the renderer and listens; call inside a tokio runtime.
+    pub async fn start(options: ServeOptions) -> Result<Server, ServeError> {
+        let doc = SceneDocument::load(&options.scene).map_err(|e| ServeError::Scene(e.to_string()))?;
+        let token = match options.token {
+            Some(t) => t,
+            None => random_token()?,
+        };
+        let backend = options.backend.clone();
+        let preview_size = options.preview_size;
+        let renderer = tokio::task::spawn_blocking(move || Renderer::start(backend, preview_size))
+            .await
+            .map_err(|e| ServeError::Renderer(e.to_string()))?
+            .map_err(ServeError::Renderer)?;
+        renderer.set_scene(Arc::new(doc.scene().clone()));
+        let addr = SocketAddr::new(options.host, options.port);
+        let listener = tokio::net::TcpListener::bind(addr).await.map_err(|cause| ServeError::Bind { addr, cause })?;
+        let addr = listener.local_addr().map_err(|cause| ServeError::Bind { addr, cause })?;
+        let json = Arc::new(scene_message(&doc));
+        let (updates, _) = broadcast::channel(64);
+        let app = Arc::new(App {
+            doc: Mutex::new(doc),
+            renderer,
+            cookie: format!("photonix_token_{}", addr.port()),
+            token: token.clone(),
+            scene_json: Mutex::new(json),
+            updates,
+            max_upload_bytes: options.max_upload_bytes,
+        });
+        let router = router(app.clone());
+        let (tx, rx) = tokio::sync::oneshot::channel::<()>();
+        let task = tokio::spawn(async move {
+            let _ = axum::serve(listener, router)
+                .with_graceful_shutdown(async {
+                    let _ = rx.await;
+                })
+                .await;
+        });
+        Ok(Server { addr, token, app, shutdown: Some(tx), task: Some(task) })
+    }
+
+    /// The URL to open, with the token.
+    pub fn url(&self) -> String {
+        let host = match self.addr.ip() {
+            IpAddr::V6(ip) => format!("[{ip}]"),
+            IpAddr::V4(ip) => ip.to_string(),
+        };
+        format!("http://{host}:{}/?token={}", self.addr.port(), self.token)
+    }
+
+    /// The scene's current text (what a save would write).
+    pub fn scene_text(&self) -> String {
+        self.app.doc.lock().expect("document lock").text().to_string()
+    }
+
+    /// The renderer's device, e.g. "cpu (2 threads)".
+    pub fn device(&self) -> String {
+        self.app.renderer.device.clone()
+    }
+
+    /// Stops listening and waits for the server task; the renderer stops when the last
+    /// reference to it goes.
+    pub async fn shutdown(mut self) {
+        if let Some(tx) = self.shutdown.take() {
+            let _ = tx.send(());
+        }
+        if let Some(task) = self.task.take() {
+            // Open WebSockets keep a graceful shutdown waiting: give them a moment, then go.
+            let _ = tokio::time::timeout(std::time::Duration::from_secs(2), task).await;
+        }
+        let app = self.app.clone();
+        drop(self);
+        // The renderer's thread joins in Drop; keep that off the async threads.
+        let _ = tokio::task::spawn_blocking(move || drop(app)).await;
+    }
+}
+
+fn random_token() -> Result<String, ServeError> {
+    let mut bytes = [0u8; 24];
+    getrandom::fill(&mut bytes).map_err(|e| ServeError::Token(e.to_string()))?;
+    Ok(bytes.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+fn router(app: Arc<App>) -> Router {
+    let upload_limit = app.max_upload_bytes;
+    Router::new()
+        .route("/api/scene", get(get_scene))
+        .route("/api/scene.toml", get(download_scene))
+        .route("/api/edit", post(post_edit))
+        .route("/api/undo", post(post_undo))
+        .route("/api/redo", post(post_redo))
+        .route("/api/save", post(post_save))
+        .route("/api/import", post(post_import).layer(DefaultBodyLimit::max(upload_limit)))
+        .route("/api/render", post(post_render))
+        .route("/api/render/cancel", post(post_cancel))
+        .route("/api/render/status", get(get_render_status))
+        .route("/api/render/image.png", get(get_render_png))
+        .route("/api/render/image.exr", get(get_render_exr))
+        .route("/ws", get(websocket))
+        .fallback(get(static_asset))
+        .layer(DefaultBodyLimit::max(MAX_REQUEST_BYTES))
+        .layer(middleware::from_fn_with_state(app.clone(), auth))
+        .with_state(app)
+}
+
+/// Every request needs the token: in the query (`?token=`, how the printed URL carries it), an
+/// `Authorization: token <t>` header, or the cookie set on the first visit (so the page's own
+/// module imports need not carry it). A request from a page of another origin is refused too.
+async fn auth(State(app): State<Arc<App>>, request: Request, next: Next) -> Response {
+    let query_token = request
+        .uri()
+        .query()
+        .and_then(|q| q.split('&').find_map(|pair| pair.strip_prefix("token=").map(|t| t.to_string())));
+    let header_token = request
+        .headers()
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.strip_prefix("token ").map(str::to_string));
+    let cookie_token = request.headers().get_all(header::COOKIE).iter().find_map(|v| {
+        v.to_str().ok()?.split(';').find_map(|c| {
+            let (name, value) = c.trim().split_once('=')?;
+            (name == app.cookie).then(|| value.to_string())
+        })
+    });
+    let given = query_token.clone().or(header_token).or(cookie_token);
+    match given {
+        None => return error(StatusCode::UNAUTHORIZED, "missing token; open the URL that `photonix serve` printed"),
+        Some(t) if !same_token(&t, &app.token) => {
+            return error(StatusCode::FORBIDDEN, "wrong token; open the URL that `photonix serve` printed")
+        }
+        Some(_) => {}
+    }
+    if let Some(origin) = request.headers().get(header::ORIGIN) {
+        let host = request.headers().get(header::HOST).and_then(|h| h.to_str().ok()).unwrap_or("");
+        if origin.to_str().ok() != Some(&format!("http://{host}")) {
+            return error(StatusCode::FORBIDDEN, "requests from other origins are refused");
+        }
+    }
+    let mut response = next.run(request).await;
+    let headers = response.headers_mut();
+    if query_token.is_some() {
+        let cookie = format!("{}={}; Path=/; HttpOnly; SameSite=Strict", app.cookie, app.token);
+        if let Ok(v) = HeaderValue::from_str(&cookie) {
+            headers.insert(header::SET_COOKIE, v);
+        }
+    }
+    // The token is in the URL: no Referer may carry it elsewhere.
+    headers.insert(header::REFERRER_POLICY, HeaderValue::from_static("no-referrer"));
+    headers.insert(header::X_CONTENT_TYPE_OPTIONS, HeaderValue::from_static("nosniff"));
+    headers.insert(
+        header::CONTENT_SECURITY_POLICY,
+        HeaderValue::from_static(
+            "default-src 'self'; img-src 'self' blob: data:; connect-src 'self'; script-src 'self'; style-src 'self'; frame-ancestors 'none'",
+        ),
+    );
+    headers.entry(header::CACHE_CONTROL).or_insert(HeaderValue::from_static("no-store"));
+    response
+}
+
+/// Compares without an early exit, so the time taken says nothing about the token.
+fn same_token(a: &str, b: &str) -> bool {
+    a.len() == b.len() && a.bytes().zip(b.bytes()).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+fn error(status: StatusCode, message: &str) -> Response {
+    (status, axum::Json(json!({ "ok": false, "error": message }))).into_response()
+}
+
+async fn static_asset(request: Request) -> Response {
+    match asset(request.uri().path()) {
+        Some((mime, bytes)) => ([(header::CONTENT_TYPE, mime)], bytes).into_response(),
+        None => error(StatusCode::NOT_FOUND, "no such page"),
+    }
+}
+
+fn scene_message(doc: &SceneDocument) -> String {
+    let mut value = scene_json(doc);
+    value["type"] = json!("scene");
+    value.to_string()
+}
+
+async fn get_scene(State(app): State<Arc<App>>) -> Response {
+    let json = app.scene_json.lock().expect("scene json lock").clone();
+    ([(header::CONTENT_TYPE, "application/json")], json.to_string()).into_response()
+}
+
+async fn download_scene(State(app): State<Arc<App>>) -> Response {
+    let (text, name) = {
+        let doc = app.doc.lock().expect("document lock");
+        (doc.text().to_string(), doc.path().file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default())
+    };
+    let name: String = name.chars().filter(|c| c.is_ascii_alphanumeric() || "._-".contains(*c)).collect();
+    (
+        [
+            (header::CONTENT_TYPE, "application/toml; charset=utf-8".to_string()),
+            (header::CONTENT_DISPOSITION, format!("attachment; filename=\"{name}\"")),
+        ],
+        text,
+    )
+        .into_response()
+}
+
+/// What changes the document.
+enum Change {
+    Edit(Command),
+    Undo,
+    Redo,
+}
+
+/// Applies a change on a blocking thread (parsing a scene may read meshes), then sends the new
+/// scene to every page and to the renderer. Returns the new revision.
+async fn change(app: &Arc<App>, change: Change) -> Result<u64, String> {
+    let app2 = app.clone();
+    tokio::task::spawn_blocking(move || {
+        let mut doc = app2.doc.lock().expect("document lock");
+        let result = match &change {
+            Change::Edit(command) => doc.apply(command),
+            Change::Undo => doc.undo(),
+            Change::Redo => doc.redo(),
+        };
+        result.map_err(|e: EditError| e.to_string())?;
+        publish(&app2, &doc);
+        Ok(doc.revision())
+    })
+    .await
+    .map_err(|e| format!("the edit failed: {e}"))?
+}
+
+/// Sends the document's scene to the renderer and to every page.
+fn publish(app: &App, doc: &SceneDocument) {
+    app.renderer.set_scene(Arc::new(doc.scene().clone()));
+    let json = Arc::new(scene_message(doc));
+    *app.scene_json.lock().expect("scene json lock") = json.clone();
+    let _ = app.updates.send(json);
+}
+
+fn reply(result: Result<u64, String>) -> Response {
+    match result {
+        Ok(revision) => axum::Json(json!({ "ok": true, "revision": revision })).into_response(),
+        Err(message) => error(StatusCode::UNPROCESSABLE_ENTITY, &message),
+    }
+}
+
+async fn post_edit(State(app): State<Arc<App>>, body: Bytes) -> Response {
+    let command: Command = match serde_json::from_slice(&body) {
+        Ok(c) => c,
+        Err(e) => return error(StatusCode::BAD_REQUEST, &format!("malformed edit: {e}")),
+    };
+    reply(change(&app, Change::Edit(command)).await)
+}
+
+async fn post_undo(State(app): State<Arc<App>>) -> Response {
+    reply(change(&app, Change::Undo).await)
+}
+
+async fn post_redo(State(app): State<Arc<App>>) -> Response {
+    reply(change(&app, Change::Redo).await)
+}
+
+async fn save(app: &Arc<App>) -> Result<u64, String> {
+    let app2 = app.clone();
+    tokio::task::spawn_blocking(move || {
+        let mut doc = app2.doc.lock().expect("document lock");
+        doc.save()?;
+        let json = Arc::new(scene_message(&doc));
+        *app2.scene_json.lock().expect("scene json lock") = json.clone();
+        let _ = app2.updates.send(json);
+        Ok(doc.revision())
+    })
+    .await
+    .map_err(|e| format!("the save failed: {e}"))?
+}
+
+async fn post_save(State(app): State<Arc<App>>) -> Response {
+    reply(save(&app).await)
+}
+
+#[derive(Deserialize)]
+struct ImportQuery {
+    name: String,
+    material: String,
+}
+
+/// A file name for the scene's folder: letters, digits, `.`, `_`, `-`; no leading dot, no
+/// path; an `.obj` extension.
+fn check_import_name(name: &str) -> Result<(), String> {
+    let ok_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
+    if name.is_empty() || name.len() > 100 || !ok_chars || name.starts_with('.') {
+        return Err(format!(
+            "\"{}\" is not a file name the editor accepts: letters, digits, '.', '_' and '-', no folders",
+            crate::limits::printable(name)
+        ));
+    }
+    if !name.to_ascii_lowercase().ends_with(".obj") {
+        return Err("only OBJ meshes (.obj) can be imported".into());
+    }
+    Ok(())
+}
+
+async fn post_import(State(app): State<Arc<App>>, Query(query): Query<ImportQuery>, body: Bytes) -> Response {
+    if let Err(message) = check_import_name(&query.name) {
+        return error(StatusCode::BAD_REQUEST, &message);
+    }
+    let app2 = app.clone();
+    let result = tokio::task::spawn_blocking(move || -> Result<(u64, String), String> {
+        let mut doc = app2.doc.lock().expect("document lock");
+        // A name not taken yet: foo.obj, foo-2.obj, ...
+        let (stem, ext) = query.name.rsplit_once('.').expect("checked: ends in .obj");
+        let mut name = query.name.clone();
+        let mut n = 2;
+        while std::fs::symlink_metadata(doc.folder().join(&name)).is_ok() {
+            name = format!("{stem}-{n}.{ext}");
+            n += 1;
+        }
+        let path = doc.folder().join(&name);
+        crate::io::image::write_atomically(&path, |tmp| std::fs::write(tmp, &body).map_err(|e| e.to_string()))
+            .map_err(|e| e.to_string())?;
+        let mut table = serde_json::Map::new();
+        table.insert("name".into(), json!(stem));
+        table.insert("type".into(), json!("mesh"));
+        table.insert("material".into(), json!(query.material));
+        table.insert("file".into(), json!(name));
+        let command = Command::Add { kind: super::document::Kind::Shape, table, name: None };
+        if let Err(e) = doc.apply(&command) {
+            // Nothing refers to the file: take it away again.
+            let _ = std::fs::remove_file(&path);
+            return Err(e.to_string());
+        }
+        publish(&app2, &doc);
+        Ok((doc.revision(), name))
+    })
+    .await
+    .unwrap_or_else(|e| Err(format!("the import failed: {e}")));
+    match result {
+        Ok((revision, file)) => axum::Json(json!({ "ok": true, "revision": revision, "file": file })).into_response(),
+        Err(message) => error(StatusCode::UNPROCESSABLE_ENTITY, &message),
+    }
+}
+
+async fn post_render(State(app): State<Arc<App>>, body: Bytes) -> Response {
+    let request: FinalRequest = if body.is_empty() {
+        FinalRequest::default()
+    } else {
+        match serde_json::from_slice(&body) {
+            Ok(r) => r,
+            Err(e) => return error(StatusCode::BAD_REQUEST, &format!("malformed render request: {e}")),
+        }
+    };
+    let scene = Arc::new(app.doc.lock().expect("document lock").scene().clone());
+    match app.renderer.start_final(request, scene) {
+        Ok(()) => axum::Json(json!({ "ok": true })).into_response(),
+        Err(message) => error(StatusCode::CONFLICT, &message),
+    }
+}
+
+async fn post_cancel(State(app): State<Arc<App>>) -> Response {
+    if app.renderer.cancel_final() {
+        axum::Json(json!({ "ok": true })).into_response()
+    } else {
+        error(StatusCode::CONFLICT, "no final render is running")
+    }
+}
+
+async fn get_render_status(State(app): State<Arc<App>>) -> Response {
+    axum::Json(app.renderer.final_status()).into_response()
+}
+
+async fn get_render_png(State(app): State<Arc<App>>) -> Response {
+    match app.renderer.final_image() {
+        Some(image) => {
+            let bytes = tokio::task::spawn_blocking(move || encode_png(&image, 0.0)).await.unwrap_or_default();
+            download(bytes, "image/png", "render.png")
+        }
+        None => error(StatusCode::NOT_FOUND, "no final render yet; start one first"),
+    }
+}
+
+async fn get_render_exr(State(app): State<Arc<App>>) -> Response {
+    match app.renderer.final_image() {
+        Some(image) => match tokio::task::spawn_blocking(move || encode_exr(&image)).await {
+            Ok(Ok(bytes)) => download(bytes, "image/x-exr", "render.exr"),
+            Ok(Err(message)) => error(StatusCode::INTERNAL_SERVER_ERROR, &message),
+            Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
+        },
+        None => error(StatusCode::NOT_FOUND, "no final render yet; start one first"),
+    }
+}
+
+fn download(bytes: Vec<u8>, mime: &'static str, name: &str) -> Response {
+    let mut headers = HeaderMap::new();
+    headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(mime));
+    if let Ok(v) = HeaderValue::from_str(&format!("attachment; filename=\"{name}\"")) {
+        headers.insert(header::CONTENT_DISPOSITION, v);
+    }
+    (headers, bytes).into_response()
+}
+
+async fn websocket(State(app): State<Arc<App>>, ws: WebSocketUpgrade) -> Response {
+    ws.max_message_size(MAX_REQUEST_BYTES)
+        .max_frame_size(MAX_REQUEST_BYTES)
+        .on_upgrade(move |socket| session(app, socket))
+}
+
+/// A message from the page.
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum PageMessage {
+    View { view: View },
+    Edit { id: Option<u64>, command: Command },
+    Undo { id: Option<u64> },
+    Redo { id: Option<u64> },
+    Save { id: Option<u64> },
+}
+
+async fn session(app: Arc<App>, mut socket: WebSocket) {
+    let mut updates = app.updates.subscribe();
+    let mut events = app.renderer.subscribe();
+    let first = app.scene_json.lock().expect("scene json lock").clone();
+    if socket.send(Message::Text(first.as_str().into())).await.is_err() {
+        return;
+    }
+    let status = app.renderer.final_status();
+    if socket.send(Message::Text(status.to_string().into())).await.is_err() {
+        return;
+    }
+    loop {
+        let outgoing = tokio::select! {
+            incoming = socket.recv() => match incoming {
+                Some(Ok(Message::Text(text))) => handle_page_message(&app, text.as_str()).await,
+                Some(Ok(Message::Binary(_))) => Some(json!({ "type": "error", "message": "the editor takes text messages only" }).to_string()),
+                Some(Ok(_)) => None,
+                Some(Err(_)) | None => return,
+            },
+            update = updates.recv() => match update {
+                Ok(json) => Some(json.to_string()),
+                // Missed scene updates: send the current scene.
+                Err(broadcast::error::RecvError::Lagged(_)) => Some(app.scene_json.lock().expect("scene json lock").to_string()),
+                Err(broadcast::error::RecvError::Closed) => return,
+            },
+            event = events.recv() => match event {
+                Ok(Event::Message(value)) => Some(value.to_string()),
+                Ok(Event::Frame { header, png }) => {
+                    let header = header.to_string();
+                    let mut bytes = Vec::with_capacity(4 + header.len() + png.len());
+                    bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
+                    bytes.extend_from_slice(header.as_bytes());
+                    bytes.extend_from_slice(&png);
+                    if socket.send(Message::Binary(bytes.into())).await.is_err() {
+                        return;
+                    }
+                    None
+                }
+                // A slow page skips frames; the next one is newer anyway.
+                Err(broadcast::error::RecvError::Lagged(_)) => None,
+                Err(broadcast::error::RecvError::Closed) => return,
+            },
+        };
+        if let Some(text) = outgoing {
+            if socket.send(Message::Text(text.into())).await.is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// Handles one message of a page; returns the reply to send, if any.
+async fn handle_page_message(app: &Arc<App>, text: &str) -> Option<String> {
+    let message: PageMessage = match serde_json::from_str(text) {
+        Ok(m) => m,
+        Err(e) => return Some(json!({ "type": "error", "message": format!("malformed message: {e}") }).to_string()),
+    };
+    let (id, result) = match message {
+        PageMessage::View { view } => {
+            return app.renderer.set_view(view).err().map(|m| json!({ "type": "error", "message": m }).to_string());
+        }
+        PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command)).await),
+        PageMessage::Undo { id } => (id, change(app, Change::Undo).await),
+        PageMessage::Redo { id } => (id, change(app, Change::Redo).await),
+        PageMessage::Save { id } => (id, save(app).await),
+    };
+    let reply: Json = match result {
+        Ok(revision) => json!({ "type": "reply", "id": id, "ok": true, "revision": revision }),
+        Err(message) => json!({ "type": "reply", "id": id, "ok": false, "error": message }),
+    };
+    Some(reply.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn import_names_stay_in_the_folder() {
+        assert!(check_import_name("bunny.obj").is_ok());
+        assert!(check_import_name("My_Mesh-2.OBJ").is_ok());
+        for bad in ["../x.obj", "a/b.obj", ".hidden.obj", "x.txt", "", "x\u{0}.obj", "/etc/x.obj", "..obj"] {
+            assert!(check_import_name(bad).is_err(), "{bad:?}");
+        }
+    }
+
+    #[test]
+    fn tokens_compare_whole() {
+        assert!(same_token("abc", "abc"));
+        assert!(!same_token("abc", "abd"));
+        assert!(!same_token("ab", "abc"));
+    }
+}

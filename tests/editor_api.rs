@@ -1,0 +1,395 @@
+//! The editor's server through its HTTP and WebSocket API: every edit command, undo and redo,
+//! save (comments kept), import, the final render, and the security rules (token, origin, path
+//! traversal, symbolic links, size limits).
+
+mod editor_support;
+
+use std::time::{Duration, Instant};
+
+use editor_support::{http, parse, Fixture};
+use serde_json::json;
+
+fn ok(r: &editor_support::Response) {
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["ok"], true, "{}", r.text());
+}
+
+/// The first vertex of an entry's triangles in the page's scene JSON.
+fn first_vertex(scene: &serde_json::Value, list: &str, index: usize) -> [f64; 3] {
+    let p = &scene[list][index]["positions"];
+    [p[0].as_f64().unwrap(), p[1].as_f64().unwrap(), p[2].as_f64().unwrap()]
+}
+
+#[test]
+fn set_transform_moves_the_shape_and_keeps_comments() {
+    let f = Fixture::new();
+    let before = first_vertex(&f.scene_json(), "shapes", 1);
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "shape": 1 }, "translate": [0.5, 0, -0.25] })));
+    let text = f.text();
+    assert!(text.contains("transform = { translate = [0.5, 0, -0.25] }"), "{text}");
+    assert!(text.contains("# A test scene for the editor."), "{text}");
+    let after = first_vertex(&f.scene_json(), "shapes", 1);
+    assert!(
+        (after[0] - before[0] - 0.5).abs() < 1e-4 && (after[2] - before[2] + 0.25).abs() < 1e-4,
+        "{before:?} -> {after:?}"
+    );
+
+    // A transform written as a table stays a table; rotate and scale change in place.
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "shape": 2 }, "rotate": [0, 45, 0], "scale": [2, 2, 2] })));
+    let text = f.text();
+    assert!(text.contains("[shapes.transform]\nrotate = [0, 45, 0]\ntranslate = [1, 0, 0]\nscale = 2"), "{text}");
+    // The renderer's parse agrees.
+    let scene = parse(&text, &f.scene);
+    assert_eq!(scene.shapes.len(), 2 + 1 + 12 + 2);
+
+    // An area light has a transform; a point light does not.
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "light": 0 }, "translate": [0, 0.5, 0] })));
+    let r = f.edit(json!({ "op": "set_transform", "target": { "light": 1 }, "translate": [0, 0.5, 0] }));
+    assert_eq!(r.status, 422);
+    assert!(r.text().contains("not an area light"), "{}", r.text());
+    // A sphere takes only a uniform scale: the parser's own message comes back, nothing changes.
+    let text = f.text();
+    let r = f.edit(json!({ "op": "set_transform", "target": { "shape": 1 }, "scale": [1, 2, 1] }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("scene.toml:") && r.text().contains("uniform"), "{}", r.text());
+    assert_eq!(f.text(), text);
+}
+
+#[test]
+fn set_changes_material_light_camera_and_render_fields() {
+    let f = Fixture::new();
+    ok(&f.edit(
+        json!({ "op": "set", "target": { "material": "white" }, "field": "reflectance", "value": [0.5, 0.6, 0.7] }),
+    ));
+    ok(&f.edit(json!({ "op": "set", "target": { "material": "glass" }, "field": "ior", "value": 1.33 })));
+    ok(&f.edit(json!({ "op": "set", "target": { "material": "glass" }, "field": "roughness", "value": 0.1 })));
+    ok(&f.edit(json!({ "op": "set", "target": { "light": 1 }, "field": "intensity", "value": 3 })));
+    ok(&f.edit(json!({ "op": "set", "target": { "light": 0 }, "field": "radiance", "value": [4, 3, 2] })));
+    ok(&f.edit(json!({ "op": "set", "target": "camera", "field": "fov", "value": 30 })));
+    ok(&f.edit(json!({ "op": "set", "target": "camera", "field": "position", "value": [0, 1.5, 5] })));
+    ok(&f.edit(json!({ "op": "set", "target": "render", "field": "spp", "value": 2 })));
+    // Several fields in one step: one undo takes them all back.
+    let before = f.text();
+    ok(&f.edit(
+        json!({ "op": "set_fields", "target": "camera", "fields": { "look_at": [0, 0, 0], "up": [0, 1, 0.1] } }),
+    ));
+    assert!(f.text().contains("look_at = [0, 0, 0]") && f.text().contains("up = [0, 1, 0.1]"), "{}", f.text());
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.text(), before);
+    ok(&f.edit(json!({ "op": "set", "target": { "shape": 0 }, "field": "name", "value": "ground" })));
+    let text = f.text();
+    // The comment after a replaced value stays with it.
+    assert!(text.contains("reflectance = [0.5, 0.6, 0.7]   # grey"), "{text}");
+    assert!(text.contains("position = [0, 1.5, 5]   # the eye"), "{text}");
+    assert!(text.contains("name = \"ground\"   # the ground"), "{text}");
+    let scene = parse(&text, &f.scene);
+    assert_eq!(scene.camera.fov_deg, 30.0);
+    assert_eq!(scene.render.spp, 2);
+    match &scene.materials[2].kind {
+        photonix::scene::MaterialKind::Dielectric { ior, roughness } => {
+            assert_eq!(*ior, 1.33);
+            assert_eq!(roughness.alpha, [0.1, 0.1]);
+        }
+        other => panic!("{other:?}"),
+    }
+    // The page's view of the scene follows.
+    let page = f.scene_json();
+    assert_eq!(page["camera"]["fov"], 30.0);
+    assert_eq!(page["materials"][0]["fields"]["reflectance"], json!([0.5, 0.6, 0.7]));
+    assert_eq!(page["shapes"][0]["fields"]["name"], "ground");
+
+    // null removes a field; a value the parser refuses changes nothing and says why.
+    ok(&f.edit(json!({ "op": "set", "target": { "material": "glass" }, "field": "roughness", "value": null })));
+    assert!(!f.text().contains("roughness"));
+    let text = f.text();
+    for (command, says) in [
+        (json!({ "op": "set", "target": { "material": "white" }, "field": "reflectance", "value": 2 }), "reflectance"),
+        (json!({ "op": "set", "target": { "material": "white" }, "field": "colour", "value": 1 }), "unknown field"),
+        (json!({ "op": "set", "target": { "material": "nope" }, "field": "ior", "value": 1 }), "no material"),
+        (json!({ "op": "set", "target": { "shape": 9 }, "field": "name", "value": "x" }), "no shape 9"),
+        (json!({ "op": "set", "target": "camera", "field": "fov", "value": "wide" }), "fov"),
+        (json!({ "op": "set", "target": "camera", "field": "Bad Key", "value": 1 }), "not a field name"),
+        (json!({ "op": "set", "target": { "shape": 0 }, "field": "material", "value": "missing" }), "unknown material"),
+    ] {
+        let r = f.edit(command.clone());
+        assert_eq!(r.status, 422, "{command}: {}", r.text());
+        assert!(r.text().contains(says), "{command}: {}", r.text());
+        assert_eq!(f.text(), text, "{command} changed the text");
+    }
+    // Malformed JSON is a 400 with a message.
+    let r = f.call("POST", "/api/edit", b"{\"op\":\"set\"");
+    assert_eq!(r.status, 400);
+    assert!(r.text().contains("malformed edit"), "{}", r.text());
+}
+
+#[test]
+fn delete_undo_redo_restore_the_text_exactly() {
+    let f = Fixture::new();
+    let original = f.text();
+    ok(&f.edit(json!({ "op": "delete", "target": { "shape": 1 } })));
+    assert!(!f.text().contains("name = \"ball\""));
+    assert_eq!(f.scene_json()["shapes"].as_array().unwrap().len(), 2);
+    ok(&f.edit(json!({ "op": "delete", "target": { "light": 1 } })));
+    assert!(!f.text().contains("fill"));
+    ok(&f.call("POST", "/api/undo", b""));
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.text(), original);
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 3);
+    assert_eq!(page["can_undo"], false);
+    assert_eq!(page["can_redo"], true);
+    ok(&f.call("POST", "/api/redo", b""));
+    assert!(!f.text().contains("name = \"ball\""));
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.text(), original);
+    // Nothing left to undo.
+    let r = f.call("POST", "/api/undo", b"");
+    assert_eq!(r.status, 422);
+    assert!(r.text().contains("nothing to undo"));
+
+    // A material still in use cannot go: the parser names the shape that needs it.
+    let r = f.edit(json!({ "op": "delete", "target": { "material": "red" } }));
+    assert_eq!(r.status, 422);
+    assert!(r.text().contains("unknown material \\\"red\\\"") || r.text().contains("red"), "{}", r.text());
+    // An unused one can.
+    ok(&f.edit(json!({ "op": "delete", "target": { "material": "glass" } })));
+    assert!(!f.text().contains("[materials.glass]"));
+    let r = f.edit(json!({ "op": "delete", "target": "camera" }));
+    assert_eq!(r.status, 422);
+    let r = f.edit(json!({ "op": "delete", "target": { "shape": 7 } }));
+    assert_eq!(r.status, 422);
+}
+
+#[test]
+fn duplicate_and_add_append_entries() {
+    let f = Fixture::new();
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "shape": 2 } })));
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "light": 0 } })));
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "material": "red" } })));
+    let text = f.text();
+    let scene = parse(&text, &f.scene);
+    assert!(text.contains("name = \"block copy\""), "{text}");
+    assert!(text.contains("[materials.red_copy]"), "{text}");
+    // The copy of the turned block has the same transform (as an inline table).
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 4);
+    assert_eq!(page["shapes"][3]["fields"]["transform"]["rotate"], json!([0, 30, 0]));
+    assert_eq!(page["shapes"][3]["positions"], page["shapes"][2]["positions"]);
+    assert_eq!(page["lights"].as_array().unwrap().len(), 3);
+    assert_eq!(scene.shapes.len(), 2 + 1 + 12 + 12 + 2 + 2);
+
+    ok(&f.edit(json!({ "op": "add", "kind": "shape",
+        "table": { "name": "new ball", "type": "sphere", "material": "red_copy", "center": [0, 1, 1], "radius": 0.25 } })));
+    ok(&f.edit(json!({ "op": "add", "kind": "light",
+        "table": { "type": "spot", "position": [0, 3, 0], "point_at": [0, 0, 0], "intensity": 10, "outer_angle": 30 } })));
+    ok(&f.edit(json!({ "op": "add", "kind": "material", "name": "gold", "table": { "type": "conductor", "preset": "gold", "roughness": 0.2 } })));
+    let page = f.scene_json();
+    assert_eq!(page["shapes"][4]["fields"]["name"], "new ball");
+    assert_eq!(page["lights"][3]["kind"], "spot");
+    assert_eq!(page["materials"].as_array().unwrap().iter().filter(|m| m["name"] == "gold").count(), 1);
+    let text = f.text();
+    assert!(text.contains("[materials.gold]"), "{text}");
+    // A bad addition is refused whole.
+    let r =
+        f.edit(json!({ "op": "add", "kind": "shape", "table": { "type": "sphere", "material": "red", "radius": -1 } }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    let r = f.edit(json!({ "op": "add", "kind": "material", "name": "gold", "table": { "type": "diffuse" } }));
+    assert_eq!(r.status, 422);
+    assert_eq!(f.text(), text);
+}
+
+#[test]
+fn save_writes_the_edits_atomically_and_keeps_comments() {
+    let f = Fixture::new();
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "shape": 1 }, "translate": [0, 0.25, 0] })));
+    ok(&f.edit(
+        json!({ "op": "set", "target": { "material": "red" }, "field": "reflectance", "value": [0.2, 0.3, 0.4] }),
+    ));
+    ok(&f.edit(json!({ "op": "delete", "target": { "light": 1 } })));
+    assert_eq!(f.scene_json()["dirty"], true);
+    // Not yet on disk.
+    assert_eq!(std::fs::read_to_string(&f.scene).unwrap(), editor_support::SCENE);
+    ok(&f.call("POST", "/api/save", b""));
+    assert_eq!(f.scene_json()["dirty"], false);
+    let saved = std::fs::read_to_string(&f.scene).unwrap();
+    assert_eq!(saved, f.text());
+    // Every comment of the original is still there.
+    for comment in editor_support::SCENE.lines().filter_map(|l| l.find('#').map(|i| &l[i..])) {
+        assert!(saved.contains(comment), "lost {comment:?}:\n{saved}");
+    }
+    // Reloading gives the edited scene.
+    let scene = photonix::scene::load_scene(&f.scene).unwrap();
+    assert_eq!(scene.lights.len(), 1);
+    let ball = scene.spheres().next().unwrap().0;
+    assert!((ball.center.y - 0.75).abs() < 1e-6, "{}", ball.center);
+    // No temporary file is left behind.
+    let names: Vec<_> = std::fs::read_dir(f.dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 1, "{names:?}");
+    // The download is the current text.
+    let r = f.call("GET", "/api/scene.toml", b"");
+    assert_eq!(r.status, 200);
+    assert_eq!(r.text(), saved);
+    assert!(r.header("content-disposition").unwrap().contains("scene.toml"));
+}
+
+#[test]
+fn requests_without_the_right_token_are_refused() {
+    let f = Fixture::new();
+    let addr = f.addr();
+    for path in ["/", "/app.js", "/api/scene", "/api/scene.toml", "/ws", "/vendor/three.module.min.js"] {
+        let r = http(addr, "GET", path, &[], b"");
+        assert_eq!(r.status, 401, "{path}: {}", r.text());
+        let r = http(addr, "GET", &format!("{path}?token=wrong"), &[], b"");
+        assert_eq!(r.status, 403, "{path}: {}", r.text());
+        let r = http(addr, "GET", path, &[("Cookie", &format!("photonix_token_{}=nope", addr.port()))], b"");
+        assert_eq!(r.status, 403, "{path}");
+    }
+    let r = http(addr, "POST", "/api/edit", &[], br#"{"op":"delete","target":{"shape":0}}"#);
+    assert_eq!(r.status, 401);
+    let r = http(addr, "POST", "/api/save?token=x", &[], b"");
+    assert_eq!(r.status, 403);
+    assert_eq!(f.text(), editor_support::SCENE);
+
+    // The right token works from the query, a header, or the cookie the first visit sets.
+    let r = f.call("GET", "/", b"");
+    assert_eq!(r.status, 200);
+    assert!(r.text().contains("<script type=\"module\""), "{}", r.text());
+    let cookie = r.header("set-cookie").expect("a cookie").split(';').next().unwrap().to_string();
+    assert!(cookie.contains(&f.token()));
+    assert_eq!(r.header("referrer-policy"), Some("no-referrer"));
+    assert!(r.header("content-security-policy").unwrap().contains("script-src 'self'"));
+    let r = http(addr, "GET", "/app.js", &[("Cookie", &cookie)], b"");
+    assert_eq!(r.status, 200);
+    let auth = format!("token {}", f.token());
+    let r = http(addr, "GET", "/api/scene", &[("Authorization", &auth)], b"");
+    assert_eq!(r.status, 200);
+    // A page of another origin is refused even with the cookie (the browser would send it).
+    let r = http(addr, "POST", "/api/save", &[("Cookie", &cookie), ("Origin", "http://evil.example")], b"");
+    assert_eq!(r.status, 403);
+    let origin = format!("http://{addr}");
+    let r = http(addr, "GET", "/api/scene", &[("Cookie", &cookie), ("Origin", &origin)], b"");
+    assert_eq!(r.status, 200);
+}
+
+#[test]
+fn paths_outside_the_scene_folder_are_refused() {
+    let f = Fixture::new();
+    let addr = f.addr();
+    // No URL reaches a file: the page's files are compiled in.
+    for path in ["/../Cargo.toml", "/vendor/../../scene.toml", "/scene.toml", "/%2e%2e/etc/passwd", "//etc/passwd"] {
+        let r = http(addr, "GET", &format!("{path}?token={}", f.token()), &[], b"");
+        assert!(r.status == 404 || r.status == 400, "{path}: {} {}", r.status, r.text());
+        assert!(!r.text().contains("root:"), "{path}");
+    }
+    // A mesh outside the folder, by `..`, by an absolute path and through a symbolic link.
+    let outside = tempfile::tempdir().unwrap();
+    let obj = outside.path().join("secret.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    std::os::unix::fs::symlink(&obj, f.dir.path().join("link.obj")).unwrap();
+    let relative = format!("../{}/secret.obj", outside.path().file_name().unwrap().to_string_lossy());
+    for file in [relative.as_str(), obj.to_str().unwrap(), "link.obj", "/etc/passwd", "missing.obj"] {
+        let r = f.edit(
+            json!({ "op": "add", "kind": "shape", "table": { "type": "mesh", "material": "white", "file": file } }),
+        );
+        assert_eq!(r.status, 422, "{file}: {}", r.text());
+        let r = f.edit(json!({ "op": "add", "kind": "material", "name": "t", "table": { "type": "diffuse" } }));
+        let _ = r;
+        let r = f.edit(json!({ "op": "set", "target": "environment", "field": "file", "value": file }));
+        assert_eq!(r.status, 422, "{file}: {}", r.text());
+    }
+    assert!(!f.text().contains("secret"));
+    // Imports: the name may not leave the folder.
+    for name in ["../x.obj", "..%2Fx.obj", "/tmp/x.obj", ".x.obj", "x.toml"] {
+        let r = f.call("POST", &format!("/api/import?name={name}&material=white"), b"v 0 0 0\n");
+        assert_eq!(r.status, 400, "{name}: {}", r.text());
+    }
+    assert!(!f.dir.path().parent().unwrap().join("x.obj").exists());
+}
+
+#[test]
+fn oversized_requests_are_refused() {
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| o.max_upload_bytes = 4096);
+    let big = vec![b'v'; 8192];
+    let r = f.call("POST", "/api/import?name=big.obj&material=white", &big);
+    assert_eq!(r.status, 413, "{}", r.text());
+    assert!(!f.dir.path().join("big.obj").exists());
+    let edit = format!(r#"{{"op":"set","target":"camera","field":"fov","value":"{}"}}"#, "x".repeat(2 << 20));
+    let r = f.call("POST", "/api/edit", edit.as_bytes());
+    assert_eq!(r.status, 413);
+    assert_eq!(f.text(), editor_support::SCENE);
+}
+
+#[test]
+fn import_adds_a_mesh_shape_and_keeps_the_file_in_the_folder() {
+    let f = Fixture::new();
+    let obj = "# a tetrahedron\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+    let r = f.call("POST", "/api/import?name=tet.obj&material=red", obj.as_bytes());
+    ok(&r);
+    assert_eq!(r.json()["file"], "tet.obj");
+    assert_eq!(std::fs::read_to_string(f.dir.path().join("tet.obj")).unwrap(), obj);
+    let page = f.scene_json();
+    assert_eq!(page["shapes"][3]["fields"]["file"], "tet.obj");
+    assert_eq!(page["shapes"][3]["positions"].as_array().unwrap().len(), 4 * 9);
+    // A second import of the same name gets a new name; a broken mesh is refused and removed.
+    let r = f.call("POST", "/api/import?name=tet.obj&material=red", obj.as_bytes());
+    assert_eq!(r.json()["file"], "tet-2.obj");
+    let r = f.call("POST", "/api/import?name=broken.obj&material=red", b"v 0 0\nf 1 2 3\n");
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("broken.obj"), "{}", r.text());
+    assert!(!f.dir.path().join("broken.obj").exists());
+    let r = f.call("POST", "/api/import?name=x.obj&material=nope", obj.as_bytes());
+    assert_eq!(r.status, 422);
+    assert!(!f.dir.path().join("x.obj").exists());
+}
+
+#[test]
+fn final_render_reports_passes_and_gives_png_and_exr() {
+    let f = Fixture::new();
+    let r = f.call("GET", "/api/render/image.png", b"");
+    assert_eq!(r.status, 404);
+    ok(&f.call("POST", "/api/render", br#"{"passes": 3}"#));
+    let start = Instant::now();
+    let status = loop {
+        let s = f.call("GET", "/api/render/status", b"").json();
+        if s["state"] == "done" || s["state"] == "failed" {
+            break s;
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "{s}");
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert_eq!(status["state"], "done", "{status}");
+    assert_eq!(status["passes"], 3);
+    assert_eq!(status["remaining"], 0.0);
+    let png = f.call("GET", "/api/render/image.png", b"");
+    assert_eq!(png.status, 200);
+    assert_eq!(&png.body[..8], b"\x89PNG\r\n\x1a\n");
+    let exr = f.call("GET", "/api/render/image.exr", b"");
+    assert_eq!(exr.status, 200);
+    assert_eq!(&exr.body[..4], &[0x76, 0x2f, 0x31, 0x01]);
+    // Its pixels are the render's: the scene's size, and lit.
+    let path = f.dir.path().join("out.exr");
+    std::fs::write(&path, &exr.body).unwrap();
+    let image = photonix::io::read_exr(&path).unwrap();
+    assert_eq!((image.width, image.height), (24, 16));
+    assert!(image.channel_means()[0] > 0.0);
+
+    // A long render can be cancelled; the passes done are kept.
+    ok(&f.call("POST", "/api/render", br#"{"seconds": 600}"#));
+    let r = f.call("POST", "/api/render", b"");
+    assert_eq!(r.status, 409, "{}", r.text());
+    std::thread::sleep(Duration::from_millis(300));
+    let s = f.call("GET", "/api/render/status", b"").json();
+    assert_eq!(s["state"], "running", "{s}");
+    ok(&f.call("POST", "/api/render/cancel", b""));
+    let start = Instant::now();
+    loop {
+        let s = f.call("GET", "/api/render/status", b"").json();
+        if s["state"] == "cancelled" {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(60), "{s}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let r = f.call("POST", "/api/render", br#"{"seconds": -1}"#);
+    assert_eq!(r.status, 409);
+}

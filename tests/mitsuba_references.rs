@@ -1,0 +1,68 @@
+//! Photonix against Mitsuba 3 on small scenes of features the shared references do not cover:
+//! a spot light, a thin lens, the Hosek-Wilkie sky alone and with its sun. The scenes are
+//! Photonix files in tests/references/; make_mitsuba_references.py there translated each into
+//! Mitsuba 3.9.1's path tracer and rendered the committed EXRs (4096 spp). Here each is
+//! rendered with the CPU backend, 8 progressive passes, and compared by per-channel mean and
+//! relMSE.
+
+mod common;
+
+use photonix::io::image::read_exr;
+use photonix::io::metrics::{mean_ratio, rel_mse};
+
+/// Renders `name` and returns (relMSE, mean ratios) against Mitsuba's image.
+fn compare(name: &str) -> (f64, [f64; 3]) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::repo_path(&format!("tests/references/{name}.toml"));
+    let out = dir.path().join(format!("{name}.exr"));
+    let run = common::photonix(
+        &["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--passes", "8", "--backend", "cpu"],
+        dir.path(),
+    );
+    assert!(run.status.success(), "{name}: {}", common::stderr(&run));
+    let ours = read_exr(&out).unwrap();
+    let theirs = read_exr(&common::repo_path(&format!("tests/references/mitsuba/{name}.exr"))).unwrap();
+    let (error, ratio) = (rel_mse(&ours, &theirs), mean_ratio(&ours, &theirs));
+    println!("{name}: relMSE {error:.2e} against Mitsuba, mean ratio {ratio:.4?}");
+    (error, ratio)
+}
+
+fn check(name: &str, max_error: f64, max_mean_off: f64) {
+    let (error, ratio) = compare(name);
+    assert!(error < max_error, "{name}: relMSE {error:.3e} against Mitsuba");
+    for r in ratio {
+        assert!((r - 1.0).abs() < max_mean_off, "{name}: mean ratio {ratio:?} against Mitsuba");
+    }
+}
+
+// Bounds: the means within 3% (the issue's), relMSE about three times what was measured
+// (spot 1.3e-4, thin lens 7.8e-4, sky 7.5e-4): noise of 8 passes at 48 x 48, not a convention
+// (a mirrored image, a wrong falloff or focus moves relMSE above 1e-2).
+
+#[test]
+fn spot_light_matches_mitsuba() {
+    // Measured: mean ratio 1.0009 in every channel.
+    check("spot", 5e-4, 0.03);
+}
+
+#[test]
+fn thin_lens_matches_mitsuba() {
+    // Measured: mean ratio 0.9996-0.9998; the blur of the near and far balls is in the relMSE.
+    check("thinlens", 2.5e-3, 0.03);
+}
+
+#[test]
+fn sky_matches_mitsuba_sunsky() {
+    // The sky dome alone: the same Hosek-Wilkie RGB model in the same units (directions
+    // evaluated one by one agree within 0.1%); the ground it lights measured 0.988.
+    check("sky", 2.5e-3, 0.03);
+}
+
+#[test]
+fn sun_and_sky_match_mitsuba_sunsky_within_its_sun_model() {
+    // With the sun, measured 0.942, 0.950, 0.963: Mitsuba's sun radiance at the disc's centre is
+    // 5.6% (R) to 8.5% (B) above the Hosek-Wilkie solar function turned into RGB here (its
+    // irradiance too; same disc, same limb darkening), a difference in the spectral-to-RGB
+    // path of the sun alone. The bound keeps that and catches anything larger.
+    check("sunsky", 1e-2, 0.08);
+}

@@ -1,0 +1,500 @@
+// The 3D viewport: the scene's triangles drawn with three.js (solid shading) or the server's
+// rendered frames behind the overlays (rendered shading), one perspective view or four views
+// (top, front, side, perspective), a grid and axes, click selection with an outline, and
+// translate / rotate / scale gizmos whose result is sent to the server as an edit.
+
+import * as THREE from './vendor/three.module.min.js';
+import { OrbitControls } from './vendor/OrbitControls.min.js';
+import { TransformControls } from './vendor/TransformControls.min.js';
+
+const DEG = Math.PI / 180;
+// The scene format's rotation is world_from_object = T Rz Ry Rx S: three.js's Euler order 'ZYX'
+// is the matrix Rz Ry Rx.
+const EULER_ORDER = 'ZYX';
+const OUTLINE_COLOR = 0xffa640;
+
+function round(v) { return Number.parseFloat(Number(v).toPrecision(7)); }
+
+export class Viewport {
+  constructor(canvas, labels, app) {
+    this.canvas = canvas;
+    this.labels = labels;
+    this.app = app;
+    this.rendered = true;
+    this.quad = false;
+    this.snap = false;
+    this.selection = null;
+    this.frameTexture = null;
+    this.frameAspect = 1;
+    this.objects = [];          // { holder, mesh, target, kind }
+    this.pickables = [];
+    this.lastViewSent = '';
+
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
+    this.renderer.setScissorTest(true);
+    this.scene = new THREE.Scene();
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x444450, 2.2));
+    this.headlight = new THREE.DirectionalLight(0xffffff, 1.2);
+    this.scene.add(this.headlight);
+    this.content = new THREE.Group();
+    this.scene.add(this.content);
+    this.helpers = new THREE.Group();
+    this.scene.add(this.helpers);
+
+    // Views: the perspective one is orbited; the orthographic ones pan and zoom.
+    this.perspective = new THREE.PerspectiveCamera(40, 1, 0.01, 1000);
+    this.views = [
+      { name: 'Top', camera: new THREE.OrthographicCamera(), dir: [0, 1, 0], up: [0, 0, -1], layer: 1 },
+      { name: 'Front', camera: new THREE.OrthographicCamera(), dir: [0, 0, 1], up: [0, 1, 0], layer: 2 },
+      { name: 'Right', camera: new THREE.OrthographicCamera(), dir: [1, 0, 0], up: [0, 1, 0], layer: 3 },
+      { name: 'Perspective', camera: this.perspective, layer: 1 },
+    ];
+    // Our pointer listener first, so the view under the pointer owns the gesture.
+    canvas.addEventListener('pointerdown', (e) => this.onPointerDown(e));
+    canvas.addEventListener('pointerup', (e) => this.onPointerUp(e));
+    for (const view of this.views) {
+      view.camera.layers.enable(view.layer);
+      view.controls = new OrbitControls(view.camera, canvas);
+      view.controls.enableDamping = false;
+      if (view.camera.isOrthographicCamera) {
+        view.controls.enableRotate = false;
+        view.controls.screenSpacePanning = true;
+      }
+      view.controls.addEventListener('change', () => { if (view.camera === this.perspective) this.sendView(); });
+    }
+    this.activeView = this.views[3];
+
+    this.gizmo = new TransformControls(this.perspective, canvas);
+    this.gizmo.setSize(0.9);
+    this.gizmo.addEventListener('dragging-changed', (e) => {
+      for (const view of this.views) view.controls.enabled = !e.value;
+      if (!e.value) this.commitGizmo();
+    });
+    this.gizmoHelper = this.gizmo.getHelper();
+    this.scene.add(this.gizmoHelper);
+
+    new ResizeObserver(() => this.resize()).observe(canvas);
+    this.resize();
+    const loop = () => { this.draw(); requestAnimationFrame(loop); };
+    requestAnimationFrame(loop);
+  }
+
+  // Layout -------------------------------------------------------------------------------------
+
+  /// The rectangles of the visible views in CSS pixels, origin at the top left.
+  rects() {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    if (!this.quad) return [{ view: this.views[3], x: 0, y: 0, w, h }];
+    const hw = Math.floor(w / 2), hh = Math.floor(h / 2);
+    return [
+      { view: this.views[0], x: 0, y: 0, w: hw, h: hh },
+      { view: this.views[1], x: hw, y: 0, w: w - hw, h: hh },
+      { view: this.views[2], x: 0, y: hh, w: hw, h: h - hh },
+      { view: this.views[3], x: hw, y: hh, w: w - hw, h: h - hh },
+    ];
+  }
+
+  resize() {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    if (!w || !h) return;
+    this.renderer.setSize(w, h, false);
+    this.labels.innerHTML = '';
+    for (const r of this.rects()) {
+      if (this.quad) {
+        const label = document.createElement('div');
+        label.className = 'label';
+        label.style.left = `${r.x + 6}px`;
+        label.style.top = `${r.y + 4}px`;
+        label.textContent = r.view.name;
+        this.labels.appendChild(label);
+      }
+      this.fitCamera(r.view.camera, r.w, r.h);
+    }
+    this.sendView(true);
+  }
+
+  fitCamera(camera, w, h) {
+    const aspect = w / Math.max(h, 1);
+    if (camera.isPerspectiveCamera) {
+      camera.aspect = aspect;
+    } else {
+      const half = camera.userData.half || 1;
+      camera.left = -half * aspect; camera.right = half * aspect; camera.top = half; camera.bottom = -half;
+    }
+    camera.updateProjectionMatrix();
+  }
+
+  setQuad(quad) { this.quad = quad; this.resize(); }
+
+  setRendered(rendered) {
+    this.rendered = rendered;
+    if (rendered) this.sendView(true);
+  }
+
+  setSnap(snap) {
+    this.snap = snap;
+    this.applySnap();
+  }
+
+  setMode(mode) {
+    this.gizmo.setMode(mode);
+    this.applySnap();
+  }
+
+  applySnap() {
+    const step = this.gridStep || 0.1;
+    this.gizmo.setTranslationSnap(this.snap ? step : null);
+    this.gizmo.setRotationSnap(this.snap ? 15 * DEG : null);
+    this.gizmo.setScaleSnap(this.snap ? 0.1 : null);
+  }
+
+  // The scene ----------------------------------------------------------------------------------
+
+  setScene(scene, first) {
+    this.sceneData = scene;
+    for (const o of this.objects) {
+      o.holder.traverse((c) => { if (c.geometry) c.geometry.dispose(); });
+      this.content.remove(o.holder);
+    }
+    this.objects = [];
+    this.pickables = [];
+    const lo = new THREE.Vector3(...scene.bounds.min), hi = new THREE.Vector3(...scene.bounds.max);
+    const extent = Math.max(lo.distanceTo(hi), 1e-3);
+    this.extent = extent;
+    scene.shapes.forEach((shape, index) => this.addEntry(shape, { kind: 'shape', index }));
+    scene.lights.forEach((light, index) => this.addLight(light, { kind: 'light', index }));
+    this.addCamera(scene.camera);
+    this.buildGrid(lo, hi, extent);
+    if (first) {
+      this.viewThroughCamera();
+      this.frameOrtho(lo, hi, extent);
+    }
+    this.setSelection(this.selection);
+  }
+
+  /// A holder at the entry's transform, with its world triangles mapped into the holder's space.
+  makeHolder(fields) {
+    const holder = new THREE.Object3D();
+    const t = fields.transform || {};
+    if (t.translate) holder.position.set(...t.translate);
+    if (t.rotate) holder.rotation.set(t.rotate[0] * DEG, t.rotate[1] * DEG, t.rotate[2] * DEG, EULER_ORDER);
+    else holder.rotation.order = EULER_ORDER;
+    if (t.scale !== undefined) {
+      if (Array.isArray(t.scale)) holder.scale.set(...t.scale); else holder.scale.setScalar(t.scale);
+    }
+    holder.updateMatrix();
+    return holder;
+  }
+
+  meshOf(positions, holder, material) {
+    const geometry = new THREE.BufferGeometry();
+    const array = new Float32Array(positions);
+    geometry.setAttribute('position', new THREE.BufferAttribute(array, 3));
+    geometry.applyMatrix4(holder.matrix.clone().invert());
+    geometry.computeVertexNormals();
+    return new THREE.Mesh(geometry, material);
+  }
+
+  addEntry(entry, target) {
+    const holder = this.makeHolder(entry.fields);
+    const color = new THREE.Color(...entry.color);
+    const material = entry.emissive
+      ? new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide })
+      : new THREE.MeshLambertMaterial({ color, side: THREE.DoubleSide });
+    const mesh = this.meshOf(entry.positions, holder, material);
+    holder.add(mesh);
+    this.content.add(holder);
+    const object = { holder, mesh, target, kind: 'mesh' };
+    mesh.userData.object = object;
+    this.objects.push(object);
+    this.pickables.push(mesh);
+    return object;
+  }
+
+  addLight(light, target) {
+    if (light.kind === 'area') {
+      const object = this.addEntry({ ...light, color: [1, 0.95, 0.7], emissive: true }, target);
+      object.kind = 'area';
+      return;
+    }
+    const holder = new THREE.Object3D();
+    holder.rotation.order = EULER_ORDER;
+    const size = this.extent * 0.02;
+    const icon = new THREE.Mesh(new THREE.OctahedronGeometry(size), new THREE.MeshBasicMaterial({ color: 0xffe080, wireframe: true }));
+    holder.add(icon);
+    const lo = new THREE.Vector3(...this.sceneData.bounds.min), hi = new THREE.Vector3(...this.sceneData.bounds.max);
+    const position = light.position ? new THREE.Vector3(...light.position)
+      : new THREE.Vector3((lo.x + hi.x) / 2, hi.y + this.extent * 0.1, (lo.z + hi.z) / 2);
+    holder.position.copy(position);
+    if (light.direction) {
+      const dir = new THREE.Vector3(...light.direction).normalize();
+      holder.add(new THREE.ArrowHelper(dir, new THREE.Vector3(), this.extent * 0.12, 0xffe080));
+    }
+    this.content.add(holder);
+    const object = { holder, mesh: icon, target, kind: light.kind };
+    icon.userData.object = object;
+    this.objects.push(object);
+    this.pickables.push(icon);
+  }
+
+  addCamera(camera) {
+    const holder = new THREE.Object3D();
+    holder.position.set(...camera.position);
+    const size = this.extent * 0.05;
+    const geometry = new THREE.ConeGeometry(size * 0.7, size, 4, 1, true);
+    geometry.rotateX(-Math.PI / 2);
+    geometry.rotateZ(Math.PI / 4);
+    geometry.translate(0, 0, -size / 2);
+    const body = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({ color: 0x90c0ff, wireframe: true }));
+    // Point the cone along the camera's view.
+    const m = new THREE.Matrix4().lookAt(new THREE.Vector3(...camera.position), new THREE.Vector3(...camera.look_at), new THREE.Vector3(...camera.up));
+    body.quaternion.setFromRotationMatrix(m);
+    holder.add(body);
+    this.content.add(holder);
+    this.cameraIcon = holder;
+    const object = { holder, mesh: body, target: { kind: 'camera' }, kind: 'camera' };
+    body.userData.object = object;
+    this.objects.push(object);
+    this.pickables.push(body);
+  }
+
+  buildGrid(lo, hi, extent) {
+    this.helpers.clear();
+    // Grid lines at a power of ten of the scene's size.
+    const step = 10 ** Math.floor(Math.log10(extent / 4));
+    this.gridStep = step;
+    const size = Math.ceil((extent * 2) / step) * step;
+    const divisions = Math.round(size / step);
+    const centre = new THREE.Vector3().addVectors(lo, hi).multiplyScalar(0.5);
+    const snapTo = (v) => Math.round(v / step) * step;
+    const grids = [
+      { layer: 1, rotate: null, pos: [snapTo(centre.x), lo.y, snapTo(centre.z)] },
+      { layer: 2, rotate: [Math.PI / 2, 0, 0], pos: [snapTo(centre.x), snapTo(centre.y), lo.z] },
+      { layer: 3, rotate: [0, 0, Math.PI / 2], pos: [lo.x, snapTo(centre.y), snapTo(centre.z)] },
+    ];
+    for (const g of grids) {
+      const grid = new THREE.GridHelper(size, divisions, 0x6a6f78, 0x3a3e45);
+      if (g.rotate) grid.rotation.set(...g.rotate);
+      grid.position.set(...g.pos);
+      grid.layers.set(g.layer);
+      this.helpers.add(grid);
+    }
+    const axes = new THREE.AxesHelper(extent * 0.25);
+    axes.layers.enableAll();
+    this.helpers.add(axes);
+    this.applySnap();
+  }
+
+  frameOrtho(lo, hi, extent) {
+    const centre = new THREE.Vector3().addVectors(lo, hi).multiplyScalar(0.5);
+    for (const view of this.views.slice(0, 3)) {
+      const c = view.camera;
+      c.userData.half = extent * 0.6;
+      c.position.copy(centre).addScaledVector(new THREE.Vector3(...view.dir), extent * 2);
+      c.up.set(...view.up);
+      c.near = -extent * 10; c.far = extent * 10;
+      view.controls.target.copy(centre);
+      c.lookAt(centre);
+      view.controls.update();
+    }
+    this.perspective.near = extent * 1e-3;
+    this.perspective.far = extent * 100;
+    this.resize();
+  }
+
+  // Cameras ------------------------------------------------------------------------------------
+
+  viewThroughCamera() {
+    const cam = this.sceneData && this.sceneData.camera;
+    if (!cam) return;
+    const view = this.views[3];
+    this.perspective.position.set(...cam.position);
+    this.perspective.up.set(...cam.up).normalize();
+    this.perspective.fov = cam.projection === 'perspective' ? cam.fov : 45;
+    view.controls.target.set(...cam.look_at);
+    this.perspective.lookAt(view.controls.target);
+    this.perspective.updateProjectionMatrix();
+    view.controls.update();
+    this.sendView(true);
+  }
+
+  cameraToView() {
+    const p = this.perspective;
+    const target = this.views[3].controls.target;
+    this.app.edit({
+      op: 'set_fields', target: 'camera',
+      fields: { position: p.position.toArray().map(round), look_at: target.toArray().map(round), up: p.up.toArray().map(round), fov: round(p.fov) },
+    });
+  }
+
+  /// Tells the server where the perspective view looks (throttled), for the rendered preview.
+  sendView(force = false) {
+    if (!this.rendered || !this.sceneData) return;
+    const r = this.rects().find((x) => x.view === this.views[3]);
+    if (!r || r.w < 1 || r.h < 1) return;
+    const p = this.perspective;
+    const view = {
+      position: p.position.toArray(), look_at: this.views[3].controls.target.toArray(), up: p.up.toArray(),
+      fov: p.fov, width: Math.round(r.w), height: Math.round(r.h),
+    };
+    const key = JSON.stringify(view);
+    if (key === this.lastViewSent && !force) return;
+    const now = performance.now();
+    clearTimeout(this.viewTimer);
+    const wait = Math.max(0, 80 - (now - (this.lastViewTime || 0)));
+    this.viewTimer = setTimeout(() => {
+      this.lastViewTime = performance.now();
+      this.lastViewSent = key;
+      this.frameAspect = view.width / view.height;
+      this.app.sendView(view);
+    }, force ? 0 : wait);
+  }
+
+  setFrame(blob) {
+    const url = URL.createObjectURL(blob);
+    const image = new Image();
+    image.onload = () => {
+      const texture = new THREE.Texture(image);
+      texture.colorSpace = THREE.SRGBColorSpace;
+      texture.needsUpdate = true;
+      if (this.frameTexture) this.frameTexture.dispose();
+      this.frameTexture = texture;
+      URL.revokeObjectURL(url);
+    };
+    image.src = url;
+  }
+
+  // Selection and gizmos -----------------------------------------------------------------------
+
+  setSelection(sel) {
+    this.selection = sel;
+    if (this.outline) {
+      this.outline.parent?.remove(this.outline);
+      this.outline.geometry.dispose();
+      this.outline = null;
+    }
+    if (this.selectionBox) {
+      this.scene.remove(this.selectionBox);
+      this.selectionBox.geometry.dispose();
+      this.selectionBox = null;
+    }
+    this.gizmo.detach();
+    const object = this.objectOf(sel);
+    if (!object) return;
+    // The box shows curved shapes too, whose edges alone draw nothing.
+    this.selectionBox = new THREE.BoxHelper(object.mesh, OUTLINE_COLOR);
+    this.selectionBox.layers.enableAll();
+    this.scene.add(this.selectionBox);
+    const edges = new THREE.EdgesGeometry(object.mesh.geometry, 25);
+    const outline = new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: OUTLINE_COLOR, depthTest: false }));
+    outline.renderOrder = 10;
+    outline.layers.enableAll();
+    outline.position.copy(object.mesh.position);
+    outline.quaternion.copy(object.mesh.quaternion);
+    object.holder.add(outline);
+    this.outline = outline;
+    const movable = object.kind === 'mesh' || object.kind === 'area' || object.kind === 'point' || object.kind === 'spot' || object.kind === 'camera';
+    if (movable) {
+      // Point and spot lights and the camera move only.
+      if (object.kind !== 'mesh' && object.kind !== 'area' && this.gizmo.getMode() !== 'translate') this.gizmo.setMode('translate');
+      this.gizmo.attach(object.holder);
+    }
+  }
+
+  objectOf(sel) {
+    if (!sel) return null;
+    return this.objects.find((o) => o.target.kind === sel.kind && (sel.kind === 'camera' || o.target.index === sel.index)) || null;
+  }
+
+  /// Sends the gizmo's result: a transform for shapes and area lights, a position for point
+  /// and spot lights, position and look_at for the camera.
+  commitGizmo() {
+    const object = this.objectOf(this.selection);
+    if (!object) return;
+    const h = object.holder;
+    const t = object.target;
+    if (object.kind === 'mesh' || object.kind === 'area') {
+      const target = t.kind === 'shape' ? { shape: t.index } : { light: t.index };
+      this.app.edit({
+        op: 'set_transform', target,
+        translate: h.position.toArray().map(round),
+        rotate: [h.rotation.x, h.rotation.y, h.rotation.z].map((r) => round(r / DEG)),
+        scale: h.scale.toArray().map(round),
+      });
+    } else if (object.kind === 'point' || object.kind === 'spot') {
+      const fields = { position: h.position.toArray().map(round) };
+      if (object.kind === 'spot') {
+        const light = this.sceneData.lights[t.index];
+        if (light.fields.point_at) {
+          const start = new THREE.Vector3(...light.position);
+          const moved = new THREE.Vector3(...light.fields.point_at).add(h.position.clone().sub(start));
+          fields.point_at = moved.toArray().map(round);
+        }
+      }
+      this.app.edit({ op: 'set_fields', target: { light: t.index }, fields });
+    } else if (object.kind === 'camera') {
+      const cam = this.sceneData.camera;
+      const delta = h.position.clone().sub(new THREE.Vector3(...cam.position));
+      const lookAt = new THREE.Vector3(...cam.look_at).add(delta);
+      this.app.edit({ op: 'set_fields', target: 'camera', fields: { position: h.position.toArray().map(round), look_at: lookAt.toArray().map(round) } });
+    }
+  }
+
+  viewAt(x, y) {
+    return this.rects().find((r) => x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h);
+  }
+
+  onPointerDown(e) {
+    const rect = this.canvas.getBoundingClientRect();
+    const x = e.clientX - rect.left, y = e.clientY - rect.top;
+    const r = this.viewAt(x, y);
+    if (!r) return;
+    this.activeView = r.view;
+    for (const view of this.views) view.controls.enabled = view === r.view && !this.gizmo.dragging;
+    this.gizmo.camera = r.view.camera;
+    this.down = { x: e.clientX, y: e.clientY };
+  }
+
+  onPointerUp(e) {
+    if (!this.down || e.button !== 0) return;
+    const moved = Math.hypot(e.clientX - this.down.x, e.clientY - this.down.y);
+    this.down = null;
+    if (moved > 4 || this.gizmo.dragging || this.gizmo.axis) return;
+    const rect = this.canvas.getBoundingClientRect();
+    const x = e.clientX - rect.left, y = e.clientY - rect.top;
+    const r = this.viewAt(x, y);
+    if (!r) return;
+    const ndc = new THREE.Vector2(((x - r.x) / r.w) * 2 - 1, -((y - r.y) / r.h) * 2 + 1);
+    const raycaster = new THREE.Raycaster();
+    raycaster.setFromCamera(ndc, r.view.camera);
+    const hit = raycaster.intersectObjects(this.pickables, false)[0];
+    if (!hit) { this.app.select(null); return; }
+    const t = hit.object.userData.object.target;
+    this.app.select(t.kind === 'camera' ? { kind: 'camera' } : { kind: t.kind, index: t.index });
+  }
+
+  // Drawing ------------------------------------------------------------------------------------
+
+  draw() {
+    const height = this.canvas.clientHeight;
+    this.headlight.position.copy(this.perspective.position);
+    if (this.selectionBox) this.selectionBox.update();
+    for (const r of this.rects()) {
+      const view = r.view;
+      const rendered = this.rendered && view === this.views[3] && this.frameTexture;
+      for (const o of this.objects) if (o.kind === 'mesh' || o.kind === 'area') o.mesh.visible = !rendered;
+      // Seen from (nearly) its own position, the camera's icon would fill the view.
+      if (this.cameraIcon) {
+        this.cameraIcon.visible = view !== this.views[3] || this.cameraIcon.position.distanceTo(this.perspective.position) > this.extent * 0.1;
+      }
+      this.scene.background = rendered ? this.frameTexture : new THREE.Color(view === this.views[3] ? 0x2b2e33 : 0x26292e);
+      this.gizmo.camera = view.camera;
+      const y = height - r.y - r.h;
+      this.renderer.setViewport(r.x, y, r.w, r.h);
+      this.renderer.setScissor(r.x, y, r.w, r.h);
+      this.renderer.render(this.scene, view.camera);
+    }
+    this.gizmo.camera = this.activeView.camera;
+  }
+}
