@@ -38,6 +38,20 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
     })?;
     let base = path.parent().unwrap_or(Path::new(""));
     let document = gltf.document;
+    // The crate's own message for a missing buffer file does not say which file it looked for.
+    for buffer in document.buffers() {
+        if let ::gltf::buffer::Source::Uri(uri) = buffer.source() {
+            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+                return Err(err(
+                    format!("buffer {}", buffer.index()),
+                    format!(
+                        "its data file `{}` is missing; put it next to the glTF file, or export a .glb",
+                        crate::limits::printable_message(uri)
+                    ),
+                ));
+            }
+        }
+    }
     let buffers = ::gltf::import_buffers(&document, Some(base), gltf.blob)
         .map_err(|e| err(String::new(), format!("cannot load its buffers: {e}")))?;
     for (b, buffer) in document.buffers().enumerate() {
