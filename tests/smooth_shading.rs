@@ -150,3 +150,30 @@ fn gpu_matches_cpu_on_a_smooth_mesh() {
     // the bound).
     assert!(error < 1e-6, "relMSE {error:.3e}");
 }
+
+#[test]
+fn default_smooth_angle_leaves_flat_faced_models_flat() {
+    // smooth_angle defaults to 30 degrees: the shipped OBJ models (the showcase's icosahedron,
+    // whose faces meet at 41.8 degrees, Cornell walls, a fog box) keep flat triangles, so they
+    // draw as before smooth shading existed; the Loop-subdivided icosahedron of shapes.toml is
+    // smooth.
+    for file in ["scenes/showcase.toml", "scenes/cornell-glossy.toml", "scenes/cornell-fog.toml"] {
+        let scene = load_scene(&common::repo_path(file)).unwrap();
+        let (mut flat, mut smooth) = (0, 0);
+        for s in &scene.shapes {
+            if let Geometry::Triangle(t) = &s.geometry {
+                if t.normals.is_some() {
+                    smooth += 1;
+                } else {
+                    flat += 1;
+                }
+            }
+        }
+        println!("{file}: {flat} flat, {smooth} smooth triangles");
+        assert!(flat > 0 && smooth == 0, "{file}: {flat} flat, {smooth} smooth triangles");
+    }
+    let scene = load_scene(&common::repo_path("scenes/shapes.toml")).unwrap();
+    let smooth =
+        scene.shapes.iter().filter(|s| matches!(&s.geometry, Geometry::Triangle(t) if t.normals.is_some())).count();
+    assert!(smooth > 1000, "shapes.toml's teapot and subdivided icosahedron are smooth ({smooth} triangles)");
+}
