@@ -107,7 +107,9 @@ Bsdf material_bsdf(Material m, Hit h) {
     b.alpha = vec2(m.roughness[0], m.roughness[1]);
     if ((lookups & (1u << LOOKUP_ROUGHNESS)) != 0u) b.alpha *= looked[LOOKUP_ROUGHNESS].x;
     b.ior = m.ior;
-    b.ng = h.ng;
+    // The normal that decides sides: the geometric one, or a smooth triangle's interpolated one
+    // (its BSDF sees the curved surface the normals describe; see the twin).
+    b.ng = h.ns;
     b.ns = h.ns;
     b.ts = h.dpdu;
     b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;

@@ -133,6 +133,11 @@ struct GridParams {
     uint _pad[3];
 };
 
+struct TriangleShading {
+    float uv[6];
+    float normals[9];
+};
+
 struct EmitParams {
     uint path_begin;
     uint path_count;

@@ -20,6 +20,7 @@ layout(std430, binding = 7) buffer Photons { Photon photons[]; };
 layout(std430, binding = 8) buffer Grids { GridParams grids[]; };
 layout(std430, binding = 9) buffer Emits { EmitParams emits[]; };
 layout(std430, binding = 10) buffer Media { Medium media[]; };
+layout(std430, binding = 11) buffer Shadings { TriangleShading shadings[]; };
 
 void main() {
     // Element 1 of each buffer becomes a field-by-field copy of element 0.
@@ -32,6 +33,7 @@ void main() {
     ranges[1] = ranges[0];
     photons[1] = photons[0];
     grids[1] = grids[0];
+    shadings[1] = shadings[0];
     emits[1] = emits[0];
     media[1] = media[0];
 }

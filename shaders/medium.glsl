@@ -65,6 +65,7 @@ Hit medium_hit(vec3 p, vec3 wo) {
     h.prim = NO_LIGHT;
     h.material = NO_LIGHT;
     h.eps = 0.0;
+    h.shift = vec3(0.0);
     return h;
 }
 

@@ -18,10 +18,12 @@ void trace_photon_path(uint path, EmitParams params) {
     flux /= l.photon_probability * float(params.total_paths);
     bool specular_only = true;
     uint medium = l.medium;
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    uint skip = NO_LIGHT;
     uint depth = 0u;  // scattering events so far (surfaces and media; null boundaries are none)
     for (uint step = 0u; step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth; step++) {
         float t;
-        uint prim = trace_ray(o, d, INF, false, t);
+        uint prim = trace_ray(o, d, INF, false, skip, t);
         bool scattered = false;
         vec3 collision = vec3(0.0);
         vec3 medium_weight = vec3(1.0);
@@ -41,6 +43,7 @@ void trace_photon_path(uint path, EmitParams params) {
         }
 #endif
         if (!scattered && prim == NO_LIGHT) return;
+        skip = scattered ? NO_LIGHT : ray_skip(prim);
         Hit h;
         Bsdf b;
         vec3 wo = -d;

@@ -107,6 +107,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     uint lookup_layer[2];
     vec3 lookup_weight[2];
 
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    uint skip = NO_LIGHT;
     for (uint step = 0u; step < LOOP_STEPS; step++) {
         float t;
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
@@ -116,7 +118,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         // Shadow rays take the closest hit: they pass null boundaries and sum the media between.
         any_hit = false;
 #endif
-        uint prim = trace_ray(o, d, t_max, any_hit, t);
+        // A shaft ray leaves a point in a medium, which has no triangle to skip.
+        uint prim = trace_ray(o, d, t_max, any_hit, ray == RAY_SHAFT ? NO_LIGHT : skip, t);
         bool scattered = false;
 #ifdef VARIANT_MEDIA
         // The medium up to the hit (or to the light, or to infinity): shadow rays take its
@@ -182,6 +185,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         if (null_hit) {
             // An invisible boundary: straight through into the medium beyond, not a bounce.
             medium = medium_after(prim, h.ng, d, medium);
+            if (ray != RAY_SHAFT) skip = ray_skip(prim);
             vec3 next = offset_origin(h, -d, BSDF_TRANSMISSION);
             if (ray == RAY_SHADOW || ray == RAY_SHAFT) t_max = max(t_max - dot(next - o, d), 0.0);
             o = next;
@@ -239,6 +243,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
             }
             break;
         }
+        skip = scattered ? NO_LIGHT : ray_skip(prim);
         vec3 wo = -d;
         bool camera = ray == RAY_CAMERA;
         Bsdf b;

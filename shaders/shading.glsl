@@ -33,10 +33,19 @@ void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
 
 // Origin of the ray that leaves h in a direction sampled from a lobe with `lobe_flags`: offset
 // off the surface to the side the ray goes (wo's side for reflection, the other for transmission),
-// by the hit's own offset.
+// by the hit's own offset, plus a smooth triangle's shift when the ray leaves to its side. The
+// side is judged by the shading normal h.ns, which on smooth triangles keeps a ray toward a light
+// above the shading horizon but below the facet on the outside (see the twin).
 vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
-    vec3 nf = dot(wo, h.ng) > 0.0 ? h.ng : -h.ng;
-    return (lobe_flags & BSDF_TRANSMISSION) != 0u ? h.p - nf * h.eps : h.p + nf * h.eps;
+    vec3 nf = dot(wo, h.ns) > 0.0 ? h.ng : -h.ng;
+    vec3 side = (lobe_flags & BSDF_TRANSMISSION) != 0u ? -nf : nf;
+    return h.p + side * h.eps + (dot(h.shift, side) > 0.0 ? h.shift : vec3(0.0));
+}
+
+// The primitive rays leaving a hit on primitive i must skip: i itself when it is a smooth
+// triangle (see trace_ray's twin), else none.
+uint ray_skip(uint i) {
+    return (primitives[i].kind & PRIMITIVE_FLAG_SMOOTH) != 0u ? i : NO_LIGHT;
 }
 
 // A shadow ray toward a point sampled on a light, and the radiance the light reflects at the

@@ -12,6 +12,7 @@ struct Hit {
     uint prim;
     uint material;
     float eps;  // offset of rays leaving the point: frame.ray_epsilon, or the analytic shape's own
+    vec3 shift; // smooth triangles: Hanika's shift of the origin of rays leaving to its side; else 0
 };
 
 // Möller and Trumbore 1997, two-sided. Returns the hit distance in (t_min, t_max), or INF.
@@ -305,6 +306,24 @@ void triangle_uvs(Primitive p, out vec2 uv0, out vec2 uv1, out vec2 uv2) {
     uv2 = vec2(shape_data[a + 4u], shape_data[a + 5u]);
 }
 
+// The shading normal of smooth triangle p at x (barycentrics b), and h.shift; projects dpdu and
+// dpdv onto the shading normal's tangent plane (see the twin for the method and its sources).
+vec3 triangle_smooth(Primitive p, vec3 x, vec3 b, vec3 p0, vec3 p1, vec3 p2, inout Hit h) {
+    uint a = p.data + TRIANGLE_DATA_NORMALS;
+    vec3 n0 = vec3(shape_data[a], shape_data[a + 1u], shape_data[a + 2u]);
+    vec3 n1 = vec3(shape_data[a + 3u], shape_data[a + 4u], shape_data[a + 5u]);
+    vec3 n2 = vec3(shape_data[a + 6u], shape_data[a + 7u], shape_data[a + 8u]);
+    vec3 n = b.x * n0 + b.y * n1 + b.z * n2;
+    float len = length(n);
+    n = len > 0.0 ? n / len : h.ng;
+    if (!(dot(n, h.ng) > 0.0)) n = h.ng;
+    h.shift = -(b.x * min(0.0, dot(x - p0, n0)) * n0 + b.y * min(0.0, dot(x - p1, n1)) * n1
+              + b.z * min(0.0, dot(x - p2, n2)) * n2);
+    h.dpdu -= n * dot(n, h.dpdu);
+    h.dpdv -= n * dot(n, h.dpdv);
+    return n;
+}
+
 // Longitude/latitude uv of unit vector `w` (object space, +y the pole): u grows with the angle
 // atan2(x, z) from 0 at -z, v from 0 at the south pole to 1 at the north pole. Sets the
 // derivatives of the unit direction along u and v.
@@ -496,11 +515,14 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
             if (length(cross(h.dpdu, h.dpdv)) == 0.0) onb(h.ng, h.dpdu, h.dpdv);
         }
     }
+    bool is_smooth = (p.kind & PRIMITIVE_FLAG_SMOOTH) != 0u;
+    vec3 ns = vec3(0.0);
+    h.shift = vec3(0.0);
     WHEN(kind == PRIMITIVE_TRIANGLE) {
         vec3 p0 = load3(p.p0), p1 = load3(p.p1), p2 = load3(p.p2);
         vec3 e1 = p1 - p0, e2 = p2 - p0;
         h.ng = normalize(cross(e1, e2));
-        WHEN(wants_uv) {
+        WHEN(wants_uv || is_smooth) {
             // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
             vec3 v = x - p0;
             float d00 = dot(e1, e1), d01 = dot(e1, e2), d11 = dot(e2, e2);
@@ -508,16 +530,19 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
             float inv = 1.0 / (d00 * d11 - d01 * d01);
             float b1 = (d11 * d20 - d01 * d21) * inv;
             float b2 = (d00 * d21 - d01 * d20) * inv;
-            vec2 uv0, uv1, uv2;
-            triangle_uvs(p, uv0, uv1, uv2);
-            h.uv = (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2;
-            triangle_derivatives(p0, p1, p2, uv0, uv1, uv2, h.ng, h.dpdu, h.dpdv);
+            WHEN(wants_uv) {
+                vec2 uv0, uv1, uv2;
+                triangle_uvs(p, uv0, uv1, uv2);
+                h.uv = (1.0 - b1 - b2) * uv0 + b1 * uv1 + b2 * uv2;
+                triangle_derivatives(p0, p1, p2, uv0, uv1, uv2, h.ng, h.dpdu, h.dpdv);
+            }
+            WHEN(is_smooth) { ns = triangle_smooth(p, x, vec3(1.0 - b1 - b2, b1, b2), p0, p1, p2, h); }
         }
     }
 #ifdef VARIANT_ANALYTIC
     WHEN(kind > PRIMITIVE_SPHERE) { analytic_surface(p, x, wants_uv, h); }
 #endif
-    h.ns = h.ng;
+    h.ns = is_smooth ? ns : h.ng;
 }
 
 // The hit record of the ray o + t d on primitive i.

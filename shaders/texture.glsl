@@ -50,7 +50,8 @@ Hit hit_moved(Hit h, float du, float dv) {
     return m;
 }
 
-// The shading normal of a bump map: the surface displaced along ng by `strength` times a height
+// The shading normal of a bump map: the surface displaced along ns (ng, or a smooth triangle's
+// interpolated normal) by `strength` times a height
 // (scene units), its slopes from central differences along u and v (pbrt-v4's BumpMap) of the
 // heights at u +- BUMP_DELTA and v +- BUMP_DELTA (looked up at hit_moved points). Works alike for
 // uv-space images and 3D patterns, since moving in uv moves the point along dpdu and dpdv.
@@ -58,23 +59,23 @@ vec3 bump_normal_from_heights(float u_plus, float u_minus, float v_plus, float v
     float d = BUMP_DELTA;
     float dhdu = strength * (u_plus - u_minus) / (2.0 * d);
     float dhdv = strength * (v_plus - v_minus) / (2.0 * d);
-    vec3 n = cross(h.dpdu + dhdu * h.ng, h.dpdv + dhdv * h.ng);
+    vec3 n = cross(h.dpdu + dhdu * h.ns, h.dpdv + dhdv * h.ns);
     float len = length(n);
     if (!(len > 0.0)) return h.ns;
     n /= len;
-    return dot(n, h.ng) < 0.0 ? -n : n;
+    return dot(n, h.ns) < 0.0 ? -n : n;
 }
 
 // The shading normal of a tangent-space normal map from its texel (OpenGL convention: red along
 // +u, green along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
 vec3 normal_map_normal_from_texel(vec3 texel, Hit h) {
     vec3 c = 2.0 * texel - 1.0;
-    vec3 t = h.dpdu - h.ng * dot(h.ng, h.dpdu);
+    vec3 t = h.dpdu - h.ns * dot(h.ns, h.dpdu);
     if (!(length(t) > 0.0)) return h.ns;
     t = normalize(t);
-    vec3 b = cross(h.ng, t);
+    vec3 b = cross(h.ns, t);
     if (dot(b, h.dpdv) < 0.0) b = -b;
-    vec3 n = t * c.x + b * c.y + h.ng * c.z;
+    vec3 n = t * c.x + b * c.y + h.ns * c.z;
     float len = length(n);
     if (!(len > 0.0)) return h.ns;
     n /= len;

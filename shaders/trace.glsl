@@ -24,9 +24,10 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
     return passes;
 }
 
-// Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer.
-void visit(uint i, vec3 o, vec3 d, inout uint hit, inout float t_hit) {
-    float t = shape_intersect(i, o, d, 0.0, t_hit);
+// Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer; the
+// primitive `ignore` is not tested (see trace_ray).
+void visit(uint i, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
+    float t = i == ignore ? INF : shape_intersect(i, o, d, 0.0, t_hit);
 #ifdef VARIANT_ALPHA
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray. Alpha lives in
@@ -42,16 +43,17 @@ void visit(uint i, vec3 o, vec3 d, inout uint hit, inout float t_hit) {
 }
 
 // Closest hit in [0, t_max): returns the primitive index or NO_LIGHT (as "none") and sets t_hit.
-// With `any_hit` it returns the first hit found (shadow rays). The unbounded primitives (planes,
+// With `any_hit` it returns the first hit found (shadow rays). Primitive `ignore` (NO_LIGHT: none)
+// is ignored: the smooth triangle a ray leaves (see the twin). The unbounded primitives (planes,
 // after the BVH's, in the analytic variant) come first; then the BVH, stackless: a missed box, or
 // a finished leaf, continues at the node's miss link.
-uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out float t_hit) {
+uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float t_hit) {
     vec3 inv_d = 1.0 / d;
     t_hit = t_max;
     uint hit = NO_LIGHT;
 #ifdef VARIANT_ANALYTIC
     for (uint i = frame.unbounded_first; i < frame.primitive_count; i++) {
-        visit(i, o, d, hit, t_hit);
+        visit(i, o, d, ignore, hit, t_hit);
         if (any_hit && hit != NO_LIGHT) return hit;
     }
 #endif
@@ -70,7 +72,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, out float t_hit) {
         }
         for (uint i = n.first; i < n.first + count; i++) {
             uint before = hit;
-            visit(i, o, d, hit, t_hit);
+            visit(i, o, d, ignore, hit, t_hit);
             if (any_hit && hit != before) return hit;
         }
         node = skip;

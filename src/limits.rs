@@ -58,6 +58,11 @@ pub const MIN_DURATION_SECONDS: f64 = 1e-3;
 pub const MAX_SCENE_FILE_BYTES: u64 = 64 << 20;
 /// Largest OBJ file read.
 pub const MAX_OBJ_FILE_BYTES: u64 = 256 << 20;
+/// Largest model file (OBJ, PLY, glTF, 3DS, IFS, BPT) read, in bytes; also each MTL file and glTF buffer.
+pub const MAX_MODEL_FILE_BYTES: u64 = MAX_OBJ_FILE_BYTES;
+/// Smallest Bezier patch flatness tolerance, relative to the patch: finer asks for more than
+/// `MAX_PATCH_STEPS` per side anyway.
+pub const MIN_PATCH_FLATNESS: f64 = 1e-6;
 /// Longest name (material, shape, texture, unknown field) echoed in a message, in characters.
 pub const MAX_ECHOED_CHARS: usize = 64;
 

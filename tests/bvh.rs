@@ -63,7 +63,7 @@ fn closest_hit_matches_brute_force() {
         let o = random_vec(ray, 100) * 30.0 - 15.0;
         let d = (random_vec(ray, 103) * 2.0 - 1.0).normalize();
         let (expected, t_expected) = brute_force(&prims, o, d);
-        let (index, t) = trace_ray(&view, o, d, f32::INFINITY, false);
+        let (index, t) = trace_ray(&view, o, d, f32::INFINITY, false, NO_LIGHT);
         match expected {
             None => assert_eq!(index, NO_LIGHT, "ray {ray}: BVH hit where brute force missed"),
             Some(p) => {
@@ -75,7 +75,7 @@ fn closest_hit_matches_brute_force() {
             }
         }
         // Any-hit agrees on whether something blocks the ray.
-        let (any, _) = trace_ray(&view, o, d, f32::INFINITY, true);
+        let (any, _) = trace_ray(&view, o, d, f32::INFINITY, true, NO_LIGHT);
         assert_eq!(any == NO_LIGHT, expected.is_none(), "ray {ray}: any-hit disagrees");
     }
     println!("{hits} of 5000 rays hit; all match brute force");
@@ -87,6 +87,6 @@ fn empty_scene_misses_everything() {
     let bvh = build_bvh(&[], &[]).unwrap();
     let frame = FrameParams::default();
     let view = SceneView::geometry(&frame, &bvh.nodes, &bvh.primitives);
-    let (index, _) = trace_ray(&view, Vec3::ZERO, Vec3::X, f32::INFINITY, false);
+    let (index, _) = trace_ray(&view, Vec3::ZERO, Vec3::X, f32::INFINITY, false, NO_LIGHT);
     assert_eq!(index, NO_LIGHT);
 }

@@ -351,7 +351,7 @@ fn analytic_shapes_render_like_their_fine_tessellations() {
                     .tessellate(512)
                     .into_iter()
                     .map(|vertices| Shape {
-                        geometry: Geometry::Triangle(Triangle { vertices, uv: None }),
+                        geometry: Geometry::Triangle(Triangle { vertices, uv: None, normals: None }),
                         material: s.material,
                         media: None,
                     })
@@ -520,7 +520,7 @@ fn analytic_emitters_light_like_their_references() {
                             .tessellate(256)
                             .into_iter()
                             .map(|vertices| Shape {
-                                geometry: Geometry::Triangle(Triangle { vertices, uv: None }),
+                                geometry: Geometry::Triangle(Triangle { vertices, uv: None, normals: None }),
                                 material: shape.material,
                                 media: None,
                             })

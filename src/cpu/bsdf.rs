@@ -30,7 +30,11 @@ pub struct Bsdf {
     pub color1: Vec3,
     pub alpha: Vec2,
     pub ior: f32,
-    /// Geometric normal (a triangle's winding side, a sphere's outside).
+    /// The normal that decides sides (reflection or transmission, leaks, the dielectric's inside):
+    /// the geometric normal (a triangle's winding side, a sphere's outside), or on a smooth
+    /// triangle its interpolated normal, so its BSDF sees the curved surface the vertex normals
+    /// describe (no flat terminator band where the light is below the facet but above the
+    /// shading normal's horizon, and glass refracts smoothly).
     pub ng: Vec3,
     /// Shading normal, on the side of `ng`.
     pub ns: Vec3,
@@ -84,9 +88,9 @@ pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
         color1: param_color(s, m.color1, m.color1_tex, h),
         alpha,
         ior: m.ior,
-        ng: h.ng,
-        // Bump and normal maps change the shading normal only: the geometric normal keeps
-        // deciding sides, offsets and leaks.
+        ng: h.ns,
+        // Bump and normal maps change the shading normal only: `ng` keeps deciding sides and
+        // leaks, and the hit's own `ng` the ray offsets.
         ns: if m.bump_tex != NO_TEXTURE {
             bump_normal(s, m.bump_tex, m.bump_strength, h)
         } else if m.normal_tex != NO_TEXTURE {

@@ -9,7 +9,7 @@ use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
 use super::rng::{rand1, rand2, rand4};
-use super::shading::offset_origin;
+use super::shading::{offset_origin, ray_skip};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
@@ -46,11 +46,13 @@ pub fn trace_photon_path(
     flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
     let mut medium = l.medium;
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    let mut skip = NO_LIGHT;
     // Scattering events so far (surfaces and media; null boundaries are none).
     let mut depth = 0;
     let mut step = 0;
     while step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth {
-        let (prim, mut t) = trace_ray(s, o, d, f32::INFINITY, false);
+        let (prim, mut t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
         let mut scattered = false;
         let mut collision = Vec3::ZERO;
         let mut medium_weight = Vec3::ONE;
@@ -71,6 +73,7 @@ pub fn trace_photon_path(
         if !scattered && prim == NO_LIGHT {
             return;
         }
+        skip = if scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let wo = -d;
         let (h, b) = if scattered {
             (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))

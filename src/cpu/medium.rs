@@ -87,6 +87,7 @@ pub fn medium_hit(p: Vec3, wo: Vec3) -> Hit {
         prim: NO_LIGHT,
         material: NO_LIGHT,
         eps: 0.0,
+        shift: Vec3::ZERO,
     }
 }
 

@@ -13,7 +13,7 @@ use super::medium::{
 };
 use super::phase::phase_hg;
 use super::rng::{rand2, rand4};
-use super::shading::{camera_ray, direct_light_sample, offset_origin, NO_RAY};
+use super::shading::{camera_ray, direct_light_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -83,6 +83,8 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     let mut gdim = 0;
     let mut lookups: [Option<Lookup>; 2] = [None; 2];
 
+    // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
+    let mut skip = NO_LIGHT;
     // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries;
     // with media each camera segment may take three (its equiangular shadow ray, then its retrace).
     let steps = if s.media.is_empty() { 2 * f.max_depth + 1 } else { 3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) };
@@ -94,7 +96,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
         // Shadow rays take the closest hit where there are media: they pass null boundaries and
         // sum the media between (the kernel's `media` variant).
         let any_hit = (ray == Ray::Shadow || ray == Ray::Shaft) && s.media.is_empty();
-        let (prim, mut t) = trace_ray(s, o, d, t_max, any_hit);
+        // A shaft ray leaves a point in a medium, which has no triangle to skip.
+        let ignore = if ray == Ray::Shaft { NO_LIGHT } else { skip };
+        let (prim, mut t) = trace_ray(s, o, d, t_max, any_hit, ignore);
         let mut scattered = false;
         // The medium up to the hit (or to the light, or to infinity): shadow rays take its
         // transmittance, camera and gather rays sample a free flight through it.
@@ -160,6 +164,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
         if let Some(h) = h.filter(|h| !scattered && s.materials[h.material as usize].kind == MATERIAL_NULL) {
             // An invisible boundary: straight through into the medium beyond, not a bounce.
             medium = medium_after(s, prim, h.ng, d, medium);
+            if ray != Ray::Shaft {
+                skip = ray_skip(s, prim);
+            }
             let next = offset_origin(&h, -d, BSDF_TRANSMISSION);
             if ray == Ray::Shadow || ray == Ray::Shaft {
                 t_max = (t_max - (next - o).dot(d)).max(0.0);
@@ -219,6 +226,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             }
             break;
         };
+        skip = if scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let wo = -d;
         let camera = ray == Ray::Camera;
         let mut inv_sigma_t = Vec3::ONE;

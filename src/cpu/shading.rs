@@ -44,14 +44,29 @@ pub fn camera_ray(s: &SceneView, sx: f32, sy: f32, u: [f32; 2]) -> (Vec3, Vec3) 
 
 /// Origin of the ray that leaves `h` in a direction sampled from a lobe with `lobe_flags`:
 /// offset off the surface to the side the ray goes (`wo`'s side for reflection, the other for
-/// transmission).
-/// The offset is the hit's own (`Hit::eps`).
+/// transmission) by the hit's own offset (`Hit::eps`), plus a smooth triangle's `Hit::shift`
+/// when the ray leaves to the side the shift points to (the outside of the curved surface its
+/// normals describe; toward the inside it would start the ray beyond the triangle).
+///
+/// The side is `wo`'s side of the shading normal `h.ns` (the geometric one but on smooth
+/// triangles). A ray toward a light just above a smooth triangle's shading horizon may head below
+/// its flat facet: judged by the facet, it would start under the mesh's skin without the shift
+/// and be shadowed by the mesh itself, the dark terminator facets that the shift is there to
+/// remove. From the shifted point on the curved surface it crosses only its own facet's plane,
+/// which `trace_ray` skips.
 pub fn offset_origin(h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
-    let nf = if wo.dot(h.ng) > 0.0 { h.ng } else { -h.ng };
-    if lobe_flags & BSDF_TRANSMISSION != 0 {
-        h.p - nf * h.eps
+    let nf = if wo.dot(h.ns) > 0.0 { h.ng } else { -h.ng };
+    let side = if lobe_flags & BSDF_TRANSMISSION != 0 { -nf } else { nf };
+    h.p + side * h.eps + if h.shift.dot(side) > 0.0 { h.shift } else { Vec3::ZERO }
+}
+
+/// The primitive that rays leaving a hit on primitive `i` skip: `i` itself when it is a smooth
+/// triangle, else none (`NO_LIGHT`); see `trace_ray`.
+pub fn ray_skip(s: &SceneView, i: u32) -> u32 {
+    if s.primitives[i as usize].kind & PRIMITIVE_FLAG_SMOOTH != 0 {
+        i
     } else {
-        h.p + nf * h.eps
+        NO_LIGHT
     }
 }
 

@@ -28,6 +28,9 @@ pub struct Hit {
     /// `ray_epsilon` for triangles and spheres, a multiple of the point's own size for the
     /// analytic shapes (`SHAPE_EPSILON_SCALE`).
     pub eps: f32,
+    /// Smooth triangles: Hanika's shift of the origin of rays that leave to its side
+    /// (`triangle_smooth`); zero for every other shape.
+    pub shift: Vec3,
 }
 
 /// Möller and Trumbore 1997, two-sided. Returns the hit distance in (t_min, t_max), or infinity.
@@ -553,6 +556,35 @@ pub fn triangle_uvs(s: &SceneView, p: &Primitive) -> [Vec2; 3] {
     [Vec2::new(a[0], a[1]), Vec2::new(a[2], a[3]), Vec2::new(a[4], a[5])]
 }
 
+/// The shading normal of smooth triangle `p` at `x` (barycentrics `b` of vertices `v`): its unit
+/// vertex normals (`TriangleShading`) interpolated (Phong shading), or `ng` where they cancel or
+/// would turn below the triangle. Sets `h.shift`, the shadow-terminator fix of Hanika (2021,
+/// "Hacking the shadow terminator", Ray Tracing Gems II ch. 4): x projected onto the tangent
+/// plane of each vertex (only where that moves it outward, so concave parts stay put), those
+/// three points mixed by the barycentrics. Rays leaving from x + shift start on the curved surface
+/// the normals describe, so the neighbouring flat facets of a low-poly mesh no longer shadow
+/// points whose shading normal faces the light. dpdu and dpdv are projected onto the shading
+/// normal's tangent plane (as pbrt-v4 does for its shading frame), so bump and normal maps and
+/// anisotropic roughness bend around the smooth normal.
+pub fn triangle_smooth(s: &SceneView, p: &Primitive, x: Vec3, b: Vec3, v: [Vec3; 3], h: &mut Hit) -> Vec3 {
+    let a = (p.data + TRIANGLE_DATA_NORMALS) as usize;
+    let d = &s.shape_data[a..a + 9];
+    let (n0, n1, n2) = (Vec3::new(d[0], d[1], d[2]), Vec3::new(d[3], d[4], d[5]), Vec3::new(d[6], d[7], d[8]));
+    let n = b.x * n0 + b.y * n1 + b.z * n2;
+    let len = n.length();
+    let mut n = if len > 0.0 { n / len } else { h.ng };
+    // NaN-safe: a normal below the triangle, or none at all, falls back to the flat one.
+    if n.dot(h.ng).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        n = h.ng;
+    }
+    h.shift = -(b.x * (x - v[0]).dot(n0).min(0.0) * n0
+        + b.y * (x - v[1]).dot(n1).min(0.0) * n1
+        + b.z * (x - v[2]).dot(n2).min(0.0) * n2);
+    h.dpdu -= n * n.dot(h.dpdu);
+    h.dpdv -= n * n.dot(h.dpdv);
+    n
+}
+
 /// Longitude/latitude uv of unit vector `w` (object space, +y the pole): u grows with the angle
 /// atan2(x, z) from 0 at -z, v from 0 at the south pole to 1 at the north pole. Also returns the
 /// derivatives of the unit direction along u and v.
@@ -579,6 +611,8 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
     let p = &s.primitives[i as usize];
     let mut h = Hit { p: x, prim: i, material: p.material, ..Default::default() };
     let wants_uv = p.kind & PRIMITIVE_FLAG_UV != 0;
+    let smooth = p.kind & PRIMITIVE_FLAG_SMOOTH != 0;
+    let mut ns = Vec3::ZERO;
     h.eps = s.frame.ray_epsilon;
     match p.kind & PRIMITIVE_KIND_MASK {
         PRIMITIVE_SPHERE => {
@@ -599,7 +633,7 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
             let (p0, p1, p2) = (Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2));
             let (e1, e2) = (p1 - p0, p2 - p0);
             h.ng = e1.cross(e2).normalize();
-            if wants_uv {
+            if wants_uv || smooth {
                 // Barycentrics of x from the normal equations of x - p0 = b1 e1 + b2 e2.
                 let v = x - p0;
                 let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
@@ -607,14 +641,19 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
                 let inv = 1.0 / (d00 * d11 - d01 * d01);
                 let b1 = (d11 * d20 - d01 * d21) * inv;
                 let b2 = (d00 * d21 - d01 * d20) * inv;
-                let uv = triangle_uvs(s, p);
-                h.uv = (1.0 - b1 - b2) * uv[0] + b1 * uv[1] + b2 * uv[2];
-                (h.dpdu, h.dpdv) = triangle_derivatives([p0, p1, p2], uv, h.ng);
+                if wants_uv {
+                    let uv = triangle_uvs(s, p);
+                    h.uv = (1.0 - b1 - b2) * uv[0] + b1 * uv[1] + b2 * uv[2];
+                    (h.dpdu, h.dpdv) = triangle_derivatives([p0, p1, p2], uv, h.ng);
+                }
+                if smooth {
+                    ns = triangle_smooth(s, p, x, Vec3::new(1.0 - b1 - b2, b1, b2), [p0, p1, p2], &mut h);
+                }
             }
         }
         _ => analytic_surface(s, p, x, wants_uv, &mut h),
     }
-    h.ns = h.ng;
+    h.ns = if smooth { ns } else { h.ng };
     h
 }
 

@@ -71,7 +71,8 @@ pub fn bump_normal(s: &SceneView, tex: u32, strength: f32, h: &Hit) -> Vec3 {
     bump_normal_from_heights(height(d, 0.0), height(-d, 0.0), height(0.0, d), height(0.0, -d), strength, h)
 }
 
-/// The shading normal of a bump map: the surface displaced along `ng` by `strength` times a
+/// The shading normal of a bump map: the surface displaced along `ns` (`ng`, or a smooth
+/// triangle's interpolated normal, around which its dpdu and dpdv already lie) by `strength` times a
 /// height (scene units), its slopes from central differences along u and v (pbrt-v4's `BumpMap`)
 /// of the heights at u +- `BUMP_DELTA` and v +- `BUMP_DELTA`. Works alike for uv-space images and
 /// 3D patterns, since moving in uv moves the point along dpdu and dpdv.
@@ -79,13 +80,13 @@ pub fn bump_normal_from_heights(u_plus: f32, u_minus: f32, v_plus: f32, v_minus:
     let d = BUMP_DELTA;
     let dhdu = strength * (u_plus - u_minus) / (2.0 * d);
     let dhdv = strength * (v_plus - v_minus) / (2.0 * d);
-    let n = (h.dpdu + dhdu * h.ng).cross(h.dpdv + dhdv * h.ng);
+    let n = (h.dpdu + dhdu * h.ns).cross(h.dpdv + dhdv * h.ns);
     let len = n.length();
     if len.is_nan() || len <= 0.0 {
         return h.ns;
     }
     let n = n / len;
-    if n.dot(h.ng) < 0.0 {
+    if n.dot(h.ns) < 0.0 {
         -n
     } else {
         n
@@ -101,16 +102,16 @@ pub fn normal_map_normal(s: &SceneView, tex: u32, h: &Hit) -> Vec3 {
 /// +u, green along +v, blue along the normal; texels in [0, 1] map to [-1, 1]).
 pub fn normal_map_normal_from_texel(texel: Vec3, h: &Hit) -> Vec3 {
     let c = 2.0 * texel - 1.0;
-    let t = h.dpdu - h.ng * h.ng.dot(h.dpdu);
+    let t = h.dpdu - h.ns * h.ns.dot(h.dpdu);
     if t.length().is_nan() || t.length() <= 0.0 {
         return h.ns;
     }
     let t = t.normalize();
-    let mut b = h.ng.cross(t);
+    let mut b = h.ns.cross(t);
     if b.dot(h.dpdv) < 0.0 {
         b = -b;
     }
-    let n = t * c.x + b * c.y + h.ng * c.z;
+    let n = t * c.x + b * c.y + h.ns * c.z;
     let len = n.length();
     if len.is_nan() || len <= 0.0 {
         return h.ns;

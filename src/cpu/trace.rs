@@ -33,9 +33,10 @@ pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
     hash_point(s, h.p, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
 }
 
-/// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer.
-fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, hit: &mut u32, t_hit: &mut f32) {
-    let mut t = shape_intersect(s, i, o, d, 0.0, *t_hit);
+/// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer; the
+/// primitive `ignore` is not tested (see `trace_ray`).
+fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, ignore: u32, hit: &mut u32, t_hit: &mut f32) {
+    let mut t = if i == ignore { f32::INFINITY } else { shape_intersect(s, i, o, d, 0.0, *t_hit) };
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray.
     let mut k = 0;
@@ -53,13 +54,19 @@ fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, hit: &mut u32, t_hit: &mut f32
 /// With `any_hit` the first hit found is returned (shadow rays). The unbounded primitives
 /// (infinite planes, after the BVH's) come first, then the BVH, stackless: a missed box, or a
 /// finished leaf, continues at the node's miss link.
-pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> (u32, f32) {
+///
+/// Primitive `ignore` (`NO_LIGHT`: none) is ignored: the smooth triangle the ray leaves. A ray
+/// leaving a smooth triangle may head below the triangle's plane (its shading normal allows
+/// directions the flat facet faces away from), and would then meet its own facet at once; Hanika's
+/// shifted origin (`Hit::shift`) keeps it off the neighbouring facets. A flat triangle's rays never
+/// cross its plane, so flat scenes skip nothing.
+pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
     let nodes = s.nodes;
     let inv_d = d.recip();
     let mut t_hit = t_max;
     let mut hit = NO_LIGHT;
     for i in s.frame.unbounded_first..s.frame.primitive_count {
-        visit(s, i, o, d, &mut hit, &mut t_hit);
+        visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
         if any_hit && hit != NO_LIGHT {
             return (hit, t_hit);
         }
@@ -78,7 +85,7 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool) -> 
         }
         for i in n.first..n.first + count {
             let before = hit;
-            visit(s, i, o, d, &mut hit, &mut t_hit);
+            visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
             if any_hit && hit != before {
                 return (hit, t_hit);
             }

@@ -129,6 +129,16 @@ shared_constants! {
     /// Flag of `Primitive::kind`: its material reads uv or the surface derivatives (textures, bump
     /// and normal maps); without it a hit record leaves them at zero, which saves their cost.
     PRIMITIVE_FLAG_UV: u32 = 0x200;
+    /// Flag of a triangle's `Primitive::kind`: smooth shading. Its `data` block is a
+    /// `TriangleShading` (vertex uvs, then unit vertex normals on the winding side); the shading
+    /// normal interpolates the vertex normals, and rays leave from Hanika's shifted point
+    /// (`Hit::shift`), which hides the shadow terminator of low-poly meshes.
+    PRIMITIVE_FLAG_SMOOTH: u32 = 0x800;
+    /// Float offsets inside a smooth triangle's `TriangleShading` block (checked against the
+    /// struct by a const assertion in src/layout/mod.rs).
+    TRIANGLE_DATA_UV: u32 = 0;
+    TRIANGLE_DATA_NORMALS: u32 = 6;
+    TRIANGLE_DATA_FLOATS: u32 = 15;
 
     /// A light that is an emitting primitive (`Light::primitive`), sampled by `shape_sample` (a
     /// point and its 1/pdf by area).

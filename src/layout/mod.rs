@@ -265,6 +265,15 @@ gpu_structs! {
         pub emission: [f32; 3],
         pub _pad: u32,
     }
+
+    /// The shape-data block of a smooth triangle (`PRIMITIVE_FLAG_SMOOTH`), 60 bytes of scalars:
+    /// the uv of its three vertices, then their unit normals (x, y, z each), which the host turns
+    /// to the side of the winding normal. A flat triangle's block, when it has vertex uvs, is
+    /// the first 6 floats alone.
+    pub struct TriangleShading {
+        pub uv: [f32; 6],
+        pub normals: [f32; 9],
+    }
 }
 
 impl BvhNode {
@@ -278,6 +287,9 @@ impl BvhNode {
 }
 
 const _: () = assert!(size_of::<Photon>() == 20);
+const _: () = assert!(size_of::<TriangleShading>() == 4 * constants::TRIANGLE_DATA_FLOATS as usize);
+const _: () = assert!(core::mem::offset_of!(TriangleShading, uv) == 4 * constants::TRIANGLE_DATA_UV as usize);
+const _: () = assert!(core::mem::offset_of!(TriangleShading, normals) == 4 * constants::TRIANGLE_DATA_NORMALS as usize);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
@@ -285,3 +297,15 @@ const _: () = assert!(size_of::<Texture>() == 80);
 const _: () = assert!(size_of::<Light>() == 96);
 const _: () = assert!(size_of::<Medium>() == 48);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));
+// The primitive flags are distinct bits above the kind.
+const _: () = {
+    use constants::*;
+    let flags = [PRIMITIVE_FLAG_ALPHA, PRIMITIVE_FLAG_UV, PRIMITIVE_FLAG_MEDIUM, PRIMITIVE_FLAG_SMOOTH];
+    let mut seen = PRIMITIVE_KIND_MASK;
+    let mut i = 0;
+    while i < flags.len() {
+        assert!(flags[i].is_power_of_two() && seen & flags[i] == 0);
+        seen |= flags[i];
+        i += 1;
+    }
+};

@@ -2,10 +2,10 @@
 //! and their shape data, materials, textures and their data. A new kind of shape, material or
 //! texture adds one arm to the matching function here.
 
-use glam::{Affine3A, Mat3, Vec3};
+use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use crate::layout::constants::*;
-use crate::layout::{Material, Medium, Primitive, Texture};
+use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
     Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase,
@@ -251,7 +251,23 @@ pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Ve
         Geometry::Triangle(t) => {
             p.kind = PRIMITIVE_TRIANGLE | flags;
             (p.p0, p.p1, p.p2) = (t.vertices[0].into(), t.vertices[1].into(), t.vertices[2].into());
-            if let Some(uv) = t.uv {
+            if let Some(normals) = t.normals {
+                // A smooth triangle's block is a `TriangleShading`: uvs (the default ones when the
+                // triangle has none), then the vertex normals.
+                p.kind |= PRIMITIVE_FLAG_SMOOTH;
+                p.data = shape_data.len() as u32;
+                let uv = t.uv.unwrap_or([Vec2::ZERO, Vec2::X, Vec2::Y]);
+                let block = TriangleShading {
+                    uv: [uv[0].x, uv[0].y, uv[1].x, uv[1].y, uv[2].x, uv[2].y],
+                    normals: [normals[0], normals[1], normals[2]]
+                        .map(|n| n.to_array())
+                        .concat()
+                        .try_into()
+                        .expect("9 floats"),
+                };
+                shape_data.extend(bytemuck::cast_slice::<TriangleShading, f32>(&[block]));
+                debug_assert_eq!(shape_data.len() as u32 - p.data, TRIANGLE_DATA_FLOATS);
+            } else if let Some(uv) = t.uv {
                 p.data = shape_data.len() as u32;
                 shape_data.extend(uv.iter().flat_map(|v| [v.x, v.y]));
             }

@@ -544,8 +544,9 @@ pub fn medium_at(view: &crate::cpu::SceneView, p: Vec3, atmosphere: u32) -> u32 
     use crate::cpu::shading::offset_origin;
     let d = Vec3::new(0.5773, 0.6157, 0.5362).normalize();
     let mut o = p;
+    let mut skip = NO_LIGHT;
     for _ in 0..100_000 {
-        let (prim, t) = crate::cpu::trace::trace_ray(view, o, d, f32::INFINITY, false);
+        let (prim, t) = crate::cpu::trace::trace_ray(view, o, d, f32::INFINITY, false, skip);
         if prim == NO_LIGHT {
             return atmosphere;
         }
@@ -555,6 +556,7 @@ pub fn medium_at(view: &crate::cpu::SceneView, p: Vec3, atmosphere: u32) -> u32 
             return if d.dot(h.ng) > 0.0 { q.interior } else { q.exterior };
         }
         o = offset_origin(&h, -d, BSDF_TRANSMISSION);
+        skip = crate::cpu::shading::ray_skip(view, prim);
     }
     atmosphere
 }

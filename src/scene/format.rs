@@ -250,6 +250,15 @@ pub(crate) struct ShapeDef {
     pub major_radius: Option<Spanned<f64>>,
     pub minor_radius: Option<Spanned<f64>>,
     pub exponents: Option<Spanned<Vec<f64>>>,
+    // meshes and patches
+    pub smooth_angle: Option<Spanned<f64>>,
+    pub file_normals: Option<Spanned<bool>>,
+    pub subdivision: Option<Spanned<String>>,
+    pub levels: Option<Spanned<i64>>,
+    pub crease_angle: Option<Spanned<f64>>,
+    pub flatness: Option<Spanned<f64>>,
+    pub lights: Option<Spanned<bool>>,
+    pub points: Option<Spanned<Vec<Vec3Def>>>,
     // media
     pub interior: Option<Spanned<String>>,
     pub exterior: Option<Spanned<String>>,

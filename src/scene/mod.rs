@@ -16,7 +16,7 @@ mod error;
 mod format;
 mod material;
 mod medium;
-mod mesh;
+pub mod model;
 pub mod pattern;
 mod photons;
 pub mod sky;
@@ -213,6 +213,8 @@ pub struct Triangle {
     pub vertices: [Vec3; 3],
     /// Texture coordinates of the vertices; `None` means (0, 0), (1, 0), (0, 1).
     pub uv: Option<[Vec2; 3]>,
+    /// Unit vertex normals on the side of the winding normal, for smooth shading; `None` is flat.
+    pub normals: Option<[Vec3; 3]>,
 }
 
 /// An analytic sphere; its front face is outward. Its uv is longitude/latitude about its own

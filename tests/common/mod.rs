@@ -66,7 +66,7 @@ pub fn photonix(args: &[&str], dir: &Path) -> Output {
 /// A triangle shape of material `material` with the default uv.
 pub fn triangle(vertices: [glam::Vec3; 3], material: u32) -> photonix::scene::Shape {
     use photonix::scene::{Geometry, Shape, Triangle};
-    Shape { geometry: Geometry::Triangle(Triangle { vertices, uv: None }), material, media: None }
+    Shape { geometry: Geometry::Triangle(Triangle { vertices, uv: None, normals: None }), material, media: None }
 }
 
 /// A diffuse material of albedo `rho` in every channel, emitting `emission`.

@@ -1,0 +1,347 @@
+//! glTF 2.0 models, `.gltf` (JSON with external or embedded buffers) and `.glb` (binary), read
+//! with the `gltf` crate: the node hierarchy of the default scene with each node's transform,
+//! triangle meshes (positions, normals, the first texture coordinates, indices), materials
+//! (metallic-roughness with base-colour, metallic-roughness, normal and emissive textures,
+//! alpha modes), cameras and KHR_lights_punctual lights.
+//!
+//! glTF texture coordinates have v down (the image's top row at v = 0); Photonix's have v up, so
+//! v becomes 1 - v. Every accessor is checked against its buffer before it is read, and every
+//! index against the vertex count.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Affine3A, Mat4, Vec2, Vec3};
+
+use super::{Model, ModelCamera, ModelError, ModelImage, ModelLight, ModelMaterial, ModelMesh, ModelProjection};
+use crate::scene::image_texture::{srgb_to_linear, ColorSpace, ImageTexture, Wrap};
+
+/// Deepest node nesting followed (a cycle in a damaged file would otherwise never end).
+const MAX_NODE_DEPTH: usize = 64;
+
+/// The model of a glTF or GLB file's bytes; `path` names it in messages and locates external
+/// buffers and images.
+pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
+    // The gltf crate asserts a few invariants with panics after its validation; a damaged file
+    // that trips one becomes an error here rather than a crash.
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read(bytes, path))) {
+        Ok(result) => result,
+        Err(_) => Err(ModelError::new(path, "", "the glTF file is malformed (its reader gave up)")),
+    }
+}
+
+fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
+    let err = |at: String, message: String| ModelError::new(path, at, message);
+    let gltf = ::gltf::Gltf::from_slice(bytes).map_err(|e| {
+        err(String::new(), format!("not a valid glTF 2.0 file: {e} (glTF 1.0 files must be converted to 2.0 first)"))
+    })?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    let document = gltf.document;
+    // The crate's own message for a missing buffer file does not say which file it looked for.
+    for buffer in document.buffers() {
+        if let ::gltf::buffer::Source::Uri(uri) = buffer.source() {
+            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+                return Err(err(
+                    format!("buffer {}", buffer.index()),
+                    format!(
+                        "its data file `{}` is missing; put it next to the glTF file, or export a .glb",
+                        crate::limits::printable_message(uri)
+                    ),
+                ));
+            }
+        }
+    }
+    let buffers = ::gltf::import_buffers(&document, Some(base), gltf.blob)
+        .map_err(|e| err(String::new(), format!("cannot load its buffers: {e}")))?;
+    for (b, buffer) in document.buffers().enumerate() {
+        if buffers[b].len() < buffer.length() {
+            return Err(err(
+                format!("buffer {b}"),
+                format!(
+                    "holds {} bytes, fewer than the {} it declares (truncated file?)",
+                    buffers[b].len(),
+                    buffer.length()
+                ),
+            ));
+        }
+    }
+    let mut model = Model::default();
+
+    // Materials
+    let images = ::gltf::import_images(&document, Some(base), &buffers)
+        .map_err(|e| err(String::new(), format!("cannot load its images: {e}")))?;
+    let mut cache: HashMap<(usize, bool), Arc<ImageTexture>> = HashMap::new();
+    let mut texture = |info: ::gltf::texture::Texture<'_>, space: ColorSpace| -> Result<ModelImage, ModelError> {
+        let index = info.source().index();
+        let srgb = space == ColorSpace::Srgb;
+        let image = match cache.get(&(index, srgb)) {
+            Some(i) => i.clone(),
+            None => {
+                let i = Arc::new(convert_image(&images[index], srgb).map_err(|m| err(format!("image {index}"), m))?);
+                cache.insert((index, srgb), i.clone());
+                i
+            }
+        };
+        let wrap = match info.sampler().wrap_s() {
+            ::gltf::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
+            ::gltf::texture::WrappingMode::MirroredRepeat => Wrap::Mirror,
+            ::gltf::texture::WrappingMode::Repeat => Wrap::Repeat,
+        };
+        Ok(ModelImage { image, wrap })
+    };
+    for (i, m) in document.materials().enumerate() {
+        let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material {i}"));
+        let mut out = ModelMaterial::new(&name);
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, a] = pbr.base_color_factor();
+        out.base_color = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
+        out.metallic = pbr.metallic_factor().clamp(0.0, 1.0);
+        // glTF's roughness is perceptual: the GGX alpha is its square.
+        out.roughness = Some(pbr.roughness_factor().clamp(0.0, 1.0).powi(2));
+        if let Some(t) = pbr.base_color_texture() {
+            out.base_color_texture = Some(texture(t.texture(), ColorSpace::Srgb)?);
+        }
+        if let Some(t) = pbr.metallic_roughness_texture() {
+            out.metallic_roughness_texture = Some(texture(t.texture(), ColorSpace::Linear)?);
+        }
+        if let Some(t) = m.normal_texture() {
+            out.normal_texture = Some(texture(t.texture(), ColorSpace::Linear)?);
+        }
+        out.emission = Vec3::from(m.emissive_factor()).max(Vec3::ZERO);
+        if let Some(t) = m.emissive_texture() {
+            out.emission_texture = Some(texture(t.texture(), ColorSpace::Srgb)?);
+        }
+        match m.alpha_mode() {
+            ::gltf::material::AlphaMode::Opaque => {}
+            ::gltf::material::AlphaMode::Mask | ::gltf::material::AlphaMode::Blend => {
+                out.opacity = a.clamp(0.0, 1.0);
+                out.opacity_from_texture_alpha = out.base_color_texture.is_some();
+            }
+        }
+        model.materials.push(out);
+    }
+
+    // Nodes
+    let roots: Vec<::gltf::Node<'_>> = match document.default_scene().or_else(|| document.scenes().next()) {
+        Some(scene) => scene.nodes().collect(),
+        None => {
+            // No scene: every node that no other node names as a child is a root.
+            let children: std::collections::HashSet<usize> =
+                document.nodes().flat_map(|n| n.children().map(|c| c.index())).collect();
+            document.nodes().filter(|n| !children.contains(&n.index())).collect()
+        }
+    };
+    let mut stack: Vec<(::gltf::Node<'_>, Mat4, usize)> = roots.into_iter().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > MAX_NODE_DEPTH {
+            return Err(err(
+                format!("node {}", node.index()),
+                format!("nodes nest more than {MAX_NODE_DEPTH} deep (a cycle in the hierarchy?)"),
+            ));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() || world.to_cols_array().iter().any(|v| v.abs() > 1e9) {
+            return Err(err(
+                format!("node {}", node.index()),
+                "its transform holds numbers that are not finite or too large".into(),
+            ));
+        }
+        let affine = Affine3A::from_mat4(world);
+        if let Some(mesh) = node.mesh() {
+            read_mesh(&mesh, affine, &buffers, &mut model, path)?;
+        }
+        if let Some(camera) = node.camera() {
+            let forward = affine.transform_vector3(-Vec3::Z).normalize_or_zero();
+            let up = affine.transform_vector3(Vec3::Y).normalize_or_zero();
+            let (projection, aspect) = match camera.projection() {
+                ::gltf::camera::Projection::Perspective(p) => {
+                    (ModelProjection::Perspective { yfov_deg: p.yfov().to_degrees() }, p.aspect_ratio())
+                }
+                ::gltf::camera::Projection::Orthographic(o) => {
+                    (ModelProjection::Orthographic { view_height: 2.0 * o.ymag() }, Some(o.xmag() / o.ymag()))
+                }
+            };
+            model.cameras.push(ModelCamera {
+                name: camera.name().unwrap_or("").to_string(),
+                position: affine.translation.into(),
+                forward,
+                up,
+                projection,
+                aspect,
+            });
+        }
+        if let Some(light) = node.light() {
+            let color = Vec3::from(light.color()) * light.intensity();
+            let position: Vec3 = affine.translation.into();
+            let direction = affine.transform_vector3(-Vec3::Z).normalize_or_zero();
+            model.lights.push(match light.kind() {
+                ::gltf::khr_lights_punctual::Kind::Point => ModelLight::Point { position, intensity: color },
+                ::gltf::khr_lights_punctual::Kind::Directional => {
+                    ModelLight::Directional { direction, irradiance: color }
+                }
+                ::gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } => ModelLight::Spot {
+                    position,
+                    direction,
+                    intensity: color,
+                    inner_deg: inner_cone_angle.to_degrees(),
+                    outer_deg: outer_cone_angle.to_degrees(),
+                },
+            });
+        }
+        for child in node.children() {
+            stack.push((child, world, depth + 1));
+        }
+    }
+    if model.meshes.is_empty() {
+        return Err(err(String::new(), "the glTF scene has no triangle meshes".into()));
+    }
+    Ok(model)
+}
+
+/// Checks that accessor `a` lies inside its buffer, so reading it cannot go out of bounds.
+fn check_accessor(a: &::gltf::Accessor<'_>, buffers: &[::gltf::buffer::Data], what: &str) -> Result<(), String> {
+    if a.sparse().is_some() {
+        return Err(format!("{what}: sparse accessors are not supported"));
+    }
+    let Some(view) = a.view() else {
+        return Err(format!("{what}: the accessor has no buffer view"));
+    };
+    let data = &buffers[view.buffer().index()];
+    let element = a.size();
+    let stride = view.stride().unwrap_or(element);
+    let start = view.offset() + a.offset();
+    let end = if a.count() == 0 { start } else { start + stride * (a.count() - 1) + element };
+    if view.offset() + view.length() > data.len() || end > view.offset() + view.length() {
+        return Err(format!(
+            "{what}: accessor {} reads bytes {start}..{end}, beyond its buffer view or buffer ({} bytes)",
+            a.index(),
+            data.len()
+        ));
+    }
+    Ok(())
+}
+
+fn read_mesh(
+    mesh: &::gltf::Mesh<'_>,
+    model_from_mesh: Affine3A,
+    buffers: &[::gltf::buffer::Data],
+    model: &mut Model,
+    path: &Path,
+) -> Result<(), ModelError> {
+    let mesh_name = mesh.name().map(str::to_string).unwrap_or_else(|| format!("mesh {}", mesh.index()));
+    for (p, primitive) in mesh.primitives().enumerate() {
+        let at = format!("mesh {} (\"{}\") primitive {p}", mesh.index(), crate::limits::printable(&mesh_name));
+        let err = |m: String| ModelError::new(path, at.clone(), m);
+        // Points and lines carry no surface.
+        let mode = primitive.mode();
+        if !matches!(
+            mode,
+            ::gltf::mesh::Mode::Triangles | ::gltf::mesh::Mode::TriangleStrip | ::gltf::mesh::Mode::TriangleFan
+        ) {
+            continue;
+        }
+        for (_, accessor) in primitive.attributes() {
+            check_accessor(&accessor, buffers, "an attribute").map_err(err)?;
+        }
+        if let Some(indices) = primitive.indices() {
+            check_accessor(&indices, buffers, "the indices").map_err(err)?;
+        }
+        let reader = primitive.reader(|b| Some(&buffers[b.index()]));
+        let Some(positions) = reader.read_positions() else {
+            return Err(err("the primitive has no POSITION attribute".into()));
+        };
+        let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
+        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+        let uvs: Option<Vec<Vec2>> =
+            reader.read_tex_coords(0).map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect());
+        let n = positions.len();
+        if normals.as_ref().is_some_and(|x| x.len() != n) || uvs.as_ref().is_some_and(|x| x.len() != n) {
+            return Err(err("its attributes have different counts".into()));
+        }
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..n as u32).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(err(format!("index {bad} is out of range; the primitive has {n} vertices")));
+        }
+        let triangles: Vec<[u32; 3]> = match mode {
+            ::gltf::mesh::Mode::Triangles => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+            ::gltf::mesh::Mode::TriangleStrip => (2..indices.len())
+                .map(|k| {
+                    if k % 2 == 0 {
+                        [indices[k - 2], indices[k - 1], indices[k]]
+                    } else {
+                        [indices[k - 1], indices[k - 2], indices[k]]
+                    }
+                })
+                .collect(),
+            _ => (2..indices.len()).map(|k| [indices[0], indices[k - 1], indices[k]]).collect(),
+        };
+        let material = primitive.material().index().map(|i| i as u32);
+        let mut out = ModelMesh { name: mesh_name.clone(), positions, model_from_mesh, ..Default::default() };
+        for t in &triangles {
+            out.push_face(t, material);
+            if let Some(nv) = &normals {
+                out.normals.get_or_insert_with(Vec::new).extend(t.iter().map(|&i| nv[i as usize]));
+            }
+            if let Some(uv) = &uvs {
+                out.uvs.get_or_insert_with(Vec::new).extend(t.iter().map(|&i| uv[i as usize]));
+            }
+        }
+        if out.face_count() > 0 {
+            model.meshes.push(out);
+        }
+    }
+    Ok(())
+}
+
+/// A decoded glTF image as a texture: 8 and 16-bit channels from sRGB (colours) or linear
+/// (data), floats as they are.
+fn convert_image(data: &::gltf::image::Data, srgb: bool) -> Result<ImageTexture, String> {
+    use ::gltf::image::Format as F;
+    let (channels, bytes_per) = match data.format {
+        F::R8 => (1, 1),
+        F::R8G8 => (2, 1),
+        F::R8G8B8 => (3, 1),
+        F::R8G8B8A8 => (4, 1),
+        F::R16 => (1, 2),
+        F::R16G16 => (2, 2),
+        F::R16G16B16 => (3, 2),
+        F::R16G16B16A16 => (4, 2),
+        F::R32G32B32FLOAT => (3, 4),
+        F::R32G32B32A32FLOAT => (4, 4),
+    };
+    let (w, h) = (data.width, data.height);
+    let max = crate::limits::MAX_IMAGE_SIDE;
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(format!("the image is {w}x{h} texels; a texture needs 1 to {max} per side"));
+    }
+    let texel_bytes = channels * bytes_per;
+    if data.pixels.len() < w as usize * h as usize * texel_bytes {
+        return Err("the decoded image holds fewer pixels than its size".into());
+    }
+    let value = |t: &[u8], c: usize| -> f32 {
+        let b = &t[c * bytes_per..(c + 1) * bytes_per];
+        match bytes_per {
+            1 => b[0] as f32 / 255.0,
+            2 => u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0,
+            _ => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        }
+    };
+    let decode = |v: f32| if srgb && bytes_per < 4 { srgb_to_linear(v as f64) as f32 } else { v };
+    let texels = data
+        .pixels
+        .chunks_exact(texel_bytes)
+        .take(w as usize * h as usize)
+        .map(|t| {
+            let c = |k: usize| if k < channels { value(t, k) } else { value(t, channels.min(3) - 1) };
+            let (r, g, b) = if channels <= 2 { (c(0), c(0), c(0)) } else { (c(0), c(1), c(2)) };
+            let a = if channels == 4 || channels == 2 { value(t, channels - 1) } else { 1.0 };
+            [decode(r), decode(g), decode(b), a]
+        })
+        .collect();
+    Ok(ImageTexture { width: w, height: h, texels })
+}
