@@ -16,17 +16,136 @@ vec3 medium_sigma_t(Medium m) { return load3(m.sigma_a) + load3(m.sigma_s); }
 
 // Beer-Lambert transmittance exp(-sigma_t t) per channel; a channel with sigma_t = 0 is 1 even
 // over an infinite distance.
-vec3 medium_transmittance(uint medium, float t) {
-    vec3 st = medium_sigma_t(media[medium]);
+vec3 medium_beer_lambert(vec3 st, float t) {
     return vec3(st.r > 0.0 ? exp(-st.r * t) : 1.0, st.g > 0.0 ? exp(-st.g * t) : 1.0, st.b > 0.0 ? exp(-st.b * t) : 1.0);
 }
 
-// Free-flight sampling over a segment of length t_seg (infinite for a ray that leaves the
-// scene): u.x picks a channel, u.y a distance exp(sigma_t of that channel). The pdf is the mean
-// of the three channels' (the one-sample spectral MIS of pbrt-v4), so chromatic media stay
-// unbiased; grey media get weights of exactly the albedo (scattering) and 1 (passing).
-MediumEvent medium_sample(uint medium, float t_seg, vec2 u) {
+// The scattering point at p seen from wo as a hit record: no surface, no offset.
+Hit medium_hit(vec3 p, vec3 wo) {
+    Hit h;
+    h.p = p;
+    h.ng = wo;
+    h.ns = wo;
+    h.uv = vec2(0.0);
+    h.dpdu = vec3(0.0);
+    h.dpdv = vec3(0.0);
+    h.prim = NO_LIGHT;
+    h.material = NO_LIGHT;
+    h.eps = 0.0;
+    return h;
+}
+
+// ---- Heterogeneous media: density, delta and ratio tracking (contracts in the twin) ----------
+
+float medium_density(uint medium, vec3 p) {
     Medium m = media[medium];
+    if (m.density == NO_TEXTURE) return 1.0;
+    vec3 lo = load3(m.bounds_min);
+    vec3 hi = load3(m.bounds_max);
+    if (any(lessThan(p, lo)) || any(greaterThan(p, hi))) return 0.0;
+    return max(texture_eval(m.density, medium_hit(p, vec3(0.0, 0.0, 1.0))).x, 0.0);
+}
+
+vec3 medium_sigma_t_at(uint medium, vec3 p) { return medium_sigma_t(media[medium]) * medium_density(medium, p); }
+
+vec2 medium_box_span(Medium m, vec3 o, vec3 d, float t_seg) {
+    float t0 = 0.0;
+    float t1 = t_seg;
+    for (uint a = 0u; a < 3u; a++) {
+        float lo = m.bounds_min[a] - o[a];
+        float hi = m.bounds_max[a] - o[a];
+        if (d[a] == 0.0) {
+            if (lo > 0.0 || hi < 0.0) t1 = -1.0;
+        } else {
+            float ta = lo / d[a];
+            float tb = hi / d[a];
+            t0 = max(t0, min(ta, tb));
+            t1 = min(t1, max(ta, tb));
+        }
+    }
+    return vec2(t0, t1);
+}
+
+uvec2 medium_walk_key(vec2 u) { return uvec2(u * 16777216.0); }
+
+float medium_walk_rand(uvec2 key, uint i) { return rand_unit(pcg4d(uvec4(key, i, MEDIUM_WALK_SALT)).x); }
+
+vec3 medium_ratio_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
+    Medium m = media[medium];
+    vec3 st = medium_sigma_t(m);
+    vec2 span = medium_box_span(m, o, d, t_seg);
+    vec3 tr = vec3(1.0);
+    if (!(span.x < span.y) || !(m.majorant > 0.0)) return tr;
+    uvec2 key = medium_walk_key(u);
+    float s = span.x;
+    for (uint i = 0u; i < MEDIUM_TRACKING_STEPS; i++) {
+        s -= log(1.0 - medium_walk_rand(key, 2u * i)) / m.majorant;
+        if (!(s < span.y)) break;
+        tr *= max(vec3(1.0) - st * (medium_density(medium, o + d * s) / m.majorant), vec3(0.0));
+        float top = max(tr.r, max(tr.g, tr.b));
+        if (top < MEDIUM_ROULETTE) {
+            float q = top / MEDIUM_ROULETTE;
+            if (!(medium_walk_rand(key, 2u * i + 1u) < q)) return vec3(0.0);
+            tr /= q;
+        }
+    }
+    return tr;
+}
+
+MediumEvent medium_delta_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
+    Medium m = media[medium];
+    vec3 ss = load3(m.sigma_s);
+    vec3 st = medium_sigma_t(m);
+    float mu = m.majorant;
+    MediumEvent e;
+    e.scattered = false;
+    e.t = t_seg;
+    e.weight = vec3(1.0);
+    e.collision = vec3(0.0);
+    e.emission = vec3(0.0);
+    vec2 span = medium_box_span(m, o, d, t_seg);
+    if (!(span.x < span.y) || !(mu > 0.0)) return e;
+    uvec2 key = medium_walk_key(u);
+    vec3 w = vec3(1.0);
+    float s = span.x;
+    for (uint i = 0u; i < MEDIUM_TRACKING_STEPS; i++) {
+        s -= log(1.0 - medium_walk_rand(key, 2u * i)) / mu;
+        if (!(s < span.y)) break;
+        float rho = medium_density(medium, o + d * s);
+        vec3 stx = st * rho;
+        float wsum = w.r + w.g + w.b;
+        if (!(wsum > 0.0)) break;
+        float pr = dot(w, stx) / (mu * wsum);
+        if (medium_walk_rand(key, 2u * i + 1u) < pr) {
+            float over = 1.0 / (mu * pr);
+            e.scattered = true;
+            e.t = s;
+            e.weight = w * ss * (rho * over);
+            e.collision = w * stx * over;
+            e.emission = w * load3(m.emission) * (rho * over);
+            return e;
+        }
+        w *= max(vec3(mu) - stx, vec3(0.0)) / (mu * (1.0 - pr));
+    }
+    e.weight = w;
+    return e;
+}
+
+// Transmittance along o + t d, t in [0, t), of the medium (contract: the twin's
+// medium_transmittance). u seeds a heterogeneous medium's ratio tracking.
+vec3 medium_transmittance(uint medium, vec3 o, vec3 d, float t, vec2 u) {
+    if (media[medium].density != NO_TEXTURE) return medium_ratio_tracking(medium, o, d, t, u);
+    return medium_beer_lambert(medium_sigma_t(media[medium]), t);
+}
+
+// Free-flight sampling over a segment of length t_seg (infinite for a ray that leaves the
+// scene). Homogeneous media: u.x picks a channel, u.y a distance exp(sigma_t of that channel).
+// The pdf is the mean of the three channels' (the one-sample spectral MIS of pbrt-v4), so
+// chromatic media stay unbiased; grey media get weights of exactly the albedo (scattering) and
+// 1 (passing). Heterogeneous media: delta tracking seeded by u (see the twin).
+MediumEvent medium_sample(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
+    Medium m = media[medium];
+    if (m.density != NO_TEXTURE) return medium_delta_tracking(medium, o, d, t_seg, u);
     vec3 sa = load3(m.sigma_a);
     vec3 ss = load3(m.sigma_s);
     vec3 st = sa + ss;
@@ -45,27 +164,12 @@ MediumEvent medium_sample(uint medium, float t_seg, vec2 u) {
         e.emission = pdf > 0.0 ? load3(m.emission) * tr / pdf : vec3(0.0);
         return e;
     }
-    vec3 tr = medium_transmittance(medium, t_seg);
+    vec3 tr = medium_beer_lambert(st, t_seg);
     float p = dot(tr, vec3(1.0 / 3.0));
     e.scattered = false;
     e.t = t_seg;
     e.weight = p > 0.0 ? tr / p : vec3(0.0);
     return e;
-}
-
-// The scattering point at p seen from wo as a hit record: no surface, no offset.
-Hit medium_hit(vec3 p, vec3 wo) {
-    Hit h;
-    h.p = p;
-    h.ng = wo;
-    h.ns = wo;
-    h.uv = vec2(0.0);
-    h.dpdu = vec3(0.0);
-    h.dpdv = vec3(0.0);
-    h.prim = NO_LIGHT;
-    h.material = NO_LIGHT;
-    h.eps = 0.0;
-    return h;
 }
 
 // The medium's phase function as a Bsdf (MATERIAL_PHASE, see bsdf.glsl).

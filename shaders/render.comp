@@ -123,7 +123,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         // transmittance, camera and gather rays sample a free flight through it.
         if (medium != NO_MEDIUM && t_max != NO_RAY) {
             if (ray == RAY_SHADOW || ray == RAY_SHAFT) {
-                unoccluded *= medium_transmittance(medium, t);
+                unoccluded *= medium_transmittance(medium, o, d, t, rand2(stream, sample_index, frame.seed, RNG_TRANSMITTANCE_DOMAIN + step));
             } else {
                 // Single scattering from point and spot lights along the whole camera segment,
                 // by equiangular sampling (the light shafts; the free flight's scattering
@@ -141,7 +141,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                         float r = sqrt(r2);
                         vec3 wi = to_light / r;
                         Medium md = media[medium];
-                        vec3 c = throughput * medium_transmittance(medium, te) * load3(md.sigma_s)
+                        vec3 c = throughput * medium_transmittance(medium, o, d, te, ue.zw) * load3(md.sigma_s) * medium_density(medium, x)
                             * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * load3(l.intensity);
                         if (pdf > 0.0 && r > 0.0 && c != vec3(0.0)) {
@@ -161,7 +161,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                 shaft_done = false;
                 uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + segment;
                 segment++;
-                MediumEvent e = medium_sample(medium, t, rand2(stream, sample_index, frame.seed, key));
+                MediumEvent e = medium_sample(medium, o, d, t, rand2(stream, sample_index, frame.seed, key));
                 if (ray == RAY_CAMERA && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * e.emission;
                 throughput *= e.weight;
                 scattered = e.scattered;
@@ -241,7 +241,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
 #ifdef VARIANT_MEDIA
         if (scattered) {
             b = phase_bsdf(medium, wo);
-            vec3 st = medium_sigma_t(media[medium]);
+            vec3 st = medium_sigma_t_at(medium, h.p);
             inv_sigma_t = vec3(st.r > 0.0 ? 1.0 / st.r : 0.0, st.g > 0.0 ? 1.0 / st.g : 0.0, st.b > 0.0 ? 1.0 / st.b : 0.0);
         } else
 #endif

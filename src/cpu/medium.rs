@@ -4,7 +4,9 @@
 use glam::{Vec2, Vec3};
 
 use super::bsdf::Bsdf;
+use super::rng::{pcg4d, rand_unit};
 use super::shape::Hit;
+use super::texture::texture_eval;
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Medium;
@@ -37,17 +39,162 @@ fn channel_transmittance(sigma: f32, t: f32) -> f32 {
 
 /// Beer-Lambert transmittance exp(-sigma_t t) per channel; a channel with sigma_t = 0 is 1 even
 /// over an infinite distance.
-pub fn medium_transmittance(s: &SceneView, medium: u32, t: f32) -> Vec3 {
-    let st = medium_sigma_t(&s.media[medium as usize]);
+pub fn medium_beer_lambert(st: Vec3, t: f32) -> Vec3 {
     Vec3::new(channel_transmittance(st.x, t), channel_transmittance(st.y, t), channel_transmittance(st.z, t))
 }
 
-/// Free-flight sampling over a segment of length `t_seg` (infinite for a ray that leaves the
-/// scene): `u[0]` picks a channel, `u[1]` a distance with that channel's sigma_t. The pdf is the
-/// mean of the three channels' (pbrt-v4's one-sample spectral MIS), so chromatic media stay
-/// unbiased; grey media weigh a collision by exactly the albedo and a pass by 1.
-pub fn medium_sample(s: &SceneView, medium: u32, t_seg: f32, u: [f32; 2]) -> MediumEvent {
+// ---- Heterogeneous media: density, delta and ratio tracking ---------------------------------
+
+/// The medium's density at `p`: 1 for a homogeneous medium; else the first channel of its
+/// density texture (negative values read as 0) inside its box, and 0 outside it.
+pub fn medium_density(s: &SceneView, medium: u32, p: Vec3) -> f32 {
     let m = &s.media[medium as usize];
+    if m.density == NO_TEXTURE {
+        return 1.0;
+    }
+    if p.cmplt(Vec3::from(m.bounds_min)).any() || p.cmpgt(Vec3::from(m.bounds_max)).any() {
+        return 0.0;
+    }
+    texture_eval(s, m.density, &medium_hit(p, Vec3::Z)).x.max(0.0)
+}
+
+/// Extinction at `p`: sigma_t times the density there.
+pub fn medium_sigma_t_at(s: &SceneView, medium: u32, p: Vec3) -> Vec3 {
+    medium_sigma_t(&s.media[medium as usize]) * medium_density(s, medium, p)
+}
+
+/// The part (t0, t1) of the ray `o + t d`, t in [0, `t_seg`), inside the medium's box; empty
+/// unless t0 < t1. Tracking walks only there: outside it the density is 0, and an unbounded
+/// segment (a heterogeneous atmosphere) becomes a bounded walk.
+pub fn medium_box_span(m: &Medium, o: Vec3, d: Vec3, t_seg: f32) -> (f32, f32) {
+    let (mut t0, mut t1) = (0.0f32, t_seg);
+    for a in 0..3 {
+        let lo = m.bounds_min[a] - o[a];
+        let hi = m.bounds_max[a] - o[a];
+        if d[a] == 0.0 {
+            if lo > 0.0 || hi < 0.0 {
+                t1 = -1.0;
+            }
+        } else {
+            let (ta, tb) = (lo / d[a], hi / d[a]);
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+    }
+    (t0, t1)
+}
+
+/// A tracking walk's random numbers: its two free-flight numbers (24 bits each) as a key,
+/// hashed with the number's index, so a walk takes as many as it needs from one dimension.
+fn medium_walk_key(u: [f32; 2]) -> [u32; 2] {
+    [(u[0] * 16777216.0) as u32, (u[1] * 16777216.0) as u32]
+}
+
+fn medium_walk_rand(key: [u32; 2], i: u32) -> f32 {
+    rand_unit(pcg4d([key[0], key[1], i, MEDIUM_WALK_SALT])[0])
+}
+
+/// Ratio tracking (Novák et al. 2014): tentative collisions at rate `majorant` through the
+/// medium's box; the estimate is the product of (1 - sigma_t(x) / majorant) over them, unbiased
+/// for exp(-integral of sigma_t) per channel. Russian roulette below `MEDIUM_ROULETTE` keeps it
+/// unbiased while ending walks through thick media; at most `MEDIUM_TRACKING_STEPS` collisions
+/// (the rest of a longer walk counts as clear: see docs/limits.md).
+pub fn medium_ratio_tracking(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg: f32, u: [f32; 2]) -> Vec3 {
+    let m = &s.media[medium as usize];
+    let st = medium_sigma_t(m);
+    let (t0, t1) = medium_box_span(m, o, d, t_seg);
+    let mut tr = Vec3::ONE;
+    if !(t0 < t1) || !(m.majorant > 0.0) {
+        return tr;
+    }
+    let key = medium_walk_key(u);
+    let mut t = t0;
+    for i in 0..MEDIUM_TRACKING_STEPS {
+        t -= (1.0 - medium_walk_rand(key, 2 * i)).ln() / m.majorant;
+        if !(t < t1) {
+            break;
+        }
+        tr *= (Vec3::ONE - st * (medium_density(s, medium, o + d * t) / m.majorant)).max(Vec3::ZERO);
+        let top = tr.max_element();
+        if top < MEDIUM_ROULETTE {
+            let q = top / MEDIUM_ROULETTE;
+            if !(medium_walk_rand(key, 2 * i + 1) < q) {
+                return Vec3::ZERO;
+            }
+            tr /= q;
+        }
+    }
+    tr
+}
+
+/// Delta tracking with spectral weights (Kutz et al. 2017's spectral tracking): tentative
+/// collisions at rate `majorant`; one at x is real with probability P = mean(w sigma_t(x)) /
+/// (majorant mean(w)), where w is the walk's weight so far, and a null one multiplies w by
+/// (majorant - sigma_t(x)) / (majorant (1 - P)). A real collision's event carries w sigma_s(x)
+/// / (majorant P) (`weight`), w sigma_t(x) / (majorant P) (`collision`) and the emission alike;
+/// passing the segment carries w. Grey media get exactly the homogeneous weights: the albedo
+/// at a collision, 1 passing. Unbiased with any majorant >= sigma_t (null-scattering path
+/// integral, Miller et al. 2019), up to `MEDIUM_TRACKING_STEPS` collisions.
+pub fn medium_delta_tracking(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg: f32, u: [f32; 2]) -> MediumEvent {
+    let m = &s.media[medium as usize];
+    let (ss, st, mu) = (Vec3::from(m.sigma_s), medium_sigma_t(m), m.majorant);
+    let mut e = MediumEvent { scattered: false, t: t_seg, weight: Vec3::ONE, ..Default::default() };
+    let (t0, t1) = medium_box_span(m, o, d, t_seg);
+    if !(t0 < t1) || !(mu > 0.0) {
+        return e;
+    }
+    let key = medium_walk_key(u);
+    let mut w = Vec3::ONE;
+    let mut t = t0;
+    for i in 0..MEDIUM_TRACKING_STEPS {
+        t -= (1.0 - medium_walk_rand(key, 2 * i)).ln() / mu;
+        if !(t < t1) {
+            break;
+        }
+        let rho = medium_density(s, medium, o + d * t);
+        let stx = st * rho;
+        let wsum = w.x + w.y + w.z;
+        if !(wsum > 0.0) {
+            break;
+        }
+        let pr = w.dot(stx) / (mu * wsum);
+        if medium_walk_rand(key, 2 * i + 1) < pr {
+            let over = 1.0 / (mu * pr);
+            return MediumEvent {
+                scattered: true,
+                t,
+                weight: w * ss * (rho * over),
+                collision: w * stx * over,
+                emission: w * Vec3::from(m.emission) * (rho * over),
+            };
+        }
+        w *= (Vec3::splat(mu) - stx).max(Vec3::ZERO) / (mu * (1.0 - pr));
+    }
+    e.weight = w;
+    e
+}
+
+/// Transmittance along `o + t d`, t in [0, `t`): Beer-Lambert, exact, for a homogeneous
+/// medium; ratio tracking seeded by `u` for a heterogeneous one (an unbiased estimate).
+pub fn medium_transmittance(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t: f32, u: [f32; 2]) -> Vec3 {
+    let m = &s.media[medium as usize];
+    if m.density != NO_TEXTURE {
+        return medium_ratio_tracking(s, medium, o, d, t, u);
+    }
+    medium_beer_lambert(medium_sigma_t(m), t)
+}
+
+/// Free-flight sampling along `o + t d` over a segment of length `t_seg` (infinite for a ray
+/// that leaves the scene). Homogeneous media: `u[0]` picks a channel, `u[1]` a distance with
+/// that channel's sigma_t. The pdf is the mean of the three channels' (pbrt-v4's one-sample
+/// spectral MIS), so chromatic media stay unbiased; grey media weigh a collision by exactly the
+/// albedo and a pass by 1. Heterogeneous media: delta tracking seeded by `u`
+/// (`medium_delta_tracking`).
+pub fn medium_sample(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg: f32, u: [f32; 2]) -> MediumEvent {
+    let m = &s.media[medium as usize];
+    if m.density != NO_TEXTURE {
+        return medium_delta_tracking(s, medium, o, d, t_seg, u);
+    }
     let (sa, ss) = (Vec3::from(m.sigma_a), Vec3::from(m.sigma_s));
     let st = sa + ss;
     let sc = if u[0] < 1.0 / 3.0 {
@@ -70,7 +217,7 @@ pub fn medium_sample(s: &SceneView, medium: u32, t_seg: f32, u: [f32; 2]) -> Med
             emission: over(Vec3::from(m.emission)),
         };
     }
-    let tr = medium_transmittance(s, medium, t_seg);
+    let tr = medium_beer_lambert(st, t_seg);
     let p = tr.dot(Vec3::splat(1.0 / 3.0));
     MediumEvent { scattered: false, t: t_seg, weight: if p > 0.0 { tr / p } else { Vec3::ZERO }, ..Default::default() }
 }

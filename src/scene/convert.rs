@@ -21,9 +21,10 @@ use super::material::{
 };
 use super::mesh::{load_obj_triangles, ObjError};
 use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
+use super::voxel::load_voxel_grid;
 use super::{
-    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface, Phase,
-    PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Density, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface,
+    Phase, PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
@@ -67,7 +68,7 @@ const METAL_PRESETS: &[(&str, [f32; 3], [f32; 3])] = &[
     ("platinum", [2.38, 2.08, 1.85], [4.26, 3.72, 3.15]),
     ("titanium", [2.74, 2.54, 2.16], [3.82, 3.43, 2.98]),
 ];
-const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern"];
+const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern", "voxels"];
 const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] =
     &["quad", "triangle", "sphere", "box", "mesh", "plane", "disc", "cylinder", "cone", "torus", "superellipsoid"];
@@ -1160,6 +1161,15 @@ impl Builder<'_> {
                 let color = self.require(&t.color, &table, &object, "color", "color = [0.8, 0.2, 0.2]")?;
                 (TextureKind::Constant(Vec3::from(self.color(color, &object, "color", false)?)), TextureSpace::Uv)
             }
+            "voxels" => {
+                self.only_fields(&object, "a voxels texture", &present, &["type", "transform", "file"])?;
+                let file = self.require(&t.file, &table, &object, "file", "file = \"volumes/smoke.pxvol\"")?;
+                let base = self.src.path.parent().unwrap_or(Path::new(""));
+                let path = base.join(file.get_ref());
+                let grid = load_voxel_grid(&path)
+                    .map_err(|e| self.invalid(&file.span(), &object, format!("{}: {e}", path.display())))?;
+                (TextureKind::Voxels(std::sync::Arc::new(grid)), TextureSpace::World)
+            }
             "image" => {
                 let fields = ["type", "space", "transform", "file", "color_space", "wrap", "channel"];
                 self.only_fields(&object, "an image texture", &present, &fields)?;
@@ -1302,8 +1312,29 @@ impl Builder<'_> {
         let object = format!("medium \"{}\"", printable(&name));
         let m = def.get_ref();
         if let Some(kind) = &m.r#type {
-            self.one_of(kind, &object, "type", &["homogeneous"])?;
+            let kind = self.one_of(kind, &object, "type", &["homogeneous", "heterogeneous"])?;
+            match (kind, &m.density) {
+                ("homogeneous", Some(d)) => {
+                    return Err(self.invalid(
+                        &d.span(),
+                        &object,
+                        "a `density` makes the medium heterogeneous; drop it, or say `type = \"heterogeneous\"`"
+                            .to_string(),
+                    ))
+                }
+                ("heterogeneous", None) => return Err(self.invalid(
+                    &def.span(),
+                    &object,
+                    "a heterogeneous medium needs `density = \"name\"`, a [textures.name] pattern or voxels texture"
+                        .to_string(),
+                )),
+                _ => {}
+            }
         }
+        let density = match &m.density {
+            Some(name) => Some(self.density(name, &object)?),
+            None => None,
+        };
         let coefficient = |builder: &Self, value: &Spanned<Vec3Def>, field: &str| -> Result<Vec3> {
             let c = builder.vector(value, &object, field)?;
             if c.min_element() < 0.0 {
@@ -1418,9 +1449,32 @@ impl Builder<'_> {
                 Phase::HenyeyGreenstein { g }
             }
         };
-        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase });
+        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase, density });
         self.medium_names.push(name);
         Ok(())
+    }
+
+    /// A medium's `density`: a texture that has a value at every point of space.
+    fn density(&mut self, name: &Spanned<String>, object: &str) -> Result<Density> {
+        let texture = self.texture_id(name.get_ref(), &name.span(), object)?;
+        let t = &self.textures[texture as usize];
+        let refuse = |why: &str| {
+            Err(self.invalid(
+                &name.span(),
+                object,
+                format!("`density` texture \"{}\" {why}; use a pattern or a voxels texture", printable(name.get_ref())),
+            ))
+        };
+        if matches!(t.kind, TextureKind::Image { .. })
+            || t.space == TextureSpace::Uv && !matches!(t.kind, TextureKind::Constant(_))
+        {
+            return refuse("is looked up in uv space, which a medium does not have");
+        }
+        let max = t.kind.max_value();
+        if !(max.is_finite() && max > 0.0) {
+            return refuse("is 0 everywhere (the medium would be vacuum)");
+        }
+        Ok(Density { texture, max })
     }
 
     fn medium_id(&self, value: &Spanned<String>, object: &str, field: &str) -> Result<Option<u32>> {

@@ -41,6 +41,7 @@ pub(crate) struct MediumDef {
     pub emission: Option<Spanned<Vec3Def>>,
     pub phase: Option<Spanned<String>>,
     pub g: Option<Spanned<f64>>,
+    pub density: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
