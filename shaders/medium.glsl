@@ -172,13 +172,15 @@ MediumEvent medium_sample(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
     return e;
 }
 
-// The medium's phase function as a Bsdf (MATERIAL_PHASE, see bsdf.glsl).
+// The medium's phase function as a Bsdf (MATERIAL_PHASE, see bsdf.glsl); color1.y is 1 where
+// the scattering point samples point and spot lights itself (heterogeneous media, which have no
+// equiangular shafts).
 Bsdf phase_bsdf(uint medium, vec3 wo) {
     Medium m = media[medium];
     Bsdf b;
     b.kind = MATERIAL_PHASE;
     b.color0 = vec3(1.0);
-    b.color1 = vec3(float(m.phase), 0.0, 0.0);
+    b.color1 = vec3(float(m.phase), m.density != NO_TEXTURE ? 1.0 : 0.0, 0.0);
     b.alpha = vec2(0.0);
     b.ior = m.g;
     b.ng = wo;

@@ -128,8 +128,11 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                 // Single scattering from point and spot lights along the whole camera segment,
                 // by equiangular sampling (the light shafts; the free flight's scattering
                 // point leaves these lights out): the sample's shadow ray runs first, then the
-                // segment is traced again and goes on.
-                if (ray == RAY_CAMERA && part == 0u && !shaft_done) {
+                // segment is traced again and goes on. Not in heterogeneous media: equiangular
+                // samples ignore the density, and in sparse smoke most would land in clear
+                // air while the rest carry all the light (speckles); there the free flight's
+                // scattering point, placed by the density, samples these lights too.
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done && media[medium].density == NO_TEXTURE) {
                     vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     Light l = lights[pick_light(ue.x, false)];
                     if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0) {
@@ -141,7 +144,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                         float r = sqrt(r2);
                         vec3 wi = to_light / r;
                         Medium md = media[medium];
-                        vec3 c = throughput * medium_transmittance(medium, o, d, te, ue.zw) * load3(md.sigma_s) * medium_density(medium, x)
+                        vec3 c = throughput * medium_transmittance(medium, o, d, te, ue.zw) * load3(md.sigma_s)
                             * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * load3(l.intensity);
                         if (pdf > 0.0 && r > 0.0 && c != vec3(0.0)) {

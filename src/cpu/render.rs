@@ -9,8 +9,7 @@ use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf,
 use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
 use super::light::{environment_radiance, pick_light, spot_falloff};
 use super::medium::{
-    equiangular_sample, medium_after, medium_density, medium_hit, medium_sample, medium_sigma_t_at,
-    medium_transmittance, phase_bsdf,
+    equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
 };
 use super::phase::phase_hg;
 use super::rng::{rand2, rand4};
@@ -113,8 +112,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 // Single scattering from point and spot lights along the whole camera segment,
                 // by equiangular sampling (the light shafts; the free flight's scattering point
                 // leaves these lights out): the sample's shadow ray runs first, then the segment
-                // is traced again and goes on.
-                if ray == Ray::Camera && part == 0 && !shaft_done {
+                // is traced again and goes on. Not in heterogeneous media, where the free
+                // flight's scattering point samples these lights (see the kernel).
+                if ray == Ray::Camera && part == 0 && !shaft_done && s.media[medium as usize].density == NO_TEXTURE {
                     let ue = rand4(stream, sample, f.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     let l = &s.lights[pick_light(s, ue[0], false) as usize];
                     if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 {
@@ -128,7 +128,6 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                         let c = throughput
                             * medium_transmittance(s, medium, o, d, te, [ue[2], ue[3]])
                             * Vec3::from(md.sigma_s)
-                            * medium_density(s, medium, x)
                             * (phase_hg((-d).dot(wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * Vec3::from(l.intensity);
                         if pdf > 0.0 && r > 0.0 && c != Vec3::ZERO {

@@ -11,7 +11,7 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{
-    AtmosphereDef, EnvironmentDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
+    AtmosphereDef, EnvironmentDef, FogDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
     TextureDef, TransformDef, Vec3Def,
 };
 use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
@@ -20,7 +20,7 @@ use super::material::{
     TextureSpace,
 };
 use super::mesh::{load_obj_triangles, ObjError};
-use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
+use super::pattern::{parse_pattern, ColorMap, PatternDesc, PatternKind, PATTERN_FIELDS};
 use super::voxel::load_voxel_grid;
 use super::{
     Analytic, AnalyticKind, Camera, Density, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface,
@@ -136,6 +136,9 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
     }
     if let Some(def) = &file.atmosphere {
         builder.atmosphere(def)?;
+    }
+    if let Some(def) = &file.fog {
+        builder.fog(def, file.atmosphere.is_some())?;
     }
 
     for (index, shape) in file.shapes.iter().enumerate() {
@@ -1497,6 +1500,101 @@ impl Builder<'_> {
         let object = "[atmosphere]";
         let medium = self.require(&def.get_ref().medium, &def.span(), object, "medium", "medium = \"fog\"")?;
         self.atmosphere = self.medium_id(medium, object, "medium")?;
+        Ok(())
+    }
+
+    /// POV-Ray's `fog` as the atmosphere: a medium that absorbs with sigma_a = 1 / `distance` and
+    /// glows with `color` / `distance`, so that a camera ray of length d returns exp(-d / D) of
+    /// what it meets plus (1 - exp(-d / D)) of the colour, POV-Ray's blend. Ground fog scales
+    /// both by POV-Ray's density (1 below `fog_offset`, 1 / (1 + (y - offset) / alt)^2 above).
+    fn fog(&mut self, def: &Spanned<FogDef>, has_atmosphere: bool) -> Result<()> {
+        let object = "[fog]";
+        let f = def.get_ref();
+        let table = def.span();
+        if has_atmosphere {
+            return Err(self.invalid(
+                &table,
+                object,
+                "[fog] fills all space, as [atmosphere] does; keep one of them".to_string(),
+            ));
+        }
+        let kind = match &f.r#type {
+            Some(t) => self.one_of(t, object, "type", &["constant", "ground"])?,
+            None => "constant",
+        };
+        let distance = self.require(&f.distance, &table, object, "distance", "distance = 20")?;
+        let distance = self.positive(distance, object, "distance")?;
+        let color = match &f.color {
+            Some(c) => Vec3::from(self.color(c, object, "color", false)?),
+            None => Vec3::ZERO,
+        };
+        let present = [
+            ("fog_offset", span_of(&f.fog_offset)),
+            ("fog_alt", span_of(&f.fog_alt)),
+            ("turbulence", span_of(&f.turbulence)),
+            ("octaves", span_of(&f.octaves)),
+            ("omega", span_of(&f.omega)),
+            ("lambda", span_of(&f.lambda)),
+        ];
+        let sigma_a = Vec3::splat(1.0 / distance);
+        if sigma_a.x > MAX_MEDIUM_COEFFICIENT {
+            return Err(self.invalid(
+                &span_of(&f.distance).unwrap_or(table.clone()),
+                object,
+                format!(
+                    "`distance` is {distance}; it must be at least 1 / {MAX_MEDIUM_COEFFICIENT} (see docs/limits.md)"
+                ),
+            ));
+        }
+        let density = if kind == "ground" {
+            let offset = match &f.fog_offset {
+                Some(v) => self.number(v, object, "fog_offset")?,
+                None => 0.0,
+            };
+            let alt = self.require(&f.fog_alt, &table, object, "fog_alt", "fog_alt = 1.5")?;
+            let alt = self.positive(alt, object, "fog_alt")?;
+            let turbulence = match &f.turbulence {
+                Some(t) => {
+                    let mut p = PatternDesc::new(PatternKind::Bozo);
+                    p.turbulence = self.vector(t, object, "turbulence")?;
+                    if let Some(o) = &f.octaves {
+                        p.octaves = self.integer(o, object, "octaves", 1, 10, "", "")?;
+                    }
+                    if let Some(o) = &f.omega {
+                        p.omega = self.number(o, object, "omega")?;
+                    }
+                    if let Some(l) = &f.lambda {
+                        p.lambda = self.number(l, object, "lambda")?;
+                    }
+                    p.validate().map_err(|message| self.invalid(&t.span(), object, message))?;
+                    Some(p)
+                }
+                None => {
+                    self.only_fields(object, "ground fog without `turbulence`", &present[3..], &[])?;
+                    None
+                }
+            };
+            self.textures.push(TextureDesc {
+                kind: TextureKind::GroundFog { offset, alt, turbulence },
+                space: TextureSpace::World,
+                lookup_from_texture: Affine3A::IDENTITY,
+            });
+            self.texture_names.push("[fog] ground fog".to_string());
+            self.texture_used.push(true);
+            Some(Density { texture: (self.textures.len() - 1) as u32, max: 1.0 })
+        } else {
+            self.only_fields(object, "constant fog (`type = \"ground\"` takes them)", &present, &[])?;
+            None
+        };
+        self.media.push(MediumDesc {
+            sigma_a,
+            sigma_s: Vec3::ZERO,
+            emission: color * sigma_a,
+            phase: Phase::Isotropic,
+            density,
+        });
+        self.medium_names.push("[fog]".to_string());
+        self.atmosphere = Some((self.media.len() - 1) as u32);
         Ok(())
     }
 
