@@ -1570,7 +1570,7 @@ impl Builder<'_> {
                     Some(p)
                 }
                 None => {
-                    self.only_fields(object, "ground fog without `turbulence`", &present[3..], &[])?;
+                    self.fog_fields_unused(&present[3..], "ground fog without `turbulence`", "add `turbulence`")?;
                     None
                 }
             };
@@ -1583,7 +1583,7 @@ impl Builder<'_> {
             self.texture_used.push(true);
             Some(Density { texture: (self.textures.len() - 1) as u32, max: 1.0 })
         } else {
-            self.only_fields(object, "constant fog (`type = \"ground\"` takes them)", &present, &[])?;
+            self.fog_fields_unused(&present, "constant fog", "say `type = \"ground\"` for ground fog")?;
             None
         };
         self.media.push(MediumDesc {
@@ -1595,6 +1595,19 @@ impl Builder<'_> {
         });
         self.medium_names.push("[fog]".to_string());
         self.atmosphere = Some((self.media.len() - 1) as u32);
+        Ok(())
+    }
+
+    fn fog_fields_unused(&self, present: &[Present<'_>], what: &str, fix: &str) -> Result<()> {
+        for (name, span) in present {
+            if let Some(span) = span {
+                return Err(self.invalid(
+                    span,
+                    "[fog]",
+                    format!("`{name}` does not apply to {what}; {fix}, or remove it"),
+                ));
+            }
+        }
         Ok(())
     }
 
