@@ -241,8 +241,8 @@ fn pov_fog_blends_toward_its_colour_as_pov_ray_does() {
     ];
     for (fog, y, density) in cases {
         let s = scene_in(dir.path(), &emitter_in_fog(&fog, y));
-        let distance = if fog.contains("distance = 8") { 8.0 } else { 4.0 };
-        let t = (-10.0 * density / distance as f64).exp();
+        let distance: f64 = if fog.contains("distance = 8") { 8.0 } else { 4.0 };
+        let t = (-10.0 * density / distance).exp();
         let buffers = common::buffers(&s, 16, 16);
         for (backend, image) in
             [("cpu", common::cpu_image(&buffers, 64)), ("gpu", common::gpu_image(&ctx, &buffers, 64))]

@@ -84,6 +84,12 @@ pub fn medium_box_span(m: &Medium, o: Vec3, d: Vec3, t_seg: f32) -> (f32, f32) {
     (t0, t1)
 }
 
+/// a < b; false when either is NaN, so a walk with a NaN bound or weight stops, as the kernel's
+/// `!(a < b)` tests do.
+fn less(a: f32, b: f32) -> bool {
+    a < b
+}
+
 /// A tracking walk's random numbers: its two free-flight numbers (24 bits each) as a key,
 /// hashed with the number's index, so a walk takes as many as it needs from one dimension.
 fn medium_walk_key(u: [f32; 2]) -> [u32; 2] {
@@ -104,21 +110,21 @@ pub fn medium_ratio_tracking(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg
     let st = medium_sigma_t(m);
     let (t0, t1) = medium_box_span(m, o, d, t_seg);
     let mut tr = Vec3::ONE;
-    if !(t0 < t1) || !(m.majorant > 0.0) {
+    if !less(t0, t1) || !less(0.0, m.majorant) {
         return tr;
     }
     let key = medium_walk_key(u);
     let mut t = t0;
     for i in 0..MEDIUM_TRACKING_STEPS {
         t -= (1.0 - medium_walk_rand(key, 2 * i)).ln() / m.majorant;
-        if !(t < t1) {
+        if !less(t, t1) {
             break;
         }
         tr *= (Vec3::ONE - st * (medium_density(s, medium, o + d * t) / m.majorant)).max(Vec3::ZERO);
         let top = tr.max_element();
         if top < MEDIUM_ROULETTE {
             let q = top / MEDIUM_ROULETTE;
-            if !(medium_walk_rand(key, 2 * i + 1) < q) {
+            if !less(medium_walk_rand(key, 2 * i + 1), q) {
                 return Vec3::ZERO;
             }
             tr /= q;
@@ -140,7 +146,7 @@ pub fn medium_delta_tracking(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg
     let (ss, st, mu) = (Vec3::from(m.sigma_s), medium_sigma_t(m), m.majorant);
     let mut e = MediumEvent { scattered: false, t: t_seg, weight: Vec3::ONE, ..Default::default() };
     let (t0, t1) = medium_box_span(m, o, d, t_seg);
-    if !(t0 < t1) || !(mu > 0.0) {
+    if !less(t0, t1) || !less(0.0, mu) {
         return e;
     }
     let key = medium_walk_key(u);
@@ -148,13 +154,13 @@ pub fn medium_delta_tracking(s: &SceneView, medium: u32, o: Vec3, d: Vec3, t_seg
     let mut t = t0;
     for i in 0..MEDIUM_TRACKING_STEPS {
         t -= (1.0 - medium_walk_rand(key, 2 * i)).ln() / mu;
-        if !(t < t1) {
+        if !less(t, t1) {
             break;
         }
         let rho = medium_density(s, medium, o + d * t);
         let stx = st * rho;
         let wsum = w.x + w.y + w.z;
-        if !(wsum > 0.0) {
+        if !less(0.0, wsum) {
             break;
         }
         let pr = w.dot(stx) / (mu * wsum);
