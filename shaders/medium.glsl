@@ -199,6 +199,45 @@ uint medium_after(uint prim, vec3 ng, vec3 d, uint medium) {
     return dot(d, ng) < 0.0 ? p.interior : p.exterior;
 }
 
+// The part [t0, t1) of o + t d, t in [0, t_max), inside the cone of a spot light (apex c, unit
+// axis a, cos of the half-angle cos_outer), a little widened; contract: the twin's spot_span.
+vec2 spot_span(vec3 o, vec3 d, float t_max, vec3 c, vec3 a, float cos_outer) {
+    if (!(cos_outer > SPOT_SPAN_MARGIN)) return vec2(0.0, t_max);
+    float k = cos_outer - SPOT_SPAN_MARGIN;
+    float k2 = k * k;
+    vec3 v = o - c;
+    float da = dot(d, a);
+    float va = dot(v, a);
+    float A = da * da - k2;
+    float B = da * va - k2 * dot(d, v);
+    float C = va * va - k2 * dot(v, v);
+    float lo = 0.0;
+    float hi = t_max;
+    if (da > 0.0) lo = max(lo, -va / da);
+    else if (da < 0.0) hi = min(hi, -va / da);
+    else if (va < 0.0) return vec2(0.0, -1.0);
+    float disc = B * B - A * C;
+    if (abs(A) < 1e-12) {
+        if (B > 0.0) lo = max(lo, -C / (2.0 * B));
+        else if (B < 0.0) hi = min(hi, -C / (2.0 * B));
+        else if (C < 0.0) return vec2(0.0, -1.0);
+        return vec2(lo, hi);
+    }
+    if (disc < 0.0) return A > 0.0 ? vec2(lo, hi) : vec2(0.0, -1.0);
+    float q = sqrt(disc);
+    float r1 = (-B - q) / A;
+    float r2 = (-B + q) / A;
+    float ra = min(r1, r2);
+    float rb = max(r1, r2);
+    if (A < 0.0) return vec2(max(lo, ra), min(hi, rb));
+    bool first = lo < min(hi, ra);
+    bool second = max(lo, rb) < hi;
+    if (first && second) return vec2(lo, hi);
+    if (first) return vec2(lo, min(hi, ra));
+    if (second) return vec2(max(lo, rb), hi);
+    return vec2(0.0, -1.0);
+}
+
 // Equiangular sampling (Kulla and Fajardo 2012) of a distance t in [0, t_end) along o + t d
 // toward the point c: uniform in the angle under which c sees the ray, so the samples crowd
 // where the ray passes the light (pdf = D / ((theta_b - theta_a) (D^2 + (t - delta)^2))).

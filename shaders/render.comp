@@ -135,9 +135,11 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                 if (ray == RAY_CAMERA && part == 0u && !shaft_done && media[medium].density == NO_TEXTURE) {
                     vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     Light l = lights[pick_light(ue.x, false)];
-                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0) {
+                    // A spot's samples stay in its cone, where its light is.
+                    vec2 span = l.kind == LIGHT_SPOT ? spot_span(o, d, t, load3(l.position), load3(l.direction), l.cos_outer) : vec2(0.0, t);
+                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 && span.x < span.y) {
                         float pdf;
-                        float te = equiangular_sample(o, d, t, load3(l.position), ue.y, pdf);
+                        float te = span.x + equiangular_sample(o + d * span.x, d, span.y - span.x, load3(l.position), ue.y, pdf);
                         vec3 x = o + d * te;
                         vec3 to_light = load3(l.position) - x;
                         float r2 = dot(to_light, to_light);

@@ -276,6 +276,64 @@ pub fn medium_after(s: &SceneView, prim: u32, ng: Vec3, d: Vec3, medium: u32) ->
     }
 }
 
+/// The part (t0, t1) of the ray `o + t d`, t in [0, `t_max`), inside the cone of a spot light
+/// (apex `c`, unit axis `a`, `cos_outer` the cosine of its half-angle), widened by
+/// `SPOT_SPAN_MARGIN` in cosine so that rounding never cuts lit points; empty unless t0 < t1.
+/// Equiangular samples toward a spot stay in it: outside, its light is 0, and a narrow beam
+/// sampled over the whole segment gives a few bright samples among dark ones (speckles). The
+/// cone's front nappe is convex, so the part is one interval. Cones of 90 degrees or more give
+/// the whole segment.
+pub fn spot_span(o: Vec3, d: Vec3, t_max: f32, c: Vec3, a: Vec3, cos_outer: f32) -> (f32, f32) {
+    const EMPTY: (f32, f32) = (0.0, -1.0);
+    if !less(SPOT_SPAN_MARGIN, cos_outer) {
+        return (0.0, t_max);
+    }
+    let k = cos_outer - SPOT_SPAN_MARGIN;
+    let k2 = k * k;
+    let v = o - c;
+    let (da, va) = (d.dot(a), v.dot(a));
+    // Inside the double cone where A t^2 + 2 B t + C >= 0; in its front nappe where va + t da >= 0.
+    let a2 = da * da - k2;
+    let b = da * va - k2 * d.dot(v);
+    let c0 = va * va - k2 * v.dot(v);
+    let (mut lo, mut hi) = (0.0f32, t_max);
+    if da > 0.0 {
+        lo = lo.max(-va / da);
+    } else if da < 0.0 {
+        hi = hi.min(-va / da);
+    } else if va < 0.0 {
+        return EMPTY;
+    }
+    let disc = b * b - a2 * c0;
+    if a2.abs() < 1e-12 {
+        if b > 0.0 {
+            lo = lo.max(-c0 / (2.0 * b));
+        } else if b < 0.0 {
+            hi = hi.min(-c0 / (2.0 * b));
+        } else if c0 < 0.0 {
+            return EMPTY;
+        }
+        return (lo, hi);
+    }
+    if disc < 0.0 {
+        return if a2 > 0.0 { (lo, hi) } else { EMPTY };
+    }
+    let q = disc.sqrt();
+    let (r1, r2) = ((-b - q) / a2, (-b + q) / a2);
+    let (ra, rb) = (r1.min(r2), r1.max(r2));
+    if a2 < 0.0 {
+        return (lo.max(ra), hi.min(rb));
+    }
+    let first = lo < hi.min(ra);
+    let second = lo.max(rb) < hi;
+    match (first, second) {
+        (true, true) => (lo, hi),
+        (true, false) => (lo, hi.min(ra)),
+        (false, true) => (lo.max(rb), hi),
+        (false, false) => EMPTY,
+    }
+}
+
 /// Equiangular sampling (Kulla and Fajardo 2012) of a distance t in [0, `t_end`) along
 /// `o + t d` toward the point `c`: uniform in the angle under which `c` sees the ray, so the
 /// samples crowd where the ray passes the light. Returns t and its pdf, D / ((theta_b -
@@ -294,6 +352,38 @@ pub fn equiangular_sample(o: Vec3, d: Vec3, t_end: f32, c: Vec3, u: f32) -> (f32
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every point of a segment inside a spot's cone lies in `spot_span`'s interval, and the
+    /// interval holds little outside the (widened) cone: brute force over random rays.
+    #[test]
+    fn spot_span_holds_the_lit_part_of_a_segment() {
+        let mut seed = 1u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / 16777216.0
+        };
+        let c = Vec3::new(0.2, 3.0, -0.1);
+        let a = Vec3::new(0.1, -1.0, 0.2).normalize();
+        for cos_outer in [0.99f32, 0.95, 0.7, 0.2] {
+            for _ in 0..2000 {
+                let o = Vec3::new(next() * 8.0 - 4.0, next() * 8.0 - 2.0, next() * 8.0 - 4.0);
+                let d = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5).normalize();
+                let t_max = next() * 10.0;
+                let (t0, t1) = spot_span(o, d, t_max, c, a, cos_outer);
+                for i in 0..200 {
+                    let t = (i as f32 + 0.5) / 200.0 * t_max;
+                    let w = (o + d * t - c).normalize();
+                    let inside = w.dot(a) > cos_outer;
+                    if inside {
+                        assert!(t0 <= t && t <= t1, "cos {cos_outer}: t {t} lit but span {t0}..{t1}");
+                    } else if t0 < t && t < t1 {
+                        let widened = w.dot(a) > cos_outer - 2.0 * SPOT_SPAN_MARGIN;
+                        assert!(widened, "cos {cos_outer}: t {t} dark but in span {t0}..{t1}");
+                    }
+                }
+            }
+        }
+    }
 
     /// The equiangular pdf integrates to 1 over the segment and its samples follow it: the
     /// mean of 1/pdf over samples is the segment's length (an unbiased length estimate).

@@ -10,6 +10,7 @@ use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
 use super::light::{environment_radiance, pick_light, spot_falloff};
 use super::medium::{
     equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
+    spot_span,
 };
 use super::phase::phase_hg;
 use super::rng::{rand2, rand4};
@@ -117,8 +118,15 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 if ray == Ray::Camera && part == 0 && !shaft_done && s.media[medium as usize].density == NO_TEXTURE {
                     let ue = rand4(stream, sample, f.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     let l = &s.lights[pick_light(s, ue[0], false) as usize];
-                    if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 {
-                        let (te, pdf) = equiangular_sample(o, d, t, Vec3::from(l.position), ue[1]);
+                    // A spot's samples stay in its cone, where its light is.
+                    let (t0, t1) = if l.kind == LIGHT_SPOT {
+                        spot_span(o, d, t, Vec3::from(l.position), Vec3::from(l.direction), l.cos_outer)
+                    } else {
+                        (0.0, t)
+                    };
+                    if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 && t0 < t1 {
+                        let (te, pdf) = equiangular_sample(o + d * t0, d, t1 - t0, Vec3::from(l.position), ue[1]);
+                        let te = t0 + te;
                         let x = o + d * te;
                         let to_light = Vec3::from(l.position) - x;
                         let r2 = to_light.dot(to_light);

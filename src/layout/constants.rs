@@ -219,6 +219,9 @@ shared_constants! {
     MEDIUM_ROULETTE: f32 = 0.1;
     /// Salt of the tracking walks' random numbers (hashed with the walk's key and step).
     MEDIUM_WALK_SALT: u32 = 0x6d65_6469;
+    /// Equiangular samples toward a spot light stay inside its cone, widened by this much in
+    /// cosine (`spot_span`).
+    SPOT_SPAN_MARGIN: f32 = 0.001;
 
     /// Marks a primitive that is not a light.
     NO_LIGHT: u32 = 0xffff_ffff;
