@@ -81,6 +81,10 @@ struct Medium {
     float sigma_s[3];
     float g;
     float emission[3];
+    uint density;
+    float bounds_min[3];
+    float majorant;
+    float bounds_max[3];
     uint _pad;
 };
 

@@ -31,7 +31,7 @@ void trace_photon_path(uint path, EmitParams params) {
         // A free flight through the medium: a collision before the surface scatters the photon
         // (or absorbs it, by roulette on the albedo below); passing it, the flux keeps its mean.
         if (medium != NO_MEDIUM) {
-            MediumEvent e = medium_sample(medium, t, rand2(path, params.pass, seed, dim + RNG_PHOTON_MEDIUM + step));
+            MediumEvent e = medium_sample(medium, o, d, t, rand2(path, params.pass, seed, dim + RNG_PHOTON_MEDIUM + step));
             scattered = e.scattered;
             t = e.t;
             if (scattered) {

@@ -126,25 +126,30 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         // transmittance, camera and gather rays sample a free flight through it.
         if (medium != NO_MEDIUM && t_max != NO_RAY) {
             if (ray == RAY_SHADOW || ray == RAY_SHAFT) {
-                unoccluded *= medium_transmittance(medium, t);
+                unoccluded *= medium_transmittance(medium, o, d, t, rand2(stream, sample_index, frame.seed, RNG_TRANSMITTANCE_DOMAIN + step));
             } else {
                 // Single scattering from point and spot lights along the whole camera segment,
                 // by equiangular sampling (the light shafts; the free flight's scattering
                 // point leaves these lights out): the sample's shadow ray runs first, then the
-                // segment is traced again and goes on.
-                if (ray == RAY_CAMERA && part == 0u && !shaft_done) {
+                // segment is traced again and goes on. Not in heterogeneous media: equiangular
+                // samples ignore the density, and in sparse smoke most would land in clear
+                // air while the rest carry all the light (speckles); there the free flight's
+                // scattering point, placed by the density, samples these lights too.
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done && media[medium].density == NO_TEXTURE) {
                     vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     Light l = lights[pick_light(ue.x, false)];
-                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0) {
+                    // A spot's samples stay in its cone, where its light is.
+                    vec2 span = l.kind == LIGHT_SPOT ? spot_span(o, d, t, load3(l.position), load3(l.direction), l.cos_outer) : vec2(0.0, t);
+                    if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 && span.x < span.y) {
                         float pdf;
-                        float te = equiangular_sample(o, d, t, load3(l.position), ue.y, pdf);
+                        float te = span.x + equiangular_sample(o + d * span.x, d, span.y - span.x, load3(l.position), ue.y, pdf);
                         vec3 x = o + d * te;
                         vec3 to_light = load3(l.position) - x;
                         float r2 = dot(to_light, to_light);
                         float r = sqrt(r2);
                         vec3 wi = to_light / r;
                         Medium md = media[medium];
-                        vec3 c = throughput * medium_transmittance(medium, te) * load3(md.sigma_s)
+                        vec3 c = throughput * medium_transmittance(medium, o, d, te, ue.zw) * load3(md.sigma_s)
                             * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * load3(l.intensity);
                         if (pdf > 0.0 && r > 0.0 && c != vec3(0.0)) {
@@ -164,7 +169,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
                 shaft_done = false;
                 uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + segment;
                 segment++;
-                MediumEvent e = medium_sample(medium, t, rand2(stream, sample_index, frame.seed, key));
+                MediumEvent e = medium_sample(medium, o, d, t, rand2(stream, sample_index, frame.seed, key));
                 if (ray == RAY_CAMERA && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * e.emission;
                 throughput *= e.weight;
                 scattered = e.scattered;
@@ -251,7 +256,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
 #ifdef VARIANT_MEDIA
         if (scattered) {
             b = phase_bsdf(medium, wo);
-            vec3 st = medium_sigma_t(media[medium]);
+            vec3 st = medium_sigma_t_at(medium, h.p);
             inv_sigma_t = vec3(st.r > 0.0 ? 1.0 / st.r : 0.0, st.g > 0.0 ? 1.0 / st.g : 0.0, st.b > 0.0 ? 1.0 / st.b : 0.0);
         } else
 #endif

@@ -13,6 +13,7 @@ const float INF = 1.0 / 0.0;
 #ifdef VARIANT_TEXTURED
 #include "pattern.glsl"
 #include "image_texture.glsl"
+#include "voxel.glsl"
 #endif
 #include "texture.glsl"
 #include "microfacet.glsl"

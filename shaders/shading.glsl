@@ -80,9 +80,9 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
     // A scene whose lights all give photons only picks one with probability 0.
     if (l.pick_probability <= 0.0) return none;
-    // A scattering point in a medium leaves point and spot lights to the camera segment's
-    // equiangular sample (render.comp).
-    if (b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
+    // A scattering point in a homogeneous medium leaves point and spot lights to the camera
+    // segment's equiangular sample (render.comp).
+    if (b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
     LightSample s = light_sample(l, h.p, grid_sample(l.grid, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U), stream, sample_index));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;

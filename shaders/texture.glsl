@@ -22,9 +22,11 @@ vec3 texture_eval(uint index, Hit h) {
     WHEN(t.kind == TEXTURE_PATTERN) {
         c = color_map_eval(t.color_map, pattern_value(t.data, p));
     }
+    WHEN(t.kind == TEXTURE_VOXELS) c = vec3(voxel_lookup(t.data, p));
+    WHEN(t.kind == TEXTURE_GROUND_FOG) c = vec3(ground_fog_density(p, t.value[0], t.value[1], t.data));
 #endif
-    // TEXTURE_CONSTANT: the value itself. The host packs only known kinds, and image and pattern
-    // textures only for the textured variant.
+    // TEXTURE_CONSTANT: the value itself. The host packs only known kinds, and image, pattern,
+    // voxel and ground-fog textures only for the textured variant.
     return c;
 }
 

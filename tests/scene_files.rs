@@ -113,3 +113,18 @@ fn materials_showroom_has_every_material_kind_on_its_spheres() {
     assert!(scene.materials.iter().any(|m| matches!(m.normal, photonix::scene::NormalMod::Bump { .. })));
     assert_eq!(scene.spheres().count(), 12);
 }
+
+#[test]
+fn smoke_fills_a_ball_with_a_turbulent_pattern_density() {
+    use photonix::scene::TextureKind;
+    let scene = load("smoke.toml");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.media.len(), 1);
+    let density = scene.media[0].density.expect("the smoke is heterogeneous");
+    let TextureKind::Pattern { pattern, color_map } = &scene.textures[density.texture as usize].kind else {
+        panic!("the density is a pattern");
+    };
+    assert!(pattern.turbulence.x > 0.0);
+    assert_eq!(density.max, color_map.max_first_channel());
+    assert_eq!(scene.spheres().count(), 1, "the ball that bounds the smoke");
+}

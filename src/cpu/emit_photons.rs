@@ -59,7 +59,7 @@ pub fn trace_photon_path(
         // A free flight through the medium: a collision before the surface scatters the photon
         // (or absorbs it, by roulette on the albedo below); passing it, the flux keeps its mean.
         if medium != NO_MEDIUM {
-            let e = medium_sample(s, medium, t, rand2(path, params.pass, seed, dim + RNG_PHOTON_MEDIUM + step));
+            let e = medium_sample(s, medium, o, d, t, rand2(path, params.pass, seed, dim + RNG_PHOTON_MEDIUM + step));
             scattered = e.scattered;
             t = e.t;
             if scattered {

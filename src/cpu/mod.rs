@@ -20,6 +20,7 @@ pub mod shading;
 pub mod shape;
 pub mod texture;
 pub mod trace;
+pub mod voxel;
 
 use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Photon, Primitive, Texture};
 

@@ -48,11 +48,11 @@ pub use crate::layout::constants::{
 };
 use crate::layout::constants::{NOISE_UNIT_SCALE, NOISE_VECTOR_SCALE};
 
-fn word(data: &[u32], i: u32) -> f32 {
+pub fn word(data: &[u32], i: u32) -> f32 {
     f32::from_bits(data[i as usize])
 }
 
-fn vec3_at(data: &[u32], i: u32) -> Vec3 {
+pub fn vec3_at(data: &[u32], i: u32) -> Vec3 {
     Vec3::new(word(data, i), word(data, i + 1), word(data, i + 2))
 }
 
@@ -137,7 +137,7 @@ fn lattice_hash(cx: i32, cy: i32, cz: i32, seed: u32) -> u32 {
     h[0] >> 28
 }
 
-fn lerp(t: f32, a: f32, b: f32) -> f32 {
+pub fn lerp(t: f32, a: f32, b: f32) -> f32 {
     a + t * (b - a)
 }
 

@@ -9,7 +9,8 @@ use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf,
 use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
 use super::light::{distant_discs_radiance, environment_radiance, pick_light, spot_falloff};
 use super::medium::{
-    equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t, medium_transmittance, phase_bsdf,
+    equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
+    spot_span,
 };
 use super::phase::phase_hg;
 use super::rng::{rand2, rand4};
@@ -88,7 +89,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries;
     // with media each camera segment may take three (its equiangular shadow ray, then its retrace).
     let steps = if s.media.is_empty() { 2 * f.max_depth + 1 } else { 3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) };
-    for _ in 0..steps {
+    for step in 0..steps {
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if t_max != NO_RAY {
             *rays += 1;
@@ -104,17 +105,32 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
         // transmittance, camera and gather rays sample a free flight through it.
         if medium != NO_MEDIUM && t_max != NO_RAY {
             if ray == Ray::Shadow || ray == Ray::Shaft {
-                unoccluded *= medium_transmittance(s, medium, t);
+                unoccluded *= medium_transmittance(
+                    s,
+                    medium,
+                    o,
+                    d,
+                    t,
+                    rand2(stream, sample, f.seed, RNG_TRANSMITTANCE_DOMAIN + step),
+                );
             } else {
                 // Single scattering from point and spot lights along the whole camera segment,
                 // by equiangular sampling (the light shafts; the free flight's scattering point
                 // leaves these lights out): the sample's shadow ray runs first, then the segment
-                // is traced again and goes on.
-                if ray == Ray::Camera && part == 0 && !shaft_done {
+                // is traced again and goes on. Not in heterogeneous media, where the free
+                // flight's scattering point samples these lights (see the kernel).
+                if ray == Ray::Camera && part == 0 && !shaft_done && s.media[medium as usize].density == NO_TEXTURE {
                     let ue = rand4(stream, sample, f.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     let l = &s.lights[pick_light(s, ue[0], false) as usize];
-                    if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 {
-                        let (te, pdf) = equiangular_sample(o, d, t, Vec3::from(l.position), ue[1]);
+                    // A spot's samples stay in its cone, where its light is.
+                    let (t0, t1) = if l.kind == LIGHT_SPOT {
+                        spot_span(o, d, t, Vec3::from(l.position), Vec3::from(l.direction), l.cos_outer)
+                    } else {
+                        (0.0, t)
+                    };
+                    if (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 && t0 < t1 {
+                        let (te, pdf) = equiangular_sample(o + d * t0, d, t1 - t0, Vec3::from(l.position), ue[1]);
+                        let te = t0 + te;
                         let x = o + d * te;
                         let to_light = Vec3::from(l.position) - x;
                         let r2 = to_light.dot(to_light);
@@ -122,7 +138,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                         let wi = to_light / r;
                         let md = &s.media[medium as usize];
                         let c = throughput
-                            * medium_transmittance(s, medium, te)
+                            * medium_transmittance(s, medium, o, d, te, [ue[2], ue[3]])
                             * Vec3::from(md.sigma_s)
                             * (phase_hg((-d).dot(wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * Vec3::from(l.intensity);
@@ -142,7 +158,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
                 let key =
                     RNG_MEDIUM_DOMAIN + if ray == Ray::Gather { part } else { 0 } * RNG_MEDIUM_DIMS_PER_PART + segment;
                 segment += 1;
-                let e = medium_sample(s, medium, t, rand2(stream, sample, f.seed, key));
+                let e = medium_sample(s, medium, o, d, t, rand2(stream, sample, f.seed, key));
                 if ray == Ray::Camera && part == 0 {
                     terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += throughput * e.emission;
                 }
@@ -231,7 +247,7 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
         let camera = ray == Ray::Camera;
         let mut inv_sigma_t = Vec3::ONE;
         let b = if scattered {
-            let st = medium_sigma_t(&s.media[medium as usize]);
+            let st = medium_sigma_t_at(s, medium, h.p);
             inv_sigma_t = Vec3::select(st.cmpgt(Vec3::ZERO), st.recip(), Vec3::ZERO);
             phase_bsdf(s, medium, wo)
         } else {

@@ -116,9 +116,9 @@ pub fn direct_light_sample(
     if l.pick_probability <= 0.0 {
         return none;
     }
-    // A scattering point in a medium leaves point and spot lights to the camera segment's
-    // equiangular sample (`render::radiance`).
-    if b.kind == MATERIAL_PHASE && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
+    // A scattering point in a homogeneous medium leaves point and spot lights to the camera
+    // segment's equiangular sample (`render::radiance`).
+    if b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
         return none;
     }
     let ls =

@@ -6,6 +6,7 @@ use glam::{Vec3, Vec4};
 use super::image_texture::image_lookup;
 use super::pattern::{color_map_eval, pattern_value};
 use super::shape::Hit;
+use super::voxel::{ground_fog_density, voxel_lookup};
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Texture;
@@ -32,6 +33,8 @@ pub fn texture_eval(s: &SceneView, index: u32, h: &Hit) -> Vec3 {
             }
         }
         TEXTURE_PATTERN => color_map_eval(s.texture_data, t.color_map, pattern_value(s.texture_data, t.data, p)),
+        TEXTURE_VOXELS => Vec3::splat(voxel_lookup(s.texture_data, t.data, p)),
+        TEXTURE_GROUND_FOG => Vec3::splat(ground_fog_density(s.texture_data, p, t.value[0], t.value[1], t.data)),
         _ => Vec3::ZERO, // unreachable: the host packs only known kinds
     }
 }

@@ -189,6 +189,15 @@ shared_constants! {
     /// A procedural 3D pattern (shaders/pattern.glsl): `data` is its block, `color_map` the map
     /// from its value in [0, 1] to a colour.
     TEXTURE_PATTERN: u32 = 2;
+    /// A voxel grid (shaders/voxel.glsl): `data` is its block, looked up with trilinear
+    /// filtering in the unit cube of texture space (0 outside it); grey.
+    TEXTURE_VOXELS: u32 = 3;
+    /// POV-Ray's ground fog as a density: 1 at heights (texture-space y, after a turbulence warp
+    /// when `data` holds a pattern block) up to `value[0]` (fog_offset), 1 / (1 + (y -
+    /// offset) / alt)^2 above, alt = `value[1]` (fog_alt); grey.
+    TEXTURE_GROUND_FOG: u32 = 4;
+    /// Words of a voxel block's header: nx, ny, nz; the nx ny nz floats follow, x fastest.
+    VOXEL_HEADER_WORDS: u32 = 3;
     /// `Texture::channel`: the colour as it is, or one channel of an image spread to grey.
     TEXTURE_CHANNEL_RGB: u32 = 0;
     TEXTURE_CHANNEL_R: u32 = 1;
@@ -211,6 +220,18 @@ shared_constants! {
     /// Medium boundaries a path may cross beyond its `max_depth` bounces (each crossing is one
     /// step of the camera kernel's loop; a path past it ends, as one past `max_depth` does).
     MEDIUM_CROSSINGS: u32 = 16;
+    /// Most tentative collisions of one delta- or ratio-tracking walk through a heterogeneous
+    /// medium: lavapipe stops an invocation after 65535 loop iterations in all, and the camera
+    /// kernel may track on each of its steps (docs/limits.md).
+    MEDIUM_TRACKING_STEPS: u32 = 128;
+    /// Ratio tracking plays Russian roulette once the transmittance falls below this in every
+    /// channel (it survives with probability max / this), so thick media end their walks early.
+    MEDIUM_ROULETTE: f32 = 0.1;
+    /// Salt of the tracking walks' random numbers (hashed with the walk's key and step).
+    MEDIUM_WALK_SALT: u32 = 0x6d65_6469;
+    /// Equiangular samples toward a spot light stay inside its cone, widened by this much in
+    /// cosine (`spot_span`).
+    SPOT_SPAN_MARGIN: f32 = 0.001;
 
     /// Marks a primitive that is not a light.
     NO_LIGHT: u32 = 0xffff_ffff;
@@ -273,6 +294,11 @@ shared_constants! {
     /// Equiangular samples of camera segments toward point and spot lights:
     /// `RNG_EQUIANGULAR_DOMAIN + segment` (x picks the light, y the distance).
     RNG_EQUIANGULAR_DOMAIN: u32 = 0x3000_0000;
+    /// Ratio tracking of shadow rays through heterogeneous media: `RNG_TRANSMITTANCE_DOMAIN +
+    /// step` seeds the walk (only part 0 casts shadow rays). The camera-side transmittance of an
+    /// equiangular sample uses z and w of its `RNG_EQUIANGULAR_DOMAIN` numbers; a free flight's
+    /// two numbers seed its delta-tracking walk.
+    RNG_TRANSMITTANCE_DOMAIN: u32 = 0x3800_0000;
     /// Free-flight distances of photon paths: `RNG_PHOTON_DOMAIN + RNG_PHOTON_MEDIUM + step`.
     RNG_PHOTON_MEDIUM: u32 = 0x1000_0000;
 

@@ -254,15 +254,22 @@ gpu_structs! {
         pub _pad: [u32; 3],
     }
 
-    /// A homogeneous participating medium, 48 bytes: absorption and scattering coefficients per
-    /// channel (1 / scene unit), the radiance it emits per unit length, and its phase function
-    /// (`PHASE_*`, asymmetry `g`). Extinction is `sigma_a + sigma_s`.
+    /// A participating medium, 80 bytes: absorption and scattering coefficients per channel
+    /// (1 / scene unit), the radiance it emits per unit length, and its phase function
+    /// (`PHASE_*`, asymmetry `g`). Extinction is `sigma_a + sigma_s`. A heterogeneous medium
+    /// scales all three by a density, the first channel of texture `density` at the point
+    /// (`NO_TEXTURE`: homogeneous, density 1), inside the box `bounds_min..bounds_max` only (0
+    /// outside); `majorant` bounds sigma_t there in every channel (delta and ratio tracking).
     pub struct Medium {
         pub sigma_a: [f32; 3],
         pub phase: u32,
         pub sigma_s: [f32; 3],
         pub g: f32,
         pub emission: [f32; 3],
+        pub density: u32,
+        pub bounds_min: [f32; 3],
+        pub majorant: f32,
+        pub bounds_max: [f32; 3],
         pub _pad: u32,
     }
 
@@ -295,7 +302,7 @@ const _: () = assert!(size_of::<Primitive>() == 64);
 const _: () = assert!(size_of::<Material>() == 112);
 const _: () = assert!(size_of::<Texture>() == 80);
 const _: () = assert!(size_of::<Light>() == 96);
-const _: () = assert!(size_of::<Medium>() == 48);
+const _: () = assert!(size_of::<Medium>() == 80);
 const _: () = assert!(size_of::<FrameParams>().is_multiple_of(16));
 // The primitive flags are distinct bits above the kind.
 const _: () = {

@@ -10,7 +10,7 @@ use super::{
     SceneBuffers,
 };
 use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
-use crate::layout::constants::{LAYER_COUNT, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
+use crate::layout::constants::{LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
 use crate::layout::{DispatchRange, EmitParams, GridParams, Medium, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
@@ -247,8 +247,18 @@ impl DeviceScene {
 
 /// The media as bound: Vulkan has no empty buffers, so a scene without media binds one unused.
 fn device_media(buffers: &SceneBuffers) -> &[Medium] {
-    const NONE: &[Medium] =
-        &[Medium { sigma_a: [0.0; 3], phase: 0, sigma_s: [0.0; 3], g: 0.0, emission: [0.0; 3], _pad: 0 }];
+    const NONE: &[Medium] = &[Medium {
+        sigma_a: [0.0; 3],
+        phase: 0,
+        sigma_s: [0.0; 3],
+        g: 0.0,
+        emission: [0.0; 3],
+        density: NO_TEXTURE,
+        bounds_min: [0.0; 3],
+        majorant: 0.0,
+        bounds_max: [0.0; 3],
+        _pad: 0,
+    }];
     if buffers.media.is_empty() {
         NONE
     } else {

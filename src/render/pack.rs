@@ -111,8 +111,13 @@ fn scalar(param: &ScalarParam) -> (f32, u32) {
     (param.value, texture_index(param.texture))
 }
 
-/// The only place that turns a medium into the GPU's `Medium`.
-pub fn pack_medium(m: &MediumDesc) -> Medium {
+/// The only place that turns a medium into the GPU's `Medium`. `bounds` is the box a
+/// heterogeneous medium tracks in (the density is 0 outside it; `prepare` finds it).
+pub fn pack_medium(m: &MediumDesc, bounds: (Vec3, Vec3)) -> Medium {
+    let (density, majorant) = match m.density {
+        Some(d) => (d.texture, m.sigma_t().max_element() * d.max),
+        None => (NO_TEXTURE, 0.0),
+    };
     Medium {
         sigma_a: m.sigma_a.into(),
         phase: match m.phase {
@@ -122,6 +127,10 @@ pub fn pack_medium(m: &MediumDesc) -> Medium {
         sigma_s: m.sigma_s.into(),
         g: m.phase.g(),
         emission: m.emission.into(),
+        density,
+        bounds_min: bounds.0.into(),
+        majorant,
+        bounds_max: bounds.1.into(),
         _pad: 0,
     }
 }
@@ -232,8 +241,44 @@ pub fn pack_texture(t: &TextureDesc, data: &mut Vec<u32>) -> Texture {
             out.data = pattern.pack(data);
             out.color_map = color_map.pack(data);
         }
+        TextureKind::Voxels(grid) => {
+            out.kind = TEXTURE_VOXELS;
+            out.data = data.len() as u32;
+            data.extend(grid.dims);
+            data.extend(grid.values.iter().map(|v| v.to_bits()));
+            // The kernels look the grid up in its unit cube: the box the file gives, in
+            // texture space, maps onto it.
+            let unit_from_texture = Affine3A::from_scale(1.0 / (grid.bounds_max - grid.bounds_min))
+                * Affine3A::from_translation(-grid.bounds_min);
+            out.transform = affine_rows(&(unit_from_texture * t.lookup_from_texture.inverse()));
+        }
+        TextureKind::GroundFog { offset, alt, turbulence } => {
+            out.kind = TEXTURE_GROUND_FOG;
+            out.value = [*offset, *alt, 0.0];
+            if let Some(pattern) = turbulence {
+                out.data = pattern.pack(data);
+            }
+        }
     }
     out
+}
+
+/// The box a texture is non-zero in, in lookup space, when it has one (a voxel grid's, moved
+/// by its placement); a medium tracks only there.
+pub fn texture_support(t: &TextureDesc) -> Option<(Vec3, Vec3)> {
+    let TextureKind::Voxels(grid) = &t.kind else { return None };
+    let (lo, hi) = (grid.bounds_min, grid.bounds_max);
+    let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for i in 0..8 {
+        let corner = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let p = t.lookup_from_texture.transform_point3(corner);
+        out = (out.0.min(p), out.1.max(p));
+    }
+    Some(out)
 }
 
 /// The only place that turns a shape into the GPU's `Primitive` (and its shape data, if any).

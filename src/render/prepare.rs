@@ -452,10 +452,12 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         camera_medium: NO_MEDIUM,
     };
     // Media: the null material needs the media variant's kernels even without a medium.
-    let mut media: Vec<Medium> = scene.media.iter().map(super::pack::pack_medium).collect();
+    let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, &bvh.nodes[0], cam.position);
+    let mut media: Vec<Medium> =
+        scene.media.iter().zip(tracking_boxes).map(|(m, b)| super::pack::pack_medium(m, b)).collect();
     let has_null = scene.materials.iter().any(|m| m.kind == crate::scene::MaterialKind::Null);
     if media.is_empty() && has_null {
-        media.push(Medium::default());
+        media.push(Medium { density: NO_TEXTURE, ..Medium::default() });
     }
     let mut media_volume = 0.0f32;
     if !scene.media.is_empty() {

@@ -11,7 +11,7 @@ use toml::Spanned;
 
 use super::error::{backticked, object_name, suggest, SceneError, Source};
 use super::format::{
-    AtmosphereDef, EnvironmentDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
+    AtmosphereDef, EnvironmentDef, FogDef, LightDef, MaterialDef, MediumDef, ParamDef, RainbowDef, SceneFile, ShapeDef,
     TextureDef, TransformDef, Vec3Def,
 };
 use super::image_texture::{load_image_texture, ColorSpace, ImageTexture, Wrap};
@@ -24,10 +24,11 @@ use super::model::subdivide::{subdivide, Scheme, MAX_LEVELS};
 use super::model::{
     load_model, mesh_triangles, Format, LoadOptions, ModelError, ModelImage, ModelLight, ModelMaterial, Shading,
 };
-use super::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
+use super::pattern::{parse_pattern, ColorMap, PatternDesc, PatternKind, PATTERN_FIELDS};
+use super::voxel::load_voxel_grid;
 use super::{
-    Analytic, AnalyticKind, Camera, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface, Phase,
-    PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Density, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface,
+    Phase, PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
 use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{
@@ -71,7 +72,7 @@ const METAL_PRESETS: &[(&str, [f32; 3], [f32; 3])] = &[
     ("platinum", [2.38, 2.08, 1.85], [4.26, 3.72, 3.15]),
     ("titanium", [2.74, 2.54, 2.16], [3.82, 3.43, 2.98]),
 ];
-const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern"];
+const TEXTURE_TYPES: &[&str] = &["constant", "image", "pattern", "voxels"];
 const TEXTURE_SPACES: &[&str] = &["uv", "world"];
 const SHAPE_TYPES: &[&str] = &[
     "quad",
@@ -158,6 +159,9 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
     }
     if let Some(def) = &file.atmosphere {
         builder.atmosphere(def)?;
+    }
+    if let Some(def) = &file.fog {
+        builder.fog(def, file.atmosphere.is_some())?;
     }
 
     for (index, shape) in file.shapes.iter().enumerate() {
@@ -1183,6 +1187,15 @@ impl Builder<'_> {
                 let color = self.require(&t.color, &table, &object, "color", "color = [0.8, 0.2, 0.2]")?;
                 (TextureKind::Constant(Vec3::from(self.color(color, &object, "color", false)?)), TextureSpace::Uv)
             }
+            "voxels" => {
+                self.only_fields(&object, "a voxels texture", &present, &["type", "transform", "file"])?;
+                let file = self.require(&t.file, &table, &object, "file", "file = \"volumes/smoke.pxvol\"")?;
+                let base = self.src.path.parent().unwrap_or(Path::new(""));
+                let path = base.join(file.get_ref());
+                let grid = load_voxel_grid(&path)
+                    .map_err(|e| self.invalid(&file.span(), &object, format!("{}: {e}", path.display())))?;
+                (TextureKind::Voxels(std::sync::Arc::new(grid)), TextureSpace::World)
+            }
             "image" => {
                 let fields = ["type", "space", "transform", "file", "color_space", "wrap", "channel"];
                 self.only_fields(&object, "an image texture", &present, &fields)?;
@@ -1325,8 +1338,29 @@ impl Builder<'_> {
         let object = format!("medium \"{}\"", printable(&name));
         let m = def.get_ref();
         if let Some(kind) = &m.r#type {
-            self.one_of(kind, &object, "type", &["homogeneous"])?;
+            let kind = self.one_of(kind, &object, "type", &["homogeneous", "heterogeneous"])?;
+            match (kind, &m.density) {
+                ("homogeneous", Some(d)) => {
+                    return Err(self.invalid(
+                        &d.span(),
+                        &object,
+                        "a `density` makes the medium heterogeneous; drop it, or say `type = \"heterogeneous\"`"
+                            .to_string(),
+                    ))
+                }
+                ("heterogeneous", None) => return Err(self.invalid(
+                    &def.span(),
+                    &object,
+                    "a heterogeneous medium needs `density = \"name\"`, a [textures.name] pattern or voxels texture"
+                        .to_string(),
+                )),
+                _ => {}
+            }
         }
+        let density = match &m.density {
+            Some(name) => Some(self.density(name, &object)?),
+            None => None,
+        };
         let coefficient = |builder: &Self, value: &Spanned<Vec3Def>, field: &str| -> Result<Vec3> {
             let c = builder.vector(value, &object, field)?;
             if c.min_element() < 0.0 {
@@ -1441,9 +1475,32 @@ impl Builder<'_> {
                 Phase::HenyeyGreenstein { g }
             }
         };
-        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase });
+        self.media.push(MediumDesc { sigma_a, sigma_s, emission, phase, density });
         self.medium_names.push(name);
         Ok(())
+    }
+
+    /// A medium's `density`: a texture that has a value at every point of space.
+    fn density(&mut self, name: &Spanned<String>, object: &str) -> Result<Density> {
+        let texture = self.texture_id(name.get_ref(), &name.span(), object)?;
+        let t = &self.textures[texture as usize];
+        let refuse = |why: &str| {
+            Err(self.invalid(
+                &name.span(),
+                object,
+                format!("`density` texture \"{}\" {why}; use a pattern or a voxels texture", printable(name.get_ref())),
+            ))
+        };
+        if matches!(t.kind, TextureKind::Image { .. })
+            || t.space == TextureSpace::Uv && !matches!(t.kind, TextureKind::Constant(_))
+        {
+            return refuse("is looked up in uv space, which a medium does not have");
+        }
+        let max = t.kind.max_value();
+        if !(max.is_finite() && max > 0.0) {
+            return refuse("is 0 everywhere (the medium would be vacuum)");
+        }
+        Ok(Density { texture, max })
     }
 
     fn medium_id(&self, value: &Spanned<String>, object: &str, field: &str) -> Result<Option<u32>> {
@@ -1466,6 +1523,114 @@ impl Builder<'_> {
         let object = "[atmosphere]";
         let medium = self.require(&def.get_ref().medium, &def.span(), object, "medium", "medium = \"fog\"")?;
         self.atmosphere = self.medium_id(medium, object, "medium")?;
+        Ok(())
+    }
+
+    /// POV-Ray's `fog` as the atmosphere: a medium that absorbs with sigma_a = 1 / `distance` and
+    /// glows with `color` / `distance`, so that a camera ray of length d returns exp(-d / D) of
+    /// what it meets plus (1 - exp(-d / D)) of the colour, POV-Ray's blend. Ground fog scales
+    /// both by POV-Ray's density (1 below `fog_offset`, 1 / (1 + (y - offset) / alt)^2 above).
+    fn fog(&mut self, def: &Spanned<FogDef>, has_atmosphere: bool) -> Result<()> {
+        let object = "[fog]";
+        let f = def.get_ref();
+        let table = def.span();
+        if has_atmosphere {
+            return Err(self.invalid(
+                &table,
+                object,
+                "[fog] fills all space, as [atmosphere] does; keep one of them".to_string(),
+            ));
+        }
+        let kind = match &f.r#type {
+            Some(t) => self.one_of(t, object, "type", &["constant", "ground"])?,
+            None => "constant",
+        };
+        let distance = self.require(&f.distance, &table, object, "distance", "distance = 20")?;
+        let distance = self.positive(distance, object, "distance")?;
+        let color = match &f.color {
+            Some(c) => Vec3::from(self.color(c, object, "color", false)?),
+            None => Vec3::ZERO,
+        };
+        let present = [
+            ("fog_offset", span_of(&f.fog_offset)),
+            ("fog_alt", span_of(&f.fog_alt)),
+            ("turbulence", span_of(&f.turbulence)),
+            ("octaves", span_of(&f.octaves)),
+            ("omega", span_of(&f.omega)),
+            ("lambda", span_of(&f.lambda)),
+        ];
+        let sigma_a = Vec3::splat(1.0 / distance);
+        if sigma_a.x > MAX_MEDIUM_COEFFICIENT {
+            return Err(self.invalid(
+                &span_of(&f.distance).unwrap_or(table.clone()),
+                object,
+                format!(
+                    "`distance` is {distance}; it must be at least 1 / {MAX_MEDIUM_COEFFICIENT} (see docs/limits.md)"
+                ),
+            ));
+        }
+        let density = if kind == "ground" {
+            let offset = match &f.fog_offset {
+                Some(v) => self.number(v, object, "fog_offset")?,
+                None => 0.0,
+            };
+            let alt = self.require(&f.fog_alt, &table, object, "fog_alt", "fog_alt = 1.5")?;
+            let alt = self.positive(alt, object, "fog_alt")?;
+            let turbulence = match &f.turbulence {
+                Some(t) => {
+                    let mut p = PatternDesc::new(PatternKind::Bozo);
+                    p.turbulence = self.vector(t, object, "turbulence")?;
+                    if let Some(o) = &f.octaves {
+                        p.octaves = self.integer(o, object, "octaves", 1, 10, "", "")?;
+                    }
+                    if let Some(o) = &f.omega {
+                        p.omega = self.number(o, object, "omega")?;
+                    }
+                    if let Some(l) = &f.lambda {
+                        p.lambda = self.number(l, object, "lambda")?;
+                    }
+                    p.validate().map_err(|message| self.invalid(&t.span(), object, message))?;
+                    Some(p)
+                }
+                None => {
+                    self.fog_fields_unused(&present[3..], "ground fog without `turbulence`", "add `turbulence`")?;
+                    None
+                }
+            };
+            self.textures.push(TextureDesc {
+                kind: TextureKind::GroundFog { offset, alt, turbulence },
+                space: TextureSpace::World,
+                lookup_from_texture: Affine3A::IDENTITY,
+            });
+            self.texture_names.push("[fog] ground fog".to_string());
+            self.texture_used.push(true);
+            Some(Density { texture: (self.textures.len() - 1) as u32, max: 1.0 })
+        } else {
+            self.fog_fields_unused(&present, "constant fog", "say `type = \"ground\"` for ground fog")?;
+            None
+        };
+        self.media.push(MediumDesc {
+            sigma_a,
+            sigma_s: Vec3::ZERO,
+            emission: color * sigma_a,
+            phase: Phase::Isotropic,
+            density,
+        });
+        self.medium_names.push("[fog]".to_string());
+        self.atmosphere = Some((self.media.len() - 1) as u32);
+        Ok(())
+    }
+
+    fn fog_fields_unused(&self, present: &[Present<'_>], what: &str, fix: &str) -> Result<()> {
+        for (name, span) in present {
+            if let Some(span) = span {
+                return Err(self.invalid(
+                    span,
+                    "[fog]",
+                    format!("`{name}` does not apply to {what}; {fix}, or remove it"),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -2224,6 +2389,7 @@ impl Builder<'_> {
                         direction: t.transform_vector3(direction).normalize_or(Vec3::NEG_Y),
                         irradiance,
                         half_angle_deg: 0.0,
+                        visible: true,
                     },
                 };
                 let finite = match &kind {

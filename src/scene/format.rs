@@ -28,6 +28,7 @@ pub(crate) struct SceneFile {
     #[serde(default)]
     pub media: BTreeMap<Spanned<String>, Spanned<MediumDef>>,
     pub atmosphere: Option<Spanned<AtmosphereDef>>,
+    pub fog: Option<Spanned<FogDef>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -41,6 +42,22 @@ pub(crate) struct MediumDef {
     pub emission: Option<Spanned<Vec3Def>>,
     pub phase: Option<Spanned<String>>,
     pub g: Option<Spanned<f64>>,
+    pub density: Option<Spanned<String>>,
+}
+
+/// POV-Ray's `fog`, turned into an atmosphere (see `Builder::fog`).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct FogDef {
+    pub r#type: Option<Spanned<String>>,
+    pub distance: Option<Spanned<f64>>,
+    pub color: Option<Spanned<Vec3Def>>,
+    pub fog_offset: Option<Spanned<f64>>,
+    pub fog_alt: Option<Spanned<f64>>,
+    pub turbulence: Option<Spanned<Vec3Def>>,
+    pub octaves: Option<Spanned<i64>>,
+    pub omega: Option<Spanned<f64>>,
+    pub lambda: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -7,6 +7,7 @@ use glam::{Affine3A, Vec3};
 
 use super::image_texture::{ImageTexture, Wrap};
 use super::pattern::{ColorMap, PatternDesc};
+use super::voxel::VoxelGrid;
 
 /// A colour parameter: a constant, optionally times a texture (index into `Scene::textures`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -166,6 +167,29 @@ pub enum TextureKind {
         pattern: PatternDesc,
         color_map: ColorMap,
     },
+    /// A voxel grid (grey), trilinear, 0 outside its box; for media densities.
+    Voxels(Arc<VoxelGrid>),
+    /// POV-Ray's ground fog density (grey): 1 up to height `offset`, 1 / (1 + (y - offset) /
+    /// `alt`)^2 above, the point first moved by the turbulence of `turbulence` if any.
+    GroundFog {
+        offset: f32,
+        alt: f32,
+        turbulence: Option<PatternDesc>,
+    },
+}
+
+impl TextureKind {
+    /// The largest first channel the texture takes anywhere (a medium density's majorant).
+    pub fn max_value(&self) -> f32 {
+        match self {
+            TextureKind::Constant(c) => c.x,
+            // An image is looked up in uv space, which a medium does not have.
+            TextureKind::Image { .. } => 1.0,
+            TextureKind::Pattern { color_map, .. } => color_map.max_first_channel(),
+            TextureKind::Voxels(grid) => grid.max,
+            TextureKind::GroundFog { .. } => 1.0,
+        }
+    }
 }
 
 /// A texture: its kind, where it is looked up, and where it is placed there (`lookup_from_texture`:

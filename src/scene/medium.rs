@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-/// A homogeneous medium: coefficients per channel in 1 / scene unit.
+/// A medium: coefficients per channel in 1 / scene unit (at density 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MediumDesc {
     pub sigma_a: Vec3,
@@ -11,6 +11,18 @@ pub struct MediumDesc {
     /// Radiance emitted per unit length (added along camera rays; it lights nothing else).
     pub emission: Vec3,
     pub phase: Phase,
+    /// A heterogeneous medium's density: the coefficients and the emission are scaled by it.
+    pub density: Option<Density>,
+}
+
+/// Where a heterogeneous medium's density comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Density {
+    /// The texture (index into `Scene::textures`) whose first channel, looked up at the point
+    /// in world space, is the density.
+    pub texture: u32,
+    /// The largest density anywhere (sets the tracking majorant).
+    pub max: f32,
 }
 
 impl MediumDesc {

@@ -20,6 +20,7 @@ pub mod model;
 pub mod pattern;
 mod photons;
 pub mod sky;
+pub mod voxel;
 
 pub mod image_texture;
 
@@ -33,7 +34,7 @@ pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
 };
-pub use medium::{MediumDesc, MediumInterface, Phase};
+pub use medium::{Density, MediumDesc, MediumInterface, Phase};
 pub use photons::PhotonSettings;
 
 /// A loaded, validated scene. Right-handed, y up, lengths in scene units.

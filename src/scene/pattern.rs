@@ -404,6 +404,12 @@ impl ColorMap {
         Ok(())
     }
 
+    /// The largest red (first) component of its entries: the map's maximum, since it is linear
+    /// between entries and constant beyond them.
+    pub fn max_first_channel(&self) -> f32 {
+        self.entries.iter().map(|(_, c)| c[0]).fold(0.0, f32::max)
+    }
+
     /// Appends the map's block (count, then position, r, g, b per entry) to `data` and returns
     /// its offset, the `at` of `color_map_eval`.
     pub fn pack(&self, data: &mut Vec<u32>) -> u32 {
