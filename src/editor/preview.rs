@@ -36,9 +36,10 @@ use crate::scene::{Projection, Scene};
 /// Passes of the full-size preview before it stops refining.
 pub const MAX_PREVIEW_PASSES: u32 = 64;
 /// Paths (photon or camera) between two looks at the stop flag in a preview step: on lavapipe
-/// with two cores 16k paths take some tens of milliseconds, so a stale step ends well within the
-/// half second an edit may take to show; a real GPU pays a few microseconds per submission.
-const PREVIEW_STOP_PATHS: u64 = 1 << 14;
+/// with two busy cores 4096 camera paths of cornell-box take about 80 ms (16k: 300 ms), so a
+/// stale step ends within the half second an edit may take to show, and the passes' rate did
+/// not measurably drop (BENCHMARKS.md); a real GPU pays a few microseconds per submission.
+const PREVIEW_STOP_PATHS: u64 = 1 << 12;
 /// Largest final render the editor accepts, in pixels (the scene's resolution).
 const MAX_FINAL_PIXELS: u64 = 4096 * 4096;
 
@@ -383,7 +384,14 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         None => format!("cpu ({} threads)", rayon::current_num_threads()),
     };
     set_thread_stop_flag(Some(shared.stop.clone()));
-    set_thread_stop_paths(Some(PREVIEW_STOP_PATHS));
+    // PHOTONIX_PREVIEW_STOP_PATHS overrides the step's stop granularity (0: the backends' own
+    // submissions), to weigh latency against throughput on a given device.
+    let stop_paths = match std::env::var("PHOTONIX_PREVIEW_STOP_PATHS").ok().and_then(|v| v.parse::<u64>().ok()) {
+        Some(0) => None,
+        Some(paths) => Some(paths),
+        None => Some(PREVIEW_STOP_PATHS),
+    };
+    set_thread_stop_paths(stop_paths);
     let _ = ready.send(Ok(device.clone()));
     let mut backend = Backend { gpu: ctx.as_ref().map(|ctx| (ctx, None)), prepared: None, device_photons: None };
     let mut preview = PreviewState::default();
@@ -410,7 +418,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
             // waits for the one under way.
             set_thread_stop_paths(None);
             final_render(&shared, &mut backend, &request, &scene);
-            set_thread_stop_paths(Some(PREVIEW_STOP_PATHS));
+            set_thread_stop_paths(stop_paths);
             let mut s = shared.state.lock().expect("renderer state lock");
             s.mode = Mode::Preview;
             // The preview starts again from its first step.

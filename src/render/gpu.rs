@@ -546,7 +546,14 @@ fn build_maps(
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
     let r_volume = volume_radius(buffers, settings, volume_count, pass);
     let g_volume = map_grid(buffers, r_volume, volume_count, settings.photons);
+    // A stopped render uses no map: skip the grid builds (seconds on lavapipe) of a stale pass.
+    if super::stop_requested() {
+        return no_maps(ctx);
+    }
     let global = build_map(ctx, kernels, global_photons, g_global, "global")?;
+    if super::stop_requested() {
+        return no_maps(ctx);
+    }
     let caustic = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")?;
     let volume = build_map(ctx, kernels, volume_photons, g_volume, "volume")?;
     let grids = ctx.upload("grids", &[g_global, g_caustic, g_volume])?;
