@@ -341,7 +341,11 @@ impl Backend<'_> {
         match renderer {
             Some(r) => {
                 if !same || self.device_photons.as_ref() != photons {
-                    r.update_scene(buffers, photons).map_err(err)?;
+                    if let Err(e) = r.update_scene(buffers, photons) {
+                        // The device does not hold this scene: the next step must upload it.
+                        self.prepared = None;
+                        return Err(err(e));
+                    }
                     cost.written = r.last_written().to_vec();
                 }
             }

@@ -592,6 +592,8 @@ pub struct GpuRenderer<'a> {
     setup_time: Duration,
     /// The arrays the last `update_scene` wrote (those that changed).
     last_written: Vec<&'static str>,
+    /// Set while an `update_scene` runs: one that failed leaves the device's arrays unknown.
+    device_mixed: bool,
 }
 
 impl<'a> GpuRenderer<'a> {
@@ -616,6 +618,7 @@ impl<'a> GpuRenderer<'a> {
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
             last_written: Vec::new(),
+            device_mixed: false,
         })
     }
 
@@ -641,8 +644,11 @@ impl<'a> GpuRenderer<'a> {
     /// count; [`GpuRenderer::last_written`] names those written).
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
-        let previous = Some((&self.buffers, self.photons.as_ref()));
+        // After a failed update the device may hold a mix of the two scenes: compare with nothing.
+        let previous = (!self.device_mixed).then_some((&self.buffers, self.photons.as_ref()));
+        self.device_mixed = true;
         let (in_place, written) = self.scene.update_changed(self.ctx, buffers, photons, previous)?;
+        self.device_mixed = false;
         self.last_written = written;
         if buffers.variant() != self.kernels.variant() {
             self.kernels = GpuKernels::for_scene(buffers.variant());
