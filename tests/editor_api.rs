@@ -393,3 +393,72 @@ fn final_render_reports_passes_and_gives_png_and_exr() {
     let r = f.call("POST", "/api/render", br#"{"seconds": -1}"#);
     assert_eq!(r.status, 409);
 }
+
+/// A 2 x 2 PNG (opaque, one red texel) at `path`.
+fn write_png(path: &std::path::Path) {
+    std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+    let mut image = image::RgbImage::new(2, 2);
+    image.put_pixel(0, 0, image::Rgb([255, 0, 0]));
+    image.save(path).unwrap();
+}
+
+#[test]
+fn texture_picker_lists_the_folders_images_and_sets_a_texture_in_one_step() {
+    let f = Fixture::new();
+    write_png(&f.dir.path().join("textures/wood grain.png"));
+    write_png(&f.dir.path().join("rough.png"));
+    write_png(&f.dir.path().join(".hidden/x.png"));
+    std::fs::write(f.dir.path().join("notes.txt"), "not an image").unwrap();
+    // An image outside the folder, seen through a link inside it, is not listed.
+    let outside = tempfile::tempdir().unwrap();
+    write_png(&outside.path().join("secret.png"));
+    std::os::unix::fs::symlink(outside.path().join("secret.png"), f.dir.path().join("link.png")).unwrap();
+    let r = f.call("GET", "/api/images", b"");
+    assert_eq!(r.status, 200, "{}", r.text());
+    assert_eq!(r.json()["images"], json!(["rough.png", "textures/wood grain.png"]));
+
+    // A colour: sRGB; the texture is named after the file and the field points at it.
+    let text = f.text();
+    ok(&f.edit(
+        json!({ "op": "set_texture", "material": "red", "field": "reflectance", "file": "textures/wood grain.png" }),
+    ));
+    let after = f.text();
+    assert!(after.contains("[textures.wood_grain]\ntype = \"image\"\nfile = \"textures/wood grain.png\""), "{after}");
+    assert!(after.contains("reflectance = { texture = \"wood_grain\" }"), "{after}");
+    assert!(after.contains("# A test scene for the editor."));
+    let scene = parse(&after, &f.scene);
+    assert_eq!(scene.textures.len(), 1);
+    // The same image again reuses its texture; as data (roughness) it is another one, linear.
+    ok(&f.edit(
+        json!({ "op": "set_texture", "material": "white", "field": "reflectance", "file": "textures/wood grain.png" }),
+    ));
+    assert_eq!(f.text().matches("[textures.").count(), 1, "{}", f.text());
+    ok(&f.edit(
+        json!({ "op": "set_texture", "material": "glass", "field": "roughness", "file": "rough.png", "linear": true }),
+    ));
+    let t = f.text();
+    assert!(t.contains("[textures.rough]\ntype = \"image\"\nfile = \"rough.png\"\ncolor_space = \"linear\""), "{t}");
+    assert!(t.contains("roughness = { texture = \"rough\" }"), "{t}");
+    // One step each: three undos give the original text back.
+    for _ in 0..3 {
+        ok(&f.call("POST", "/api/undo", b""));
+    }
+    assert_eq!(f.text(), text);
+
+    // The server's path rules: outside the folder, through a link out, or missing: refused,
+    // nothing changes.
+    let escape = format!("../{}/secret.png", outside.path().file_name().unwrap().to_string_lossy());
+    for file in [escape.as_str(), outside.path().join("secret.png").to_str().unwrap(), "link.png", "missing.png"] {
+        let r = f.edit(json!({ "op": "set_texture", "material": "red", "field": "reflectance", "file": file }));
+        assert_eq!(r.status, 422, "{file}: {}", r.text());
+        assert_eq!(f.text(), text, "{file}");
+    }
+    // A field that takes no texture: the parser's message; an unknown material: named.
+    let r = f.edit(json!({ "op": "set_texture", "material": "red", "field": "ior", "file": "rough.png" }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("scene.toml:"), "{}", r.text());
+    let r = f.edit(json!({ "op": "set_texture", "material": "nope", "field": "reflectance", "file": "rough.png" }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("nope"), "{}", r.text());
+    assert_eq!(f.text(), text);
+}

@@ -1,7 +1,9 @@
 //! The editor in a real browser: headless Chromium (Debian's `chromium` and `chromium-driver`,
 //! which ci/setup installs) driven over WebDriver. It waits for the first rendered frame, clicks
 //! the ball in the viewport and checks the properties panel, moves the ball by a typed value and
-//! checks the server's scene, deletes it, undoes, saves and checks the file. Screenshots of each
+//! checks the server's scene, drags the move gizmo's X arrow with the mouse (WebDriver pointer
+//! actions) and checks the ball moved along x only, undoes that, checks the selection outline
+//! in four views, deletes the ball, undoes, saves and checks the file. Screenshots of each
 //! step go to target/editor-browser/ (kept as artifacts).
 
 mod editor_support;
@@ -118,6 +120,15 @@ impl Driver {
         self.session("POST", &format!("/element/{id}/value"), json!({ "text": text }));
     }
 
+    /// Performs WebDriver pointer actions of the mouse (`pointerMove` at viewport pixels,
+    /// `pointerDown`, `pointerUp`); a button pressed in one call stays down into the next.
+    fn pointer(&self, actions: Value) {
+        let body = json!({ "actions": [{
+            "type": "pointer", "id": "mouse", "parameters": { "pointerType": "mouse" }, "actions": actions,
+        }] });
+        self.session("POST", "/actions", body);
+    }
+
     fn screenshot(&self, name: &str) {
         let v = self.session("GET", "/screenshot", Value::Null);
         let bytes = base64_decode(v.as_str().expect("base64 PNG"));
@@ -165,6 +176,35 @@ fn base64_decode(text: &str) -> Vec<u8> {
     out
 }
 
+/// Counts the canvas's pixels of the selection outline's colour (0xffa640): in all, then in
+/// each quarter (top left, top right, bottom left, bottom right).
+const OUTLINE_PIXELS: &str = "const c = document.getElementById('canvas');
+    const t = document.createElement('canvas'); t.width = c.width; t.height = c.height;
+    const g = t.getContext('2d'); g.drawImage(c, 0, 0);
+    const d = g.getImageData(0, 0, t.width, t.height).data;
+    const n = [0, 0, 0, 0, 0];
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.abs(d[i] - 255) < 6 && Math.abs(d[i + 1] - 166) < 6 && Math.abs(d[i + 2] - 64) < 6) {
+        const x = (i / 4) % t.width, y = Math.floor(i / 4 / t.width);
+        n[0]++; n[1 + (x >= t.width / 2 ? 1 : 0) + (y >= t.height / 2 ? 2 : 0)]++;
+      }
+    }
+    return n;";
+
+fn outline_pixels(driver: &Driver) -> Vec<u64> {
+    let v = driver.script(OUTLINE_PIXELS);
+    v.as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect()
+}
+
+/// The ball's (the second shape's) `transform.translate` in `text`.
+fn ball_translate(text: &str) -> [f64; 3] {
+    let doc: toml_edit::DocumentMut = text.parse().expect("the server's scene is TOML");
+    let ball = &doc["shapes"].as_array_of_tables().expect("[[shapes]]").get(1).expect("the ball")["transform"];
+    let t = ball.get("translate").and_then(|t| t.as_array()).unwrap_or_else(|| panic!("no translate: {ball}"));
+    let number = |v: &toml_edit::Value| v.as_float().or(v.as_integer().map(|i| i as f64)).expect("a number");
+    [0, 1, 2].map(|i| number(t.get(i).expect("three numbers")))
+}
+
 /// Waits until the server's scene text satisfies `done`.
 fn wait_text(f: &Fixture, what: &str, done: impl Fn(&str) -> bool) -> String {
     let start = Instant::now();
@@ -204,8 +244,12 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     // WebDriver's element click presses the mouse.
     let (dx, dy) = (point[0].as_f64().unwrap(), point[1].as_f64().unwrap());
     assert!(dx.abs() < 2.0 && dy.abs() < 2.0, "the ball projects to ({dx}, {dy}) from the centre");
+    assert!(outline_pixels(&driver).iter().sum::<u64>() < 20, "an outline before any selection");
     driver.click("#canvas");
     driver.wait_for("the ball to be selected", "return document.body.dataset.selection", |v| v == "shape:1");
+    // Its silhouette is outlined: a ring of orange pixels around the ball.
+    let ring = driver.wait_for("the outline", OUTLINE_PIXELS, |v| v[0].as_u64().unwrap_or(0) > 200);
+    assert!(ring[0].as_u64().unwrap() < 20_000, "the outline fills the view: {ring}");
     let name = driver.script("return document.getElementById('obj-name').value");
     assert_eq!(name, "ball");
     let radius = driver.script("return document.getElementById('obj-radius').value");
@@ -229,19 +273,69 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     });
     driver.screenshot("03-moved.png");
 
+    // Drag the move gizmo's X arrow with the mouse; the server's ball moves along x only
+    let before_drag = f.text();
+    let handle = driver.script(
+        "const v = window.photonixEditor.viewport, c = v.canvas.getBoundingClientRect();
+         const arrow = v.gizmo._gizmo.picker.translate.children.find((m) => m.name === 'X');
+         const V = v.perspective.position.constructor;
+         const screen = (p) => { const q = p.project(v.perspective);
+           return [c.left + (q.x * 0.5 + 0.5) * c.width, c.top + (-q.y * 0.5 + 0.5) * c.height]; };
+         // The arrow's picker runs along x from the gizmo's centre to 0.6 (in the gizmo's frame,
+         // which three.js bakes into the pickers' geometry).
+         return [screen(arrow.localToWorld(new V(0.45, 0, 0))), screen(arrow.localToWorld(new V(0, 0, 0)))];",
+    );
+    let at = |i: usize, j: usize| handle[i][j].as_f64().unwrap();
+    let (grab, centre) = ([at(0, 0), at(0, 1)], [at(1, 0), at(1, 1)]);
+    let along = [grab[0] - centre[0], grab[1] - centre[1]];
+    let length = along[0].hypot(along[1]);
+    assert!(length > 10.0, "the X arrow is {length} pixels long on screen");
+    let unit = [along[0] / length, along[1] / length];
+    let point = |distance: f64| -> Value {
+        let (x, y) = (grab[0] + unit[0] * distance, grab[1] + unit[1] * distance);
+        json!({ "type": "pointerMove", "duration": 0, "origin": "viewport", "x": x.round() as i64, "y": y.round() as i64 })
+    };
+    driver.pointer(json!([point(0.0), { "type": "pointerDown", "button": 0 }]));
+    assert_eq!(driver.script("return window.photonixEditor.viewport.gizmo.axis"), "X", "the press missed the X arrow");
+    driver.screenshot("04-gizmo-grabbed.png");
+    driver.pointer(Value::Array((1..=5).map(|i| point(12.0 * i as f64)).collect()));
+    driver.screenshot("05-gizmo-dragging.png");
+    driver.pointer(json!([point(90.0), { "type": "pointerUp", "button": 0 }]));
+    let text = wait_text(&f, "the drag", |t| t != before_drag);
+    let translate = ball_translate(&text);
+    assert!(translate[0] > 0.8, "dragging the X arrow right moved the ball to {translate:?}");
+    assert_eq!((translate[1], translate[2]), (0.0, 0.0), "the drag left the X axis: {translate:?}");
+    driver.wait_for("the dragged ball in the panel", "return document.getElementById('tf-translate-0')?.value", |v| {
+        v.as_str().and_then(|v| v.parse::<f64>().ok()).is_some_and(|x| (x - translate[0]).abs() < 1e-6)
+    });
+    driver.screenshot("06-gizmo-dropped.png");
+    // A drag is one undoable edit.
+    driver.click("#undo");
+    wait_text(&f, "the drag's undo", |t| t == before_drag);
+
+    // Four views: the ball is outlined in each (top, front, right, perspective)
+    driver.click("#layout");
+    let quadrants = driver
+        .wait_for("the outline in four views", OUTLINE_PIXELS, |v| (0..4).all(|i| v[i + 1].as_u64().unwrap_or(0) > 20));
+    let quadrants: Vec<u64> = (1..5).map(|i| quadrants[i].as_u64().unwrap()).collect();
+    driver.screenshot("07-four-views.png");
+    driver.click("#layout");
+    driver.wait_for("one view again", OUTLINE_PIXELS, |v| v[0].as_u64().unwrap_or(0) > 200);
+    assert!(quadrants.iter().all(|&n| n > 20), "{quadrants:?}");
+
     // Delete, then undo
     driver.click("#delete");
     wait_text(&f, "the deletion", |t| !t.contains("name = \"ball\""));
     driver.wait_for("the tree without the ball", "return document.querySelectorAll('[id^=tree-shape-]').length", |v| {
         v == 2
     });
-    driver.screenshot("04-deleted.png");
+    driver.screenshot("08-deleted.png");
     driver.click("#undo");
     let text = wait_text(&f, "the undo", |t| t.contains("name = \"ball\""));
     assert!(text.contains("translate = [0.75, 0, 0]"), "{text}");
     driver
         .wait_for("the tree with the ball", "return document.querySelectorAll('[id^=tree-shape-]').length", |v| v == 3);
-    driver.screenshot("05-undone.png");
+    driver.screenshot("09-undone.png");
 
     // Save: the file on disk is the edited scene, comments and all
     driver.click("#save");
@@ -261,7 +355,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     assert!((ball.center.x - 0.75).abs() < 1e-6, "{}", ball.center);
     driver
         .wait_for("the saved state", "return document.getElementById('file-name').textContent", |v| v == "scene.toml");
-    driver.screenshot("06-saved.png");
+    driver.screenshot("10-saved.png");
     // No error was shown on the way.
     let error = driver.script("return document.body.dataset.lastError || ''");
     assert_eq!(error, "", "the page showed an error");

@@ -123,6 +123,25 @@ async fn stream_frames(f: &Fixture, label: &str) {
         header["width"],
         header["height"]
     );
+    // Only what the edit changed reaches the device: the material array (and the frame
+    // constants, as the quick step has another size and no photons). The next full-size pass
+    // of the same scene and view prepares and uploads nothing.
+    let uploaded: Vec<&str> = header["uploaded"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    if label == "gpu" {
+        assert_eq!(uploaded, ["frame", "materials"], "{header}");
+    } else {
+        assert!(uploaded.is_empty(), "{header}");
+    }
+    assert!(header["prepare_ms"].as_f64().unwrap() > 0.0, "{header}");
+    loop {
+        if let Received::Frame(h, _) = receive(&mut page).await {
+            if h["generation"] == header["generation"] && h["step"].as_u64().unwrap() >= 3 {
+                assert_eq!(h["uploaded"], json!([]), "{h}");
+                assert_eq!(h["prepare_ms"], 0.0, "{h}");
+                break;
+            }
+        }
+    }
     // The other page got the new scene without asking.
     loop {
         if let Received::Text(v) = receive(&mut other).await {
@@ -173,13 +192,20 @@ fn websocket_needs_the_token() {
 /// The benchmark of BENCHMARKS.md ("Editor preview"), not a timed test: run it by hand with
 /// `cargo test --release --test editor_ws -- --ignored --nocapture`. On scenes/cornell-box.toml
 /// at the default preview size (256 px), for each backend: the time from an edit to its first
-/// rendered frame (quarter size) and to the first full-size frame, and the full-size passes per
-/// second while nothing changes.
+/// rendered frame (quarter size, direct light) and to the first full-size frame, and the
+/// full-size passes per second while nothing changes. Each edit is sent a different time after
+/// a full-size frame (0 to 1.5 s), so that edits land in every stage of a pass, photon tracing
+/// included. `PHOTONIX_BENCH_BACKENDS=cpu` or `=gpu` runs one backend.
 #[test]
 #[ignore]
 fn editor_preview_benchmark() {
+    const DELAYS_MS: [u64; 8] = [0, 100, 250, 400, 600, 800, 1100, 1500];
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
+    let only = std::env::var("PHOTONIX_BENCH_BACKENDS").unwrap_or_default();
     for gpu in [false, true] {
+        if !only.is_empty() && only != if gpu { "gpu" } else { "cpu" } {
+            continue;
+        }
         let backend = if gpu {
             BackendChoice::Gpu { options: photonix::gpu::GpuOptions::from_env(None).unwrap(), fallback: false }
         } else {
@@ -196,41 +222,62 @@ fn editor_preview_benchmark() {
             let view = json!({ "type": "view", "view": { "position": [278, 273, -800], "look_at": [278, 273, -799],
                 "up": [0, 1, 0], "fov": 39.3, "width": 256, "height": 256 } });
             send_json(&mut page, view).await;
-            let mut first = Vec::new();
-            let mut full = Vec::new();
-            let mut passes = (0, Instant::now());
-            for edit in 0..3 {
-                let t = Instant::now();
-                if edit > 0 {
-                    let value = [0.2 + 0.1 * edit as f64, 0.1, 0.1];
-                    send_json(&mut page, json!({ "type": "edit", "command": {
-                        "op": "set", "target": { "material": "red" }, "field": "reflectance", "value": value } })).await;
-                }
-                let mut got_first = false;
+            // The next frame of at least `step` from a generation after `after`.
+            async fn frame(page: &mut Socket, after: u64, step: u64) -> Value {
                 loop {
-                    if let Received::Frame(header, _) = receive(&mut page).await {
-                        let step = header["step"].as_u64().unwrap();
-                        if step == 0 && !got_first {
-                            first.push(t.elapsed().as_secs_f64() * 1e3);
-                            got_first = true;
-                        }
-                        if got_first && step == 2 {
-                            full.push(t.elapsed().as_secs_f64() * 1e3);
-                            passes = (0, Instant::now());
-                        }
-                        if got_first && step > 2 {
-                            passes.0 += 1;
-                            if passes.1.elapsed() > Duration::from_secs(4) || passes.0 >= 3 {
-                                break;
-                            }
+                    if let Received::Frame(header, _) = receive(page).await {
+                        if header["generation"].as_u64().unwrap() > after && header["step"].as_u64().unwrap() >= step {
+                            return header;
                         }
                     }
                 }
             }
-            let fps = passes.0 as f64 / passes.1.elapsed().as_secs_f64();
+            let mut generation = frame(&mut page, 0, 2).await["generation"].as_u64().unwrap();
+            let (mut first, mut full) = (Vec::new(), Vec::new());
+            let (mut quick_costs, mut full_costs, mut waits) = (Vec::new(), Vec::new(), Vec::new());
+            for (i, delay) in DELAYS_MS.iter().enumerate() {
+                tokio::time::sleep(Duration::from_millis(*delay)).await;
+                let t = Instant::now();
+                let value = [0.2 + 0.05 * i as f64, 0.1, 0.1];
+                send_json(&mut page, json!({ "type": "edit", "command": {
+                    "op": "set", "target": { "material": "red" }, "field": "reflectance", "value": value } })).await;
+                let header = frame(&mut page, generation, 0).await;
+                assert_eq!(header["step"], 0, "the first frame after an edit is the quick one");
+                first.push(t.elapsed().as_secs_f64() * 1e3);
+                let ms = |h: &Value, key: &str| h[key].as_f64().unwrap();
+                quick_costs.push((ms(&header, "prepare_ms"), ms(&header, "upload_ms"), header["uploaded"].to_string()));
+                // Server side: from the change to the quick step's start (the stale step
+                // stopping), and the quick step itself.
+                let render = ms(&header, "render_ms");
+                waits.push(((ms(&header, "since_change_ms") - render).round(), render.round()));
+                generation = header["generation"].as_u64().unwrap();
+                let header = frame(&mut page, generation - 1, 2).await;
+                full.push(t.elapsed().as_secs_f64() * 1e3);
+                full_costs.push(ms(&header, "prepare_ms") + ms(&header, "upload_ms"));
+            }
+            let start = Instant::now();
+            let mut passes = 0;
+            let mut pass_costs = Vec::new();
+            while passes < 4 && start.elapsed() < Duration::from_secs(8) {
+                let h = frame(&mut page, generation - 1, 3).await;
+                pass_costs.push(h["prepare_ms"].as_f64().unwrap() + h["upload_ms"].as_f64().unwrap());
+                passes += 1;
+            }
+            println!("{label}: after an edit, the quick step's (prepare ms, upload ms, arrays written): {quick_costs:?}");
+            println!("{label}: server side, (ms until the stale step stopped, ms of the quick step): {waits:?}");
             println!(
-                "{label}: edit to first frame (64 px) {:?} ms; to first full-size frame (256 px) {:?} ms; {fps:.1} full-size passes/s",
+                "{label}: prepare + upload of the first full-size pass (which every pass paid before) {:?} ms; of the passes after it {:?} ms",
+                full_costs.iter().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>(),
+                pass_costs
+            );
+            let fps = passes as f64 / start.elapsed().as_secs_f64();
+            let mut sorted = first.clone();
+            sorted.sort_by(f64::total_cmp);
+            println!(
+                "{label}: edit to first frame (64 px) {:?} ms (median {:.0}, max {:.0}); to first full-size frame (256 px) {:?} ms; {fps:.2} full-size passes/s",
                 first.iter().map(|v| v.round()).collect::<Vec<_>>(),
+                sorted[sorted.len() / 2],
+                sorted[sorted.len() - 1],
                 full.iter().map(|v| v.round()).collect::<Vec<_>>()
             );
         });

@@ -219,7 +219,18 @@ const viewport = new Viewport($('canvas'), $('view-labels'), {
   state,
 });
 const tree = new Tree($('tree'), { select });
-const properties = new Properties($('properties'), { edit, state, showMessage });
+/// The image files in the scene's folder, for the texture picker.
+async function images() {
+  const response = await fetch('api/images', { headers: token ? { Authorization: `token ${token}` } : {} });
+  const reply = await response.json().catch(() => ({}));
+  if (!response.ok || !Array.isArray(reply.images)) {
+    showMessage(reply.error || `cannot list the folder's images (${response.status})`);
+    return [];
+  }
+  return reply.images;
+}
+
+const properties = new Properties($('properties'), { edit, state, showMessage, images });
 const renderDialog = new RenderDialog($('render-dialog'), { showMessage, token });
 
 $('undo').onclick = undo;

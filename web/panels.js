@@ -4,6 +4,13 @@
 
 const COLOR_FIELDS = new Set(['reflectance', 'tint', 'emission', 'radiance', 'intensity', 'irradiance', 'color']);
 const HIDDEN_FIELDS = new Set(['type', 'transform']);
+// The fields of each material type that a texture may drive (besides `opacity` and `emission`),
+// and those read as data (linear) rather than colour (sRGB).
+const TEXTURE_FIELDS = {
+  diffuse: ['reflectance'], plastic: ['reflectance', 'roughness'], mirror: ['tint'],
+  conductor: ['roughness'], dielectric: ['roughness'], mix: ['weight'],
+};
+const DATA_FIELDS = new Set(['roughness', 'opacity', 'weight']);
 
 function el(tag, attrs = {}, ...children) {
   const e = document.createElement(tag);
@@ -73,15 +80,40 @@ export class Properties {
       const hasTransform = sel.kind === 'shape' || entry.fields.type === 'area';
       if (hasTransform) this.root.append(this.transform(target, entry.fields.transform || {}));
       const material = entry.fields.material && scene.materials.find((m) => m.name === entry.fields.material);
-      if (material) this.root.append(this.fieldset(`Material "${material.name}": ${material.fields.type}`, { material: material.name }, material.fields, scene, 'mat'));
+      if (material) this.root.append(this.material(material, scene));
     } else if (sel.kind === 'material') {
       const material = scene.materials.find((m) => m.name === sel.name);
-      if (material) this.root.append(this.fieldset(`Material "${material.name}": ${material.fields.type}`, { material: material.name }, material.fields, scene, 'mat'));
+      if (material) this.root.append(this.material(material, scene));
     } else if (sel.kind === 'camera') {
       this.root.append(this.fieldset('Camera', 'camera', scene.camera.fields, scene, 'cam'));
       if (scene.render) this.root.append(this.fieldset('Render', 'render', scene.render, scene, 'render'));
       if (scene.photons) this.root.append(this.fieldset('Photons', 'photons', scene.photons, scene, 'photons'));
     }
+  }
+
+  material(material, scene) {
+    const fs = this.fieldset(`Material "${material.name}": ${material.fields.type}`, { material: material.name }, material.fields, scene, 'mat');
+    if (material.fields.type !== 'null') fs.append(this.texturePicker(material));
+    return fs;
+  }
+
+  /// A texture for one of the material's fields: an image file of the scene's folder (the
+  /// server adds the `[textures.*]` table and checks the path).
+  texturePicker(material) {
+    const fields = [...(TEXTURE_FIELDS[material.fields.type] || []), 'opacity', 'emission'];
+    const field = el('select', { id: 'tex-field', title: 'The field the texture drives' });
+    for (const f of fields) field.append(el('option', { value: f }, f));
+    const file = el('select', { id: 'tex-file', title: 'An image in the scene\'s folder' }, el('option', { value: '' }, 'image…'));
+    this.app.images().then((images) => {
+      for (const f of images) file.append(el('option', { value: f }, f));
+      if (!images.length) file.firstChild.textContent = 'no images in the folder';
+      file.dataset.loaded = String(images.length);
+    });
+    file.onchange = () => {
+      if (!file.value) return;
+      this.app.edit({ op: 'set_texture', material: material.name, field: field.value, file: file.value, linear: DATA_FIELDS.has(field.value) });
+    };
+    return el('div', { class: 'row texture' }, el('label', {}, 'texture'), field, file);
   }
 
   set(target, field, value) {

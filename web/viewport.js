@@ -1,6 +1,6 @@
 // The 3D viewport: the scene's triangles drawn with three.js (solid shading) or the server's
 // rendered frames behind the overlays (rendered shading), one perspective view or four views
-// (top, front, side, perspective), a grid and axes, click selection with an outline, and
+// (top, front, side, perspective), a grid and axes, click selection with a silhouette outline, and
 // translate / rotate / scale gizmos whose result is sent to the server as an edit.
 
 import * as THREE from './vendor/three.module.min.js';
@@ -73,6 +73,7 @@ export class Viewport {
     });
     this.gizmoHelper = this.gizmo.getHelper();
     this.scene.add(this.gizmoHelper);
+    this.makeOutlinePass();
 
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
@@ -367,33 +368,116 @@ export class Viewport {
 
   // Selection and gizmos -----------------------------------------------------------------------
 
+  /// The selection outline is its silhouette: the selected object drawn alone, flat white, into
+  /// a mask (`outlineMask`), then a full-view pass paints the mask's outside border, a few pixels
+  /// wide, over the view. The whole silhouette shows, parts behind other objects included, as
+  /// in the modelling tools, and it works for every shape (a sphere has no edges to draw).
+  makeOutlinePass() {
+    this.outlineMask = new THREE.WebGLRenderTarget(1, 1, { depthBuffer: false });
+    this.outlineMask.scissorTest = true;
+    this.maskMaterial = new THREE.MeshBasicMaterial({ color: 0xffffff, side: THREE.DoubleSide, wireframe: false });
+    this.outlineQuad = new THREE.Mesh(new THREE.PlaneGeometry(2, 2), new THREE.ShaderMaterial({
+      uniforms: { mask: { value: this.outlineMask.texture }, size: { value: new THREE.Vector2(1, 1) },
+        // Written to the canvas as is (no colour management in this pass): OUTLINE_COLOR's sRGB bytes.
+        color: { value: new THREE.Color().setRGB(...[16, 8, 0].map((b) => ((OUTLINE_COLOR >> b) & 255) / 255), THREE.LinearSRGBColorSpace) },
+        radius: { value: 2 } },
+      vertexShader: 'void main() { gl_Position = vec4(position.xy, 0.0, 1.0); }',
+      fragmentShader: `
+        uniform sampler2D mask; uniform vec2 size; uniform vec3 color; uniform int radius;
+        void main() {
+          vec2 uv = gl_FragCoord.xy / size;
+          if (texture2D(mask, uv).r > 0.5) discard;
+          float near = 0.0;
+          for (int i = -3; i <= 3; i++) for (int j = -3; j <= 3; j++) {
+            if (abs(i) > radius || abs(j) > radius || i * i + j * j > radius * radius + 1) continue;
+            near = max(near, texture2D(mask, uv + vec2(float(i), float(j)) / size).r);
+          }
+          if (near < 0.5) discard;
+          gl_FragColor = vec4(color, 1.0);
+        }`,
+      depthTest: false, depthWrite: false, toneMapped: false,
+    }));
+    this.outlineQuad.frustumCulled = false;
+    this.outlineScene = new THREE.Scene();
+    this.outlineScene.add(this.outlineQuad);
+    this.outlineCamera = new THREE.OrthographicCamera(-1, 1, 1, -1, 0, 1);
+    this.outlineLayer = 7;
+  }
+
+  /// Draws the selection's silhouette into the view rectangle (x, y from the bottom, CSS pixels).
+  drawOutline(camera, x, y, w, h) {
+    const object = this.objectOf(this.selection);
+    if (!object) return;
+    const ratio = this.renderer.getPixelRatio();
+    const size = this.renderer.getDrawingBufferSize(new THREE.Vector2());
+    if (this.outlineMask.width !== size.x || this.outlineMask.height !== size.y) this.outlineMask.setSize(size.x, size.y);
+    this.outlineMask.viewport.set(x * ratio, y * ratio, w * ratio, h * ratio);
+    this.outlineMask.scissor.copy(this.outlineMask.viewport);
+    // The selected object alone, in white on black, seen by this view's camera (the axes and
+    // the gizmo are on every layer, so they are hidden).
+    const visible = object.mesh.visible, background = this.scene.background, layers = camera.layers.mask;
+    object.mesh.visible = true;
+    this.helpers.visible = false;
+    this.gizmoHelper.visible = false;
+    object.mesh.layers.enable(this.outlineLayer);
+    camera.layers.set(this.outlineLayer);
+    this.scene.background = null;
+    this.scene.overrideMaterial = this.maskMaterial;
+    const clear = this.renderer.getClearColor(new THREE.Color()), alpha = this.renderer.getClearAlpha();
+    this.renderer.setClearColor(0x000000, 1);
+    this.renderer.setRenderTarget(this.outlineMask);
+    this.renderer.render(this.scene, camera);
+    this.renderer.setRenderTarget(null);
+    this.renderer.setClearColor(clear, alpha);
+    this.scene.overrideMaterial = null;
+    this.scene.background = background;
+    camera.layers.mask = layers;
+    object.mesh.layers.disable(this.outlineLayer);
+    object.mesh.visible = visible;
+    this.helpers.visible = true;
+    this.gizmoHelper.visible = true;
+    // Its border over the view, shaded only in the rectangle around the object (the pass reads
+    // up to 49 mask texels a pixel: over a whole view that is slow on a software renderer).
+    const radius = Math.max(1, Math.round(1.5 * ratio));
+    this.outlineQuad.material.uniforms.size.value.copy(size);
+    this.outlineQuad.material.uniforms.radius.value = radius;
+    const box = this.screenBox(object.mesh, camera, x, y, w, h, radius / ratio + 2);
+    if (!box) return;
+    this.renderer.setScissor(box.x, box.y, box.w, box.h);
+    this.renderer.autoClear = false;
+    this.renderer.render(this.outlineScene, this.outlineCamera);
+    this.renderer.autoClear = true;
+    this.renderer.setScissor(x, y, w, h);
+  }
+
+  /// The rectangle (CSS pixels from the bottom left) that `mesh` covers in the view at x, y, w, h
+  /// seen by `camera`, grown by `pad`; the whole view when part of it is behind the camera;
+  /// null when it is off the view.
+  screenBox(mesh, camera, x, y, w, h, pad) {
+    if (!mesh.geometry.boundingBox) mesh.geometry.computeBoundingBox();
+    const b = mesh.geometry.boundingBox;
+    const view = new THREE.Vector3();
+    let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+    for (let i = 0; i < 8; i++) {
+      const p = new THREE.Vector3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z).applyMatrix4(mesh.matrixWorld);
+      view.copy(p).applyMatrix4(camera.matrixWorldInverse);
+      if (camera.isPerspectiveCamera && view.z > -camera.near) return { x, y, w, h };
+      p.project(camera);
+      x0 = Math.min(x0, p.x); x1 = Math.max(x1, p.x); y0 = Math.min(y0, p.y); y1 = Math.max(y1, p.y);
+    }
+    const left = Math.max(x, Math.floor(x + (x0 * 0.5 + 0.5) * w - pad));
+    const right = Math.min(x + w, Math.ceil(x + (x1 * 0.5 + 0.5) * w + pad));
+    const bottom = Math.max(y, Math.floor(y + (y0 * 0.5 + 0.5) * h - pad));
+    const top = Math.min(y + h, Math.ceil(y + (y1 * 0.5 + 0.5) * h + pad));
+    if (right <= left || top <= bottom) return null;
+    return { x: left, y: bottom, w: right - left, h: top - bottom };
+  }
+
   setSelection(sel) {
     this.selection = sel;
-    if (this.outline) {
-      this.outline.parent?.remove(this.outline);
-      this.outline.geometry.dispose();
-      this.outline = null;
-    }
-    if (this.selectionBox) {
-      this.scene.remove(this.selectionBox);
-      this.selectionBox.geometry.dispose();
-      this.selectionBox = null;
-    }
     this.gizmo.detach();
     const object = this.objectOf(sel);
     if (!object) return;
-    // The box shows curved shapes too, whose edges alone draw nothing.
-    this.selectionBox = new THREE.BoxHelper(object.mesh, OUTLINE_COLOR);
-    this.selectionBox.layers.enableAll();
-    this.scene.add(this.selectionBox);
-    const edges = new THREE.EdgesGeometry(object.mesh.geometry, 25);
-    const outline = new THREE.LineSegments(edges, new THREE.LineBasicMaterial({ color: OUTLINE_COLOR, depthTest: false }));
-    outline.renderOrder = 10;
-    outline.layers.enableAll();
-    outline.position.copy(object.mesh.position);
-    outline.quaternion.copy(object.mesh.quaternion);
-    object.holder.add(outline);
-    this.outline = outline;
     const movable = object.kind === 'mesh' || object.kind === 'area' || object.kind === 'point' || object.kind === 'spot' || object.kind === 'camera';
     if (movable) {
       // Point and spot lights and the camera move only.
@@ -479,7 +563,6 @@ export class Viewport {
   draw() {
     const height = this.canvas.clientHeight;
     this.headlight.position.copy(this.perspective.position);
-    if (this.selectionBox) this.selectionBox.update();
     for (const r of this.rects()) {
       const view = r.view;
       const rendered = this.rendered && view === this.views[3] && this.frameTexture;
@@ -494,6 +577,7 @@ export class Viewport {
       this.renderer.setViewport(r.x, y, r.w, r.h);
       this.renderer.setScissor(r.x, y, r.w, r.h);
       this.renderer.render(this.scene, view.camera);
+      this.drawOutline(view.camera, r.x, y, r.w, r.h);
     }
     this.gizmo.camera = this.activeView.camera;
   }

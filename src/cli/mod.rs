@@ -25,6 +25,7 @@ macro_rules! note {
 pub mod bench;
 pub mod devices;
 pub mod diff;
+pub mod export;
 pub mod merge;
 mod parse;
 pub mod render;
@@ -61,4 +62,6 @@ pub enum Command {
     Merge(merge::MergeArgs),
     /// Edit a scene in the browser with a live rendered preview (prints the URL to open)
     Serve(serve::ServeArgs),
+    /// Write a scene's geometry, materials and camera as glTF 2.0 binary (.glb)
+    Export(export::ExportArgs),
 }

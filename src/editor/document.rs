@@ -17,6 +17,8 @@ use crate::scene::{parse_scene_with_origins, Scene, SceneOrigins};
 const MAX_UNDO: usize = 200;
 /// Array nesting accepted in an edit's value (a colour map is two deep).
 const MAX_VALUE_DEPTH: usize = 4;
+/// Longest string an edit may carry.
+const MAX_STRING_BYTES: usize = 4096;
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum EditError {
@@ -112,6 +114,17 @@ pub enum Command {
     /// "<name>_copy"), to the file.
     Duplicate {
         target: Target,
+    },
+    /// Points a material's colour or scalar `field` (`reflectance`, `roughness`, ...) at an
+    /// image in the scene's folder: adds `[textures.<file's stem>]` of `type = "image"` (or
+    /// reuses the texture that already reads `file`) and sets `field = { texture = "..." }`,
+    /// in one step (one undo). `linear` reads the image as data rather than sRGB colour.
+    SetTexture {
+        material: String,
+        field: String,
+        file: String,
+        #[serde(default)]
+        linear: bool,
     },
     /// Appends a new shape, light or material (`name` is the material's) made of `table`.
     Add {
@@ -461,6 +474,23 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
             }
             _ => Err(bad(format!("{} cannot be duplicated", target.describe()))),
         },
+        Command::SetTexture { material, field, file, linear } => {
+            check_key(field)?;
+            if matches!(field.as_str(), "type" | "name" | "materials") {
+                return Err(bad(format!("`{field}` cannot take a texture")));
+            }
+            if file.is_empty() || file.len() > MAX_STRING_BYTES {
+                return Err(bad("`file` takes a path relative to the scene's folder"));
+            }
+            let target = Target::Material(material.clone());
+            target_table(doc, &target)?;
+            let name = texture_for(doc, file, *linear)?;
+            let mut reference = toml_edit::InlineTable::new();
+            reference.insert("texture", Value::from(name));
+            let table = target_table(doc, &target)?;
+            set_key(table, field, Value::InlineTable(reference), false);
+            Ok(())
+        }
         Command::Add { kind, table, name } => {
             let mut new = Table::new();
             for (key, value) in table {
@@ -503,6 +533,84 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
             Ok(())
         }
     }
+}
+
+/// The name of an image texture reading `file` (with the colour space `linear` asks for): the
+/// one the scene has, else a new `[textures.<stem>]` (`<stem>_2`, ... when the name is taken).
+fn texture_for(doc: &mut DocumentMut, file: &str, linear: bool) -> Result<String, EditError> {
+    let space = if linear { "linear" } else { "srgb" };
+    if doc.get("textures").is_none() {
+        let mut textures = Table::new();
+        textures.set_implicit(true);
+        doc.insert("textures", Item::Table(textures));
+    }
+    let textures = doc["textures"].as_table_like_mut().ok_or_else(|| bad("`textures` is not a table"))?;
+    for (name, item) in textures.iter() {
+        let Some(t) = item.as_table_like() else { continue };
+        let same_file = t.get("file").and_then(|f| f.as_str()) == Some(file);
+        let same_space = t.get("color_space").and_then(|c| c.as_str()).unwrap_or("srgb") == space;
+        let plain = t.get("transform").is_none() && t.get("channel").is_none();
+        if t.get("type").and_then(|t| t.as_str()) == Some("image") && same_file && same_space && plain {
+            return Ok(name.to_string());
+        }
+    }
+    let stem = Path::new(file).file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mut base: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '_' { c } else { '_' }).collect();
+    if !base.starts_with(|c: char| c.is_ascii_alphabetic()) {
+        base = format!("image_{base}");
+    }
+    let mut name = base.clone();
+    let mut n = 2;
+    while textures.contains_key(&name) {
+        name = format!("{base}_{n}");
+        n += 1;
+    }
+    let mut table = Table::new();
+    table.insert("type", toml_edit::value("image"));
+    table.insert("file", toml_edit::value(file));
+    if linear {
+        table.insert("color_space", toml_edit::value("linear"));
+    }
+    textures.insert(&name, Item::Table(table));
+    Ok(name)
+}
+
+/// Image files (what `[textures.*]` reads: PNG, JPEG, OpenEXR, Radiance HDR) in `folder` and
+/// its subfolders, as paths relative to it with `/`, sorted; hidden entries skipped, symbolic
+/// links followed only while they stay inside the folder, at most `limit` files.
+pub fn image_files(folder: &Path, limit: usize) -> Vec<String> {
+    const EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "exr", "hdr"];
+    const MAX_DEPTH: usize = 4;
+    let mut out = Vec::new();
+    let mut stack = vec![(folder.to_path_buf(), 0usize)];
+    while let Some((dir, depth)) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for entry in entries.flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if name.starts_with('.') {
+                continue;
+            }
+            let path = entry.path();
+            let Ok(resolved) = path.canonicalize() else { continue };
+            if !resolved.starts_with(folder) {
+                continue;
+            }
+            if resolved.is_dir() {
+                if depth < MAX_DEPTH {
+                    stack.push((path, depth + 1));
+                }
+            } else if Path::new(&name).extension().is_some_and(|e| EXTENSIONS.iter().any(|x| e.eq_ignore_ascii_case(x)))
+            {
+                if let Ok(relative) = path.strip_prefix(folder) {
+                    let parts: Vec<String> = relative.iter().map(|p| p.to_string_lossy().into_owned()).collect();
+                    out.push(parts.join("/"));
+                }
+            }
+        }
+    }
+    out.sort();
+    out.truncate(limit);
+    out
 }
 
 /// A copy of `table`'s fields as a new table (no comments, no place in the file yet, so it
@@ -644,7 +752,7 @@ fn json_to_toml(value: &Json, depth: usize) -> Result<Value, EditError> {
             None => number(n.as_f64().ok_or_else(|| bad("the number is out of range"))?)?,
         },
         Json::String(s) => {
-            if s.len() > 4096 {
+            if s.len() > MAX_STRING_BYTES {
                 return Err(bad("strings are limited to 4096 bytes"));
             }
             Value::from(s.as_str())

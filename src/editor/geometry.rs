@@ -180,7 +180,7 @@ fn material_color(scene: &Scene, id: usize) -> ([f32; 3], bool) {
 }
 
 /// Appends the world-space triangles of `geometry` to `out`.
-fn triangles(geometry: &Geometry, lo: Vec3, hi: Vec3, extent: f32, out: &mut Vec<f32>) {
+pub(super) fn triangles(geometry: &Geometry, lo: Vec3, hi: Vec3, extent: f32, out: &mut Vec<f32>) {
     let mut push = |t: [Vec3; 3]| {
         for v in t {
             out.extend_from_slice(&v.to_array());

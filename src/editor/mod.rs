@@ -3,11 +3,13 @@
 //! the file as a `toml_edit` document, edits as small commands checked by the scene parser)
 //! and one renderer (`preview.rs`: a thread with the GPU or CPU backend kept alive between
 //! frames); the page (`web/`, embedded by `assets.rs`) draws the geometry (`geometry.rs`) with
-//! three.js and shows the rendered frames.
+//! three.js and shows the rendered frames; `gltf.rs` writes the same geometry as glTF 2.0 for
+//! the page's download and `photonix export`.
 
 mod assets;
 pub mod document;
 pub mod geometry;
+pub mod gltf;
 pub mod preview;
 pub mod server;
 

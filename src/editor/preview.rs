@@ -2,15 +2,17 @@
 //! and the final render of the scene's camera.
 //!
 //! The preview restarts whenever the scene or the view changes (a new *generation*), first at a
-//! quarter of the preview size with few photons and no final gathering (the edit shows within a
-//! fraction of a second), then at half size, then at the full preview size with the scene's
-//! photon settings, pass after pass (progressive photon mapping, docs/progressive.md) until
-//! `MAX_PREVIEW_PASSES`. A change during a pass stops it after the dispatch under way (the
-//! renderer's stop flag) and the new generation starts at once.
+//! quarter of the preview size with direct light only (no photons: the edit shows within a
+//! fraction of a second), then at half size with an eighth of the photons and no final
+//! gathering, then at the full preview size with the scene's photon settings, pass after pass
+//! (progressive photon mapping, docs/progressive.md) until `MAX_PREVIEW_PASSES`. A change during
+//! a step stops it within `PREVIEW_STOP_PATHS` paths (photon tracing included: the renderer's
+//! stop flag, looked at between small submissions) and the new generation starts at once.
 //!
 //! On the GPU backend the `GpuRenderer` (device, kernels, buffers) lives as long as the thread:
-//! a change re-prepares the scene and `update_scene` rewrites its arrays in place where their
-//! sizes allow. The final render runs on the same thread and renderer, with the scene as it was
+//! a change re-prepares the scene and `update_scene` writes only the arrays that changed (an
+//! edit of a material writes the material array), in place where their sizes allow; passes of
+//! one scene, view and size reuse the prepared scene and upload nothing. The final render runs on the same thread and renderer, with the scene as it was
 //! when it started; it goes on when every page is closed, and the preview waits for it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -26,11 +28,18 @@ use crate::gpu::{GpuContext, GpuOptions};
 use crate::io::Image;
 use crate::render::gpu::GpuRenderer;
 use crate::render::progressive::{Accumulator, Budget};
-use crate::render::{prepare, render_cpu, set_thread_stop_flag, FrameSettings, PhotonSettings, RenderOutput};
+use crate::render::{
+    prepare, render_cpu, set_thread_stop_flag, set_thread_stop_paths, FrameSettings, PhotonSettings, RenderOutput,
+};
 use crate::scene::{Projection, Scene};
 
 /// Passes of the full-size preview before it stops refining.
 pub const MAX_PREVIEW_PASSES: u32 = 64;
+/// Paths (photon or camera) between two looks at the stop flag in a preview step: on lavapipe
+/// with two busy cores 4096 camera paths of cornell-box take about 80 ms (16k: 300 ms), so a
+/// stale step ends within the half second an edit may take to show, and the passes' rate did
+/// not measurably drop (BENCHMARKS.md); a real GPU pays a few microseconds per submission.
+const PREVIEW_STOP_PATHS: u64 = 1 << 12;
 /// Largest final render the editor accepts, in pixels (the scene's resolution).
 const MAX_FINAL_PIXELS: u64 = 4096 * 4096;
 
@@ -258,40 +267,104 @@ impl Drop for Renderer {
     }
 }
 
-/// One backend: the CPU twin, or a `GpuRenderer` kept across frames.
-enum Backend<'a> {
-    Cpu,
-    Gpu { ctx: &'a GpuContext, renderer: Option<Box<GpuRenderer<'a>>> },
+/// What a step cost besides its render: preparing the scene (BVH and arrays) and writing it to
+/// the device. A step that renders the scene, view and size of the step before reuses both.
+#[derive(Debug, Default)]
+struct StepCost {
+    prepare_ms: f64,
+    upload_ms: f64,
+    /// The scene arrays written to the device (GPU backend): only those that changed.
+    written: Vec<&'static str>,
+}
+
+/// The scene the backend prepared last, kept while the scene, the view and the size stay (the
+/// `Arc` held here keeps its address from being reused by another scene).
+struct Prepared {
+    scene: Arc<Scene>,
+    view: Option<View>,
+    settings: FrameSettings,
+    buffers: crate::render::SceneBuffers,
+}
+
+/// One backend: the CPU twin, or a `GpuRenderer` kept across frames; with the scene prepared last.
+struct Backend<'a> {
+    gpu: Option<(&'a GpuContext, Option<Box<GpuRenderer<'a>>>)>,
+    prepared: Option<Prepared>,
+    /// The photon settings the device's frame constants hold.
+    device_photons: Option<PhotonSettings>,
 }
 
 impl Backend<'_> {
+    /// Renders pass `pass` of `scene`, seen from `view` when given (else its own camera), at the
+    /// size of `settings`.
     fn render(
         &mut self,
-        scene: &Scene,
+        scene: &Arc<Scene>,
+        view: Option<&View>,
         settings: &FrameSettings,
         photons: Option<&PhotonSettings>,
         spp: u32,
         pass: u32,
-    ) -> Result<RenderOutput, String> {
-        let buffers = prepare(scene, settings).map_err(|e| e.to_string())?;
-        if let Some(p) = photons {
-            crate::render::photons::check_radii(&buffers, p).map_err(|e| e.to_string())?;
-        }
-        match self {
-            Backend::Cpu => Ok(render_cpu(&buffers, spp, photons, pass, &mut |_, _| {})),
-            Backend::Gpu { ctx, renderer } => {
-                match renderer {
-                    Some(r) => {
-                        r.update_scene(&buffers, photons).map_err(|e| e.to_string())?;
+    ) -> Result<(RenderOutput, StepCost), String> {
+        let mut cost = StepCost::default();
+        let same = self.prepared.as_ref().is_some_and(|p| {
+            let (a, b) = (&p.settings, settings);
+            let same_settings = (a.width, a.height, a.max_depth, a.seed) == (b.width, b.height, b.max_depth, b.seed);
+            Arc::ptr_eq(&p.scene, scene) && p.view.as_ref() == view && same_settings
+        });
+        if !same {
+            let t = Instant::now();
+            let viewed;
+            let target: &Scene = match view {
+                Some(v) => {
+                    viewed = view_scene(scene, v, settings.width, settings.height);
+                    if viewed.camera.basis().is_none() {
+                        return Err("the view's up direction is parallel to its direction of view".into());
                     }
-                    None => {
-                        *renderer = Some(Box::new(GpuRenderer::new(ctx, &buffers, photons).map_err(|e| e.to_string())?))
-                    }
+                    &viewed
                 }
-                let r = renderer.as_mut().expect("made just above");
-                r.render_pass(spp, pass, &mut |_, _| {}).map_err(|e| e.to_string())
+                None => scene,
+            };
+            let buffers = prepare(target, settings).map_err(|e| e.to_string())?;
+            self.prepared = Some(Prepared { scene: scene.clone(), view: view.copied(), settings: *settings, buffers });
+            cost.prepare_ms = t.elapsed().as_secs_f64() * 1e3;
+        }
+        let buffers = &self.prepared.as_ref().expect("prepared just above").buffers;
+        if let Some(p) = photons {
+            crate::render::photons::check_radii(buffers, p).map_err(|e| e.to_string())?;
+        }
+        let Some((ctx, renderer)) = &mut self.gpu else {
+            return Ok((render_cpu(buffers, spp, photons, pass, &mut |_, _| {}), cost));
+        };
+        let err = |e: crate::gpu::GpuError| e.to_string();
+        let t = Instant::now();
+        match renderer {
+            Some(r) => {
+                if !same || self.device_photons.as_ref() != photons {
+                    if let Err(e) = r.update_scene(buffers, photons) {
+                        // The device does not hold this scene: the next step must upload it.
+                        self.prepared = None;
+                        return Err(err(e));
+                    }
+                    cost.written = r.last_written().to_vec();
+                }
+            }
+            None => {
+                // Made with the scene's photon settings, so that the photon kernels are created
+                // now and not in the first step that traces photons.
+                let mut r = GpuRenderer::new(ctx, buffers, photons.or(scene.photons.as_ref())).map_err(err)?;
+                if photons.is_none() {
+                    r.update_scene(buffers, None).map_err(err)?;
+                }
+                *renderer = Some(Box::new(r));
+                cost.written = vec!["all"];
             }
         }
+        self.device_photons = photons.copied();
+        cost.upload_ms = t.elapsed().as_secs_f64() * 1e3;
+        let r = renderer.as_mut().expect("made just above");
+        let out = r.render_pass(spp, pass, &mut |_, _| {}).map_err(err)?;
+        Ok((out, cost))
     }
 }
 
@@ -315,11 +388,16 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         None => format!("cpu ({} threads)", rayon::current_num_threads()),
     };
     set_thread_stop_flag(Some(shared.stop.clone()));
-    let _ = ready.send(Ok(device.clone()));
-    let mut backend = match &ctx {
-        Some(ctx) => Backend::Gpu { ctx, renderer: None },
-        None => Backend::Cpu,
+    // PHOTONIX_PREVIEW_STOP_PATHS overrides the step's stop granularity (0: the backends' own
+    // submissions), to weigh latency against throughput on a given device.
+    let stop_paths = match std::env::var("PHOTONIX_PREVIEW_STOP_PATHS").ok().and_then(|v| v.parse::<u64>().ok()) {
+        Some(0) => None,
+        Some(paths) => Some(paths),
+        None => Some(PREVIEW_STOP_PATHS),
     };
+    set_thread_stop_paths(stop_paths);
+    let _ = ready.send(Ok(device.clone()));
+    let mut backend = Backend { gpu: ctx.as_ref().map(|ctx| (ctx, None)), prepared: None, device_photons: None };
     let mut preview = PreviewState::default();
     loop {
         // Wait for work: a final render, or a preview step still to do.
@@ -340,7 +418,11 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
             s.mode = Mode::Final;
             shared.stop.store(false, Ordering::SeqCst);
             drop(s);
+            // The final render's submissions are the backends' own (fewer, larger); a cancel
+            // waits for the one under way.
+            set_thread_stop_paths(None);
             final_render(&shared, &mut backend, &request, &scene);
+            set_thread_stop_paths(stop_paths);
             let mut s = shared.state.lock().expect("renderer state lock");
             s.mode = Mode::Preview;
             // The preview starts again from its first step.
@@ -364,7 +446,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         let result = preview_step(&mut backend, &scene, &view, preview_size, &mut preview);
         let current = shared.state.lock().expect("renderer state lock").generation == generation;
         match result {
-            Ok(Some(image)) if current => {
+            Ok(Some((image, cost))) if current => {
                 preview.step += 1;
                 let png = encode_png(&image, 0.0);
                 let header = json!({
@@ -376,6 +458,9 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                     "width": image.width,
                     "height": image.height,
                     "render_ms": t.elapsed().as_secs_f64() * 1e3,
+                    "prepare_ms": cost.prepare_ms,
+                    "upload_ms": cost.upload_ms,
+                    "uploaded": cost.written,
                     "since_change_ms": changed_at.elapsed().as_secs_f64() * 1e3,
                     "device": device,
                 });
@@ -436,36 +521,32 @@ fn preview_resolution(view: &View, preview_size: u32, level_divisor: u32) -> (u3
 /// Renders one preview step; `None` when a change stopped it.
 fn preview_step(
     backend: &mut Backend,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     view: &View,
     preview_size: u32,
     preview: &mut PreviewState,
-) -> Result<Option<Image>, String> {
+) -> Result<Option<(Image, StepCost)>, String> {
     let step = preview.step;
     let (divisor, photons, pass) = match step {
-        // A quick look: a sixteenth of the pixels, an eighth of the photons, the global map read
-        // directly (no final gathering); then a quarter of the pixels and of the photons, one
-        // final-gather ray.
-        0 => (4, scene.photons.map(|p| scaled(p, 8, 0)), 0),
-        1 => (2, scene.photons.map(|p| scaled(p, 4, p.gather_rays.min(1))), 0),
+        // A quick look: a sixteenth of the pixels and direct light only (no photon tracing, so
+        // an edit shows at once even on lavapipe); then a quarter of the pixels with an eighth
+        // of the photons, the global map read directly (no final gathering).
+        0 => (4, None, 0),
+        1 => (2, scene.photons.map(|p| scaled(p, 8, 0)), 0),
         _ => (1, scene.photons, step - 2),
     };
     let (width, height) = preview_resolution(view, preview_size, divisor);
-    let viewed = view_scene(scene, view, width, height);
-    if viewed.camera.basis().is_none() {
-        return Err("the view's up direction is parallel to its direction of view".into());
-    }
     let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
-    let out = backend.render(&viewed, &settings, photons.as_ref(), 1, pass)?;
+    let (out, cost) = backend.render(scene, Some(view), &settings, photons.as_ref(), 1, pass)?;
     if !out.complete {
         return Ok(None);
     }
     if step < 2 {
-        return Ok(Some(out.image));
+        return Ok(Some((out.image, cost)));
     }
     let acc = preview.accumulator.get_or_insert_with(|| Accumulator::new(width, height));
     acc.add(pass, &out);
-    Ok(Some(acc.mean().combined()))
+    Ok(Some((acc.mean().combined(), cost)))
 }
 
 /// Photon settings with `1/divisor` of the paths (at least 1000) and `gather_rays` final
@@ -480,7 +561,7 @@ fn scaled(p: PhotonSettings, divisor: u32, gather_rays: u32) -> PhotonSettings {
 }
 
 /// Runs a final render, publishing its status after every pass.
-fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, scene: &Scene) {
+fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, scene: &Arc<Scene>) {
     let start = Instant::now();
     let passes = request.passes.unwrap_or(if request.seconds.is_some() {
         crate::limits::MAX_PASSES
@@ -539,7 +620,9 @@ fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, 
         settings.width,
         settings.height,
         &budget,
-        |pass| backend.render(scene, &settings, scene.photons.as_ref(), scene.render.spp, pass),
+        |pass| {
+            backend.render(scene, None, &settings, scene.photons.as_ref(), scene.render.spp, pass).map(|(out, _)| out)
+        },
         |acc, _| {
             publish(status("running", Some(acc), None), Some(acc.mean().combined()));
             Ok(())

@@ -5,6 +5,9 @@
 //! - `GET /api/scene`: the scene as the page sees it (`geometry::scene_json`);
 //! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save`;
 //! - `GET /api/scene.toml`: the scene's current text (a download);
+//! - `GET /api/scene.glb`: the scene's geometry as glTF 2.0 binary (`gltf.rs`, a download);
+//! - `GET /api/images`: the image files in the scene's folder (`{"images": ["textures/a.png"]}`),
+//!   for the texture picker;
 //! - `POST /api/import?name=F.obj&material=M`: the body is written to F.obj in the scene's folder
 //!   and a mesh shape using it is added;
 //! - `POST /api/render` (`FinalRequest`), `/api/render/cancel`, `GET /api/render/status`,
@@ -192,6 +195,8 @@ fn router(app: Arc<App>) -> Router {
     Router::new()
         .route("/api/scene", get(get_scene))
         .route("/api/scene.toml", get(download_scene))
+        .route("/api/scene.glb", get(download_glb))
+        .route("/api/images", get(list_images))
         .route("/api/edit", post(post_edit))
         .route("/api/undo", post(post_undo))
         .route("/api/redo", post(post_redo))
@@ -304,6 +309,32 @@ async fn download_scene(State(app): State<Arc<App>>) -> Response {
         text,
     )
         .into_response()
+}
+
+/// Most image files the texture picker lists.
+const MAX_LISTED_IMAGES: usize = 1000;
+
+async fn list_images(State(app): State<Arc<App>>) -> Response {
+    let folder = app.doc.lock().expect("document lock").folder().to_path_buf();
+    match tokio::task::spawn_blocking(move || super::document::image_files(&folder, MAX_LISTED_IMAGES)).await {
+        Ok(images) => axum::Json(json!({ "images": images })).into_response(),
+        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
+    }
+}
+
+async fn download_glb(State(app): State<Arc<App>>) -> Response {
+    let made = tokio::task::spawn_blocking(move || {
+        let doc = app.doc.lock().expect("document lock");
+        let stem = doc.path().file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let stem: String = stem.chars().filter(|c| c.is_ascii_alphanumeric() || "._-".contains(*c)).collect();
+        super::gltf::scene_glb(&doc).map(|bytes| (bytes, format!("{stem}.glb")))
+    })
+    .await;
+    match made {
+        Ok(Ok((bytes, name))) => download(bytes, "model/gltf-binary", &name),
+        Ok(Err(message)) => error(StatusCode::INTERNAL_SERVER_ERROR, &message),
+        Err(e) => error(StatusCode::INTERNAL_SERVER_ERROR, &e.to_string()),
+    }
 }
 
 /// What changes the document.

@@ -203,8 +203,35 @@ impl DeviceScene {
         buffers: &SceneBuffers,
         photons: Option<&PhotonSettings>,
     ) -> Result<u32, GpuError> {
-        fn replace<T: bytemuck::Pod>(ctx: &GpuContext, buffer: &mut Buffer, data: &[T]) -> Result<u32, GpuError> {
+        Ok(self.update_changed(ctx, buffers, photons, None)?.0)
+    }
+
+    /// [`DeviceScene::update`], leaving alone each array equal to that of `previous` (the scene
+    /// and photon settings the device holds): an editor's change of one material writes the
+    /// material array only. Returns how many arrays kept their buffer (of 9; unchanged ones
+    /// count) and the names of the arrays written.
+    pub fn update_changed(
+        &mut self,
+        ctx: &GpuContext,
+        buffers: &SceneBuffers,
+        photons: Option<&PhotonSettings>,
+        previous: Option<(&SceneBuffers, Option<&PhotonSettings>)>,
+    ) -> Result<(u32, Vec<&'static str>), GpuError> {
+        fn replace<T: bytemuck::Pod>(
+            ctx: &GpuContext,
+            buffer: &mut Buffer,
+            data: &[T],
+            old: Option<&[T]>,
+            written: &mut Vec<&'static str>,
+            name: &'static str,
+        ) -> Result<u32, GpuError> {
             let bytes = std::mem::size_of_val(data) as u64;
+            if bytes == buffer.size()
+                && old.is_some_and(|old| bytemuck::cast_slice::<T, u8>(old) == bytemuck::cast_slice::<T, u8>(data))
+            {
+                return Ok(1);
+            }
+            written.push(name);
             if bytes == buffer.size() {
                 ctx.write(buffer, data)?;
                 Ok(1)
@@ -214,16 +241,61 @@ impl DeviceScene {
             }
         }
         let frame = photon_frame(buffers, photons);
+        let old_frame = previous.map(|(b, p)| photon_frame(b, p));
         self.variant = buffers.variant();
-        Ok(replace(ctx, &mut self.frame, std::slice::from_ref(&frame))?
-            + replace(ctx, &mut self.nodes, &buffers.nodes)?
-            + replace(ctx, &mut self.primitives, &buffers.primitives)?
-            + replace(ctx, &mut self.materials, &buffers.materials)?
-            + replace(ctx, &mut self.lights, &buffers.lights)?
-            + replace(ctx, &mut self.textures, &buffers.textures)?
-            + replace(ctx, &mut self.texture_data, &buffers.texture_data)?
-            + replace(ctx, &mut self.shape_data, &buffers.shape_data)?
-            + replace(ctx, &mut self.media, device_media(buffers))?)
+        let mut written = Vec::new();
+        let w = &mut written;
+        let kept = replace(
+            ctx,
+            &mut self.frame,
+            std::slice::from_ref(&frame),
+            old_frame.as_ref().map(std::slice::from_ref),
+            w,
+            "frame",
+        )? + replace(ctx, &mut self.nodes, &buffers.nodes, previous.map(|(b, _)| &b.nodes[..]), w, "nodes")?
+            + replace(
+                ctx,
+                &mut self.primitives,
+                &buffers.primitives,
+                previous.map(|(b, _)| &b.primitives[..]),
+                w,
+                "primitives",
+            )?
+            + replace(
+                ctx,
+                &mut self.materials,
+                &buffers.materials,
+                previous.map(|(b, _)| &b.materials[..]),
+                w,
+                "materials",
+            )?
+            + replace(ctx, &mut self.lights, &buffers.lights, previous.map(|(b, _)| &b.lights[..]), w, "lights")?
+            + replace(
+                ctx,
+                &mut self.textures,
+                &buffers.textures,
+                previous.map(|(b, _)| &b.textures[..]),
+                w,
+                "textures",
+            )?
+            + replace(
+                ctx,
+                &mut self.texture_data,
+                &buffers.texture_data,
+                previous.map(|(b, _)| &b.texture_data[..]),
+                w,
+                "texture_data",
+            )?
+            + replace(
+                ctx,
+                &mut self.shape_data,
+                &buffers.shape_data,
+                previous.map(|(b, _)| &b.shape_data[..]),
+                w,
+                "shape_data",
+            )?
+            + replace(ctx, &mut self.media, device_media(buffers), previous.map(|(b, _)| device_media(b)), w, "media")?;
+        Ok((kept, written))
     }
 
     /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
@@ -334,10 +406,14 @@ fn emit(
         let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
         let counters = ctx.create_buffer("photon_counters", 12)?;
         let mut begin = 0;
-        while begin < params.total_paths {
+        let per_dispatch =
+            super::thread_stop_paths().map_or(PATHS_PER_DISPATCH, |p| p.min(PATHS_PER_DISPATCH as u64) as u32);
+        // A stopped trace keeps the photons of the dispatches done; the render then stops
+        // before its camera kernel reads them.
+        while begin < params.total_paths && !super::stop_requested() {
             let mut p = params;
             p.path_begin = begin;
-            p.path_count = PATHS_PER_DISPATCH.min(params.total_paths - begin);
+            p.path_count = per_dispatch.min(params.total_paths - begin);
             p.global_capacity = if caustic { 0 } else { capacity as u32 };
             p.caustic_capacity = if caustic { capacity as u32 } else { 0 };
             p.volume_capacity = if volume { volume_capacity as u32 } else { 0 };
@@ -480,7 +556,14 @@ fn build_maps(
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
     let r_volume = volume_radius(buffers, settings, volume_count, pass);
     let g_volume = map_grid(buffers, r_volume, volume_count, settings.photons);
+    // A stopped render uses no map: skip the grid builds (seconds on lavapipe) of a stale pass.
+    if super::stop_requested() {
+        return no_maps(ctx);
+    }
     let global = build_map(ctx, kernels, global_photons, g_global, "global")?;
+    if super::stop_requested() {
+        return no_maps(ctx);
+    }
     let caustic = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")?;
     let volume = build_map(ctx, kernels, volume_photons, g_volume, "volume")?;
     let grids = ctx.upload("grids", &[g_global, g_caustic, g_volume])?;
@@ -517,6 +600,10 @@ pub struct GpuRenderer<'a> {
     photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
     setup_time: Duration,
+    /// The arrays the last `update_scene` wrote (those that changed).
+    last_written: Vec<&'static str>,
+    /// Set while an `update_scene` runs: one that failed leaves the device's arrays unknown.
+    device_mixed: bool,
 }
 
 impl<'a> GpuRenderer<'a> {
@@ -540,6 +627,8 @@ impl<'a> GpuRenderer<'a> {
             accumulation: None,
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
+            last_written: Vec::new(),
+            device_mixed: false,
         })
     }
 
@@ -553,12 +642,24 @@ impl<'a> GpuRenderer<'a> {
         self.ctx
     }
 
-    /// Replaces the scene (and the photon settings) without recreating the kernels: arrays that
-    /// keep their size are rewritten in their buffers. Returns how many of the 9 scene arrays
-    /// were written in place.
+    /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
+    /// differ from the scene it held ("frame", "nodes", "primitives", "materials", ...).
+    pub fn last_written(&self) -> &[&'static str] {
+        &self.last_written
+    }
+
+    /// Replaces the scene (and the photon settings) without recreating the kernels: arrays equal
+    /// to the current ones are left alone, others that keep their size are rewritten in their
+    /// buffers. Returns how many of the 9 scene arrays kept their buffers (unchanged ones
+    /// count; [`GpuRenderer::last_written`] names those written).
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
-        let in_place = self.scene.update(self.ctx, buffers, photons)?;
+        // After a failed update the device may hold a mix of the two scenes: compare with nothing.
+        let previous = (!self.device_mixed).then_some((&self.buffers, self.photons.as_ref()));
+        self.device_mixed = true;
+        let (in_place, written) = self.scene.update_changed(self.ctx, buffers, photons, previous)?;
+        self.device_mixed = false;
+        self.last_written = written;
         if buffers.variant() != self.kernels.variant() {
             self.kernels = GpuKernels::for_scene(buffers.variant());
             self.kernels.create_all(self.ctx, photons.is_some())?;
@@ -607,6 +708,7 @@ impl<'a> GpuRenderer<'a> {
                 f.width
             )));
         }
+        let max_rows = super::stop_band_rows(f.width, max_rows);
         let bytes = max_rows as u64 * row_bytes;
         if self.accumulation.as_ref().is_none_or(|(b, w)| b.size() != bytes || *w != f.width) {
             self.accumulation = Some((ctx.create_buffer("accumulation", bytes)?, f.width));
@@ -632,7 +734,7 @@ impl<'a> GpuRenderer<'a> {
             let mut paths = first.row_count as u64 * f.width as u64;
             batch.clear();
             batch.push(first);
-            while paths < PATHS_PER_SUBMIT {
+            while paths < super::thread_stop_paths().unwrap_or(PATHS_PER_SUBMIT) {
                 let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
                 paths += unit.row_count as u64 * f.width as u64;
                 batch.push(unit);

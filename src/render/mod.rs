@@ -266,6 +266,31 @@ pub fn set_thread_stop_flag(flag: Option<std::sync::Arc<AtomicBool>>) {
     THREAD_STOP.with(|f| *f.borrow_mut() = flag);
 }
 
+thread_local! {
+    /// At most this many paths (photon or camera) between two looks at the stop flags on this
+    /// thread; `None` leaves each backend its own, larger, submissions.
+    static THREAD_STOP_PATHS: std::cell::Cell<Option<u64>> = const { std::cell::Cell::new(None) };
+}
+
+/// Makes renders on the calling thread look at the stop flags at least every `paths` paths,
+/// photon tracing included: an interactive preview (the editor) must drop a stale pass within
+/// a fraction of a second, which whole passes on lavapipe or the CPU take seconds to reach. The
+/// image is the same; only the submissions are smaller.
+pub fn set_thread_stop_paths(paths: Option<u64>) {
+    THREAD_STOP_PATHS.with(|p| p.set(paths.map(|p| p.max(1))));
+}
+
+/// The calling thread's `set_thread_stop_paths`.
+pub fn thread_stop_paths() -> Option<u64> {
+    THREAD_STOP_PATHS.with(|p| p.get())
+}
+
+/// Rows of a band of `width`-pixel rows (at most `rows`) holding at most the thread's
+/// stop-check paths, for a render that looks at the stop flags between bands.
+pub fn stop_band_rows(width: u32, rows: u32) -> u32 {
+    thread_stop_paths().map_or(rows, |paths| rows.min((paths / width.max(1) as u64).max(1) as u32)).max(1)
+}
+
 pub fn stop_requested() -> bool {
     STOP.load(Ordering::Relaxed) || THREAD_STOP.with(|f| f.borrow().as_ref().is_some_and(|f| f.load(Ordering::Relaxed)))
 }
@@ -294,7 +319,8 @@ pub fn render_cpu(
 
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
-    let units = work_units(frame.height, spp, parts_per_sample(&frame), frame.height, pass);
+    let band_rows = stop_band_rows(frame.width, frame.height);
+    let units = work_units(frame.height, spp, parts_per_sample(&frame), band_rows, pass);
     let total = units.total_rows();
     let mut done = 0;
     let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];

@@ -34,6 +34,25 @@ pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) ->
     }
 }
 
+/// `emit_photons` of all of `params`' paths, in slices of the thread's stop-check size
+/// (`super::thread_stop_paths`) with a look at the stop flags before each: a stopped trace
+/// returns the photons of the slices done (the render then stops before using them). Paths draw
+/// their own random streams, so the slices together store the photons of one whole trace.
+fn emit_stoppable(view: &crate::cpu::SceneView, params: &EmitParams) -> crate::cpu::emit_photons::PhotonMaps {
+    let Some(slice) = super::thread_stop_paths() else { return emit_photons(view, params) };
+    let mut maps = crate::cpu::emit_photons::PhotonMaps::default();
+    let mut begin = 0;
+    while begin < params.total_paths && !super::stop_requested() {
+        let count = (params.total_paths - begin).min(slice.min(u32::MAX as u64) as u32);
+        let part = emit_photons(view, &EmitParams { path_begin: begin, path_count: count, ..*params });
+        maps.global.extend(part.global);
+        maps.caustic.extend(part.caustic);
+        maps.volume.extend(part.volume);
+        begin += count;
+    }
+    maps
+}
+
 /// Average photons inside a lookup ball the automatic volume radius aims at.
 pub const VOLUME_NEIGHBOURS: f32 = 64.0;
 
@@ -143,9 +162,9 @@ impl PhotonMaps {
 /// Traces both passes of `pass` and builds their grids, as the GPU does.
 pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> PhotonMaps {
     let view = buffers.view();
-    let emitted = emit_photons(&view, &emit_params(settings, pass, false));
+    let emitted = emit_stoppable(&view, &emit_params(settings, pass, false));
     let (global, volume) = (emitted.global, emitted.volume);
-    let caustic = emit_photons(&view, &emit_params(settings, pass, true)).caustic;
+    let caustic = emit_stoppable(&view, &emit_params(settings, pass, true)).caustic;
     let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32, pass);
     let g_global = map_grid(buffers, r_global, global.len() as u32, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);
