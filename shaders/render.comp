@@ -55,20 +55,24 @@ const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an esti
 const uint RAY_SHAFT = 3u;  // the shadow ray of an equiangular sample of a camera segment (media)
 
 // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries; with
-// media each camera segment may take three (its equiangular shadow ray, then its retrace).
+// media each camera segment may take three (its equiangular shadow ray, then its retrace); and
+// the extra shadow rays of an adaptive light (each with its crossings).
 #ifdef VARIANT_MEDIA
-#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS))
+#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS) + (ADAPTIVE_MAX_RAYS - 1u) * (1u + MEDIUM_CROSSINGS))
 #else
-#define LOOP_STEPS (2u * frame.max_depth + 1u)
+#define LOOP_STEPS (2u * frame.max_depth + 1u + ADAPTIVE_MAX_RAYS - 1u)
 #endif
 
 // Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
 // DispatchRange: part 0 is everything but the final gather, part k >= 1 is gather ray k - 1).
+// `penumbra_since`: the sample at which the pixel's earlier shadow rays toward adaptive lights
+// were first found some blocked, some not (NO_SAMPLE: not yet); this sample's rays toward them
+// are counted into `blocked` and `lit`.
 // The camera path, its shadow ray and its gather path are one loop with one `trace_ray`, one
 // `material_bsdf` and one `photon_radiance` in it (src/cpu/render.rs is the same loop): lavapipe
 // inlines every call site, so three traversals and two material evaluations made the kernel
 // three times the code, and as much slower to compile and to run.
-void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4], inout uint rays) {
+void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_since, inout vec3 terms[4], inout uint rays, inout uint blocked, inout uint lit) {
     uint stream = py * frame.width + px;
     // xy jitter the film position, zw sample the lens.
     vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
@@ -97,6 +101,12 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
     bool volume_e = false;     // the estimate vertex is a scattering point in a medium
     vec3 inv_sigma_t_e = vec3(0.0);
     vec3 unoccluded = vec3(0.0);
+    // The estimate vertex's shadow rays: this one, how many, toward an adaptive light, and the
+    // medium they start in.
+    uint shadow_ray = 0u;
+    uint shadow_rays = 1u;
+    bool shadow_adaptive = false;
+    uint medium_e = NO_MEDIUM;
     vec3 gather_weight = vec3(0.0);
     uint gdim = 0u;
     // Photon lookups at the estimate vertex, done after the loop: caustics and the preview, or
@@ -213,6 +223,19 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
 #endif
         if (ray == RAY_SHADOW) {
             if (prim == NO_LIGHT) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * unoccluded;
+            if (shadow_adaptive && t_max != NO_RAY) {
+                if (prim == NO_LIGHT) lit++; else blocked++;
+            }
+            shadow_ray++;
+            if (shadow_ray < shadow_rays) {
+                ShadowRay sr = direct_light_sample(he, be, wo_e, stream, sample_index, depth * RNG_DIMS_PER_BOUNCE, penumbra_since, shadow_ray);
+                unoccluded = sr.unoccluded;
+                o = sr.origin;
+                d = sr.direction;
+                t_max = sr.t_max;
+                medium = medium_e;
+                continue;
+            }
             if (frame.photon_mapping == 0u) break;
             if (volume_e) {
                 // A scattering point: the volume map without the single scattering, which the
@@ -308,7 +331,10 @@ void radiance(uint px, uint py, uint sample_index, uint part, inout vec3 terms[4
         volume_e = scattered;
         inv_sigma_t_e = inv_sigma_t;
         if (part == 0u) {
-            ShadowRay sr = direct_light_sample(h, b, wo, stream, sample_index, dim);
+            ShadowRay sr = direct_light_sample(h, b, wo, stream, sample_index, dim, penumbra_since, 0u);
+            shadow_rays = sr.rays;
+            shadow_adaptive = sr.adaptive;
+            medium_e = medium;
             unoccluded = sr.unoccluded;
             o = sr.origin;
             d = sr.direction;
@@ -343,12 +369,24 @@ void main() {
     uint py = range.row_begin + i / frame.width;
     vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     uint rays = 0u;
-    radiance(px, py, range.sample_index, range.part, terms, rays);
     uint base = i * LAYER_COUNT;
+    // w of the indirect and caustic layers: the pixel's shadow rays toward adaptive lights so
+    // far in this pass, blocked and not; w of the specular layer: 1 + the sample at which both
+    // were first seen (0: not yet), set by the first part 0 after it happens.
+    float since_w = accumulation[base + LAYER_SPECULAR].w;
+    uint penumbra_since = since_w > 0.0 ? uint(since_w) - 1u : NO_SAMPLE;
+    float since_set = 0.0;
+    if (range.part == 0u && penumbra_since == NO_SAMPLE && accumulation[base + LAYER_INDIRECT].w > 0.0 && accumulation[base + LAYER_CAUSTICS].w > 0.0) {
+        penumbra_since = range.sample_index;
+        since_set = float(range.sample_index + 1u);
+    }
+    uint blocked = 0u;
+    uint lit = 0u;
+    radiance(px, py, range.sample_index, range.part, penumbra_since, terms, rays, blocked, lit);
     // w of the direct layer counts rays; a float holds counts exactly up to 2^24 per pixel.
     // Each pixel belongs to one invocation, so plain read-modify-write is race-free.
     accumulation[base + LAYER_DIRECT] += vec4(terms[LAYER_DIRECT], float(rays));
-    accumulation[base + LAYER_SPECULAR] += vec4(terms[LAYER_SPECULAR], 0.0);
-    accumulation[base + LAYER_INDIRECT] += vec4(terms[LAYER_INDIRECT], 0.0);
-    accumulation[base + LAYER_CAUSTICS] += vec4(terms[LAYER_CAUSTICS], 0.0);
+    accumulation[base + LAYER_SPECULAR] += vec4(terms[LAYER_SPECULAR], since_set);
+    accumulation[base + LAYER_INDIRECT] += vec4(terms[LAYER_INDIRECT], float(blocked));
+    accumulation[base + LAYER_CAUSTICS] += vec4(terms[LAYER_CAUSTICS], float(lit));
 }

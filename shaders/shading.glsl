@@ -60,6 +60,10 @@ struct ShadowRay {
     vec3 direction;
     float t_max;
     vec3 unoccluded;
+    // The vertex's shadow rays (see LIGHT_GRID_ADAPTIVE), and whether the picked light is
+    // adaptive (its rays' visibility is the pixel's history).
+    uint rays;
+    bool adaptive;
 };
 
 // A light's sample numbers `u` moved into one cell of its POV-Ray grid (`Light::grid`; 0: `u`
@@ -74,8 +78,15 @@ vec2 grid_sample(uint grid, vec2 u, uint stream, uint sample_index) {
     return vec2((float(k % n) + j.x) / float(n), (float(k / n) + j.y) / float(m));
 }
 
-ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim) {
-    ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0));
+// Shadow ray `ray` of the vertex: every ray picks the same light. Toward an adaptive light, a
+// pixel found in a penumbra at sample `penumbra_since` casts one ray per cell from the first
+// sample of the light's next cycle of n m samples on (ray j of sample s takes the sequence's
+// entry s rays + j, so the rays visit every cell once); before that, one ray in the sample's
+// cell. The switch falls on a cycle's first sample and depends on earlier samples alone, so
+// every cycle of single rays visits each cell once and every sample of many rays is unbiased
+// by itself: the mean stays unbiased.
+ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim, uint penumbra_since, uint ray) {
+    ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0), 1u, false);
     if (frame.light_count == 0u) return none;
     Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
     // A scene whose lights all give photons only picks one with probability 0.
@@ -83,7 +94,14 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     // A scattering point in a homogeneous medium leaves point and spot lights to the camera
     // segment's equiangular sample (render.comp).
     if (b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
-    LightSample s = light_sample(l, h.p, grid_sample(l.grid, rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U), stream, sample_index));
+    none.adaptive = (l.grid & LIGHT_GRID_ADAPTIVE) != 0u;
+    if (none.adaptive) {
+        // An adaptive light has a grid of at least 2 cells (scene loading checks it).
+        uint cells = (l.grid & 0xffu) * ((l.grid >> 8u) & 0xffu);
+        if (penumbra_since <= sample_index - sample_index % cells) none.rays = cells;
+    }
+    vec2 u = rand2(stream, sample_index, frame.seed, ray == 0u ? dim + RNG_LIGHT_U : RNG_ADAPTIVE_DOMAIN + ray);
+    LightSample s = light_sample(l, h.p, grid_sample(l.grid, u, stream, sample_index * none.rays + ray));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;
     // The shadow ray runs from the offset origin to the sampled point itself: aiming along wi from
@@ -94,5 +112,5 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     float t_max = max(shadow_length - s.eps, 0.0);
     // A medium's phase function has no cosine: it is per solid angle already.
     float cosine = b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, s.wi));
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / l.pick_probability));
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / (l.pick_probability * float(none.rays))), none.rays, none.adaptive);
 }

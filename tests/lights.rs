@@ -564,6 +564,98 @@ fn area_light_grid_errors_name_the_field() {
     }
 }
 
+// POV-Ray's adaptive area lights: more shadow rays where visibility varies
+
+/// A disc lamp of radius 0.75 at height 2 to the side of a ball on the plane, whose long
+/// shadow has a penumbra a few pixels wide when `ball` (a disc is one primitive: a quad would be two triangles, each picked
+/// at random).
+fn shadowed_lamp(options: &str, ball: bool) -> Scene {
+    let ball = if ball {
+        "[materials.ball]\ntype = \"diffuse\"\nreflectance = 0.5\n\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"ball\"\ncenter = [0, 0.5, 0]\nradius = 0.5\n"
+    } else {
+        ""
+    };
+    plane_scene(
+        &format!(
+            "{ball}\n[[lights]]\ntype = \"area\"\nshape = \"disc\"\ncenter = [-2, 2, 0]\nnormal = [0, -1, 0]\nradius = 0.75\nradiance = 20\n{options}"
+        ),
+        false,
+    )
+}
+
+#[test]
+fn adaptive_area_light_spends_rays_in_the_penumbra_without_bias() {
+    let size = 64;
+    let render = |options: &str, spp: u32| {
+        let buffers = common::buffers(&shadowed_lamp(options, true), size, size);
+        let out = photonix::render::render_cpu(&buffers, spp, None, 0, &mut |_, _| {});
+        (out.image, out.stats.rays)
+    };
+    // A 3 x 3 grid: 36 samples are four cycles of its 9 cells; a pixel found in the penumbra
+    // during one casts 9 rays a sample from the next on.
+    let (grid_options, adaptive_options) = ("samples = [3, 3]\n", "samples = [3, 3]\nadaptive = 1\n");
+    let (reference, _) = render("", 1024);
+    let (grid, grid_rays) = render(grid_options, 36);
+    let (adaptive, adaptive_rays) = render(adaptive_options, 36);
+    // The penumbra as the adaptive light found it: the pixels where it cast more rays, the
+    // only ones where its image differs from the grid's (the same random numbers otherwise).
+    let penumbra: Vec<usize> = (0..grid.pixels.len()).filter(|&i| grid.pixels[i] != adaptive.pixels[i]).collect();
+    let penumbra_error = |img: &Image| {
+        let e: f64 = penumbra
+            .iter()
+            .map(|&i| {
+                let (x, r) = (img.pixels[i][1] as f64, reference.pixels[i][1] as f64);
+                (x - r).powi(2) / (r * r + 1e-3)
+            })
+            .sum();
+        e / penumbra.len() as f64
+    };
+    let (e_grid, e_adaptive) = (penumbra_error(&grid), penumbra_error(&adaptive));
+    let (a_grid, a_adaptive) = (rel_mse(&grid, &reference), rel_mse(&adaptive, &reference));
+    // Against the grid at the same samples (the same camera rays): the means differ only by
+    // the shadow rays' noise.
+    let m = mean_ratio(&adaptive, &grid)[1];
+    println!(
+        "36 spp, {} penumbra pixels: grid relMSE there {e_grid:.2e} ({a_grid:.2e} overall) with {grid_rays} rays, \
+         adaptive {e_adaptive:.2e} ({a_adaptive:.2e}) with {adaptive_rays} rays; mean over the grid's {m:.4}",
+        penumbra.len()
+    );
+    // More rays, yet far from 9 times as many (most of the image is lit or dark throughout),
+    // and less error in the penumbra.
+    assert!(adaptive_rays > grid_rays && adaptive_rays < 3 * grid_rays, "{adaptive_rays} rays against {grid_rays}");
+    assert!(e_adaptive < 0.6 * e_grid, "adaptive {e_adaptive:.3e} against the grid's {e_grid:.3e} in the penumbra");
+    assert!(a_adaptive < a_grid, "adaptive {a_adaptive:.3e} against the grid's {a_grid:.3e}");
+    assert!((m - 1.0).abs() < 0.005, "adaptive mean over the grid's {m}");
+    // Without bias where it matters: the mean over the penumbra matches a long plain render.
+    // (The 36-sample image chose the pixels; this one's 288 samples decide again.)
+    let (adaptive_long, _) = render(adaptive_options, 288);
+    let sum = |img: &Image| penumbra.iter().map(|&i| img.pixels[i][1] as f64).sum::<f64>();
+    let ratio = sum(&adaptive_long) / sum(&reference);
+    println!("penumbra mean ratio at 288 spp: {ratio:.4}");
+    assert!(penumbra.len() > 20 && (ratio - 1.0).abs() < 0.01, "penumbra mean ratio {ratio}");
+    // The kernels decide and sample the same way.
+    let buffers = common::buffers(&shadowed_lamp(adaptive_options, true), size, size);
+    let gpu = common::gpu_image(&common::gpu(), &buffers, 36);
+    let e = rel_mse(&gpu, &adaptive);
+    assert!(e < 1e-9, "gpu against cpu with an adaptive light: relMSE {e:.3e}");
+}
+
+#[test]
+fn adaptive_errors_name_the_field() {
+    for (options, expected) in [
+        ("adaptive = 1\n", "needs a grid of 2 to 256 cells"),
+        ("samples = [32, 32]\nadaptive = 2\n", "needs a grid of 2 to 256 cells"),
+        ("samples = [4, 4]\nadaptive = -1\n", "0 (off) or more"),
+    ] {
+        let text = format!(
+            "[camera]\nposition = [0, 1, 4]\nlook_at = [0, 0, 0]\nfov = 40\n[[lights]]\ntype = \"area\"\nshape = \"quad\"\nvertices = [[-1, 1.5, -1], [1, 1.5, -1], [1, 1.5, 1], [-1, 1.5, 1]]\nradiance = 5\n{options}"
+        );
+        let Err(e) = parse_scene(&text, &common::repo_path("scenes/test.toml")) else { panic!("{options:?} accepted") };
+        let e = e.to_string();
+        assert!(e.contains("`adaptive`") && e.contains(expected), "{options:?}: {e}");
+    }
+}
+
 // A distant light's disc seen by camera paths
 
 const DISC_DIAMETER_DEG: f64 = 20.0;

@@ -49,8 +49,21 @@ struct Lookup {
 /// final gather, part k >= 1 is gather ray k - 1 (see `DispatchRange`). The camera path, its
 /// shadow ray and its gather path are one loop, as in the kernel (which has one call site of
 /// each traversal and material evaluation for lavapipe's sake), so both add the same terms in
-/// the same order.
-pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
+/// the same order. `penumbra_since`: the sample at which the pixel's earlier shadow rays toward
+/// adaptive lights were first found some blocked, some not (`NO_SAMPLE`: not yet); this sample's
+/// rays toward them are counted into `visibility` (blocked, lit).
+#[allow(clippy::too_many_arguments)]
+pub fn radiance(
+    s: &SceneView,
+    px: u32,
+    py: u32,
+    sample: u32,
+    part: u32,
+    penumbra_since: u32,
+    terms: &mut [Vec3; 4],
+    rays: &mut u32,
+    visibility: &mut [u32; 2],
+) {
     let f = s.frame;
     let stream = py * f.width + px;
     // xy jitter the film position, zw sample the lens.
@@ -80,6 +93,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     let mut volume_e = false;
     let mut inv_sigma_t_e = Vec3::ZERO;
     let mut unoccluded = Vec3::ZERO;
+    // The estimate vertex's shadow rays: this one, how many, toward an adaptive light, and the
+    // medium they start in.
+    let (mut shadow_ray, mut shadow_rays, mut shadow_adaptive, mut medium_e) = (0, 1, false, NO_MEDIUM);
     let mut gather_weight = Vec3::ZERO;
     let mut gdim = 0;
     let mut lookups: [Option<Lookup>; 2] = [None; 2];
@@ -88,7 +104,12 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
     let mut skip = NO_LIGHT;
     // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries;
     // with media each camera segment may take three (its equiangular shadow ray, then its retrace).
-    let steps = if s.media.is_empty() { 2 * f.max_depth + 1 } else { 3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) };
+    // And the extra shadow rays of an adaptive light (each with its crossings).
+    let steps = if s.media.is_empty() {
+        2 * f.max_depth + 1 + ADAPTIVE_MAX_RAYS - 1
+    } else {
+        3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) + (ADAPTIVE_MAX_RAYS - 1) * (1 + MEDIUM_CROSSINGS)
+    };
     for step in 0..steps {
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if t_max != NO_RAY {
@@ -206,6 +227,17 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
             if prim == NO_LIGHT {
                 terms[(if via_specular { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += weight * unoccluded;
             }
+            if shadow_adaptive && t_max != NO_RAY {
+                visibility[(prim == NO_LIGHT) as usize] += 1;
+            }
+            shadow_ray += 1;
+            if shadow_ray < shadow_rays {
+                let (he, be, wo_e) = estimate.as_ref().expect("a shadow ray leaves an estimate vertex");
+                let dim = depth * RNG_DIMS_PER_BOUNCE;
+                let sr = direct_light_sample(s, he, be, *wo_e, stream, sample, dim, penumbra_since, shadow_ray);
+                (unoccluded, o, d, t_max, medium) = (sr.unoccluded, sr.origin, sr.direction, sr.t_max, medium_e);
+                continue;
+            }
             if f.photon_mapping == 0 {
                 break;
             }
@@ -301,7 +333,8 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
         volume_e = scattered;
         inv_sigma_t_e = inv_sigma_t;
         if part == 0 {
-            let sr = direct_light_sample(s, &h, &b, wo, stream, sample, dim);
+            let sr = direct_light_sample(s, &h, &b, wo, stream, sample, dim, penumbra_since, 0);
+            (shadow_rays, shadow_adaptive, medium_e) = (sr.rays, sr.adaptive, medium);
             unoccluded = sr.unoccluded;
             o = sr.origin;
             d = sr.direction;
@@ -336,7 +369,9 @@ pub fn radiance(s: &SceneView, px: u32, py: u32, sample: u32, part: u32, terms: 
 }
 
 /// Adds the sample part of `range` to `accumulation` (`LAYER_COUNT` `[r, g, b, w]` per pixel of
-/// the band; w of the direct layer counts rays), exactly as one dispatch of the kernel does.
+/// the band; w of the direct layer counts rays, w of the indirect and caustic layers the pixel's
+/// shadow rays toward adaptive lights in this pass, blocked and not, w of the specular layer 1 +
+/// the sample at which both were first seen), exactly as one dispatch of the kernel does.
 pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]]) {
     let row_len = (s.frame.width * LAYER_COUNT) as usize;
     accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
@@ -344,7 +379,17 @@ pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]
         for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
             let mut terms = [Vec3::ZERO; 4];
             let mut rays = 0;
-            radiance(s, px as u32, py, range.sample_index, range.part, &mut terms, &mut rays);
+            let mut visibility = [0; 2];
+            let (blocked, lit, since) = (LAYER_INDIRECT as usize, LAYER_CAUSTICS as usize, LAYER_SPECULAR as usize);
+            let mut penumbra_since = if acc[since][3] > 0.0 { acc[since][3] as u32 - 1 } else { NO_SAMPLE };
+            if range.part == 0 && penumbra_since == NO_SAMPLE && acc[blocked][3] > 0.0 && acc[lit][3] > 0.0 {
+                penumbra_since = range.sample_index;
+                acc[since][3] = (range.sample_index + 1) as f32;
+            }
+            let sample = range.sample_index;
+            radiance(s, px as u32, py, sample, range.part, penumbra_since, &mut terms, &mut rays, &mut visibility);
+            acc[blocked][3] += visibility[0] as f32;
+            acc[lit][3] += visibility[1] as f32;
             for (layer, term) in acc.iter_mut().zip(terms) {
                 layer[0] += term.x;
                 layer[1] += term.y;

@@ -82,6 +82,10 @@ pub struct ShadowRay {
     pub direction: Vec3,
     pub t_max: f32,
     pub unoccluded: Vec3,
+    /// The vertex's shadow rays (see `LIGHT_GRID_ADAPTIVE`), and whether the picked light is
+    /// adaptive (its rays' visibility is the pixel's history).
+    pub rays: u32,
+    pub adaptive: bool,
 }
 
 /// A light's sample numbers `u` moved into one cell of its POV-Ray grid (`Light::grid`; 0: `u`
@@ -97,6 +101,14 @@ pub fn grid_sample(grid: u32, u: [f32; 2], stream: u32, sample: u32) -> [f32; 2]
     [((k % n) as f32 + j[0]) / n as f32, ((k / n) as f32 + j[1]) / m as f32]
 }
 
+/// Shadow ray `ray` of the vertex: every ray picks the same light. Toward an adaptive light, a
+/// pixel found in a penumbra at sample `penumbra_since` casts one ray per cell from the first
+/// sample of the light's next cycle of n m samples on (ray j of sample s takes the sequence's
+/// entry s rays + j, so the rays visit every cell once); before that, one ray in the sample's
+/// cell. The switch falls on a cycle's first sample and depends on earlier samples alone, so
+/// every cycle of single rays visits each cell once and every sample of many rays is unbiased
+/// by itself: the mean stays unbiased.
+#[allow(clippy::too_many_arguments)]
 pub fn direct_light_sample(
     s: &SceneView,
     h: &Hit,
@@ -105,9 +117,12 @@ pub fn direct_light_sample(
     stream: u32,
     sample: u32,
     dim: u32,
+    penumbra_since: u32,
+    ray: u32,
 ) -> ShadowRay {
     let f = s.frame;
-    let none = ShadowRay { origin: h.p, direction: Vec3::Y, t_max: NO_RAY, unoccluded: Vec3::ZERO };
+    let mut none =
+        ShadowRay { origin: h.p, direction: Vec3::Y, t_max: NO_RAY, unoccluded: Vec3::ZERO, rays: 1, adaptive: false };
     if f.light_count == 0 {
         return none;
     }
@@ -121,8 +136,16 @@ pub fn direct_light_sample(
     if b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
         return none;
     }
-    let ls =
-        light_sample(s, l, h.p, grid_sample(l.grid, rand2(stream, sample, f.seed, dim + RNG_LIGHT_U), stream, sample));
+    none.adaptive = l.grid & LIGHT_GRID_ADAPTIVE != 0;
+    if none.adaptive {
+        // An adaptive light has a grid of at least 2 cells (scene loading checks it).
+        let cells = (l.grid & 0xff) * ((l.grid >> 8) & 0xff);
+        if penumbra_since <= sample - sample % cells {
+            none.rays = cells;
+        }
+    }
+    let u = rand2(stream, sample, f.seed, if ray == 0 { dim + RNG_LIGHT_U } else { RNG_ADAPTIVE_DOMAIN + ray });
+    let ls = light_sample(s, l, h.p, grid_sample(l.grid, u, stream, sample.wrapping_mul(none.rays).wrapping_add(ray)));
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {
         return none;
@@ -137,6 +160,10 @@ pub fn direct_light_sample(
         direction: to_target / shadow_length,
         t_max: (shadow_length - ls.eps).max(0.0),
         // A medium's phase function has no cosine: it is per solid angle already.
-        unoccluded: fr * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() } / l.pick_probability),
+        unoccluded: fr
+            * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() }
+                / (l.pick_probability * none.rays as f32)),
+        rays: none.rays,
+        adaptive: none.adaptive,
     }
 }

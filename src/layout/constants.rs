@@ -146,6 +146,15 @@ shared_constants! {
     /// Flag of `Light::grid`: a POV-Ray grid's samples are jittered within their cells (else
     /// they sit at the cells' centres). The grid itself is n | m << 8, n and m in 1..=64.
     LIGHT_GRID_JITTER: u32 = 0x10000;
+    /// Flag of `Light::grid`: POV-Ray's `adaptive`. Once a pixel's shadow rays toward adaptive
+    /// lights in this pass were some blocked and some not, its samples from the light's next
+    /// cycle of n m samples on cast one ray per cell of the grid toward it, each weighted
+    /// 1/(n m); before, one ray (see `direct_light_sample`).
+    LIGHT_GRID_ADAPTIVE: u32 = 0x20000;
+    /// Most cells of an adaptive light's grid: the shadow rays of one camera vertex.
+    ADAPTIVE_MAX_RAYS: u32 = 256;
+    /// No sample: a pixel not (yet) found in a penumbra (see `LIGHT_GRID_ADAPTIVE`).
+    NO_SAMPLE: u32 = 0xffff_ffff;
     /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
     /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
     LIGHT_POINT: u32 = 2;
@@ -301,6 +310,9 @@ shared_constants! {
     RNG_TRANSMITTANCE_DOMAIN: u32 = 0x3800_0000;
     /// Free-flight distances of photon paths: `RNG_PHOTON_DOMAIN + RNG_PHOTON_MEDIUM + step`.
     RNG_PHOTON_MEDIUM: u32 = 0x1000_0000;
+    /// The light sample of an adaptive light's shadow ray j >= 1 at the estimate vertex:
+    /// `RNG_ADAPTIVE_DOMAIN + j` (ray 0 takes the vertex's own `RNG_LIGHT_U`).
+    RNG_ADAPTIVE_DOMAIN: u32 = 0x5000_0000;
 
     /// Photon flag: stored at the first surface its path met (direct light).
     PHOTON_FLAG_DIRECT: u32 = 1;

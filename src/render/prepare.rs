@@ -319,8 +319,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             scene.lights.iter().find(|l| matches!(l.kind, LightKind::Area { material, .. } if material == p.material));
         powers.push(light_powers(power, options.is_none_or(|o| o.direct), options.is_none_or(|o| o.photons)));
         let grid = match options.map(|o| &o.kind) {
-            Some(&LightKind::Area { grid: [n, m], jitter, .. }) if n * m > 1 => {
-                n | m << 8 | if jitter { LIGHT_GRID_JITTER } else { 0 }
+            Some(&LightKind::Area { grid: [n, m], jitter, adaptive, .. }) if n * m > 1 => {
+                n | m << 8 | if jitter { LIGHT_GRID_JITTER } else { 0 } | if adaptive { LIGHT_GRID_ADAPTIVE } else { 0 }
             }
             _ => 0,
         };

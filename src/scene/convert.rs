@@ -30,7 +30,7 @@ use super::{
     Analytic, AnalyticKind, Camera, Density, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface,
     Phase, PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
 };
-use crate::layout::constants::MIX_MAX_DEPTH;
+use crate::layout::constants::{ADAPTIVE_MAX_RAYS, MIX_MAX_DEPTH};
 use crate::limits::{
     fmt_f32, fmt_number, printable, printable_message, MAX_APERTURE_BLADES, MAX_DEPTH, MAX_ENVIRONMENT_TEXELS,
     MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_IOR, MAX_LIGHT_GRID, MAX_MEDIUM_COEFFICIENT, MAX_PASSES, MAX_PHOTON_PATHS,
@@ -2679,6 +2679,7 @@ impl Builder<'_> {
             ("normal", span_of(&l.normal)),
             ("samples", span_of(&l.samples)),
             ("jitter", span_of(&l.jitter)),
+            ("adaptive", span_of(&l.adaptive)),
             ("radiance", span_of(&l.radiance)),
             ("position", span_of(&l.position)),
             ("intensity", span_of(&l.intensity)),
@@ -2931,7 +2932,7 @@ impl Builder<'_> {
     ) -> Result<()> {
         let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
         let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = [common, &["shape", "radiance", "transform", "samples", "jitter"]].concat();
+        let mut allowed = [common, &["shape", "radiance", "transform", "samples", "jitter", "adaptive"]].concat();
         let what = match shape {
             "quad" => {
                 allowed.push("vertices");
@@ -2985,7 +2986,32 @@ impl Builder<'_> {
             None => [1, 1],
         };
         let jitter = l.jitter.as_ref().is_none_or(|j| *j.get_ref());
-        self.lights.push(LightDesc { kind: LightKind::Area { material, grid, jitter }, direct, photons });
+        let adaptive = match &l.adaptive {
+            Some(a) => {
+                let level = *a.get_ref();
+                let cells = grid[0] * grid[1];
+                if level < 0 {
+                    return Err(self.invalid(
+                        &a.span(),
+                        object,
+                        format!("`adaptive` is {level}; it is POV-Ray's level, 0 (off) or more (on)"),
+                    ));
+                }
+                if level > 0 && !(2..=ADAPTIVE_MAX_RAYS).contains(&cells) {
+                    return Err(self.invalid(
+                        &a.span(),
+                        object,
+                        format!(
+                            "`adaptive` needs a grid of 2 to {ADAPTIVE_MAX_RAYS} cells, the shadow rays of a sample in \
+                             a penumbra, and `samples` gives {cells}; e.g. `samples = [4, 4]`"
+                        ),
+                    ));
+                }
+                level > 0
+            }
+            None => false,
+        };
+        self.lights.push(LightDesc { kind: LightKind::Area { material, grid, jitter, adaptive }, direct, photons });
         let transform = self.transform(l.transform.as_ref(), object)?;
         match shape {
             "quad" => {

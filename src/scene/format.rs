@@ -295,6 +295,7 @@ pub(crate) struct LightDef {
     // POV-Ray's area_light grid
     pub samples: Option<Spanned<Vec<i64>>>,
     pub jitter: Option<Spanned<bool>>,
+    pub adaptive: Option<Spanned<i64>>,
     pub position: Option<Spanned<Vec3Def>>,
     pub intensity: Option<Spanned<Vec3Def>>,
     pub transform: Option<Spanned<TransformDef>>,

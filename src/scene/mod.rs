@@ -279,7 +279,9 @@ pub enum LightKind {
     /// The options of an area light: they apply to the shapes of material `material`. `grid` is
     /// POV-Ray's `area_light` grid, [n, m] cells of stratified shadow samples over each of its
     /// shapes ([1, 1]: plain sampling), jittered in their cells or at the centres.
-    Area { material: u32, grid: [u32; 2], jitter: bool },
+    /// `adaptive` (POV-Ray's): pixels whose shadow rays toward it disagree cast one ray per
+    /// cell at each sample (see `LIGHT_GRID_ADAPTIVE`).
+    Area { material: u32, grid: [u32; 2], jitter: bool, adaptive: bool },
 }
 
 /// Where the shapes of a `Scene` came from in its file: for each `[[shapes]]` entry and each
