@@ -76,34 +76,78 @@ def choose_variant(requested):
     sys.exit("no usable Mitsuba variant; pip install mitsuba (and apt-get install libllvm19)")
 
 
-def write_quad_obj(path, vertices):
-    """A quad as the two triangles (v0, v1, v2) and (v0, v2, v3), as scene.json asks."""
+def write_quad_obj(path, vertices, uv=None):
+    """A quad as the two triangles (v0, v1, v2) and (v0, v2, v3), as scene.json asks, with its
+    per-vertex uv where it has them (Mitsuba's OBJ loader flips v and its textures put row 0 at
+    the top: the two flips cancel, as scene.json's texture notes say)."""
     with open(path, "w") as f:
         for v in vertices:
             f.write("v {} {} {}\n".format(*v))
-        f.write("f 1 2 3\nf 1 3 4\n")
+        if uv is None:
+            f.write("f 1 2 3\nf 1 3 4\n")
+        else:
+            for t in uv:
+                f.write("vt {} {}\n".format(*t))
+            f.write("f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+
+
+def rgb(value):
+    return {"type": "rgb", "value": value}
 
 
 def mitsuba_scene(scene_json, mesh_dir, max_depth):
+    """The scene of a shared reference as Mitsuba 3 rendered it: path tracer, or the volumetric
+    path tracer where the scene has media; diffuse, mirror, dielectric, GGX rough conductor and
+    dielectric, checkerboard and bitmap textures, null medium boundaries."""
     import mitsuba as mi
 
+    root = Path(scene_json).parent
     s = json.loads(Path(scene_json).read_text())
+
+    def texture(value):
+        if isinstance(value, dict) and "texture" in value:
+            t = s["textures"][value["texture"]]
+            if t["type"] == "checkerboard":
+                scale = t.get("uv_scale", 1)
+                return {"type": "checkerboard", "color0": rgb(t["color0"]), "color1": rgb(t["color1"]),
+                        "to_uv": mi.ScalarTransform4f.scale([scale, scale, 1])}
+            if t["type"] == "bitmap":
+                return {"type": "bitmap", "filename": str(root / t["file"]), "raw": False, "filter_type": "bilinear"}
+            raise SystemExit(f"{scene_json}: texture type {t['type']} is not translated to Mitsuba")
+        return rgb(value)
 
     def bsdf(name):
         m = s["materials"][name]
         if m["type"] == "diffuse":
             # Diffuse surfaces reflect alike on both sides; Mitsuba's BSDFs are one-sided.
-            return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": m["reflectance"]}}}
+            return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": texture(m["reflectance"])}}
         if m["type"] == "dielectric":
             return {"type": "dielectric", "int_ior": m["ior"], "ext_ior": m.get("outside_ior", 1.0)}
         if m["type"] == "mirror":
-            return {"type": "conductor", "material": "none", "specular_reflectance": {"type": "rgb", "value": m["reflectance"]}}
+            return {"type": "conductor", "material": "none", "specular_reflectance": rgb(m["reflectance"])}
+        if m["type"] == "rough_conductor":
+            return {"type": "roughconductor", "distribution": m["distribution"], "alpha": m["alpha"],
+                    "eta": rgb(m["eta"]), "k": rgb(m["k"])}
+        if m["type"] == "rough_dielectric":
+            return {"type": "roughdielectric", "distribution": m["distribution"], "alpha": m["alpha"],
+                    "int_ior": m["ior"], "ext_ior": m.get("outside_ior", 1.0)}
+        if m["type"] == "null":
+            return {"type": "null"}
         raise SystemExit(f"{scene_json}: material type {m['type']} is not translated to Mitsuba")
 
+    def medium(name):
+        m = s["media"][name]
+        if m["type"] != "homogeneous" or m["phase"]["type"] != "isotropic":
+            raise SystemExit(f"{scene_json}: medium {name} is not translated to Mitsuba")
+        # sigma_t per mm given directly (the scene is in mm), as scene.json's "mitsuba" note does.
+        return {"type": "homogeneous", "sigma_t": rgb(m["sigma_t_per_mm"]), "albedo": rgb(m["albedo"]),
+                "phase": {"type": "isotropic"}}
+
     cam = s["camera"]
+    integrator = "volpath" if s.get("media") else "path"
     d = {
         "type": "scene",
-        "integrator": {"type": "path", "max_depth": max_depth, "rr_depth": 5},
+        "integrator": {"type": integrator, "max_depth": max_depth, "rr_depth": 5},
         "sensor": {
             "type": "perspective",
             "fov": cam["fov_deg"],
@@ -124,17 +168,21 @@ def mitsuba_scene(scene_json, mesh_dir, max_depth):
         key = f"shape_{i}_{shape.get('name', shape['type'])}"
         if shape["type"] == "quad":
             obj = Path(mesh_dir) / f"{key}.obj"
-            write_quad_obj(obj, shape["vertices"])
+            write_quad_obj(obj, shape["vertices"], shape.get("uv"))
             entry = {"type": "obj", "filename": str(obj), "face_normals": True}
         elif shape["type"] == "sphere":
             entry = {"type": "sphere", "center": shape["center"], "radius": shape["radius"]}
+        elif shape["type"] == "box" and "mesh_file" in shape:
+            entry = {"type": "obj", "filename": str(root / shape["mesh_file"]), "face_normals": True}
         else:
             raise SystemExit(f"{scene_json}: shape type {shape['type']} is not translated to Mitsuba")
         entry["bsdf"] = bsdf(shape["material"])
+        if "interior_medium" in shape:
+            entry["interior"] = medium(shape["interior_medium"])
         light = emitters.get(shape.get("name"))
         if light is not None:
             # One-sided Lambertian emitter on the side of the winding normal (downwards).
-            entry["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": light["radiance"]}}
+            entry["emitter"] = {"type": "area", "radiance": rgb(light["radiance"])}
         d[key] = entry
     return mi.load_dict(d)
 

@@ -47,13 +47,18 @@ pub fn run(args: DiffArgs) -> Result<()> {
         reference = downsample(&reference, factor);
     }
     let ratio = mean_ratio(&test, &reference);
-    out!("relMSE {:.6}", rel_mse(&test, &reference));
-    out!("RMSE   {:.6}", rmse(&test, &reference));
+    out!("relMSE {}", four_digits(rel_mse(&test, &reference)));
+    out!("RMSE   {}", four_digits(rmse(&test, &reference)));
     out!("mean ratio (test/reference) R {:.4} G {:.4} B {:.4}", ratio[0], ratio[1], ratio[2]);
     if let Some(h) = &args.heatmap {
         write_image(h, &error_heatmap(&test, &reference), 0.0)?;
     }
     Ok(())
+}
+
+/// Small errors keep four significant digits (converged renders reach 1e-5 and below).
+fn four_digits(x: f64) -> String {
+    if x == 0.0 || x >= 1e-2 { format!("{x:.6}") } else { format!("{x:.3e}") }
 }
 
 /// An EXR as linear radiance. An accumulation file holds sums over its passes, not radiance: it is
