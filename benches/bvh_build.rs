@@ -76,7 +76,10 @@ fn main() -> Result<(), Box<dyn Error>> {
     let primitive_bytes = bvh.primitives.len() * size_of::<Primitive>();
     let shape_bytes = packed.shape_data.len() * size_of::<f32>();
     let per = |bytes: usize| bytes as f64 / n as f64;
-    println!("{n} primitives; load {load:.3} s, pack {pack:.3} s, BVH build {build:.3} s ({:.2} M primitives/s)", n as f64 / build / 1e6);
+    println!(
+        "{n} primitives; load {load:.3} s, pack {pack:.3} s, BVH build {build:.3} s ({:.2} M primitives/s)",
+        n as f64 / build / 1e6
+    );
     println!(
         "BVH: {} nodes of {} bytes, depth {}; bytes per primitive: nodes {:.1}, primitives {:.1}, shape data {:.1}, total {:.1}",
         bvh.nodes.len(),

@@ -1,6 +1,7 @@
 //! Fuzz targets, run as ordinary tests (there is no nightly toolchain for cargo-fuzz here): the
-//! scene parser (`parse_scene`) and the OBJ importer (a `type = "mesh"` shape behind
-//! `load_scene`). Inputs come from a generator that follows each format's grammar and from
+//! scene parser (`parse_scene`), the OBJ importer (a `type = "mesh"` shape behind `load_scene`)
+//! and the other model importers (PLY ASCII and binary, glTF `.gltf` and `.glb`, 3DS, IFS and
+//! Bezier patches, fed mutations of real exporters' files). Inputs come from a generator that follows each format's grammar and from
 //! byte-level mutations of the shipped files, drawn from the crate's counter-based hash, so a
 //! (seed, case) pair replays exactly. Every case must give a scene that keeps the documented
 //! invariants (finite geometry, a usable camera, finite light power) or an error that names the
@@ -15,7 +16,8 @@
 //! ```
 //!
 //! With `PHOTONIX_FUZZ_FINDINGS` set, each new kind of failure is written to that folder and the
-//! run goes on. Every input that once failed is kept in `tests/fuzz_corpus/{scene,obj}/`, and
+//! run goes on. Every input that once failed is kept in `tests/fuzz_corpus/{scene,obj,model}/`
+//! (a model input's extension names its format), and
 //! `fuzz_corpus_replays_cleanly` replays them all.
 
 use std::cell::RefCell;
@@ -871,6 +873,70 @@ fn fuzz(
     }
 }
 
+/// Model target: `bytes` as the mesh file `input.<extension>` of a scene, so the file's extension
+/// picks the importer. A `.gltf` finds the buffer and image its seed referenced beside it.
+fn check_model_input(bytes: &[u8], extension: &str, dir: &Path) -> Result<(), Failure> {
+    let (scene, model) = (dir.join("model-scene.toml"), dir.join(format!("input.{extension}")));
+    std::fs::write(&scene, OBJ_SCENE.replace("input.obj", &format!("input.{extension}"))).unwrap();
+    std::fs::write(&model, bytes).unwrap();
+    check_scene(|| load_scene(&scene), &[&scene, &model])
+}
+
+/// Mutations for binary files: besides `mutate`'s, whole 32-bit words made extreme (counts,
+/// indices and offsets of u32::MAX or 2^31, NaN and infinite floats, zero).
+fn mutate_binary(r: &mut Rng, input: &[u8]) -> Vec<u8> {
+    let mut b = if r.chance(40) { mutate(r, input) } else { input.to_vec() };
+    for _ in 0..1 + r.below(4) {
+        if b.len() < 4 {
+            break;
+        }
+        let at = r.below(b.len() - 3) & !if r.chance(70) { 3 } else { 0 };
+        let word: u32 =
+            *r.pick(&[u32::MAX, 0x8000_0000, 0x7fc0_0000, 0x7f80_0000, 0xff80_0000, 0, 0x4b00_0000, 1 << 20]);
+        b[at..at + 4].copy_from_slice(&word.to_le_bytes());
+    }
+    b
+}
+
+/// Seeds of the model target: (extension, file) from real exporters (tests/models/assimp), the
+/// teapot's patches and an IFS file written by the crate's writer.
+fn model_seeds() -> Vec<(&'static str, Vec<u8>)> {
+    let assimp = |name: &str| std::fs::read(repo("tests/models/assimp").join(name)).unwrap();
+    let tetrahedron = photonix::scene::model::ifs::write_ifs(
+        "tetrahedron",
+        &[glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z],
+        &[[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]],
+    );
+    vec![
+        ("ply", assimp("cube.ply")),
+        ("ply", assimp("cube_binary.ply")),
+        ("ply", assimp("cube_uv.ply")),
+        ("ply", assimp("float-color.ply")),
+        ("glb", assimp("BoxTextured.glb")),
+        ("gltf", assimp("BoxTextured-glTF/BoxTextured.gltf")),
+        ("3ds", assimp("cube_with_diffuse_texture.3DS")),
+        ("3ds", assimp("test1.3ds")),
+        ("ifs", tetrahedron),
+        ("bpt", std::fs::read(repo("scenes/meshes/teapot.bpt")).unwrap()),
+    ]
+}
+
+/// A model input carries its extension in front of the bytes ("ply\n..."), so that a finding
+/// written to a file replays with the right importer.
+fn check_tagged_model_input(tagged: &[u8], dir: &Path) -> Result<(), Failure> {
+    let split = tagged.iter().position(|&c| c == b'\n').unwrap_or(tagged.len());
+    let extension = String::from_utf8_lossy(&tagged[..split]).to_string();
+    let bytes = tagged.get(split + 1..).unwrap_or_default();
+    // The .gltf seed references these by name.
+    for name in ["BoxTextured0.bin", "CesiumLogoFlat.png"] {
+        let target = dir.join(name);
+        if !target.exists() {
+            std::fs::copy(repo("tests/models/assimp/BoxTextured-glTF").join(name), target).unwrap();
+        }
+    }
+    check_model_input(bytes, &extension, dir)
+}
+
 /// The shipped scene files, as seeds for mutation.
 fn shipped_scenes() -> Vec<Vec<u8>> {
     ["scenes/cornell-box.toml", "scenes/cornell-caustics.toml", "scenes/showcase.toml"]
@@ -922,13 +988,33 @@ fn fuzz_obj_importer() {
 }
 
 #[test]
+fn fuzz_model_importers() {
+    let seeds = model_seeds();
+    fuzz(
+        "model",
+        "model",
+        300,
+        |r| {
+            let (extension, base) = r.pick(&seeds);
+            let text = matches!(*extension, "gltf" | "bpt")
+                || (*extension == "ply" && !base.windows(6).any(|w| w == b"binary"));
+            let bytes = if text && r.chance(70) { mutate(r, base) } else { mutate_binary(r, base) };
+            [extension.as_bytes(), b"\n", &bytes].concat()
+        },
+        check_tagged_model_input,
+    );
+}
+
+#[test]
 fn fuzz_corpus_replays_cleanly() {
     quiet_panics();
     let dir = workspace();
     let mut replayed = 0;
-    for (folder, check) in
-        [("scene", check_scene_input as fn(&[u8], &Path) -> Result<(), Failure>), ("obj", check_obj_input)]
-    {
+    for (folder, check) in [
+        ("scene", check_scene_input as fn(&[u8], &Path) -> Result<(), Failure>),
+        ("obj", check_obj_input),
+        ("model", check_tagged_model_input),
+    ] {
         let Ok(entries) = std::fs::read_dir(repo("tests/fuzz_corpus").join(folder)) else { continue };
         let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();
         paths.sort();

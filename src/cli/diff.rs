@@ -58,7 +58,11 @@ pub fn run(args: DiffArgs) -> Result<()> {
 
 /// Small errors keep four significant digits (converged renders reach 1e-5 and below).
 fn four_digits(x: f64) -> String {
-    if x == 0.0 || x >= 1e-2 { format!("{x:.6}") } else { format!("{x:.3e}") }
+    if x == 0.0 || x >= 1e-2 {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.3e}")
+    }
 }
 
 /// An EXR as linear radiance. An accumulation file holds sums over its passes, not radiance: it is

@@ -2520,8 +2520,8 @@ impl Builder<'_> {
             None => DEFAULT_FLATNESS as f32,
         };
         let shading = self.shading(s, object)?;
-        let mesh = patch::tessellate(&[points], flatness);
         let span = s.points.as_ref().map_or(table.clone(), |p| p.span());
+        let mesh = patch::tessellate(&[points], flatness).map_err(|m| self.invalid(&span, object, m))?;
         let mut added = 0;
         for t in mesh_triangles(&mesh, shading) {
             let (vertices, uv, normals) = apply_with_normals(transform, t.vertices, t.uv, t.normals);

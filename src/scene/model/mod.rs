@@ -180,8 +180,12 @@ pub struct ModelError {
 }
 
 impl ModelError {
+    /// The message as users read it, whatever bytes the file held: control characters escaped
+    /// and numbers of more than 15 digits (a garbage float or count) in short form.
     pub fn new(path: &Path, at: impl Into<String>, message: impl Into<String>) -> ModelError {
-        ModelError { path: path.to_path_buf(), at: at.into(), message: message.into(), not_found: false }
+        let message = crate::limits::printable_message(&crate::limits::shorten_numbers(&message.into()));
+        let at = crate::limits::printable_message(&at.into());
+        ModelError { path: path.to_path_buf(), at, message, not_found: false }
     }
 
     /// `path:at` as messages show it (`at` left out when empty).

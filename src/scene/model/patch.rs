@@ -21,6 +21,10 @@ use super::{check_number, Model, ModelError, ModelMesh};
 pub const MAX_PATCH_STEPS: u32 = 256;
 /// Most patches in one file or shape.
 pub const MAX_PATCHES: usize = 1 << 20;
+/// Most grid cells (two triangles each) one tessellation makes: 2 M triangles, seconds of work.
+/// Every patch gets the finest patch's steps (so neighbours meet without cracks), and one wild
+/// control point would otherwise ask for 256 x 256 cells on every patch of the file.
+pub const MAX_PATCH_CELLS: u64 = 1 << 20;
 
 /// The point and the (unnormalised) normal of the patch at (u, v).
 pub fn evaluate(p: &[Vec3; 16], u: f32, v: f32) -> (Vec3, Vec3) {
@@ -66,9 +70,19 @@ pub fn steps_for(p: &[Vec3; 16], tolerance: f32) -> u32 {
 
 /// The patches as one mesh of quads (each grid cell), with per-corner normals from the patches'
 /// derivatives. Where a patch edge collapses to a point (the teapot's lid and bottom) the normal
-/// there is the limit from inside the patch.
-pub fn tessellate(patches: &[[Vec3; 16]], tolerance: f32) -> ModelMesh {
+/// there is the limit from inside the patch. An error says when the tolerance asks for more than
+/// `MAX_PATCH_CELLS`.
+pub fn tessellate(patches: &[[Vec3; 16]], tolerance: f32) -> Result<ModelMesh, String> {
     let n = patches.iter().map(|p| steps_for(p, tolerance)).max().unwrap_or(1);
+    let cells = patches.len() as u64 * u64::from(n) * u64::from(n);
+    if cells > MAX_PATCH_CELLS {
+        return Err(format!(
+            "{} patches of {n} x {n} cells each ({cells} cells) meet the flatness {}; the most is {MAX_PATCH_CELLS}: \
+             raise `flatness`, or check the control points (one far from the others makes every patch fine)",
+            patches.len(),
+            crate::limits::fmt_f32(tolerance)
+        ));
+    }
     let mut mesh = ModelMesh { model_from_mesh: Affine3A::IDENTITY, ..Default::default() };
     let mut corner_normals = Vec::new();
     for p in patches {
@@ -99,7 +113,7 @@ pub fn tessellate(patches: &[[Vec3; 16]], tolerance: f32) -> ModelMesh {
         }
     }
     mesh.normals = Some(corner_normals);
-    mesh
+    Ok(mesh)
 }
 
 /// The model of a `.bpt` file's bytes.
@@ -164,7 +178,7 @@ pub fn parse_bpt(bytes: &[u8], path: &Path, tolerance: f32) -> Result<Model, Mod
         }
         patches.push(p);
     }
-    let mut mesh = tessellate(&patches, tolerance);
+    let mut mesh = tessellate(&patches, tolerance).map_err(|m| ModelError::new(path, "", m))?;
     mesh.name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     Ok(Model { meshes: vec![mesh], ..Default::default() })
 }
@@ -183,6 +197,18 @@ mod tests {
             }
         }
         p
+    }
+
+    #[test]
+    fn one_wild_control_point_is_an_error_not_millions_of_triangles() {
+        let mut wild = bump();
+        wild[5].z = 250.0;
+        // 32 patches at the finest patch's 256 x 256 steps would be 2 M cells.
+        let patches: Vec<[Vec3; 16]> = std::iter::once(wild).chain(std::iter::repeat_n(bump(), 31)).collect();
+        let Err(message) = tessellate(&patches, 0.01) else { panic!("2 M cells accepted") };
+        assert!(message.contains("raise `flatness`") && message.contains("32 patches"), "{message}");
+        // The same patches at a coarser tolerance fit.
+        assert!(tessellate(&patches, 1.0).is_ok());
     }
 
     #[test]
