@@ -24,9 +24,25 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
     return passes;
 }
 
+#ifdef VARIANT_ANALYTIC
+#include "csg.glsl"
+#endif
+
 // Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer; the
-// primitive `ignore` is not tested (see trace_ray).
+// primitive `ignore` is not tested (see trace_ray). A CSG primitive reports the leaf primitive
+// it shows there (csg.glsl), so every caller sees an ordinary primitive.
 void visit(uint i, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
+#ifdef VARIANT_ANALYTIC
+    if ((primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG) {
+        uint leaf;
+        float tc = csg_intersect(i, o, d, t_hit, leaf);
+        if (tc < t_hit) {
+            t_hit = tc;
+            hit = leaf;
+        }
+        return;
+    }
+#endif
     float t = i == ignore ? INF : shape_intersect(i, o, d, 0.0, t_hit);
 #ifdef VARIANT_ALPHA
     // A ray that passes a transparent point may meet the shape again behind it (a

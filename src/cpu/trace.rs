@@ -4,9 +4,10 @@ use glam::Vec3;
 
 use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
+use super::csg::csg_intersect;
 use super::shape::{shape_hit, shape_intersect};
 use super::SceneView;
-use crate::layout::constants::{NO_LIGHT, PRIMITIVE_FLAG_ALPHA};
+use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
 pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
@@ -34,8 +35,17 @@ pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
 }
 
 /// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer; the
-/// primitive `ignore` is not tested (see `trace_ray`).
+/// primitive `ignore` is not tested (see `trace_ray`). A CSG primitive reports the leaf primitive
+/// it shows there (`cpu/csg.rs`), so every caller sees an ordinary primitive.
 fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, ignore: u32, hit: &mut u32, t_hit: &mut f32) {
+    if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
+        let (t, leaf) = csg_intersect(s, i, o, d, *t_hit);
+        if t < *t_hit {
+            *t_hit = t;
+            *hit = leaf;
+        }
+        return;
+    }
     let mut t = if i == ignore { f32::INFINITY } else { shape_intersect(s, i, o, d, 0.0, *t_hit) };
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray.
