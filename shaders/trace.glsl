@@ -29,20 +29,8 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
 #endif
 
 // Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer; the
-// primitive `ignore` is not tested (see trace_ray). A CSG primitive reports the leaf primitive
-// it shows there (csg.glsl), so every caller sees an ordinary primitive.
+// primitive `ignore` is not tested (see trace_ray).
 void visit(uint i, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
-#ifdef VARIANT_ANALYTIC
-    if ((primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG) {
-        uint leaf;
-        float tc = csg_intersect(i, o, d, t_hit, leaf);
-        if (tc < t_hit) {
-            t_hit = tc;
-            hit = leaf;
-        }
-        return;
-    }
-#endif
     float t = i == ignore ? INF : shape_intersect(i, o, d, 0.0, t_hit);
 #ifdef VARIANT_ALPHA
     // A ray that passes a transparent point may meet the shape again behind it (a
@@ -88,6 +76,21 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
         }
         for (uint i = n.first; i < n.first + count; i++) {
             uint before = hit;
+#ifdef VARIANT_ANALYTIC
+            // A CSG object reports the leaf primitive it shows (csg.glsl), so callers see an
+            // ordinary primitive. Behind WHEN: lavapipe would run its walk under masks for
+            // every primitive of every scene of the analytic variant.
+            bool is_csg = (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
+            WHEN(is_csg) {
+                uint leaf;
+                float tc = csg_intersect(i, o, d, t_hit, leaf);
+                if (tc < t_hit) {
+                    t_hit = tc;
+                    hit = leaf;
+                }
+            }
+            if (!is_csg)
+#endif
             visit(i, o, d, ignore, hit, t_hit);
             if (any_hit && hit != before) return hit;
         }

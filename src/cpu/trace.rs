@@ -35,17 +35,8 @@ pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
 }
 
 /// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer; the
-/// primitive `ignore` is not tested (see `trace_ray`). A CSG primitive reports the leaf primitive
-/// it shows there (`cpu/csg.rs`), so every caller sees an ordinary primitive.
+/// primitive `ignore` is not tested (see `trace_ray`).
 fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, ignore: u32, hit: &mut u32, t_hit: &mut f32) {
-    if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
-        let (t, leaf) = csg_intersect(s, i, o, d, *t_hit);
-        if t < *t_hit {
-            *t_hit = t;
-            *hit = leaf;
-        }
-        return;
-    }
     let mut t = if i == ignore { f32::INFINITY } else { shape_intersect(s, i, o, d, 0.0, *t_hit) };
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray.
@@ -95,7 +86,17 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
         }
         for i in n.first..n.first + count {
             let before = hit;
-            visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+            // A CSG object (always in the BVH) reports the leaf primitive it shows
+            // (`cpu/csg.rs`), so callers see an ordinary primitive.
+            if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
+                let (t, leaf) = csg_intersect(s, i, o, d, t_hit);
+                if t < t_hit {
+                    t_hit = t;
+                    hit = leaf;
+                }
+            } else {
+                visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+            }
             if any_hit && hit != before {
                 return (hit, t_hit);
             }
