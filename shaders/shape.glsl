@@ -543,6 +543,12 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
     WHEN(kind > PRIMITIVE_SPHERE) { analytic_surface(p, x, wants_uv, h); }
 #endif
     h.ns = is_smooth ? ns : h.ng;
+    // A leaf on the subtracted side of a CSG difference: the solid lies on its other side.
+    if ((p.kind & PRIMITIVE_FLAG_CSG_FLIP) != 0u) {
+        h.ng = -h.ng;
+        h.ns = -h.ns;
+        h.dpdv = -h.dpdv;
+    }
 }
 
 // The hit record of the ray o + t d on primitive i.

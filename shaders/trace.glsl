@@ -24,6 +24,10 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
     return passes;
 }
 
+#ifdef VARIANT_ANALYTIC
+#include "csg.glsl"
+#endif
+
 // Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer; the
 // primitive `ignore` is not tested (see trace_ray).
 void visit(uint i, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
@@ -72,6 +76,21 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
         }
         for (uint i = n.first; i < n.first + count; i++) {
             uint before = hit;
+#ifdef VARIANT_ANALYTIC
+            // A CSG object reports the leaf primitive it shows (csg.glsl), so callers see an
+            // ordinary primitive. Behind WHEN: lavapipe would run its walk under masks for
+            // every primitive of every scene of the analytic variant.
+            bool is_csg = (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
+            WHEN(is_csg) {
+                uint leaf;
+                float tc = csg_intersect(i, o, d, t_hit, leaf);
+                if (tc < t_hit) {
+                    t_hit = tc;
+                    hit = leaf;
+                }
+            }
+            if (!is_csg)
+#endif
             visit(i, o, d, ignore, hit, t_hit);
             if (any_hit && hit != before) return hit;
         }

@@ -656,6 +656,12 @@ fn broken_invariant(scene: &Scene) -> Option<String> {
                     return Some(format!("bad analytic shape accepted: {a:?}"));
                 }
             }
+            Geometry::Csg(c) => {
+                let (lo, hi) = c.bounds();
+                if c.leaves.iter().any(|l| l.is_empty()) || !(lo.is_finite() && hi.is_finite()) {
+                    return Some(format!("bad csg accepted: {c:?}"));
+                }
+            }
         }
     }
     for l in &scene.lights {

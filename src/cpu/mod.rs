@@ -2,6 +2,7 @@
 //! flattened arrays, so GPU and CPU results can be compared sample for sample.
 
 pub mod bsdf;
+pub mod csg;
 pub mod emit_photons;
 pub mod gather;
 pub mod grid;

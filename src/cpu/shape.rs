@@ -654,6 +654,12 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
         _ => analytic_surface(s, p, x, wants_uv, &mut h),
     }
     h.ns = if smooth { ns } else { h.ng };
+    // A leaf on the subtracted side of a CSG difference: the solid lies on its other side.
+    if p.kind & PRIMITIVE_FLAG_CSG_FLIP != 0 {
+        h.ng = -h.ng;
+        h.ns = -h.ns;
+        h.dpdv = -h.dpdv;
+    }
     h
 }
 

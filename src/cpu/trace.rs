@@ -4,9 +4,10 @@ use glam::Vec3;
 
 use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
+use super::csg::csg_intersect;
 use super::shape::{shape_hit, shape_intersect};
 use super::SceneView;
-use crate::layout::constants::{NO_LIGHT, PRIMITIVE_FLAG_ALPHA};
+use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
 pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
@@ -85,7 +86,17 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
         }
         for i in n.first..n.first + count {
             let before = hit;
-            visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+            // A CSG object (always in the BVH) reports the leaf primitive it shows
+            // (`cpu/csg.rs`), so callers see an ordinary primitive.
+            if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
+                let (t, leaf) = csg_intersect(s, i, o, d, t_hit);
+                if t < t_hit {
+                    t_hit = t;
+                    hit = leaf;
+                }
+            } else {
+                visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+            }
             if any_hit && hit != before {
                 return (hit, t_hit);
             }

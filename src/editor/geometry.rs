@@ -223,5 +223,11 @@ pub(super) fn triangles(geometry: &Geometry, lo: Vec3, hi: Vec3, extent: f32, ou
             push([p, s, r]);
         }
         Geometry::Analytic(a) => a.tessellate(SEGMENTS).into_iter().for_each(push),
+        // Every leaf whole: the preview shows the parts a CSG object is made of.
+        Geometry::Csg(c) => {
+            for shape in c.leaves.iter().flatten() {
+                triangles(&shape.geometry, lo, hi, extent, out);
+            }
+        }
     }
 }

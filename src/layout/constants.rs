@@ -134,6 +134,44 @@ shared_constants! {
     /// normal interpolates the vertex normals, and rays leave from Hanika's shifted point
     /// (`Hit::shift`), which hides the shadow terminator of low-poly meshes.
     PRIMITIVE_FLAG_SMOOTH: u32 = 0x800;
+    /// A CSG object (union, intersection, difference, merge of closed shapes): one BVH primitive
+    /// whose `data` is a CSG block in the shape data (`CSG_DATA_*`). Its leaves' primitives sit
+    /// after the scene's own, from `FrameParams::primitive_count` on, where no ray meets them
+    /// except through the block's walk (`shaders/csg.glsl`). In the `analytic` kernel variant.
+    PRIMITIVE_CSG: u32 = 7;
+    /// Flag of a CSG leaf's `Primitive::kind`: the leaf lies on the subtracted side of an odd
+    /// number of differences, so the solid's outward normal is the leaf's inward one.
+    PRIMITIVE_FLAG_CSG_FLIP: u32 = 0x1000;
+    /// Words of a CSG block (u32 bits stored in the f32 shape data): the count of its leaf
+    /// primitives, the length of its postfix program, the index of its first leaf primitive
+    /// counted from `FrameParams::primitive_count`, then the leaf index of each leaf primitive
+    /// (leaves are contiguous runs), then the program.
+    CSG_DATA_PRIMITIVES: u32 = 0;
+    CSG_DATA_PROGRAM_LENGTH: u32 = 1;
+    CSG_DATA_FIRST: u32 = 2;
+    CSG_DATA_LEAVES: u32 = 3;
+    /// A program word is `op << CSG_OP_SHIFT | leaf`: `CSG_OP_LEAF` pushes the leaf's inside bit,
+    /// the others pop two values (a below b) and push a op b.
+    CSG_OP_SHIFT: u32 = 16;
+    CSG_OP_LEAF: u32 = 0;
+    /// Union (POV-Ray's): every child's surface stays visible, inner ones included.
+    CSG_OP_UNION: u32 = 1;
+    /// Merge: a union without the surfaces inside other children.
+    CSG_OP_MERGE: u32 = 2;
+    CSG_OP_INTERSECTION: u32 = 3;
+    /// a minus b.
+    CSG_OP_DIFFERENCE: u32 = 4;
+    /// Most leaves of one CSG object (its inside state is one 32-bit mask).
+    CSG_MAX_LEAVES: u32 = 32;
+    /// Most primitives over all leaves of one CSG object (a box is 12 triangles, a capped
+    /// cylinder 3 primitives): each step of the walk tests every one.
+    CSG_MAX_PRIMITIVES: u32 = 64;
+    /// Most nested CSG nodes from an object's root to a leaf.
+    CSG_MAX_DEPTH: u32 = 16;
+    /// Most distinct crossings the walk of one ray through one CSG object visits (those behind
+    /// the ray's origin included); a ray that needs more passes the rest of the object as a miss.
+    /// With the caps above a walk runs at most 32 x (64 + 63) loop iterations.
+    CSG_MAX_STEPS: u32 = 32;
     /// Float offsets inside a smooth triangle's `TriangleShading` block (checked against the
     /// struct by a const assertion in src/layout/mod.rs).
     TRIANGLE_DATA_UV: u32 = 0;

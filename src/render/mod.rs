@@ -8,6 +8,7 @@ pub mod gpu;
 pub mod media_bounds;
 pub mod memory;
 pub mod pack;
+pub mod pack_csg;
 pub mod photons;
 pub mod prepare;
 pub mod progressive;

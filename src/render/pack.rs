@@ -38,6 +38,9 @@ pub struct PackedScene {
     /// True when some shape is a torus or a superellipsoid: the kernels then need their
     /// `analytic_implicit` variant.
     pub implicit: bool,
+    /// The leaf primitives of the CSG objects, which follow all others in the primitive array
+    /// (their CSG blocks count them from `FrameParams::primitive_count`).
+    pub csg_primitives: Vec<Primitive>,
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
@@ -49,7 +52,15 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
     }
     for shape in &scene.shapes {
         let (alpha, uses_uv) = material_needs(scene, shape.material, 0);
-        let p = pack_shape(shape, alpha, uses_uv, &mut packed.shape_data);
+        let p = match &shape.geometry {
+            Geometry::Csg(csg) => super::pack_csg::pack_csg(
+                csg,
+                |m| material_needs(scene, m, 0).1,
+                &mut packed.shape_data,
+                &mut packed.csg_primitives,
+            ),
+            _ => pack_shape(shape, alpha, uses_uv, &mut packed.shape_data),
+        };
         packed.primitives.push(p);
         packed.bounds.push(shape.geometry.bounds());
         // The area that holds photons: a constant opacity scales it (a fully transparent shape
@@ -63,7 +74,8 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
             packed.photon_area += area * visible;
         }
     }
-    packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_)));
+    // CSG objects live in the analytic variant (their leaves may be discs and cones).
+    packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_) | Geometry::Csg(_)));
     packed.implicit = scene.shapes.iter().any(|s| {
         matches!(
             s.geometry,
@@ -281,7 +293,8 @@ pub fn texture_support(t: &TextureDesc) -> Option<(Vec3, Vec3)> {
     Some(out)
 }
 
-/// The only place that turns a shape into the GPU's `Primitive` (and its shape data, if any).
+/// The only place that turns a shape into the GPU's `Primitive` (and its shape data, if any);
+/// `pack_scene` packs CSG objects with `pack_csg`, which calls this for each leaf shape.
 pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Vec<f32>) -> Primitive {
     let flags = if alpha { PRIMITIVE_FLAG_ALPHA } else { 0 } | if uses_uv { PRIMITIVE_FLAG_UV } else { 0 };
     let mut p = Primitive { material: shape.material, light: NO_LIGHT, data: NO_DATA, ..Default::default() };
@@ -337,6 +350,8 @@ pub fn pack_shape(shape: &Shape, alpha: bool, uses_uv: bool, shape_data: &mut Ve
             shape_data.push(a.size());
             debug_assert_eq!(shape_data.len() as u32 - p.data, SHAPE_DATA_FLOATS);
         }
+        // Packed by `pack_csg` (it needs the leaves' own array); here a triangle no ray meets.
+        Geometry::Csg(_) => {}
         Geometry::Sphere(s) => {
             p.kind = PRIMITIVE_SPHERE | flags;
             p.p0 = s.center.into();

@@ -264,6 +264,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let mut primitives = bvh.primitives;
     let unbounded_first = primitives.len() as u32;
     primitives.extend(unbounded.iter().map(|&i| packed.primitives[i]));
+    // The CSG objects' leaves come last: no ray meets them but through their object's walk.
+    let primitive_count = primitives.len() as u32;
+    primitives.extend_from_slice(&packed.csg_primitives);
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
     // original index, which the reorder keeps in `order`).
     let areas: Vec<f32> = bvh
@@ -436,7 +439,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         seed: settings.seed,
         light_count: lights.len() as u32,
         ray_epsilon: scale * RAY_EPSILON_SCALE,
-        primitive_count: primitives.len() as u32,
+        primitive_count,
         node_count: bvh.nodes.len() as u32,
         total_light_power: total_photon as f32,
         photon_mapping: 0,

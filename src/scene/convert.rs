@@ -1,6 +1,7 @@
 //! From the file as written (`format`) to the `Scene` the renderer uses: checks every value,
 //! applies defaults, turns quads, boxes, meshes and area lights into triangles and materials.
 
+mod csg;
 mod sky;
 
 use std::ops::Range;
@@ -87,6 +88,7 @@ const SHAPE_TYPES: &[&str] = &[
     "cone",
     "torus",
     "superellipsoid",
+    "csg",
 ];
 /// Mesh defaults (docs/scene-format.md): faces whose normals differ by up to this share vertex
 /// normals where the file has none (Blender's auto-smooth default); subdivision levels; the
@@ -1673,7 +1675,14 @@ impl Builder<'_> {
     /// Checks that the triangles from `first` on (one mesh) close up, every edge shared by two
     /// triangles that run it in opposite directions, and turns them around when they face
     /// inward (negative volume), so that the winding normal points out of the medium.
-    fn close_mesh(&mut self, first: usize, file: &Spanned<String>, object: &str) -> Result<()> {
+    fn close_mesh(
+        &mut self,
+        first: usize,
+        file: &Spanned<String>,
+        object: &str,
+        needs: &str,
+        or_else: &str,
+    ) -> Result<()> {
         use std::collections::HashMap;
         let key = |v: Vec3| v.to_array().map(f32::to_bits);
         let mut edges: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
@@ -1695,7 +1704,7 @@ impl Builder<'_> {
                 &file.span(),
                 object,
                 format!(
-                    "mesh {}: a medium needs a closed mesh, but {open} edges border a single triangle or triangles wound against their neighbours; close the mesh or drop `interior`",
+                    "mesh {}: {needs} needs a closed mesh, but {open} edges border a single triangle or triangles wound against their neighbours; close the mesh{or_else}",
                     printable(file.get_ref())
                 ),
             ));
@@ -1724,6 +1733,27 @@ impl Builder<'_> {
         let table = def.span();
         let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
         let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;
+        self.shape_fields(kind, s, &object)?;
+        if kind == "csg" {
+            return self.csg(def, &object);
+        }
+        let first_shape = self.shapes.len();
+        let media = self.medium_interface(kind, s, &object)?;
+        self.shape_kind(kind, s, &table, &object, None)?;
+        if let Some(media) = media {
+            if kind == "mesh" {
+                let file = s.file.as_ref().expect("shape_kind required the file");
+                self.close_mesh(first_shape, file, &object, "a medium", " or drop `interior`")?;
+            }
+            for shape in &mut self.shapes[first_shape..] {
+                shape.media = Some(media);
+            }
+        }
+        Ok(())
+    }
+
+    /// Refuses the fields a shape of type `kind` does not take.
+    fn shape_fields(&self, kind: &str, s: &ShapeDef, object: &str) -> Result<()> {
         let present = [
             ("name", span_of(&s.name)),
             ("type", span_of(&s.r#type)),
@@ -1757,6 +1787,8 @@ impl Builder<'_> {
             ("points", span_of(&s.points)),
             ("interior", span_of(&s.interior)),
             ("exterior", span_of(&s.exterior)),
+            ("operation", span_of(&s.operation)),
+            ("children", span_of(&s.children)),
         ];
         let (what, fields): (&str, &[&str]) = match kind {
             "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
@@ -1769,6 +1801,7 @@ impl Builder<'_> {
             "torus" => ("a torus", &["center", "axis", "major_radius", "minor_radius"]),
             "superellipsoid" => ("a superellipsoid", &["center", "exponents"]),
             "bicubic_patch" => ("a bicubic patch", &["points", "flatness", "smooth_angle"]),
+            "csg" => ("a csg", &["operation", "children"]),
             _ => (
                 "a mesh",
                 &[
@@ -1784,30 +1817,29 @@ impl Builder<'_> {
             ),
         };
         let mut allowed = vec!["name", "type", "material", "transform", "interior", "exterior"];
-        allowed.extend_from_slice(fields);
-        self.only_fields(&object, what, &present, &allowed)?;
-        let first_shape = self.shapes.len();
-        let media = self.medium_interface(kind, s, &object)?;
-        self.shape_kind(kind, s, &table, &object)?;
-        if let Some(media) = media {
-            if kind == "mesh" {
-                let file = s.file.as_ref().expect("shape_kind required the file");
-                self.close_mesh(first_shape, file, &object)?;
-            }
-            for shape in &mut self.shapes[first_shape..] {
-                shape.media = Some(media);
-            }
+        if kind == "csg" {
+            allowed = vec!["name", "type", "material"];
         }
-        Ok(())
+        allowed.extend_from_slice(fields);
+        self.only_fields(object, what, &present, &allowed)
     }
 
     /// Adds the shapes of one `[[shapes]]` table of type `kind`.
-    fn shape_kind(&mut self, kind: &str, s: &ShapeDef, table: &Range<usize>, object: &str) -> Result<()> {
+    /// `default_material` stands in for a missing `material` (a CSG node's, for its children).
+    fn shape_kind(
+        &mut self,
+        kind: &str,
+        s: &ShapeDef,
+        table: &Range<usize>,
+        object: &str,
+        default_material: Option<&Spanned<String>>,
+    ) -> Result<()> {
         let (table, object) = (table.clone(), object.to_string());
+        let material_field = s.material.as_ref().or(default_material);
 
         // A mesh may leave out `material`: its file's materials apply.
         if kind == "mesh" {
-            let material = match &s.material {
+            let material = match material_field {
                 Some(m) => Some(self.material_id(m, &object)?),
                 None => None,
             };
@@ -1815,7 +1847,10 @@ impl Builder<'_> {
             let file = self.require(&s.file, &table, &object, "file", "file = \"meshes/bunny.obj\"")?;
             return self.mesh(file, s, &object, material, transform);
         }
-        let material_def = self.require(&s.material, &table, &object, "material", "material = \"white\"")?;
+        let material_def = match material_field {
+            Some(m) => m,
+            None => self.require(&s.material, &table, &object, "material", "material = \"white\"")?,
+        };
         let material = self.material_id(material_def, &object)?;
         let transform = self.transform(s.transform.as_ref(), &object)?;
 

@@ -279,6 +279,9 @@ pub(crate) struct ShapeDef {
     // media
     pub interior: Option<Spanned<String>>,
     pub exterior: Option<Spanned<String>>,
+    // csg
+    pub operation: Option<Spanned<String>>,
+    pub children: Option<Spanned<Vec<Spanned<ShapeDef>>>>,
 }
 
 #[derive(Debug, Deserialize)]

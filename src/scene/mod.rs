@@ -12,6 +12,7 @@
 
 pub mod analytic;
 mod convert;
+pub mod csg;
 mod error;
 mod format;
 mod material;
@@ -29,6 +30,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3, Vec2, Vec3};
 
 pub use analytic::{Analytic, AnalyticKind};
+pub use csg::{Csg, CsgNode, CsgOp};
 pub use error::SceneError;
 pub use material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
@@ -175,6 +177,8 @@ pub enum Geometry {
     Sphere(Sphere),
     /// Plane, disc, cone or cylinder side, torus, superellipsoid (`analytic.rs`).
     Analytic(Analytic),
+    /// A CSG object of closed shapes (`csg.rs`).
+    Csg(Box<Csg>),
 }
 
 impl Geometry {
@@ -187,6 +191,7 @@ impl Geometry {
             }
             Geometry::Sphere(s) => (s.center - Vec3::splat(s.radius), s.center + Vec3::splat(s.radius)),
             Geometry::Analytic(a) => a.bounds(),
+            Geometry::Csg(c) => c.bounds(),
         }
     }
 
@@ -204,6 +209,7 @@ impl Geometry {
             }
             Geometry::Sphere(s) => 4.0 * std::f32::consts::PI * s.radius * s.radius,
             Geometry::Analytic(a) => a.area(),
+            Geometry::Csg(c) => c.area(),
         }
     }
 }
