@@ -113,6 +113,9 @@ struct FrameParams {
     uint environment;
     uint unbounded_first;
     uint camera_medium;
+    uint instance_count;
+    uint instance_data;
+    uint _pad[2];
 };
 
 struct DispatchRange {
