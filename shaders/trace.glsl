@@ -63,7 +63,10 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
     }
 #endif
     uint flat_end = nodes[0].skip_count >> BVH_COUNT_BITS;
-    uint world_end = frame.instance_count > 0u ? nodes[flat_end].skip_count >> BVH_COUNT_BITS : flat_end;
+    // Without instances node flat_end does not exist: only read it behind a loop of one turn
+    // (a select would read it unconditionally).
+    uint world_end = flat_end;
+    WHEN(frame.instance_count > 0u) { world_end = nodes[flat_end].skip_count >> BVH_COUNT_BITS; }
     vec3 ro = o;
     vec3 rd = d;
     vec3 inv_d = 1.0 / d;
