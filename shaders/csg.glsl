@@ -59,7 +59,7 @@ float csg_intersect(uint i, vec3 o, vec3 d, float t_max, out uint hit) {
     uint a = primitives[i].data;
     uint count = csg_word(a + CSG_DATA_PRIMITIVES);
     uint program_length = csg_word(a + CSG_DATA_PROGRAM_LENGTH);
-    uint first = frame.primitive_count + csg_word(a + CSG_DATA_FIRST);
+    uint first = frame.csg_first + csg_word(a + CSG_DATA_FIRST);
     uint leaves = a + CSG_DATA_LEAVES;
     uint program = leaves + count;
     hit = NO_LIGHT;

@@ -113,6 +113,10 @@ struct FrameParams {
     uint environment;
     uint unbounded_first;
     uint camera_medium;
+    uint instance_count;
+    uint instance_data;
+    uint csg_first;
+    uint _pad;
 };
 
 struct DispatchRange {

@@ -195,7 +195,7 @@ Bsdf phase_bsdf(uint medium, vec3 wo) {
 // a medium boundary's interior when it went against the outward normal, its exterior when it
 // went along it; any other surface leaves the medium as it was.
 uint medium_after(uint prim, vec3 ng, vec3 d, uint medium) {
-    Primitive p = primitives[prim];
+    Primitive p = primitives[hit_primitive(prim)];
     if ((p.kind & PRIMITIVE_FLAG_MEDIUM) == 0u) return medium;
     return dot(d, ng) < 0.0 ? p.interior : p.exterior;
 }

@@ -45,7 +45,7 @@ vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
 // The primitive rays leaving a hit on primitive i must skip: i itself when it is a smooth
 // triangle (see trace_ray's twin), else none.
 uint ray_skip(uint i) {
-    return (primitives[i].kind & PRIMITIVE_FLAG_SMOOTH) != 0u ? i : NO_LIGHT;
+    return (primitives[hit_primitive(i)].kind & PRIMITIVE_FLAG_SMOOTH) != 0u ? i : NO_LIGHT;
 }
 
 // A shadow ray toward a point sampled on a light, and the radiance the light reflects at the

@@ -48,14 +48,9 @@ float ray_sphere(vec3 o, vec3 d, vec3 c, float r, float t_min, float t_max) {
     return (t > t_min && t < t_max) ? t : INF;
 }
 
-#ifdef VARIANT_ANALYTIC
-// Analytic shapes (plane, disc, cone, torus, superellipsoid), intersected in their object space.
-// Only the `analytic` variant of the scene kernels has them: lavapipe compiles and runs every
-// branch under masks, so scenes without them keep kernels without their code. Each function
-// explains itself at its twin in src/cpu/shape.rs.
-
 // Rows of the affine map at shape_data[a] (3x4) applied to a point, to a vector, and its
 // transposed linear part applied to a vector (object normals to the world with object_from_world).
+// The analytic shapes and the instances use them.
 vec3 affine_point(uint a, vec3 x) {
     return vec3(shape_data[a] * x.x + shape_data[a + 1u] * x.y + shape_data[a + 2u] * x.z + shape_data[a + 3u],
                 shape_data[a + 4u] * x.x + shape_data[a + 5u] * x.y + shape_data[a + 6u] * x.z + shape_data[a + 7u],
@@ -71,6 +66,12 @@ vec3 affine_transpose_vector(uint a, vec3 v) {
          + vec3(shape_data[a + 4u], shape_data[a + 5u], shape_data[a + 6u]) * v.y
          + vec3(shape_data[a + 8u], shape_data[a + 9u], shape_data[a + 10u]) * v.z;
 }
+
+#ifdef VARIANT_ANALYTIC
+// Analytic shapes (plane, disc, cone, torus, superellipsoid), intersected in their object space.
+// Only the `analytic` variant of the scene kernels has them: lavapipe compiles and runs every
+// branch under masks, so scenes without them keep kernels without their code. Each function
+// explains itself at its twin in src/cpu/shape.rs.
 
 float ray_plane(vec3 o, vec3 d, float t_min, float t_max) {
     float t = -o.y / d.y;
@@ -551,10 +552,60 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
     }
 }
 
-// The hit record of the ray o + t d on primitive i.
+// Instances (twin: src/cpu/instance.rs, which explains them). A hit on primitive p of instance k
+// is named (k + 1) * frame.primitive_count + p; names below primitive_count are the world's.
+
+// The instance of hit name id, or NO_DATA for a primitive of the world.
+uint hit_instance(uint id) {
+    return (frame.instance_count == 0u || id < frame.primitive_count) ? NO_DATA : id / frame.primitive_count - 1u;
+}
+
+// The primitive a hit name refers to.
+uint hit_primitive(uint id) {
+    uint k = hit_instance(id);
+    return k == NO_DATA ? id : id - (k + 1u) * frame.primitive_count;
+}
+
+// Offset of instance k's record in the shape data (INSTANCE_DATA_*).
+uint instance_record(uint k) {
+    return frame.instance_data + k * INSTANCE_DATA_FLOATS;
+}
+
+// h, filled in object space at the object point of world point x, moved to the world by the
+// instance whose record is at a (see the twin's to_world).
+void instance_to_world(uint a, vec3 x, uint kind, inout Hit h) {
+    uint ofw = a + INSTANCE_DATA_OBJECT_FROM_WORLD;
+    uint wfo = a + INSTANCE_DATA_WORLD_FROM_OBJECT;
+    h.p = x;
+    h.ng = normalize(affine_transpose_vector(ofw, h.ng));
+    h.ns = normalize(affine_transpose_vector(ofw, h.ns));
+    h.dpdu = affine_vector(wfo, h.dpdu);
+    h.dpdv = affine_vector(wfo, h.dpdv);
+    h.shift = affine_vector(wfo, h.shift);
+    if (kind > PRIMITIVE_SPHERE) {
+        vec3 ax = abs(x);
+        h.eps = max(h.eps * shape_data[a + INSTANCE_DATA_SCALE], SHAPE_EPSILON_SCALE * max(max(ax.x, ax.y), ax.z));
+    }
+    uint material = floatBitsToUint(shape_data[a + INSTANCE_DATA_MATERIAL]);
+    if (material != NO_DATA) h.material = material;
+}
+
+// The hit record of the ray o + t d on primitive i, or on an instance's primitive (i a hit
+// name): filled at the object point, then moved to the world.
 Hit shape_hit(uint i, vec3 o, vec3 d, float t) {
     Hit h;
-    shape_surface(i, o + t * d, h);
+    vec3 x = o + t * d;
+    uint k = hit_instance(i);
+    uint prim = hit_primitive(i);
+    uint a = 0u;
+    vec3 xo = x;
+    WHEN(k != NO_DATA) {
+        a = instance_record(k);
+        xo = affine_point(a + INSTANCE_DATA_OBJECT_FROM_WORLD, x);
+    }
+    shape_surface(prim, xo, h);
+    WHEN(k != NO_DATA) { instance_to_world(a, x, primitives[prim].kind & PRIMITIVE_KIND_MASK, h); }
+    h.prim = i;
     return h;
 }
 

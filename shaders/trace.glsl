@@ -13,13 +13,13 @@ float ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
     return enter <= leave ? enter : INF;
 }
 
-// Stochastic transparency: the ray passes through primitive i at distance t with probability
-// 1 - opacity. Camera rays, shadow rays and photons all decide here.
-bool passes_through(uint i, vec3 o, vec3 d, float t) {
+// Stochastic transparency: the ray passes through the primitive of hit name id at distance t
+// with probability 1 - opacity. Camera rays, shadow rays and photons all decide here.
+bool passes_through(uint id, vec3 o, vec3 d, float t) {
     bool passes = false;
-    WHEN((primitives[i].kind & PRIMITIVE_FLAG_ALPHA) != 0u) {
-        Hit h = shape_hit(i, o, d, t);
-        passes = hash_point(h.p, i) >= material_opacity(materials[h.material], h);
+    WHEN((primitives[hit_primitive(id)].kind & PRIMITIVE_FLAG_ALPHA) != 0u) {
+        Hit h = shape_hit(id, o, d, t);
+        passes = hash_point(h.p, id) >= material_opacity(materials[h.material], h);
     }
     return passes;
 }
@@ -28,45 +28,74 @@ bool passes_through(uint i, vec3 o, vec3 d, float t) {
 #include "csg.glsl"
 #endif
 
-// Tests primitive i against the ray and keeps it in (hit, t_hit) when it is closer; the
-// primitive `ignore` is not tested (see trace_ray).
-void visit(uint i, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
-    float t = i == ignore ? INF : shape_intersect(i, o, d, 0.0, t_hit);
+// Tests primitive i (hit name id) against the walk's ray (ro, rd: the world's, or an instance's
+// object-space form whose distances are len times the world's) and keeps it in (hit, t_hit,
+// world distances) when it is closer; the hit name `ignore` is not tested (see trace_ray).
+// (o, d) is the world ray.
+void visit(uint i, uint id, vec3 ro, vec3 rd, float len, vec3 o, vec3 d, uint ignore, inout uint hit, inout float t_hit) {
+    float t_max = t_hit * len;
+    float t = id == ignore ? INF : shape_intersect(i, ro, rd, 0.0, t_max);
 #ifdef VARIANT_ALPHA
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray. Alpha lives in
     // its own variant: its test in the innermost loop slows lavapipe down.
-    for (uint k = 0u; k < 2u && t < t_hit && passes_through(i, o, d, t); k++) {
-        t = shape_intersect(i, o, d, t, t_hit);
+    for (uint k = 0u; k < 2u && t < t_max && passes_through(id, o, d, t / len); k++) {
+        t = shape_intersect(i, ro, rd, t, t_max);
     }
 #endif
+    t /= len;
     if (t < t_hit) {
         t_hit = t;
-        hit = i;
+        hit = id;
     }
 }
 
-// Closest hit in [0, t_max): returns the primitive index or NO_LIGHT (as "none") and sets t_hit.
-// With `any_hit` it returns the first hit found (shadow rays). Primitive `ignore` (NO_LIGHT: none)
+// Closest hit in [0, t_max): returns the hit name or NO_LIGHT (as "none") and sets t_hit.
+// With `any_hit` it returns the first hit found (shadow rays). Hit name `ignore` (NO_LIGHT: none)
 // is ignored: the smooth triangle a ray leaves (see the twin). The unbounded primitives (planes,
 // after the BVH's, in the analytic variant) come first; then the BVH, stackless: a missed box, or
-// a finished leaf, continues at the node's miss link.
+// a finished leaf, continues at the node's miss link. With instances, the top level follows the
+// world's BVH and each of its leaves walks its instance's object in object space, in the same
+// loop of at most TRACE_STEPS turns (see the twin).
 uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float t_hit) {
-    vec3 inv_d = 1.0 / d;
     t_hit = t_max;
     uint hit = NO_LIGHT;
 #ifdef VARIANT_ANALYTIC
-    for (uint i = frame.unbounded_first; i < frame.primitive_count; i++) {
-        visit(i, o, d, ignore, hit, t_hit);
+    for (uint i = frame.unbounded_first; i < frame.csg_first; i++) {
+        visit(i, i, o, d, 1.0, o, d, ignore, hit, t_hit);
         if (any_hit && hit != NO_LIGHT) return hit;
     }
 #endif
+    uint flat_end = nodes[0].skip_count >> BVH_COUNT_BITS;
+    // Without instances node flat_end does not exist: only read it behind a loop of one turn
+    // (a select would read it unconditionally).
+    uint world_end = flat_end;
+    WHEN(frame.instance_count > 0u) { world_end = nodes[flat_end].skip_count >> BVH_COUNT_BITS; }
+    vec3 ro = o;
+    vec3 rd = d;
+    vec3 inv_d = 1.0 / d;
+    float len = 1.0;
+    uint base = 0u;
+    uint resume = NO_DATA;
+    uint end = world_end;
     uint node = 0u;
-    while (node < frame.node_count) {
+    for (uint step = 0u; step < TRACE_STEPS; step++) {
+        if (node >= end) {
+            if (resume == NO_DATA) break;
+            node = resume;
+            resume = NO_DATA;
+            end = world_end;
+            ro = o;
+            rd = d;
+            inv_d = 1.0 / d;
+            len = 1.0;
+            base = 0u;
+            continue;
+        }
         BvhNode n = nodes[node];
         uint count = n.skip_count & BVH_COUNT_MASK;
         uint skip = n.skip_count >> BVH_COUNT_BITS;
-        if (ray_box(o, inv_d, load3(n.aabb_min), load3(n.aabb_max), t_hit) == INF) {
+        if (ray_box(ro, inv_d, load3(n.aabb_min), load3(n.aabb_max), t_hit * len) == INF) {
             node = skip;
             continue;
         }
@@ -74,12 +103,30 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             node++;
             continue;
         }
+        // A leaf of the top level: walk its instance's object (a loop of at most one turn, so
+        // scenes without instances skip its reads).
+        bool entered = false;
+        WHEN(node >= flat_end && resume == NO_DATA) {
+            uint a = instance_record(n.first);
+            vec3 od = affine_vector(a + INSTANCE_DATA_OBJECT_FROM_WORLD, d);
+            len = length(od);
+            ro = affine_point(a + INSTANCE_DATA_OBJECT_FROM_WORLD, o);
+            rd = od / len;
+            inv_d = 1.0 / rd;
+            base = (n.first + 1u) * frame.primitive_count;
+            resume = skip;
+            node = floatBitsToUint(shape_data[a + INSTANCE_DATA_ROOT]);
+            end = floatBitsToUint(shape_data[a + INSTANCE_DATA_END]);
+            entered = true;
+        }
+        if (entered) continue;
         for (uint i = n.first; i < n.first + count; i++) {
             uint before = hit;
 #ifdef VARIANT_ANALYTIC
             // A CSG object reports the leaf primitive it shows (csg.glsl), so callers see an
-            // ordinary primitive. Behind WHEN: lavapipe would run its walk under masks for
-            // every primitive of every scene of the analytic variant.
+            // ordinary primitive. Only the world holds CSG objects (scene loading refuses them in
+            // objects), so the walk runs on the world ray. Behind WHEN: lavapipe would run its
+            // walk under masks for every primitive of every scene of the analytic variant.
             bool is_csg = (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
             WHEN(is_csg) {
                 uint leaf;
@@ -91,7 +138,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             }
             if (!is_csg)
 #endif
-            visit(i, o, d, ignore, hit, t_hit);
+            visit(i, base + i, ro, rd, len, o, d, ignore, hit, t_hit);
             if (any_hit && hit != before) return hit;
         }
         node = skip;

@@ -23,6 +23,9 @@ pub const MAX_DEPTH: u32 = 1024;
 pub const MAX_GATHER_RAYS: u32 = 1024;
 /// Most photon paths per map and pass.
 pub const MAX_PHOTON_PATHS: u32 = 1_000_000_000;
+/// Most instances of objects in a scene, nested placements and grids counted out: each takes
+/// a record of 112 bytes and a node of the top-level BVH.
+pub const MAX_INSTANCES: u32 = 1 << 20;
 /// Largest magnitude of a coordinate, a length or a colour in a scene, after transforms: products
 /// of two (areas) and sums of many (light power) then stay finite in 32-bit floats.
 pub const MAX_SCENE_VALUE: f64 = 1e9;

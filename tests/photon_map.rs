@@ -113,6 +113,8 @@ fn closed_box(rho: f32) -> Scene {
         })],
         environment: None,
         warnings: vec![],
+        objects: vec![],
+        instances: vec![],
         media: vec![],
         medium_names: vec![],
         atmosphere: None,

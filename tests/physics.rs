@@ -58,6 +58,8 @@ fn light_over_plane() -> Scene {
         lights: vec![],
         environment: None,
         warnings: vec![],
+        objects: vec![],
+        instances: vec![],
         media: vec![],
         medium_names: vec![],
         atmosphere: None,

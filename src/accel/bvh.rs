@@ -65,6 +65,16 @@ struct Item {
 /// Builds the hierarchy over `primitives` (any order), whose axis-aligned bounds (min, max) are
 /// `bounds`, and returns it with the primitives reordered.
 pub fn build_bvh(primitives: &[Primitive], bounds: &[(Vec3, Vec3)]) -> Result<Bvh, BvhError> {
+    build_bvh_with_leaves(primitives, bounds, MAX_LEAF_SIZE)
+}
+
+/// `build_bvh` with leaves of at most `max_leaf` primitives wherever their centroids can be
+/// separated (the top level over instances takes 1: a leaf is one instance to enter).
+pub fn build_bvh_with_leaves(
+    primitives: &[Primitive],
+    bounds: &[(Vec3, Vec3)],
+    max_leaf: usize,
+) -> Result<Bvh, BvhError> {
     assert_eq!(primitives.len(), bounds.len(), "one bounding box per primitive");
     let mut items: Vec<Item> = bounds
         .iter()
@@ -87,13 +97,20 @@ pub fn build_bvh(primitives: &[Primitive], bounds: &[(Vec3, Vec3)]) -> Result<Bv
     if primitives.len() >= limit as usize {
         return Err(BvhError::TooManyPrimitives { count: primitives.len(), limit });
     }
-    build_node(&mut items, 0, &mut nodes, 1, &mut depth);
+    build_node(&mut items, 0, &mut nodes, 1, &mut depth, max_leaf);
     let ordered = items.iter().map(|it| primitives[it.index as usize]).collect();
     Ok(Bvh { nodes, primitives: ordered, order: items.iter().map(|it| it.index).collect(), depth })
 }
 
 /// Appends the subtree over `items` (which start at primitive `first`) in depth-first order.
-fn build_node(items: &mut [Item], first: usize, nodes: &mut Vec<BvhNode>, level: u32, depth: &mut u32) {
+fn build_node(
+    items: &mut [Item],
+    first: usize,
+    nodes: &mut Vec<BvhNode>,
+    level: u32,
+    depth: &mut u32,
+    max_leaf: usize,
+) {
     *depth = (*depth).max(level);
     let mut bounds = Bounds::EMPTY;
     let mut centroid_bounds = Bounds::EMPTY;
@@ -108,13 +125,13 @@ fn build_node(items: &mut [Item], first: usize, nodes: &mut Vec<BvhNode>, level:
         first: first as u32,
         skip_count: 0,
     });
-    let split = if items.len() == 1 { None } else { choose_split(items, &bounds, &centroid_bounds) };
+    let split = if items.len() == 1 { None } else { choose_split(items, &bounds, &centroid_bounds, max_leaf) };
     let count = match split {
         None => items.len() as u32, // a leaf
         Some(mid) => {
             let (left, right) = items.split_at_mut(mid);
-            build_node(left, first, nodes, level + 1, depth);
-            build_node(right, first + mid, nodes, level + 1, depth);
+            build_node(left, first, nodes, level + 1, depth, max_leaf);
+            build_node(right, first + mid, nodes, level + 1, depth, max_leaf);
             0
         }
     };
@@ -123,7 +140,7 @@ fn build_node(items: &mut [Item], first: usize, nodes: &mut Vec<BvhNode>, level:
 }
 
 /// Partitions `items` and returns the split position, or `None` when a leaf is cheaper.
-fn choose_split(items: &mut [Item], bounds: &Bounds, centroid_bounds: &Bounds) -> Option<usize> {
+fn choose_split(items: &mut [Item], bounds: &Bounds, centroid_bounds: &Bounds, max_leaf: usize) -> Option<usize> {
     let n = items.len();
     let extent = centroid_bounds.max - centroid_bounds.min;
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bin boundary)
@@ -169,7 +186,7 @@ fn choose_split(items: &mut [Item], bounds: &Bounds, centroid_bounds: &Bounds) -
     match best {
         Some((cost, axis, boundary)) => {
             let split_cost = TRAVERSAL_COST + cost / bounds.half_area().max(f32::MIN_POSITIVE);
-            if split_cost >= leaf_cost && n <= MAX_LEAF_SIZE {
+            if split_cost >= leaf_cost && n <= max_leaf {
                 return None;
             }
             let scale = BINS as f32 / extent[axis];
@@ -180,7 +197,7 @@ fn choose_split(items: &mut [Item], bounds: &Bounds, centroid_bounds: &Bounds) -
         }
         // All centroids coincide: no plane separates them. Split in the middle so leaves stay
         // small; the two halves overlap completely, which costs time but stays correct.
-        None if n > MAX_LEAF_SIZE => Some(n / 2),
+        None if n > max_leaf => Some(n / 2),
         None => None,
     }
 }

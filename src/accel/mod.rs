@@ -2,4 +2,4 @@
 
 pub mod bvh;
 
-pub use bvh::{build_bvh, Bvh, BvhError};
+pub use bvh::{build_bvh, build_bvh_with_leaves, Bvh, BvhError};

@@ -94,7 +94,7 @@ pub fn csg_intersect(s: &SceneView, i: u32, o: Vec3, d: Vec3, t_max: f32) -> (f3
     let a = s.primitives[i as usize].data;
     let count = csg_word(s, a + CSG_DATA_PRIMITIVES);
     let program_length = csg_word(s, a + CSG_DATA_PROGRAM_LENGTH);
-    let first = s.frame.primitive_count + csg_word(s, a + CSG_DATA_FIRST);
+    let first = s.frame.csg_first + csg_word(s, a + CSG_DATA_FIRST);
     let leaves = a + CSG_DATA_LEAVES;
     let program = leaves + count;
     let mut inside = 0u32;

@@ -266,7 +266,7 @@ pub fn phase_bsdf(s: &SceneView, medium: u32, wo: Vec3) -> Bsdf {
 /// `d`: a medium boundary's interior when it went against the outward normal, its exterior when
 /// it went along it; any other surface leaves the medium as it was.
 pub fn medium_after(s: &SceneView, prim: u32, ng: Vec3, d: Vec3, medium: u32) -> u32 {
-    let p = &s.primitives[prim as usize];
+    let p = &s.primitives[super::instance::hit_primitive(s, prim) as usize];
     if p.kind & PRIMITIVE_FLAG_MEDIUM == 0 {
         return medium;
     }

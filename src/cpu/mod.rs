@@ -8,6 +8,7 @@ pub mod gather;
 pub mod grid;
 pub mod grid_build;
 pub mod image_texture;
+pub mod instance;
 pub mod light;
 pub mod medium;
 pub mod microfacet;

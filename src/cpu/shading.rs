@@ -63,7 +63,7 @@ pub fn offset_origin(h: &Hit, wo: Vec3, lobe_flags: u32) -> Vec3 {
 /// The primitive that rays leaving a hit on primitive `i` skip: `i` itself when it is a smooth
 /// triangle, else none (`NO_LIGHT`); see `trace_ray`.
 pub fn ray_skip(s: &SceneView, i: u32) -> u32 {
-    if s.primitives[i as usize].kind & PRIMITIVE_FLAG_SMOOTH != 0 {
+    if s.primitives[super::instance::hit_primitive(s, i) as usize].kind & PRIMITIVE_FLAG_SMOOTH != 0 {
         i
     } else {
         NO_LIGHT

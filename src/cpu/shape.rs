@@ -663,9 +663,18 @@ pub fn shape_surface(s: &SceneView, i: u32, x: Vec3) -> Hit {
     h
 }
 
-/// The hit record of the ray o + t d on primitive `i`.
+/// The hit record of the ray o + t d on primitive `i`, or on an instance's primitive (`i` a
+/// hit name, see `cpu::instance`): filled at the object point, then moved to the world.
 pub fn shape_hit(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> Hit {
-    shape_surface(s, i, o + t * d)
+    let x = o + t * d;
+    let Some((k, prim)) = super::instance::split_hit(s, i) else {
+        return shape_surface(s, i, x);
+    };
+    let rec = super::instance::record(s, k);
+    let mut h = shape_surface(s, prim, affine_point(super::instance::object_from_world(rec), x));
+    super::instance::to_world(rec, x, s.primitives[prim as usize].kind & PRIMITIVE_KIND_MASK, &mut h);
+    h.prim = i;
+    h
 }
 
 /// A point on primitive `i` for the uniform numbers `u`, as a hit record, and 1/pdf of such

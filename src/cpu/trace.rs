@@ -5,9 +5,10 @@ use glam::Vec3;
 use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
 use super::csg::csg_intersect;
+use super::instance::{hit_primitive, object_nodes, object_ray, record};
 use super::shape::{shape_hit, shape_intersect};
 use super::SceneView;
-use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK};
+use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK, TRACE_STEPS};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
 pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
@@ -24,59 +25,94 @@ pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
     }
 }
 
-/// Stochastic transparency: the ray passes through primitive `i` at distance `t` with
-/// probability 1 - opacity. Camera rays, shadow rays and photons all decide here.
-pub fn passes_through(s: &SceneView, i: u32, o: Vec3, d: Vec3, t: f32) -> bool {
-    if s.primitives[i as usize].kind & PRIMITIVE_FLAG_ALPHA == 0 {
+/// Stochastic transparency: the ray passes through the primitive of hit name `id` at distance
+/// `t` with probability 1 - opacity. Camera rays, shadow rays and photons all decide here.
+pub fn passes_through(s: &SceneView, id: u32, o: Vec3, d: Vec3, t: f32) -> bool {
+    if s.primitives[hit_primitive(s, id) as usize].kind & PRIMITIVE_FLAG_ALPHA == 0 {
         return false;
     }
-    let h = shape_hit(s, i, o, d, t);
-    hash_point(s, h.p, i) >= material_opacity(s, &s.materials[h.material as usize], &h)
+    let h = shape_hit(s, id, o, d, t);
+    hash_point(s, h.p, id) >= material_opacity(s, &s.materials[h.material as usize], &h)
 }
 
-/// Tests primitive `i` against the ray and keeps it in (`hit`, `t_hit`) when it is closer; the
-/// primitive `ignore` is not tested (see `trace_ray`).
-fn visit(s: &SceneView, i: u32, o: Vec3, d: Vec3, ignore: u32, hit: &mut u32, t_hit: &mut f32) {
-    let mut t = if i == ignore { f32::INFINITY } else { shape_intersect(s, i, o, d, 0.0, *t_hit) };
+/// The ray a BVH walk tests its boxes and primitives with: the world's, or an instance's
+/// object-space form with a unit direction whose distances are `len` times the world's.
+struct WalkRay {
+    o: Vec3,
+    d: Vec3,
+    inv_d: Vec3,
+    len: f32,
+}
+
+impl WalkRay {
+    fn new(o: Vec3, d: Vec3, len: f32) -> WalkRay {
+        WalkRay { o, d, inv_d: d.recip(), len }
+    }
+}
+
+/// Tests primitive `i` (hit name `id`) against the ray and keeps it in (`hit`, `t_hit`, world
+/// distances) when it is closer; the hit name `ignore` is not tested (see `trace_ray`). (`o`,
+/// `d`) is the world ray.
+#[allow(clippy::too_many_arguments)]
+fn visit(s: &SceneView, i: u32, id: u32, r: &WalkRay, o: Vec3, d: Vec3, ignore: u32, hit: &mut u32, t_hit: &mut f32) {
+    let t_max = *t_hit * r.len;
+    let mut t = if id == ignore { f32::INFINITY } else { shape_intersect(s, i, r.o, r.d, 0.0, t_max) };
     // A ray that passes a transparent point may meet the shape again behind it (a
     // sphere's far side); a shape has at most two surfaces along a ray.
     let mut k = 0;
-    while k < 2 && t < *t_hit && passes_through(s, i, o, d, t) {
-        t = shape_intersect(s, i, o, d, t, *t_hit);
+    while k < 2 && t < t_max && passes_through(s, id, o, d, t / r.len) {
+        t = shape_intersect(s, i, r.o, r.d, t, t_max);
         k += 1;
     }
+    let t = t / r.len;
     if t < *t_hit {
         *t_hit = t;
-        *hit = i;
+        *hit = id;
     }
 }
 
-/// Closest hit in [0, t_max) as (primitive index, distance), or `NO_LIGHT` and t_max on a miss.
-/// With `any_hit` the first hit found is returned (shadow rays). The unbounded primitives
-/// (infinite planes, after the BVH's) come first, then the BVH, stackless: a missed box, or a
-/// finished leaf, continues at the node's miss link.
+/// Closest hit in [0, t_max) as (hit name, distance), or `NO_LIGHT` and t_max on a miss. With
+/// `any_hit` the first hit found is returned (shadow rays). The unbounded primitives (infinite
+/// planes, after the BVH's) come first, then the BVH, stackless: a missed box, or a finished
+/// leaf, continues at the node's miss link.
 ///
-/// Primitive `ignore` (`NO_LIGHT`: none) is ignored: the smooth triangle the ray leaves. A ray
+/// With instances the walk has two levels in one loop: after the world's BVH (which ends at
+/// node 0's miss link) comes the top level over the instances' bounds, one instance per leaf;
+/// a leaf's instance moves the ray into its object's space and walks the object's BVH, whose
+/// end returns to the top level at the leaf's miss link. Both levels share one bound of
+/// `TRACE_STEPS` loop turns (lavapipe's loop limit).
+///
+/// Hit name `ignore` (`NO_LIGHT`: none) is ignored: the smooth triangle the ray leaves. A ray
 /// leaving a smooth triangle may head below the triangle's plane (its shading normal allows
 /// directions the flat facet faces away from), and would then meet its own facet at once; Hanika's
 /// shifted origin (`Hit::shift`) keeps it off the neighbouring facets. A flat triangle's rays never
 /// cross its plane, so flat scenes skip nothing.
 pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
     let nodes = s.nodes;
-    let inv_d = d.recip();
+    let world = WalkRay::new(o, d, 1.0);
     let mut t_hit = t_max;
     let mut hit = NO_LIGHT;
-    for i in s.frame.unbounded_first..s.frame.primitive_count {
-        visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+    for i in s.frame.unbounded_first..s.frame.csg_first {
+        visit(s, i, i, &world, o, d, ignore, &mut hit, &mut t_hit);
         if any_hit && hit != NO_LIGHT {
             return (hit, t_hit);
         }
     }
-    let mut node = 0usize;
-    while node < nodes.len() {
+    let flat_end = nodes.first().map_or(0, |n| n.skip() as usize);
+    let world_end = if s.frame.instance_count > 0 { nodes[flat_end].skip() as usize } else { flat_end };
+    let mut r = WalkRay::new(o, d, 1.0);
+    let (mut node, mut end, mut base) = (0usize, world_end, 0u32);
+    let mut resume: Option<usize> = None;
+    for _ in 0..TRACE_STEPS {
+        if node >= end {
+            let Some(next) = resume.take() else { break };
+            (node, end, base) = (next, world_end, 0);
+            r = WalkRay::new(o, d, 1.0);
+            continue;
+        }
         let n = &nodes[node];
         let (count, skip) = (n.count(), n.skip() as usize);
-        if ray_box(o, inv_d, Vec3::from(n.aabb_min), Vec3::from(n.aabb_max), t_hit) == f32::INFINITY {
+        if ray_box(r.o, r.inv_d, Vec3::from(n.aabb_min), Vec3::from(n.aabb_max), t_hit * r.len) == f32::INFINITY {
             node = skip;
             continue;
         }
@@ -84,9 +120,20 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
             node += 1;
             continue;
         }
+        if node >= flat_end && resume.is_none() {
+            // A leaf of the top level: walk its instance's object.
+            let rec = record(s, n.first);
+            let (oo, od, len) = object_ray(rec, o, d);
+            r = WalkRay::new(oo, od, len);
+            base = (n.first + 1) * s.frame.primitive_count;
+            resume = Some(skip);
+            let (root, object_end) = object_nodes(rec);
+            (node, end) = (root as usize, object_end as usize);
+            continue;
+        }
         for i in n.first..n.first + count {
             let before = hit;
-            // A CSG object (always in the BVH) reports the leaf primitive it shows
+            // A CSG object (always in the world's BVH; objects hold none) reports the leaf primitive it shows
             // (`cpu/csg.rs`), so callers see an ordinary primitive.
             if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
                 let (t, leaf) = csg_intersect(s, i, o, d, t_hit);
@@ -95,7 +142,7 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
                     hit = leaf;
                 }
             } else {
-                visit(s, i, o, d, ignore, &mut hit, &mut t_hit);
+                visit(s, i, base + i, &r, o, d, ignore, &mut hit, &mut t_hit);
             }
             if any_hit && hit != before {
                 return (hit, t_hit);

@@ -93,6 +93,24 @@ shared_constants! {
     SHAPE_DATA_DET: u32 = 24;
     SHAPE_DATA_SIZE: u32 = 25;
     SHAPE_DATA_FLOATS: u32 = 26;
+    /// Offsets in an instance's record in the shape data (`FrameParams::instance_data` +
+    /// instance x `INSTANCE_DATA_FLOATS`): the rows of `object_from_world` and of
+    /// `world_from_object` (3x4 each); then, as float bits, its object's BVH (root node, and the
+    /// root's miss link, where the object's nodes end) and its material override (`NO_DATA`:
+    /// its object's materials); then the largest factor its linear part stretches a length by,
+    /// which scales the ray offsets of its analytic shapes.
+    INSTANCE_DATA_OBJECT_FROM_WORLD: u32 = 0;
+    INSTANCE_DATA_WORLD_FROM_OBJECT: u32 = 12;
+    INSTANCE_DATA_ROOT: u32 = 24;
+    INSTANCE_DATA_END: u32 = 25;
+    INSTANCE_DATA_MATERIAL: u32 = 26;
+    INSTANCE_DATA_SCALE: u32 = 27;
+    INSTANCE_DATA_FLOATS: u32 = 28;
+    /// Most loop turns of one `trace_ray` over both levels of the BVH (nodes visited, the
+    /// world's and the instances' objects' alike): lavapipe stops an invocation after 65535 loop
+    /// iterations in all, and overlapping instances multiply the nodes a ray may visit. A ray
+    /// that reaches it keeps the closest hit found so far (docs/limits.md).
+    TRACE_STEPS: u32 = 4096;
     /// Ray origins leave an analytic shape's hit point by this times (its largest coordinate +
     /// the shape's size): its hit points are projected onto the surface in object space, so
     /// their error scales with those, not with the scene (this is about 17 float ulps of each).

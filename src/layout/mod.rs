@@ -150,7 +150,7 @@ gpu_structs! {
         pub _pad: [u32; 2],
     }
 
-    /// Per-render constants of every kernel, 128 bytes.
+    /// Per-render constants of every kernel, 144 bytes.
     /// A primary ray through film position (sx, sy) in [-1, 1]^2 depends on `camera_kind`
     /// (`CAMERA_*`): a perspective camera's has direction `forward + sx * right + sy * up` (not
     /// normalised: `right` and `up` carry the field of view), an orthographic one starts at
@@ -195,6 +195,17 @@ gpu_structs! {
         pub unbounded_first: u32,
         /// The medium around the camera (`NO_MEDIUM`: vacuum), found by the host.
         pub camera_medium: u32,
+        /// Instances of objects (0: none). With instances, the nodes after the world's BVH (from
+        /// node 0's miss link on) are the top level, one instance per leaf; the objects' BVHs
+        /// follow it. A hit on an instance's primitive p is named (instance + 1) x
+        /// `primitive_count` + p (see `cpu::instance`).
+        pub instance_count: u32,
+        /// Offset in the shape data of the first instance's record (`INSTANCE_DATA_*`).
+        pub instance_data: u32,
+        /// The first CSG leaf primitive: CSG leaves fill `csg_first..primitive_count`, after the
+        /// unbounded primitives (`unbounded_first..csg_first`); only their object's walk meets them.
+        pub csg_first: u32,
+        pub _pad: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -5,6 +5,7 @@
 pub mod accumulation;
 pub mod bench;
 pub mod gpu;
+pub mod instances;
 pub mod media_bounds;
 pub mod memory;
 pub mod pack;

@@ -39,7 +39,7 @@ pub struct PackedScene {
     /// `analytic_implicit` variant.
     pub implicit: bool,
     /// The leaf primitives of the CSG objects, which follow all others in the primitive array
-    /// (their CSG blocks count them from `FrameParams::primitive_count`).
+    /// (their CSG blocks count them from `FrameParams::csg_first`).
     pub csg_primitives: Vec<Primitive>,
 }
 
@@ -99,7 +99,7 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
 
 /// Whether material `id` (or any material a mix of it may pick) has alpha, and whether it reads
 /// uv or the surface derivatives.
-fn material_needs(scene: &Scene, id: u32, depth: u32) -> (bool, bool) {
+pub(super) fn material_needs(scene: &Scene, id: u32, depth: u32) -> (bool, bool) {
     let m = &scene.materials[id as usize];
     let own = (m.has_alpha(), m.uses_uv());
     match m.kind {
@@ -208,7 +208,7 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
 }
 
 /// The rows of the 3x4 affine map `a`.
-fn affine_rows(a: &Affine3A) -> [f32; 12] {
+pub(super) fn affine_rows(a: &Affine3A) -> [f32; 12] {
     let m = Mat3::from(a.matrix3);
     let t = Vec3::from(a.translation);
     let mut rows = [0.0; 12];

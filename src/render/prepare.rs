@@ -4,6 +4,7 @@ use std::f32::consts::PI;
 
 use glam::{Mat3, Vec3};
 
+use super::instances::pack_instances;
 use super::pack::{pack_environment, pack_scene};
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
@@ -239,6 +240,12 @@ pub enum PrepareError {
     #[error(transparent)]
     Bvh(#[from] BvhError),
     #[error(
+        "{path}: {instances} instances of a scene of {primitives} primitives are too many to name every hit in 32 \
+         bits ((instances + 1) x primitives must stay below 2^32); use fewer instances or smaller objects (see \
+         docs/limits.md)"
+    )]
+    TooManyInstances { path: String, instances: u32, primitives: usize },
+    #[error(
         "{path}: [camera]: no camera frame: `look_at` equals `position`, or `up` is zero or parallel to the view \
          direction"
     )]
@@ -261,31 +268,57 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         &bounded.iter().map(|&i| packed.primitives[i]).collect::<Vec<_>>(),
         &bounded.iter().map(|&i| packed.bounds[i]).collect::<Vec<_>>(),
     )?;
+    let mut packed = packed;
+    // The objects that instances place: their primitives after the world BVH's, their nodes
+    // (the top level, then each object's BVH) after its nodes.
+    let instanced = pack_instances(scene, &mut packed.shape_data, bvh.nodes.len() as u32, bvh.primitives.len() as u32)?;
     let mut primitives = bvh.primitives;
+    primitives.extend(&instanced.primitives);
     let unbounded_first = primitives.len() as u32;
     primitives.extend(unbounded.iter().map(|&i| packed.primitives[i]));
     // The CSG objects' leaves come last: no ray meets them but through their object's walk.
-    let primitive_count = primitives.len() as u32;
+    // `primitive_count` counts them too: it is the stride of instances' hit names, which must
+    // stay above every world primitive's index, the CSG leaves' included.
+    let csg_first = primitives.len() as u32;
     primitives.extend_from_slice(&packed.csg_primitives);
+    let primitive_count = primitives.len() as u32;
     // Areas follow the primitives into BVH order (their bounds and areas are keyed by the
-    // original index, which the reorder keeps in `order`).
+    // original index, which the reorder keeps in `order`). The objects' primitives have none
+    // here: they are never lights.
     let areas: Vec<f32> = bvh
         .order
         .iter()
         .map(|&i| bounded.get(i as usize).map_or(0.0, |&j| packed.areas[j]))
+        .chain(instanced.primitives.iter().map(|_| 0.0))
         .chain(unbounded.iter().map(|_| 0.0))
         .collect();
+    // A hit on an instance is named (instance + 1) x primitive count + primitive, in one u32.
+    let names = (instanced.instance_count as u64 + 1) * primitives.len() as u64;
+    if names >= NO_LIGHT as u64 {
+        return Err(PrepareError::TooManyInstances {
+            path: path(),
+            instances: instanced.instance_count,
+            primitives: primitives.len(),
+        });
+    }
 
-    // Bounds of the shapes in the BVH (not the infinite planes)
-    let root = &bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.aabb_min), Vec3::from(root.aabb_max));
+    // Bounds of the shapes in the BVH and of the instances (not the infinite planes)
+    let flat_root = &bvh.nodes[0];
+    let (lo, hi) = (
+        Vec3::from(flat_root.aabb_min).min(instanced.bounds.0),
+        Vec3::from(flat_root.aabb_max).max(instanced.bounds.1),
+    );
+    let root = &BvhNode { aabb_min: lo.into(), aabb_max: hi.into(), ..*flat_root };
     let (bounding_center, bounding_radius) =
         if lo.cmple(hi).all() { ((lo + hi) * 0.5, (hi - lo).length() * 0.5) } else { (Vec3::ZERO, 1.0) };
     // Distant lights and the environment send their photons through the disc of that bounding
     // sphere. A scene of infinite planes alone has none (its BVH is one empty leaf, radius 0): a
     // unit sphere at the origin stands in, so that those lights keep a power and stay lights.
-    let (light_center, light_radius) =
-        if bounded.is_empty() { (Vec3::ZERO, 1.0) } else { (bounding_center, bounding_radius) };
+    let (light_center, light_radius) = if bounded.is_empty() && instanced.instance_count == 0 {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (bounding_center, bounding_radius)
+    };
 
     // Lights: distant lights with a disc (camera paths that leave the scene look for them at
     // the front of the list, see `distant_discs_radiance`), emissive primitives (in BVH order),
@@ -385,7 +418,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     // An infinite plane holds photons over the part of it near the rest of the scene: its disc
     // inside the sphere around the bounded shapes, the point and spot lights and the camera.
     // (Distant lights and the environment send theirs through the bounding sphere's disc only.)
-    let mut surface_area = packed.photon_area;
+    let mut surface_area = packed.photon_area + instanced.photon_area;
     if !unbounded.is_empty() {
         let mut extent = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         if lo.cmple(hi).all() {
@@ -440,7 +473,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         light_count: lights.len() as u32,
         ray_epsilon: scale * RAY_EPSILON_SCALE,
         primitive_count,
-        node_count: bvh.nodes.len() as u32,
+        csg_first,
+        node_count: (bvh.nodes.len() + instanced.nodes.len()) as u32,
         total_light_power: total_photon as f32,
         photon_mapping: 0,
         gather_rays: 0,
@@ -453,9 +487,12 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         environment,
         unbounded_first,
         camera_medium: NO_MEDIUM,
+        instance_count: instanced.instance_count,
+        instance_data: instanced.instance_data,
+        _pad: 0,
     };
     // Media: the null material needs the media variant's kernels even without a medium.
-    let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, &bvh.nodes[0], cam.position);
+    let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);
     let mut media: Vec<Medium> =
         scene.media.iter().zip(tracking_boxes).map(|(m, b)| super::pack::pack_medium(m, b)).collect();
     let has_null = scene.materials.iter().any(|m| m.kind == crate::scene::MaterialKind::Null);
@@ -479,19 +516,21 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             media_volume = size.x * size.y * size.z;
         }
     }
+    let mut nodes = bvh.nodes;
+    nodes.extend(instanced.nodes);
     let mut buffers = SceneBuffers {
         frame,
-        nodes: bvh.nodes,
+        nodes,
         primitives,
         materials: packed.materials,
         lights,
         textures: packed.textures,
         texture_data,
         shape_data: packed.shape_data,
-        textured: packed.textured,
-        analytic: packed.analytic,
-        implicit: packed.implicit,
-        alpha: packed.alpha,
+        textured: packed.textured || instanced.alpha,
+        analytic: packed.analytic || instanced.analytic,
+        implicit: packed.implicit || instanced.implicit,
+        alpha: packed.alpha || instanced.alpha,
         bounding_radius,
         surface_area,
         media,
@@ -556,7 +595,7 @@ pub fn medium_at(view: &crate::cpu::SceneView, p: Vec3, atmosphere: u32) -> u32 
             return atmosphere;
         }
         let h = crate::cpu::shape::shape_hit(view, prim, o, d, t);
-        let q = &view.primitives[prim as usize];
+        let q = &view.primitives[crate::cpu::instance::hit_primitive(view, prim) as usize];
         if q.kind & PRIMITIVE_FLAG_MEDIUM != 0 {
             return if d.dot(h.ng) > 0.0 { q.interior } else { q.exterior };
         }

@@ -2,6 +2,7 @@
 //! applies defaults, turns quads, boxes, meshes and area lights into triangles and materials.
 
 mod csg;
+mod objects;
 mod sky;
 
 use std::ops::Range;
@@ -128,6 +129,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         media: Vec::new(),
         medium_names: Vec::new(),
         atmosphere: None,
+        context: String::new(),
     };
 
     let Some(camera) = &file.camera else {
@@ -176,6 +178,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         builder.light(index, light)?;
         origins.lights.push(first..builder.shapes.len());
     }
+    let (objects, instances) = builder.objects(&file.objects, &file.instances)?;
     let environment = match (&file.environment, &file.rainbow) {
         (Some(def), rainbow) => Some(builder.environment(def, rainbow.as_ref())?),
         (None, Some(rainbow)) => {
@@ -227,6 +230,8 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         media: builder.media,
         medium_names: builder.medium_names,
         atmosphere: builder.atmosphere,
+        objects,
+        instances,
     };
     Ok((scene, origins))
 }
@@ -245,6 +250,8 @@ struct Builder<'a> {
     media: Vec<MediumDesc>,
     medium_names: Vec<String>,
     atmosphere: Option<u32>,
+    /// Put before the names of shapes in messages: `objects.NAME ` inside an object, else empty.
+    context: String,
 }
 
 /// A field as written: its name, and its span when present.
@@ -1729,7 +1736,8 @@ impl Builder<'_> {
 
     fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
         let s = def.get_ref();
-        let object = object_name("shape", index, s.name.as_ref().map(|n| n.get_ref().as_str()));
+        let object =
+            format!("{}{}", self.context, object_name("shape", index, s.name.as_ref().map(|n| n.get_ref().as_str())));
         let table = def.span();
         let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
         let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;

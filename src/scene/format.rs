@@ -29,6 +29,32 @@ pub(crate) struct SceneFile {
     pub media: BTreeMap<Spanned<String>, Spanned<MediumDef>>,
     pub atmosphere: Option<Spanned<AtmosphereDef>>,
     pub fog: Option<Spanned<FogDef>>,
+    #[serde(default)]
+    pub objects: BTreeMap<Spanned<String>, Spanned<ObjectDef>>,
+    #[serde(default)]
+    pub instances: Vec<Spanned<InstanceDef>>,
+}
+
+/// `[objects.NAME]`: shapes (and placements of other objects) defined once, in object space.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ObjectDef {
+    #[serde(default)]
+    pub shapes: Vec<Spanned<ShapeDef>>,
+    #[serde(default)]
+    pub instances: Vec<Spanned<InstanceDef>>,
+}
+
+/// `[[instances]]`: an object placed once, or on a grid of `count` places `spacing` apart.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct InstanceDef {
+    pub name: Option<Spanned<String>>,
+    pub object: Option<Spanned<String>>,
+    pub transform: Option<Spanned<TransformDef>>,
+    pub material: Option<Spanned<String>>,
+    pub count: Option<Spanned<Vec<Spanned<i64>>>>,
+    pub spacing: Option<Spanned<Vec3Def>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -69,6 +69,29 @@ pub struct Scene {
     pub atmosphere: Option<u32>,
     /// Problems that do not stop rendering, e.g. "scene has no lights; the image will be black".
     pub warnings: Vec<String>,
+    /// The objects of `[objects.NAME]` that some instance places, in file order; their shapes
+    /// are in object space and appear in `shapes` only through `instances`.
+    pub objects: Vec<ObjectDesc>,
+    /// Every placement of an object, nested placements resolved (their transforms composed).
+    pub instances: Vec<InstanceDesc>,
+}
+
+/// A named object: shapes defined once (object space) and placed by instances. No shape of an
+/// object is unbounded (an infinite plane) or emits light (instanced emitters are not sampled).
+#[derive(Clone, Debug)]
+pub struct ObjectDesc {
+    pub name: String,
+    pub shapes: Vec<Shape>,
+}
+
+/// One placement of object `object` (index in `Scene::objects`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceDesc {
+    pub object: u32,
+    /// Invertible.
+    pub world_from_object: glam::Affine3A,
+    /// A material that replaces every material of the object; `None` keeps them.
+    pub material: Option<u32>,
 }
 
 impl Scene {
