@@ -189,6 +189,12 @@ fn catmull_clark_level(
         }
     }
     out.uvs = uvs;
+    (out, split_sharp_edges(&edges, nv))
+}
+
+/// The two halves of each sharp interior edge after a step that put edge e's new vertex at
+/// nv + e: creases stay creases on the next level.
+fn split_sharp_edges(edges: &Edges, nv: usize) -> std::collections::HashSet<u64> {
     let mut sharp = std::collections::HashSet::new();
     for (e, [a, b]) in edges.ends.iter().enumerate() {
         if edges.sharp[e] && edges.faces[e].len() == 2 {
@@ -197,7 +203,7 @@ fn catmull_clark_level(
             sharp.insert(key(m, *b));
         }
     }
-    (out, sharp)
+    sharp
 }
 
 /// Loop's vertex weight beta for valence n.
@@ -272,15 +278,7 @@ fn loop_level(
         }
     }
     out.uvs = uvs;
-    let mut sharp = std::collections::HashSet::new();
-    for (e, [a, b]) in edges.ends.iter().enumerate() {
-        if edges.sharp[e] && edges.faces[e].len() == 2 {
-            let m = (nv + e) as u32;
-            sharp.insert(key(*a, m));
-            sharp.insert(key(m, *b));
-        }
-    }
-    (out, sharp)
+    (out, split_sharp_edges(&edges, nv))
 }
 
 /// Why a mesh cannot be subdivided.
