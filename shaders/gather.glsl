@@ -40,10 +40,14 @@ vec3 photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
     float r2 = g.radius * g.radius;
     float thickness = PHOTON_DISC_THICKNESS * g.radius;
     ivec3 c = grid_cell(x, g.cell_size);
+    vec3 lower, upper;
+    grid_face_gaps(x, g.cell_size, lower, upper);
     vec3 sum = vec3(0.0);
-    // Each of the 27 cells is read through its bucket; a photon of another cell that shares the
-    // bucket is skipped, so no photon is counted twice and no duplicate buckets need removing.
+    // Each of the 27 cells in reach is read through its bucket; a photon of another cell that
+    // shares the bucket is skipped, so no photon is counted twice and no duplicate buckets need
+    // removing.
     for (uint k = 0u; k < 27u; k++) {
+        if (!grid_neighbour_in_reach(lower, upper, r2, k)) continue;
         ivec3 cell = grid_neighbour(c, k);
         uint h = grid_hash(cell, g.table_mask);
         uint end = map_start(map, h + 1u);
@@ -76,8 +80,11 @@ vec3 photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
     // Photons arriving from behind count only where the BSDF transmits.
     bool both_sides = volume || (bsdf_flags(b) & BSDF_TRANSMISSION) != 0u;
     ivec3 c = grid_cell(h.p, g.cell_size);
+    vec3 lower, upper;
+    grid_face_gaps(h.p, g.cell_size, lower, upper);
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < 27u; k++) {
+        if (!grid_neighbour_in_reach(lower, upper, r2, k)) continue;
         ivec3 cell = grid_neighbour(c, k);
         uint bucket = grid_hash(cell, g.table_mask);
         uint end = map_start(map, bucket + 1u);

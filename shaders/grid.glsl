@@ -25,3 +25,22 @@ bool photon_less(Photon a, Photon b) {
 ivec3 grid_neighbour(ivec3 c, uint k) {
     return c + ivec3(int(k % 3u), int((k / 3u) % 3u), int(k / 9u)) - 1;
 }
+
+// Distances from x to the lower (0) and upper (1) faces of its cell along each axis, shortened by
+// a few ulps of x and the cell size (see the twin's grid_face_gaps).
+void grid_face_gaps(vec3 x, float cell_size, out vec3 lower, out vec3 upper) {
+    vec3 f = x / cell_size;
+    f -= floor(f);
+    vec3 ax = abs(x);
+    float tolerance = (max(max(ax.x, ax.y), ax.z) + cell_size) * GRID_REACH_TOLERANCE;
+    lower = max(f * cell_size - tolerance, vec3(0.0));
+    upper = max((1.0 - f) * cell_size - tolerance, vec3(0.0));
+}
+
+// Whether neighbour k of the point's cell has any point within the radius (r2 its square): the
+// lookups skip the buckets of cells out of reach, about a quarter of the 27.
+bool grid_neighbour_in_reach(vec3 lower, vec3 upper, float r2, uint k) {
+    uvec3 o = uvec3(k % 3u, (k / 3u) % 3u, k / 9u);
+    vec3 gap = mix(mix(vec3(0.0), upper, equal(o, uvec3(2u))), lower, equal(o, uvec3(0u)));
+    return dot(gap, gap) <= r2;
+}

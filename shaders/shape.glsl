@@ -557,7 +557,7 @@ void shape_surface(uint i, vec3 x, inout Hit h) {
 
 // The instance of hit name id, or NO_DATA for a primitive of the world.
 uint hit_instance(uint id) {
-    return (frame.instance_count == 0u || id < frame.primitive_count) ? NO_DATA : id / frame.primitive_count - 1u;
+    return (!SCENE_HAS_INSTANCES || frame.instance_count == 0u || id < frame.primitive_count) ? NO_DATA : id / frame.primitive_count - 1u;
 }
 
 // The primitive a hit name refers to.

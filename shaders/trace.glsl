@@ -70,7 +70,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
     // Without instances node flat_end does not exist: only read it behind a loop of one turn
     // (a select would read it unconditionally).
     uint world_end = flat_end;
-    WHEN(frame.instance_count > 0u) { world_end = nodes[flat_end].skip_count >> BVH_COUNT_BITS; }
+    WHEN(SCENE_HAS_INSTANCES && frame.instance_count > 0u) { world_end = nodes[flat_end].skip_count >> BVH_COUNT_BITS; }
     vec3 ro = o;
     vec3 rd = d;
     vec3 inv_d = 1.0 / d;
@@ -106,7 +106,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
         // A leaf of the top level: walk its instance's object (a loop of at most one turn, so
         // scenes without instances skip its reads).
         bool entered = false;
-        WHEN(node >= flat_end && resume == NO_DATA) {
+        WHEN(SCENE_HAS_INSTANCES && node >= flat_end && resume == NO_DATA) {
             uint a = instance_record(n.first);
             vec3 od = affine_vector(a + INSTANCE_DATA_OBJECT_FROM_WORLD, d);
             len = length(od);
@@ -127,7 +127,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             // ordinary primitive. Only the world holds CSG objects (scene loading refuses them in
             // objects), so the walk runs on the world ray. Behind WHEN: lavapipe would run its
             // walk under masks for every primitive of every scene of the analytic variant.
-            bool is_csg = (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
+            bool is_csg = SCENE_HAS_CSG && (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
             WHEN(is_csg) {
                 uint leaf;
                 float tc = csg_intersect(i, o, d, t_hit, leaf);

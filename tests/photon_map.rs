@@ -155,3 +155,34 @@ fn stored_flux_conserves_energy() {
     let gpu = build_maps_gpu(&ctx, &device_scene, &buffers, &settings, 0).unwrap().download(&ctx).unwrap();
     assert_eq!(gpu.global_photons.len(), maps.global_photons.len());
 }
+
+#[test]
+fn scenes_that_skip_the_caustic_pass_would_store_no_caustic_photons() {
+    // A scene whose materials cannot end a caustic path skips the caustic pass: check on every
+    // shipped scene that the full pass would have stored nothing there, and that the check does
+    // not skip the scenes made for caustics.
+    use photonix::cpu::emit_photons::emit_photons;
+    use photonix::render::photons::{caustic_emit_params, emit_params};
+    let settings = PhotonSettings { photons: 1_000, caustic_photons: 20_000, ..PhotonSettings::default() };
+    let mut skipped = Vec::new();
+    for entry in std::fs::read_dir(common::repo_path("scenes")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let scene = load_scene(&path).unwrap();
+        let buffers = common::buffers(&scene, 16, 16);
+        let name = path.file_stem().unwrap().to_string_lossy().to_string();
+        if buffers.can_store_caustics() {
+            assert_eq!(caustic_emit_params(&buffers, &settings, 0).total_paths, 20_000, "{name}");
+            continue;
+        }
+        assert_eq!(caustic_emit_params(&buffers, &settings, 0).total_paths, 0, "{name}");
+        let full = emit_photons(&buffers.view(), &emit_params(&settings, 0, true));
+        assert!(full.caustic.is_empty(), "{name}: skipped, yet its caustic pass stores {}", full.caustic.len());
+        skipped.push(name);
+    }
+    println!("scenes that skip the caustic pass: {skipped:?}");
+    assert!(skipped.contains(&"cornell-box".to_string()), "{skipped:?}");
+    assert!(!skipped.contains(&"cornell-caustics".to_string()), "{skipped:?}");
+}

@@ -252,7 +252,20 @@ impl GpuContext {
         binding_count: u32,
         push_constant_size: u32,
     ) -> Result<Kernel, GpuError> {
-        let kernel = Kernel::create(&self.shared, name, spirv, binding_count, push_constant_size)?;
+        self.create_specialized_kernel(name, spirv, binding_count, push_constant_size, &[])
+    }
+
+    /// `create_kernel` with specialization constants: `constants[i]` is the value of
+    /// `constant_id = i` (a bool as 0 or 1).
+    pub fn create_specialized_kernel(
+        &self,
+        name: &str,
+        spirv: &[u32],
+        binding_count: u32,
+        push_constant_size: u32,
+        constants: &[u32],
+    ) -> Result<Kernel, GpuError> {
+        let kernel = Kernel::create(&self.shared, name, spirv, binding_count, push_constant_size, constants)?;
         self.shared.check_validation()?;
         Ok(kernel)
     }

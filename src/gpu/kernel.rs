@@ -28,13 +28,16 @@ pub struct Kernel {
 impl Kernel {
     /// A compute pipeline from SPIR-V words with `binding_count` storage-buffer bindings (set 0,
     /// bindings 0..n) and push constants of `push_constant_size` bytes (0 = none). The entry
-    /// point is `main`. The caller checks for validation messages.
+    /// point is `main`. `constants[i]` is the value of specialization constant `constant_id = i`
+    /// (a bool as 0 or 1); ids the shader does not declare are ignored. The caller checks for
+    /// validation messages.
     pub(super) fn create(
         shared: &Arc<Shared>,
         name: &str,
         spirv: &[u32],
         binding_count: u32,
         push_constant_size: u32,
+        constants: &[u32],
     ) -> Result<Kernel, GpuError> {
         if spirv.len() < 5 || spirv[0] != SPIRV_MAGIC {
             let reason = if spirv.is_empty() { "empty module".to_string() } else { "no SPIR-V header".to_string() };
@@ -93,10 +96,18 @@ impl Kernel {
             .map_err(|e| GpuError::vk("vkCreatePipelineLayout", name, e))?;
         shared.set_name(kernel.layout, name);
 
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|id| vk::SpecializationMapEntry::default().constant_id(id).offset(id * 4).size(4))
+            .collect();
+        let specialization =
+            vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(constants));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(kernel.shader)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&specialization);
+        }
         let pipeline_info = [vk::ComputePipelineCreateInfo::default().stage(stage).layout(kernel.layout)];
         // SAFETY: the module and layout are live; no pipeline cache is used.
         let pipelines = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &pipeline_info, None) }

@@ -390,6 +390,10 @@ shared_constants! {
     /// Photons farther than this fraction of the radius off the lookup's tangent plane are
     /// ignored: the disc-shaped filter of Jensen keeps photons on a nearby wall out of a corner.
     PHOTON_DISC_THICKNESS: f32 = 0.25;
+    /// Slack, relative to the point's largest coordinate plus the cell size, by which a lookup
+    /// shortens its distances to the faces of the point's cell before skipping neighbour cells
+    /// out of reach (2^-20, eight ulps: more than the rounding of the cells' division).
+    GRID_REACH_TOLERANCE: f32 = 9.536_743e-7;
 
     /// Relative offset of secondary ray origins, scaled by the scene's extent (avoids self-hits).
     RAY_EPSILON_SCALE: f32 = 1.0e-5;

@@ -3,7 +3,7 @@
 use std::cell::OnceCell;
 use std::time::{Duration, Instant};
 
-use super::photons::{emit_params, map_grid, radii, volume_radius, PhotonMaps, PhotonSettings};
+use super::photons::{caustic_emit_params, emit_params, map_grid, radii, volume_radius, PhotonMaps, PhotonSettings};
 use super::prepare::KernelVariant;
 use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
@@ -23,9 +23,15 @@ const PATHS_PER_DISPATCH: u32 = 1 << 18;
 /// a scene stores more.
 const INITIAL_PHOTONS_PER_PATH: u64 = 4;
 
-fn kernel(ctx: &GpuContext, name: &str, bindings: u32, push_bytes: usize) -> Result<Kernel, GpuError> {
+fn kernel(
+    ctx: &GpuContext,
+    name: &str,
+    bindings: u32,
+    push_bytes: usize,
+    constants: &[u32],
+) -> Result<Kernel, GpuError> {
     let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
-    ctx.create_kernel(name, &spirv, bindings, push_bytes as u32)
+    ctx.create_specialized_kernel(name, &spirv, bindings, push_bytes as u32, constants)
 }
 
 /// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
@@ -73,36 +79,39 @@ impl GpuKernels {
         name: &str,
         bindings: u32,
         push_bytes: usize,
+        constants: &[u32],
     ) -> Result<&'k Kernel, GpuError> {
         if let Some(k) = cell.get() {
             return Ok(k);
         }
-        let k = kernel(ctx, name, bindings, push_bytes)?;
+        let k = kernel(ctx, name, bindings, push_bytes, constants)?;
         Ok(cell.get_or_init(|| k))
     }
 
     fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("emit_photons");
-        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, size_of::<EmitParams>())
+        let constants = self.variant.specialization();
+        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, size_of::<EmitParams>(), &constants)
     }
     fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_count, ctx, "grid_count", 3, 0)
+        Self::get(&self.grid_count, ctx, "grid_count", 3, 0, &[])
     }
     fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan, ctx, "grid_scan", 2, 4)
+        Self::get(&self.grid_scan, ctx, "grid_scan", 2, 4, &[])
     }
     fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, 4)
+        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, 4, &[])
     }
     fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, 0)
+        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, 0)
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
-        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, size_of::<DispatchRange>())
+        let constants = self.variant.specialization();
+        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, size_of::<DispatchRange>(), &constants)
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
@@ -396,6 +405,8 @@ fn emit(
     let photon_bytes = size_of::<Photon>() as u64;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let name = if caustic { "caustic_photons" } else { "global_photons" };
+    // A pass of no paths (a caustic pass where none can be stored) needs no room.
+    let capacity = if params.total_paths == 0 { 1 } else { capacity };
     let mut capacity = capacity.clamp(1, limit / photon_bytes);
     // Only the global pass of a scene with media stores collisions.
     let volume = !caustic && scene.variant.media;
@@ -549,7 +560,7 @@ fn build_maps(
     let ((global_photons, global_count), (volume_photons, volume_count)) =
         emit(ctx, kernels, scene, emit_params(settings, pass, false), false, global_room, volume_room)?;
     let ((caustic_photons, caustic_count), _) =
-        emit(ctx, kernels, scene, emit_params(settings, pass, true), true, caustic_room, 0)?;
+        emit(ctx, kernels, scene, caustic_emit_params(buffers, settings, pass), true, caustic_room, 0)?;
     *capacity = [global_count as u64, caustic_count as u64, volume_count as u64];
     let (r_global, r_caustic) = radii(buffers, settings, global_count, pass);
     let g_global = map_grid(buffers, r_global, global_count, settings.photons);

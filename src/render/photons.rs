@@ -34,6 +34,17 @@ pub fn emit_params(settings: &PhotonSettings, pass: u32, caustics_only: bool) ->
     }
 }
 
+/// `emit_params` of the caustic pass of `pass` for this scene: no paths where no caustic photon
+/// can be stored (`SceneBuffers::can_store_caustics`).
+pub fn caustic_emit_params(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> EmitParams {
+    let mut params = emit_params(settings, pass, true);
+    if !buffers.can_store_caustics() {
+        params.path_count = 0;
+        params.total_paths = 0;
+    }
+    params
+}
+
 /// `emit_photons` of all of `params`' paths, in slices of the thread's stop-check size
 /// (`super::thread_stop_paths`) with a look at the stop flags before each: a stopped trace
 /// returns the photons of the slices done (the render then stops before using them). Paths draw
@@ -164,7 +175,7 @@ pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u
     let view = buffers.view();
     let emitted = emit_stoppable(&view, &emit_params(settings, pass, false));
     let (global, volume) = (emitted.global, emitted.volume);
-    let caustic = emit_stoppable(&view, &emit_params(settings, pass, true)).caustic;
+    let caustic = emit_stoppable(&view, &caustic_emit_params(buffers, settings, pass)).caustic;
     let (r_global, r_caustic) = radii(buffers, settings, global.len() as u32, pass);
     let g_global = map_grid(buffers, r_global, global.len() as u32, settings.photons);
     let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);

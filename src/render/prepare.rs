@@ -56,6 +56,10 @@ pub struct KernelVariant {
     pub implicit: bool,
     /// Participating media and null surfaces.
     pub media: bool,
+    /// Instances (the two-level walk). A specialization constant, not a build of its own.
+    pub instances: bool,
+    /// CSG objects (their walk, in the analytic builds). A specialization constant.
+    pub csg: bool,
 }
 
 impl KernelVariant {
@@ -80,6 +84,12 @@ impl KernelVariant {
         }
         out
     }
+
+    /// The values of the scene kernels' specialization constants (`constant_id` 0, 1, ...: see
+    /// shaders/scene_bindings.glsl).
+    pub fn specialization(self) -> [u32; 2] {
+        [self.instances as u32, self.csg as u32]
+    }
 }
 
 impl SceneBuffers {
@@ -91,7 +101,23 @@ impl SceneBuffers {
             analytic: self.analytic,
             implicit: self.implicit,
             media: !self.media.is_empty(),
+            instances: self.frame.instance_count > 0,
+            csg: self.frame.csg_first < self.frame.primitive_count,
         }
+    }
+
+    /// Whether a caustic photon pass can store anything: caustic paths end at the first surface
+    /// with an estimate lobe, so only scenes with a material that can lack one (mirror, glass,
+    /// metal, plastic with a black or textured base, mixes of these) get caustic photons. Scenes
+    /// of diffuse surfaces skip the caustic pass (its paths would each cost a ray and store
+    /// nothing); their images are unchanged.
+    pub fn can_store_caustics(&self) -> bool {
+        self.materials.iter().any(|m| {
+            matches!(
+                m.kind,
+                MATERIAL_MIRROR | MATERIAL_DIELECTRIC | MATERIAL_CONDUCTOR | MATERIAL_PLASTIC | MATERIAL_MIX
+            )
+        })
     }
 
     pub fn view(&self) -> SceneView<'_> {
