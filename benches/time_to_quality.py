@@ -13,7 +13,10 @@ For each scene (default: cornell-box and cornell-caustics) this
      (mean over pixels and channels of (t - r)^2 / (r^2 + 0.01), as `photonix diff` prints it);
   4. fits Mitsuba's error as k / spp and its time as t0 + c * spp (least squares), and prints for
      each Photonix render the time Mitsuba needs for the same error divided by Photonix's time
-     (the equal-error time ratio; above 1 means Photonix is faster).
+     (the equal-error time ratio; above 1 means Photonix is faster), and the same ratio of CPU
+     time (user + system of all threads: Mitsuba's process time around mi.render, Photonix's
+     child-process usage), which other processes on a shared machine disturb far less than the
+     wall clock (both renderers use the same 2 cores; lavapipe's threads count as Photonix's).
 
 Needs: a release build (`cargo build --release`), `pip install mitsuba` (3.9 was used), and for
 the fast variant Debian's `libllvm19` (the script sets DRJIT_LIBLLVM_PATH=libLLVM-19.so unless it
@@ -28,6 +31,7 @@ import json
 import os
 import platform
 import re
+import resource
 import subprocess
 import sys
 import tempfile
@@ -198,9 +202,12 @@ def run_mitsuba(scene_name, spps, variant, reference, max_depth):
         np.array(mi.render(scene, spp=1, seed=999))
         for spp in spps:
             t = time.perf_counter()
+            c = time.process_time()
             image = np.array(mi.render(scene, spp=spp, seed=spp), dtype=np.float64)
             seconds = time.perf_counter() - t
-            rows.append({"spp": spp, "seconds": seconds, "rel_mse": rel_mse(image[..., :3], reference)})
+            cpu_seconds = time.process_time() - c
+            rows.append({"spp": spp, "seconds": seconds, "cpu_seconds": cpu_seconds,
+                         "rel_mse": rel_mse(image[..., :3], reference)})
             print(f"  mitsuba {variant} {scene_name} {spp:5d} spp: {seconds:7.2f} s, relMSE {rows[-1]['rel_mse']:.5f}", flush=True)
     return rows
 
@@ -211,17 +218,25 @@ def fit_mitsuba(rows):
 
     spp = np.array([r["spp"] for r in rows], dtype=np.float64)
     err = np.array([r["rel_mse"] for r in rows])
-    sec = np.array([r["seconds"] for r in rows])
     k = float(np.exp(np.mean(np.log(err * spp))))
-    if len(rows) > 1:
-        c, t0 = np.polyfit(spp, sec, 1)
-    else:
-        c, t0 = sec[0] / spp[0], 0.0
-    return {"k": k, "c": float(c), "t0": float(max(t0, 0.0))}
+
+    def line(key):
+        sec = np.array([r[key] for r in rows])
+        if len(rows) > 1:
+            c, t0 = np.polyfit(spp, sec, 1)
+        else:
+            c, t0 = sec[0] / spp[0], 0.0
+        return float(c), float(max(t0, 0.0))
+
+    c, t0 = line("seconds")
+    cpu_c, cpu_t0 = line("cpu_seconds")
+    return {"k": k, "c": c, "t0": t0, "cpu_c": cpu_c, "cpu_t0": cpu_t0}
 
 
-def mitsuba_time_for(fit, error):
+def mitsuba_time_for(fit, error, cpu=False):
     spp = fit["k"] / error
+    if cpu:
+        return fit["cpu_t0"] + fit["cpu_c"] * spp, spp
     return fit["t0"] + fit["c"] * spp, spp
 
 
@@ -234,8 +249,11 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra)
     out = Path(out_dir) / f"{scene_name}-{backend}-{budget}s.exr"
     cmd = [str(binary), "render", str(scene), "--backend", backend, "--time", f"{budget}s", "-o", str(out)] + extra
     t = time.perf_counter()
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     proc = subprocess.run(cmd, capture_output=True, text=True)
     seconds = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu_seconds = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
     if proc.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{proc.stderr}")
     passes = re.search(r"^(\d+) pass", proc.stderr, re.M)
@@ -245,6 +263,7 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra)
         "args": " ".join(extra),
         "budget": budget,
         "seconds": seconds,
+        "cpu_seconds": cpu_seconds,
         "passes": int(passes.group(1)) if passes else None,
         "rel_mse": rel_mse(image, reference),
         "mean_ratio": mean_ratio(image, reference),
@@ -306,20 +325,24 @@ def main():
             results[scene] = {"photonix": ours, "mitsuba": theirs, "fit": fit_mitsuba(theirs)}
 
     print()
-    print("| scene | renderer | budget | seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | renderer | budget | seconds | CPU seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio | CPU-time ratio |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for scene, r in results.items():
         fit = r["fit"]
         for m in r["mitsuba"]:
-            print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['spp']} spp | {m['rel_mse']:.5f} | - | - | - |")
+            print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['cpu_seconds']:.2f} | {m['spp']} spp | "
+                  f"{m['rel_mse']:.5f} | - | - | - | - |")
         for p in r["photonix"]:
             t_mi, spp = mitsuba_time_for(fit, p["rel_mse"])
             p["mitsuba_seconds"], p["ratio"] = t_mi, t_mi / p["seconds"]
+            cpu_mi, _ = mitsuba_time_for(fit, p["rel_mse"], cpu=True)
+            p["mitsuba_cpu_seconds"], p["cpu_ratio"] = cpu_mi, cpu_mi / p["cpu_seconds"]
             ratio = ", ".join(f"{r:.4f}" for r in p["mean_ratio"])
             name = f"photonix {p['backend']} {p['args']}".strip()
-            print(f"| {scene} | {name} | {p['budget']} s | {p['seconds']:.2f} | {p['passes']} passes | "
-                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** |")
-        print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | | |")
+            print(f"| {scene} | {name} | {p['budget']} s | {p['seconds']:.2f} | {p['cpu_seconds']:.2f} | {p['passes']} passes | "
+                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** | {p['cpu_ratio']:.2f} |")
+        print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | "
+              f"CPU t = {fit['cpu_t0']:.2f} + {fit['cpu_c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | | | |")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
 
