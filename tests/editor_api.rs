@@ -586,3 +586,21 @@ fn a_csg_object_is_drawn_as_its_solids_surface() {
     let colors: Vec<[f64; 3]> = cut["groups"].as_array().unwrap().iter().map(|g| rgb(&g["color"])).collect();
     assert_eq!(colors, [[0.7, 0.7, 0.7], [0.7, 0.1, 0.1]]);
 }
+
+#[test]
+fn large_grids_of_instances_are_drawn_as_boxes_then_as_one_box() {
+    // 10 000 posts of some 1000 triangles: too many to draw, so each copy is its object's box.
+    let f = Fixture::with_text(&editor_support::INSTANCES.replace("count = [3, 1, 2]", "count = [100, 1, 100]"));
+    let fence = &f.scene_json()["instances"][1];
+    assert_eq!((fence["copies"].as_u64(), fence["drawn"].as_str()), (Some(10_000), Some("boxes")));
+    assert_eq!(fence["positions"].as_array().unwrap().len(), 10_000 * 12 * 9);
+    let (lo, hi) = vertex_bounds(&fence["positions"]);
+    assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-1.5 + 49.5 + 0.1, 1.2, -1.5 + 99.0 + 0.1]), "{lo:?} {hi:?}");
+    // 90 000: twelve triangles each would still be too many; one box around them all.
+    let f = Fixture::with_text(&editor_support::INSTANCES.replace("count = [3, 1, 2]", "count = [300, 1, 300]"));
+    let fence = &f.scene_json()["instances"][1];
+    assert_eq!((fence["copies"].as_u64(), fence["drawn"].as_str()), (Some(90_000), Some("bounds")));
+    assert_eq!(fence["positions"].as_array().unwrap().len(), 12 * 9);
+    let (lo, hi) = vertex_bounds(&fence["positions"]);
+    assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-1.5 + 149.5 + 0.1, 1.2, -1.5 + 299.0 + 0.1]), "{lo:?} {hi:?}");
+}
