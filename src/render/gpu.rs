@@ -659,6 +659,12 @@ impl<'a> GpuRenderer<'a> {
         self.ctx
     }
 
+    /// The kernel variants whose pipelines this renderer holds: its scene's first, then those
+    /// it keeps from earlier scenes (the most recent last).
+    pub fn kernel_variants(&self) -> Vec<KernelVariant> {
+        std::iter::once(&self.kernels).chain(self.spare_kernels.iter().rev()).map(GpuKernels::variant).collect()
+    }
+
     /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
     /// differ from the scene it held ("frame", "nodes", "primitives", "materials", ...).
     pub fn last_written(&self) -> &[&'static str] {
