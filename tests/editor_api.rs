@@ -462,3 +462,145 @@ fn texture_picker_lists_the_folders_images_and_sets_a_texture_in_one_step() {
     assert!(r.text().contains("nope"), "{}", r.text());
     assert_eq!(f.text(), text);
 }
+
+/// (min, max) over the vertices of a flat `positions` array.
+fn vertex_bounds(positions: &serde_json::Value) -> ([f64; 3], [f64; 3]) {
+    let p: Vec<f64> = positions.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for v in p.chunks_exact(3) {
+        for axis in 0..3 {
+            lo[axis] = lo[axis].min(v[axis]);
+            hi[axis] = hi[axis].max(v[axis]);
+        }
+    }
+    (lo, hi)
+}
+
+/// A colour of the page's scene (f32 values) rounded to 4 decimals.
+fn rgb(v: &serde_json::Value) -> [f64; 3] {
+    [0, 1, 2].map(|i| (v[i].as_f64().unwrap() * 1e4).round() / 1e4)
+}
+
+fn near(a: [f64; 3], b: [f64; 3]) -> bool {
+    (0..3).all(|i| (a[i] - b[i]).abs() < 1e-4)
+}
+
+#[test]
+fn instances_are_drawn_listed_and_edited() {
+    let f = Fixture::with_text(editor_support::INSTANCES);
+    let scene = f.scene_json();
+    let instances = scene["instances"].as_array().unwrap();
+    let names: Vec<&str> = instances.iter().map(|i| i["fields"]["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["single", "fence", "pairs"]);
+    let copies: Vec<u64> = instances.iter().map(|i| i["copies"].as_u64().unwrap()).collect();
+    assert_eq!(copies, [1, 6, 2]);
+    for i in instances {
+        assert_eq!(i["drawn"], "triangles");
+        assert_eq!(i["object"], i["fields"]["object"]);
+    }
+
+    // One post: a box (12 triangles) and a tessellated ball, in two colours, where the
+    // instance puts it.
+    let single = &instances[0];
+    let triangles = single["positions"].as_array().unwrap().len() / 9;
+    assert!(triangles > 12 + 400, "{triangles}");
+    let groups = single["groups"].as_array().unwrap();
+    assert_eq!(groups.len(), 2, "{groups:?}");
+    assert_eq!(rgb(&groups[0]["color"]), [0.7, 0.7, 0.7]);
+    assert_eq!(rgb(&groups[1]["color"]), [0.7, 0.1, 0.1]);
+    let counts: u64 = groups.iter().map(|g| g["count"].as_u64().unwrap()).sum();
+    assert_eq!(counts as usize, triangles);
+    assert!(near(vertex_bounds(&single["positions"]).0, [2.9, 0.0, -0.1]), "{:?}", vertex_bounds(&single["positions"]));
+    assert!(near(vertex_bounds(&single["positions"]).1, [3.1, 1.2, 0.1]));
+
+    // The grid: six posts in glass (one colour), 0.5 apart along x and 1 along z.
+    let fence = &instances[1];
+    assert_eq!(fence["positions"].as_array().unwrap().len(), 6 * triangles * 9);
+    assert_eq!(fence["groups"].as_array().unwrap().len(), 1);
+    let (lo, hi) = vertex_bounds(&fence["positions"]);
+    assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-0.4, 1.2, -0.4]), "{lo:?} {hi:?}");
+
+    // Nested: the pair's two posts at x = +-0.3 in the object, turned a quarter about y (x to
+    // -z) and moved to z = 1.5.
+    let (lo, hi) = vertex_bounds(&instances[2]["positions"]);
+    assert!(near(lo, [-0.1, 0.0, 1.1]) && near(hi, [0.1, 1.2, 1.9]), "{lo:?} {hi:?}");
+
+    // The scene's bounds take the copies in (the lone post sticks out of the floor at x = 3.1).
+    assert!((scene["bounds"]["max"][0].as_f64().unwrap() - 3.1).abs() < 1e-5, "{}", scene["bounds"]);
+
+    // An instance's transform is edited as a shape's: the copies move.
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "instance": 1 }, "translate": [-1.5, 0.5, -1.5] })));
+    assert!(f.text().contains("transform = { translate = [-1.5, 0.5, -1.5] }"), "{}", f.text());
+    let (lo, _) = vertex_bounds(&f.scene_json()["instances"][1]["positions"]);
+    assert!(near(lo, [-1.6, 0.5, -1.6]), "{lo:?}");
+    // A refused value (an unknown object) comes back as the parser's message and changes nothing.
+    let text = f.text();
+    let r = f.edit(json!({ "op": "set", "target": { "instance": 0 }, "field": "object", "value": "pots" }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("scene.toml:") && r.text().contains("unknown object"), "{}", r.text());
+    assert_eq!(f.text(), text);
+    let r = f.edit(json!({ "op": "set_transform", "target": { "instance": 3 }, "translate": [0, 0, 0] }));
+    assert_eq!(r.status, 422);
+    assert!(r.text().contains("there is no instance 3"), "{}", r.text());
+
+    // Duplicate, delete, undo.
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "instance": 0 } })));
+    let scene = f.scene_json();
+    assert_eq!(scene["instances"].as_array().unwrap().len(), 4);
+    assert_eq!(scene["instances"][3]["fields"]["name"], "single copy");
+    ok(&f.edit(json!({ "op": "delete", "target": { "instance": 1 } })));
+    let scene = f.scene_json();
+    let names: Vec<&str> =
+        scene["instances"].as_array().unwrap().iter().map(|i| i["fields"]["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["single", "pairs", "single copy"]);
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.scene_json()["instances"][1]["copies"], 6);
+}
+
+#[test]
+fn a_csg_object_is_drawn_as_its_solids_surface() {
+    let f = Fixture::with_text(editor_support::INSTANCES);
+    let scene = f.scene_json();
+    let cut = &scene["shapes"][3];
+    assert_eq!(cut["fields"]["name"], "cut box");
+    let p: Vec<f64> = cut["positions"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!(p.len() > 9 * 100, "{}", p.len());
+    // Every triangle's centre is on the box minus the ball: inside the box, not inside the ball
+    // (the ball's part that shows is the cut, inside the box; the box's part, outside the ball).
+    let ball = [0.5, 1.0, 0.5];
+    let (mut on_ball, mut on_box) = (0, 0);
+    for t in p.chunks_exact(9) {
+        let c: Vec<f64> = (0..3).map(|a| (t[a] + t[3 + a] + t[6 + a]) / 3.0).collect();
+        let inside_box = (0..3).all(|a| c[a] >= [-0.5, 0.0, -0.5][a] - 1e-4 && c[a] <= [0.5, 1.0, 0.5][a] + 1e-4);
+        assert!(inside_box, "a triangle outside the box at {c:?}");
+        let r = ((c[0] - ball[0]).powi(2) + (c[1] - ball[1]).powi(2) + (c[2] - ball[2]).powi(2)).sqrt();
+        assert!(r > 0.6 * 0.97, "a triangle inside the ball at {c:?} (r = {r})");
+        if r < 0.6 * 1.01 {
+            on_ball += 1;
+        } else {
+            on_box += 1;
+        }
+    }
+    assert!(on_ball > 50 && on_box > 50, "{on_ball} {on_box}");
+    // Two colours: the box's white, the cut's red.
+    let colors: Vec<[f64; 3]> = cut["groups"].as_array().unwrap().iter().map(|g| rgb(&g["color"])).collect();
+    assert_eq!(colors, [[0.7, 0.7, 0.7], [0.7, 0.1, 0.1]]);
+}
+
+#[test]
+fn large_grids_of_instances_are_drawn_as_boxes_then_as_one_box() {
+    // 10 000 posts of some 1000 triangles: too many to draw, so each copy is its object's box.
+    let f = Fixture::with_text(&editor_support::INSTANCES.replace("count = [3, 1, 2]", "count = [100, 1, 100]"));
+    let fence = &f.scene_json()["instances"][1];
+    assert_eq!((fence["copies"].as_u64(), fence["drawn"].as_str()), (Some(10_000), Some("boxes")));
+    assert_eq!(fence["positions"].as_array().unwrap().len(), 10_000 * 12 * 9);
+    let (lo, hi) = vertex_bounds(&fence["positions"]);
+    assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-1.5 + 49.5 + 0.1, 1.2, -1.5 + 99.0 + 0.1]), "{lo:?} {hi:?}");
+    // 90 000: twelve triangles each would still be too many; one box around them all.
+    let f = Fixture::with_text(&editor_support::INSTANCES.replace("count = [3, 1, 2]", "count = [300, 1, 300]"));
+    let fence = &f.scene_json()["instances"][1];
+    assert_eq!((fence["copies"].as_u64(), fence["drawn"].as_str()), (Some(90_000), Some("bounds")));
+    assert_eq!(fence["positions"].as_array().unwrap().len(), 12 * 9);
+    let (lo, hi) = vertex_bounds(&fence["positions"]);
+    assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-1.5 + 149.5 + 0.1, 1.2, -1.5 + 299.0 + 0.1]), "{lo:?} {hi:?}");
+}

@@ -3,8 +3,11 @@
 //! the ball in the viewport and checks the properties panel, moves the ball by a typed value and
 //! checks the server's scene, drags the move gizmo's X arrow with the mouse (WebDriver pointer
 //! actions) and checks the ball moved along x only, undoes that, checks the selection outline
-//! in four views, deletes the ball, undoes, saves and checks the file. Screenshots of each
-//! step go to target/editor-browser/ (kept as artifacts).
+//! in four views, deletes the ball, undoes, saves and checks the file. A second run opens a
+//! scene with instances and a CSG object: it selects an instance in the scene tree, checks the
+//! properties panel and the outline, moves it by a typed value, picks a texture for a material
+//! in the properties panel and checks the server's scene and the saved file. Screenshots of
+//! each step go to target/editor-browser/ (kept as artifacts).
 
 mod editor_support;
 
@@ -357,6 +360,93 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
         .wait_for("the saved state", "return document.getElementById('file-name').textContent", |v| v == "scene.toml");
     driver.screenshot("10-saved.png");
     // No error was shown on the way.
+    let error = driver.script("return document.body.dataset.lastError || ''");
+    assert_eq!(error, "", "the page showed an error");
+}
+
+#[test]
+fn browser_shows_instances_and_picks_a_texture() {
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| {
+        o.preview_size = 96;
+        let text = format!("{}{}", editor_support::SCENE, editor_support::INSTANCES);
+        // Seen from further back, so the copies are in view.
+        let text = text.replace("position = [0, 1, 4]   # the eye", "position = [0, 3, 7]   # the eye");
+        std::fs::write(&o.scene, text).unwrap();
+    });
+    let mut image = image::RgbImage::new(4, 4);
+    for (x, y, p) in image.enumerate_pixels_mut() {
+        *p = if (x + y) % 2 == 0 { image::Rgb([230, 200, 40]) } else { image::Rgb([40, 60, 200]) };
+    }
+    image.save(f.dir.path().join("checker.png")).unwrap();
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+    driver.click("#shading");
+
+    // The instances in the tree: the grid says how many copies it places
+    let labels =
+        driver.script("return [...document.querySelectorAll('[id^=tree-instance-]')].map((e) => e.textContent)");
+    assert_eq!(labels, json!(["single (post)", "fence (post ×6)", "pairs (pair ×2)"]));
+    driver.click("#tree-instance-1");
+    driver.wait_for("the grid to be selected", "return document.body.dataset.selection", |v| v == "instance:1");
+    let object = driver.script("return document.getElementById('obj-object').value");
+    assert_eq!(object, "post");
+    let note = driver.script("return document.getElementById('instance-note').textContent");
+    assert!(note.as_str().unwrap().starts_with("6 copies of object \"post\", drawn whole"), "{note}");
+    // Its six copies are outlined together.
+    driver.wait_for("the grid's outline", OUTLINE_PIXELS, |v| v[0].as_u64().unwrap_or(0) > 200);
+    driver.screenshot("11-instances-selected.png");
+
+    // Move the grid by a typed value
+    driver.type_into("#tf-translate-1", "0.5\n");
+    let text = wait_text(&f, "the grid's move", |t| t.contains("transform = { translate = [-1.5, 0.5, -1.5] }"));
+    assert!(text.contains("name = \"fence\""));
+    let moved = driver.wait_for(
+        "the moved copies",
+        "const o = window.photonixEditor.viewport.objects.find((o) => o.target.kind === 'instance' && o.target.index === 1);
+         o.mesh.geometry.computeBoundingBox(); const b = o.mesh.geometry.boundingBox.clone().applyMatrix4(o.mesh.matrixWorld);
+         return b.min.y;",
+        |v| v.as_f64().is_some_and(|y| (y - 0.5).abs() < 1e-4),
+    );
+    assert!((moved.as_f64().unwrap() - 0.5).abs() < 1e-4);
+    driver.screenshot("12-instances-moved.png");
+
+    // The texture picker: the ball's material, its reflectance, the folder's checker image
+    driver.click("#tree-shape-1");
+    driver.wait_for("the ball to be selected", "return document.body.dataset.selection", |v| v == "shape:1");
+    driver.wait_for("the folder's images", "return document.getElementById('tex-file')?.dataset.loaded", |v| v == "1");
+    let field = driver.script("return document.getElementById('tex-field').value");
+    assert_eq!(field, "reflectance");
+    let frames = driver.script("return Number(document.body.dataset.frames)").as_u64().unwrap();
+    driver.click("#tex-file option[value='checker.png']");
+    let text = wait_text(&f, "the texture", |t| t.contains("reflectance = { texture = \"checker\" }"));
+    assert!(text.contains("[textures.checker]\ntype = \"image\"\nfile = \"checker.png\""), "{text}");
+    let scene = photonix::scene::parse_scene(&text, &f.scene).unwrap();
+    assert_eq!(scene.textures.len(), 1);
+    driver.wait_for("the texture in the panel", "return document.getElementById('mat-reflectance')?.value", |v| {
+        v == r#"{"texture":"checker"}"#
+    });
+    driver.screenshot("13-texture-picked.png");
+    driver.click("#shading");
+    driver.wait_for("a frame with the texture", "return Number(document.body.dataset.frames)", |v| {
+        v.as_u64() > Some(frames + 1)
+    });
+    driver.screenshot("14-texture-rendered.png");
+
+    // Saved: the file has the texture and the moved grid
+    driver.click("#save");
+    let start = Instant::now();
+    loop {
+        let saved = std::fs::read_to_string(&f.scene).unwrap();
+        if saved.contains("texture = \"checker\"") {
+            assert!(saved.contains("translate = [-1.5, 0.5, -1.5]"), "{saved}");
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(30), "the save did not reach the file:\n{saved}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let error = driver.script("return document.body.dataset.lastError || ''");
     assert_eq!(error, "", "the page showed an error");
 }

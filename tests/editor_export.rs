@@ -180,3 +180,48 @@ fn photonix_export_writes_a_glb_and_refuses_bad_input_without_writing() {
     let leftovers: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(leftovers.len(), 3, "{leftovers:?}");
 }
+
+#[test]
+fn instances_export_as_one_mesh_per_object_and_one_node_per_copy() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("{SCENE}{}", editor_support::INSTANCES);
+    let doc = SceneDocument::load(&scene_file(dir.path(), &text)).unwrap();
+    let (file, meshes) = read_back(&scene_glb(&doc).unwrap());
+    // The post once in object space (box white, ball red), and once more in the glass the fence
+    // gives it; the CSG box as a shape, world space.
+    let mesh_names: Vec<String> = file.document.meshes().map(|m| m.name().unwrap_or("").to_string()).collect();
+    assert_eq!(mesh_names, ["floor", "ball", "block", "cut box", "lamp", "post", "post (glass)"]);
+    let post: Vec<&Mesh> = meshes.iter().filter(|m| m.0 == "post").collect();
+    assert_eq!(post.iter().map(|m| m.2.as_str()).collect::<Vec<_>>(), ["white", "red"]);
+    assert_eq!(post[0].1.len(), 36);
+    let top = post[1].1.iter().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+    assert!((top - 1.2).abs() < 1e-5, "{top}");
+    let glass: Vec<&Mesh> = meshes.iter().filter(|m| m.0 == "post (glass)").collect();
+    assert_eq!(glass.len(), 1);
+    assert_eq!(glass[0].1.len(), post[0].1.len() + post[1].1.len());
+
+    // One node per [[instances]] entry, one child per copy with its world_from_object.
+    let node = |name: &str| file.document.nodes().find(|n| n.name() == Some(name)).unwrap();
+    let children = |name: &str| -> Vec<([f32; 3], String)> {
+        node(name)
+            .children()
+            .map(|c| (c.transform().decomposed().0, c.mesh().unwrap().name().unwrap().to_string()))
+            .collect()
+    };
+    assert_eq!(children("single"), [([3.0, 0.0, 0.0], "post".to_string())]);
+    let fence = children("fence");
+    assert_eq!(fence.len(), 6);
+    for (k, (t, mesh)) in fence.iter().enumerate() {
+        let want = [-1.5 + 0.5 * (k % 3) as f32, 0.0, -1.5 + (k / 3) as f32];
+        assert!((0..3).all(|a| (t[a] - want[a]).abs() < 1e-5), "{k}: {t:?} vs {want:?}");
+        assert_eq!(mesh, "post (glass)");
+    }
+    let pairs = children("pairs");
+    assert_eq!(pairs.len(), 2);
+    for (t, z) in pairs.iter().map(|p| p.0).zip([1.2, 1.8]) {
+        assert!(t[0].abs() < 1e-5 && (t[2] - z).abs() < 1e-5, "{t:?}");
+    }
+    // The scene lists the entries, the instance groups and the camera; the copies hang below.
+    let roots: Vec<&str> = file.document.scenes().next().unwrap().nodes().map(|n| n.name().unwrap()).collect();
+    assert_eq!(roots, ["floor", "ball", "block", "cut box", "lamp", "single", "fence", "pairs", "camera"]);
+}

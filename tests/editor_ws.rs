@@ -199,7 +199,13 @@ fn websocket_needs_the_token() {
 #[test]
 #[ignore]
 fn editor_preview_benchmark() {
-    const DELAYS_MS: [u64; 8] = [0, 100, 250, 400, 600, 800, 1100, 1500];
+    // PHOTONIX_BENCH_DELAYS_MS=a,b,... sends the edits at other delays: a lavapipe pass of
+    // cornell-box traces photons for its first 2-3 s, so edits past that land in the grid
+    // builds and the camera kernel.
+    let delays: Vec<u64> = match std::env::var("PHOTONIX_BENCH_DELAYS_MS") {
+        Ok(list) => list.split(',').map(|d| d.trim().parse().expect("delays in ms, comma-separated")).collect(),
+        Err(_) => vec![0, 100, 250, 400, 600, 800, 1100, 1500],
+    };
     let scene = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
     let only = std::env::var("PHOTONIX_BENCH_BACKENDS").unwrap_or_default();
     for gpu in [false, true] {
@@ -235,7 +241,8 @@ fn editor_preview_benchmark() {
             let mut generation = frame(&mut page, 0, 2).await["generation"].as_u64().unwrap();
             let (mut first, mut full) = (Vec::new(), Vec::new());
             let (mut quick_costs, mut full_costs, mut waits) = (Vec::new(), Vec::new(), Vec::new());
-            for (i, delay) in DELAYS_MS.iter().enumerate() {
+            let mut stages = Vec::new();
+            for (i, delay) in delays.iter().enumerate() {
                 tokio::time::sleep(Duration::from_millis(*delay)).await;
                 let t = Instant::now();
                 let value = [0.2 + 0.05 * i as f64, 0.1, 0.1];
@@ -250,6 +257,8 @@ fn editor_preview_benchmark() {
                 // stopping), and the quick step itself.
                 let render = ms(&header, "render_ms");
                 waits.push(((ms(&header, "since_change_ms") - render).round(), render.round()));
+                // Where the time went: the stopped step's stages before it stopped, the quick step's.
+                stages.push(format!("stale {} / quick {}", header["stale"], header["stages"]));
                 generation = header["generation"].as_u64().unwrap();
                 let header = frame(&mut page, generation - 1, 2).await;
                 full.push(t.elapsed().as_secs_f64() * 1e3);
@@ -265,6 +274,9 @@ fn editor_preview_benchmark() {
             }
             println!("{label}: after an edit, the quick step's (prepare ms, upload ms, arrays written): {quick_costs:?}");
             println!("{label}: server side, (ms until the stale step stopped, ms of the quick step): {waits:?}");
+            for (i, line) in stages.iter().enumerate() {
+                println!("{label}: edit {i}: {line}");
+            }
             println!(
                 "{label}: prepare + upload of the first full-size pass (which every pass paid before) {:?} ms; of the passes after it {:?} ms",
                 full_costs.iter().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>(),

@@ -179,3 +179,29 @@ fn kept_renderer_equals_a_renderer_per_pass() {
     let before = render_gpu(&ctx, &buffers, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
     assert!(kept.layers != before.layers, "the new seed was not used");
 }
+
+/// A scene of another kernel variant and back (an edit and its undo in the editor): the
+/// renderer keeps the first variant's kernels, switches back to them, and renders as a fresh
+/// renderer would.
+#[test]
+fn switching_variants_keeps_the_earlier_kernels() {
+    use photonix::render::gpu::{render_gpu, GpuRenderer};
+    let path = common::repo_path("scenes/cornell-caustics.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let plain = photonix::scene::parse_scene(&text, &path).unwrap();
+    let disc = "\n[[shapes]]\ntype = \"disc\"\nmaterial = \"white\"\ncenter = [0.5, 0.01, 0.5]\nnormal = [0, 1, 0]\nradius = 0.05\n";
+    let analytic = photonix::scene::parse_scene(&format!("{text}{disc}"), &path).unwrap();
+    let (a, b) = (common::buffers(&plain, 16, 16), common::buffers(&analytic, 16, 16));
+    assert_ne!(a.variant(), b.variant(), "a disc needs the analytic kernels");
+    let ctx = common::gpu();
+    let photons = common::test_photons();
+    let mut renderer = GpuRenderer::new(&ctx, &a, Some(&photons)).unwrap();
+    assert_eq!(renderer.kernel_variants(), [a.variant()]);
+    renderer.update_scene(&b, Some(&photons)).unwrap();
+    assert_eq!(renderer.kernel_variants(), [b.variant(), a.variant()]);
+    renderer.update_scene(&a, Some(&photons)).unwrap();
+    assert_eq!(renderer.kernel_variants(), [a.variant(), b.variant()]);
+    let kept = renderer.render_pass(1, 0, &mut |_, _| {}).unwrap();
+    let fresh = render_gpu(&ctx, &a, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
+    assert!(kept.layers == fresh.layers, "the kept kernels render differently from fresh ones");
+}

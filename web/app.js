@@ -109,6 +109,7 @@ export function targetOf(sel) {
   if (!sel) return null;
   if (sel.kind === 'shape') return { shape: sel.index };
   if (sel.kind === 'light') return { light: sel.index };
+  if (sel.kind === 'instance') return { instance: sel.index };
   if (sel.kind === 'material') return { material: sel.name };
   if (sel.kind === 'camera') return 'camera';
   return null;
@@ -133,6 +134,7 @@ function setScene(scene) {
   let sel = state.selection;
   if (sel && sel.kind === 'shape' && sel.index >= scene.shapes.length) sel = null;
   if (sel && sel.kind === 'light' && sel.index >= scene.lights.length) sel = null;
+  if (sel && sel.kind === 'instance' && sel.index >= (scene.instances || []).length) sel = null;
   if (sel && sel.kind === 'material' && !scene.materials.some((m) => m.name === sel.name)) sel = null;
   select(sel);
   for (const w of scene.warnings) if (!old || !old.warnings.includes(w)) showMessage(`warning: ${w}`, 'info');

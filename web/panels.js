@@ -47,6 +47,12 @@ export class Tree {
       item(`${nameOf(s, `shape ${i}`)} (${s.fields.type})`, { kind: 'shape', index: i }, `tree-shape-${i}`))));
     this.root.append(section('Lights', scene.lights.map((l, i) =>
       item(`${nameOf(l, `light ${i}`)} (${l.fields.type})`, { kind: 'light', index: i }, `tree-light-${i}`))));
+    const instances = scene.instances || [];
+    if (instances.length) {
+      this.root.append(section('Instances', instances.map((inst, i) =>
+        item(`${nameOf(inst, `instance ${i}`)} (${inst.object}${inst.copies === 1 ? '' : ` ×${inst.copies}`})`,
+          { kind: 'instance', index: i }, `tree-instance-${i}`))));
+    }
     this.root.append(section('Materials', scene.materials.map((m) =>
       item(`${m.name} (${m.fields.type})`, { kind: 'material', name: m.name }, `tree-material-${m.name}`))));
   }
@@ -70,14 +76,17 @@ export class Properties {
       this.root.append(el('p', { class: 'hint' }, 'Select an object in the viewport or the tree.'));
       return;
     }
-    if (sel.kind === 'shape' || sel.kind === 'light') {
-      const list = sel.kind === 'shape' ? scene.shapes : scene.lights;
+    if (sel.kind === 'shape' || sel.kind === 'light' || sel.kind === 'instance') {
+      const list = sel.kind === 'shape' ? scene.shapes : sel.kind === 'light' ? scene.lights : scene.instances || [];
       const entry = list[sel.index];
       if (!entry) return;
-      const target = sel.kind === 'shape' ? { shape: sel.index } : { light: sel.index };
-      const title = `${nameOf(entry, `${sel.kind} ${sel.index}`)}: ${entry.fields.type}`;
+      const target = { [sel.kind]: sel.index };
+      const title = sel.kind === 'instance'
+        ? `${nameOf(entry, `instance ${sel.index}`)}: object "${entry.object}"`
+        : `${nameOf(entry, `${sel.kind} ${sel.index}`)}: ${entry.fields.type}`;
       this.root.append(this.fieldset(title, target, entry.fields, scene, 'obj'));
-      const hasTransform = sel.kind === 'shape' || entry.fields.type === 'area';
+      if (sel.kind === 'instance') this.root.append(this.instanceNote(entry));
+      const hasTransform = sel.kind !== 'light' || entry.fields.type === 'area';
       if (hasTransform) this.root.append(this.transform(target, entry.fields.transform || {}));
       const material = entry.fields.material && scene.materials.find((m) => m.name === entry.fields.material);
       if (material) this.root.append(this.material(material, scene));
@@ -89,6 +98,19 @@ export class Properties {
       if (scene.render) this.root.append(this.fieldset('Render', 'render', scene.render, scene, 'render'));
       if (scene.photons) this.root.append(this.fieldset('Photons', 'photons', scene.photons, scene, 'photons'));
     }
+  }
+
+  /// How many copies the entry places and how the solid view draws them.
+  instanceNote(entry) {
+    const drawn = {
+      triangles: 'drawn whole',
+      boxes: 'too many triangles to draw: each copy is drawn as its object\'s bounding box',
+      bounds: 'too many copies to draw: one box around them all',
+    }[entry.drawn] || '';
+    const grid = entry.fields.count ? '; the grid\'s offsets (count × spacing) follow the transform, along the world axes' : '';
+    return el('p', { class: 'hint', id: 'instance-note' },
+      `${entry.copies} ${entry.copies === 1 ? 'copy' : 'copies'} of object "${entry.object}", ${drawn}${grid}. ` +
+      'The object\'s own shapes are edited in the scene file.');
   }
 
   material(material, scene) {

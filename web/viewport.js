@@ -165,6 +165,7 @@ export class Viewport {
     this.extent = extent;
     scene.shapes.forEach((shape, index) => this.addEntry(shape, { kind: 'shape', index }));
     scene.lights.forEach((light, index) => this.addLight(light, { kind: 'light', index }));
+    (scene.instances || []).forEach((instance, index) => this.addEntry(instance, { kind: 'instance', index }));
     this.addCamera(scene.camera);
     this.buildGrid(lo, hi, extent);
     if (first) {
@@ -199,11 +200,18 @@ export class Viewport {
 
   addEntry(entry, target) {
     const holder = this.makeHolder(entry.fields);
-    const color = new THREE.Color(...entry.color);
-    const material = entry.emissive
-      ? new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide })
-      : new THREE.MeshLambertMaterial({ color, side: THREE.DoubleSide });
+    const surface = (rgb, emissive) => {
+      const color = new THREE.Color(...rgb);
+      return emissive
+        ? new THREE.MeshBasicMaterial({ color, side: THREE.DoubleSide })
+        : new THREE.MeshLambertMaterial({ color, side: THREE.DoubleSide });
+    };
+    // An entry of several materials (a CSG object's leaves, an instanced object's shapes)
+    // comes in groups of triangles, one colour each.
+    const groups = entry.groups && entry.groups.length ? entry.groups : null;
+    const material = groups ? groups.map((g) => surface(g.color, g.emissive)) : surface(entry.color, entry.emissive);
     const mesh = this.meshOf(entry.positions, holder, material);
+    if (groups) groups.forEach((g, i) => mesh.geometry.addGroup(g.start * 3, g.count * 3, i));
     holder.add(mesh);
     this.content.add(holder);
     const object = { holder, mesh, target, kind: 'mesh' };
@@ -499,7 +507,9 @@ export class Viewport {
     const h = object.holder;
     const t = object.target;
     if (object.kind === 'mesh' || object.kind === 'area') {
-      const target = t.kind === 'shape' ? { shape: t.index } : { light: t.index };
+      // A grid of instances turns about its transform's origin here; the server then places
+      // the copies along the world axes again (the grid's offsets come after the transform).
+      const target = t.kind === 'shape' ? { shape: t.index } : t.kind === 'instance' ? { instance: t.index } : { light: t.index };
       this.app.edit({
         op: 'set_transform', target,
         translate: h.position.toArray().map(round),

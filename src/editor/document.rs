@@ -46,6 +46,8 @@ pub enum Target {
     Shape(usize),
     /// Entry of `[[lights]]`, from 0 in file order.
     Light(usize),
+    /// Entry of `[[instances]]`, from 0 in file order.
+    Instance(usize),
     /// `[materials.<name>]`.
     Material(String),
     Camera,
@@ -59,6 +61,7 @@ impl Target {
         match self {
             Target::Shape(i) => format!("shape {i}"),
             Target::Light(i) => format!("light {i}"),
+            Target::Instance(i) => format!("instance {i}"),
             Target::Material(name) => format!("material \"{}\"", crate::limits::printable(name)),
             Target::Camera => "[camera]".into(),
             Target::Render => "[render]".into(),
@@ -89,7 +92,8 @@ pub enum Kind {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(tag = "op", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Command {
-    /// Sets the `transform` of a shape or an area light; parts left out keep their value.
+    /// Sets the `transform` of a shape, an area light or an instance; parts left out keep
+    /// their value.
     SetTransform {
         target: Target,
         translate: Option<[f64; 3]>,
@@ -110,8 +114,8 @@ pub enum Command {
     Delete {
         target: Target,
     },
-    /// Appends a copy of a shape or light (named "<name> copy"), or of a material (as
-    /// "<name>_copy"), to the file.
+    /// Appends a copy of a shape, light or instance (named "<name> copy"), or of a material
+    /// (as "<name>_copy"), to the file.
     Duplicate {
         target: Target,
     },
@@ -348,8 +352,11 @@ fn file_fields(text: &str) -> BTreeSet<String> {
 fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
     match command {
         Command::SetTransform { target, translate, rotate, scale } => {
-            if !matches!(target, Target::Shape(_) | Target::Light(_)) {
-                return Err(bad(format!("{} has no transform; only shapes and area lights do", target.describe())));
+            if !matches!(target, Target::Shape(_) | Target::Light(_) | Target::Instance(_)) {
+                return Err(bad(format!(
+                    "{} has no transform; only shapes, area lights and instances do",
+                    target.describe()
+                )));
             }
             let table = target_table(doc, target)?;
             if matches!(target, Target::Light(_)) && table.get("type").and_then(|t| t.as_str()) != Some("area") {
@@ -419,7 +426,7 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
             Ok(())
         }
         Command::Delete { target } => match target {
-            Target::Shape(i) | Target::Light(i) => {
+            Target::Shape(i) | Target::Light(i) | Target::Instance(i) => {
                 let (key, count) = array_of(doc, target)?;
                 if *i >= count {
                     return Err(bad(format!("there is no {} (the file has {count})", target.describe())));
@@ -451,7 +458,7 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
             Target::Camera => Err(bad("a scene needs its [camera]; it cannot be deleted")),
         },
         Command::Duplicate { target } => match target {
-            Target::Shape(_) | Target::Light(_) => {
+            Target::Shape(_) | Target::Light(_) | Target::Instance(_) => {
                 let mut copy = fresh_copy(target_table(doc, target)?);
                 if let Some(name) = copy.get("name").and_then(|n| n.as_str()).map(str::to_string) {
                     set_key(&mut copy, "name", Value::from(format!("{name} copy")), false);
@@ -627,12 +634,13 @@ fn fresh_copy(table: &dyn TableLike) -> Table {
     copy
 }
 
-/// The array of tables a shape or light target lives in, and its length.
+/// The array of tables a shape, light or instance target lives in, and its length.
 fn array_of(doc: &DocumentMut, target: &Target) -> Result<(&'static str, usize), EditError> {
     let key = match target {
         Target::Shape(_) => "shapes",
         Target::Light(_) => "lights",
-        _ => unreachable!("array_of is only called for shapes and lights"),
+        Target::Instance(_) => "instances",
+        _ => unreachable!("array_of is only called for shapes, lights and instances"),
     };
     match doc.get(key) {
         None => Ok((key, 0)),
@@ -646,7 +654,7 @@ fn array_of(doc: &DocumentMut, target: &Target) -> Result<(&'static str, usize),
 /// The table a target names, created for `[render]`, `[photons]` and `[environment]`.
 fn target_table<'d>(doc: &'d mut DocumentMut, target: &Target) -> Result<&'d mut dyn TableLike, EditError> {
     match target {
-        Target::Shape(i) | Target::Light(i) => {
+        Target::Shape(i) | Target::Light(i) | Target::Instance(i) => {
             let (key, count) = array_of(doc, target)?;
             if *i >= count {
                 return Err(bad(format!("there is no {} (the file has {count})", target.describe())));

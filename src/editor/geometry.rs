@@ -8,21 +8,40 @@
 //!   "camera": { "fields": {..}, "position", "look_at", "up", "fov", "width", "height", "projection", "view_height" },
 //!   "render": {..}, "photons": {..} | null, "environment": {..} | null,
 //!   "materials": [ { "name", "fields": {..}, "color": [r,g,b], "emission": [r,g,b] } ],
-//!   "shapes": [ { "fields": {..}, "color", "emissive", "positions": [x,y,z, ...] } ],
-//!   "lights": [ { "fields": {..}, "kind", "positions": [..], "position": [..]?, "direction": [..]? } ] }
+//!   "shapes": [ { "fields": {..}, "color", "emissive", "positions": [x,y,z, ...], "groups"? } ],
+//!   "lights": [ { "fields": {..}, "kind", "positions": [..], "position": [..]?, "direction": [..]? } ],
+//!   "instances": [ { "fields": {..}, "object", "copies", "drawn", "color", "emissive",
+//!                    "positions": [..], "groups": [..] } ] }
 //! ```
 //! `positions` lists three vertices per triangle; analytic shapes (spheres, discs, cones, tori,
 //! superellipsoids) come tessellated, an infinite plane as a square as large as the scene.
+//! `groups` (`{ "start", "count", "color" }`, in triangles) colours the runs of an entry made
+//! of several materials: a CSG object's leaves, an instanced object's shapes.
+//!
+//! A CSG object is drawn as its solid's surface: each leaf's tessellated triangles where the
+//! operation shows them (judged at the triangle's centre, so a cut edge is as jagged as the
+//! tessellation). An `[[instances]]` entry is every copy it places (a grid's and the nested
+//! placements' included) in world space, `drawn = "triangles"`; past `MAX_INSTANCE_TRIANGLES`
+//! each copy is its object's bounding box instead (`"boxes"`), and past that again one box
+//! around all the copies (`"bounds"`), so a million trees do not make a gigabyte of JSON.
 
-use glam::{Mat3, Vec3};
+use std::collections::BTreeMap;
+
+use glam::{Affine3A, Mat3, Vec3};
 use serde_json::{json, Value as Json};
 use toml_edit::{DocumentMut, Item};
 
 use super::document::{toml_to_json, SceneDocument};
-use crate::scene::{AnalyticKind, Geometry, LightKind, MaterialKind, Projection, Scene};
+use crate::scene::csg::{Csg, CsgNode, CsgOp};
+use crate::scene::{AnalyticKind, Geometry, LightKind, MaterialKind, ObjectDesc, Projection, Scene};
 
 /// Segments around a tessellated analytic shape in the solid view.
 const SEGMENTS: usize = 32;
+/// Most triangles the solid view gets for one `[[instances]]` entry before it draws boxes.
+pub const MAX_INSTANCE_TRIANGLES: usize = 200_000;
+
+/// Triangles (9 numbers each) by material id.
+pub(super) type Parts = BTreeMap<u32, Vec<f32>>;
 
 /// The page's view of `doc`.
 pub fn scene_json(doc: &SceneDocument) -> Json {
@@ -55,8 +74,29 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         .map(|(range, fields)| {
             let material = scene.shapes.get(range.start).map(|s| s.material as usize);
             let (color, emissive) = material.map_or(([0.8; 3], false), |m| material_color(scene, m));
-            json!({ "fields": fields, "color": color, "emissive": emissive, "positions": positions(range) })
+            let mut entry = json!({ "fields": fields, "color": color, "emissive": emissive });
+            let csg =
+                scene.shapes.get(range.clone()).unwrap_or(&[]).iter().any(|s| matches!(s.geometry, Geometry::Csg(_)));
+            if csg {
+                // A CSG object's leaves keep their own materials: one group per material.
+                let mut parts = Parts::new();
+                for shape in scene.shapes.get(range.clone()).unwrap_or(&[]) {
+                    shape_parts(shape, lo, hi, extent, &mut parts);
+                }
+                let (positions, groups) = grouped(scene, parts);
+                entry["positions"] = json!(positions);
+                entry["groups"] = json!(groups);
+            } else {
+                entry["positions"] = json!(positions(range));
+            }
+            entry
         })
+        .collect();
+    let instances: Vec<Json> = origins
+        .instances
+        .iter()
+        .zip(entries("instances"))
+        .map(|(range, fields)| instance_json(scene, range.clone(), fields))
         .collect();
     let lights: Vec<Json> = origins
         .lights
@@ -134,15 +174,23 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "materials": materials,
         "shapes": shapes,
         "lights": lights,
+        "instances": instances,
     })
 }
 
-/// The bounds of every shape but the infinite planes; a unit box when there are none.
+/// The bounds of every shape but the infinite planes, instanced copies included; a unit box
+/// when there are none.
 pub fn finite_bounds(scene: &Scene) -> (Vec3, Vec3) {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     for shape in scene.shapes.iter().filter(|s| !s.geometry.is_unbounded()) {
         let (a, b) = shape.geometry.bounds();
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    let boxes: Vec<(Vec3, Vec3)> = scene.objects.iter().map(object_bounds).collect();
+    for instance in &scene.instances {
+        let (a, b) = transformed_box(boxes[instance.object as usize], &instance.world_from_object);
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -223,11 +271,297 @@ pub(super) fn triangles(geometry: &Geometry, lo: Vec3, hi: Vec3, extent: f32, ou
             push([p, s, r]);
         }
         Geometry::Analytic(a) => a.tessellate(SEGMENTS).into_iter().for_each(push),
-        // Every leaf whole: the preview shows the parts a CSG object is made of.
         Geometry::Csg(c) => {
-            for shape in c.leaves.iter().flatten() {
-                triangles(&shape.geometry, lo, hi, extent, out);
+            for (_, positions) in csg_surface(c, lo, hi, extent) {
+                out.extend(positions);
             }
         }
+    }
+}
+
+/// Appends the triangles of `shape` to `parts` under its material (a CSG object's under each
+/// leaf's own).
+pub(super) fn shape_parts(shape: &crate::scene::Shape, lo: Vec3, hi: Vec3, extent: f32, parts: &mut Parts) {
+    match &shape.geometry {
+        Geometry::Csg(c) => {
+            for (material, positions) in csg_surface(c, lo, hi, extent) {
+                parts.entry(material).or_default().extend(positions);
+            }
+        }
+        geometry => triangles(geometry, lo, hi, extent, parts.entry(shape.material).or_default()),
+    }
+}
+
+/// The triangles, grouped by material, of the parts of `parts` in one array, and the groups
+/// (`start` and `count` in triangles, `color`) that colour them.
+fn grouped(scene: &Scene, parts: Parts) -> (Vec<f32>, Vec<Json>) {
+    let mut positions = Vec::new();
+    let mut groups = Vec::new();
+    for (material, p) in parts.into_iter().filter(|(_, p)| !p.is_empty()) {
+        let (color, emissive) = material_color(scene, material as usize);
+        groups
+            .push(json!({ "start": positions.len() / 9, "count": p.len() / 9, "color": color, "emissive": emissive }));
+        positions.extend(p);
+    }
+    (positions, groups)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Instances
+
+/// An object's shapes as triangles in object space, by material (objects hold no infinite
+/// plane, so the scene's bounds do not enter).
+pub(super) fn object_parts(object: &ObjectDesc) -> Parts {
+    let mut parts = Parts::new();
+    for shape in &object.shapes {
+        shape_parts(shape, Vec3::ZERO, Vec3::ZERO, 1.0, &mut parts);
+    }
+    parts
+}
+
+/// The bounds of an object's shapes, in object space.
+fn object_bounds(object: &ObjectDesc) -> (Vec3, Vec3) {
+    object.shapes.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), s| {
+        let (a, b) = s.geometry.bounds();
+        (lo.min(a), hi.max(b))
+    })
+}
+
+/// The axis-aligned bounds of box (lo, hi) moved by `m`.
+fn transformed_box((lo, hi): (Vec3, Vec3), m: &Affine3A) -> (Vec3, Vec3) {
+    (0..8).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), i| {
+        let corner = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let p = m.transform_point3(corner);
+        (a.min(p), b.max(p))
+    })
+}
+
+/// The 12 triangles of box (lo, hi) moved by `m`, appended to `out`.
+fn box_triangles((lo, hi): (Vec3, Vec3), m: &Affine3A, out: &mut Vec<f32>) {
+    let c = |i: usize| {
+        m.transform_point3(Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        ))
+    };
+    const FACES: [[usize; 4]; 6] = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    for [a, b, d, e] in FACES {
+        for t in [[a, b, d], [a, d, e]] {
+            for i in t {
+                out.extend_from_slice(&c(i).to_array());
+            }
+        }
+    }
+}
+
+/// Appends `positions` (object space) moved by `m` to `out`.
+fn transformed(positions: &[f32], m: &Affine3A, out: &mut Vec<f32>) {
+    for v in positions.chunks_exact(3) {
+        out.extend_from_slice(&m.transform_point3(Vec3::from_slice(v)).to_array());
+    }
+}
+
+/// The page's view of one `[[instances]]` entry: the copies `range` of `Scene::instances`.
+fn instance_json(scene: &Scene, range: std::ops::Range<usize>, fields: Json) -> Json {
+    let copies = scene.instances.get(range).unwrap_or(&[]);
+    let object_name = fields.get("object").cloned().unwrap_or(Json::Null);
+    let mut cache: BTreeMap<u32, Parts> = BTreeMap::new();
+    for c in copies {
+        cache.entry(c.object).or_insert_with(|| object_parts(&scene.objects[c.object as usize]));
+    }
+    let count = |parts: &Parts| parts.values().map(|p| p.len() / 9).sum::<usize>();
+    let total: usize = copies.iter().map(|c| count(&cache[&c.object])).sum();
+    let first_material = copies.first().and_then(|c| c.material.or_else(|| cache[&c.object].keys().next().copied()));
+    let (color, _) = first_material.map_or(([0.8; 3], false), |m| material_color(scene, m as usize));
+    let mut parts = Parts::new();
+    let drawn = if total <= MAX_INSTANCE_TRIANGLES {
+        for c in copies {
+            for (material, p) in &cache[&c.object] {
+                transformed(p, &c.world_from_object, parts.entry(c.material.unwrap_or(*material)).or_default());
+            }
+        }
+        "triangles"
+    } else if copies.len() * 12 <= MAX_INSTANCE_TRIANGLES {
+        for c in copies {
+            let bounds = object_bounds(&scene.objects[c.object as usize]);
+            box_triangles(bounds, &c.world_from_object, parts.entry(first_material.unwrap_or(0)).or_default());
+        }
+        "boxes"
+    } else {
+        let (lo, hi) = copies.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
+            let (a, b) = transformed_box(object_bounds(&scene.objects[c.object as usize]), &c.world_from_object);
+            (lo.min(a), hi.max(b))
+        });
+        box_triangles((lo, hi), &Affine3A::IDENTITY, parts.entry(first_material.unwrap_or(0)).or_default());
+        "bounds"
+    };
+    let (positions, groups) = grouped(scene, parts);
+    json!({
+        "fields": fields, "object": object_name, "copies": copies.len(), "drawn": drawn,
+        "color": color, "emissive": false, "positions": positions, "groups": groups,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// CSG
+
+/// The surface of a CSG object as the solid view draws it, by material: each leaf tessellated,
+/// each triangle kept when the point at its centre is on the solid's surface (`shown`), tested
+/// against the other leaves' tessellations (closed, so a ray's crossings tell inside from out).
+fn csg_surface(c: &Csg, lo: Vec3, hi: Vec3, extent: f32) -> Parts {
+    let leaves: Vec<Vec<(u32, Vec<f32>)>> = c
+        .leaves
+        .iter()
+        .map(|shapes| {
+            shapes
+                .iter()
+                .map(|s| {
+                    let mut out = Vec::new();
+                    triangles(&s.geometry, lo, hi, extent, &mut out);
+                    (s.material, out)
+                })
+                .collect()
+        })
+        .collect();
+    let solids: Vec<Solid> = leaves.iter().map(|parts| Solid::new(parts.iter().map(|(_, p)| p.as_slice()))).collect();
+    // A box's face is two triangles: split large ones so that a cut shows at about a twelfth of
+    // the object's size.
+    let (a, b) = solids.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), s| (lo.min(s.lo), hi.max(s.hi)));
+    let max_edge = (b - a).length().max(1e-6) / 12.0;
+    let mut out = Parts::new();
+    let mut pieces = Vec::new();
+    for (leaf, parts) in leaves.iter().enumerate() {
+        for (material, positions) in parts {
+            for t in positions.chunks_exact(9) {
+                pieces.clear();
+                let t = [Vec3::from_slice(&t[0..3]), Vec3::from_slice(&t[3..6]), Vec3::from_slice(&t[6..9])];
+                split(t, max_edge, 5, &mut pieces);
+                for piece in &pieces {
+                    let centre = (piece[0] + piece[1] + piece[2]) / 3.0;
+                    if shown(&c.root, leaf as u32, centre, &solids) == Some(true) {
+                        let part = out.entry(*material).or_default();
+                        piece.iter().for_each(|v| part.extend_from_slice(&v.to_array()));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Splits `t` into four at its edges' midpoints, `depth` times at most, until no edge is
+/// longer than `max_edge`; appends the pieces to `out`.
+fn split(t: [Vec3; 3], max_edge: f32, depth: u32, out: &mut Vec<[Vec3; 3]>) {
+    let longest = (t[1] - t[0]).length().max((t[2] - t[1]).length()).max((t[0] - t[2]).length());
+    if depth == 0 || longest <= max_edge {
+        out.push(t);
+        return;
+    }
+    let [a, b, c] = t;
+    let (ab, bc, ca) = ((a + b) * 0.5, (b + c) * 0.5, (c + a) * 0.5);
+    for piece in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+        split(piece, max_edge, depth - 1, out);
+    }
+}
+
+/// Whether a point `p` on leaf `leaf`'s surface is on the surface of `node`'s solid; `None`
+/// when the leaf is not under `node`. Union shows every child's surface (POV-Ray's, inner ones
+/// included); merge those outside the other children; intersection those inside all of them;
+/// difference the first child's outside the others, and the others' inside the first.
+fn shown(node: &CsgNode, leaf: u32, p: Vec3, solids: &[Solid]) -> Option<bool> {
+    let CsgNode::Op(op, children) = node else {
+        return (*node == CsgNode::Leaf(leaf)).then_some(true);
+    };
+    let (k, on) = children.iter().enumerate().find_map(|(k, child)| shown(child, leaf, p, solids).map(|on| (k, on)))?;
+    if !on {
+        return Some(false);
+    }
+    let mut others = children.iter().enumerate().filter(|(j, _)| *j != k).map(|(_, c)| c);
+    Some(match op {
+        CsgOp::Union => true,
+        CsgOp::Merge => !others.any(|c| inside(c, p, solids)),
+        CsgOp::Intersection => others.all(|c| inside(c, p, solids)),
+        CsgOp::Difference if k == 0 => !others.any(|c| inside(c, p, solids)),
+        CsgOp::Difference => {
+            inside(&children[0], p, solids)
+                && !children.iter().enumerate().skip(1).any(|(j, c)| j != k && inside(c, p, solids))
+        }
+    })
+}
+
+/// Whether `p` is inside `node`'s solid.
+fn inside(node: &CsgNode, p: Vec3, solids: &[Solid]) -> bool {
+    match node {
+        CsgNode::Leaf(l) => solids[*l as usize].contains(p),
+        CsgNode::Op(op, children) => {
+            let mut each = children.iter().map(|c| inside(c, p, solids));
+            match op {
+                CsgOp::Union | CsgOp::Merge => each.any(|x| x),
+                CsgOp::Intersection => each.all(|x| x),
+                CsgOp::Difference => {
+                    let mut rest = children.iter().skip(1);
+                    inside(&children[0], p, solids) && !rest.any(|c| inside(c, p, solids))
+                }
+            }
+        }
+    }
+}
+
+/// A closed leaf as triangles and their bounds: a point is inside when a ray from it crosses
+/// the triangles an odd number of times.
+struct Solid {
+    triangles: Vec<[Vec3; 3]>,
+    lo: Vec3,
+    hi: Vec3,
+}
+
+impl Solid {
+    fn new<'a>(parts: impl Iterator<Item = &'a [f32]>) -> Solid {
+        let mut triangles = Vec::new();
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for positions in parts {
+            for t in positions.chunks_exact(9) {
+                let v = [Vec3::from_slice(&t[0..3]), Vec3::from_slice(&t[3..6]), Vec3::from_slice(&t[6..9])];
+                for p in v {
+                    lo = lo.min(p);
+                    hi = hi.max(p);
+                }
+                triangles.push(v);
+            }
+        }
+        Solid { triangles, lo, hi }
+    }
+
+    fn contains(&self, p: Vec3) -> bool {
+        if p.cmplt(self.lo).any() || p.cmpgt(self.hi).any() {
+            return false;
+        }
+        // A direction along no axis or diagonal, so the ray rarely grazes a tessellation's edge.
+        let d = Vec3::new(0.5381, 0.6197, 0.5713).normalize();
+        let mut crossings = 0;
+        for [a, b, c] in &self.triangles {
+            let (e1, e2) = (*b - *a, *c - *a);
+            let q = d.cross(e2);
+            let det = e1.dot(q);
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let s = p - *a;
+            let u = s.dot(q) / det;
+            let r = s.cross(e1);
+            let v = d.dot(r) / det;
+            if u < 0.0 || v < 0.0 || u + v > 1.0 {
+                continue;
+            }
+            if e2.dot(r) / det > 0.0 {
+                crossings += 1;
+            }
+        }
+        crossings % 2 == 1
     }
 }

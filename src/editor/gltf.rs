@@ -3,9 +3,13 @@
 //!
 //! One node per `[[shapes]]` entry and per area light of the file, named as the entry is, with
 //! the same world-space triangles the editor's solid view draws (`geometry::triangles`: analytic
-//! shapes tessellated, an infinite plane as a square as large as the scene); one primitive per
-//! material an entry uses. Vertices are in world space (the nodes carry no transform) and come
-//! without normals, so viewers shade the facets flat, as glTF specifies. Materials keep the
+//! shapes tessellated, an infinite plane as a square as large as the scene, a CSG object's
+//! surface); one primitive per material an entry uses. Vertices are in world space (these
+//! nodes carry no transform) and come without normals, so viewers shade the facets flat, as
+//! glTF specifies. Instancing stays instancing: each `[objects.NAME]` becomes one mesh in object
+//! space (one per replacing `material` its instances give), each `[[instances]]` entry a node
+//! named as the entry with one child node per copy it places (grid cells and nested placements
+//! resolved), whose `matrix` is the copy's `world_from_object`. Materials keep the
 //! constant part of their colour (textures are not exported), a metal's or mirror's reflectance
 //! at normal incidence, roughness (the square root of the GGX width), emission (with
 //! `KHR_materials_emissive_strength` above 1), and for glass `KHR_materials_transmission` and
@@ -19,7 +23,7 @@ use serde_json::{json, Value as Json};
 use toml_edit::{DocumentMut, Item};
 
 use super::document::SceneDocument;
-use super::geometry::{finite_bounds, triangles};
+use super::geometry::{finite_bounds, object_parts, shape_parts, Parts};
 use crate::scene::{MaterialDesc, MaterialKind, Projection, Scene};
 
 const GLB_MAGIC: u32 = 0x4654_6c67; // "glTF"
@@ -51,63 +55,131 @@ pub fn scene_glb(doc: &SceneDocument) -> Result<Vec<u8>, String> {
     entries.extend(
         names("lights", "light").into_iter().zip(origins.lights.iter().cloned()).filter(|(_, r)| !r.is_empty()),
     );
-    write_glb(scene, &entries)
+    let instances: Vec<(String, std::ops::Range<usize>)> =
+        names("instances", "instance").into_iter().zip(origins.instances.iter().cloned()).collect();
+    write_glb(scene, &entries, &instances)
 }
 
-/// Builds the glTF document and its binary buffer for the shapes of `entries` (a name and the
-/// range of `scene.shapes` it became).
-fn write_glb(scene: &Scene, entries: &[(String, std::ops::Range<usize>)]) -> Result<Vec<u8>, String> {
-    let (lo, hi) = finite_bounds(scene);
-    let extent = (hi - lo).length().max(1e-3);
-    let mut bin: Vec<u8> = Vec::new();
-    let (mut views, mut accessors, mut meshes, mut nodes) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    // Scene material id -> glTF material index, in order of first use.
-    let mut used: BTreeMap<u32, usize> = BTreeMap::new();
-    let mut order: Vec<u32> = Vec::new();
-    for (name, range) in entries {
-        // The entry's triangles, grouped by material.
-        let mut by_material: BTreeMap<u32, Vec<f32>> = BTreeMap::new();
-        for shape in scene.shapes.get(range.clone()).unwrap_or(&[]) {
-            triangles(&shape.geometry, lo, hi, extent, by_material.entry(shape.material).or_default());
-        }
+/// The binary buffer with its views, accessors and meshes, and the materials in order of first use.
+#[derive(Default)]
+struct Writer {
+    bin: Vec<u8>,
+    views: Vec<Json>,
+    accessors: Vec<Json>,
+    meshes: Vec<Json>,
+    /// Scene material id -> glTF material index.
+    used: BTreeMap<u32, usize>,
+    order: Vec<u32>,
+}
+
+impl Writer {
+    /// Adds a mesh named `name` with one primitive per material of `parts`; its index, or
+    /// `None` when it has no triangles.
+    fn mesh(&mut self, name: &str, parts: Parts) -> Option<usize> {
         let mut primitives = Vec::new();
-        for (material, positions) in by_material.into_iter().filter(|(_, p)| !p.is_empty()) {
-            let index = *used.entry(material).or_insert_with(|| {
-                order.push(material);
-                order.len() - 1
-            });
+        for (material, positions) in parts.into_iter().filter(|(_, p)| !p.is_empty()) {
+            let next = self.order.len();
+            let index = *self.used.entry(material).or_insert(next);
+            if index == next {
+                self.order.push(material);
+            }
             let (mut min, mut max) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
             for v in positions.chunks_exact(3) {
                 min = min.min(Vec3::from_slice(v));
                 max = max.max(Vec3::from_slice(v));
             }
-            let offset = bin.len();
-            bin.extend(positions.iter().flat_map(|x| x.to_le_bytes()));
-            views.push(
+            let offset = self.bin.len();
+            self.bin.extend(positions.iter().flat_map(|x| x.to_le_bytes()));
+            self.views.push(
                 json!({ "buffer": 0, "byteOffset": offset, "byteLength": positions.len() * 4, "target": ARRAY_BUFFER }),
             );
-            accessors.push(json!({
-                "bufferView": views.len() - 1, "componentType": FLOAT, "type": "VEC3",
+            self.accessors.push(json!({
+                "bufferView": self.views.len() - 1, "componentType": FLOAT, "type": "VEC3",
                 "count": positions.len() / 3, "min": min.to_array(), "max": max.to_array(),
             }));
-            primitives.push(json!({ "attributes": { "POSITION": accessors.len() - 1 }, "material": index }));
+            primitives.push(json!({ "attributes": { "POSITION": self.accessors.len() - 1 }, "material": index }));
         }
         if primitives.is_empty() {
-            continue;
+            return None;
         }
-        meshes.push(json!({ "name": name, "primitives": primitives }));
-        nodes.push(json!({ "name": name, "mesh": meshes.len() - 1 }));
+        self.meshes.push(json!({ "name": name, "primitives": primitives }));
+        Some(self.meshes.len() - 1)
     }
+}
+
+/// Builds the glTF document and its binary buffer for the shapes of `entries` (a name and the
+/// range of `scene.shapes` it became) and the placements of `instances` (a name and the range
+/// of `scene.instances`).
+fn write_glb(
+    scene: &Scene,
+    entries: &[(String, std::ops::Range<usize>)],
+    instances: &[(String, std::ops::Range<usize>)],
+) -> Result<Vec<u8>, String> {
+    let (lo, hi) = finite_bounds(scene);
+    let extent = (hi - lo).length().max(1e-3);
+    let mut w = Writer::default();
+    let mut nodes = Vec::new();
+    for (name, range) in entries {
+        let mut parts = Parts::new();
+        for shape in scene.shapes.get(range.clone()).unwrap_or(&[]) {
+            shape_parts(shape, lo, hi, extent, &mut parts);
+        }
+        if let Some(mesh) = w.mesh(name, parts) {
+            nodes.push(json!({ "name": name, "mesh": mesh }));
+        }
+    }
+    // One mesh per object and replacing material, made when a copy first needs it.
+    let mut object_meshes: BTreeMap<(u32, Option<u32>), Option<usize>> = BTreeMap::new();
+    let mut children_nodes = Vec::new();
+    let mut roots: Vec<usize> = (0..nodes.len()).collect();
+    for (name, range) in instances {
+        let mut children = Vec::new();
+        for (k, copy) in scene.instances.get(range.clone()).unwrap_or(&[]).iter().enumerate() {
+            let mesh = *object_meshes.entry((copy.object, copy.material)).or_insert_with(|| {
+                let object = &scene.objects[copy.object as usize];
+                let mut parts = object_parts(object);
+                if let Some(m) = copy.material {
+                    let all: Vec<f32> = std::mem::take(&mut parts).into_values().flatten().collect();
+                    parts.insert(m, all);
+                }
+                let mesh_name = match copy.material {
+                    Some(m) => format!("{} ({})", object.name, scene.material_names[m as usize]),
+                    None => object.name.clone(),
+                };
+                w.mesh(&mesh_name, parts)
+            });
+            let Some(mesh) = mesh else { continue };
+            let matrix = glam::Mat4::from(copy.world_from_object).to_cols_array();
+            children.push(children_nodes.len());
+            children_nodes.push(json!({ "name": format!("{name} {k}"), "mesh": mesh, "matrix": matrix }));
+        }
+        if !children.is_empty() {
+            roots.push(nodes.len());
+            nodes.push(json!({ "name": name, "children": children }));
+        }
+    }
+    // The copies' nodes follow the entries' and the instances' own.
+    let first_child = nodes.len();
+    for node in nodes.iter_mut() {
+        if let Some(children) = node.get_mut("children").and_then(Json::as_array_mut) {
+            for c in children.iter_mut() {
+                *c = json!(first_child + c.as_u64().expect("child indices are numbers") as usize);
+            }
+        }
+    }
+    nodes.extend(children_nodes);
+    let Writer { bin, views, accessors, meshes, order, .. } = w;
     let materials: Vec<Json> = order.iter().map(|&m| material_json(scene, m as usize)).collect();
     let mut cameras = Vec::new();
     if let Some((camera, node)) = camera_json(scene) {
         cameras.push(camera);
+        roots.push(nodes.len());
         nodes.push(node);
     }
     let mut root = json!({
         "asset": { "version": "2.0", "generator": concat!("Photonix ", env!("CARGO_PKG_VERSION")) },
         "scene": 0,
-        "scenes": [{ "name": scene.name, "nodes": (0..nodes.len()).collect::<Vec<_>>() }],
+        "scenes": [{ "name": scene.name, "nodes": roots }],
         "nodes": nodes,
     });
     let extensions: Vec<&str> = ["KHR_materials_emissive_strength", "KHR_materials_transmission", "KHR_materials_ior"]

@@ -275,6 +275,8 @@ struct StepCost {
     upload_ms: f64,
     /// The scene arrays written to the device (GPU backend): only those that changed.
     written: Vec<&'static str>,
+    /// The render's own stages (photons, render, download), ms.
+    stages: serde_json::Map<String, serde_json::Value>,
 }
 
 /// The scene the backend prepared last, kept while the scene, the view and the size stay (the
@@ -399,6 +401,9 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
     let _ = ready.send(Ok(device.clone()));
     let mut backend = Backend { gpu: ctx.as_ref().map(|ctx| (ctx, None)), prepared: None, device_photons: None };
     let mut preview = PreviewState::default();
+    // What the last stopped step did before it stopped, reported with the next frame (where an
+    // edit's wait for the stale step went).
+    let mut stale: Option<serde_json::Value> = None;
     loop {
         // Wait for work: a final render, or a preview step still to do.
         let mut s = shared.state.lock().expect("renderer state lock");
@@ -446,7 +451,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         let result = preview_step(&mut backend, &scene, &view, preview_size, &mut preview);
         let current = shared.state.lock().expect("renderer state lock").generation == generation;
         match result {
-            Ok(Some((image, cost))) if current => {
+            Ok((Some(image), cost)) if current => {
                 preview.step += 1;
                 let png = encode_png(&image, 0.0);
                 let header = json!({
@@ -461,13 +466,17 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                     "prepare_ms": cost.prepare_ms,
                     "upload_ms": cost.upload_ms,
                     "uploaded": cost.written,
+                    "stages": cost.stages,
+                    "stale": stale.take(),
                     "since_change_ms": changed_at.elapsed().as_secs_f64() * 1e3,
                     "device": device,
                 });
                 let _ = shared.events.send(Event::Frame { header, png: Arc::new(png) });
             }
             // Stopped by a change, or a change came during the step: start the new generation.
-            Ok(_) => {}
+            Ok((_, cost)) => {
+                stale = Some(json!({ "step": step, "ms": t.elapsed().as_secs_f64() * 1e3, "stages": cost.stages }));
+            }
             Err(message) => {
                 preview.failed = true;
                 let _ = shared
@@ -518,14 +527,14 @@ fn preview_resolution(view: &View, preview_size: u32, level_divisor: u32) -> (u3
     ((w.round() as u32).max(1), (h.round() as u32).max(1))
 }
 
-/// Renders one preview step; `None` when a change stopped it.
+/// Renders one preview step; no image when a change stopped it.
 fn preview_step(
     backend: &mut Backend,
     scene: &Arc<Scene>,
     view: &View,
     preview_size: u32,
     preview: &mut PreviewState,
-) -> Result<Option<(Image, StepCost)>, String> {
+) -> Result<(Option<Image>, StepCost), String> {
     let step = preview.step;
     let (divisor, photons, pass) = match step {
         // A quick look: a sixteenth of the pixels and direct light only (no photon tracing, so
@@ -537,16 +546,19 @@ fn preview_step(
     };
     let (width, height) = preview_resolution(view, preview_size, divisor);
     let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
-    let (out, cost) = backend.render(scene, Some(view), &settings, photons.as_ref(), 1, pass)?;
+    let (out, mut cost) = backend.render(scene, Some(view), &settings, photons.as_ref(), 1, pass)?;
+    for (name, time) in &out.stats.stages {
+        cost.stages.insert(name.clone(), json!(time.as_secs_f64() * 1e3));
+    }
     if !out.complete {
-        return Ok(None);
+        return Ok((None, cost));
     }
     if step < 2 {
-        return Ok(Some((out.image, cost)));
+        return Ok((Some(out.image), cost));
     }
     let acc = preview.accumulator.get_or_insert_with(|| Accumulator::new(width, height));
     acc.add(pass, &out);
-    Ok(Some((acc.mean().combined(), cost)))
+    Ok((Some(acc.mean().combined()), cost))
 }
 
 /// Photon settings with `1/divisor` of the paths (at least 1000) and `gather_rays` final

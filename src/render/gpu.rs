@@ -490,21 +490,29 @@ fn scan(ctx: &GpuContext, kernels: &GpuKernels, values: &Buffer, count: u32) -> 
     })
 }
 
-/// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets.
+/// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets;
+/// `None` when the thread's render was stopped between two of them (a stale pass uses no map,
+/// and an edit in the editor waits for one submission, not for the whole build).
 fn build_map(
     ctx: &GpuContext,
     kernels: &GpuKernels,
     photons: Buffer,
     grid: GridParams,
     name: &str,
-) -> Result<DeviceMap, GpuError> {
+) -> Result<Option<DeviceMap>, GpuError> {
     let buckets = grid.table_mask + 1;
     let grid_buffer = ctx.upload("grid_params", std::slice::from_ref(&grid))?;
     let starts = ctx.create_buffer(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
     let count = grid.photon_count;
     let count_kernel = kernels.grid_count(ctx)?;
     ctx.run("grid_count", |rec| rec.dispatch(count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
+    if super::stop_requested() {
+        return Ok(None);
+    }
     scan(ctx, kernels, &starts, buckets + 1)?;
+    if super::stop_requested() {
+        return Ok(None);
+    }
     let fill = ctx.create_buffer("grid_fill", buckets as u64 * 4)?;
     let photon_bytes = (count.max(1) as u64) * size_of::<Photon>() as u64;
     let scattered = ctx.create_buffer(&format!("{name}_scattered"), photon_bytes)?;
@@ -514,11 +522,14 @@ fn build_map(
         rec.dispatch(scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))
     })?;
     drop(photons);
+    if super::stop_requested() {
+        return Ok(None);
+    }
     let ranked = ctx.create_buffer(&format!("{name}_photons"), photon_bytes)?;
     ctx.run("grid_rank", |rec| {
         rec.dispatch(rank_kernel, &[&grid_buffer, &starts, &scattered, &ranked], &[], groups(count))
     })?;
-    Ok(DeviceMap { grid, photons: ranked, starts })
+    Ok(Some(DeviceMap { grid, photons: ranked, starts }))
 }
 
 /// Traces pass `pass` of both photon maps and builds their grids on the device, creating the
@@ -567,16 +578,14 @@ fn build_maps(
     let g_caustic = map_grid(buffers, r_caustic, caustic_count, settings.caustic_photons);
     let r_volume = volume_radius(buffers, settings, volume_count, pass);
     let g_volume = map_grid(buffers, r_volume, volume_count, settings.photons);
-    // A stopped render uses no map: skip the grid builds (seconds on lavapipe) of a stale pass.
+    // A stopped render uses no map: skip the grid builds (seconds on lavapipe) of a stale pass,
+    // or what is left of them.
     if super::stop_requested() {
         return no_maps(ctx);
     }
-    let global = build_map(ctx, kernels, global_photons, g_global, "global")?;
-    if super::stop_requested() {
-        return no_maps(ctx);
-    }
-    let caustic = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")?;
-    let volume = build_map(ctx, kernels, volume_photons, g_volume, "volume")?;
+    let Some(global) = build_map(ctx, kernels, global_photons, g_global, "global")? else { return no_maps(ctx) };
+    let Some(caustic) = build_map(ctx, kernels, caustic_photons, g_caustic, "caustic")? else { return no_maps(ctx) };
+    let Some(volume) = build_map(ctx, kernels, volume_photons, g_volume, "volume")? else { return no_maps(ctx) };
     let grids = ctx.upload("grids", &[g_global, g_caustic, g_volume])?;
     Ok(DeviceMaps { global, caustic, volume, grids })
 }
@@ -615,7 +624,14 @@ pub struct GpuRenderer<'a> {
     last_written: Vec<&'static str>,
     /// Set while an `update_scene` runs: one that failed leaves the device's arrays unknown.
     device_mixed: bool,
+    /// The kernels of variants used before, most recent last: an edit that switches the variant
+    /// (a texture added, then undone) finds the pipelines it had, where lavapipe would spend
+    /// seconds compiling them again.
+    spare_kernels: Vec<GpuKernels>,
 }
+
+/// Variants' kernel sets a renderer keeps besides its current one.
+const SPARE_KERNEL_SETS: usize = 3;
 
 impl<'a> GpuRenderer<'a> {
     /// Uploads `buffers` and creates every kernel a render with (or, `photons` = `None`,
@@ -640,6 +656,7 @@ impl<'a> GpuRenderer<'a> {
             setup_time: t.elapsed(),
             last_written: Vec::new(),
             device_mixed: false,
+            spare_kernels: Vec::new(),
         })
     }
 
@@ -651,6 +668,12 @@ impl<'a> GpuRenderer<'a> {
 
     pub fn context(&self) -> &'a GpuContext {
         self.ctx
+    }
+
+    /// The kernel variants whose pipelines this renderer holds: its scene's first, then those
+    /// it keeps from earlier scenes (the most recent last).
+    pub fn kernel_variants(&self) -> Vec<KernelVariant> {
+        std::iter::once(&self.kernels).chain(self.spare_kernels.iter().rev()).map(GpuKernels::variant).collect()
     }
 
     /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
@@ -672,7 +695,15 @@ impl<'a> GpuRenderer<'a> {
         self.device_mixed = false;
         self.last_written = written;
         if buffers.variant() != self.kernels.variant() {
-            self.kernels = GpuKernels::for_scene(buffers.variant());
+            let kept = self.spare_kernels.iter().position(|k| k.variant() == buffers.variant());
+            let next = match kept {
+                Some(i) => self.spare_kernels.remove(i),
+                None => GpuKernels::for_scene(buffers.variant()),
+            };
+            self.spare_kernels.push(std::mem::replace(&mut self.kernels, next));
+            if self.spare_kernels.len() > SPARE_KERNEL_SETS {
+                self.spare_kernels.remove(0);
+            }
             self.kernels.create_all(self.ctx, photons.is_some())?;
         }
         if photons.is_some() {

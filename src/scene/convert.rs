@@ -178,7 +178,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         builder.light(index, light)?;
         origins.lights.push(first..builder.shapes.len());
     }
-    let (objects, instances) = builder.objects(&file.objects, &file.instances)?;
+    let (objects, instances) = builder.objects(&file.objects, &file.instances, &mut origins.instances)?;
     let environment = match (&file.environment, &file.rainbow) {
         (Some(def), rainbow) => Some(builder.environment(def, rainbow.as_ref())?),
         (None, Some(rainbow)) => {

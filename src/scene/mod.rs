@@ -315,12 +315,15 @@ pub enum LightKind {
 
 /// Where the shapes of a `Scene` came from in its file: for each `[[shapes]]` entry and each
 /// `[[lights]]` entry, in file order, the range of `Scene::shapes` it became (a quad is two
-/// triangles, a closed cylinder three shapes, a mesh many; a point, spot or distant light none).
-/// The editor uses it to map a click on a triangle back to the entry to edit.
+/// triangles, a closed cylinder three shapes, a mesh many; a point, spot or distant light none),
+/// and for each `[[instances]]` entry the range of `Scene::instances` it became (a grid's copies
+/// and the placements nested in its object). The editor uses it to map a click on a triangle
+/// back to the entry to edit.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SceneOrigins {
     pub shapes: Vec<std::ops::Range<usize>>,
     pub lights: Vec<std::ops::Range<usize>>,
+    pub instances: Vec<std::ops::Range<usize>>,
 }
 
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above

@@ -78,6 +78,57 @@ position = [2, 2, 2]
 intensity = 1
 "#;
 
+/// Appended to `SCENE`: an object (a post: a white box with a red ball on top) placed once, on a
+/// 3 x 1 x 2 grid in glass, and twice through another object turned a quarter about y; and a
+/// CSG box with a ball taken out of its corner (the cut red).
+pub const INSTANCES: &str = r#"
+[[objects.post.shapes]]
+type = "box"
+material = "white"
+min = [-0.1, 0, -0.1]
+max = [0.1, 1, 0.1]
+
+[[objects.post.shapes]]
+type = "sphere"
+material = "red"
+center = [0, 1.1, 0]
+radius = 0.1
+
+[objects.pair]
+instances = [
+  { object = "post", transform = { translate = [0.3, 0, 0] } },
+  { object = "post", transform = { translate = [-0.3, 0, 0] } },
+]
+
+[[instances]]
+name = "single"
+object = "post"
+transform = { translate = [3, 0, 0] }
+
+[[instances]]
+name = "fence"
+object = "post"
+material = "glass"
+transform = { translate = [-1.5, 0, -1.5] }
+count = [3, 1, 2]
+spacing = [0.5, 0, 1]
+
+[[instances]]
+name = "pairs"
+object = "pair"
+transform = { rotate = [0, 90, 0], translate = [0, 0, 1.5] }
+
+[[shapes]]
+name = "cut box"
+type = "csg"
+operation = "difference"
+material = "white"
+children = [
+  { type = "box", min = [-0.5, 0, -0.5], max = [0.5, 1, 0.5] },
+  { type = "sphere", center = [0.5, 1, 0.5], radius = 0.6, material = "red" },
+]
+"#;
+
 pub struct Fixture {
     pub dir: tempfile::TempDir,
     pub scene: PathBuf,
@@ -88,6 +139,13 @@ pub struct Fixture {
 impl Fixture {
     pub fn new() -> Fixture {
         Fixture::with(BackendChoice::Cpu, |_| {})
+    }
+
+    /// A fixture whose scene is `SCENE` followed by `extra`.
+    pub fn with_text(extra: &str) -> Fixture {
+        Fixture::with(BackendChoice::Cpu, |o| {
+            std::fs::write(&o.scene, format!("{SCENE}{extra}")).expect("write the scene");
+        })
     }
 
     /// A fixture whose options `adjust` may change before the server starts.

@@ -19,11 +19,13 @@ use crate::scene::{InstanceDesc, ObjectDesc};
 type Entries<'f> = [(&'f Spanned<String>, &'f Spanned<ObjectDef>)];
 
 impl Builder<'_> {
-    /// Builds every object's shapes once, then resolves the placements of `[[instances]]`.
+    /// Builds every object's shapes once, then resolves the placements of `[[instances]]`;
+    /// `origins` gets, per placement, the range of instances it became.
     pub(super) fn objects(
         &mut self,
         defs: &BTreeMap<Spanned<String>, Spanned<ObjectDef>>,
         placements: &[Spanned<InstanceDef>],
+        origins: &mut Vec<Range<usize>>,
     ) -> Result<(Vec<ObjectDesc>, Vec<InstanceDesc>)> {
         let mut entries: Vec<_> = defs.iter().collect();
         entries.sort_by_key(|(key, _)| key.span().start);
@@ -35,6 +37,7 @@ impl Builder<'_> {
         let mut placed = vec![false; objects.len()];
         for (index, def) in placements.iter().enumerate() {
             let what = object_name("instance", index, def.get_ref().name.as_ref().map(|n| n.get_ref().as_str()));
+            let first = instances.len();
             let mut place = Placement {
                 entries: &entries,
                 objects: &objects,
@@ -43,6 +46,7 @@ impl Builder<'_> {
                 placed: &mut placed,
             };
             self.place(def, &what, Affine3A::IDENTITY, None, &mut place)?;
+            origins.push(first..instances.len());
         }
         for (object, placed) in objects.iter().zip(&placed) {
             if !placed {
