@@ -143,6 +143,14 @@ float poly_root_in(float lead, vec4 c, float a, float b, float none) {
     return x;
 }
 
+// The root of the quartic in its monotone piece [a, b] of the chord as a distance, when it lies
+// after t_min; pieces wholly before t_min or after t_max are not searched.
+float torus_piece_root(vec4 c, float a, float b, float tc, float scale, float len, float t_min, float t_max) {
+    if (!((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max)) return INF;
+    float t = (tc + scale * poly_root_in(1.0, c, a, b, INF)) / len;
+    return t > t_min ? t : INF;
+}
+
 float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t_max) {
     float scale = big_r + small_r;
     float len = length(d);
@@ -152,10 +160,9 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
     float m2 = dot(p, p);
     float reach = TORUS_CHORD * TORUS_CHORD;
     if (m2 >= reach) return INF;
-    float half_chord = sqrt(reach - m2);
-    float lo = max(-half_chord, (t_min * len - tc) / scale);
-    float hi = min(half_chord, (t_max * len - tc) / scale);
-    if (!(lo < hi)) return INF;
+    float hi = sqrt(reach - m2);
+    float lo = -hi;
+    if (!((tc + scale * hi) / len > t_min && (tc + scale * lo) / len < t_max)) return INF;
     float br = big_r / scale;
     float sr = small_r / scale;
     float g = m2 + br * br - sr * sr;
@@ -183,12 +190,11 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
     float e0 = poly_root_in(0.0, dc, lo, x1, lo);
     float e1 = poly_root_in(0.0, dc, x1, x2, x1);
     float e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    float root = poly_root_in(1.0, c, lo, e0, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e0, e1, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e1, e2, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e2, hi, INF);
-    float t = (tc + scale * root) / len;
-    return (t > t_min && t < t_max) ? t : INF;
+    float t = torus_piece_root(c, lo, e0, tc, scale, len, t_min, t_max);
+    if (t == INF) t = torus_piece_root(c, e0, e1, tc, scale, len, t_min, t_max);
+    if (t == INF) t = torus_piece_root(c, e1, e2, tc, scale, len, t_min, t_max);
+    if (t == INF) t = torus_piece_root(c, e2, hi, tc, scale, len, t_min, t_max);
+    return t < t_max ? t : INF;
 }
 
 float safe_pow(float x, float y) {
@@ -212,26 +218,16 @@ vec4 superellipsoid_gauge(vec3 p, vec4 ex) {
 }
 
 
-float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
-    vec3 inv = 1.0 / d;
-    vec3 ta = (vec3(-SUPERELLIPSOID_BOX) - o) * inv;
-    vec3 tb = (vec3(SUPERELLIPSOID_BOX) - o) * inv;
-    vec3 tn = min(ta, tb);
-    vec3 tf = max(ta, tb);
-    float t_in = max(max(max(tn.x, tn.y), tn.z), t_min);
-    float t_out = min(min(tf.x, tf.y), tf.z);
-    if (!(t_in < t_out)) return INF;
-    vec3 p = o + t_in * d;
-    float span = t_out - t_in;
-    vec4 g0 = superellipsoid_gauge(p, ex);
-    bool outside = g0.w - 1.0 > SUPERELLIPSOID_TOLERANCE;
-    float s = outside ? 0.0 : span;
-    vec4 g = outside ? g0 : superellipsoid_gauge(p + span * d, ex);
+// Newton's search along p + s d, s in [0, span]: the entry from s = 0 forward, or the exit from
+// s = span backward; INF on a miss.
+float superellipsoid_root(vec3 p, vec3 d, float span, vec4 ex, bool forward) {
+    float s = forward ? 0.0 : span;
+    vec4 g = superellipsoid_gauge(p + s * d, ex);
     float phi = g.w - 1.0;
     float slope = dot(g.xyz, d);
     bool found = phi <= SUPERELLIPSOID_TOLERANCE;
     for (uint k = 0u; k < SUPERELLIPSOID_STEPS; k++) {
-        if (found || (outside && slope >= 0.0) || (!outside && slope <= 0.0)) break;
+        if (found || (forward && slope >= 0.0) || (!forward && slope <= 0.0)) break;
         s -= phi / slope;
         if (!(s >= 0.0 && s <= span)) break;
         g = superellipsoid_gauge(p + s * d, ex);
@@ -239,8 +235,28 @@ float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
         slope = dot(g.xyz, d);
         found = phi <= SUPERELLIPSOID_TOLERANCE;
     }
-    float t = t_in + s;
-    return (found && t > t_min && t < t_max) ? t : INF;
+    return found ? s : INF;
+}
+
+float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
+    vec3 inv = 1.0 / d;
+    vec3 ta = (vec3(-SUPERELLIPSOID_BOX) - o) * inv;
+    vec3 tb = (vec3(SUPERELLIPSOID_BOX) - o) * inv;
+    vec3 tn = min(ta, tb);
+    vec3 tf = max(ta, tb);
+    float t_in = max(max(tn.x, tn.y), tn.z);
+    float t_out = min(min(tf.x, tf.y), tf.z);
+    if (!(t_in < t_out && t_out > t_min && t_in < t_max)) return INF;
+    if (t_min > t_in) {
+        vec4 g = superellipsoid_gauge(o + t_min * d, ex);
+        if (g.w - 1.0 > 2.0 * SUPERELLIPSOID_TOLERANCE && dot(g.xyz, d) >= 0.0) return INF;
+    }
+    vec3 p = o + t_in * d;
+    float span = t_out - t_in;
+    float entry = superellipsoid_root(p, d, span, ex, true);
+    float t = t_in + entry;
+    if (entry != INF && !(t > t_min)) t = t_in + superellipsoid_root(p, d, span, ex, false);
+    return (t > t_min && t < t_max) ? t : INF;
 }
 
 #endif
@@ -576,7 +592,8 @@ uint instance_record(uint k) {
 void instance_to_world(uint a, vec3 x, uint kind, inout Hit h) {
     uint ofw = a + INSTANCE_DATA_OBJECT_FROM_WORLD;
     uint wfo = a + INSTANCE_DATA_WORLD_FROM_OBJECT;
-    h.p = x;
+    // The analytic shapes' point projected onto the surface, moved back (see the twin).
+    h.p = kind > PRIMITIVE_SPHERE ? affine_point(wfo, h.p) : x;
     h.ng = normalize(affine_transpose_vector(ofw, h.ng));
     h.ns = normalize(affine_transpose_vector(ofw, h.ns));
     h.dpdu = affine_vector(wfo, h.dpdu);

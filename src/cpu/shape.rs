@@ -227,6 +227,10 @@ pub fn poly_root_in(lead: f32, c: Vec4, a: f32, b: f32, none: f32) -> f32 {
 /// the roots of f' found there split it into pieces where f is monotone, and each piece holds
 /// at most one root of f, found by safeguarded Newton. No root is lost to a bad starting point,
 /// and a grazing ray's pair of nearby roots is either found or truly absent to float precision.
+///
+/// The pieces and their roots come from the whole chord, whatever t_min and t_max (which only
+/// skip pieces): a search restarted at one root finds the next one exactly, never the same one
+/// again, which the CSG walk (`cpu/csg.rs`) relies on.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
 pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: f32) -> f32 {
     let scale = big_r + small_r;
@@ -242,10 +246,9 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
     if m2 >= reach {
         return f32::INFINITY;
     }
-    let half = (reach - m2).sqrt();
-    let lo = (-half).max((t_min * len - tc) / scale);
-    let hi = half.min((t_max * len - tc) / scale);
-    if !(lo < hi) {
+    let hi = (reach - m2).sqrt();
+    let lo = -hi;
+    if !((tc + scale * hi) / len > t_min && (tc + scale * lo) / len < t_max) {
         return f32::INFINITY;
     }
     let (br, sr) = (big_r / scale, small_r / scale);
@@ -274,19 +277,34 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
     let e0 = poly_root_in(0.0, dc, lo, x1, lo);
     let e1 = poly_root_in(0.0, dc, x1, x2, x1);
     let e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    // The first root of f, piece by piece.
-    let mut root = poly_root_in(1.0, c, lo, e0, f32::INFINITY);
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e0, e1, f32::INFINITY);
+    // The first root of f after t_min, piece by piece.
+    let piece = |a: f32, b: f32| torus_piece_root(c, a, b, tc, scale, len, t_min, t_max);
+    let mut t = piece(lo, e0);
+    if t == f32::INFINITY {
+        t = piece(e0, e1);
     }
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e1, e2, f32::INFINITY);
+    if t == f32::INFINITY {
+        t = piece(e1, e2);
     }
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e2, hi, f32::INFINITY);
+    if t == f32::INFINITY {
+        t = piece(e2, hi);
     }
-    let t = (tc + scale * root) / len;
-    if t > t_min && t < t_max {
+    if t < t_max {
+        t
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// The distance of the torus quartic's root in its monotone piece [a, b] of the chord when it
+/// lies after t_min, else infinity; pieces wholly before t_min or after t_max are not searched.
+#[allow(clippy::too_many_arguments, clippy::neg_cmp_op_on_partial_ord)] // as in the kernel
+pub fn torus_piece_root(c: Vec4, a: f32, b: f32, tc: f32, scale: f32, len: f32, t_min: f32, t_max: f32) -> f32 {
+    if !((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max) {
+        return f32::INFINITY;
+    }
+    let t = (tc + scale * poly_root_in(1.0, c, a, b, f32::INFINITY)) / len;
+    if t > t_min {
         t
     } else {
         f32::INFINITY
@@ -329,12 +347,16 @@ pub fn superellipsoid_gauge(p: Vec3, ex: Vec4) -> (f32, Vec3) {
 }
 
 /// POV-Ray's superellipsoid inside [-1, 1]^3. Along a ray, h - 1 is a convex function (both
-/// exponents at most 2), so Newton's method started outside the surface on its near side
-/// climbs monotonically to the first root and never steps over it, and a step that leaves the
-/// box (or a slope that turns upward) proves there is no root: no holes at silhouettes and no
-/// missed thin parts, in at most `SUPERELLIPSOID_STEPS` steps. From inside, the same from the
-/// box's far side finds the exit. The gauge grows linearly (not as |x|^(2/e)), so even boxy
-/// shapes converge in a few steps.
+/// exponents at most 2), so the ray crosses the surface at most twice, and Newton's method
+/// started outside the surface climbs monotonically to the nearest root and never steps over
+/// it; a step that leaves the box (or a slope that turns upward) proves there is no root: no
+/// holes at silhouettes and no missed thin parts, in at most `SUPERELLIPSOID_STEPS` steps. The
+/// gauge grows linearly (not as |x|^(2/e)), so even boxy shapes converge in a few steps.
+///
+/// The entry is sought from the box's near side, the exit from its far side, whatever t_min
+/// and t_max: the two roots do not depend on them, so a search restarted at the entry finds the
+/// exit exactly (the CSG walk, `cpu/csg.rs`, relies on it). A ray that starts outside the
+/// surface heading away from it (a shadow ray leaving it) is told apart by one evaluation.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
 pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) -> f32 {
     // The box is grown by 1e-3 so that its entry point lies clearly outside even a boxy shape,
@@ -342,26 +364,44 @@ pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) ->
     let inv = d.recip();
     let ta = (Vec3::splat(-SUPERELLIPSOID_BOX) - o) * inv;
     let tb = (Vec3::splat(SUPERELLIPSOID_BOX) - o) * inv;
-    let t_in = ta.min(tb).max_element().max(t_min);
+    let t_in = ta.min(tb).max_element();
     let t_out = ta.max(tb).min_element();
-    if !(t_in < t_out) {
+    if !(t_in < t_out && t_out > t_min && t_in < t_max) {
         return f32::INFINITY;
+    }
+    if t_min > t_in {
+        // Past both roots (convexity): the searches below stop within the tolerance of the
+        // surface, so a margin of twice it keeps this shortcut from hiding a root they find.
+        let (h, g) = superellipsoid_gauge(o + t_min * d, ex);
+        if h - 1.0 > 2.0 * SUPERELLIPSOID_TOLERANCE && g.dot(d) >= 0.0 {
+            return f32::INFINITY;
+        }
     }
     let p = o + t_in * d;
     let span = t_out - t_in;
-    let (h0, g0) = superellipsoid_gauge(p, ex);
-    let outside = h0 - 1.0 > SUPERELLIPSOID_TOLERANCE;
-    // From outside: the first root, left to right; from inside: the last, right to left.
-    let mut s = if outside { 0.0 } else { span };
-    let (mut phi, mut slope) = if outside {
-        (h0 - 1.0, g0.dot(d))
+    let entry = superellipsoid_root(p, d, span, ex, true);
+    let mut t = t_in + entry;
+    if entry != f32::INFINITY && !(t > t_min) {
+        t = t_in + superellipsoid_root(p, d, span, ex, false);
+    }
+    if t > t_min && t < t_max {
+        t
     } else {
-        let (h, g) = superellipsoid_gauge(p + span * d, ex);
-        (h - 1.0, g.dot(d))
-    };
+        f32::INFINITY
+    }
+}
+
+/// Newton's search for the superellipsoid along p + s d, s in [0, span] (both ends outside it):
+/// from s = 0 forward for the entry, or from s = span backward for the exit. Returns s, or
+/// infinity when the ray misses (or grazes it closer than the steps resolve).
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
+pub fn superellipsoid_root(p: Vec3, d: Vec3, span: f32, ex: Vec4, forward: bool) -> f32 {
+    let mut s = if forward { 0.0 } else { span };
+    let (h, g) = superellipsoid_gauge(p + s * d, ex);
+    let (mut phi, mut slope) = (h - 1.0, g.dot(d));
     let mut found = phi <= SUPERELLIPSOID_TOLERANCE;
     for _ in 0..SUPERELLIPSOID_STEPS {
-        if found || (outside && slope >= 0.0) || (!outside && slope <= 0.0) {
+        if found || (forward && slope >= 0.0) || (!forward && slope <= 0.0) {
             break;
         }
         s -= phi / slope;
@@ -372,9 +412,8 @@ pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) ->
         (phi, slope) = (h - 1.0, g.dot(d));
         found = phi <= SUPERELLIPSOID_TOLERANCE;
     }
-    let t = t_in + s;
-    if found && t > t_min && t < t_max {
-        t
+    if found {
+        s
     } else {
         f32::INFINITY
     }

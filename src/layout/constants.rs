@@ -186,6 +186,10 @@ shared_constants! {
     CSG_MAX_PRIMITIVES: u32 = 64;
     /// Most nested CSG nodes from an object's root to a leaf.
     CSG_MAX_DEPTH: u32 = 16;
+    /// Most tori and superellipsoids among the leaves of one CSG object: the walk runs their
+    /// root searches (up to 7 x `TORUS_ROOT_STEPS` or 2 x `SUPERELLIPSOID_STEPS` loop turns) at
+    /// every crossing, where a sphere or a triangle costs one turn.
+    CSG_MAX_IMPLICIT: u32 = 4;
     /// Most distinct crossings the walk of one ray through one CSG object visits (those behind
     /// the ray's origin included); a ray that needs more passes the rest of the object as a miss.
     /// With the caps above a walk runs at most 32 x (64 + 63) loop iterations.

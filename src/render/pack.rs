@@ -8,8 +8,8 @@ use crate::layout::constants::*;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase,
-    ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+    AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase, ScalarParam,
+    Scene, Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -74,14 +74,8 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
             packed.photon_area += area * visible;
         }
     }
-    // CSG objects live in the analytic variant (their leaves may be discs and cones).
-    packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_) | Geometry::Csg(_)));
-    packed.implicit = scene.shapes.iter().any(|s| {
-        matches!(
-            s.geometry,
-            Geometry::Analytic(Analytic { kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }, .. })
-        )
-    });
+    packed.analytic = scene.shapes.iter().any(|s| s.geometry.is_analytic());
+    packed.implicit = scene.shapes.iter().any(|s| s.geometry.is_implicit());
     packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
     packed.textured = packed.alpha || packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.

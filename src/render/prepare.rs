@@ -271,7 +271,13 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let mut packed = packed;
     // The objects that instances place: their primitives after the world BVH's, their nodes
     // (the top level, then each object's BVH) after its nodes.
-    let instanced = pack_instances(scene, &mut packed.shape_data, bvh.nodes.len() as u32, bvh.primitives.len() as u32)?;
+    let instanced = pack_instances(
+        scene,
+        &mut packed.shape_data,
+        &mut packed.csg_primitives,
+        bvh.nodes.len() as u32,
+        bvh.primitives.len() as u32,
+    )?;
     let mut primitives = bvh.primitives;
     primitives.extend(&instanced.primitives);
     let unbounded_first = primitives.len() as u32;
