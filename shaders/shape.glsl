@@ -143,14 +143,6 @@ float poly_root_in(float lead, vec4 c, float a, float b, float none) {
     return x;
 }
 
-// The root of the quartic in its monotone piece [a, b] of the chord as a distance, when it lies
-// after t_min; pieces wholly before t_min or after t_max are not searched.
-float torus_piece_root(vec4 c, float a, float b, float tc, float scale, float len, float t_min, float t_max) {
-    if (!((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max)) return INF;
-    float t = (tc + scale * poly_root_in(1.0, c, a, b, INF)) / len;
-    return t > t_min ? t : INF;
-}
-
 float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t_max) {
     float scale = big_r + small_r;
     float len = length(d);
@@ -187,13 +179,28 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
         x2 = clamp(max(ra, rb), lo, hi);
     }
     vec4 dc = vec4(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
-    float e0 = poly_root_in(0.0, dc, lo, x1, lo);
-    float e1 = poly_root_in(0.0, dc, x1, x2, x1);
-    float e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    float t = torus_piece_root(c, lo, e0, tc, scale, len, t_min, t_max);
-    if (t == INF) t = torus_piece_root(c, e0, e1, tc, scale, len, t_min, t_max);
-    if (t == INF) t = torus_piece_root(c, e1, e2, tc, scale, len, t_min, t_max);
-    if (t == INF) t = torus_piece_root(c, e2, hi, tc, scale, len, t_min, t_max);
+    float e0 = lo;
+    float e1 = x1;
+    float e2 = x2;
+    float t = INF;
+    for (uint k = 0u; k < 7u; k++) {
+        bool derivative = k < 3u;
+        uint j = derivative ? k : k - 3u;
+        float a = j == 0u ? lo : (j == 1u ? (derivative ? x1 : e0) : (j == 2u ? (derivative ? x2 : e1) : e2));
+        float b = j == 0u ? (derivative ? x1 : e0) : (j == 1u ? (derivative ? x2 : e1) : (j == 2u ? (derivative ? hi : e2) : hi));
+        float none = derivative ? a : INF;
+        bool search = derivative || ((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max);
+        float r = none;
+        if (search) r = poly_root_in(derivative ? 0.0 : 1.0, derivative ? dc : c, a, b, none);
+        if (k == 0u) e0 = r;
+        if (k == 1u) e1 = r;
+        if (k == 2u) e2 = r;
+        float tk = (tc + scale * r) / len;
+        if (!derivative && r != INF && tk > t_min) {
+            t = tk;
+            break;
+        }
+    }
     return t < t_max ? t : INF;
 }
 
@@ -218,26 +225,6 @@ vec4 superellipsoid_gauge(vec3 p, vec4 ex) {
 }
 
 
-// Newton's search along p + s d, s in [0, span]: the entry from s = 0 forward, or the exit from
-// s = span backward; INF on a miss.
-float superellipsoid_root(vec3 p, vec3 d, float span, vec4 ex, bool forward) {
-    float s = forward ? 0.0 : span;
-    vec4 g = superellipsoid_gauge(p + s * d, ex);
-    float phi = g.w - 1.0;
-    float slope = dot(g.xyz, d);
-    bool found = phi <= SUPERELLIPSOID_TOLERANCE;
-    for (uint k = 0u; k < SUPERELLIPSOID_STEPS; k++) {
-        if (found || (forward && slope >= 0.0) || (!forward && slope <= 0.0)) break;
-        s -= phi / slope;
-        if (!(s >= 0.0 && s <= span)) break;
-        g = superellipsoid_gauge(p + s * d, ex);
-        phi = g.w - 1.0;
-        slope = dot(g.xyz, d);
-        found = phi <= SUPERELLIPSOID_TOLERANCE;
-    }
-    return found ? s : INF;
-}
-
 float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
     vec3 inv = 1.0 / d;
     vec3 ta = (vec3(-SUPERELLIPSOID_BOX) - o) * inv;
@@ -253,9 +240,24 @@ float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
     }
     vec3 p = o + t_in * d;
     float span = t_out - t_in;
-    float entry = superellipsoid_root(p, d, span, ex, true);
-    float t = t_in + entry;
-    if (entry != INF && !(t > t_min)) t = t_in + superellipsoid_root(p, d, span, ex, false);
+    float s = 0.0;
+    bool forward = true;
+    float t = INF;
+    for (uint k = 0u; k < 2u * SUPERELLIPSOID_STEPS; k++) {
+        vec4 g = superellipsoid_gauge(p + s * d, ex);
+        float phi = g.w - 1.0;
+        float slope = dot(g.xyz, d);
+        if (phi <= SUPERELLIPSOID_TOLERANCE) {
+            t = t_in + s;
+            if (!forward || t > t_min) break;
+            forward = false;
+            s = span;
+            continue;
+        }
+        if (forward ? slope >= 0.0 : slope <= 0.0) break;
+        s -= phi / slope;
+        if (!(s >= 0.0 && s <= span)) break;
+    }
     return (t > t_min && t < t_max) ? t : INF;
 }
 

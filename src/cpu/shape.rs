@@ -272,39 +272,37 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
         x1 = ra.min(rb).clamp(lo, hi);
         x2 = ra.max(rb).clamp(lo, hi);
     }
-    // Roots of f' = 4 x^3 + 3 c.w x^2 + 2 c.z x + c.y between them (or the piece's start).
+    // Seven searches in one loop (one copy of `poly_root_in` in the kernel): the roots of
+    // f' = 4 x^3 + 3 c.w x^2 + 2 c.z x + c.y between those of f'' (or a piece's start), then
+    // the first root of f after t_min, piece by piece between them. Pieces wholly before t_min
+    // or after t_max are not searched.
     let dc = Vec4::new(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
-    let e0 = poly_root_in(0.0, dc, lo, x1, lo);
-    let e1 = poly_root_in(0.0, dc, x1, x2, x1);
-    let e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    // The first root of f after t_min, piece by piece.
-    let piece = |a: f32, b: f32| torus_piece_root(c, a, b, tc, scale, len, t_min, t_max);
-    let mut t = piece(lo, e0);
-    if t == f32::INFINITY {
-        t = piece(e0, e1);
-    }
-    if t == f32::INFINITY {
-        t = piece(e1, e2);
-    }
-    if t == f32::INFINITY {
-        t = piece(e2, hi);
+    let mut e = [lo, x1, x2];
+    let mut t = f32::INFINITY;
+    for k in 0..7 {
+        let derivative = k < 3;
+        let (a, b) = if derivative {
+            ([lo, x1, x2][k], [x1, x2, hi][k])
+        } else {
+            ([lo, e[0], e[1], e[2]][k - 3], [e[0], e[1], e[2], hi][k - 3])
+        };
+        let none = if derivative { a } else { f32::INFINITY };
+        let search = derivative || ((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max);
+        let r = if search {
+            poly_root_in(if derivative { 0.0 } else { 1.0 }, if derivative { dc } else { c }, a, b, none)
+        } else {
+            none
+        };
+        if derivative {
+            e[k] = r;
+        }
+        let tk = (tc + scale * r) / len;
+        if !derivative && r != f32::INFINITY && tk > t_min {
+            t = tk;
+            break;
+        }
     }
     if t < t_max {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-/// The distance of the torus quartic's root in its monotone piece [a, b] of the chord when it
-/// lies after t_min, else infinity; pieces wholly before t_min or after t_max are not searched.
-#[allow(clippy::too_many_arguments, clippy::neg_cmp_op_on_partial_ord)] // as in the kernel
-pub fn torus_piece_root(c: Vec4, a: f32, b: f32, tc: f32, scale: f32, len: f32, t_min: f32, t_max: f32) -> f32 {
-    if !((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max) {
-        return f32::INFINITY;
-    }
-    let t = (tc + scale * poly_root_in(1.0, c, a, b, f32::INFINITY)) / len;
-    if t > t_min {
         t
     } else {
         f32::INFINITY
@@ -350,7 +348,7 @@ pub fn superellipsoid_gauge(p: Vec3, ex: Vec4) -> (f32, Vec3) {
 /// exponents at most 2), so the ray crosses the surface at most twice, and Newton's method
 /// started outside the surface climbs monotonically to the nearest root and never steps over
 /// it; a step that leaves the box (or a slope that turns upward) proves there is no root: no
-/// holes at silhouettes and no missed thin parts, in at most `SUPERELLIPSOID_STEPS` steps. The
+/// holes at silhouettes and no missed thin parts, in at most 2 `SUPERELLIPSOID_STEPS` steps. The
 /// gauge grows linearly (not as |x|^(2/e)), so even boxy shapes converge in a few steps.
 ///
 /// The entry is sought from the box's near side, the exit from its far side, whatever t_min
@@ -377,43 +375,33 @@ pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) ->
             return f32::INFINITY;
         }
     }
+    // One loop for both searches (one copy of the gauge's code in the kernel): the entry, and
+    // when it lies before t_min the exit. The entry search always starts the loop, so it gets
+    // the same turns (and the same root) every time; the exit gets what it leaves.
     let p = o + t_in * d;
     let span = t_out - t_in;
-    let entry = superellipsoid_root(p, d, span, ex, true);
-    let mut t = t_in + entry;
-    if entry != f32::INFINITY && !(t > t_min) {
-        t = t_in + superellipsoid_root(p, d, span, ex, false);
-    }
-    if t > t_min && t < t_max {
-        t
-    } else {
-        f32::INFINITY
-    }
-}
-
-/// Newton's search for the superellipsoid along p + s d, s in [0, span] (both ends outside it):
-/// from s = 0 forward for the entry, or from s = span backward for the exit. Returns s, or
-/// infinity when the ray misses (or grazes it closer than the steps resolve).
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
-pub fn superellipsoid_root(p: Vec3, d: Vec3, span: f32, ex: Vec4, forward: bool) -> f32 {
-    let mut s = if forward { 0.0 } else { span };
-    let (h, g) = superellipsoid_gauge(p + s * d, ex);
-    let (mut phi, mut slope) = (h - 1.0, g.dot(d));
-    let mut found = phi <= SUPERELLIPSOID_TOLERANCE;
-    for _ in 0..SUPERELLIPSOID_STEPS {
-        if found || (forward && slope >= 0.0) || (!forward && slope <= 0.0) {
+    let (mut s, mut forward, mut t) = (0.0f32, true, f32::INFINITY);
+    for _ in 0..2 * SUPERELLIPSOID_STEPS {
+        let (h, g) = superellipsoid_gauge(p + s * d, ex);
+        let (phi, slope) = (h - 1.0, g.dot(d));
+        if phi <= SUPERELLIPSOID_TOLERANCE {
+            t = t_in + s;
+            if !forward || t > t_min {
+                break;
+            }
+            (forward, s) = (false, span);
+            continue;
+        }
+        if if forward { slope >= 0.0 } else { slope <= 0.0 } {
             break;
         }
         s -= phi / slope;
         if !(s >= 0.0 && s <= span) {
             break;
         }
-        let (h, g) = superellipsoid_gauge(p + s * d, ex);
-        (phi, slope) = (h - 1.0, g.dot(d));
-        found = phi <= SUPERELLIPSOID_TOLERANCE;
     }
-    if found {
-        s
+    if t > t_min && t < t_max {
+        t
     } else {
         f32::INFINITY
     }

@@ -33,6 +33,7 @@ pub struct PackedInstances {
     /// As `PackedScene`'s flags, for the objects' shapes.
     pub analytic: bool,
     pub implicit: bool,
+    pub implicit_csg: bool,
     pub alpha: bool,
 }
 
@@ -99,6 +100,7 @@ pub fn pack_instances(
             area += shape.geometry.area() * visible;
             out.analytic |= shape.geometry.is_analytic();
             out.implicit |= shape.geometry.is_implicit();
+            out.implicit_csg |= shape.geometry.is_implicit_csg();
         }
         let bvh = build_bvh(&primitives, &bounds)?;
         let first_node = object_nodes.len() as u32;

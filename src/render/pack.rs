@@ -38,6 +38,9 @@ pub struct PackedScene {
     /// True when some shape is a torus or a superellipsoid: the kernels then need their
     /// `analytic_implicit` variant.
     pub implicit: bool,
+    /// True when a CSG object has a torus or a superellipsoid among its leaves: the kernels then
+    /// need their `analytic_implicit_csg` variant.
+    pub implicit_csg: bool,
     /// The leaf primitives of the CSG objects, which follow all others in the primitive array
     /// (their CSG blocks count them from `FrameParams::csg_first`).
     pub csg_primitives: Vec<Primitive>,
@@ -76,6 +79,7 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
     }
     packed.analytic = scene.shapes.iter().any(|s| s.geometry.is_analytic());
     packed.implicit = scene.shapes.iter().any(|s| s.geometry.is_implicit());
+    packed.implicit_csg = scene.shapes.iter().any(|s| s.geometry.is_implicit_csg());
     packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
     packed.textured = packed.alpha || packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.

@@ -31,6 +31,9 @@ pub struct SceneBuffers {
     pub analytic: bool,
     /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
     pub implicit: bool,
+    /// True when a CSG object has a torus or a superellipsoid among its leaves (see
+    /// `PackedScene::implicit_csg`).
+    pub implicit_csg: bool,
     /// True when some shape has an opacity below 1 (see `PackedScene::alpha`).
     pub alpha: bool,
     /// Radius of a sphere around the whole scene (scene units).
@@ -54,12 +57,17 @@ pub struct KernelVariant {
     pub analytic: bool,
     /// Tori and superellipsoids (with the analytic shapes).
     pub implicit: bool,
+    /// Tori and superellipsoids as CSG leaves (with the implicit shapes): the CSG walk's copy of
+    /// their root searches, which lavapipe would otherwise compile into, and pay for in, every
+    /// kernel of the implicit variant.
+    pub implicit_csg: bool,
     /// Participating media and null surfaces.
     pub media: bool,
 }
 
 impl KernelVariant {
-    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]][_media]`
+    /// The kernel `name` in this variant's build:
+    /// `name[_textured[_alpha]][_analytic[_implicit[_csg]]][_media]`
     /// (the `// variant:` lines of the kernels, see build.rs).
     pub fn kernel_name(self, name: &str) -> String {
         let mut out = name.to_string();
@@ -69,11 +77,14 @@ impl KernelVariant {
         if self.alpha {
             out.push_str("_alpha");
         }
-        if self.analytic || self.implicit {
+        if self.analytic || self.implicit || self.implicit_csg {
             out.push_str("_analytic");
         }
-        if self.implicit {
+        if self.implicit || self.implicit_csg {
             out.push_str("_implicit");
+        }
+        if self.implicit_csg {
+            out.push_str("_csg");
         }
         if self.media {
             out.push_str("_media");
@@ -90,6 +101,7 @@ impl SceneBuffers {
             alpha: self.alpha,
             analytic: self.analytic,
             implicit: self.implicit,
+            implicit_csg: self.implicit_csg,
             media: !self.media.is_empty(),
         }
     }
@@ -536,6 +548,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textured: packed.textured || instanced.alpha,
         analytic: packed.analytic || instanced.analytic,
         implicit: packed.implicit || instanced.implicit,
+        implicit_csg: packed.implicit_csg || instanced.implicit_csg,
         alpha: packed.alpha || instanced.alpha,
         bounding_radius,
         surface_area,

@@ -239,6 +239,12 @@ impl Geometry {
         }
     }
 
+    /// True for CSG objects with a torus or a superellipsoid among their leaves: they need the
+    /// `analytic_implicit_csg` variant.
+    pub fn is_implicit_csg(&self) -> bool {
+        matches!(self, Geometry::Csg(_)) && self.is_implicit()
+    }
+
     /// Surface area in scene units squared (infinite for the plane).
     pub fn area(&self) -> f32 {
         match self {
