@@ -12,6 +12,9 @@
 // variant: analytic implicit
 // variant: textured analytic implicit
 // variant: textured alpha analytic implicit
+// variant: analytic implicit csg
+// variant: textured analytic implicit csg
+// variant: textured alpha analytic implicit csg
 // variant: media
 // variant: textured media
 // variant: textured alpha media
@@ -21,6 +24,9 @@
 // variant: analytic implicit media
 // variant: textured analytic implicit media
 // variant: textured alpha analytic implicit media
+// variant: analytic implicit csg media
+// variant: textured analytic implicit csg media
+// variant: textured alpha analytic implicit csg media
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

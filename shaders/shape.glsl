@@ -152,10 +152,9 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
     float m2 = dot(p, p);
     float reach = TORUS_CHORD * TORUS_CHORD;
     if (m2 >= reach) return INF;
-    float half_chord = sqrt(reach - m2);
-    float lo = max(-half_chord, (t_min * len - tc) / scale);
-    float hi = min(half_chord, (t_max * len - tc) / scale);
-    if (!(lo < hi)) return INF;
+    float hi = sqrt(reach - m2);
+    float lo = -hi;
+    if (!((tc + scale * hi) / len > t_min && (tc + scale * lo) / len < t_max)) return INF;
     float br = big_r / scale;
     float sr = small_r / scale;
     float g = m2 + br * br - sr * sr;
@@ -180,15 +179,29 @@ float ray_torus(vec3 o, vec3 d, float big_r, float small_r, float t_min, float t
         x2 = clamp(max(ra, rb), lo, hi);
     }
     vec4 dc = vec4(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
-    float e0 = poly_root_in(0.0, dc, lo, x1, lo);
-    float e1 = poly_root_in(0.0, dc, x1, x2, x1);
-    float e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    float root = poly_root_in(1.0, c, lo, e0, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e0, e1, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e1, e2, INF);
-    if (root == INF) root = poly_root_in(1.0, c, e2, hi, INF);
-    float t = (tc + scale * root) / len;
-    return (t > t_min && t < t_max) ? t : INF;
+    float e0 = lo;
+    float e1 = x1;
+    float e2 = x2;
+    float t = INF;
+    for (uint k = 0u; k < 7u; k++) {
+        bool derivative = k < 3u;
+        uint j = derivative ? k : k - 3u;
+        float a = j == 0u ? lo : (j == 1u ? (derivative ? x1 : e0) : (j == 2u ? (derivative ? x2 : e1) : e2));
+        float b = j == 0u ? (derivative ? x1 : e0) : (j == 1u ? (derivative ? x2 : e1) : (j == 2u ? (derivative ? hi : e2) : hi));
+        float none = derivative ? a : INF;
+        bool search = derivative || ((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max);
+        float r = none;
+        if (search) r = poly_root_in(derivative ? 0.0 : 1.0, derivative ? dc : c, a, b, none);
+        if (k == 0u) e0 = r;
+        if (k == 1u) e1 = r;
+        if (k == 2u) e2 = r;
+        float tk = (tc + scale * r) / len;
+        if (!derivative && r != INF && tk > t_min) {
+            t = tk;
+            break;
+        }
+    }
+    return t < t_max ? t : INF;
 }
 
 float safe_pow(float x, float y) {
@@ -218,29 +231,34 @@ float ray_superellipsoid(vec3 o, vec3 d, vec4 ex, float t_min, float t_max) {
     vec3 tb = (vec3(SUPERELLIPSOID_BOX) - o) * inv;
     vec3 tn = min(ta, tb);
     vec3 tf = max(ta, tb);
-    float t_in = max(max(max(tn.x, tn.y), tn.z), t_min);
+    float t_in = max(max(tn.x, tn.y), tn.z);
     float t_out = min(min(tf.x, tf.y), tf.z);
-    if (!(t_in < t_out)) return INF;
+    if (!(t_in < t_out && t_out > t_min && t_in < t_max)) return INF;
+    if (t_min > t_in) {
+        vec4 g = superellipsoid_gauge(o + t_min * d, ex);
+        if (g.w - 1.0 > 2.0 * SUPERELLIPSOID_TOLERANCE && dot(g.xyz, d) >= 0.0) return INF;
+    }
     vec3 p = o + t_in * d;
     float span = t_out - t_in;
-    vec4 g0 = superellipsoid_gauge(p, ex);
-    bool outside = g0.w - 1.0 > SUPERELLIPSOID_TOLERANCE;
-    float s = outside ? 0.0 : span;
-    vec4 g = outside ? g0 : superellipsoid_gauge(p + span * d, ex);
-    float phi = g.w - 1.0;
-    float slope = dot(g.xyz, d);
-    bool found = phi <= SUPERELLIPSOID_TOLERANCE;
-    for (uint k = 0u; k < SUPERELLIPSOID_STEPS; k++) {
-        if (found || (outside && slope >= 0.0) || (!outside && slope <= 0.0)) break;
+    float s = 0.0;
+    bool forward = true;
+    float t = INF;
+    for (uint k = 0u; k < 2u * SUPERELLIPSOID_STEPS; k++) {
+        vec4 g = superellipsoid_gauge(p + s * d, ex);
+        float phi = g.w - 1.0;
+        float slope = dot(g.xyz, d);
+        if (phi <= SUPERELLIPSOID_TOLERANCE) {
+            t = t_in + s;
+            if (!forward || t > t_min) break;
+            forward = false;
+            s = span;
+            continue;
+        }
+        if (forward ? slope >= 0.0 : slope <= 0.0) break;
         s -= phi / slope;
         if (!(s >= 0.0 && s <= span)) break;
-        g = superellipsoid_gauge(p + s * d, ex);
-        phi = g.w - 1.0;
-        slope = dot(g.xyz, d);
-        found = phi <= SUPERELLIPSOID_TOLERANCE;
     }
-    float t = t_in + s;
-    return (found && t > t_min && t < t_max) ? t : INF;
+    return (t > t_min && t < t_max) ? t : INF;
 }
 
 #endif
@@ -576,7 +594,8 @@ uint instance_record(uint k) {
 void instance_to_world(uint a, vec3 x, uint kind, inout Hit h) {
     uint ofw = a + INSTANCE_DATA_OBJECT_FROM_WORLD;
     uint wfo = a + INSTANCE_DATA_WORLD_FROM_OBJECT;
-    h.p = x;
+    // The analytic shapes' point projected onto the surface, moved back (see the twin).
+    h.p = kind > PRIMITIVE_SPHERE ? affine_point(wfo, h.p) : x;
     h.ng = normalize(affine_transpose_vector(ofw, h.ng));
     h.ns = normalize(affine_transpose_vector(ofw, h.ns));
     h.dpdu = affine_vector(wfo, h.dpdu);

@@ -124,16 +124,15 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             uint before = hit;
 #ifdef VARIANT_ANALYTIC
             // A CSG object reports the leaf primitive it shows (csg.glsl), so callers see an
-            // ordinary primitive. Only the world holds CSG objects (scene loading refuses them in
-            // objects), so the walk runs on the world ray. Behind WHEN: lavapipe would run its
+            // ordinary primitive (an instance's: base + leaf). Behind WHEN: lavapipe would run its
             // walk under masks for every primitive of every scene of the analytic variant.
             bool is_csg = SCENE_HAS_CSG && (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
             WHEN(is_csg) {
                 uint leaf;
-                float tc = csg_intersect(i, o, d, t_hit, leaf);
+                float tc = csg_intersect(i, ro, rd, t_hit * len, leaf) / len;
                 if (tc < t_hit) {
                     t_hit = tc;
-                    hit = leaf;
+                    hit = base + leaf;
                 }
             }
             if (!is_csg)

@@ -146,6 +146,83 @@ fn csg_objects_and_instances_render_together_as_flat() {
     assert!(e < 1e-6, "gpu against cpu: relMSE {e:.3e}");
 }
 
+/// A CSG object for objects: a box minus a ball, with a torus ring around it (merged) and a
+/// superellipsoid knob on top; `extra` goes into every child table (the flat copy's transform).
+fn cut_thing(extra: &str) -> String {
+    let children = [
+        "type = \"box\", min = [-0.5, 0, -0.5], max = [0.5, 1, 0.5]",
+        "type = \"sphere\", center = [0.3, 0.8, 0.4], radius = 0.45, material = \"red\"",
+        "type = \"torus\", center = [0, 0.5, 0], major_radius = 0.6, minor_radius = 0.12, material = \"blue\"",
+        "type = \"superellipsoid\", exponents = [0.4, 0.6], transform = { scale = 0.25, translate = [0, 1.1, 0] }",
+    ];
+    let child = |c: &str| {
+        // A child's own transform is applied first, then the placement's.
+        match (c.find("transform = { scale = 0.25, translate = [0, 1.1, 0] }"), extra.is_empty()) {
+            (Some(_), false) => format!("{{ {c} }}"),
+            _ => format!("{{ {c}{extra} }}"),
+        }
+    };
+    format!(
+        "type = \"csg\"\noperation = \"merge\"\nmaterial = \"white\"\nchildren = [\n  {{ type = \"csg\", operation = \"difference\", children = [{}, {}] }},\n  {},\n  {},\n]\n",
+        child(children[0]),
+        child(children[1]),
+        child(children[2]),
+        child(children[3])
+    )
+}
+
+#[test]
+fn instanced_csg_objects_render_as_their_flat_copies() {
+    // Placements that a child's `transform` can repeat in the world (no CSG takes a transform).
+    let placements =
+        ["{ translate = [-1.3, 0, 0] }", "{ scale = 0.9, rotate = [0, 40, 0], translate = [1.2, 0, -0.4] }"];
+    let mut instanced = format!("{HEADER}[[objects.cut.shapes]]\n{}", cut_thing(""));
+    let mut flat = HEADER.to_string();
+    for (k, t) in placements.iter().enumerate() {
+        writeln!(instanced, "[[instances]]\nobject = \"cut\"\ntransform = {t}").unwrap();
+        if k == 1 {
+            writeln!(instanced, "material = \"blue\"").unwrap();
+        }
+        let mut shape = cut_thing(&format!(", transform = {t}"));
+        if k == 1 {
+            // The override replaces every leaf's material.
+            shape = shape.replace("\"red\"", "\"blue\"").replace("\"white\"", "\"blue\"");
+        }
+        writeln!(flat, "[[shapes]]\n{shape}").unwrap();
+    }
+    // The superellipsoid knob has its own transform: in the flat copy it is composed by hand.
+    flat = flat.replace(
+        "{ type = \"superellipsoid\", exponents = [0.4, 0.6], transform = { scale = 0.25, translate = [0, 1.1, 0] } }",
+        "KNOB",
+    );
+    let knobs = [
+        "{ type = \"superellipsoid\", exponents = [0.4, 0.6], transform = { scale = 0.25, translate = [-1.3, 1.1, 0] } }",
+        "{ type = \"superellipsoid\", exponents = [0.4, 0.6], transform = { scale = 0.225, rotate = [0, 40, 0], translate = [1.2, 0.99, -0.4] } }",
+    ];
+    for knob in knobs {
+        flat = flat.replacen("KNOB", knob, 1);
+    }
+    let (instanced, flat) = (parse(&instanced), parse(&flat));
+    assert_eq!(instanced.instances.len(), 2);
+    assert!(instanced.shapes.len() < flat.shapes.len(), "the CSG object lives in the object");
+    let (a, b) = (common::buffers(&instanced, 64, 48), common::buffers(&flat, 64, 48));
+    assert!(a.implicit && b.implicit, "the CSG's torus needs the implicit kernels");
+    let (ia, ib) = (common::cpu_render(&a, 2, &photons()), common::cpu_render(&b, 2, &photons()));
+    let error = rel_mse(&ia.image, &ib.image);
+    let ratio = mean_ratio(&ia.image, &ib.image);
+    println!("instanced vs flat CSG objects (CPU, 64x48, photons): relMSE {error:.3e}, mean ratio {ratio:.5?}");
+    assert!(error < 1e-6, "relMSE {error:.3e}");
+    for r in ratio {
+        assert!((r - 1.0).abs() < 1e-3, "mean ratio {ratio:?}");
+    }
+    let red = ia.image.pixels.iter().filter(|p| p[0] > 2.0 * p[2] && p[0] > 2.0 * p[1] && p[0] > 0.02).count();
+    assert!(red > 10, "only {red} red pixels: the subtracted ball's surface is not seen");
+    let gpu = common::gpu_render(&common::gpu(), &a, 2, &photons());
+    let e = rel_mse(&gpu.image, &ia.image);
+    println!("instanced CSG objects: GPU vs CPU relMSE {e:.3e}");
+    assert!(e < 1e-6, "gpu against cpu: relMSE {e:.3e}");
+}
+
 #[test]
 fn gpu_matches_cpu_on_instances() {
     let scene = parse(&instanced_text());
@@ -286,9 +363,9 @@ fn bad_objects_and_placements_are_refused_with_file_line_and_field() {
         ),
         ("[[instances]]\ntransform = { translate = [0, 1, 0] }\n".to_string(), "[[instances]]", &["missing field `object`"]),
         (
-            "[[objects.cut.shapes]]\ntype = \"csg\"\noperation = \"difference\"\nmaterial = \"white\"\nchildren = [{ type = \"box\", min = [0, 0, 0], max = [1, 1, 1] }, { type = \"sphere\", center = [1, 1, 1], radius = 0.5 }]\n[[instances]]\nobject = \"cut\"\n".to_string(),
-            "[[objects.cut.shapes]]",
-            &["CSG cannot be part of an object"],
+            "[materials.veil]\ntype = \"diffuse\"\nopacity = 0.5\n[[objects.cut.shapes]]\ntype = \"csg\"\noperation = \"difference\"\nmaterial = \"white\"\nchildren = [{ type = \"box\", min = [0, 0, 0], max = [1, 1, 1] }, { type = \"sphere\", center = [1, 1, 1], radius = 0.5 }]\n[[instances]]\nobject = \"cut\"\nmaterial = \"veil\"\n".to_string(),
+            "material = \"veil\"",
+            &["opacity below 1", "object \"cut\" holds a CSG object", "opaque material"],
         ),
         (format!("{thing}[[objects.thing.shapes]]\ntype = \"sphere\"\nmaterial = \"whte\"\ncenter = [0, 0, 0]\nradius = 1\n[[instances]]\nobject = \"thing\"\n"), "material = \"whte\"", &["[objects.thing] shape 1", "unknown material"]),
     ];

@@ -28,7 +28,7 @@
 
 use glam::Vec3;
 
-use super::shape::{affine_point, affine_vector, ray_cone, ray_disc, ray_sphere, ray_triangle};
+use super::shape::{analytic_intersect, ray_sphere, ray_triangle};
 use super::SceneView;
 use crate::layout::constants::*;
 
@@ -36,8 +36,10 @@ fn csg_word(s: &SceneView, a: u32) -> u32 {
     s.shape_data[a as usize].to_bits()
 }
 
-/// Next crossing in (t_min, t_max) of leaf primitive `i`: a sphere, a triangle, a disc or a cone
-/// side (the kinds whose test returns the nearest root after any t_min exactly).
+/// Next crossing in (t_min, t_max) of leaf primitive `i`: a sphere, a triangle, or an analytic
+/// shape (a disc, a cone side, a torus, a superellipsoid), each of whose tests returns the
+/// nearest root after any t_min exactly (the torus and the superellipsoid find their roots
+/// independently of t_min for this, see `cpu/shape.rs`).
 pub fn csg_leaf_intersect(s: &SceneView, i: u32, o: Vec3, d: Vec3, t_min: f32, t_max: f32) -> f32 {
     let p = &s.primitives[i as usize];
     let kind = p.kind & PRIMITIVE_KIND_MASK;
@@ -47,12 +49,7 @@ pub fn csg_leaf_intersect(s: &SceneView, i: u32, o: Vec3, d: Vec3, t_min: f32, t
     if kind == PRIMITIVE_TRIANGLE {
         return ray_triangle(o, d, Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2), t_min, t_max);
     }
-    let ow = &s.shape_data[(p.data + SHAPE_DATA_OBJECT_FROM_WORLD) as usize..];
-    let (oo, od) = (affine_point(ow, o), affine_vector(ow, d));
-    if kind == PRIMITIVE_DISC {
-        return ray_disc(oo, od, p.p0[0], p.p0[1], t_min, t_max);
-    }
-    ray_cone(oo, od, p.p0[0], p.p0[1], p.p0[2], t_min, t_max)
+    analytic_intersect(s, p, o, d, t_min, t_max)
 }
 
 /// The object's inside value and whether a lone crossing of `leaf` shows, for the leaves' inside

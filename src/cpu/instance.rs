@@ -51,13 +51,17 @@ pub fn object_ray(rec: &[f32], o: Vec3, d: Vec3) -> (Vec3, Vec3, f32) {
 }
 
 /// `h`, filled in object space at the object point of world point `x`, moved to the world:
-/// normals by the inverse transpose, derivatives and the smooth triangles' shift by the
-/// linear part, the analytic shapes' offsets by its largest stretch; the instance's material
-/// replaces the object's when it has one.
+/// the point (x, or an analytic shape's projected point moved back), normals by the inverse
+/// transpose, derivatives and the smooth triangles' shift by the linear part, the analytic
+/// shapes' offsets by its largest stretch; the instance's material replaces the object's when it
+/// has one.
 pub fn to_world(rec: &[f32], x: Vec3, kind: u32, h: &mut Hit) {
     let ofw = object_from_world(rec);
     let wfo = &rec[INSTANCE_DATA_WORLD_FROM_OBJECT as usize..];
-    h.p = x;
+    // The analytic shapes' point projected onto the surface (`analytic_surface`), moved back:
+    // x carries the ray's rounding, which grows with its length (on a torus, less exact than
+    // the offset allows for, that was shadow acne).
+    h.p = if kind > PRIMITIVE_SPHERE { affine_point(wfo, h.p) } else { x };
     h.ng = affine_transpose_vector(ofw, h.ng).normalize();
     h.ns = affine_transpose_vector(ofw, h.ns).normalize();
     h.dpdu = affine_vector(wfo, h.dpdu);

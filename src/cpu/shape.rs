@@ -227,6 +227,10 @@ pub fn poly_root_in(lead: f32, c: Vec4, a: f32, b: f32, none: f32) -> f32 {
 /// the roots of f' found there split it into pieces where f is monotone, and each piece holds
 /// at most one root of f, found by safeguarded Newton. No root is lost to a bad starting point,
 /// and a grazing ray's pair of nearby roots is either found or truly absent to float precision.
+///
+/// The pieces and their roots come from the whole chord, whatever t_min and t_max (which only
+/// skip pieces): a search restarted at one root finds the next one exactly, never the same one
+/// again, which the CSG walk (`cpu/csg.rs`) relies on.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
 pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: f32) -> f32 {
     let scale = big_r + small_r;
@@ -242,10 +246,9 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
     if m2 >= reach {
         return f32::INFINITY;
     }
-    let half = (reach - m2).sqrt();
-    let lo = (-half).max((t_min * len - tc) / scale);
-    let hi = half.min((t_max * len - tc) / scale);
-    if !(lo < hi) {
+    let hi = (reach - m2).sqrt();
+    let lo = -hi;
+    if !((tc + scale * hi) / len > t_min && (tc + scale * lo) / len < t_max) {
         return f32::INFINITY;
     }
     let (br, sr) = (big_r / scale, small_r / scale);
@@ -269,24 +272,37 @@ pub fn ray_torus(o: Vec3, d: Vec3, big_r: f32, small_r: f32, t_min: f32, t_max: 
         x1 = ra.min(rb).clamp(lo, hi);
         x2 = ra.max(rb).clamp(lo, hi);
     }
-    // Roots of f' = 4 x^3 + 3 c.w x^2 + 2 c.z x + c.y between them (or the piece's start).
+    // Seven searches in one loop (one copy of `poly_root_in` in the kernel): the roots of
+    // f' = 4 x^3 + 3 c.w x^2 + 2 c.z x + c.y between those of f'' (or a piece's start), then
+    // the first root of f after t_min, piece by piece between them. Pieces wholly before t_min
+    // or after t_max are not searched.
     let dc = Vec4::new(c.y, 2.0 * c.z, 3.0 * c.w, 4.0);
-    let e0 = poly_root_in(0.0, dc, lo, x1, lo);
-    let e1 = poly_root_in(0.0, dc, x1, x2, x1);
-    let e2 = poly_root_in(0.0, dc, x2, hi, x2);
-    // The first root of f, piece by piece.
-    let mut root = poly_root_in(1.0, c, lo, e0, f32::INFINITY);
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e0, e1, f32::INFINITY);
+    let mut e = [lo, x1, x2];
+    let mut t = f32::INFINITY;
+    for k in 0..7 {
+        let derivative = k < 3;
+        let (a, b) = if derivative {
+            ([lo, x1, x2][k], [x1, x2, hi][k])
+        } else {
+            ([lo, e[0], e[1], e[2]][k - 3], [e[0], e[1], e[2], hi][k - 3])
+        };
+        let none = if derivative { a } else { f32::INFINITY };
+        let search = derivative || ((tc + scale * b) / len > t_min && (tc + scale * a) / len < t_max);
+        let r = if search {
+            poly_root_in(if derivative { 0.0 } else { 1.0 }, if derivative { dc } else { c }, a, b, none)
+        } else {
+            none
+        };
+        if derivative {
+            e[k] = r;
+        }
+        let tk = (tc + scale * r) / len;
+        if !derivative && r != f32::INFINITY && tk > t_min {
+            t = tk;
+            break;
+        }
     }
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e1, e2, f32::INFINITY);
-    }
-    if root == f32::INFINITY {
-        root = poly_root_in(1.0, c, e2, hi, f32::INFINITY);
-    }
-    let t = (tc + scale * root) / len;
-    if t > t_min && t < t_max {
+    if t < t_max {
         t
     } else {
         f32::INFINITY
@@ -329,12 +345,16 @@ pub fn superellipsoid_gauge(p: Vec3, ex: Vec4) -> (f32, Vec3) {
 }
 
 /// POV-Ray's superellipsoid inside [-1, 1]^3. Along a ray, h - 1 is a convex function (both
-/// exponents at most 2), so Newton's method started outside the surface on its near side
-/// climbs monotonically to the first root and never steps over it, and a step that leaves the
-/// box (or a slope that turns upward) proves there is no root: no holes at silhouettes and no
-/// missed thin parts, in at most `SUPERELLIPSOID_STEPS` steps. From inside, the same from the
-/// box's far side finds the exit. The gauge grows linearly (not as |x|^(2/e)), so even boxy
-/// shapes converge in a few steps.
+/// exponents at most 2), so the ray crosses the surface at most twice, and Newton's method
+/// started outside the surface climbs monotonically to the nearest root and never steps over
+/// it; a step that leaves the box (or a slope that turns upward) proves there is no root: no
+/// holes at silhouettes and no missed thin parts, in at most 2 `SUPERELLIPSOID_STEPS` steps. The
+/// gauge grows linearly (not as |x|^(2/e)), so even boxy shapes converge in a few steps.
+///
+/// The entry is sought from the box's near side, the exit from its far side, whatever t_min
+/// and t_max: the two roots do not depend on them, so a search restarted at the entry finds the
+/// exit exactly (the CSG walk, `cpu/csg.rs`, relies on it). A ray that starts outside the
+/// surface heading away from it (a shadow ray leaving it) is told apart by one evaluation.
 #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN must read as a miss, as in the kernel
 pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) -> f32 {
     // The box is grown by 1e-3 so that its entry point lies clearly outside even a boxy shape,
@@ -342,38 +362,45 @@ pub fn ray_superellipsoid(o: Vec3, d: Vec3, ex: Vec4, t_min: f32, t_max: f32) ->
     let inv = d.recip();
     let ta = (Vec3::splat(-SUPERELLIPSOID_BOX) - o) * inv;
     let tb = (Vec3::splat(SUPERELLIPSOID_BOX) - o) * inv;
-    let t_in = ta.min(tb).max_element().max(t_min);
+    let t_in = ta.min(tb).max_element();
     let t_out = ta.max(tb).min_element();
-    if !(t_in < t_out) {
+    if !(t_in < t_out && t_out > t_min && t_in < t_max) {
         return f32::INFINITY;
     }
+    if t_min > t_in {
+        // Past both roots (convexity): the searches below stop within the tolerance of the
+        // surface, so a margin of twice it keeps this shortcut from hiding a root they find.
+        let (h, g) = superellipsoid_gauge(o + t_min * d, ex);
+        if h - 1.0 > 2.0 * SUPERELLIPSOID_TOLERANCE && g.dot(d) >= 0.0 {
+            return f32::INFINITY;
+        }
+    }
+    // One loop for both searches (one copy of the gauge's code in the kernel): the entry, and
+    // when it lies before t_min the exit. The entry search always starts the loop, so it gets
+    // the same turns (and the same root) every time; the exit gets what it leaves.
     let p = o + t_in * d;
     let span = t_out - t_in;
-    let (h0, g0) = superellipsoid_gauge(p, ex);
-    let outside = h0 - 1.0 > SUPERELLIPSOID_TOLERANCE;
-    // From outside: the first root, left to right; from inside: the last, right to left.
-    let mut s = if outside { 0.0 } else { span };
-    let (mut phi, mut slope) = if outside {
-        (h0 - 1.0, g0.dot(d))
-    } else {
-        let (h, g) = superellipsoid_gauge(p + span * d, ex);
-        (h - 1.0, g.dot(d))
-    };
-    let mut found = phi <= SUPERELLIPSOID_TOLERANCE;
-    for _ in 0..SUPERELLIPSOID_STEPS {
-        if found || (outside && slope >= 0.0) || (!outside && slope <= 0.0) {
+    let (mut s, mut forward, mut t) = (0.0f32, true, f32::INFINITY);
+    for _ in 0..2 * SUPERELLIPSOID_STEPS {
+        let (h, g) = superellipsoid_gauge(p + s * d, ex);
+        let (phi, slope) = (h - 1.0, g.dot(d));
+        if phi <= SUPERELLIPSOID_TOLERANCE {
+            t = t_in + s;
+            if !forward || t > t_min {
+                break;
+            }
+            (forward, s) = (false, span);
+            continue;
+        }
+        if if forward { slope >= 0.0 } else { slope <= 0.0 } {
             break;
         }
         s -= phi / slope;
         if !(s >= 0.0 && s <= span) {
             break;
         }
-        let (h, g) = superellipsoid_gauge(p + s * d, ex);
-        (phi, slope) = (h - 1.0, g.dot(d));
-        found = phi <= SUPERELLIPSOID_TOLERANCE;
     }
-    let t = t_in + s;
-    if found && t > t_min && t < t_max {
+    if t > t_min && t < t_max {
         t
     } else {
         f32::INFINITY

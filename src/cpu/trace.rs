@@ -133,13 +133,15 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
         }
         for i in n.first..n.first + count {
             let before = hit;
-            // A CSG object (always in the world's BVH; objects hold none) reports the leaf primitive it shows
-            // (`cpu/csg.rs`), so callers see an ordinary primitive.
+            // A CSG object reports the leaf primitive it shows (`cpu/csg.rs`), so callers see an
+            // ordinary primitive (an instance's: base + leaf). The walk runs on the walk's ray,
+            // the world's or an instance's object-space one, like any primitive's test.
             if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
-                let (t, leaf) = csg_intersect(s, i, o, d, t_hit);
+                let (t, leaf) = csg_intersect(s, i, r.o, r.d, t_hit * r.len);
+                let t = t / r.len;
                 if t < t_hit {
                     t_hit = t;
-                    hit = leaf;
+                    hit = base + leaf;
                 }
             } else {
                 visit(s, i, base + i, &r, o, d, ignore, &mut hit, &mut t_hit);

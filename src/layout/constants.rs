@@ -115,8 +115,9 @@ shared_constants! {
     /// the shape's size): its hit points are projected onto the surface in object space, so
     /// their error scales with those, not with the scene (this is about 17 float ulps of each).
     SHAPE_EPSILON_SCALE: f32 = 1.0e-6;
-    /// Most Newton steps of one superellipsoid root search (each from one side of a convex
-    /// function, so monotone; a grazing ray's double root still halves the gap each step).
+    /// Half the loop turns (gauge evaluations) of a superellipsoid's search for its entry and
+    /// exit (each Newton's method from one side of a convex function, so monotone; a grazing
+    /// ray's double root still halves the gap each step).
     SUPERELLIPSOID_STEPS: u32 = 24;
     /// Superellipsoid Newton steps stop once the gauge is this close to 1 (about 1e-6 object
     /// units off the surface).
@@ -130,8 +131,11 @@ shared_constants! {
     /// leave its sign to rounding.
     TORUS_CHORD: f32 = 1.001;
     /// Most safeguarded Newton steps per bracketed root of the torus quartic and of its
-    /// derivative; bisection alone would need 24 to reach float precision on [-1, 1].
-    TORUS_ROOT_STEPS: u32 = 16;
+    /// derivative; bisection alone needs 24 to reach float precision on [-1, 1]. The brackets
+    /// span the whole chord (the searches do not start at t_min, so the CSG walk can restart
+    /// them), where Newton may fall back to bisection for a while: with 16 steps, the root of
+    /// the surface a ray leaves was left up to 3e-5 off, past the ray's offset.
+    TORUS_ROOT_STEPS: u32 = 32;
     /// Newton steps that invert the torus's area cdf (Kepler's equation) when it is sampled.
     TORUS_SAMPLE_STEPS: u32 = 8;
     /// Low bits of `Primitive::kind` holding the shape kind; the bits above are flags.
@@ -186,6 +190,10 @@ shared_constants! {
     CSG_MAX_PRIMITIVES: u32 = 64;
     /// Most nested CSG nodes from an object's root to a leaf.
     CSG_MAX_DEPTH: u32 = 16;
+    /// Most tori and superellipsoids among the leaves of one CSG object: the walk runs their
+    /// root searches (up to 7 x `TORUS_ROOT_STEPS` or 2 x `SUPERELLIPSOID_STEPS` loop turns) at
+    /// every crossing, where a sphere or a triangle costs one turn.
+    CSG_MAX_IMPLICIT: u32 = 4;
     /// Most distinct crossings the walk of one ray through one CSG object visits (those behind
     /// the ray's origin included); a ray that needs more passes the rest of the object as a miss.
     /// With the caps above a walk runs at most 32 x (64 + 63) loop iterations.

@@ -7,10 +7,11 @@
 use glam::{Affine3A, Vec3};
 
 use super::pack::{affine_rows, material_needs, pack_shape};
+use super::pack_csg::pack_csg;
 use crate::accel::{build_bvh, build_bvh_with_leaves, BvhError};
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, Primitive};
-use crate::scene::{Analytic, AnalyticKind, Geometry, Scene};
+use crate::scene::{Geometry, Scene};
 
 /// The instanced part of the scene, to append after the world's BVH and primitives.
 #[derive(Clone, Debug, Default)]
@@ -32,15 +33,18 @@ pub struct PackedInstances {
     /// As `PackedScene`'s flags, for the objects' shapes.
     pub analytic: bool,
     pub implicit: bool,
+    pub implicit_csg: bool,
     pub alpha: bool,
 }
 
-/// Packs the objects that instances place (their shape data and records go to `shape_data`).
-/// `node_base` and `primitive_base` are the world BVH's node and primitive counts: these nodes
-/// and primitives follow them.
+/// Packs the objects that instances place (their shape data and records go to `shape_data`, the
+/// leaf primitives of their CSG objects to `csg_primitives`, after the world's). `node_base` and
+/// `primitive_base` are the world BVH's node and primitive counts: these nodes and primitives
+/// follow them.
 pub fn pack_instances(
     scene: &Scene,
     shape_data: &mut Vec<f32>,
+    csg_primitives: &mut Vec<Primitive>,
     node_base: u32,
     primitive_base: u32,
 ) -> Result<PackedInstances, BvhError> {
@@ -79,19 +83,24 @@ pub fn pack_instances(
                 let (a, u) = material_needs(scene, m, 0);
                 (alpha, uses_uv) = (alpha || a, uses_uv || u);
             }
-            primitives.push(pack_shape(shape, alpha, uses_uv, shape_data));
+            let p = match &shape.geometry {
+                // Scene loading refuses instance materials with alpha over objects holding CSG.
+                Geometry::Csg(csg) => pack_csg(
+                    csg,
+                    |m| material_needs(scene, m, 0).1 || overrides[o].iter().any(|&v| material_needs(scene, v, 0).1),
+                    shape_data,
+                    csg_primitives,
+                ),
+                _ => pack_shape(shape, alpha, uses_uv, shape_data),
+            };
+            primitives.push(p);
             bounds.push(shape.geometry.bounds());
             let opacity = scene.materials[shape.material as usize].opacity;
             let visible = if opacity.texture.is_some() { 1.0 } else { opacity.value };
             area += shape.geometry.area() * visible;
-            out.analytic |= matches!(shape.geometry, Geometry::Analytic(_));
-            out.implicit |= matches!(
-                shape.geometry,
-                Geometry::Analytic(Analytic {
-                    kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. },
-                    ..
-                })
-            );
+            out.analytic |= shape.geometry.is_analytic();
+            out.implicit |= shape.geometry.is_implicit();
+            out.implicit_csg |= shape.geometry.is_implicit_csg();
         }
         let bvh = build_bvh(&primitives, &bounds)?;
         let first_node = object_nodes.len() as u32;

@@ -8,8 +8,8 @@ use crate::layout::constants::*;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    Analytic, AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase,
-    ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+    AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase, ScalarParam,
+    Scene, Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -38,6 +38,9 @@ pub struct PackedScene {
     /// True when some shape is a torus or a superellipsoid: the kernels then need their
     /// `analytic_implicit` variant.
     pub implicit: bool,
+    /// True when a CSG object has a torus or a superellipsoid among its leaves: the kernels then
+    /// need their `analytic_implicit_csg` variant.
+    pub implicit_csg: bool,
     /// The leaf primitives of the CSG objects, which follow all others in the primitive array
     /// (their CSG blocks count them from `FrameParams::csg_first`).
     pub csg_primitives: Vec<Primitive>,
@@ -74,14 +77,9 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
             packed.photon_area += area * visible;
         }
     }
-    // CSG objects live in the analytic variant (their leaves may be discs and cones).
-    packed.analytic = scene.shapes.iter().any(|s| matches!(s.geometry, Geometry::Analytic(_) | Geometry::Csg(_)));
-    packed.implicit = scene.shapes.iter().any(|s| {
-        matches!(
-            s.geometry,
-            Geometry::Analytic(Analytic { kind: AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }, .. })
-        )
-    });
+    packed.analytic = scene.shapes.iter().any(|s| s.geometry.is_analytic());
+    packed.implicit = scene.shapes.iter().any(|s| s.geometry.is_implicit());
+    packed.implicit_csg = scene.shapes.iter().any(|s| s.geometry.is_implicit_csg());
     packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
     packed.textured = packed.alpha || packed.textures.iter().any(|t| t.kind != TEXTURE_CONSTANT);
     // Vulkan has no empty buffers: every array gets at least one (unused) element.

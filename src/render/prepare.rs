@@ -31,6 +31,9 @@ pub struct SceneBuffers {
     pub analytic: bool,
     /// True when the scene has tori or superellipsoids (see `PackedScene::implicit`).
     pub implicit: bool,
+    /// True when a CSG object has a torus or a superellipsoid among its leaves (see
+    /// `PackedScene::implicit_csg`).
+    pub implicit_csg: bool,
     /// True when some shape has an opacity below 1 (see `PackedScene::alpha`).
     pub alpha: bool,
     /// Radius of a sphere around the whole scene (scene units).
@@ -54,6 +57,10 @@ pub struct KernelVariant {
     pub analytic: bool,
     /// Tori and superellipsoids (with the analytic shapes).
     pub implicit: bool,
+    /// Tori and superellipsoids as CSG leaves (with the implicit shapes): the CSG walk's copy of
+    /// their root searches, which lavapipe would otherwise compile into, and pay for in, every
+    /// kernel of the implicit variant.
+    pub implicit_csg: bool,
     /// Participating media and null surfaces.
     pub media: bool,
     /// Instances (the two-level walk). A specialization constant, not a build of its own.
@@ -63,7 +70,8 @@ pub struct KernelVariant {
 }
 
 impl KernelVariant {
-    /// The kernel `name` in this variant's build: `name[_textured[_alpha]][_analytic[_implicit]][_media]`
+    /// The kernel `name` in this variant's build:
+    /// `name[_textured[_alpha]][_analytic[_implicit[_csg]]][_media]`
     /// (the `// variant:` lines of the kernels, see build.rs).
     pub fn kernel_name(self, name: &str) -> String {
         let mut out = name.to_string();
@@ -73,11 +81,14 @@ impl KernelVariant {
         if self.alpha {
             out.push_str("_alpha");
         }
-        if self.analytic || self.implicit {
+        if self.analytic || self.implicit || self.implicit_csg {
             out.push_str("_analytic");
         }
-        if self.implicit {
+        if self.implicit || self.implicit_csg {
             out.push_str("_implicit");
+        }
+        if self.implicit_csg {
+            out.push_str("_csg");
         }
         if self.media {
             out.push_str("_media");
@@ -100,6 +111,7 @@ impl SceneBuffers {
             alpha: self.alpha,
             analytic: self.analytic,
             implicit: self.implicit,
+            implicit_csg: self.implicit_csg,
             media: !self.media.is_empty(),
             instances: self.frame.instance_count > 0,
             csg: self.frame.csg_first < self.frame.primitive_count,
@@ -297,7 +309,13 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     let mut packed = packed;
     // The objects that instances place: their primitives after the world BVH's, their nodes
     // (the top level, then each object's BVH) after its nodes.
-    let instanced = pack_instances(scene, &mut packed.shape_data, bvh.nodes.len() as u32, bvh.primitives.len() as u32)?;
+    let instanced = pack_instances(
+        scene,
+        &mut packed.shape_data,
+        &mut packed.csg_primitives,
+        bvh.nodes.len() as u32,
+        bvh.primitives.len() as u32,
+    )?;
     let mut primitives = bvh.primitives;
     primitives.extend(&instanced.primitives);
     let unbounded_first = primitives.len() as u32;
@@ -556,6 +574,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         textured: packed.textured || instanced.alpha,
         analytic: packed.analytic || instanced.analytic,
         implicit: packed.implicit || instanced.implicit,
+        implicit_csg: packed.implicit_csg || instanced.implicit_csg,
         alpha: packed.alpha || instanced.alpha,
         bounding_radius,
         surface_area,

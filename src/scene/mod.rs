@@ -223,6 +223,28 @@ impl Geometry {
         matches!(self, Geometry::Analytic(a) if a.is_unbounded())
     }
 
+    /// True for the shapes that need the kernels' `analytic` variant: the analytic ones (planes,
+    /// discs, cones, tori, superellipsoids) and CSG objects (their leaves may be any of them).
+    pub fn is_analytic(&self) -> bool {
+        matches!(self, Geometry::Analytic(_) | Geometry::Csg(_))
+    }
+
+    /// True for the shapes that need the `analytic_implicit` variant: tori, superellipsoids and
+    /// CSG objects with one among their leaves.
+    pub fn is_implicit(&self) -> bool {
+        match self {
+            Geometry::Analytic(a) => matches!(a.kind, AnalyticKind::Torus { .. } | AnalyticKind::Superellipsoid { .. }),
+            Geometry::Csg(c) => c.leaves.iter().flatten().any(|s| s.geometry.is_implicit()),
+            _ => false,
+        }
+    }
+
+    /// True for CSG objects with a torus or a superellipsoid among their leaves: they need the
+    /// `analytic_implicit_csg` variant.
+    pub fn is_implicit_csg(&self) -> bool {
+        matches!(self, Geometry::Csg(_)) && self.is_implicit()
+    }
+
     /// Surface area in scene units squared (infinite for the plane).
     pub fn area(&self) -> f32 {
         match self {

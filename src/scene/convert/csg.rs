@@ -5,7 +5,7 @@
 use toml::Spanned;
 
 use super::{Builder, Result, SHAPE_TYPES};
-use crate::layout::constants::{CSG_MAX_DEPTH, CSG_MAX_LEAVES, CSG_MAX_PRIMITIVES};
+use crate::layout::constants::{CSG_MAX_DEPTH, CSG_MAX_IMPLICIT, CSG_MAX_LEAVES, CSG_MAX_PRIMITIVES};
 use crate::limits::printable;
 use crate::scene::format::ShapeDef;
 use crate::scene::{Csg, CsgNode, CsgOp, Geometry, Shape};
@@ -35,6 +35,16 @@ impl Builder<'_> {
                 object,
                 format!(
                     "the leaves of this csg make {primitives} primitives (a sphere is 1, a capped cylinder 3, a box 12, a mesh one per triangle), and one CSG object takes at most {CSG_MAX_PRIMITIVES}; use fewer or simpler children, or split it into several csg objects"
+                ),
+            ));
+        }
+        let implicit = leaves.iter().flatten().filter(|s| s.geometry.is_implicit()).count();
+        if implicit > CSG_MAX_IMPLICIT as usize {
+            return Err(self.invalid(
+                &span,
+                object,
+                format!(
+                    "this csg has {implicit} tori and superellipsoids among its leaves, and one CSG object takes at most {CSG_MAX_IMPLICIT} (each costs a root search at every crossing of every ray, see docs/limits.md); split it into several csg objects"
                 ),
             ));
         }
@@ -110,9 +120,6 @@ impl Builder<'_> {
                 }
                 "cylinder" | "cone" if open.is_some() => Some(format!(
                     "an open {kind} encloses no volume, and a csg child must be a closed shape; drop `open` to cap it"
-                )),
-                "torus" | "superellipsoid" => Some(format!(
-                    "a {kind} cannot be a csg child yet (its root search cannot restart from a crossing exactly, see docs/limits.md); use a closed mesh of it"
                 )),
                 _ => None,
             };

@@ -13,7 +13,7 @@ use super::{span_of, Builder, Result};
 use crate::limits::{printable, MAX_INSTANCES};
 use crate::scene::error::{object_name, suggest};
 use crate::scene::format::{InstanceDef, ObjectDef, ShapeDef};
-use crate::scene::{InstanceDesc, ObjectDesc};
+use crate::scene::{Geometry, InstanceDesc, ObjectDesc};
 
 /// The objects of the file in file order: (name, definition).
 type Entries<'f> = [(&'f Spanned<String>, &'f Spanned<ObjectDef>)];
@@ -92,18 +92,6 @@ impl Builder<'_> {
                     format!(
                         "shape {index} is an infinite plane, which no box bounds, so it cannot be part of an \
                          object; place it with [[shapes]]"
-                    ),
-                ));
-            }
-            if self.shapes[first..].iter().any(|s| matches!(s.geometry, super::Geometry::Csg(_))) {
-                // CSG leaves are addressed from the world's primitive array (FrameParams::csg_first),
-                // which an instance's object-space walk does not reach.
-                return Err(self.invalid(
-                    &table,
-                    object,
-                    format!(
-                        "shape {index} is a CSG object; CSG cannot be part of an object yet: place it with \
-                         [[shapes]] (once per copy)"
                     ),
                 ));
             }
@@ -191,6 +179,22 @@ impl Builder<'_> {
                 ));
             }
             if !place.objects[id].shapes.is_empty() {
+                if let Some(m) = material.filter(|&m| self.materials[m as usize].has_alpha()) {
+                    if place.objects[id].shapes.iter().any(|s| matches!(s.geometry, Geometry::Csg(_))) {
+                        let span = p.material.as_ref().map_or(table.clone(), |m| m.span());
+                        return Err(self.invalid(
+                            &span,
+                            what,
+                            format!(
+                                "material \"{}\" has an opacity below 1, and object \"{}\" holds a CSG object, \
+                                 whose leaves must be opaque (see docs/limits.md); give the instance an opaque \
+                                 material",
+                                printable(&self.material_names[m as usize]),
+                                printable(place.entries[id].0.get_ref())
+                            ),
+                        ));
+                    }
+                }
                 if place.out.len() >= MAX_INSTANCES as usize {
                     return Err(self.invalid(
                         &table,
