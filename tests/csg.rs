@@ -10,7 +10,6 @@ use std::io::Write;
 use glam::Vec3;
 use photonix::cpu::shape::shape_hit;
 use photonix::cpu::trace::trace_ray;
-use photonix::io::metrics::{mean_ratio, rel_mse};
 use photonix::layout::constants::NO_LIGHT;
 use photonix::render::SceneBuffers;
 use photonix::scene::{load_scene, parse_scene, Scene};
@@ -427,22 +426,7 @@ fn gpu_matches_cpu_on_a_csg_scene() {
     let scene = csg_scene();
     let buffers = common::buffers(&scene, 48, 36);
     assert!(buffers.analytic, "CSG objects need the analytic kernels");
-    let photons = photonix::render::PhotonSettings {
-        photons: 4000,
-        caustic_photons: 4000,
-        gather_rays: 1,
-        ..photonix::render::PhotonSettings::default()
-    };
-    let ctx = common::gpu();
-    let gpu = common::gpu_render(&ctx, &buffers, 1, &photons);
-    let cpu = common::cpu_render(&buffers, 1, &photons);
-    let error = rel_mse(&gpu.image, &cpu.image);
-    let ratio = mean_ratio(&gpu.image, &cpu.image);
-    println!("csg 48x36: GPU vs CPU relMSE {error:.3e}, mean ratio {ratio:.6?}");
-    assert!(error < 1e-6, "relMSE {error:.3e}");
-    for r in ratio {
-        assert!((r - 1.0).abs() < 1e-3, "mean ratio {ratio:?}");
-    }
+    let cpu = common::assert_twins_agree("csg 48x36", &buffers);
     // The CSG objects are in view: red (the ball's cut) and the lens's refraction.
     let red = cpu.image.pixels.iter().filter(|p| p[0] > 2.0 * p[1] && p[0] > 0.01).count();
     assert!(red > 20, "only {red} red pixels: the subtracted ball's surface is not seen");
@@ -475,22 +459,7 @@ children = [
     let scene = parse_scene(&text, std::path::Path::new("csg-implicit.toml")).unwrap_or_else(|e| panic!("{e}"));
     let buffers = common::buffers(&scene, 48, 36);
     assert!(buffers.implicit, "tori and superellipsoids need the implicit kernels");
-    let photons = photonix::render::PhotonSettings {
-        photons: 4000,
-        caustic_photons: 4000,
-        gather_rays: 1,
-        ..photonix::render::PhotonSettings::default()
-    };
-    let ctx = common::gpu();
-    let gpu = common::gpu_render(&ctx, &buffers, 1, &photons);
-    let cpu = common::cpu_render(&buffers, 1, &photons);
-    let error = rel_mse(&gpu.image, &cpu.image);
-    let ratio = mean_ratio(&gpu.image, &cpu.image);
-    println!("csg with implicit leaves 48x36: GPU vs CPU relMSE {error:.3e}, mean ratio {ratio:.6?}");
-    assert!(error < 1e-6, "relMSE {error:.3e}");
-    for r in ratio {
-        assert!((r - 1.0).abs() < 1e-3, "mean ratio {ratio:?}");
-    }
+    let cpu = common::assert_twins_agree("csg with implicit leaves 48x36", &buffers);
     // The torus's cut shows its inside: the white box's faces inside the red ring.
     let red = cpu.image.pixels.iter().filter(|p| p[0] > 2.0 * p[1] && p[0] > 0.01).count();
     assert!(red > 20, "only {red} red pixels: the torus is not seen");

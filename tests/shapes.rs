@@ -391,25 +391,7 @@ fn gpu_matches_cpu_on_every_shape() {
     let scene = photonix::scene::load_scene(&common::repo_path("scenes/shapes.toml")).expect("shipped scene loads");
     let buffers = common::buffers(&scene, 40, 30);
     assert!(buffers.analytic && buffers.implicit, "the scene needs the analytic_implicit kernels");
-    let photons = photonix::render::PhotonSettings {
-        photons: 4000,
-        caustic_photons: 4000,
-        gather_rays: 1,
-        ..photonix::render::PhotonSettings::default()
-    };
-    let ctx = common::gpu();
-    let gpu = common::gpu_render(&ctx, &buffers, 1, &photons);
-    let cpu = common::cpu_render(&buffers, 1, &photons);
-    let error = rel_mse(&gpu.image, &cpu.image);
-    let ratio = mean_ratio(&gpu.image, &cpu.image);
-    println!("shapes 40x30: GPU vs CPU relMSE {error:.3e}, mean ratio {ratio:.6?}");
-    // As in tests/gpu_vs_cpu.rs: the twins differ only where rounding flips a discrete choice
-    // (measured 1.9e-11 on lavapipe); 1e-6 leaves room for other drivers' exp2, log2 and atan
-    // and still catches a wrong shape, normal or pdf (those move relMSE above 1e-2).
-    assert!(error < 1e-6, "relMSE {error:.3e}");
-    for r in ratio {
-        assert!((r - 1.0).abs() < 1e-3, "mean ratio {ratio:?}");
-    }
+    let cpu = common::assert_twins_agree("shapes 40x30", &buffers);
     assert!(cpu.image.pixels.iter().filter(|p| p[0] > 0.0).count() > 600, "the image is mostly black");
 }
 

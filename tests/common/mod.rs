@@ -48,6 +48,26 @@ pub fn gpu_render(ctx: &GpuContext, buffers: &SceneBuffers, spp: u32, photons: &
     render_gpu(ctx, buffers, spp, Some(photons), 0, &mut |_, _| {}).expect("gpu render succeeds")
 }
 
+/// Renders `buffers` with both twins (one pass, 4000 + 4000 photons, one gather ray) and checks
+/// that they agree: relMSE below 1e-6 and each channel's mean within 0.1%. The twins differ only
+/// where rounding flips a discrete choice (about 1e-11 on lavapipe); 1e-6 leaves room for other
+/// drivers' exp2, log2 and atan and still catches a wrong shape, normal or pdf (those move relMSE
+/// above 1e-2). Returns the CPU render.
+pub fn assert_twins_agree(label: &str, buffers: &SceneBuffers) -> RenderOutput {
+    let photons = PhotonSettings { photons: 4000, caustic_photons: 4000, gather_rays: 1, ..PhotonSettings::default() };
+    let ctx = gpu();
+    let gpu = gpu_render(&ctx, buffers, 1, &photons);
+    let cpu = cpu_render(buffers, 1, &photons);
+    let error = photonix::io::metrics::rel_mse(&gpu.image, &cpu.image);
+    let ratio = photonix::io::metrics::mean_ratio(&gpu.image, &cpu.image);
+    println!("{label}: GPU vs CPU relMSE {error:.3e}, mean ratio {ratio:.6?}");
+    assert!(error < 1e-6, "{label}: relMSE {error:.3e}");
+    for r in ratio {
+        assert!((r - 1.0).abs() < 1e-3, "{label}: mean ratio {ratio:?}");
+    }
+    cpu
+}
+
 /// Small photon maps for fast tests.
 pub fn test_photons() -> PhotonSettings {
     PhotonSettings { photons: 20_000, caustic_photons: 20_000, gather_rays: 4, ..PhotonSettings::default() }
