@@ -32,6 +32,7 @@ use serde_json::{json, Value as Json};
 use toml_edit::{DocumentMut, Item};
 
 use super::document::{toml_to_json, SceneDocument};
+use crate::scene::analytic::transformed_box;
 use crate::scene::csg::{Csg, CsgNode, CsgOp};
 use crate::scene::{AnalyticKind, Geometry, LightKind, MaterialKind, ObjectDesc, Projection, Scene};
 
@@ -190,7 +191,10 @@ pub fn finite_bounds(scene: &Scene) -> (Vec3, Vec3) {
     }
     let boxes: Vec<(Vec3, Vec3)> = scene.objects.iter().map(object_bounds).collect();
     for instance in &scene.instances {
-        let (a, b) = transformed_box(boxes[instance.object as usize], &instance.world_from_object);
+        let (a, b) = {
+            let (lo, hi) = boxes[instance.object as usize];
+            transformed_box(&instance.world_from_object, lo, hi)
+        };
         lo = lo.min(a);
         hi = hi.max(b);
     }
@@ -327,19 +331,6 @@ fn object_bounds(object: &ObjectDesc) -> (Vec3, Vec3) {
     })
 }
 
-/// The axis-aligned bounds of box (lo, hi) moved by `m`.
-fn transformed_box((lo, hi): (Vec3, Vec3), m: &Affine3A) -> (Vec3, Vec3) {
-    (0..8).fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(a, b), i| {
-        let corner = Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        );
-        let p = m.transform_point3(corner);
-        (a.min(p), b.max(p))
-    })
-}
-
 /// The 12 triangles of box (lo, hi) moved by `m`, appended to `out`.
 fn box_triangles((lo, hi): (Vec3, Vec3), m: &Affine3A, out: &mut Vec<f32>) {
     let c = |i: usize| {
@@ -394,7 +385,10 @@ fn instance_json(scene: &Scene, range: std::ops::Range<usize>, fields: Json) -> 
         "boxes"
     } else {
         let (lo, hi) = copies.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), c| {
-            let (a, b) = transformed_box(object_bounds(&scene.objects[c.object as usize]), &c.world_from_object);
+            let (a, b) = {
+                let (lo, hi) = object_bounds(&scene.objects[c.object as usize]);
+                transformed_box(&c.world_from_object, lo, hi)
+            };
             (lo.min(a), hi.max(b))
         });
         box_triangles((lo, hi), &Affine3A::IDENTITY, parts.entry(first_material.unwrap_or(0)).or_default());

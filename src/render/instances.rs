@@ -11,6 +11,7 @@ use super::pack_csg::pack_csg;
 use crate::accel::{build_bvh, build_bvh_with_leaves, BvhError};
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, Primitive};
+use crate::scene::analytic::transformed_box;
 use crate::scene::{Geometry, Scene};
 
 /// The instanced part of the scene, to append after the world's BVH and primitives.
@@ -165,21 +166,6 @@ pub fn pack_instances(
 
 /// A packed object: (root node, end node, object-space bounds, area that holds photons).
 type PlacedObject = (u32, u32, (Vec3, Vec3), f32);
-
-/// The box around the box (lo, hi) moved by `m`.
-fn transformed_box(m: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
-    let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for corner in 0..8 {
-        let c = Vec3::new(
-            if corner & 1 == 0 { lo.x } else { hi.x },
-            if corner & 2 == 0 { lo.y } else { hi.y },
-            if corner & 4 == 0 { lo.z } else { hi.z },
-        );
-        let p = m.transform_point3(c);
-        out = (out.0.min(p), out.1.max(p));
-    }
-    out
-}
 
 /// The factor `m`'s linear part stretches a length by: its largest column norm, exact for
 /// rotations and axis scales (the usual placements), an estimate for shears.

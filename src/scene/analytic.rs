@@ -80,17 +80,7 @@ impl Analytic {
         let Some((lo, hi)) = self.object_bounds() else {
             return (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY));
         };
-        let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for corner in 0..8 {
-            let c = Vec3::new(
-                if corner & 1 == 0 { lo.x } else { hi.x },
-                if corner & 2 == 0 { lo.y } else { hi.y },
-                if corner & 4 == 0 { lo.z } else { hi.z },
-            );
-            let w = self.world_from_object.transform_point3(c);
-            out = (out.0.min(w), out.1.max(w));
-        }
-        out
+        transformed_box(&self.world_from_object, lo, hi)
     }
 
     /// The largest coordinate of the world bounds (0 for the plane): the scale of the shape's
@@ -503,6 +493,22 @@ fn object_normal_f64(kind: AnalyticKind, p: DVec3) -> DVec3 {
         AnalyticKind::Superellipsoid { e, n } => gauge(e as f64, n as f64, p).1.normalize(),
         _ => DVec3::Y,
     }
+}
+
+/// The axis-aligned box around the box (lo, hi) moved by `m`: its eight corners moved. Shapes,
+/// instances and the editor's solid view all bound their transformed boxes with it.
+pub fn transformed_box(m: &Affine3A, lo: Vec3, hi: Vec3) -> (Vec3, Vec3) {
+    let mut out = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for corner in 0..8 {
+        let c = Vec3::new(
+            if corner & 1 == 0 { lo.x } else { hi.x },
+            if corner & 2 == 0 { lo.y } else { hi.y },
+            if corner & 4 == 0 { lo.z } else { hi.z },
+        );
+        let p = m.transform_point3(c);
+        out = (out.0.min(p), out.1.max(p));
+    }
+    out
 }
 
 #[cfg(test)]
