@@ -88,7 +88,7 @@ Bsdf material_bsdf(Material m, Hit h) {
         vec3 v = vec3(1.0);
         WHEN(tex != NO_TEXTURE) v = texture_eval(tex, lookup_hit(h, k));
         if (mixing) {
-            m = materials[hash_point(h.p, level) < m.weight * v.x ? m.mix_b : m.mix_a];
+            m = material_at(hash_point(h.p, level) < m.weight * v.x ? m.mix_b : m.mix_a);
             level++;
             mixing = level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX;
             if (!mixing) pending = material_lookups(m);

@@ -2,14 +2,14 @@
 // where the method is explained. Included by trace.glsl in the `analytic` variant only.
 
 uint csg_word(uint a) {
-    return floatBitsToUint(shape_data[a]);
+    return floatBitsToUint(shape_word(a));
 }
 
 // Next crossing in (t_min, t_max) of leaf primitive i: a sphere, a triangle, a disc or a cone
 // side, and in the `csg` variant a torus or a superellipsoid (their root searches are the largest
 // code of all: a second copy here slowed every scene of the implicit variant by half on lavapipe).
 float csg_leaf_intersect(uint i, vec3 o, vec3 d, float t_min, float t_max) {
-    Primitive p = primitives[i];
+    Primitive p = primitive_at(i);
     uint kind = p.kind & PRIMITIVE_KIND_MASK;
     if (kind == PRIMITIVE_SPHERE) return ray_sphere(o, d, load3(p.p0), p.p1[0], t_min, t_max);
     if (kind == PRIMITIVE_TRIANGLE) return ray_triangle(o, d, load3(p.p0), load3(p.p1), load3(p.p2), t_min, t_max);
@@ -62,7 +62,7 @@ uvec2 csg_evaluate(uint a, uint program_length, uint inside, uint leaf) {
 // First visible surface of CSG primitive i in (0, t_max): its distance (INF: none) and, in
 // `hit`, the leaf primitive crossed there.
 float csg_intersect(uint i, vec3 o, vec3 d, float t_max, out uint hit) {
-    uint a = primitives[i].data;
+    uint a = primitive_at(i).data;
     uint count = csg_word(a + CSG_DATA_PRIMITIVES);
     uint program_length = csg_word(a + CSG_DATA_PROGRAM_LENGTH);
     uint first = frame.csg_first + csg_word(a + CSG_DATA_FIRST);

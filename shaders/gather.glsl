@@ -5,10 +5,13 @@
 // `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes shading.glsl,
 // grid.glsl and photon.glsl.
 
-// Field by field: a whole-struct copy out of either of two blocks makes glslang emit an OpStore
-// between different struct types, which the validation layer rejects.
-#define COPY_PHOTON(p, array, i) { p.position[0] = array[i].position[0]; p.position[1] = array[i].position[1]; \
-    p.position[2] = array[i].position[2]; p.flux_rg = array[i].flux_rg; p.flux_b_dir = array[i].flux_b_dir; }
+// Photon i of a map bound as words (five per photon, in the order of the Photon struct).
+#define PHOTON_WORD(map_texels, i, k) texelFetch(map_texels, int(5u * (i) + (k))).x
+#define FETCH_PHOTON(p, map_texels, i) { \
+    p.position[0] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 0u)); \
+    p.position[1] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 1u)); \
+    p.position[2] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 2u)); \
+    p.flux_rg = PHOTON_WORD(map_texels, i, 3u); p.flux_b_dir = PHOTON_WORD(map_texels, i, 4u); }
 
 // The volume map exists in the `media` variant only (its buffers are bound, and empty, in the
 // others), so scenes without media keep the two-map lookup.
@@ -16,18 +19,18 @@ Photon map_photon(uint map, uint i) {
     Photon p;
 #ifdef VARIANT_MEDIA
     if (map == MAP_VOLUME) {
-        COPY_PHOTON(p, volume_photons, i)
+        FETCH_PHOTON(p, volume_photons, i)
         return p;
     }
 #endif
-    if (map == MAP_GLOBAL) COPY_PHOTON(p, global_photons, i) else COPY_PHOTON(p, caustic_photons, i)
+    if (map == MAP_GLOBAL) FETCH_PHOTON(p, global_photons, i) else FETCH_PHOTON(p, caustic_photons, i)
     return p;
 }
 uint map_start(uint map, uint h) {
 #ifdef VARIANT_MEDIA
-    if (map == MAP_VOLUME) return volume_starts[h];
+    if (map == MAP_VOLUME) return texelFetch(volume_starts, int(h)).x;
 #endif
-    return map == MAP_GLOBAL ? global_starts[h] : caustic_starts[h];
+    return map == MAP_GLOBAL ? texelFetch(global_starts, int(h)).x : texelFetch(caustic_starts, int(h)).x;
 }
 
 // Irradiance at x (normal n, facing the side photons must arrive from) from the photons of

@@ -1,7 +1,7 @@
 // image_texture.glsl: image texture lookups in the shared texture buffer. CPU twin:
 // src/cpu/image_texture.rs (the contracts and the block layout are written there, once).
 // The including kernel declares
-//   layout(std430, binding = N) readonly buffer TextureData { uint texture_data[]; };
+//   uint texture_word(uint i), word i of the texture data (scene_fetch.glsl, or a probe's buffer);
 // An image is a block at word offset `at`: width, height, wrap, flags, then the texels row by row
 // (row 0 = the file's top row), two words each: half R | half G << 16, half B | half A << 16.
 
@@ -21,8 +21,8 @@ float image_half_to_f32(uint h) {
 // Texel (i, j) of the block at `at` of width w; i < w, j < height.
 vec4 image_fetch(uint at, uint w, uint i, uint j) {
     uint k = at + IMAGE_HEADER_WORDS + 2u * (j * w + i);
-    uint rg = texture_data[k];
-    uint ba = texture_data[k + 1u];
+    uint rg = texture_word(k);
+    uint ba = texture_word(k + 1u);
     return vec4(image_half_to_f32(rg & 0xffffu), image_half_to_f32(rg >> 16u), image_half_to_f32(ba & 0xffffu),
                 image_half_to_f32(ba >> 16u));
 }
@@ -52,9 +52,9 @@ float image_coord(float x) {
 
 // The texel whose square holds uv, no filtering.
 vec4 image_texel(uint at, vec2 uv) {
-    uint w = texture_data[at];
-    uint h = texture_data[at + 1u];
-    uint wrap = texture_data[at + 2u];
+    uint w = texture_word(at);
+    uint h = texture_word(at + 1u);
+    uint wrap = texture_word(at + 2u);
     precise float x = image_coord(float(w) * uv.x);
     precise float y = image_coord(float(h) * (1.0 - uv.y));
     return image_fetch(at, w, image_wrap(int(floor(x)), w, wrap), image_wrap(int(floor(y)), h, wrap));
@@ -63,9 +63,9 @@ vec4 image_texel(uint at, vec2 uv) {
 // Bilinear lookup; contract in src/cpu/image_texture.rs. `precise` forbids fused multiply-adds
 // and reordering, so the sums are rounded as on the CPU.
 vec4 image_lookup(uint at, vec2 uv) {
-    uint w = texture_data[at];
-    uint h = texture_data[at + 1u];
-    uint wrap = texture_data[at + 2u];
+    uint w = texture_word(at);
+    uint h = texture_word(at + 1u);
+    uint wrap = texture_word(at + 2u);
     precise float x = image_coord(float(w) * uv.x - 0.5);
     precise float y = image_coord(float(h) * (1.0 - uv.y) - 0.5);
     float x0 = floor(x);

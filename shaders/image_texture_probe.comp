@@ -9,6 +9,7 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 layout(std430, binding = 0) readonly buffer TextureData { uint texture_data[]; };
+uint texture_word(uint i) { return texture_data[i]; }
 layout(std430, binding = 1) readonly buffer Queries { uint queries[]; };
 layout(std430, binding = 2) writeonly buffer Results { vec4 results[]; };
 

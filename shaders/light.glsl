@@ -10,7 +10,7 @@ uint pick_light(float u, bool photons) {
     uint hi = frame.light_count - 1u;
     while (lo < hi) {
         uint mid = (lo + hi) / 2u;
-        if (u < (photons ? lights[mid].photon_cdf : lights[mid].cdf)) hi = mid; else lo = mid + 1u;
+        if (u < (photons ? light_at(mid).photon_cdf : light_at(mid).cdf)) hi = mid; else lo = mid + 1u;
     }
     return lo;
 }
@@ -30,7 +30,7 @@ float spot_falloff(Light l, vec3 w) {
 // word `base` of the texture data (layout at ENV_TEXELS). Texel (i, j) covers the directions of
 // polar angle theta in pi [j, j + 1] / H from +y and longitude phi in pi (2 [i, i + 1] / W - 1)
 // around +y, phi = 0 toward -z, pi/2 toward +x, before the rotation about +y.
-float env_float(uint word) { return uintBitsToFloat(texture_data[word]); }
+float env_float(uint word) { return uintBitsToFloat(texture_word(word)); }
 
 // The direction of image position (u, v) in [0, 1]^2, in world space.
 vec3 env_direction(uint base, vec2 uv) {
@@ -44,8 +44,8 @@ vec3 env_direction(uint base, vec2 uv) {
 
 // The texel (column, row) that world direction d falls in.
 uvec2 env_texel(uint base, vec3 d) {
-    uint w = texture_data[base + ENV_WIDTH];
-    uint h = texture_data[base + ENV_HEIGHT];
+    uint w = texture_word(base + ENV_WIDTH);
+    uint h = texture_word(base + ENV_HEIGHT);
     float c = env_float(base + ENV_COS_ROTATION);
     float s = env_float(base + ENV_SIN_ROTATION);
     vec3 local = vec3(c * d.x - s * d.z, d.y, c * d.z + s * d.x);
@@ -55,7 +55,7 @@ uvec2 env_texel(uint base, vec3 d) {
 }
 
 vec3 env_radiance_at(uint base, uvec2 t) {
-    uint k = base + ENV_TEXELS + 3u * (t.y * texture_data[base + ENV_WIDTH] + t.x);
+    uint k = base + ENV_TEXELS + 3u * (t.y * texture_word(base + ENV_WIDTH) + t.x);
     return vec3(env_float(k), env_float(k + 1u), env_float(k + 2u));
 }
 
@@ -70,8 +70,8 @@ vec3 environment_radiance(Light l, vec3 d) {
 vec3 distant_discs_radiance(vec3 d) {
     vec3 sum = vec3(0.0);
     for (uint i = 0u; i < frame.light_count; i++) {
-        if (lights[i].kind != LIGHT_DISTANT || lights[i].area <= 0.0) break;
-        if (dot(d, load3(lights[i].direction)) <= -lights[i].cos_outer) sum += load3(lights[i].intensity) / lights[i].area;
+        if (light_at(i).kind != LIGHT_DISTANT || light_at(i).area <= 0.0) break;
+        if (dot(d, load3(light_at(i).direction)) <= -light_at(i).cos_outer) sum += load3(light_at(i).intensity) / light_at(i).area;
     }
     return sum;
 }
@@ -92,8 +92,8 @@ uint env_search(uint first, uint n, float u) {
 // the radiance from it divided by its solid-angle pdf.
 void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
     uint base = l.primitive;
-    uint w = texture_data[base + ENV_WIDTH];
-    uint h = texture_data[base + ENV_HEIGHT];
+    uint w = texture_word(base + ENV_WIDTH);
+    uint h = texture_word(base + ENV_HEIGHT);
     uint marginal = base + ENV_TEXELS + 3u * w * h;
     uint j = env_search(marginal, h, u.y);
     float m0 = env_float(marginal + j);
@@ -141,7 +141,7 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
         float dist2 = dot(to_light, to_light);
         vec3 wi = to_light / sqrt(dist2);
         float cos_l = -dot(h.ng, wi);
-        vec3 weight = cos_l > 0.0 ? material_emission(materials[h.material], h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
+        vec3 weight = cos_l > 0.0 ? material_emission(material_at(h.material), h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
         // The shadow ray stops short of the point by its offset over the cosine there: a hit on
         // the light's own surface moves along a grazing ray by its error over that cosine.
         return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2));
@@ -181,7 +181,7 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
         Hit h = shape_sample(l.primitive, u_pos, inv_pdf);
         o = h.p + h.ng * h.eps;
         d = cosine_direction(h.ng, u_dir);
-        power = PI * inv_pdf * material_emission(materials[h.material], h);
+        power = PI * inv_pdf * material_emission(material_at(h.material), h);
         return;
     }
     case LIGHT_ENVIRONMENT:

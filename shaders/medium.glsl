@@ -39,7 +39,7 @@ Hit medium_hit(vec3 p, vec3 wo) {
 // ---- Heterogeneous media: density, delta and ratio tracking (contracts in the twin) ----------
 
 float medium_density(uint medium, vec3 p) {
-    Medium m = media[medium];
+    Medium m = medium_at(medium);
     if (m.density == NO_TEXTURE) return 1.0;
     vec3 lo = load3(m.bounds_min);
     vec3 hi = load3(m.bounds_max);
@@ -47,7 +47,7 @@ float medium_density(uint medium, vec3 p) {
     return max(texture_eval(m.density, medium_hit(p, vec3(0.0, 0.0, 1.0))).x, 0.0);
 }
 
-vec3 medium_sigma_t_at(uint medium, vec3 p) { return medium_sigma_t(media[medium]) * medium_density(medium, p); }
+vec3 medium_sigma_t_at(uint medium, vec3 p) { return medium_sigma_t(medium_at(medium)) * medium_density(medium, p); }
 
 vec2 medium_box_span(Medium m, vec3 o, vec3 d, float t_seg) {
     float t0 = 0.0;
@@ -72,7 +72,7 @@ uvec2 medium_walk_key(vec2 u) { return uvec2(u * 16777216.0); }
 float medium_walk_rand(uvec2 key, uint i) { return rand_unit(pcg4d(uvec4(key, i, MEDIUM_WALK_SALT)).x); }
 
 vec3 medium_ratio_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
-    Medium m = media[medium];
+    Medium m = medium_at(medium);
     vec3 st = medium_sigma_t(m);
     vec2 span = medium_box_span(m, o, d, t_seg);
     vec3 tr = vec3(1.0);
@@ -94,7 +94,7 @@ vec3 medium_ratio_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
 }
 
 MediumEvent medium_delta_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
-    Medium m = media[medium];
+    Medium m = medium_at(medium);
     vec3 ss = load3(m.sigma_s);
     vec3 st = medium_sigma_t(m);
     float mu = m.majorant;
@@ -135,8 +135,8 @@ MediumEvent medium_delta_tracking(uint medium, vec3 o, vec3 d, float t_seg, vec2
 // Transmittance along o + t d, t in [0, t), of the medium (contract: the twin's
 // medium_transmittance). u seeds a heterogeneous medium's ratio tracking.
 vec3 medium_transmittance(uint medium, vec3 o, vec3 d, float t, vec2 u) {
-    if (media[medium].density != NO_TEXTURE) return medium_ratio_tracking(medium, o, d, t, u);
-    return medium_beer_lambert(medium_sigma_t(media[medium]), t);
+    if (medium_at(medium).density != NO_TEXTURE) return medium_ratio_tracking(medium, o, d, t, u);
+    return medium_beer_lambert(medium_sigma_t(medium_at(medium)), t);
 }
 
 // Free-flight sampling over a segment of length t_seg (infinite for a ray that leaves the
@@ -145,7 +145,7 @@ vec3 medium_transmittance(uint medium, vec3 o, vec3 d, float t, vec2 u) {
 // chromatic media stay unbiased; grey media get weights of exactly the albedo (scattering) and
 // 1 (passing). Heterogeneous media: delta tracking seeded by u (see the twin).
 MediumEvent medium_sample(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
-    Medium m = media[medium];
+    Medium m = medium_at(medium);
     if (m.density != NO_TEXTURE) return medium_delta_tracking(medium, o, d, t_seg, u);
     vec3 sa = load3(m.sigma_a);
     vec3 ss = load3(m.sigma_s);
@@ -177,7 +177,7 @@ MediumEvent medium_sample(uint medium, vec3 o, vec3 d, float t_seg, vec2 u) {
 // the scattering point samples point and spot lights itself (heterogeneous media, which have no
 // equiangular shafts).
 Bsdf phase_bsdf(uint medium, vec3 wo) {
-    Medium m = media[medium];
+    Medium m = medium_at(medium);
     Bsdf b;
     b.kind = MATERIAL_PHASE;
     b.color0 = vec3(1.0);
@@ -195,7 +195,7 @@ Bsdf phase_bsdf(uint medium, vec3 wo) {
 // a medium boundary's interior when it went against the outward normal, its exterior when it
 // went along it; any other surface leaves the medium as it was.
 uint medium_after(uint prim, vec3 ng, vec3 d, uint medium) {
-    Primitive p = primitives[hit_primitive(prim)];
+    Primitive p = primitive_at(hit_primitive(prim));
     if ((p.kind & PRIMITIVE_FLAG_MEDIUM) == 0u) return medium;
     return dot(d, ng) < 0.0 ? p.interior : p.exterior;
 }

@@ -1,8 +1,8 @@
 // Procedural 3D patterns with POV-Ray's names and parameters, colour maps and bump gradients.
 // CPU twin: src/cpu/pattern.rs (contracts, block layout and sources are documented there).
 //
-// The including kernel declares the parameter buffer before including this file:
-//   layout(std430, binding = N) readonly buffer TextureData { uint texture_data[]; };
+// The including kernel declares, before including this file:
+//   uint texture_word(uint i), word i of the texture data (scene_fetch.glsl, or a probe's buffer);
 // Float arithmetic is written in the twin's order and stored in `precise` variables, which forbid
 // fused multiply-adds, so that both sides round alike; sines come from pattern_sin_turns on both.
 // Loops are bounded (at most 10 octaves, 125 crackle cells, 10 wave sources, 256 map entries),
@@ -14,7 +14,7 @@
 // Pattern kinds, wave shapes, the block layout and the limits come from constants.glsl
 // (src/layout/constants.rs), which the including kernel includes first.
 
-float pattern_word(uint i) { return uintBitsToFloat(texture_data[i]); }
+float pattern_word(uint i) { return uintBitsToFloat(texture_word(i)); }
 
 vec3 pattern_vec3_at(uint i) { return vec3(pattern_word(i), pattern_word(i + 1u), pattern_word(i + 2u)); }
 
@@ -319,7 +319,7 @@ float pattern_raw(uint at, uint kind, vec3 p, vec3 turb, uint octaves, float ome
         return pattern_checker(p);
     case PATTERN_CRACKLE:
         return pattern_crackle(p, pattern_vec3_at(params), pattern_word(params + 3u), pattern_word(params + 4u),
-                               texture_data[params + 5u] != 0u);
+                               texture_word(params + 5u) != 0u);
     case PATTERN_DENTS: {
         float n = noise_unit(p);
         precise float r = n * n * n;
@@ -431,9 +431,9 @@ float pattern_wave(float value, uint wave, float frequency, float phase, float e
 // The pattern block at `at` at point p in pattern space, in [0, 1]. Contract: pattern_value in
 // src/cpu/pattern.rs.
 float pattern_value(uint at, vec3 p) {
-    uint kind = texture_data[at + PATTERN_KIND];
+    uint kind = texture_word(at + PATTERN_KIND);
     vec3 turb = pattern_vec3_at(at + PATTERN_TURBULENCE);
-    uint octaves = texture_data[at + PATTERN_OCTAVES];
+    uint octaves = texture_word(at + PATTERN_OCTAVES);
     float omega = pattern_word(at + PATTERN_OMEGA);
     float lambda = pattern_word(at + PATTERN_LAMBDA);
     precise vec3 q = p;
@@ -442,7 +442,7 @@ float pattern_value(uint at, vec3 p) {
     }
     float raw = pattern_raw(at, kind, q, turb, octaves, omega, lambda);
     if (kind == PATTERN_CHECKER || kind == PATTERN_BRICK || kind == PATTERN_HEXAGON) return raw;
-    return pattern_wave(raw, texture_data[at + PATTERN_WAVE], pattern_word(at + PATTERN_FREQUENCY),
+    return pattern_wave(raw, texture_word(at + PATTERN_WAVE), pattern_word(at + PATTERN_FREQUENCY),
                         pattern_word(at + PATTERN_PHASE), pattern_word(at + PATTERN_EXPONENT));
 }
 
@@ -464,7 +464,7 @@ vec3 pattern_gradient(uint at, vec3 p, float h) {
 
 // The colour map block at `at` at value v (POV-Ray's BlendMap::Search); contract in the twin.
 vec3 color_map_eval(uint at, float v) {
-    uint n = min(texture_data[at], MAX_COLOR_MAP_ENTRIES);
+    uint n = min(texture_word(at), MAX_COLOR_MAP_ENTRIES);
     if (n == 0u) return vec3(0.0);  // unreachable: the host packs at least one entry (validated)
     uint last = n - 1u;
     if (v >= pattern_word(at + 1u + 4u * last)) return pattern_vec3_at(at + 2u + 4u * last);

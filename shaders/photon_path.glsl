@@ -8,7 +8,7 @@ void trace_photon_path(uint path, EmitParams params) {
     if (frame.light_count == 0u) return;
     uint seed = frame.seed;
     uint dim = RNG_PHOTON_DOMAIN;
-    Light l = lights[pick_light(rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK), true)];
+    Light l = light_at(pick_light(rand1(path, params.pass, seed, dim + RNG_PHOTON_LIGHT_PICK), true));
     // A scene whose lights all give direct light only picks one with probability 0.
     if (l.photon_probability <= 0.0) return;
     vec3 o, d, flux;
@@ -56,14 +56,14 @@ void trace_photon_path(uint path, EmitParams params) {
         {
             h = shape_hit(prim, o, d, t);
 #ifdef VARIANT_MEDIA
-            if (materials[h.material].kind == MATERIAL_NULL) {
+            if (material_at(h.material).kind == MATERIAL_NULL) {
                 // An invisible boundary: straight through into the medium beyond, not a bounce.
                 medium = medium_after(prim, h.ng, d, medium);
                 o = offset_origin(h, wo, BSDF_TRANSMISSION);
                 continue;
             }
 #endif
-            b = material_bsdf(materials[h.material], h);
+            b = material_bsdf(material_at(h.material), h);
         }
         uint lobes = bsdf_flags(b);
         if (lobes == 0u) return;  // a black surface keeps nothing and reflects nothing

@@ -41,12 +41,14 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
 layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Grids { GridParams grids[MAP_COUNT]; };
-layout(std430, binding = SCENE_BINDINGS + 2) readonly buffer GlobalPhotons { Photon global_photons[]; };
-layout(std430, binding = SCENE_BINDINGS + 3) readonly buffer GlobalStarts { uint global_starts[]; };
-layout(std430, binding = SCENE_BINDINGS + 4) readonly buffer CausticPhotons { Photon caustic_photons[]; };
-layout(std430, binding = SCENE_BINDINGS + 5) readonly buffer CausticStarts { uint caustic_starts[]; };
-layout(std430, binding = SCENE_BINDINGS + 6) readonly buffer VolumePhotons { Photon volume_photons[]; };
-layout(std430, binding = SCENE_BINDINGS + 7) readonly buffer VolumeStarts { uint volume_starts[]; };
+// The photon maps and their bucket starts as uniform texel buffers of words (R32UI; a photon is
+// five of them): see scene_bindings.glsl on why texel fetches.
+layout(binding = SCENE_BINDINGS + 2) uniform usamplerBuffer global_photons;
+layout(binding = SCENE_BINDINGS + 3) uniform usamplerBuffer global_starts;
+layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer caustic_photons;
+layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer caustic_starts;
+layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer volume_photons;
+layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer volume_starts;
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -151,9 +153,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                 // samples ignore the density, and in sparse smoke most would land in clear
                 // air while the rest carry all the light (speckles); there the free flight's
                 // scattering point, placed by the density, samples these lights too.
-                if (ray == RAY_CAMERA && part == 0u && !shaft_done && media[medium].density == NO_TEXTURE) {
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done && medium_at(medium).density == NO_TEXTURE) {
                     vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
-                    Light l = lights[pick_light(ue.x, false)];
+                    Light l = light_at(pick_light(ue.x, false));
                     // A spot's samples stay in its cone, where its light is.
                     vec2 span = l.kind == LIGHT_SPOT ? spot_span(o, d, t, load3(l.position), load3(l.direction), l.cos_outer) : vec2(0.0, t);
                     if ((l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) && l.pick_probability > 0.0 && span.x < span.y) {
@@ -164,7 +166,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                         float r2 = dot(to_light, to_light);
                         float r = sqrt(r2);
                         vec3 wi = to_light / r;
-                        Medium md = media[medium];
+                        Medium md = medium_at(medium);
                         vec3 c = throughput * medium_transmittance(medium, o, d, te, ue.zw) * load3(md.sigma_s)
                             * (phase_hg(dot(-d, wi), md.g) * spot_falloff(l, -wi) / (r2 * pdf * l.pick_probability))
                             * load3(l.intensity);
@@ -201,7 +203,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             h = medium_hit(o + d * t, -d);
         } else if (prim != NO_LIGHT) {
             h = shape_hit(prim, o, d, t);
-            null_hit = materials[h.material].kind == MATERIAL_NULL;
+            null_hit = material_at(h.material).kind == MATERIAL_NULL;
         }
         if (null_hit) {
             // An invisible boundary: straight through into the medium beyond, not a bounce.
@@ -271,7 +273,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             if (ray == RAY_CAMERA && part == 0u) {
                 vec3 seen = distant_discs_radiance(d);
                 WHEN(frame.environment != NO_LIGHT) {
-                    seen += environment_radiance(lights[frame.environment], d);
+                    seen += environment_radiance(light_at(frame.environment), d);
                 }
                 terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * seen;
             }
@@ -290,7 +292,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
         } else
 #endif
         {
-            Material m = materials[h.material];
+            Material m = material_at(h.material);
             // Everything a mirror or glass shows is the specular term. Emission leaves the front
             // face only; it counts wherever a camera path meets it, since estimate lobes end the
             // path and light sampling covers them. A gather path counts none: direct light and

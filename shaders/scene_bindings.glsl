@@ -3,14 +3,20 @@
 // bindings from SCENE_BINDINGS on.
 
 layout(std430, binding = BINDING_FRAME) readonly buffer Frame { FrameParams frame; };
-layout(std430, binding = BINDING_NODES) readonly buffer Nodes { BvhNode nodes[]; };
-layout(std430, binding = BINDING_PRIMITIVES) readonly buffer Primitives { Primitive primitives[]; };
-layout(std430, binding = BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
-layout(std430, binding = BINDING_LIGHTS) readonly buffer Lights { Light lights[]; };
-layout(std430, binding = BINDING_TEXTURES) readonly buffer Textures { Texture textures[]; };
-layout(std430, binding = BINDING_TEXTURE_DATA) readonly buffer TextureData { uint texture_data[]; };
-layout(std430, binding = BINDING_SHAPE_DATA) readonly buffer ShapeData { float shape_data[]; };
-layout(std430, binding = BINDING_MEDIA) readonly buffer Media { Medium media[]; };
+// The rest as uniform texel buffers: on lavapipe a texel fetch goes through gallivm's vectorised
+// texture path (one gather of four words per lane for an RGBA32UI texel), where a storage-buffer
+// read costs about 15 scalar instructions per lane and word; the kernels' process CPU time fell
+// by a third (BENCHMARKS.md, "Texel buffers on lavapipe"). Structs are RGBA32UI texels (all
+// are multiples of 16 bytes), word arrays R32UI; scene_fetch.glsl reads them back as structs.
+// `frame` stays a storage buffer: every lane reads the same words, which gallivm loads once.
+layout(binding = BINDING_NODES) uniform usamplerBuffer node_texels;
+layout(binding = BINDING_PRIMITIVES) uniform usamplerBuffer primitive_texels;
+layout(binding = BINDING_MATERIALS) uniform usamplerBuffer material_texels;
+layout(binding = BINDING_LIGHTS) uniform usamplerBuffer light_texels;
+layout(binding = BINDING_TEXTURES) uniform usamplerBuffer texture_texels;
+layout(binding = BINDING_TEXTURE_DATA) uniform usamplerBuffer texture_words;
+layout(binding = BINDING_SHAPE_DATA) uniform usamplerBuffer shape_words;
+layout(binding = BINDING_MEDIA) uniform usamplerBuffer medium_texels;
 
 // Features a scene may lack, fixed when the host creates the pipeline (specialization constants,
 // `KernelVariant::specialization`): the driver compiles their code out where they are false, so
@@ -19,3 +25,5 @@ layout(std430, binding = BINDING_MEDIA) readonly buffer Media { Medium media[]; 
 // Unlike the `// variant:` builds they cost no extra SPIR-V. Both default to present.
 layout(constant_id = 0) const bool SCENE_HAS_INSTANCES = true;
 layout(constant_id = 1) const bool SCENE_HAS_CSG = true;
+
+#include "scene_fetch.glsl"

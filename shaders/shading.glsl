@@ -45,7 +45,7 @@ vec3 offset_origin(Hit h, vec3 wo, uint lobe_flags) {
 // The primitive rays leaving a hit on primitive i must skip: i itself when it is a smooth
 // triangle (see trace_ray's twin), else none.
 uint ray_skip(uint i) {
-    return (primitives[hit_primitive(i)].kind & PRIMITIVE_FLAG_SMOOTH) != 0u ? i : NO_LIGHT;
+    return (primitive_kind(hit_primitive(i)) & PRIMITIVE_FLAG_SMOOTH) != 0u ? i : NO_LIGHT;
 }
 
 // A shadow ray toward a point sampled on a light, and the radiance the light reflects at the
@@ -88,7 +88,7 @@ vec2 grid_sample(uint grid, vec2 u, uint stream, uint sample_index) {
 ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim, uint penumbra_since, uint ray) {
     ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0), 1u, false);
     if (frame.light_count == 0u) return none;
-    Light l = lights[pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false)];
+    Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
     // A scene whose lights all give photons only picks one with probability 0.
     if (l.pick_probability <= 0.0) return none;
     // A scattering point in a homogeneous medium leaves point and spot lights to the camera

@@ -48,23 +48,23 @@ float ray_sphere(vec3 o, vec3 d, vec3 c, float r, float t_min, float t_max) {
     return (t > t_min && t < t_max) ? t : INF;
 }
 
-// Rows of the affine map at shape_data[a] (3x4) applied to a point, to a vector, and its
+// Rows of the affine map at shape_word(a) (3x4) applied to a point, to a vector, and its
 // transposed linear part applied to a vector (object normals to the world with object_from_world).
 // The analytic shapes and the instances use them.
 vec3 affine_point(uint a, vec3 x) {
-    return vec3(shape_data[a] * x.x + shape_data[a + 1u] * x.y + shape_data[a + 2u] * x.z + shape_data[a + 3u],
-                shape_data[a + 4u] * x.x + shape_data[a + 5u] * x.y + shape_data[a + 6u] * x.z + shape_data[a + 7u],
-                shape_data[a + 8u] * x.x + shape_data[a + 9u] * x.y + shape_data[a + 10u] * x.z + shape_data[a + 11u]);
+    return vec3(shape_word(a) * x.x + shape_word(a + 1u) * x.y + shape_word(a + 2u) * x.z + shape_word(a + 3u),
+                shape_word(a + 4u) * x.x + shape_word(a + 5u) * x.y + shape_word(a + 6u) * x.z + shape_word(a + 7u),
+                shape_word(a + 8u) * x.x + shape_word(a + 9u) * x.y + shape_word(a + 10u) * x.z + shape_word(a + 11u));
 }
 vec3 affine_vector(uint a, vec3 v) {
-    return vec3(shape_data[a] * v.x + shape_data[a + 1u] * v.y + shape_data[a + 2u] * v.z,
-                shape_data[a + 4u] * v.x + shape_data[a + 5u] * v.y + shape_data[a + 6u] * v.z,
-                shape_data[a + 8u] * v.x + shape_data[a + 9u] * v.y + shape_data[a + 10u] * v.z);
+    return vec3(shape_word(a) * v.x + shape_word(a + 1u) * v.y + shape_word(a + 2u) * v.z,
+                shape_word(a + 4u) * v.x + shape_word(a + 5u) * v.y + shape_word(a + 6u) * v.z,
+                shape_word(a + 8u) * v.x + shape_word(a + 9u) * v.y + shape_word(a + 10u) * v.z);
 }
 vec3 affine_transpose_vector(uint a, vec3 v) {
-    return vec3(shape_data[a], shape_data[a + 1u], shape_data[a + 2u]) * v.x
-         + vec3(shape_data[a + 4u], shape_data[a + 5u], shape_data[a + 6u]) * v.y
-         + vec3(shape_data[a + 8u], shape_data[a + 9u], shape_data[a + 10u]) * v.z;
+    return vec3(shape_word(a), shape_word(a + 1u), shape_word(a + 2u)) * v.x
+         + vec3(shape_word(a + 4u), shape_word(a + 5u), shape_word(a + 6u)) * v.y
+         + vec3(shape_word(a + 8u), shape_word(a + 9u), shape_word(a + 10u)) * v.z;
 }
 
 #ifdef VARIANT_ANALYTIC
@@ -284,7 +284,7 @@ float analytic_intersect(Primitive p, vec3 o, vec3 d, float t_min, float t_max) 
 
 // Distance to the first surface of primitive i along o + t d with t in (t_min, t_max), or INF.
 float shape_intersect(uint i, vec3 o, vec3 d, float t_min, float t_max) {
-    Primitive p = primitives[i];
+    Primitive p = primitive_at(i);
     uint kind = p.kind & PRIMITIVE_KIND_MASK;
 #ifdef VARIANT_ANALYTIC
     float t = INF;
@@ -320,18 +320,18 @@ void triangle_uvs(Primitive p, out vec2 uv0, out vec2 uv1, out vec2 uv2) {
         return;
     }
     uint a = p.data;
-    uv0 = vec2(shape_data[a], shape_data[a + 1u]);
-    uv1 = vec2(shape_data[a + 2u], shape_data[a + 3u]);
-    uv2 = vec2(shape_data[a + 4u], shape_data[a + 5u]);
+    uv0 = vec2(shape_word(a), shape_word(a + 1u));
+    uv1 = vec2(shape_word(a + 2u), shape_word(a + 3u));
+    uv2 = vec2(shape_word(a + 4u), shape_word(a + 5u));
 }
 
 // The shading normal of smooth triangle p at x (barycentrics b), and h.shift; projects dpdu and
 // dpdv onto the shading normal's tangent plane (see the twin for the method and its sources).
 vec3 triangle_smooth(Primitive p, vec3 x, vec3 b, vec3 p0, vec3 p1, vec3 p2, inout Hit h) {
     uint a = p.data + TRIANGLE_DATA_NORMALS;
-    vec3 n0 = vec3(shape_data[a], shape_data[a + 1u], shape_data[a + 2u]);
-    vec3 n1 = vec3(shape_data[a + 3u], shape_data[a + 4u], shape_data[a + 5u]);
-    vec3 n2 = vec3(shape_data[a + 6u], shape_data[a + 7u], shape_data[a + 8u]);
+    vec3 n0 = vec3(shape_word(a), shape_word(a + 1u), shape_word(a + 2u));
+    vec3 n1 = vec3(shape_word(a + 3u), shape_word(a + 4u), shape_word(a + 5u));
+    vec3 n2 = vec3(shape_word(a + 6u), shape_word(a + 7u), shape_word(a + 8u));
     vec3 n = b.x * n0 + b.y * n1 + b.z * n2;
     float len = length(n);
     n = len > 0.0 ? n / len : h.ng;
@@ -360,9 +360,9 @@ mat3 sphere_rotation(Primitive p) {
     if (p.data == NO_DATA) return mat3(1.0);
     uint a = p.data;
     // GLSL matrices are column-major: the transposed rows are its columns.
-    return transpose(mat3(shape_data[a], shape_data[a + 1u], shape_data[a + 2u],
-                          shape_data[a + 3u], shape_data[a + 4u], shape_data[a + 5u],
-                          shape_data[a + 6u], shape_data[a + 7u], shape_data[a + 8u]));
+    return transpose(mat3(shape_word(a), shape_word(a + 1u), shape_word(a + 2u),
+                          shape_word(a + 3u), shape_word(a + 4u), shape_word(a + 5u),
+                          shape_word(a + 6u), shape_word(a + 7u), shape_word(a + 8u)));
 }
 
 #ifdef VARIANT_ANALYTIC
@@ -371,7 +371,7 @@ mat3 sphere_rotation(Primitive p) {
 void analytic_surface(Primitive p, vec3 x, bool wants_uv, inout Hit h) {
     uint ow = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
     uint wo = p.data + SHAPE_DATA_WORLD_FROM_OBJECT;
-    float size = shape_data[p.data + SHAPE_DATA_SIZE];
+    float size = shape_word(p.data + SHAPE_DATA_SIZE);
     uint kind = p.kind & PRIMITIVE_KIND_MASK;
     vec3 q = affine_point(ow, x);
     vec3 n = vec3(0.0, 1.0, 0.0);
@@ -455,7 +455,7 @@ void analytic_surface(Primitive p, vec3 x, bool wants_uv, inout Hit h) {
 vec3 analytic_sample(Primitive p, vec2 u, out float inv_pdf) {
     uint ow = p.data + SHAPE_DATA_OBJECT_FROM_WORLD;
     uint wo = p.data + SHAPE_DATA_WORLD_FROM_OBJECT;
-    float det = shape_data[p.data + SHAPE_DATA_DET];
+    float det = shape_word(p.data + SHAPE_DATA_DET);
     uint kind = p.kind & PRIMITIVE_KIND_MASK;
     float phi = 2.0 * PI * u.y;
     float sin_phi = sin(phi);
@@ -511,7 +511,7 @@ vec3 analytic_sample(Primitive p, vec2 u, out float inv_pdf) {
 
 // Fills the surface fields of h for point x on primitive i (x is on the surface).
 void shape_surface(uint i, vec3 x, inout Hit h) {
-    Primitive p = primitives[i];
+    Primitive p = primitive_at(i);
     h.p = x;
     h.prim = i;
     h.material = p.material;
@@ -603,9 +603,9 @@ void instance_to_world(uint a, vec3 x, uint kind, inout Hit h) {
     h.shift = affine_vector(wfo, h.shift);
     if (kind > PRIMITIVE_SPHERE) {
         vec3 ax = abs(x);
-        h.eps = max(h.eps * shape_data[a + INSTANCE_DATA_SCALE], SHAPE_EPSILON_SCALE * max(max(ax.x, ax.y), ax.z));
+        h.eps = max(h.eps * shape_word(a + INSTANCE_DATA_SCALE), SHAPE_EPSILON_SCALE * max(max(ax.x, ax.y), ax.z));
     }
-    uint material = floatBitsToUint(shape_data[a + INSTANCE_DATA_MATERIAL]);
+    uint material = floatBitsToUint(shape_word(a + INSTANCE_DATA_MATERIAL));
     if (material != NO_DATA) h.material = material;
 }
 
@@ -623,7 +623,7 @@ Hit shape_hit(uint i, vec3 o, vec3 d, float t) {
         xo = affine_point(a + INSTANCE_DATA_OBJECT_FROM_WORLD, x);
     }
     shape_surface(prim, xo, h);
-    WHEN(k != NO_DATA) { instance_to_world(a, x, primitives[prim].kind & PRIMITIVE_KIND_MASK, h); }
+    WHEN(k != NO_DATA) { instance_to_world(a, x, primitive_kind(prim) & PRIMITIVE_KIND_MASK, h); }
     h.prim = i;
     return h;
 }
@@ -631,7 +631,7 @@ Hit shape_hit(uint i, vec3 o, vec3 d, float t) {
 // A point on primitive i for the uniform numbers u, as a hit record, and 1/pdf of such points
 // by area (see the twin): triangles (Turk 1990) and spheres uniformly, so 1/pdf is their area.
 Hit shape_sample(uint i, vec2 u, out float inv_pdf) {
-    Primitive p = primitives[i];
+    Primitive p = primitive_at(i);
     uint kind = p.kind & PRIMITIVE_KIND_MASK;
     vec3 x;
     if (kind == PRIMITIVE_SPHERE) {

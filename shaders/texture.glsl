@@ -11,7 +11,7 @@ vec3 texture_lookup_point(Texture t, Hit h) {
 
 // The colour of texture `index` at hit h (scalar textures are grey).
 vec3 texture_eval(uint index, Hit h) {
-    Texture t = textures[index];
+    Texture t = texture_at(index);
     vec3 p = texture_lookup_point(t, h);
     vec3 c = load3(t.value);
 #ifdef VARIANT_TEXTURED

@@ -17,9 +17,9 @@ float ray_box(vec3 o, vec3 inv_d, vec3 lo, vec3 hi, float t_max) {
 // with probability 1 - opacity. Camera rays, shadow rays and photons all decide here.
 bool passes_through(uint id, vec3 o, vec3 d, float t) {
     bool passes = false;
-    WHEN((primitives[hit_primitive(id)].kind & PRIMITIVE_FLAG_ALPHA) != 0u) {
+    WHEN((primitive_kind(hit_primitive(id)) & PRIMITIVE_FLAG_ALPHA) != 0u) {
         Hit h = shape_hit(id, o, d, t);
-        passes = hash_point(h.p, id) >= material_opacity(materials[h.material], h);
+        passes = hash_point(h.p, id) >= material_opacity(material_at(h.material), h);
     }
     return passes;
 }
@@ -66,11 +66,11 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
         if (any_hit && hit != NO_LIGHT) return hit;
     }
 #endif
-    uint flat_end = nodes[0].skip_count >> BVH_COUNT_BITS;
+    uint flat_end = bvh_node_skip_count(0u) >> BVH_COUNT_BITS;
     // Without instances node flat_end does not exist: only read it behind a loop of one turn
     // (a select would read it unconditionally).
     uint world_end = flat_end;
-    WHEN(SCENE_HAS_INSTANCES && frame.instance_count > 0u) { world_end = nodes[flat_end].skip_count >> BVH_COUNT_BITS; }
+    WHEN(SCENE_HAS_INSTANCES && frame.instance_count > 0u) { world_end = bvh_node_skip_count(flat_end) >> BVH_COUNT_BITS; }
     vec3 ro = o;
     vec3 rd = d;
     vec3 inv_d = 1.0 / d;
@@ -92,7 +92,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             base = 0u;
             continue;
         }
-        BvhNode n = nodes[node];
+        BvhNode n = bvh_node(node);
         uint count = n.skip_count & BVH_COUNT_MASK;
         uint skip = n.skip_count >> BVH_COUNT_BITS;
         if (ray_box(ro, inv_d, load3(n.aabb_min), load3(n.aabb_max), t_hit * len) == INF) {
@@ -115,8 +115,8 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             inv_d = 1.0 / rd;
             base = (n.first + 1u) * frame.primitive_count;
             resume = skip;
-            node = floatBitsToUint(shape_data[a + INSTANCE_DATA_ROOT]);
-            end = floatBitsToUint(shape_data[a + INSTANCE_DATA_END]);
+            node = floatBitsToUint(shape_word(a + INSTANCE_DATA_ROOT));
+            end = floatBitsToUint(shape_word(a + INSTANCE_DATA_END));
             entered = true;
         }
         if (entered) continue;
@@ -126,7 +126,7 @@ uint trace_ray(vec3 o, vec3 d, float t_max, bool any_hit, uint ignore, out float
             // A CSG object reports the leaf primitive it shows (csg.glsl), so callers see an
             // ordinary primitive (an instance's: base + leaf). Behind WHEN: lavapipe would run its
             // walk under masks for every primitive of every scene of the analytic variant.
-            bool is_csg = SCENE_HAS_CSG && (primitives[i].kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
+            bool is_csg = SCENE_HAS_CSG && (primitive_kind(i) & PRIMITIVE_KIND_MASK) == PRIMITIVE_CSG;
             WHEN(is_csg) {
                 uint leaf;
                 float tc = csg_intersect(i, ro, rd, t_hit * len, leaf) / len;

@@ -1,16 +1,16 @@
 // Voxel grids (TEXTURE_VOXELS): trilinear lookup of a block of floats. CPU twin: src/cpu/voxel.rs
-// (contract there). The including kernel declares texture_data[].
+// (contract there). The including kernel declares texture_word(i).
 
 #ifndef VOXEL_GLSL
 #define VOXEL_GLSL
 
 float voxel_at(uint at, uvec3 n, uint x, uint y, uint z) {
-    return uintBitsToFloat(texture_data[at + VOXEL_HEADER_WORDS + x + n.x * (y + n.y * z)]);
+    return uintBitsToFloat(texture_word(at + VOXEL_HEADER_WORDS + x + n.x * (y + n.y * z)));
 }
 
 float voxel_lookup(uint at, vec3 p) {
     if (any(lessThan(p, vec3(0.0))) || any(greaterThan(p, vec3(1.0)))) return 0.0;
-    uvec3 n = uvec3(texture_data[at], texture_data[at + 1u], texture_data[at + 2u]);
+    uvec3 n = uvec3(texture_word(at), texture_word(at + 1u), texture_word(at + 2u));
     vec3 nf = vec3(n);
     precise vec3 c = p * nf - 0.5;
     vec3 x = clamp(c, vec3(0.0), nf - 1.0);
@@ -31,7 +31,7 @@ float ground_fog_density(vec3 p, float offset, float alt, uint turb_at) {
     precise vec3 q = p;
     if (turb_at != NO_DATA) {
         vec3 turb = pattern_vec3_at(turb_at + PATTERN_TURBULENCE);
-        q = p + turbulence_vector(p, texture_data[turb_at + PATTERN_OCTAVES], pattern_word(turb_at + PATTERN_OMEGA),
+        q = p + turbulence_vector(p, texture_word(turb_at + PATTERN_OCTAVES), pattern_word(turb_at + PATTERN_OMEGA),
                                   pattern_word(turb_at + PATTERN_LAMBDA)) * turb;
     }
     precise float h = (q.y - offset) / alt;

@@ -134,30 +134,40 @@ impl<'a> Recorder<'a> {
                 .map_err(|e| GpuError::vk("vkAllocateDescriptorSets", label, e))?
         };
         let mut buffer_infos = Vec::with_capacity(descriptor_count as usize);
+        let mut views = Vec::new();
         let mut set_index = 0;
         for command in &commands {
             if let Command::Dispatch { kernel, buffers, .. } = command {
                 if kernel.binding_count > 0 {
-                    let infos: Vec<vk::DescriptorBufferInfo> = buffers
-                        .iter()
-                        .map(|b| vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size })
-                        .collect();
-                    buffer_infos.push((sets[set_index], infos));
+                    for (binding, b) in buffers.iter().enumerate() {
+                        let binding = binding as u32;
+                        if let Some(format) = kernel.texel_bindings.format(binding) {
+                            views.push((sets[set_index], binding, b.texel_view(format)?));
+                        } else {
+                            let info = vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size };
+                            buffer_infos.push((sets[set_index], binding, info));
+                        }
+                    }
                     set_index += 1;
                 }
             }
         }
         let writes: Vec<vk::WriteDescriptorSet> = buffer_infos
             .iter()
-            .flat_map(|(set, infos)| {
-                infos.iter().enumerate().map(|(binding, info)| {
-                    vk::WriteDescriptorSet::default()
-                        .dst_set(*set)
-                        .dst_binding(binding as u32)
-                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
-                        .buffer_info(std::slice::from_ref(info))
-                })
+            .map(|(set, binding, info)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(*set)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .buffer_info(std::slice::from_ref(info))
             })
+            .chain(views.iter().map(|(set, binding, view)| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(*set)
+                    .dst_binding(*binding)
+                    .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
+                    .texel_buffer_view(std::slice::from_ref(view))
+            }))
             .collect();
         // SAFETY: the sets are freshly allocated and unused; every buffer is live and its range
         // (`vk_size`) is within maxStorageBufferRange, checked at creation.

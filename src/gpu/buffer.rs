@@ -6,7 +6,7 @@
 //!
 //! [`GpuContext`]: super::GpuContext
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
@@ -29,6 +29,9 @@ pub struct Buffer {
     pub(super) vk_size: u64,
     pub(super) handle: vk::Buffer,
     allocation: Option<Allocation>,
+    /// The RGBA32UI (0) and R32UI (1) views kernels with texel bindings read it through, each
+    /// made on first use.
+    texel_views: [OnceLock<vk::BufferView>; 2],
     pub(super) shared: Arc<Shared>,
 }
 
@@ -56,6 +59,7 @@ impl Buffer {
             });
         }
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         Buffer::create(shared, name, size, usage, MemoryLocation::GpuOnly)
@@ -86,7 +90,15 @@ impl Buffer {
             .map_err(|e| GpuError::vk_alloc("vkCreateBuffer", name, size, e))?;
         // From here on, `buffer`'s Drop cleans up whatever part was made.
         let mut buffer =
-            Buffer { name: name.to_string(), size, vk_size, handle, allocation: None, shared: shared.clone() };
+            Buffer {
+                name: name.to_string(),
+                size,
+                vk_size,
+                handle,
+                allocation: None,
+                texel_views: [OnceLock::new(), OnceLock::new()],
+                shared: shared.clone(),
+            };
         // SAFETY: `handle` is a live buffer of this device.
         let requirements = unsafe { device.get_buffer_memory_requirements(handle) };
         let allocation = {
@@ -109,6 +121,39 @@ impl Buffer {
         bound.map_err(|e| GpuError::vk_alloc("vkBindBufferMemory", name, size, e))?;
         shared.set_name(handle, name);
         Ok(buffer)
+    }
+
+    /// The whole buffer as texels of `format` (RGBA32UI or R32UI), for kernels that bind it as
+    /// a uniform texel buffer; made on first use and kept as long as the buffer.
+    pub(super) fn texel_view(&self, format: vk::Format) -> Result<vk::BufferView, GpuError> {
+        let (cell, texel_bytes) = match format {
+            vk::Format::R32G32B32A32_UINT => (&self.texel_views[0], 16),
+            vk::Format::R32_UINT => (&self.texel_views[1], 4),
+            _ => unreachable!("TexelBindings only names RGBA32UI and R32UI"),
+        };
+        if let Some(view) = cell.get() {
+            return Ok(*view);
+        }
+        let limit = self.shared.info.max_texel_buffer_elements;
+        if self.vk_size / texel_bytes > limit {
+            return Err(GpuError::BufferTooLarge {
+                name: self.name.clone(),
+                size: self.size,
+                limit_name: "maxTexelBufferElements times the texel size",
+                limit: limit.saturating_mul(texel_bytes),
+            });
+        }
+        let info = vk::BufferViewCreateInfo::default().buffer(self.handle).format(format).offset(0).range(self.vk_size);
+        // SAFETY: the buffer is live, was created with UNIFORM_TEXEL_BUFFER usage (storage
+        // buffers are), its size is a multiple of 16 bytes and within the limit checked above;
+        // both formats are required of every Vulkan device for uniform texel buffers.
+        let view = unsafe { self.shared.device.create_buffer_view(&info, None) }
+            .map_err(|e| GpuError::vk("vkCreateBufferView", &self.name, e))?;
+        if let Err(view) = cell.set(view) {
+            // SAFETY: the view was just made and is not used anywhere.
+            unsafe { self.shared.device.destroy_buffer_view(view, None) };
+        }
+        Ok(*cell.get().expect("set above"))
     }
 
     /// The host address of the buffer's memory, when it is mapped and coherent.
@@ -159,8 +204,15 @@ impl Drop for Buffer {
     fn drop(&mut self) {
         let mut guard = self.shared.allocator();
         // SAFETY: every submission that used this buffer was waited for before the call that
-        // recorded it returned, and the buffer is destroyed exactly once.
-        unsafe { self.shared.device.destroy_buffer(self.handle, None) };
+        // recorded it returned, and the buffer is destroyed exactly once, after its view.
+        unsafe {
+            for cell in &mut self.texel_views {
+                if let Some(view) = cell.take() {
+                    self.shared.device.destroy_buffer_view(view, None);
+                }
+            }
+            self.shared.device.destroy_buffer(self.handle, None)
+        };
         if let (Some(allocation), Some(allocator)) = (self.allocation.take(), guard.as_mut()) {
             // Freeing can only fail on a bookkeeping bug in the allocator; nothing to do then.
             let _ = allocator.free(allocation);

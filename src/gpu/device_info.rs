@@ -20,6 +20,8 @@ pub struct DeviceInfo {
     pub api_version: String,
     /// Largest storage-buffer binding, in bytes.
     pub max_storage_buffer_range: u64,
+    /// Most texels a texel-buffer view may span.
+    pub max_texel_buffer_elements: u64,
     /// Largest single memory allocation, in bytes.
     pub max_memory_allocation_size: u64,
     pub max_compute_workgroup_invocations: u32,

@@ -274,6 +274,7 @@ fn describe_device(instance: &ash::Instance, physical: vk::PhysicalDevice, index
         driver: driver_text,
         api_version: version_string(api_version),
         max_storage_buffer_range: u64::from(limits.max_storage_buffer_range),
+        max_texel_buffer_elements: u64::from(limits.max_texel_buffer_elements),
         max_memory_allocation_size: maintenance3.max_memory_allocation_size,
         max_compute_workgroup_invocations: limits.max_compute_work_group_invocations,
         max_compute_workgroup_count: limits.max_compute_work_group_count,

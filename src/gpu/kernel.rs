@@ -16,6 +16,7 @@ const SPIRV_MAGIC: u32 = 0x0723_0203;
 pub struct Kernel {
     pub(super) name: String,
     pub(super) binding_count: u32,
+    pub(super) texel_bindings: TexelBindings,
     pub(super) push_constant_size: u32,
     shader: vk::ShaderModule,
     /// Null when the kernel has no bindings.
@@ -36,6 +37,7 @@ impl Kernel {
         name: &str,
         spirv: &[u32],
         binding_count: u32,
+        texel_bindings: TexelBindings,
         push_constant_size: u32,
         constants: &[u32],
     ) -> Result<Kernel, GpuError> {
@@ -52,6 +54,7 @@ impl Kernel {
         let mut kernel = Kernel {
             name: name.to_string(),
             binding_count,
+            texel_bindings,
             push_constant_size,
             shader: vk::ShaderModule::null(),
             set_layout: vk::DescriptorSetLayout::null(),
@@ -72,7 +75,7 @@ impl Kernel {
                 .map(|b| {
                     vk::DescriptorSetLayoutBinding::default()
                         .binding(b)
-                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .descriptor_type(texel_bindings.descriptor_type(b))
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 })
@@ -128,6 +131,36 @@ impl Kernel {
 
     pub fn push_constant_size(&self) -> u32 {
         self.push_constant_size
+    }
+}
+
+/// The bindings of a kernel that are uniform texel buffers (`usamplerBuffer` in GLSL) over the
+/// buffer bound there rather than storage buffers: bit b of `rgba` makes binding b a buffer of
+/// RGBA32UI texels (16 bytes each), bit b of `words` one of R32UI texels (a word each).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TexelBindings {
+    pub rgba: u32,
+    pub words: u32,
+}
+
+impl TexelBindings {
+    /// The texel format of binding `b`, or None for a storage buffer.
+    pub(super) fn format(self, b: u32) -> Option<vk::Format> {
+        let bit = 1u32.checked_shl(b).unwrap_or(0);
+        if self.rgba & bit != 0 {
+            Some(vk::Format::R32G32B32A32_UINT)
+        } else if self.words & bit != 0 {
+            Some(vk::Format::R32_UINT)
+        } else {
+            None
+        }
+    }
+
+    pub(super) fn descriptor_type(self, b: u32) -> vk::DescriptorType {
+        match self.format(b) {
+            Some(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            None => vk::DescriptorType::STORAGE_BUFFER,
+        }
     }
 }
 

@@ -59,7 +59,7 @@ impl Submitter {
         Ok(submitter)
     }
 
-    /// Makes the descriptor pool hold at least `sets` sets and `descriptors` storage buffers,
+    /// Makes the descriptor pool hold at least `sets` sets and `descriptors` storage buffers and texel buffers each,
     /// and resets it.
     pub(super) fn ensure_descriptors(&mut self, sets: u32, descriptors: u32) -> Result<(), GpuError> {
         let device = &self.shared.device;
@@ -77,7 +77,11 @@ impl Submitter {
         self.descriptor_pool = vk::DescriptorPool::null();
         self.descriptor_set_capacity = 0;
         self.descriptor_capacity = 0;
-        let sizes = [vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: descriptors }];
+        // Either kind may take all the descriptors of a batch.
+        let sizes = [
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: descriptors },
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER, descriptor_count: descriptors },
+        ];
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(sets).pool_sizes(&sizes);
         // SAFETY: valid create info; destroyed in Drop or when replaced.
         self.descriptor_pool = unsafe { device.create_descriptor_pool(&info, None) }

@@ -9,8 +9,10 @@ use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
     SceneBuffers,
 };
-use crate::gpu::{Buffer, GpuContext, GpuError, Kernel};
-use crate::layout::constants::{LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
+use crate::gpu::{Buffer, GpuContext, GpuError, Kernel, TexelBindings};
+use crate::layout::constants::{
+    BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES, BINDING_SHAPE_DATA,
+    BINDING_TEXTURES, BINDING_TEXTURE_DATA, LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
 use crate::layout::{DispatchRange, EmitParams, GridParams, Medium, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
@@ -27,12 +29,29 @@ fn kernel(
     ctx: &GpuContext,
     name: &str,
     bindings: u32,
+    texel_bindings: TexelBindings,
     push_bytes: usize,
     constants: &[u32],
 ) -> Result<Kernel, GpuError> {
     let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
-    ctx.create_specialized_kernel(name, &spirv, bindings, push_bytes as u32, constants)
+    ctx.create_specialized_kernel(name, &spirv, bindings, texel_bindings, push_bytes as u32, constants)
 }
+
+/// The scene bindings the kernels read as texel buffers (shaders/scene_bindings.glsl): on
+/// lavapipe a texel fetch goes through gallivm's vectorised texture path, where a storage-buffer
+/// read costs about 15 scalar instructions per lane and word.
+const SCENE_TEXELS: TexelBindings = TexelBindings {
+    rgba: 1 << BINDING_NODES
+        | 1 << BINDING_PRIMITIVES
+        | 1 << BINDING_MATERIALS
+        | 1 << BINDING_LIGHTS
+        | 1 << BINDING_TEXTURES
+        | 1 << BINDING_MEDIA,
+    words: 1 << BINDING_TEXTURE_DATA | 1 << BINDING_SHAPE_DATA,
+};
+/// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8).
+const RENDER_TEXELS: TexelBindings =
+    TexelBindings { rgba: SCENE_TEXELS.rgba, words: SCENE_TEXELS.words | 0b11_1111 << (SCENE_BINDINGS + 2) };
 
 /// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
 /// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
@@ -78,40 +97,41 @@ impl GpuKernels {
         ctx: &GpuContext,
         name: &str,
         bindings: u32,
+        texels: TexelBindings,
         push_bytes: usize,
         constants: &[u32],
     ) -> Result<&'k Kernel, GpuError> {
         if let Some(k) = cell.get() {
             return Ok(k);
         }
-        let k = kernel(ctx, name, bindings, push_bytes, constants)?;
+        let k = kernel(ctx, name, bindings, texels, push_bytes, constants)?;
         Ok(cell.get_or_init(|| k))
     }
 
     fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("emit_photons");
         let constants = self.variant.specialization();
-        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, size_of::<EmitParams>(), &constants)
+        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, SCENE_TEXELS, size_of::<EmitParams>(), &constants)
     }
     fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_count, ctx, "grid_count", 3, 0, &[])
+        Self::get(&self.grid_count, ctx, "grid_count", 3, TexelBindings::default(), 0, &[])
     }
     fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan, ctx, "grid_scan", 2, 4, &[])
+        Self::get(&self.grid_scan, ctx, "grid_scan", 2, TexelBindings::default(), 4, &[])
     }
     fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, 4, &[])
+        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, TexelBindings::default(), 4, &[])
     }
     fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, 0, &[])
+        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, TexelBindings::default(), 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, 0, &[])
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, TexelBindings::default(), 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
         let constants = self.variant.specialization();
-        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, size_of::<DispatchRange>(), &constants)
+        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, RENDER_TEXELS, size_of::<DispatchRange>(), &constants)
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what

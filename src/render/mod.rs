@@ -365,6 +365,7 @@ mod tests {
             driver: String::new(),
             api_version: "1.3.0".to_string(),
             max_storage_buffer_range: 1 << 27,
+            max_texel_buffer_elements: 1 << 27,
             max_memory_allocation_size: 1 << 31,
             max_compute_workgroup_invocations: 1024,
             max_compute_workgroup_count: [65535; 3],
