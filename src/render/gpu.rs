@@ -40,7 +40,7 @@ fn kernel(
 /// The scene bindings the kernels read as texel buffers (shaders/scene_bindings.glsl): on
 /// lavapipe a texel fetch goes through gallivm's vectorised texture path, where a storage-buffer
 /// read costs about 15 scalar instructions per lane and word.
-const SCENE_TEXELS: TexelBindings = TexelBindings {
+pub const SCENE_TEXELS: TexelBindings = TexelBindings {
     rgba: 1 << BINDING_NODES
         | 1 << BINDING_PRIMITIVES
         | 1 << BINDING_MATERIALS

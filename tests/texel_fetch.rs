@@ -1,0 +1,71 @@
+//! The scene's texel buffers read back as structs: `texel_probe.comp` reads element 1 of every
+//! scene struct through its loader in shaders/scene_fetch.glsl (RGBA32UI texels, field by field)
+//! and stores it to a storage buffer of that struct. A loader that took a field from the wrong
+//! word, or a wrong texel stride, would bring back a different element.
+
+use photonix::gpu::{GpuContext, GpuOptions};
+use photonix::layout::constants::SCENE_BINDINGS;
+use photonix::layout::{gpu_struct_layouts, FrameParams};
+use photonix::render::gpu::SCENE_TEXELS;
+
+/// Two elements of `words` words each, every word distinct (`0x40SSKKJJ`: struct S, word K of
+/// the pair, J = K ^ 0xa5), normal floats, so a misplaced field cannot match by accident.
+fn pattern(struct_index: u32, words: u32) -> Vec<u32> {
+    (0..2 * words).map(|k| 0x4000_0000 | (struct_index << 16) | (k << 8) | (k ^ 0xa5)).collect()
+}
+
+#[test]
+fn every_scene_struct_round_trips_through_its_texel_loader() {
+    let gpu = GpuContext::new(&GpuOptions { device: None, validation: true })
+        .unwrap_or_else(|e| panic!("cannot open the GPU: {e}"));
+    let spirv = photonix::shaders::spirv("texel_probe").expect("build.rs compiles shaders/texel_probe.comp");
+    let size = |name: &str| {
+        let layouts = gpu_struct_layouts();
+        layouts.iter().find(|(n, _, _)| *n == name).unwrap_or_else(|| panic!("{name} is a shared struct")).2 / 4
+    };
+    // Scene bindings in order: frame, nodes, primitives, materials, lights, textures, texture
+    // words, shape words, media (shaders/scene_bindings.glsl).
+    let structs = ["BvhNode", "Primitive", "Material", "Light", "Texture", "Medium"];
+    let sent: Vec<(&str, Vec<u32>)> =
+        structs.iter().enumerate().map(|(i, name)| (*name, pattern(i as u32 + 1, size(name)))).collect();
+    let words_of = |name: &str| &sent.iter().find(|(n, _)| *n == name).unwrap().1;
+    let texture_words: Vec<u32> = (0..8).map(|k| 0x4070_0000 | k).collect();
+    let shape_words: Vec<u32> = (0..8).map(|k| 0x4080_0000 | k).collect();
+
+    let frame = gpu.upload("frame", &[FrameParams::default()]).unwrap();
+    let scene: Vec<_> = [
+        words_of("BvhNode"),
+        words_of("Primitive"),
+        words_of("Material"),
+        words_of("Light"),
+        words_of("Texture"),
+        &texture_words,
+        &shape_words,
+        words_of("Medium"),
+    ]
+    .iter()
+    .map(|w| gpu.upload("scene part", w).unwrap())
+    .collect();
+    let outputs: Vec<_> = structs
+        .iter()
+        .map(|name| gpu.upload(name, &vec![0u32; size(name) as usize]).unwrap())
+        .chain(std::iter::once(gpu.upload("words", &[0u32; 4]).unwrap()))
+        .collect();
+    let bound: Vec<_> = std::iter::once(&frame).chain(&scene).chain(&outputs).collect();
+    assert_eq!(bound.len() as u32, SCENE_BINDINGS + 7);
+    let probe = gpu
+        .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, SCENE_TEXELS, 0, &[])
+        .expect("the probe matches its layout");
+    gpu.run("texel_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
+
+    for ((name, words), out) in sent.iter().zip(&outputs) {
+        let back: Vec<u32> = gpu.download(out).unwrap();
+        let half = words.len() / 2;
+        assert_eq!(back, words[half..], "{name}: the loader's element 1 differs from the one sent");
+    }
+    let words: Vec<u32> = gpu.download(outputs.last().unwrap()).unwrap();
+    let node = words_of("BvhNode");
+    let primitive = words_of("Primitive");
+    let expected = [texture_words[5], shape_words[5], node[node.len() - 1], primitive[primitive.len() / 2 + 3]];
+    assert_eq!(words, expected, "texture word, shape word, node skip/count, primitive kind");
+}
