@@ -5,26 +5,13 @@
 // `global_starts[]`, `caustic_photons[]` and `caustic_starts[]`, and includes shading.glsl,
 // grid.glsl and photon.glsl.
 
-// Photon i of a map bound as words (five per photon, in the order of the Photon struct).
-#define PHOTON_WORD(map_texels, i, k) texelFetch(map_texels, int(5u * (i) + (k))).x
-#define FETCH_PHOTON(p, map_texels, i) { \
-    p.position[0] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 0u)); \
-    p.position[1] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 1u)); \
-    p.position[2] = uintBitsToFloat(PHOTON_WORD(map_texels, i, 2u)); \
-    p.flux_rg = PHOTON_WORD(map_texels, i, 3u); p.flux_b_dir = PHOTON_WORD(map_texels, i, 4u); }
-
 // The volume map exists in the `media` variant only (its buffers are bound, and empty, in the
 // others), so scenes without media keep the two-map lookup.
 Photon map_photon(uint map, uint i) {
-    Photon p;
 #ifdef VARIANT_MEDIA
-    if (map == MAP_VOLUME) {
-        FETCH_PHOTON(p, volume_photons, i)
-        return p;
-    }
+    if (map == MAP_VOLUME) return fetch_photon(volume_photons, i);
 #endif
-    if (map == MAP_GLOBAL) FETCH_PHOTON(p, global_photons, i) else FETCH_PHOTON(p, caustic_photons, i)
-    return p;
+    return map == MAP_GLOBAL ? fetch_photon(global_photons, i) : fetch_photon(caustic_photons, i);
 }
 uint map_start(uint map, uint h) {
 #ifdef VARIANT_MEDIA

@@ -1,6 +1,18 @@
 // Hashed spatial grid over photons: cells, hashing and the deterministic order inside a bucket.
 // CPU twin: src/cpu/grid.rs.
 
+// Photon i of a map bound as a texel buffer of words (R32UI, five per photon in the order of the
+// Photon struct): the kernels that read maps at random read them this way (see scene_bindings.glsl).
+Photon fetch_photon(usamplerBuffer words, uint i) {
+    int k = int(5u * i);
+    Photon p;
+    p.position = float[3](uintBitsToFloat(texelFetch(words, k).x), uintBitsToFloat(texelFetch(words, k + 1).x),
+                          uintBitsToFloat(texelFetch(words, k + 2).x));
+    p.flux_rg = texelFetch(words, k + 3).x;
+    p.flux_b_dir = texelFetch(words, k + 4).x;
+    return p;
+}
+
 ivec3 grid_cell(vec3 p, float cell_size) { return ivec3(floor(p / cell_size)); }
 
 // Spatial hash of Teschner et al. 2003; the three primes are theirs.

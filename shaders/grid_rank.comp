@@ -11,8 +11,10 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 layout(std430, binding = 0) readonly buffer Grid { GridParams grid; };
-layout(std430, binding = 1) readonly buffer Starts { uint starts[]; };
-layout(std430, binding = 2) readonly buffer Scattered { Photon scattered[]; };
+// The starts and the scattered photons as texel buffers of words: every invocation reads its
+// whole bucket, and texel fetches are the cheap reads on lavapipe (scene_bindings.glsl).
+layout(binding = 1) uniform usamplerBuffer starts;
+layout(binding = 2) uniform usamplerBuffer scattered;
 layout(std430, binding = 3) writeonly buffer Ranked { Photon ranked[]; };
 
 #include "grid.glsl"
@@ -20,13 +22,13 @@ layout(std430, binding = 3) writeonly buffer Ranked { Photon ranked[]; };
 void main() {
     uint i = GLOBAL_INDEX;
     if (i >= grid.photon_count) return;
-    Photon p = scattered[i];
+    Photon p = fetch_photon(scattered, i);
     uint h = grid_hash(grid_cell(load3(p.position), grid.cell_size), grid.table_mask);
-    uint begin = starts[h];
-    uint end = starts[h + 1u];
+    uint begin = texelFetch(starts, int(h)).x;
+    uint end = texelFetch(starts, int(h + 1u)).x;
     uint rank = 0u;
     for (uint j = begin; j < end; j++) {
-        Photon q = scattered[j];
+        Photon q = fetch_photon(scattered, j);
         // Bit-identical photons are ordered by slot: any order of them gives the same bytes.
         if (photon_less(q, p) || (j < i && !photon_less(p, q))) rank++;
     }

@@ -126,7 +126,7 @@ impl GpuKernels {
         Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, TexelBindings::default(), 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, TexelBindings::default(), 0, &[])
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, TexelBindings { rgba: 0, words: 0b110 }, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
