@@ -89,16 +89,15 @@ impl Buffer {
         let handle = unsafe { device.create_buffer(&info, None) }
             .map_err(|e| GpuError::vk_alloc("vkCreateBuffer", name, size, e))?;
         // From here on, `buffer`'s Drop cleans up whatever part was made.
-        let mut buffer =
-            Buffer {
-                name: name.to_string(),
-                size,
-                vk_size,
-                handle,
-                allocation: None,
-                texel_views: [OnceLock::new(), OnceLock::new()],
-                shared: shared.clone(),
-            };
+        let mut buffer = Buffer {
+            name: name.to_string(),
+            size,
+            vk_size,
+            handle,
+            allocation: None,
+            texel_views: [OnceLock::new(), OnceLock::new()],
+            shared: shared.clone(),
+        };
         // SAFETY: `handle` is a live buffer of this device.
         let requirements = unsafe { device.get_buffer_memory_requirements(handle) };
         let allocation = {

@@ -59,9 +59,10 @@ impl fmt::Display for DeviceInfo {
         writeln!(f, "    device-local memory: {}", human_bytes(self.device_local_heap_bytes))?;
         writeln!(
             f,
-            "    largest storage buffer: {}, largest allocation: {}",
+            "    largest storage buffer: {}, largest allocation: {}, largest texel buffer: {} texels",
             human_bytes(self.max_storage_buffer_range),
-            human_bytes(self.max_memory_allocation_size)
+            human_bytes(self.max_memory_allocation_size),
+            self.max_texel_buffer_elements
         )?;
         writeln!(
             f,

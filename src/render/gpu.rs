@@ -12,7 +12,8 @@ use super::{
 use crate::gpu::{Buffer, GpuContext, GpuError, Kernel, TexelBindings};
 use crate::layout::constants::{
     BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES, BINDING_SHAPE_DATA,
-    BINDING_TEXTURES, BINDING_TEXTURE_DATA, LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE};
+    BINDING_TEXTURES, BINDING_TEXTURE_DATA, LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE,
+};
 use crate::layout::{DispatchRange, EmitParams, GridParams, Medium, Photon};
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
