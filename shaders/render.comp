@@ -40,7 +40,7 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
-layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Grids { GridParams grids[MAP_COUNT]; };
+layout(scalar, binding = SCENE_BINDINGS + 1) uniform Grids { GridParams grids[MAP_COUNT]; };
 // The photon maps and their bucket starts as uniform texel buffers of words (R32UI; a photon is
 // five of them): see scene_bindings.glsl on why texel fetches.
 layout(binding = SCENE_BINDINGS + 2) uniform usamplerBuffer global_photons;

@@ -2,13 +2,16 @@
 // the same order (`DeviceScene::bindings` in src/render/gpu.rs). A kernel's own buffers take the
 // bindings from SCENE_BINDINGS on.
 
-layout(std430, binding = BINDING_FRAME) readonly buffer Frame { FrameParams frame; };
+// `frame` is a uniform buffer: every lane reads the same words, and gallivm loads a uniform
+// buffer's word at a uniform address once for all lanes, where it reads a storage buffer lane by
+// lane. The scalar layout is std430's for our structs (no vectors in them).
+#extension GL_EXT_scalar_block_layout : require
+layout(scalar, binding = BINDING_FRAME) uniform Frame { FrameParams frame; };
 // The rest as uniform texel buffers: on lavapipe a texel fetch goes through gallivm's vectorised
 // texture path (one gather of four words per lane for an RGBA32UI texel), where a storage-buffer
 // read costs about 15 scalar instructions per lane and word; the kernels' process CPU time fell
 // by a third (BENCHMARKS.md, "Texel buffers on lavapipe"). Structs are RGBA32UI texels (all
 // are multiples of 16 bytes), word arrays R32UI; scene_fetch.glsl reads them back as structs.
-// `frame` stays a storage buffer: every lane reads the same words, which gallivm loads once.
 layout(binding = BINDING_NODES) uniform usamplerBuffer node_texels;
 layout(binding = BINDING_PRIMITIVES) uniform usamplerBuffer primitive_texels;
 layout(binding = BINDING_MATERIALS) uniform usamplerBuffer material_texels;

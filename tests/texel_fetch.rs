@@ -6,7 +6,7 @@
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::layout::constants::SCENE_BINDINGS;
 use photonix::layout::{gpu_struct_layouts, FrameParams};
-use photonix::render::gpu::SCENE_TEXELS;
+use photonix::render::gpu::SCENE_BINDING_TYPES;
 
 /// Two elements of `words` words each, every word distinct (`0x40SSKKJJ`: struct S, word K of
 /// the pair, J = K ^ 0xa5), normal floats, so a misplaced field cannot match by accident.
@@ -54,7 +54,7 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     let bound: Vec<_> = std::iter::once(&frame).chain(&scene).chain(&outputs).collect();
     assert_eq!(bound.len() as u32, SCENE_BINDINGS + 7);
     let probe = gpu
-        .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, SCENE_TEXELS, 0, &[])
+        .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, SCENE_BINDING_TYPES, 0, &[])
         .expect("the probe matches its layout");
     gpu.run("texel_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
 

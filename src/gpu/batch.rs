@@ -141,11 +141,12 @@ impl<'a> Recorder<'a> {
                 if kernel.binding_count > 0 {
                     for (binding, b) in buffers.iter().enumerate() {
                         let binding = binding as u32;
-                        if let Some(format) = kernel.texel_bindings.format(binding) {
+                        if let Some(format) = kernel.binding_types.format(binding) {
                             views.push((sets[set_index], binding, b.texel_view(format)?));
                         } else {
+                            let ty = kernel.binding_types.descriptor_type(binding);
                             let info = vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size };
-                            buffer_infos.push((sets[set_index], binding, info));
+                            buffer_infos.push((sets[set_index], binding, ty, info));
                         }
                     }
                     set_index += 1;
@@ -154,11 +155,11 @@ impl<'a> Recorder<'a> {
         }
         let writes: Vec<vk::WriteDescriptorSet> = buffer_infos
             .iter()
-            .map(|(set, binding, info)| {
+            .map(|(set, binding, ty, info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(*set)
                     .dst_binding(*binding)
-                    .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                    .descriptor_type(*ty)
                     .buffer_info(std::slice::from_ref(info))
             })
             .chain(views.iter().map(|(set, binding, view)| {

@@ -60,6 +60,7 @@ impl Buffer {
         }
         let usage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::UNIFORM_TEXEL_BUFFER
+            | vk::BufferUsageFlags::UNIFORM_BUFFER
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
         Buffer::create(shared, name, size, usage, MemoryLocation::GpuOnly)
@@ -128,7 +129,7 @@ impl Buffer {
         let (cell, texel_bytes) = match format {
             vk::Format::R32G32B32A32_UINT => (&self.texel_views[0], 16),
             vk::Format::R32_UINT => (&self.texel_views[1], 4),
-            _ => unreachable!("TexelBindings only names RGBA32UI and R32UI"),
+            _ => unreachable!("BindingTypes only names RGBA32UI and R32UI"),
         };
         if let Some(view) = cell.get() {
             return Ok(*view);

@@ -14,7 +14,7 @@ use super::device::{check_same_device, Shared};
 use super::device_info::DeviceInfo;
 use super::error::GpuError;
 use super::instance::{choose_device, InstanceOwner};
-use super::kernel::{Kernel, TexelBindings};
+use super::kernel::{BindingTypes, Kernel};
 use super::submitter::Submitter;
 
 /// How to open the GPU.
@@ -252,23 +252,23 @@ impl GpuContext {
         binding_count: u32,
         push_constant_size: u32,
     ) -> Result<Kernel, GpuError> {
-        self.create_specialized_kernel(name, spirv, binding_count, TexelBindings::default(), push_constant_size, &[])
+        self.create_specialized_kernel(name, spirv, binding_count, BindingTypes::default(), push_constant_size, &[])
     }
 
     /// `create_kernel` with specialization constants: `constants[i]` is the value of
-    /// `constant_id = i` (a bool as 0 or 1); the bindings `texel_bindings` names are uniform
+    /// `constant_id = i` (a bool as 0 or 1); the bindings `binding_types` names are uniform
     /// texel buffers over the buffer bound there, the others storage buffers.
     pub fn create_specialized_kernel(
         &self,
         name: &str,
         spirv: &[u32],
         binding_count: u32,
-        texel_bindings: TexelBindings,
+        binding_types: BindingTypes,
         push_constant_size: u32,
         constants: &[u32],
     ) -> Result<Kernel, GpuError> {
         let kernel =
-            Kernel::create(&self.shared, name, spirv, binding_count, texel_bindings, push_constant_size, constants)?;
+            Kernel::create(&self.shared, name, spirv, binding_count, binding_types, push_constant_size, constants)?;
         self.shared.check_validation()?;
         Ok(kernel)
     }

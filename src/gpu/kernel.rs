@@ -16,7 +16,7 @@ const SPIRV_MAGIC: u32 = 0x0723_0203;
 pub struct Kernel {
     pub(super) name: String,
     pub(super) binding_count: u32,
-    pub(super) texel_bindings: TexelBindings,
+    pub(super) binding_types: BindingTypes,
     pub(super) push_constant_size: u32,
     shader: vk::ShaderModule,
     /// Null when the kernel has no bindings.
@@ -37,7 +37,7 @@ impl Kernel {
         name: &str,
         spirv: &[u32],
         binding_count: u32,
-        texel_bindings: TexelBindings,
+        binding_types: BindingTypes,
         push_constant_size: u32,
         constants: &[u32],
     ) -> Result<Kernel, GpuError> {
@@ -54,7 +54,7 @@ impl Kernel {
         let mut kernel = Kernel {
             name: name.to_string(),
             binding_count,
-            texel_bindings,
+            binding_types,
             push_constant_size,
             shader: vk::ShaderModule::null(),
             set_layout: vk::DescriptorSetLayout::null(),
@@ -75,7 +75,7 @@ impl Kernel {
                 .map(|b| {
                     vk::DescriptorSetLayoutBinding::default()
                         .binding(b)
-                        .descriptor_type(texel_bindings.descriptor_type(b))
+                        .descriptor_type(binding_types.descriptor_type(b))
                         .descriptor_count(1)
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 })
@@ -134,17 +134,19 @@ impl Kernel {
     }
 }
 
-/// The bindings of a kernel that are uniform texel buffers (`usamplerBuffer` in GLSL) over the
-/// buffer bound there rather than storage buffers: bit b of `rgba` makes binding b a buffer of
-/// RGBA32UI texels (16 bytes each), bit b of `words` one of R32UI texels (a word each).
+/// The bindings of a kernel that are not storage buffers: uniform texel buffers (`usamplerBuffer`
+/// in GLSL) over the buffer bound there, bit b of `rgba` making binding b a buffer of RGBA32UI
+/// texels (16 bytes each) and bit b of `words` one of R32UI texels (a word each); and uniform
+/// buffers (bit b of `uniform`), which the shader declares with the scalar block layout.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TexelBindings {
+pub struct BindingTypes {
     pub rgba: u32,
     pub words: u32,
+    pub uniform: u32,
 }
 
-impl TexelBindings {
-    /// The texel format of binding `b`, or None for a storage buffer.
+impl BindingTypes {
+    /// The texel format of binding `b`, or None for a storage or uniform buffer.
     pub(super) fn format(self, b: u32) -> Option<vk::Format> {
         let bit = 1u32.checked_shl(b).unwrap_or(0);
         if self.rgba & bit != 0 {
@@ -157,8 +159,10 @@ impl TexelBindings {
     }
 
     pub(super) fn descriptor_type(self, b: u32) -> vk::DescriptorType {
+        let bit = 1u32.checked_shl(b).unwrap_or(0);
         match self.format(b) {
             Some(_) => vk::DescriptorType::UNIFORM_TEXEL_BUFFER,
+            None if self.uniform & bit != 0 => vk::DescriptorType::UNIFORM_BUFFER,
             None => vk::DescriptorType::STORAGE_BUFFER,
         }
     }

@@ -49,4 +49,4 @@ pub use context::{parse_switch, GpuContext, GpuOptions};
 pub use device_info::DeviceInfo;
 pub use error::GpuError;
 pub use instance::list_devices;
-pub use kernel::{Kernel, TexelBindings};
+pub use kernel::{BindingTypes, Kernel};

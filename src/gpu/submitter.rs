@@ -59,7 +59,7 @@ impl Submitter {
         Ok(submitter)
     }
 
-    /// Makes the descriptor pool hold at least `sets` sets and `descriptors` storage buffers and texel buffers each,
+    /// Makes the descriptor pool hold at least `sets` sets and `descriptors` storage, texel and uniform buffers each,
     /// and resets it.
     pub(super) fn ensure_descriptors(&mut self, sets: u32, descriptors: u32) -> Result<(), GpuError> {
         let device = &self.shared.device;
@@ -81,6 +81,7 @@ impl Submitter {
         let sizes = [
             vk::DescriptorPoolSize { ty: vk::DescriptorType::STORAGE_BUFFER, descriptor_count: descriptors },
             vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_TEXEL_BUFFER, descriptor_count: descriptors },
+            vk::DescriptorPoolSize { ty: vk::DescriptorType::UNIFORM_BUFFER, descriptor_count: descriptors },
         ];
         let info = vk::DescriptorPoolCreateInfo::default().max_sets(sets).pool_sizes(&sizes);
         // SAFETY: valid create info; destroyed in Drop or when replaced.

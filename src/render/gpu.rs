@@ -9,10 +9,11 @@ use super::{
     parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
     SceneBuffers,
 };
-use crate::gpu::{Buffer, GpuContext, GpuError, Kernel, TexelBindings};
+use crate::gpu::{BindingTypes, Buffer, GpuContext, GpuError, Kernel};
 use crate::layout::constants::{
-    BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES, BINDING_SHAPE_DATA,
-    BINDING_TEXTURES, BINDING_TEXTURE_DATA, LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS, WORKGROUP_SIZE,
+    BINDING_FRAME, BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES,
+    BINDING_SHAPE_DATA, BINDING_TEXTURES, BINDING_TEXTURE_DATA, LAYER_COUNT, NO_TEXTURE, SCAN_BLOCK, SCENE_BINDINGS,
+    WORKGROUP_SIZE,
 };
 use crate::layout::{DispatchRange, EmitParams, GridParams, Medium, Photon};
 
@@ -30,18 +31,19 @@ fn kernel(
     ctx: &GpuContext,
     name: &str,
     bindings: u32,
-    texel_bindings: TexelBindings,
+    binding_types: BindingTypes,
     push_bytes: usize,
     constants: &[u32],
 ) -> Result<Kernel, GpuError> {
     let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
-    ctx.create_specialized_kernel(name, &spirv, bindings, texel_bindings, push_bytes as u32, constants)
+    ctx.create_specialized_kernel(name, &spirv, bindings, binding_types, push_bytes as u32, constants)
 }
 
-/// The scene bindings the kernels read as texel buffers (shaders/scene_bindings.glsl): on
-/// lavapipe a texel fetch goes through gallivm's vectorised texture path, where a storage-buffer
-/// read costs about 15 scalar instructions per lane and word.
-pub const SCENE_TEXELS: TexelBindings = TexelBindings {
+/// How the kernels read the scene (shaders/scene_bindings.glsl): as texel buffers, since on
+/// lavapipe a texel fetch goes through gallivm's vectorised texture path where a storage-buffer
+/// read costs about 15 scalar instructions per lane and word; `frame`, which every lane reads
+/// alike, as a uniform buffer, whose uniform reads gallivm makes once for all lanes.
+pub const SCENE_BINDING_TYPES: BindingTypes = BindingTypes {
     rgba: 1 << BINDING_NODES
         | 1 << BINDING_PRIMITIVES
         | 1 << BINDING_MATERIALS
@@ -49,10 +51,15 @@ pub const SCENE_TEXELS: TexelBindings = TexelBindings {
         | 1 << BINDING_TEXTURES
         | 1 << BINDING_MEDIA,
     words: 1 << BINDING_TEXTURE_DATA | 1 << BINDING_SHAPE_DATA,
+    uniform: 1 << BINDING_FRAME,
 };
-/// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8).
-const RENDER_TEXELS: TexelBindings =
-    TexelBindings { rgba: SCENE_TEXELS.rgba, words: SCENE_TEXELS.words | 0b11_1111 << (SCENE_BINDINGS + 2) };
+/// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8)
+/// as texel buffers and the grid parameters (SCENE_BINDINGS + 1) as a uniform buffer.
+const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
+    rgba: SCENE_BINDING_TYPES.rgba,
+    words: SCENE_BINDING_TYPES.words | 0b11_1111 << (SCENE_BINDINGS + 2),
+    uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
+};
 
 /// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
 /// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
@@ -98,7 +105,7 @@ impl GpuKernels {
         ctx: &GpuContext,
         name: &str,
         bindings: u32,
-        texels: TexelBindings,
+        texels: BindingTypes,
         push_bytes: usize,
         constants: &[u32],
     ) -> Result<&'k Kernel, GpuError> {
@@ -112,27 +119,43 @@ impl GpuKernels {
     fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("emit_photons");
         let constants = self.variant.specialization();
-        Self::get(&self.emit_photons, ctx, &name, SCENE_BINDINGS + 4, SCENE_TEXELS, size_of::<EmitParams>(), &constants)
+        Self::get(
+            &self.emit_photons,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 4,
+            SCENE_BINDING_TYPES,
+            size_of::<EmitParams>(),
+            &constants,
+        )
     }
     fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_count, ctx, "grid_count", 3, TexelBindings::default(), 0, &[])
+        Self::get(&self.grid_count, ctx, "grid_count", 3, BindingTypes::default(), 0, &[])
     }
     fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan, ctx, "grid_scan", 2, TexelBindings::default(), 4, &[])
+        Self::get(&self.grid_scan, ctx, "grid_scan", 2, BindingTypes::default(), 4, &[])
     }
     fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, TexelBindings::default(), 4, &[])
+        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, BindingTypes::default(), 4, &[])
     }
     fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, TexelBindings::default(), 0, &[])
+        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, BindingTypes::default(), 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, TexelBindings { rgba: 0, words: 0b110 }, 0, &[])
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, BindingTypes { rgba: 0, words: 0b110, uniform: 0 }, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
         let constants = self.variant.specialization();
-        Self::get(&self.render, ctx, &name, SCENE_BINDINGS + 8, RENDER_TEXELS, size_of::<DispatchRange>(), &constants)
+        Self::get(
+            &self.render,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 8,
+            RENDER_BINDING_TYPES,
+            size_of::<DispatchRange>(),
+            &constants,
+        )
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
