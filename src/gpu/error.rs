@@ -67,6 +67,12 @@ pub enum GpuError {
     NoComputeQueue { device: String },
 
     #[error(
+        "device `{device}` lacks scalarBlockLayout, which photonix's kernels need (their uniform \
+         buffers use the scalar layout); pick another device with --device or use --backend cpu"
+    )]
+    NoScalarBlockLayout { device: String },
+
+    #[error(
         "buffer `{name}` is {} ({size} bytes), more than this device's {limit_name} of {} \
          ({limit} bytes); split the work into smaller buffers",
         mib(*size),

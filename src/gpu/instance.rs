@@ -318,7 +318,9 @@ pub(super) fn choose_device(candidates: &[Candidate], requested: Option<&str>) -
             let usable = candidates
                 .iter()
                 .enumerate()
-                .filter(|(_, c)| c.api_version >= vk::API_VERSION_1_2 && c.queue_family.is_some())
+                .filter(|(_, c)| {
+                    c.api_version >= vk::API_VERSION_1_2 && c.queue_family.is_some() && c.features.scalar_block_layout
+                })
                 .min_by_key(|(i, c)| (device_type_rank(c.device_type), *i));
             match usable {
                 Some((i, _)) => i,
@@ -339,6 +341,9 @@ pub(super) fn choose_device(candidates: &[Candidate], requested: Option<&str>) -
     }
     if c.queue_family.is_none() {
         return Err(GpuError::NoComputeQueue { device: c.info.name.clone() });
+    }
+    if !c.features.scalar_block_layout {
+        return Err(GpuError::NoScalarBlockLayout { device: c.info.name.clone() });
     }
     Ok(chosen)
 }
