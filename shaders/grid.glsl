@@ -1,15 +1,23 @@
 // Hashed spatial grid over photons: cells, hashing and the deterministic order inside a bucket.
 // CPU twin: src/cpu/grid.rs.
 
-// Photon i of a map bound as a texel buffer of words (R32UI, five per photon in the order of the
-// Photon struct): the kernels that read maps at random read them this way (see scene_bindings.glsl).
-Photon fetch_photon(usamplerBuffer words, uint i) {
-    int k = int(5u * i);
+// Photon i of a map bound as a texel buffer of RGBA32UI texels (the kernels that read maps at
+// random read them this way, see scene_bindings.glsl). A photon is five words, so it starts at
+// word s = 5i mod 4 of a texel and ends in the next: two fetches and a few selects, where five
+// single-word fetches cost lavapipe more.
+Photon fetch_photon(usamplerBuffer texels, uint i) {
+    uint w = 5u * i;
+    int t = int(w >> 2u);
+    uvec4 a = texelFetch(texels, t);
+    uvec4 b = texelFetch(texels, t + 1);
+    uint s = w & 3u;
+    uvec4 first = mix(mix(uvec4(a.zw, b.xy), uvec4(a.w, b.xyz), bvec4(s == 3u)),
+                      mix(a, uvec4(a.yzw, b.x), bvec4(s == 1u)), bvec4(s < 2u));
+    uint last = s < 2u ? (s == 0u ? b.x : b.y) : (s == 2u ? b.z : b.w);
     Photon p;
-    p.position = float[3](uintBitsToFloat(texelFetch(words, k).x), uintBitsToFloat(texelFetch(words, k + 1).x),
-                          uintBitsToFloat(texelFetch(words, k + 2).x));
-    p.flux_rg = texelFetch(words, k + 3).x;
-    p.flux_b_dir = texelFetch(words, k + 4).x;
+    p.position = float[3](uintBitsToFloat(first.x), uintBitsToFloat(first.y), uintBitsToFloat(first.z));
+    p.flux_rg = first.w;
+    p.flux_b_dir = last;
     return p;
 }
 

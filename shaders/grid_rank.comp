@@ -11,8 +11,9 @@
 layout(local_size_x = WORKGROUP_SIZE) in;
 
 layout(std430, binding = 0) readonly buffer Grid { GridParams grid; };
-// The starts and the scattered photons as texel buffers of words: every invocation reads its
-// whole bucket, and texel fetches are the cheap reads on lavapipe (scene_bindings.glsl).
+// The starts (R32UI) and the scattered photons (RGBA32UI, see fetch_photon) as texel buffers:
+// every invocation reads its whole bucket, and texel fetches are the cheap reads on lavapipe
+// (scene_bindings.glsl).
 layout(binding = 1) uniform usamplerBuffer starts;
 layout(binding = 2) uniform usamplerBuffer scattered;
 layout(std430, binding = 3) writeonly buffer Ranked { Photon ranked[]; };

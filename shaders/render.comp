@@ -41,8 +41,8 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
 layout(scalar, binding = SCENE_BINDINGS + 1) uniform Grids { GridParams grids[MAP_COUNT]; };
-// The photon maps and their bucket starts as uniform texel buffers of words (R32UI; a photon is
-// five of them): see scene_bindings.glsl on why texel fetches.
+// The photon maps as uniform texel buffers of RGBA32UI texels (fetch_photon in grid.glsl) and
+// their bucket starts as texel buffers of words (R32UI): see scene_bindings.glsl on why.
 layout(binding = SCENE_BINDINGS + 2) uniform usamplerBuffer global_photons;
 layout(binding = SCENE_BINDINGS + 3) uniform usamplerBuffer global_starts;
 layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer caustic_photons;

@@ -56,8 +56,8 @@ pub const SCENE_BINDING_TYPES: BindingTypes = BindingTypes {
 /// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8)
 /// as texel buffers and the grid parameters (SCENE_BINDINGS + 1) as a uniform buffer.
 const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
-    rgba: SCENE_BINDING_TYPES.rgba,
-    words: SCENE_BINDING_TYPES.words | 0b11_1111 << (SCENE_BINDINGS + 2),
+    rgba: SCENE_BINDING_TYPES.rgba | 0b01_0101 << (SCENE_BINDINGS + 2),
+    words: SCENE_BINDING_TYPES.words | 0b10_1010 << (SCENE_BINDINGS + 2),
     uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
 };
 
@@ -142,7 +142,7 @@ impl GpuKernels {
         Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, BindingTypes::default(), 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, BindingTypes { rgba: 0, words: 0b110, uniform: 0 }, 0, &[])
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, BindingTypes { rgba: 0b100, words: 0b010, uniform: 0 }, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
