@@ -1,0 +1,183 @@
+//! The CPU backend's own layout of a photon map for lookups; no shader twin. The kernels read
+//! the hashed grid of `grid.rs` (photons sorted by bucket, 20 bytes each, decoded per visit).
+//! On the CPU a pass's lookups read each photon about twenty times, so this layout pays for
+//! itself within the pass: photons sorted by cell (a cell is one contiguous range, found in a
+//! table keyed by the exact cell, so no photon of a colliding cell is read), their positions
+//! and flags in 16-byte records (what the distance test reads for every candidate), their flux
+//! and direction decoded once into a second array read only for photons within the radius.
+//! Photons that every lookup of the render excludes are left out. Within a cell the photons
+//! keep `photon_order`, which is their order in the grid's bucket, and cells are visited in the
+//! grid's neighbour order: a lookup visits the same photons in the same order as
+//! `for_each_photon_near`, so the sums, and the images, are the same bits.
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+
+use super::grid::{grid_cell, grid_face_gaps, grid_hash, grid_neighbour, grid_neighbour_in_reach, photon_order};
+use super::photon::{photon_flags, photon_flux, photon_wi};
+use crate::layout::{GridParams, Photon};
+
+/// A photon's flux (times the map's flux scale) and unit direction toward the light, decoded.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhotonData {
+    pub flux: Vec3,
+    pub wi: Vec3,
+}
+
+/// One slot of the cell table: an occupied cell and its range of photons (`end` = 0: empty).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct CellSlot {
+    cell: IVec3,
+    start: u32,
+    end: u32,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PhotonIndex {
+    /// Flags of the photons left out.
+    pub dropped: u32,
+    table: Vec<CellSlot>,
+    table_mask: u32,
+    /// Position and flags (as bits) of each photon, in cell order.
+    records: Vec<[f32; 4]>,
+    data: Vec<PhotonData>,
+}
+
+impl PhotonIndex {
+    /// No photons: every lookup finds none.
+    pub const EMPTY: PhotonIndex =
+        PhotonIndex { dropped: 0, table: Vec::new(), table_mask: 0, records: Vec::new(), data: Vec::new() };
+
+    /// Indexes `photons` (in any order) with the cells and flux scale of `g`, leaving out those
+    /// whose flags intersect `drop`.
+    pub fn build(photons: &[Photon], g: &GridParams, drop: u32) -> PhotonIndex {
+        let mut kept: Vec<(IVec3, Photon)> = photons
+            .par_iter()
+            .filter(|p| photon_flags(p) & drop == 0)
+            .map(|p| (grid_cell(Vec3::from(p.position), g.cell_size), *p))
+            .collect();
+        kept.par_sort_unstable_by(|a, b| a.0.to_array().cmp(&b.0.to_array()).then_with(|| photon_order(&a.1, &b.1)));
+
+        let mut starts: Vec<u32> =
+            (0..kept.len()).filter(|&i| i == 0 || kept[i].0 != kept[i - 1].0).map(|i| i as u32).collect();
+        let cells = starts.len();
+        starts.push(kept.len() as u32);
+        // A load factor of at most 1/2 keeps probe runs short; most lookups of empty cells end
+        // at the first slot.
+        let table_size = (cells.max(8) * 2).next_power_of_two();
+        let table_mask = table_size as u32 - 1;
+        let mut table = vec![CellSlot::default(); table_size];
+        for w in starts.windows(2) {
+            let cell = kept[w[0] as usize].0;
+            let mut h = grid_hash(cell, table_mask);
+            while table[h as usize].end != 0 {
+                h = (h + 1) & table_mask;
+            }
+            table[h as usize] = CellSlot { cell, start: w[0], end: w[1] };
+        }
+        let records = kept
+            .par_iter()
+            .map(|(_, p)| [p.position[0], p.position[1], p.position[2], f32::from_bits(photon_flags(p))])
+            .collect();
+        let data =
+            kept.par_iter().map(|(_, p)| PhotonData { flux: photon_flux(p, g.flux_scale), wi: photon_wi(p) }).collect();
+        PhotonIndex { dropped: drop, table, table_mask, records, data }
+    }
+
+    /// Photons indexed.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+
+    /// The range of photons of `cell` (empty when it holds none).
+    fn cell_range(&self, cell: IVec3) -> std::ops::Range<usize> {
+        let mut h = grid_hash(cell, self.table_mask);
+        loop {
+            let slot = &self.table[h as usize];
+            if slot.end == 0 {
+                return 0..0;
+            }
+            if slot.cell == cell {
+                return slot.start as usize..slot.end as usize;
+            }
+            h = (h + 1) & self.table_mask;
+        }
+    }
+
+    /// Calls `visit(position, flags, data, squared distance)` for every photon within
+    /// `g.radius` of `x`, in `for_each_photon_near`'s order; `g` is the grid the index was
+    /// built with.
+    pub fn for_each_near(&self, x: Vec3, g: &GridParams, mut visit: impl FnMut(Vec3, u32, &PhotonData, f32)) {
+        if self.records.is_empty() {
+            return;
+        }
+        let r2 = g.radius * g.radius;
+        let c = grid_cell(x, g.cell_size);
+        let gaps = grid_face_gaps(x, g.cell_size);
+        for k in 0..27 {
+            if !grid_neighbour_in_reach(&gaps, g.radius, k) {
+                continue;
+            }
+            let range = self.cell_range(grid_neighbour(c, k));
+            for (r, data) in self.records[range.clone()].iter().zip(&self.data[range]) {
+                let pos = Vec3::new(r[0], r[1], r[2]);
+                let d = pos - x;
+                let d2 = d.dot(d);
+                if d2 <= r2 {
+                    visit(pos, r[3].to_bits(), data, d2);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::grid::for_each_photon_near;
+    use crate::cpu::grid_build::build_grid;
+    use crate::cpu::photon::pack_photon;
+    use crate::cpu::rng::rand1;
+
+    #[test]
+    fn lookups_visit_the_grids_photons_in_the_grids_order() {
+        // Photons crowded on a few planes (many per cell, as on a scene's walls) and scattered
+        // ones, with every flag combination; tables from one bucket (all cells collide) to roomy.
+        let photons: Vec<Photon> = (0..6000u32)
+            .map(|i| {
+                let u = |d| rand1(i, 3, 7, d);
+                let mut p = Vec3::new(u(0), u(1), u(2)) * 4.0 - 2.0;
+                if i % 3 != 0 {
+                    p.y = (i % 4) as f32 * 0.5 - 1.0;
+                }
+                let wi = (Vec3::new(u(3), u(4), u(5)) * 2.0 - 1.0).normalize_or(Vec3::Y);
+                pack_photon(p, Vec3::new(u(6), u(7), u(8)), 1.0, wi, i % 4)
+            })
+            .collect();
+        for (radius, table_mask) in [(0.1, 16383u32), (0.3, 0), (0.3, 1023), (0.7, 7)] {
+            let g =
+                GridParams { cell_size: radius, radius, table_mask, photon_count: 6000, flux_scale: 3.0, _pad: [0; 3] };
+            let (sorted, starts) = build_grid(&photons, &g);
+            for drop in [0, 1, 3] {
+                let index = PhotonIndex::build(&photons, &g, drop);
+                for q in 0..400u32 {
+                    let x = Vec3::new(rand1(q, 4, 7, 0), rand1(q, 4, 7, 1), rand1(q, 4, 7, 2)) * 5.0 - 2.5;
+                    let mut expected = Vec::new();
+                    for_each_photon_near(x, &g, &sorted, &starts, |p, d2| {
+                        if photon_flags(p) & drop == 0 {
+                            let data = PhotonData { flux: photon_flux(p, g.flux_scale), wi: photon_wi(p) };
+                            expected.push((Vec3::from(p.position), photon_flags(p), data, d2));
+                        }
+                    });
+                    let mut found = Vec::new();
+                    index.for_each_near(x, &g, |pos, flags, data, d2| found.push((pos, flags, *data, d2)));
+                    assert_eq!(found, expected, "radius {radius}, table mask {table_mask}, drop {drop}, query {q}");
+                }
+            }
+        }
+    }
+}
