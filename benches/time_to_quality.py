@@ -244,9 +244,11 @@ def mitsuba_time_for(fit, error, cpu=False):
 # Photonix
 
 
-def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra):
+def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra, named=False):
     scene = REPO / "scenes" / f"{scene_name}.toml"
     out = Path(out_dir) / f"{scene_name}-{backend}-{budget}s.exr"
+    # With several binaries, a row's backend column also names the binary.
+    label = f"{backend} ({binary.name})" if named else backend
     cmd = [str(binary), "render", str(scene), "--backend", backend, "--time", f"{budget}s", "-o", str(out)] + extra
     t = time.perf_counter()
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -259,7 +261,7 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra)
     passes = re.search(r"^(\d+) pass", proc.stderr, re.M)
     image = read_exr(out)
     row = {
-        "backend": backend,
+        "backend": label,
         "args": " ".join(extra),
         "budget": budget,
         "seconds": seconds,
@@ -269,7 +271,7 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra)
         "mean_ratio": mean_ratio(image, reference),
         "summary": proc.stderr.strip().splitlines()[-3:],
     }
-    print(f"  photonix {backend} {' '.join(extra)} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
+    print(f"  photonix {label} {' '.join(extra)} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
     return row
 
 
@@ -284,7 +286,12 @@ def main():
     ap.add_argument("--spp", default="16,64,256", help="Mitsuba sample counts, comma-separated")
     ap.add_argument("--variant", default=None, help="Mitsuba variant [default: llvm_ad_rgb, else scalar_rgb]")
     ap.add_argument("--max-depth", type=int, default=65, help="Mitsuba path depth (the references used 65)")
-    ap.add_argument("--photonix", default=str(REPO / "target" / "release" / "photonix"))
+    ap.add_argument(
+        "--photonix",
+        action="append",
+        help="photonix binary [default: target/release/photonix]; repeat to compare builds in one run "
+        "(rows named by the binary's file name)",
+    )
     ap.add_argument(
         "--photonix-args",
         action="append",
@@ -295,8 +302,9 @@ def main():
     ap.add_argument("--json", help="also write every measurement to this file")
     args = ap.parse_args()
 
-    binary = Path(args.photonix)
-    if not binary.exists():
+    binaries = [Path(b) for b in args.photonix or [REPO / "target" / "release" / "photonix"]]
+    binary = binaries[0]
+    if not all(b.exists() for b in binaries):
         sys.exit(f"{binary} not found; run `cargo build --release` first")
     variant = choose_variant(args.variant)
     import mitsuba as mi
@@ -314,7 +322,8 @@ def main():
         for scene in scenes:
             reference = read_exr(REFERENCES / scene / "reference.exr")
             ours = [
-                run_photonix(binary, scene, b, t, reference, out_dir, extra.split())
+                run_photonix(binary, scene, b, t, reference, out_dir, extra.split(), len(binaries) > 1)
+                for binary in binaries
                 for extra in args.photonix_args or [""]
                 for b in args.backends.split(",")
                 for t in budgets

@@ -7,23 +7,22 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::bsdf::{bsdf_estimate_is_constant, bsdf_eval, bsdf_flags, facing, Bsdf};
-use super::grid::for_each_photon_near;
-use super::photon::{photon_flags, photon_flux, photon_wi};
+use super::photon_index::PhotonIndex;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
+use crate::layout::GridParams;
 
 pub const MAP_GLOBAL: usize = crate::layout::constants::MAP_GLOBAL as usize;
 pub const MAP_CAUSTIC: usize = crate::layout::constants::MAP_CAUSTIC as usize;
 pub const MAP_VOLUME: usize = crate::layout::constants::MAP_VOLUME as usize;
 
-/// The photons and bucket starts of `map`.
-fn map_arrays<'a>(s: &SceneView<'a>, map: usize) -> (&'a [crate::layout::Photon], &'a [u32]) {
-    match map {
-        MAP_GLOBAL => (s.maps.global_photons, s.maps.global_starts),
-        MAP_CAUSTIC => (s.maps.caustic_photons, s.maps.caustic_starts),
-        _ => (s.maps.volume_photons, s.maps.volume_starts),
-    }
+/// The lookup layout of `map`, which must have left out only photons that `exclude` skips
+/// (see `render::excluded_by_every_lookup`).
+fn map_index<'a>(s: &SceneView<'a>, map: usize, exclude: u32) -> (&'a PhotonIndex, &'a GridParams) {
+    let index = &s.maps.indices[map];
+    assert_eq!(index.dropped & !exclude, 0, "map {map} left out photons of flags a lookup keeps");
+    (index, &s.maps.grids[map])
 }
 
 /// Irradiance at `x` (normal `n`, facing the side photons must arrive from) from the photons of
@@ -31,20 +30,19 @@ fn map_arrays<'a>(s: &SceneView<'a>, map: usize) -> (&'a [crate::layout::Photon]
 /// whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
 /// photons that arrived from behind the surface or lie off its tangent plane.
 pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u32) -> Vec3 {
-    let g = &s.maps.grids[map];
+    let (index, g) = map_index(s, map, exclude);
     if g.photon_count == 0 {
         return Vec3::ZERO;
     }
-    let (photons, starts) = map_arrays(s, map);
     let r2 = g.radius * g.radius;
     let thickness = PHOTON_DISC_THICKNESS * g.radius;
     let mut sum = Vec3::ZERO;
-    for_each_photon_near(x, g, photons, starts, |p, d2| {
-        let d = Vec3::from(p.position) - x;
-        if d.dot(n).abs() > thickness || (photon_flags(p) & exclude) != 0 || photon_wi(p).dot(n) <= 0.0 {
+    index.for_each_near(x, g, |pos, flags, p, d2| {
+        let d = pos - x;
+        if d.dot(n).abs() > thickness || (flags & exclude) != 0 || p.wi.dot(n) <= 0.0 {
             return;
         }
-        sum += photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+        sum += p.flux * (1.0 - d2 / r2);
     });
     sum * (2.0 / (PI * r2))
 }
@@ -62,26 +60,24 @@ pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, e
     if !volume && bsdf_estimate_is_constant(b) {
         return bsdf_eval(b, wo, nf) * photon_irradiance(s, map, h.p, nf, exclude);
     }
-    let g = &s.maps.grids[map];
+    let (index, g) = map_index(s, map, exclude);
     if g.photon_count == 0 {
         return Vec3::ZERO;
     }
-    let (photons, starts) = map_arrays(s, map);
     let r2 = g.radius * g.radius;
     let thickness = if volume { f32::INFINITY } else { PHOTON_DISC_THICKNESS * g.radius };
     // Photons arriving from behind count only where the BSDF transmits.
     let both_sides = volume || bsdf_flags(b) & BSDF_TRANSMISSION != 0;
     let mut sum = Vec3::ZERO;
-    for_each_photon_near(h.p, g, photons, starts, |p, d2| {
-        let d = Vec3::from(p.position) - h.p;
-        if d.dot(nf).abs() > thickness || (photon_flags(p) & exclude) != 0 {
+    index.for_each_near(h.p, g, |pos, flags, p, d2| {
+        let d = pos - h.p;
+        if d.dot(nf).abs() > thickness || (flags & exclude) != 0 {
             return;
         }
-        let wi = photon_wi(p);
-        if !both_sides && wi.dot(nf) <= 0.0 {
+        if !both_sides && p.wi.dot(nf) <= 0.0 {
             return;
         }
-        sum += bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
+        sum += bsdf_eval(b, wo, p.wi) * p.flux * (1.0 - d2 / r2);
     });
     sum * if volume { 15.0 / (8.0 * PI * r2 * g.radius) } else { 2.0 / (PI * r2) }
 }

@@ -15,6 +15,7 @@ pub mod microfacet;
 pub mod pattern;
 pub mod phase;
 pub mod photon;
+pub mod photon_index;
 pub mod render;
 pub mod rng;
 pub mod sampling;
@@ -24,7 +25,8 @@ pub mod texture;
 pub mod trace;
 pub mod voxel;
 
-use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Photon, Primitive, Texture};
+use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Primitive, Texture};
+use photon_index::PhotonIndex;
 
 /// The arrays a kernel sees through its bindings, borrowed.
 #[derive(Clone, Copy)]
@@ -41,29 +43,20 @@ pub struct SceneView<'a> {
     pub maps: MapsView<'a>,
 }
 
-/// The photon maps as the camera kernel binds them: grid parameters (`MAP_*`: global, caustic,
-/// volume), photons sorted by bucket and bucket starts.
+/// The photon maps (`MAP_*`: global, caustic, volume) as the CPU backend reads them: the kernels
+/// bind grid parameters, photons sorted by bucket and bucket starts; the CPU the same photons
+/// in its own lookup layout (`photon_index.rs`), which gives the same sums.
 #[derive(Clone, Copy)]
 pub struct MapsView<'a> {
     pub grids: &'a [GridParams; 3],
-    pub global_photons: &'a [Photon],
-    pub global_starts: &'a [u32],
-    pub caustic_photons: &'a [Photon],
-    pub caustic_starts: &'a [u32],
-    pub volume_photons: &'a [Photon],
-    pub volume_starts: &'a [u32],
+    pub indices: &'a [PhotonIndex; 3],
 }
 
-/// No photon maps: grids with no photons, which every lookup skips.
+/// No photon maps: maps with no photons, which every lookup skips.
 pub const NO_MAPS: MapsView<'static> = MapsView {
     grids: &[GridParams { cell_size: 1.0, radius: 0.5, table_mask: 0, photon_count: 0, flux_scale: 1.0, _pad: [0; 3] };
         3],
-    global_photons: &[],
-    global_starts: &[0, 0],
-    caustic_photons: &[],
-    caustic_starts: &[0, 0],
-    volume_photons: &[],
-    volume_starts: &[0, 0],
+    indices: &[PhotonIndex::EMPTY, PhotonIndex::EMPTY, PhotonIndex::EMPTY],
 };
 
 impl<'a> SceneView<'a> {

@@ -44,6 +44,19 @@ struct Lookup {
     weight: Vec3,
 }
 
+/// Flags of the photons that every lookup of each map (`MAP_*` order) excludes in a render with
+/// `gather_rays` final-gather rays, which the CPU's lookup layout may leave out (see the
+/// `Lookup`s of `radiance`): reading the global map directly skips its direct and caustic
+/// photons (the light sample and the caustic map count them) and a scattering point skips
+/// the volume map's single scattering; a gather path's end reads both maps whole.
+pub fn excluded_by_every_lookup(gather_rays: u32) -> [u32; 3] {
+    if gather_rays == 0 {
+        [PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC, 0, PHOTON_FLAG_DIRECT]
+    } else {
+        [0, 0, 0]
+    }
+}
+
 /// Adds part `part` of the terms of the camera path of `sample` through pixel (`px`, `py`) to
 /// `terms` (indexed by `LAYER_*`) and the rays it casts to `rays`; part 0 is everything but the
 /// final gather, part k >= 1 is gather ray k - 1 (see `DispatchRange`). The camera path, its

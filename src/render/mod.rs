@@ -308,7 +308,7 @@ pub fn render_cpu(
 ) -> RenderOutput {
     let mut stages = Vec::new();
     let t = Instant::now();
-    let maps = photons.map(|settings| photons::build_maps_cpu(buffers, settings, pass));
+    let maps = photons.map(|settings| photons::build_indices_cpu(buffers, settings, pass));
     if maps.is_some() {
         stages.push(("photons".to_string(), t.elapsed()));
     }

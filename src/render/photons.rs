@@ -3,6 +3,8 @@
 
 use crate::cpu::emit_photons::emit_photons;
 use crate::cpu::grid_build::{build_grid, grid_params};
+use crate::cpu::photon_index::PhotonIndex;
+use crate::cpu::render::excluded_by_every_lookup;
 use crate::cpu::MapsView;
 use crate::layout::{EmitParams, GridParams, Photon};
 
@@ -156,22 +158,16 @@ pub struct PhotonMaps {
     pub volume_starts: Vec<u32>,
 }
 
-impl PhotonMaps {
-    pub fn view(&self) -> MapsView<'_> {
-        MapsView {
-            grids: &self.grids,
-            global_photons: &self.global_photons,
-            global_starts: &self.global_starts,
-            caustic_photons: &self.caustic_photons,
-            caustic_starts: &self.caustic_starts,
-            volume_photons: &self.volume_photons,
-            volume_starts: &self.volume_starts,
-        }
-    }
+/// One pass's photons, unsorted, and the grid parameters of their maps (`MAP_*` order).
+struct Emitted {
+    grids: [GridParams; 3],
+    global: Vec<Photon>,
+    caustic: Vec<Photon>,
+    volume: Vec<Photon>,
 }
 
-/// Traces both passes of `pass` and builds their grids, as the GPU does.
-pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> PhotonMaps {
+/// Traces both passes of `pass` and sets their grids' parameters.
+fn emit_maps(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> Emitted {
     let view = buffers.view();
     let emitted = emit_stoppable(&view, &emit_params(settings, pass, false));
     let (global, volume) = (emitted.global, emitted.volume);
@@ -181,16 +177,39 @@ pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u
     let g_caustic = map_grid(buffers, r_caustic, caustic.len() as u32, settings.caustic_photons);
     let r_volume = volume_radius(buffers, settings, volume.len() as u32, pass);
     let g_volume = map_grid(buffers, r_volume, volume.len() as u32, settings.photons);
-    let (global_photons, global_starts) = build_grid(&global, &g_global);
-    let (caustic_photons, caustic_starts) = build_grid(&caustic, &g_caustic);
-    let (volume_photons, volume_starts) = build_grid(&volume, &g_volume);
-    PhotonMaps {
-        grids: [g_global, g_caustic, g_volume],
-        global_photons,
-        global_starts,
-        caustic_photons,
-        caustic_starts,
-        volume_photons,
-        volume_starts,
+    Emitted { grids: [g_global, g_caustic, g_volume], global, caustic, volume }
+}
+
+/// Traces both passes of `pass` and builds their grids, as the GPU does.
+pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> PhotonMaps {
+    let Emitted { grids, global, caustic, volume } = emit_maps(buffers, settings, pass);
+    let (global_photons, global_starts) = build_grid(&global, &grids[0]);
+    let (caustic_photons, caustic_starts) = build_grid(&caustic, &grids[1]);
+    let (volume_photons, volume_starts) = build_grid(&volume, &grids[2]);
+    PhotonMaps { grids, global_photons, global_starts, caustic_photons, caustic_starts, volume_photons, volume_starts }
+}
+
+/// Traces both passes of `pass` into the CPU backend's lookup layout (the same photons and
+/// sums as `build_maps_cpu`'s grids), leaving out the photons no lookup of the render reads.
+pub fn build_indices_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> IndexedMaps {
+    let Emitted { grids, global, caustic, volume } = emit_maps(buffers, settings, pass);
+    let dropped = excluded_by_every_lookup(settings.gather_rays);
+    let indices = [
+        PhotonIndex::build(&global, &grids[0], dropped[0]),
+        PhotonIndex::build(&caustic, &grids[1], dropped[1]),
+        PhotonIndex::build(&volume, &grids[2], dropped[2]),
+    ];
+    IndexedMaps { grids, indices }
+}
+
+/// The maps of `build_indices_cpu`: grid parameters and lookup layouts (`MAP_*` order).
+pub struct IndexedMaps {
+    pub grids: [GridParams; 3],
+    pub indices: [PhotonIndex; 3],
+}
+
+impl IndexedMaps {
+    pub fn view(&self) -> MapsView<'_> {
+        MapsView { grids: &self.grids, indices: &self.indices }
     }
 }
