@@ -1,7 +1,9 @@
 #version 450
 // Reads element 1 of every scene struct through its texel-buffer loader (scene_fetch.glsl) and
-// stores it, field by field, to element 0 of a storage buffer of that struct; and word 5 of the
-// texture and shape words. tests/texel_fetch.rs compares what comes back with what was sent.
+// stores it, field by field, to element 0 of a storage buffer of that struct; word 5 of the
+// texture and shape words; and photons 0..3 through fetch_photon (grid.glsl), which start at
+// each of the four words of a texel. tests/texel_fetch.rs compares what comes back with what
+// was sent.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -15,6 +17,10 @@ layout(std430, binding = SCENE_BINDINGS + 3) writeonly buffer OutLights { Light 
 layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer OutTextures { Texture out_textures[]; };
 layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer OutMedia { Medium out_media[]; };
 layout(std430, binding = SCENE_BINDINGS + 6) writeonly buffer OutWords { uint out_words[]; };
+layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer photon_texels;
+layout(std430, binding = SCENE_BINDINGS + 8) writeonly buffer OutPhotons { Photon out_photons[]; };
+
+#include "grid.glsl"
 
 void main() {
     out_nodes[0] = bvh_node(1u);
@@ -27,4 +33,5 @@ void main() {
     out_words[1] = floatBitsToUint(shape_word(5u));
     out_words[2] = bvh_node_skip_count(1u);
     out_words[3] = primitive_kind(1u);
+    for (uint i = 0u; i < 4u; i++) out_photons[i] = fetch_photon(photon_texels, i);
 }

@@ -1,8 +1,11 @@
 //! The scene's texel buffers read back as structs: `texel_probe.comp` reads element 1 of every
 //! scene struct through its loader in shaders/scene_fetch.glsl (RGBA32UI texels, field by field)
-//! and stores it to a storage buffer of that struct. A loader that took a field from the wrong
-//! word, or a wrong texel stride, would bring back a different element.
+//! and stores it to a storage buffer of that struct, and photons 0..3 through `fetch_photon`
+//! (20-byte photons in RGBA32UI texels: each starts at a different word of its texel). A loader
+//! that took a field from the wrong word, or a wrong texel stride, would bring back a different
+//! element.
 
+use photonix::gpu::BindingTypes;
 use photonix::gpu::{GpuContext, GpuOptions};
 use photonix::layout::constants::SCENE_BINDINGS;
 use photonix::layout::{gpu_struct_layouts, FrameParams};
@@ -46,15 +49,21 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     .iter()
     .map(|w| gpu.upload("scene part", w).unwrap())
     .collect();
+    // Four photons: 20 words, so photon i starts at word 5i, at offset i of its texel.
+    let photon_words: Vec<u32> = (0..20).map(|k| 0x4090_0000 | (k << 8) | (k ^ 0xa5)).collect();
+    let photons_in = gpu.upload("photons", &photon_words).unwrap();
+    let photons_out = gpu.upload("photons out", &[0u32; 20]).unwrap();
     let outputs: Vec<_> = structs
         .iter()
         .map(|name| gpu.upload(name, &vec![0u32; size(name) as usize]).unwrap())
         .chain(std::iter::once(gpu.upload("words", &[0u32; 4]).unwrap()))
         .collect();
-    let bound: Vec<_> = std::iter::once(&frame).chain(&scene).chain(&outputs).collect();
-    assert_eq!(bound.len() as u32, SCENE_BINDINGS + 7);
+    let bound: Vec<_> =
+        std::iter::once(&frame).chain(&scene).chain(&outputs).chain([&photons_in, &photons_out]).collect();
+    assert_eq!(bound.len() as u32, SCENE_BINDINGS + 9);
+    let types = BindingTypes { rgba: SCENE_BINDING_TYPES.rgba | 1 << (SCENE_BINDINGS + 7), ..SCENE_BINDING_TYPES };
     let probe = gpu
-        .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, SCENE_BINDING_TYPES, 0, &[])
+        .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, types, 0, &[])
         .expect("the probe matches its layout");
     gpu.run("texel_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
 
@@ -68,4 +77,6 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     let primitive = words_of("Primitive");
     let expected = [texture_words[5], shape_words[5], node[node.len() - 1], primitive[primitive.len() / 2 + 3]];
     assert_eq!(words, expected, "texture word, shape word, node skip/count, primitive kind");
+    let photons: Vec<u32> = gpu.download(&photons_out).unwrap();
+    assert_eq!(photons, photon_words, "fetch_photon of photons 0..3 (each at another word of its texel)");
 }

@@ -61,6 +61,10 @@ const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
     uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
 };
 
+/// grid_rank's (shaders/grid_rank.comp): bucket starts (binding 1) as words, the scattered photons
+/// (binding 2) as RGBA32UI texels, since every invocation reads its whole bucket.
+const GRID_RANK_BINDING_TYPES: BindingTypes = BindingTypes { rgba: 1 << 2, words: 1 << 1, uniform: 0 };
+
 /// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
 /// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
 fn groups(invocations: u32) -> [u32; 3] {
@@ -142,7 +146,7 @@ impl GpuKernels {
         Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, BindingTypes::default(), 0, &[])
     }
     fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, BindingTypes { rgba: 0b100, words: 0b010, uniform: 0 }, 0, &[])
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, GRID_RANK_BINDING_TYPES, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         let name = self.scene_kernel("render");
