@@ -14,8 +14,9 @@ fn main() {
     println!("cargo:rerun-if-changed=shaders");
     println!("cargo:rerun-if-changed=src/layout/constants.rs");
 
-    let constants_glsl = out_dir.join("constants.glsl");
-    std::fs::write(&constants_glsl, render_constants()).expect("OUT_DIR is writable");
+    // Written only when its text changes: every kernel's depfile names it, so a fresh mtime on each
+    // run would make cargo rerun this script, and recompile the crate, on every build.
+    write_if_changed(&out_dir.join("constants.glsl"), &render_constants());
 
     let mut kernels: Vec<PathBuf> = std::fs::read_dir("shaders")
         .expect("the shaders/ folder exists")
@@ -60,7 +61,13 @@ fn main() {
         }
         panic!("shader compilation failed:\n{}", failures.join("\n"));
     }
-    std::fs::write(out_dir.join("kernels.rs"), index).expect("OUT_DIR is writable");
+    write_if_changed(&out_dir.join("kernels.rs"), &index);
+}
+
+fn write_if_changed(path: &Path, text: &str) {
+    if std::fs::read_to_string(path).ok().as_deref() != Some(text) {
+        std::fs::write(path, text).expect("OUT_DIR is writable");
+    }
 }
 
 fn compile(kernel: &Path, spv: &Path, include_dir: &Path, defines: &[String]) -> Result<(), String> {
@@ -93,7 +100,8 @@ fn compile(kernel: &Path, spv: &Path, include_dir: &Path, defines: &[String]) ->
     if let Ok(deps) = std::fs::read_to_string(&depfile) {
         for dep in deps.split_whitespace().skip(1) {
             let dep = dep.trim_end_matches('\\');
-            if !dep.is_empty() && Path::new(dep).exists() {
+            // Files generated into OUT_DIR are this script's own outputs, not its inputs.
+            if !dep.is_empty() && Path::new(dep).exists() && !Path::new(dep).starts_with(include_dir) {
                 println!("cargo:rerun-if-changed={dep}");
             }
         }
