@@ -116,7 +116,7 @@ struct FrameParams {
     uint instance_count;
     uint instance_data;
     uint csg_first;
-    uint _pad;
+    uint integrator;
 };
 
 struct DispatchRange {

@@ -115,20 +115,55 @@ void environment_sample(Light l, vec2 u, out vec3 d, out vec3 weight) {
 // the scene for a distant light) and `weight`, the radiance arriving along -wi divided by the
 // solid-angle pdf of the sample (so the direct light is f |cos| weight / pick probability);
 // `eps`, how far short of p a shadow ray stops (an area light's point's own offset over the
-// cosine there, else the frame's ray_epsilon).
+// cosine there, else the frame's ray_epsilon); `pdf`, the solid-angle density multiple importance
+// sampling weighs it with (see light_pdf; 0 for a light no ray can meet).
 struct LightSample {
     vec3 p;
     vec3 wi;
     vec3 weight;
     float eps;
+    float pdf;
 };
+
+// Solid-angle pdf of environment_sample drawing direction d. CPU twin: src/cpu/light.rs.
+float environment_pdf(Light l, vec3 d) {
+    uint base = l.primitive;
+    uint w = texture_word(base + ENV_WIDTH);
+    uint h = texture_word(base + ENV_HEIGHT);
+    uvec2 ij = env_texel(base, d);
+    uint marginal = base + ENV_TEXELS + 3u * w * h;
+    uint row = marginal + h + 1u + ij.y * (w + 1u);
+    float pm = env_float(marginal + ij.y + 1u) - env_float(marginal + ij.y);
+    float pc = env_float(row + ij.x + 1u) - env_float(row + ij.x);
+    float sin_theta = sqrt(max(1.0 - d.y * d.y, 0.0));
+    if (sin_theta <= 0.0) return 0.0;
+    return float(w * h) * pm * pc / (2.0 * PI * PI * sin_theta);
+}
+
+// The solid-angle density light_sample would have drawn wi with from a point dist away, toward
+// light l met by a ray (area lights: at a point of cosine cos_l toward it); area lights by their
+// uniform density by area. Contract: src/cpu/light.rs, light_pdf.
+float light_pdf(Light l, vec3 wi, float dist, float cos_l) {
+    switch (l.kind) {
+    case LIGHT_AREA:
+        return cos_l > 0.0 && l.area > 0.0 ? dist * dist / (cos_l * l.area) : 0.0;
+    case LIGHT_DISTANT:
+        return l.area > 0.0 ? 1.0 / l.area : 0.0;
+    }
+    float env = 0.0;
+    WHEN(l.kind == LIGHT_ENVIRONMENT) {
+        env = environment_pdf(l, wi);
+    }
+    return env;
+}
 
 LightSample light_sample(Light l, vec3 x, vec2 u) {
     // The environment's searches are loops: no lane enters them unless it holds the environment.
-    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon);
+    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon, 0.0);
     WHEN(l.kind == LIGHT_ENVIRONMENT) {
         environment_sample(l, u, env.wi, env.weight);
         env.p = x + env.wi * (length(x - load3(l.position)) + 2.0 * l.radius);
+        env.pdf = environment_pdf(l, env.wi);
     }
     switch (l.kind) {
     case LIGHT_ENVIRONMENT:
@@ -144,13 +179,13 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
         vec3 weight = cos_l > 0.0 ? material_emission(material_at(h.material), h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
         // The shadow ray stops short of the point by its offset over the cosine there: a hit on
         // the light's own surface moves along a grazing ray by its error over that cosine.
-        return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2));
+        return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2), light_pdf(l, wi, sqrt(dist2), cos_l));
     }
     case LIGHT_DISTANT: {
         // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
         vec3 wi = -cone_direction(load3(l.direction), l.cos_outer, u);
         float beyond = length(x - load3(l.position)) + 2.0 * l.radius;
-        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon);
+        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon, l.area > 0.0 ? 1.0 / l.area : 0.0);
     }
     }
     // Point and spot lights: I(w) / d^2.
@@ -158,7 +193,7 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
     vec3 to_light = p - x;
     float dist2 = dot(to_light, to_light);
     vec3 wi = to_light / sqrt(dist2);
-    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon);
+    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon, 0.0);
 }
 
 // A photon leaving light l: its origin, direction and the power it carries before the division

@@ -101,7 +101,7 @@ fn closed_box(rho: f32) -> Scene {
             width: 8,
             height: 8,
         },
-        render: RenderSettings { spp: 1, passes: 1, max_depth: 4, seed: 3 },
+        render: RenderSettings { spp: 1, passes: 1, max_depth: 4, seed: 3, integrator: Default::default() },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],
         material_names: vec!["wall".into()],

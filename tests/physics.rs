@@ -49,7 +49,7 @@ fn light_over_plane() -> Scene {
             width: SIZE,
             height: SIZE,
         },
-        render: RenderSettings { spp: SPP, passes: 1, max_depth: 4, seed: 7 },
+        render: RenderSettings { spp: SPP, passes: 1, max_depth: 4, seed: 7, integrator: Default::default() },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],
         material_names: vec!["plane".into(), "light".into()],

@@ -147,6 +147,14 @@ pub fn parse_target_error(s: &str) -> Result<f64, String> {
     parse_real(s, 0.0, true, MAX_TARGET_ERROR, "a relMSE such as 0.01")
 }
 
+/// `--integrator`: one of the names of [`Integrator::NAMES`].
+pub fn parse_integrator(s: &str) -> Result<photonix::scene::Integrator, String> {
+    photonix::scene::Integrator::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = photonix::scene::Integrator::NAMES.iter().map(|(n, _)| *n).collect();
+        format!("unknown integrator `{s}`; use one of {}", names.join(", "))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,11 +19,11 @@ use photonix::render::progressive::{render_progressive, Accumulator, Budget, Sto
 use photonix::render::{
     auto_backend, prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats,
 };
-use photonix::scene::load_scene;
+use photonix::scene::{load_scene, Integrator};
 
 use super::parse::{
-    parse_depth, parse_duration, parse_exposure, parse_gather_rays, parse_pass_range, parse_passes, parse_photons,
-    parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error,
+    parse_depth, parse_duration, parse_exposure, parse_gather_rays, parse_integrator, parse_pass_range, parse_passes,
+    parse_photons, parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error,
 };
 
 #[derive(clap::Args)]
@@ -40,6 +40,10 @@ pub struct RenderArgs {
     /// Samples per pixel in each pass, 1 to 4096 [default: the scene's]
     #[arg(long, value_parser = parse_spp, allow_negative_numbers = true)]
     spp: Option<u32>,
+    /// The estimator: ppm (progressive photon mapping) or pt (path tracing with multiple
+    /// importance sampling) [default: the scene's, else ppm]
+    #[arg(long, value_parser = parse_integrator)]
+    integrator: Option<Integrator>,
     /// Seed of the random streams, 0 to 4294967295 [default: the scene's]
     #[arg(long, value_parser = parse_seed, allow_negative_numbers = true)]
     seed: Option<u32>,
@@ -95,8 +99,9 @@ struct PhotonArgs {
 impl PhotonArgs {
     /// The scene's settings with the command line's overrides. Any photon flag turns photon
     /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
-    /// (Each value was range-checked by its parser.)
-    fn apply(&self, scene: Option<PhotonSettings>) -> Result<Option<PhotonSettings>> {
+    /// (Each value was range-checked by its parser.) An integrator without photon maps takes
+    /// none, and a photon flag is then an error.
+    fn apply(&self, scene: Option<PhotonSettings>, integrator: Integrator) -> Result<Option<PhotonSettings>> {
         let given: Vec<&str> = [
             ("--photons", self.photons.is_some()),
             ("--caustic-photons", self.caustic_photons.is_some()),
@@ -108,6 +113,15 @@ impl PhotonArgs {
         .into_iter()
         .filter_map(|(name, on)| on.then_some(name))
         .collect();
+        if !integrator.uses_photons() {
+            if let Some(flag) = given.first().copied().or(self.no_photons.then_some("--no-photons")) {
+                bail!(
+                    "the {} integrator uses no photon maps, so {flag} would be ignored; leave it out, or use --integrator ppm",
+                    integrator.name()
+                );
+            }
+            return Ok(None);
+        }
         if self.no_photons {
             if !given.is_empty() {
                 bail!(
@@ -172,7 +186,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.device.is_some() && matches!(args.backend, BackendArg::Cpu) {
         bail!("--device picks a Vulkan device, but --backend cpu uses none; leave one of them out");
     }
-    let scene = load_scene(&args.scene)?;
+    let mut scene = load_scene(&args.scene)?;
+    if let Some(integrator) = args.integrator {
+        scene.render.integrator = integrator;
+    }
     for warning in &scene.warnings {
         note!("warning: {warning}");
     }
@@ -211,7 +228,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         seed: args.seed.unwrap_or(scene.render.seed),
     };
     // Every number was checked against its range when parsed (flags) or loaded (the scene).
-    let photons = args.photons.apply(scene.photons)?;
+    let photons = args.photons.apply(scene.photons, scene.render.integrator)?;
     let spp = args.spp.unwrap_or(scene.render.spp);
     let budget = args.progressive.budget(scene.render.passes)?;
     let exposure = args.exposure.unwrap_or(0.0);

@@ -144,6 +144,42 @@ pub struct LightSample {
     /// How far short of `p` a shadow ray stops: an area light's point's own offset (`Hit::eps`)
     /// over the cosine there, else the frame's `ray_epsilon`.
     pub eps: f32,
+    /// Solid-angle density that multiple importance sampling weighs this sample with (before the
+    /// pick probability; `light_pdf` gives the same number for a ray that meets the light):
+    /// 0 for a light no ray can meet (point, spot, a distant light without a visible disc).
+    pub pdf: f32,
+}
+
+/// The solid-angle density `light_sample` would have drawn direction `wi` with from a point
+/// `dist` away, toward light `l` met by a ray (area lights: at a point of cosine `cos_l`
+/// toward it). Area lights use their uniform density by area, 1 / `area`, whatever their shape's
+/// sampler does: multiple importance sampling needs only that both strategies weigh a path by
+/// the same function (the sample's value keeps the sampler's own pdf), and for triangles and
+/// spheres it is exact.
+pub fn light_pdf(s: &SceneView, l: &Light, wi: Vec3, dist: f32, cos_l: f32) -> f32 {
+    match l.kind {
+        LIGHT_AREA if cos_l > 0.0 && l.area > 0.0 => dist * dist / (cos_l * l.area),
+        LIGHT_ENVIRONMENT => environment_pdf(s, l, wi),
+        LIGHT_DISTANT if l.area > 0.0 => 1.0 / l.area,
+        _ => 0.0,
+    }
+}
+
+/// Solid-angle pdf of `environment_sample` drawing direction `d` (toward the environment).
+pub fn environment_pdf(s: &SceneView, l: &Light, d: Vec3) -> f32 {
+    let base = l.primitive;
+    let w = s.texture_data[(base + ENV_WIDTH) as usize];
+    let h = s.texture_data[(base + ENV_HEIGHT) as usize];
+    let (i, j) = env_texel(s, base, d);
+    let marginal = base + ENV_TEXELS + 3 * w * h;
+    let row = marginal + h + 1 + j * (w + 1);
+    let pm = env_float(s, marginal + j + 1) - env_float(s, marginal + j);
+    let pc = env_float(s, row + i + 1) - env_float(s, row + i);
+    let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+    if sin_theta <= 0.0 {
+        return 0.0;
+    }
+    (w * h) as f32 * pm * pc / (2.0 * PI * PI * sin_theta)
 }
 
 pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSample {
@@ -151,7 +187,8 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
         LIGHT_ENVIRONMENT => {
             let (wi, weight) = environment_sample(s, l, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
-            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon }
+            let pdf = environment_pdf(s, l, wi);
+            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon, pdf }
         }
         LIGHT_AREA => {
             // By area (see `shape_sample` for the density): L cos' / d^2 over the point's pdf.
@@ -167,13 +204,15 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             };
             // The shadow ray stops short of the point by its offset over the cosine there: a hit on
             // the light's own surface moves along a grazing ray by its error over that cosine.
-            LightSample { p: h.p, wi, weight, eps: h.eps / cos_l.max(1e-2) }
+            let pdf = light_pdf(s, l, wi, dist2.sqrt(), cos_l);
+            LightSample { p: h.p, wi, weight, eps: h.eps / cos_l.max(1e-2), pdf }
         }
         LIGHT_DISTANT => {
             // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
             let wi = -cone_direction(Vec3::from(l.direction), l.cos_outer, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
-            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity), eps: s.frame.ray_epsilon }
+            let pdf = light_pdf(s, l, wi, 0.0, 0.0);
+            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity), eps: s.frame.ray_epsilon, pdf }
         }
         _ => {
             // Point and spot lights: I(w) / d^2.
@@ -182,7 +221,7 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
             let weight = Vec3::from(l.intensity) * (spot_falloff(l, -wi) / dist2);
-            LightSample { p, wi, weight, eps: s.frame.ray_epsilon }
+            LightSample { p, wi, weight, eps: s.frame.ray_epsilon, pdf: 0.0 }
         }
     }
 }

@@ -345,6 +345,8 @@ shared_constants! {
     /// One hash gives four numbers: x is the Fresnel (or lobe) choice, y and z the BSDF's
     /// direction sample, w the choice between a BSDF's path and estimate lobes.
     RNG_FRESNEL: u32 = 5;
+    /// Russian roulette of a path-traced camera path (`integrator = "pt"`).
+    RNG_ROULETTE: u32 = 6;
 
     /// Photon paths draw from dimensions above this, so they never share numbers with camera paths.
     RNG_PHOTON_DOMAIN: u32 = 0x8000_0000;
@@ -389,6 +391,13 @@ shared_constants! {
     LAYER_INDIRECT: u32 = 2;
     LAYER_CAUSTICS: u32 = 3;
     LAYER_COUNT: u32 = 4;
+
+    /// `FrameParams::integrator`: the estimator of a render (`[render] integrator`). Photon
+    /// mapping: camera paths through delta and smooth glossy lobes, then light sampling, the
+    /// caustic map and a final gather (render.comp).
+    INTEGRATOR_PPM: u32 = 0;
+    /// Path tracing with light sampling and multiple importance sampling (render_pt.comp).
+    INTEGRATOR_PT: u32 = 1;
     /// Photon maps of the camera kernel's lookups (`grids[]` index).
     MAP_GLOBAL: u32 = 0;
     MAP_CAUSTIC: u32 = 1;

@@ -205,7 +205,7 @@ gpu_structs! {
         /// The first CSG leaf primitive: CSG leaves fill `csg_first..primitive_count`, after the
         /// unbounded primitives (`unbounded_first..csg_first`); only their object's walk meets them.
         pub csg_first: u32,
-        pub _pad: u32,
+        pub integrator: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -149,7 +149,8 @@ impl GpuKernels {
         Self::get(&self.grid_rank, ctx, "grid_rank", 4, GRID_RANK_BINDING_TYPES, 0, &[])
     }
     fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        let name = self.scene_kernel("render");
+        // The integrator's camera kernel; both take the same bindings (render_pt reads no maps).
+        let name = self.scene_kernel(if self.variant.path_traced { "render_pt" } else { "render" });
         let constants = self.variant.specialization();
         Self::get(
             &self.render,
@@ -690,6 +691,7 @@ impl<'a> GpuRenderer<'a> {
         photons: Option<&PhotonSettings>,
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
+        let photons = super::effective_photons(buffers, photons);
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
         let kernels = GpuKernels::for_scene(buffers.variant());
         kernels.create_all(ctx, photons.is_some())?;
@@ -736,6 +738,7 @@ impl<'a> GpuRenderer<'a> {
     /// count; [`GpuRenderer::last_written`] names those written).
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
+        let photons = super::effective_photons(buffers, photons);
         // After a failed update the device may hold a mix of the two scenes: compare with nothing.
         let previous = (!self.device_mixed).then_some((&self.buffers, self.photons.as_ref()));
         self.device_mixed = true;

@@ -22,7 +22,7 @@ pub use prepare::{prepare, FrameSettings, KernelVariant, PrepareError, SceneBuff
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
-use crate::layout::constants::{LAYER_COUNT, LAYER_DIRECT};
+use crate::layout::constants::{INTEGRATOR_PPM, INTEGRATOR_PT, LAYER_COUNT, LAYER_DIRECT};
 use crate::layout::{DispatchRange, FrameParams};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -245,11 +245,26 @@ pub fn resolve_band(layers: &mut Layers, row_begin: u32, accumulation: &[[f32; 4
     rays
 }
 
-/// The frame constants with photon mapping switched on or off.
+/// The photon settings a render of `buffers` uses: none for an integrator without photon maps
+/// (`[render] integrator`), whatever the scene or the command line asked for.
+pub fn effective_photons<'p>(
+    buffers: &SceneBuffers,
+    photons: Option<&'p PhotonSettings>,
+) -> Option<&'p PhotonSettings> {
+    photons.filter(|_| buffers.frame.integrator == INTEGRATOR_PPM)
+}
+
+/// The frame constants with photon mapping switched on or off. A path tracer samples every
+/// non-delta lobe with the BSDF's own density and light sampling, so no glossy lobe is a path
+/// lobe there (`glossy_threshold` 0).
 pub fn photon_frame(buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> FrameParams {
+    let photons = effective_photons(buffers, photons);
     let mut frame = buffers.frame;
     frame.photon_mapping = photons.is_some() as u32;
     frame.gather_rays = photons.map_or(0, |p| p.gather_rays);
+    if frame.integrator != INTEGRATOR_PPM {
+        frame.glossy_threshold = 0.0;
+    }
     frame
 }
 
@@ -308,6 +323,7 @@ pub fn render_cpu(
 ) -> RenderOutput {
     let mut stages = Vec::new();
     let t = Instant::now();
+    let photons = effective_photons(buffers, photons);
     let maps = photons.map(|settings| photons::build_indices_cpu(buffers, settings, pass));
     if maps.is_some() {
         stages.push(("photons".to_string(), t.elapsed()));
@@ -333,7 +349,11 @@ pub fn render_cpu(
             break;
         }
         let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
-        crate::cpu::render::render(&view, &unit, band);
+        if frame.integrator == INTEGRATOR_PT {
+            crate::cpu::render_pt::render_pt(&view, &unit, band);
+        } else {
+            crate::cpu::render::render(&view, &unit, band);
+        }
         done += unit_paths(&unit);
         progress(done, total);
     }

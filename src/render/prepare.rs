@@ -67,6 +67,8 @@ pub struct KernelVariant {
     pub instances: bool,
     /// CSG objects (their walk, in the analytic builds). A specialization constant.
     pub csg: bool,
+    /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
+    pub path_traced: bool,
 }
 
 impl KernelVariant {
@@ -115,6 +117,7 @@ impl SceneBuffers {
             media: !self.media.is_empty(),
             instances: self.frame.instance_count > 0,
             csg: self.frame.csg_first < self.frame.primitive_count,
+            path_traced: self.frame.integrator == INTEGRATOR_PT,
         }
     }
 
@@ -533,7 +536,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         camera_medium: NO_MEDIUM,
         instance_count: instanced.instance_count,
         instance_data: instanced.instance_data,
-        _pad: 0,
+        integrator: scene.render.integrator.code(),
     };
     // Media: the null material needs the media variant's kernels even without a medium.
     let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);

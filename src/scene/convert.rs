@@ -29,8 +29,9 @@ use super::model::{
 use super::pattern::{parse_pattern, ColorMap, PatternDesc, PatternKind, PATTERN_FIELDS};
 use super::voxel::load_voxel_grid;
 use super::{
-    Analytic, AnalyticKind, Camera, Density, Environment, Geometry, LightDesc, LightKind, MediumDesc, MediumInterface,
-    Phase, PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens, Triangle,
+    Analytic, AnalyticKind, Camera, Density, Environment, Geometry, Integrator, LightDesc, LightKind, MediumDesc,
+    MediumInterface, Phase, PhotonSettings, Projection, RenderSettings, Scene, SceneOrigins, Shape, Sphere, ThinLens,
+    Triangle,
 };
 use crate::layout::constants::{ADAPTIVE_MAX_RAYS, MIX_MAX_DEPTH};
 use crate::limits::{
@@ -731,8 +732,13 @@ impl Builder<'_> {
 
     fn render(&self, def: Option<&Spanned<super::format::RenderDef>>) -> Result<RenderSettings> {
         let object = "[render]";
-        let mut settings =
-            RenderSettings { spp: DEFAULT_SPP, passes: DEFAULT_PASSES, max_depth: DEFAULT_MAX_DEPTH, seed: 0 };
+        let mut settings = RenderSettings {
+            spp: DEFAULT_SPP,
+            passes: DEFAULT_PASSES,
+            max_depth: DEFAULT_MAX_DEPTH,
+            seed: 0,
+            integrator: Integrator::default(),
+        };
         let Some(def) = def else {
             return Ok(settings);
         };
@@ -748,6 +754,11 @@ impl Builder<'_> {
         }
         if let Some(seed) = &r.seed {
             settings.seed = self.integer(seed, object, "seed", 0, u32::MAX, "", "")?;
+        }
+        if let Some(name) = &r.integrator {
+            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).collect();
+            let name = self.one_of(name, object, "integrator", &names)?;
+            settings.integrator = Integrator::from_name(name).expect("one_of returns one of the names");
         }
         Ok(settings)
     }

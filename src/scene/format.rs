@@ -166,6 +166,7 @@ pub(crate) struct RenderDef {
     pub passes: Option<Spanned<i64>>,
     pub max_depth: Option<Spanned<i64>>,
     pub seed: Option<Spanned<i64>>,
+    pub integrator: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -181,6 +181,46 @@ pub struct RenderSettings {
     /// Most specular bounces of a path, >= 1.
     pub max_depth: u32,
     pub seed: u32,
+    /// The estimator (`[render] integrator`, `--integrator`).
+    pub integrator: Integrator,
+}
+
+/// How a render estimates light transport: one place that chooses (`render::render_cpu`,
+/// `render::gpu`), like Mitsuba's integrators.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Integrator {
+    /// Progressive photon mapping: light sampling, a caustic map and a final gather on a global
+    /// map, a shrinking radius per pass.
+    #[default]
+    Ppm,
+    /// Path tracing with light sampling, weighed by multiple importance sampling; no photons.
+    Pt,
+}
+
+impl Integrator {
+    /// Every integrator by its name in scene files and on the command line.
+    pub const NAMES: &'static [(&'static str, Integrator)] = &[("ppm", Integrator::Ppm), ("pt", Integrator::Pt)];
+
+    pub fn from_name(name: &str) -> Option<Integrator> {
+        Self::NAMES.iter().find(|(n, _)| *n == name).map(|&(_, i)| i)
+    }
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES.iter().find(|(_, i)| *i == self).map_or("ppm", |(n, _)| n)
+    }
+
+    /// `FrameParams::integrator`.
+    pub fn code(self) -> u32 {
+        match self {
+            Integrator::Ppm => crate::layout::constants::INTEGRATOR_PPM,
+            Integrator::Pt => crate::layout::constants::INTEGRATOR_PT,
+        }
+    }
+
+    /// Whether the integrator reads photon maps (and so traces photons each pass).
+    pub fn uses_photons(self) -> bool {
+        self == Integrator::Ppm
+    }
 }
 
 /// One shape of the scene: its geometry, its material id, and the media it bounds.
