@@ -152,3 +152,15 @@ fn point_light_follows_inverse_square_law() {
         assert!((got / expected - 1.0).abs() < 0.005, "pixel ({px}, {py}): {got} vs {expected}");
     }
 }
+
+/// The path tracer meets the light with BSDF samples too: multiple importance sampling must weigh
+/// them against light sampling to the same irradiance.
+#[test]
+fn area_light_over_plane_matches_lambert_pt_both_twins() {
+    let mut scene = light_over_plane();
+    scene.render.integrator = photonix::scene::Integrator::Pt;
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    check_against_lambert(&common::cpu_image(&buffers, SPP), "pt cpu");
+    let ctx = common::gpu();
+    check_against_lambert(&common::gpu_image(&ctx, &buffers, SPP), "pt gpu");
+}

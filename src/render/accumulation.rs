@@ -88,6 +88,10 @@ impl Provenance {
             ("seed", f.seed.to_string()),
             ("max_depth", f.max_depth.to_string()),
         ];
+        // Photon mapping's files read as they did before there was a choice of integrator.
+        if f.integrator != crate::layout::constants::INTEGRATOR_PPM {
+            settings.push(("integrator", f.integrator.to_string()));
+        }
         // `{:?}` of an f32 is its shortest exact form: equal values, equal text.
         let radius = |r: Option<f32>| r.map_or("auto".to_string(), |r| format!("{r:?}"));
         match photons {

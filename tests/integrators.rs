@@ -1,0 +1,213 @@
+//! The integrators (`[render] integrator`): each against the shared references, an analytic
+//! furnace, and the GPU kernels against their CPU twins; the four layers by path signature.
+
+mod common;
+
+use glam::Vec3;
+use photonix::io::metrics::{downsample, mean_ratio, rel_mse};
+use photonix::io::read_exr;
+use photonix::render::{render_cpu, RenderOutput, SceneBuffers};
+use photonix::scene::{load_scene, Camera, Integrator, Projection, RenderSettings, Scene, Shape};
+
+fn shipped(name: &str, integrator: Integrator) -> Scene {
+    let mut scene = load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).expect("shipped scene loads");
+    scene.render.integrator = integrator;
+    scene
+}
+
+fn cpu(buffers: &SceneBuffers, spp: u32) -> RenderOutput {
+    render_cpu(buffers, spp, None, 0, &mut |_, _| {})
+}
+
+/// The path tracer's kernel against its CPU twin on scenes that take each kernel variant
+/// (plain, textured, media, analytic shapes with sky, sun and spot lights): the same random
+/// numbers, so the same image up to float rounding (see `common::assert_twins_agree` for the
+/// tolerance).
+#[test]
+fn pt_gpu_matches_cpu() {
+    let ctx = common::gpu();
+    // outdoor: one pixel of its glass ball's rim flips a discrete choice under rounding at this
+    // size (relMSE about 1e-4, the same with `ppm --no-photons`, so not the path tracer's).
+    for (name, max_error) in [
+        ("cornell-box", 1e-6),
+        ("cornell-glossy", 1e-6),
+        ("cornell-fog", 1e-6),
+        ("spotlights", 1e-6),
+        ("outdoor", 1e-3),
+    ] {
+        let scene = shipped(name, Integrator::Pt);
+        let buffers = common::buffers(&scene, 32, 24);
+        let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 1, None, 0, &mut |_, _| {}).unwrap();
+        let cpu = cpu(&buffers, 1);
+        let error = rel_mse(&gpu.image, &cpu.image);
+        let ratio = mean_ratio(&gpu.image, &cpu.image);
+        println!(
+            "{name}: GPU vs CPU relMSE {error:.3e}, mean ratio {ratio:.6?}, rays {} / {}",
+            gpu.stats.rays, cpu.stats.rays
+        );
+        assert!(error < max_error, "{name}: relMSE {error:.3e}");
+        for r in ratio {
+            assert!((r - 1.0).abs() < 1e-3, "{name}: mean ratio {ratio:?}");
+        }
+    }
+}
+
+/// The path tracer against the independent references: 64x64 renders, the 256x256 reference
+/// box-filtered down by 4. The means must agree within 2% (16 samples of a 64x64 image leave a
+/// standard error of the mean near 0.5% on these scenes), the fog's within 5%: its light comes
+/// in rare bright paths (scattering near the lamp), so few samples read low more often than
+/// high (256x256 at 32 samples: within 0.4%).
+#[test]
+fn pt_matches_references() {
+    for (name, spp, max_rel_mse, max_mean) in [
+        ("cornell-box", 16, 0.02, 0.02),
+        ("cornell-caustics", 16, 0.3, 0.02),
+        ("cornell-glossy", 16, 0.3, 0.02),
+        ("cornell-fog", 16, 0.3, 0.05),
+    ] {
+        let scene = shipped(name, Integrator::Pt);
+        let reference = downsample(&read_exr(&common::reference_path(name)).expect("shared reference"), 4);
+        let image = cpu(&common::buffers(&scene, 64, 64), spp).image;
+        let error = rel_mse(&image, &reference);
+        let ratio = mean_ratio(&image, &reference);
+        println!("{name}: relMSE {error:.4}, mean ratio {ratio:.4?}");
+        for r in ratio {
+            assert!((r - 1.0).abs() < max_mean, "{name}: mean ratio {ratio:?}");
+        }
+        assert!(error < max_rel_mse, "{name}: relMSE {error}");
+    }
+}
+
+/// A closed room whose every wall is a Lambertian emitter of radiance E and albedo rho, seen
+/// from inside: L = E (1 + rho + rho^2 + ...) = E / (1 - rho) everywhere (a white furnace), which
+/// every path reaches by both emission met and light sampling, so multiple importance sampling
+/// must weigh each path to 1 in total. With rho = 0.5 and E = 1, L = 2; max_depth 24 cuts the
+/// series 2^-24 short.
+fn furnace() -> Scene {
+    let (rho, emission) = (0.5, 1.0);
+    let c = [
+        Vec3::new(-1.0, -1.0, -1.0),
+        Vec3::new(1.0, -1.0, -1.0),
+        Vec3::new(1.0, 1.0, -1.0),
+        Vec3::new(-1.0, 1.0, -1.0),
+        Vec3::new(-1.0, -1.0, 1.0),
+        Vec3::new(1.0, -1.0, 1.0),
+        Vec3::new(1.0, 1.0, 1.0),
+        Vec3::new(-1.0, 1.0, 1.0),
+    ];
+    let faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [3, 2, 6, 7], [0, 3, 7, 4], [1, 2, 6, 5]];
+    let mut shapes: Vec<Shape> = Vec::new();
+    for f in faces {
+        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
+            let mut v = tri.map(|i| c[i]);
+            // Wind each triangle so its normal faces the room's centre: emission leaves the front.
+            let n = (v[1] - v[0]).cross(v[2] - v[0]);
+            if n.dot(-v[0]) < 0.0 {
+                v.swap(1, 2);
+            }
+            shapes.push(common::triangle(v, 0));
+        }
+    }
+    Scene {
+        name: "furnace".into(),
+        path: "furnace.toml".into(),
+        camera: Camera {
+            position: Vec3::new(0.1, -0.2, 0.05),
+            look_at: Vec3::new(0.6, 0.3, 1.0),
+            up: Vec3::Y,
+            fov_deg: 90.0,
+            projection: Projection::Perspective,
+            lens: None,
+            width: 16,
+            height: 16,
+        },
+        render: RenderSettings { spp: 16, passes: 1, max_depth: 24, seed: 5, integrator: Integrator::Pt },
+        photons: None,
+        materials: vec![common::diffuse(rho, emission)],
+        material_names: vec!["wall".into()],
+        textures: vec![],
+        shapes,
+        lights: vec![],
+        environment: None,
+        warnings: vec![],
+        objects: vec![],
+        instances: vec![],
+        media: vec![],
+        medium_names: vec![],
+        atmosphere: None,
+    }
+}
+
+#[test]
+fn pt_furnace_is_one_over_one_minus_albedo_on_both_twins() {
+    let scene = furnace();
+    let buffers = common::buffers(&scene, 16, 16);
+    let ctx = common::gpu();
+    for (backend, image) in [
+        ("cpu", cpu(&buffers, 64).image),
+        ("gpu", photonix::render::gpu::render_gpu(&ctx, &buffers, 64, None, 0, &mut |_, _| {}).unwrap().image),
+    ] {
+        let n = image.pixels.len() as f64;
+        let mean: f64 = image.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / n;
+        let worst = image.pixels.iter().map(|p| (p[0] as f64 - 2.0).abs()).fold(0.0, f64::max);
+        println!("{backend}: furnace mean {mean:.5} (expected 2), worst pixel off by {worst:.4}");
+        assert!((mean - 2.0).abs() < 0.01, "{backend}: furnace mean {mean}");
+        // Each pixel averages 64 paths (seen: worst 0.32): a pixel far off is a wrong weight.
+        assert!(worst < 0.6, "{backend}: a pixel is off by {worst}");
+    }
+}
+
+/// The four layers sum to the image, and each holds the paths of its signature: on the
+/// caustics scene the glass ball's caustic (E D S+ L) lands in the caustics layer, the walls'
+/// light seen once (E D L) in the direct one, what the mirror and glass show in the specular one.
+#[test]
+fn pt_layers_split_by_path_signature_and_sum_to_the_image() {
+    let scene = shipped("cornell-caustics", Integrator::Pt);
+    let out = cpu(&common::buffers(&scene, 32, 32), 8);
+    let total = |img: &photonix::io::Image| img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    let combined = out.layers.combined();
+    let (all, sum) = (total(&out.image), total(&combined));
+    assert!((all - sum).abs() <= 1e-4 * all, "layers sum {sum} vs image {all}");
+    let share: Vec<f64> = out.layers.named().iter().map(|(_, l)| total(l) / all).collect();
+    println!("layer shares (direct, specular, indirect, caustics): {share:.4?}");
+    for (i, s) in share.iter().enumerate() {
+        assert!(*s > 0.005, "layer {i} holds {s} of the light");
+    }
+    assert!(share[0] > share[3], "direct light outweighs the caustics");
+}
+
+#[test]
+fn integrator_is_read_from_the_scene_and_unknown_names_are_refused() {
+    let dir = common::scene_dir(
+        "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 40\n[render]\nintegrator = \"pt\"\n",
+    );
+    let scene = load_scene(&dir.path().join("scene.toml")).unwrap();
+    assert_eq!(scene.render.integrator, Integrator::Pt);
+    let dir = common::scene_dir(
+        "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 40\n[render]\nintegrator = \"ptt\"\n",
+    );
+    let err = load_scene(&dir.path().join("scene.toml")).unwrap_err().to_string();
+    println!("{err}");
+    assert!(err.contains("scene.toml:6:") && err.contains("integrator") && err.contains("\"pt\""), "{err}");
+}
+
+#[test]
+fn photon_flags_with_the_path_tracer_are_an_error() {
+    let dir = common::scene_dir(
+        "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 40\nresolution = [8, 8]\n[render]\nspp = 1\npasses = 1\n",
+    );
+    let out = common::photonix(
+        &["render", "scene.toml", "--integrator", "pt", "--photons", "1000", "--backend", "cpu", "-o", "x.png"],
+        dir.path(),
+    );
+    let err = common::stderr(&out);
+    assert!(!out.status.success() && err.contains("--photons") && err.contains("pt"), "{err}");
+    assert!(!dir.path().join("x.png").exists());
+    let out = common::photonix(&["render", "scene.toml", "--integrator", "vcmx", "-o", "x.png"], dir.path());
+    assert!(!out.status.success() && common::stderr(&out).contains("ppm, pt"), "{}", common::stderr(&out));
+    let out = common::photonix(
+        &["render", "scene.toml", "--integrator", "pt", "--backend", "cpu", "-o", "x.png"],
+        dir.path(),
+    );
+    assert!(out.status.success(), "{}", common::stderr(&out));
+}
