@@ -211,3 +211,33 @@ fn photon_flags_with_the_path_tracer_are_an_error() {
     );
     assert!(out.status.success(), "{}", common::stderr(&out));
 }
+
+/// A farm of pass ranges with the path tracer: the merged parts equal one run of the same
+/// passes, and a part of another integrator is refused by `merge`.
+#[test]
+fn pt_pass_ranges_merge_to_one_run_and_integrators_do_not_mix() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let scene = common::repo_path("scenes/cornell-box.toml");
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out, "--backend", "cpu", "--resolution", "32x32"];
+        args.extend_from_slice(extra);
+        let o = common::photonix(&args, p);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+    };
+    render("full.exr", &["--integrator", "pt", "--passes", "4"]);
+    render("a.exr", &["--integrator", "pt", "--pass-range", "0..2"]);
+    render("b.exr", &["--integrator", "pt", "--pass-range", "2..4"]);
+    render("ppm.exr", &["--pass-range", "2..4"]);
+    let merged = common::photonix(&["merge", "b.exr", "a.exr", "-o", "merged.exr"], p);
+    assert!(merged.status.success(), "{}", common::stderr(&merged));
+    let (full, merged) = (read_exr(&p.join("full.exr")).unwrap(), read_exr(&p.join("merged.exr")).unwrap());
+    let error = rel_mse(&merged, &full);
+    println!("merged vs one run: relMSE {error:.3e}");
+    assert!(error < 1e-10, "{error}");
+    let mixed = common::photonix(&["merge", "a.exr", "ppm.exr", "-o", "mixed.exr"], p);
+    let err = common::stderr(&mixed);
+    println!("{err}");
+    assert!(!mixed.status.success() && err.contains("integrator"), "{err}");
+    assert!(!p.join("mixed.exr").exists());
+}
