@@ -259,9 +259,9 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
         prev_p = h.p;
         throughput *= smp.weight / choice;
         vertex++;
-        // Russian roulette after three vertices, on the throughput's largest channel.
-        if (!next_end && vertex >= 3u) {
-            float survive = min(max(throughput.x, max(throughput.y, throughput.z)), 1.0);
+        // Russian roulette, on the throughput's largest channel.
+        if (!next_end && vertex >= PT_ROULETTE_DEPTH) {
+            float survive = min(max(throughput.x, max(throughput.y, throughput.z)), PT_ROULETTE_MAX);
             if (rand1(stream, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) next_end = true;
             else throughput /= survive;
         }

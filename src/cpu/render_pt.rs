@@ -262,9 +262,9 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
         prev_p = h.p;
         throughput *= smp.weight / choice;
         vertex += 1;
-        // Russian roulette after three vertices, on the throughput's largest channel.
-        if !next_end && vertex >= 3 {
-            let survive = throughput.max_element().min(1.0);
+        // Russian roulette, on the throughput's largest channel.
+        if !next_end && vertex >= PT_ROULETTE_DEPTH {
+            let survive = throughput.max_element().min(PT_ROULETTE_MAX);
             if rand1(stream, sample, f.seed, dim + RNG_ROULETTE) >= survive {
                 next_end = true;
             } else {

@@ -347,6 +347,12 @@ shared_constants! {
     RNG_FRESNEL: u32 = 5;
     /// Russian roulette of a path-traced camera path (`integrator = "pt"`).
     RNG_ROULETTE: u32 = 6;
+    /// A path-traced camera path plays Russian roulette from this many vertices on, surviving
+    /// with its throughput's largest channel, at most `PT_ROULETTE_MAX` (Mitsuba 3's rr_depth 5
+    /// and 0.95: a path's first bounces carry most of the light, and a cap keeps bright paths
+    /// from being cut).
+    PT_ROULETTE_DEPTH: u32 = 5;
+    PT_ROULETTE_MAX: f32 = 0.95;
 
     /// Photon paths draw from dimensions above this, so they never share numbers with camera paths.
     RNG_PHOTON_DOMAIN: u32 = 0x8000_0000;
