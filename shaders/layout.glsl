@@ -117,6 +117,8 @@ struct FrameParams {
     uint instance_data;
     uint csg_first;
     uint integrator;
+    uint techniques;
+    uint _pad[3];
 };
 
 struct DispatchRange {

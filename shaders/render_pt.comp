@@ -56,6 +56,13 @@ float mis_power(float a, float b) {
     return 1.0 / (1.0 + r * r);
 }
 
+// The weight of a path made by technique `own`; contract in src/cpu/render_pt.rs, mis_weight.
+float mis_weight(uint techniques, uint own, float p_own, float p_other) {
+    if (p_other <= 0.0 || techniques == own) return 1.0;
+    if ((techniques & own) == 0u) return 0.0;
+    return mis_power(p_own, p_other);
+}
+
 // The layer of a path that ends at a light; contract in src/cpu/render_pt.rs, path_layer.
 uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
     if (first_specular) return LAYER_SPECULAR;
@@ -161,13 +168,13 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
                 Light l = light_at(i);
                 if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
                 if (dot(d, load3(l.direction)) <= -l.cos_outer) {
-                    float w = prev_pdf > 0.0 ? mis_power(prev_pdf, l.pick_probability / l.area) : 1.0;
+                    float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability / l.area) : 1.0;
                     terms[layer] += throughput * load3(l.intensity) * (w / l.area);
                 }
             }
             WHEN(frame.environment != NO_LIGHT) {
                 Light l = light_at(frame.environment);
-                float w = prev_pdf > 0.0 ? mis_power(prev_pdf, l.pick_probability * light_pdf(l, d, 0.0, 0.0)) : 1.0;
+                float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability * light_pdf(l, d, 0.0, 0.0)) : 1.0;
                 terms[layer] += throughput * environment_radiance(l, d) * w;
             }
             break;
@@ -192,7 +199,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
                     float w = 1.0;
                     if (prev_pdf > 0.0 && light != NO_LIGHT && hp == prim) {
                         Light l = light_at(light);
-                        w = mis_power(prev_pdf, l.pick_probability * light_pdf(l, d, length(h.p - prev_p), cos_l));
+                        w = mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability * light_pdf(l, d, length(h.p - prev_p), cos_l));
                     }
                     terms[path_layer(first_specular, diffuse, specular_after)] += throughput * emitted * w;
                 }
@@ -231,7 +238,8 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
                 float cosine = scattered ? 1.0 : abs(dot(b.ns, ls.wi));
                 vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cosine;
                 if (fr != vec3(0.0)) {
-                    float w = ls.pdf > 0.0 ? mis_power(l.pick_probability * ls.pdf, (1.0 - q) * bsdf_pdf(b, wo, ls.wi)) : 1.0;
+                    float p_bsdf = ls.pdf > 0.0 ? (1.0 - q) * bsdf_pdf(b, wo, ls.wi) : 0.0;
+                    float w = mis_weight(frame.techniques, TECHNIQUE_LIGHT, l.pick_probability * ls.pdf, p_bsdf);
                     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
                     vec3 to_target = ls.p - origin;
                     float len = length(to_target);

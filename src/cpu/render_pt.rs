@@ -39,6 +39,19 @@ pub fn mis_power(a: f32, b: f32) -> f32 {
     1.0 / (1.0 + r * r)
 }
 
+/// The weight of a path made by technique `own` (`TECHNIQUE_*`) with density `p_own` where the
+/// other technique would have made it with density `p_other` (0: it cannot), for the techniques
+/// switched on in `techniques`.
+pub fn mis_weight(techniques: u32, own: u32, p_own: f32, p_other: f32) -> f32 {
+    if p_other <= 0.0 || techniques == own {
+        return 1.0;
+    }
+    if techniques & own == 0 {
+        return 0.0;
+    }
+    mis_power(p_own, p_other)
+}
+
 /// The layer of a path that ends at a light after its vertices so far: whether its first vertex
 /// was delta (`first_specular`), how many non-delta vertices it has (`diffuse`, the last vertex
 /// included), and whether a delta vertex follows the last non-delta one (`specular_after`).
@@ -160,14 +173,23 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
             let layer = path_layer(first_specular, diffuse, specular_after) as usize;
             for l in s.lights.iter().take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0) {
                 if d.dot(Vec3::from(l.direction)) <= -l.cos_outer {
-                    let w = if prev_pdf > 0.0 { mis_power(prev_pdf, l.pick_probability / l.area) } else { 1.0 };
+                    let w = if prev_pdf > 0.0 {
+                        mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability / l.area)
+                    } else {
+                        1.0
+                    };
                     terms[layer] += throughput * Vec3::from(l.intensity) * (w / l.area);
                 }
             }
             if f.environment != NO_LIGHT {
                 let l = &s.lights[f.environment as usize];
                 let w = if prev_pdf > 0.0 {
-                    mis_power(prev_pdf, l.pick_probability * light_pdf(s, l, d, 0.0, 0.0))
+                    mis_weight(
+                        f.techniques,
+                        TECHNIQUE_BSDF,
+                        prev_pdf,
+                        l.pick_probability * light_pdf(s, l, d, 0.0, 0.0),
+                    )
                 } else {
                     1.0
                 };
@@ -189,7 +211,8 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
                     let p = &s.primitives[hit_primitive(s, prim) as usize];
                     let w = if prev_pdf > 0.0 && p.light != NO_LIGHT && hit_primitive(s, prim) == prim {
                         let l = &s.lights[p.light as usize];
-                        mis_power(prev_pdf, l.pick_probability * light_pdf(s, l, d, (h.p - prev_p).length(), cos_l))
+                        let p_light = l.pick_probability * light_pdf(s, l, d, (h.p - prev_p).length(), cos_l);
+                        mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, p_light)
                     } else {
                         1.0
                     };
@@ -233,8 +256,8 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
                 let cos = if scattered { 1.0 } else { b.ns.dot(ls.wi).abs() };
                 let fr = bsdf_eval(&b, wo, ls.wi) * ls.weight * cos;
                 if fr != Vec3::ZERO {
-                    let w = mis_power(l.pick_probability * ls.pdf, (1.0 - q) * bsdf_pdf(&b, wo, ls.wi));
-                    let w = if ls.pdf > 0.0 { w } else { 1.0 };
+                    let p_bsdf = if ls.pdf > 0.0 { (1.0 - q) * bsdf_pdf(&b, wo, ls.wi) } else { 0.0 };
+                    let w = mis_weight(f.techniques, TECHNIQUE_LIGHT, l.pick_probability * ls.pdf, p_bsdf);
                     let origin = offset_origin(&h, ls.wi, BSDF_REFLECTION);
                     let to_target = ls.p - origin;
                     let length = to_target.length();

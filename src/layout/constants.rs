@@ -404,6 +404,16 @@ shared_constants! {
     INTEGRATOR_PPM: u32 = 0;
     /// Path tracing with light sampling and multiple importance sampling (render_pt.comp).
     INTEGRATOR_PT: u32 = 1;
+    /// `FrameParams::techniques`: which of an integrator's sampling techniques contribute. With
+    /// both (the default) each path is weighed by multiple importance sampling; with one alone it
+    /// carries every path it can make (weight 1) and the other contributes only the paths it
+    /// alone can make (delta lights, emission seen through delta lobes), so each converges to the
+    /// same image by itself: the check that the weights are right (tests/integrators.rs).
+    /// Light sampling (next-event estimation) at path vertices.
+    TECHNIQUE_LIGHT: u32 = 1;
+    /// Emission met by BSDF-sampled path rays.
+    TECHNIQUE_BSDF: u32 = 2;
+    TECHNIQUES_ALL: u32 = 3;
     /// Photon maps of the camera kernel's lookups (`grids[]` index).
     MAP_GLOBAL: u32 = 0;
     MAP_CAUSTIC: u32 = 1;

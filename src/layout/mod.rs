@@ -206,6 +206,8 @@ gpu_structs! {
         /// unbounded primitives (`unbounded_first..csg_first`); only their object's walk meets them.
         pub csg_first: u32,
         pub integrator: u32,
+        pub techniques: u32,
+        pub _pad: [u32; 3],
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

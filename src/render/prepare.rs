@@ -537,6 +537,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         instance_count: instanced.instance_count,
         instance_data: instanced.instance_data,
         integrator: scene.render.integrator.code(),
+        techniques: TECHNIQUES_ALL,
+        _pad: [0; 3],
     };
     // Media: the null material needs the media variant's kernels even without a medium.
     let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);
