@@ -12,12 +12,11 @@ use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::{check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr};
 use photonix::limits::{printable_message, MAX_PASSES};
 use photonix::render::accumulation::{format_ranges, write_accumulation, Provenance};
-use photonix::render::gpu::GpuRenderer;
 use photonix::render::memory::{self, available_host_memory, check_fits};
 use photonix::render::photons::check_radii;
 use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
 use photonix::render::{
-    auto_backend, prepare, render_cpu, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats,
+    auto_backend, prepare, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats, Renderer,
 };
 use photonix::scene::{load_scene, Integrator};
 
@@ -285,10 +284,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Backend::Cpu => None,
     };
     let provenance = Provenance::new(&buffers, spp, photons.as_ref());
-    let mut renderer = match &ctx {
-        Some(ctx) => Some(GpuRenderer::new(ctx, &buffers, photons.as_ref())?),
-        None => None,
-    };
+    let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons.as_ref())?;
     // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
     let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
 
@@ -333,12 +329,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     bar.set_position(position.min(length));
                 }
             };
-            let out = match &mut renderer {
-                None => render_cpu(&buffers, spp, photons.as_ref(), pass, &mut progress),
-                Some(renderer) => renderer
-                    .render_pass(spp, pass, &mut progress)
-                    .with_context(|| failure_message(&args, passes_done.get(), &output))?,
-            };
+            let out = renderer
+                .render_pass(spp, pass, &mut progress)
+                .with_context(|| failure_message(&args, passes_done.get(), &output))?;
             add_stats(&mut stats, &out.stats);
             Ok(out)
         },
@@ -377,7 +370,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         let terms: Vec<&photonix::io::Image> = mean.named().iter().map(|(_, image)| *image).collect();
         write_image(sheet, &contact_sheet(&terms), exposure)?;
     }
-    if let Some(renderer) = &renderer {
+    if renderer.gpu().is_some() {
         stats.stages.insert(0, ("setup".into(), renderer.setup_time()));
     }
     stats.stages.insert(0, ("prepare".into(), prepare_time));

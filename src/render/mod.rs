@@ -13,12 +13,14 @@ pub mod pack_csg;
 pub mod photons;
 pub mod prepare;
 pub mod progressive;
+pub mod renderer;
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 pub use photons::PhotonSettings;
 pub use prepare::{prepare, FrameSettings, KernelVariant, PrepareError, SceneBuffers};
+pub use renderer::Renderer;
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
