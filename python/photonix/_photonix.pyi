@@ -1,5 +1,7 @@
 """Type hints of the compiled module; photonix/__init__.py documents the functions."""
 
+import os
+import pathlib
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
@@ -27,7 +29,7 @@ class Scene:
     def toml(self) -> str:
         """The scene's TOML text, with every edit made so far."""
     @property
-    def path(self) -> str:
+    def path(self) -> pathlib.Path:
         """The file the scene was read from (or named after, for `loads`)."""
     @property
     def name(self) -> str:
@@ -50,7 +52,7 @@ class Scene:
     def __setitem__(self, path: str, value: Any) -> None: ...
     def copy(self) -> Scene:
         """A copy that can be edited without changing this one."""
-    def save(self, path: str) -> None:
+    def save(self, path: "str | os.PathLike[str]") -> None:
         """Writes the TOML text to `path`."""
 
 class Progress:
