@@ -1030,9 +1030,16 @@ fn devices(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
 /// Reads and parses the scene file at `path`.
 #[pyfunction]
 fn load(path: PathBuf) -> PyResult<Scene> {
-    let scene = photonix::scene::load_scene(&path).map_err(scene_error)?;
-    let text = std::fs::read_to_string(&path).map_err(scene_error)?;
-    Ok(Scene { path, text, scene })
+    // Read once, under the library's size limit (the text is kept for edits); when that fails,
+    // `load_scene` says why in the command line's words.
+    let limit = photonix::limits::MAX_SCENE_FILE_BYTES;
+    match photonix::limits::read_limited(&path, limit).ok().and_then(|bytes| String::from_utf8(bytes).ok()) {
+        Some(text) if text.len() as u64 <= limit => Scene::parse(text, path),
+        _ => Err(scene_error(match photonix::scene::load_scene(&path) {
+            Err(e) => e.to_string(),
+            Ok(_) => format!("cannot read {}", path.display()),
+        })),
+    }
 }
 
 /// Parses scene text. `path` names it in messages, gives the scene its name, and is where
