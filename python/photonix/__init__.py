@@ -117,6 +117,7 @@ def render(
     accumulation: Optional[PathLike] = None,
     progress: Optional[Callable[[Progress], None]] = None,
     info: Optional[dict] = None,
+    integrator: Optional[str] = None,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
     """Renders `scene` (a Scene, or a path to a scene file) progressively and returns the mean
     of the passes: a float32 numpy array of shape (height, width, 3) holding linear radiance, or
@@ -128,6 +129,8 @@ def render(
       time          seconds (or a timedelta): stop after the pass that crosses it
       target_error  stop when the estimated relMSE falls below it (needs 4 passes)
       seed, spp, max_depth, resolution=(width, height)
+      integrator    "ppm" (progressive photon mapping) or "pt" (path tracing with MIS; takes no
+                    photon options), see docs/integrators.md
       backend       "auto" (a real GPU if there is one, else the CPU reference), "gpu" (the
                     Vulkan device even when it is lavapipe) or "cpu"
       pass_range    (A, B), range(A, B) or "A..B": exactly passes A..B-1, for farms
@@ -173,6 +176,7 @@ def render(
         accumulation=None if accumulation is None else _os.fspath(accumulation),
         progress=progress,
         info=info,
+        integrator=integrator,
     )
 
 

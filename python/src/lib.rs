@@ -25,11 +25,11 @@ use photonix::gpu::{list_devices, GpuContext, GpuOptions};
 use photonix::io::Image;
 use photonix::limits::{MAX_DEPTH, MAX_GATHER_RAYS, MAX_IMAGE_SIDE, MAX_PASSES, MAX_PHOTON_PATHS, MAX_PIXELS, MAX_SPP};
 use photonix::render::accumulation::{merge as merge_parts, write_accumulation, Provenance};
-use photonix::render::gpu::GpuRenderer;
 use photonix::render::memory::{self, available_host_memory, check_fits};
 use photonix::render::photons::check_radii;
 use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
-use photonix::render::{auto_backend, prepare, render_cpu, Backend, FrameSettings, Layers, PhotonSettings};
+use photonix::render::{auto_backend, prepare, Backend, FrameSettings, Layers, PhotonSettings, Renderer};
+use photonix::scene::Integrator;
 
 create_exception!(_photonix, PhotonixError, PyException, "Base class of the errors Photonix raises.");
 create_exception!(
@@ -576,10 +576,7 @@ fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Res
         },
     };
     let provenance = Provenance::new(&buffers, job.spp, photons);
-    let mut renderer = match &ctx {
-        Some(ctx) => Some(GpuRenderer::new(ctx, &buffers, photons).map_err(render_failure)?),
-        None => None,
-    };
+    let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons).map_err(render_failure)?;
     let mut device = String::new();
     let passes_done = std::cell::Cell::new(0u32);
     let (acc, reason) = render_progressive(
@@ -592,10 +589,7 @@ fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Res
                 // by its flag.
                 let _ = events.send(Event::Progress(pass, passes_done.get(), done, total));
             };
-            let out = match &mut renderer {
-                None => render_cpu(&buffers, job.spp, photons, pass, &mut progress),
-                Some(r) => r.render_pass(job.spp, pass, &mut progress).map_err(render_failure)?,
-            };
+            let out = renderer.render_pass(job.spp, pass, &mut progress).map_err(render_failure)?;
             device.clone_from(&out.stats.device);
             Ok(out)
         },
@@ -665,7 +659,7 @@ fn layers_to_dict<'py>(py: Python<'py>, layers: &Layers) -> PyResult<Bound<'py, 
 #[pyo3(signature = (scene, *, passes=None, time=None, target_error=None, seed=None, backend="auto",
     resolution=None, pass_range=None, layers=false, spp=None, max_depth=None, photons=None,
     caustic_photons=None, radius=None, caustic_radius=None, gather_rays=None, photon_depth=None,
-    no_photons=false, device=None, accumulation=None, progress=None, info=None))]
+    no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -691,6 +685,7 @@ fn render<'py>(
     accumulation: Option<PathBuf>,
     progress: Option<Bound<'py, PyAny>>,
     info: Option<Bound<'py, PyDict>>,
+    integrator: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
     // Check every argument before any work, with the command line's ranges.
     let backend = match backend {
@@ -765,8 +760,23 @@ fn render<'py>(
         ("photon_depth", photon_depth.is_some()),
     ];
     let given: Vec<&str> = photon_flags.iter().filter_map(|(n, on)| on.then_some(*n)).collect();
-    let s = &scene.scene;
-    let photon_settings = if no_photons {
+    let mut s = scene.scene.clone();
+    if let Some(name) = integrator {
+        s.render.integrator = Integrator::from_name(name).ok_or_else(|| {
+            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).collect();
+            PyValueError::new_err(format!("integrator={name:?} is not one of {}", names.join(", ")))
+        })?;
+    }
+    let s = &s;
+    let photon_settings = if !s.render.integrator.uses_photons() {
+        if let Some(flag) = given.first().copied().or(no_photons.then_some("no_photons")) {
+            return Err(PyValueError::new_err(format!(
+                "the {} integrator uses no photon maps, so {flag} would be ignored; leave it out, or use integrator=\"ppm\"",
+                s.render.integrator.name()
+            )));
+        }
+        None
+    } else if no_photons {
         if !given.is_empty() {
             return Err(PyValueError::new_err(format!(
                 "no_photons renders without photon maps, so {} would be ignored; give one or the other",

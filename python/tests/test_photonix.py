@@ -242,3 +242,12 @@ def test_the_gpu_backend_agrees_with_the_cpu_reference():
     # different summation orders; relMSE far below the noise of one pass.
     rel = np.mean((gpu - cpu) ** 2 / (cpu ** 2 + 1e-2))
     assert rel < 1e-4, rel
+
+
+def test_the_path_tracer_is_chosen_by_name_and_refuses_photon_options():
+    image = photonix.render(BOX, passes=1, integrator="pt", backend="cpu", resolution=(16, 16), spp=4)
+    assert image.shape == (16, 16, 3) and (image.mean(axis=(0, 1)) > 0.01).all()
+    with pytest.raises(ValueError, match="photons"):
+        photonix.render(BOX, passes=1, integrator="pt", photons=1000)
+    with pytest.raises(ValueError, match="ppm, pt"):
+        photonix.render(BOX, passes=1, integrator="vcmx")
