@@ -413,3 +413,37 @@ fn scene_messages_point_at_the_fault_and_quote_cleanly() {
     assert!(e.contains("missing field `outer_angle`"), "{e}");
     assert_eq!(e.matches('`').count() % 2, 0, "a stray backtick: {e}");
 }
+
+// Twins at scale: a pass lavapipe would get wrong is refused
+
+/// `benches/instancing/frames-1500.toml`: 1500 overlapping hollow frames in a closed room.
+/// Photon paths of 48 bounces through the stack run past lavapipe's 65535 loop iterations per
+/// invocation; lavapipe broke them off and its image came out 38% darker than the CPU backend's
+/// (relMSE 0.19). The kernel now counts paths whose loop ended with its condition still true, and
+/// the pass is refused with a message that says why and what to do. With 4 bounces the two
+/// backends agree as usual.
+#[test]
+fn photon_paths_lavapipe_would_break_off_are_refused_not_rendered_dark() {
+    let path = common::repo_path("benches/instancing/frames-1500.toml");
+    let scene = photonix::scene::load_scene(&path).unwrap();
+    let buffers = common::buffers(&scene, 8, 6);
+    let mut photons = scene.photons.expect("the scene has photons");
+    let ctx = common::gpu();
+    let render = |p: &photonix::render::PhotonSettings| {
+        photonix::render::gpu::render_gpu(&ctx, &buffers, 1, Some(p), 0, &mut |_, _| {})
+    };
+    match render(&photons) {
+        // A real GPU has no such limit and renders the pass; lavapipe must refuse it.
+        Ok(_) => assert!(!ctx.info().name.contains("llvmpipe"), "lavapipe rendered paths it broke off"),
+        Err(e) => {
+            let e = e.to_string();
+            assert!(e.contains("broke off") && e.contains("--backend cpu"), "{e}");
+        }
+    }
+    photons.max_depth = 4;
+    let gpu = render(&photons).expect("short paths stay within the limit");
+    let cpu = common::cpu_render(&buffers, 1, &photons);
+    let error = photonix::io::metrics::rel_mse(&gpu.image, &cpu.image);
+    println!("frames, 4 bounces: GPU vs CPU relMSE {error:.3e}");
+    assert!(error < 1e-6, "relMSE {error:.3e}");
+}
