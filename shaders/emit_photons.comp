@@ -35,7 +35,8 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) writeonly buffer GlobalPhotons { Photon global_photons[]; };
 layout(std430, binding = SCENE_BINDINGS + 1) writeonly buffer CausticPhotons { Photon caustic_photons[]; };
-layout(std430, binding = SCENE_BINDINGS + 2) buffer Counters { uint counters[3]; };
+// counters[3]: photon paths the driver broke off (photon_path.glsl).
+layout(std430, binding = SCENE_BINDINGS + 2) buffer Counters { uint counters[4]; };
 layout(std430, binding = SCENE_BINDINGS + 3) writeonly buffer VolumePhotons { Photon volume_photons[]; };
 layout(push_constant) uniform Push { EmitParams params; };
 

@@ -21,7 +21,8 @@ void trace_photon_path(uint path, EmitParams params) {
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     uint skip = NO_LIGHT;
     uint depth = 0u;  // scattering events so far (surfaces and media; null boundaries are none)
-    for (uint step = 0u; step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth; step++) {
+    uint step = 0u;
+    for (; step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth; step++) {
         float t;
         uint prim = trace_ray(o, d, INF, false, skip, t);
         bool scattered = false;
@@ -96,4 +97,9 @@ void trace_photon_path(uint path, EmitParams params) {
         d = s.wi;
         depth++;
     }
+    // The loop ends by its condition or by a return. Here with the condition still true, the
+    // loop was broken off: lavapipe stops every loop of an invocation after 65535 iterations in
+    // all, and the path's photons beyond are lost. Counted, so the host refuses the pass rather
+    // than give an image darker than the CPU backend's (issue 25). The CPU twin has no such limit.
+    if (step < params.max_depth + MEDIUM_CROSSINGS && depth < params.max_depth) atomicAdd(counters[3], 1u);
 }

@@ -1,7 +1,8 @@
 //! Fuzz targets, run as ordinary tests (there is no nightly toolchain for cargo-fuzz here): the
 //! scene parser (`parse_scene`), the OBJ importer (a `type = "mesh"` shape behind `load_scene`)
 //! and the other model importers (PLY ASCII and binary, glTF `.gltf` and `.glb`, 3DS, IFS and
-//! Bezier patches, fed mutations of real exporters' files). Inputs come from a generator that follows each format's grammar and from
+//! Bezier patches, fed mutations of real exporters' files), and the editor's HTTP and WebSocket
+//! API (`photonix serve`: requests and page messages against one running server). Inputs come from a generator that follows each format's grammar and from
 //! byte-level mutations of the shipped files, drawn from the crate's counter-based hash, so a
 //! (seed, case) pair replays exactly. Every case must give a scene that keeps the documented
 //! invariants (finite geometry, a usable camera, finite light power) or an error that names the
@@ -32,6 +33,8 @@ use photonix::render::memory;
 use photonix::render::photons::check_radii;
 use photonix::render::{prepare, FrameSettings};
 use photonix::scene::{load_scene, parse_scene, Geometry, LightKind, Scene};
+
+mod editor_support;
 
 // Random choices
 
@@ -1009,6 +1012,305 @@ fn fuzz_model_importers() {
         },
         check_tagged_model_input,
     );
+}
+
+// The editor's API
+
+/// Words a file outside the editor's folder holds; no reply may ever show them.
+const SECRET: &str = "OUTSIDESECRET";
+
+/// A server on a scene in `<tmp>/scene/`, with `<tmp>/outside/` holding files that edits and
+/// imports try to reach (an MTL, a glTF buffer, an image, a scene).
+struct EditorTarget {
+    fixture: editor_support::Fixture,
+    /// The served scene file (`fixture.scene` is the fixture's unused default).
+    scene: PathBuf,
+    outside: PathBuf,
+    /// Answers seen, by kind ("http 422", "ws reply ok"), for the run's summary.
+    answers: RefCell<BTreeMap<String, u64>>,
+    _root: tempfile::TempDir,
+}
+
+impl EditorTarget {
+    fn new() -> EditorTarget {
+        let root = tempfile::tempdir().unwrap();
+        let outside = root.path().join("outside");
+        std::fs::create_dir(&outside).unwrap();
+        std::fs::write(outside.join("secret.mtl"), format!("newmtl {SECRET}\nKd 0.1 0.2 0.3\n")).unwrap();
+        std::fs::write(outside.join("secret.obj"), format!("o {SECRET}\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"))
+            .unwrap();
+        std::fs::write(outside.join("secret.bin"), SECRET.repeat(4)).unwrap();
+        std::fs::write(outside.join("secret.toml"), format!("# {SECRET}\n")).unwrap();
+        let folder = root.path().join("scene");
+        std::fs::create_dir(&folder).unwrap();
+        let fixture = editor_support::Fixture::with(photonix::editor::BackendChoice::Cpu, |o| {
+            o.scene = folder.join("scene.toml");
+            std::fs::write(&o.scene, editor_support::SCENE).unwrap();
+            o.max_upload_bytes = 64 << 10;
+        });
+        std::os::unix::fs::symlink(outside.join("secret.mtl"), folder.join("link.mtl")).unwrap();
+        EditorTarget {
+            fixture,
+            scene: folder.join("scene.toml"),
+            outside,
+            answers: RefCell::new(BTreeMap::new()),
+            _root: root,
+        }
+    }
+}
+
+/// A file name as the page might send it: ordinary, missing, or leading out of the folder.
+fn editor_file(r: &mut Rng) -> String {
+    const FILES: &str = "mesh.obj scene.toml link.mtl missing.obj ../outside/secret.obj ../outside/secret.mtl \
+        /etc/passwd ../outside/secret.bin file:///etc/passwd . .. / ../../ %2e%2e/outside/secret.obj \
+        ../outside/missing.obj textures/a.png ./scene.toml";
+    r.pick(&words(FILES)).to_string()
+}
+
+/// A JSON value for a field: right kind most of the time, else anything.
+fn editor_value(r: &mut Rng) -> serde_json::Value {
+    use serde_json::json;
+    match r.below(12) {
+        0 => json!(r.below(100) as f64 / 10.0),
+        1 => json!([r.below(5), r.below(5), r.below(5)]),
+        2 => json!(words("1e300 -1e300 1e-300 0 -0 3.4e39 -1")[r.below(7)].parse::<f64>().unwrap()),
+        3 => json!(editor_file(r)),
+        4 => json!({ "texture": "checks" }),
+        5 => json!(null),
+        6 => json!(true),
+        7 => json!("k".repeat(r.below(5000))),
+        8 => json!([[[[]]]]),
+        9 => json!({ "a": { "b": [1, { "c": "\u{1b}[31m" }] } }),
+        10 => json!(i64::MAX),
+        _ => json!(r.below(3)),
+    }
+}
+
+fn editor_target(r: &mut Rng) -> serde_json::Value {
+    use serde_json::json;
+    match r.below(9) {
+        0 => json!({ "shape": r.below(6) }),
+        1 => json!({ "light": r.below(4) }),
+        2 => json!({ "instance": r.below(2) }),
+        3 => json!({ "material": *r.pick(&["white", "red", "glass", "nope", ""]) }),
+        4 => json!(*r.pick(&["camera", "render", "photons", "environment", "objects", "x"])),
+        5 => json!({ "shape": -1 }),
+        6 => json!({ "shape": u64::MAX }),
+        7 => json!([1, 2]),
+        _ => json!({ "shape": 0, "light": 0 }),
+    }
+}
+
+/// An edit command of the page's protocol (docs/editor.md), sometimes malformed.
+fn editor_command(r: &mut Rng) -> serde_json::Value {
+    use serde_json::json;
+    const FIELDS: &str = "position look_at up fov resolution spp passes max_depth seed count radius file \
+        reflectance emission roughness ior type material center radius vertices transform strength \
+        rotation count caustic_count gather_rays name bogus";
+    let field = r.pick(&words(FIELDS)).to_string();
+    let mut command = match r.below(9) {
+        0 => json!({ "op": "set", "target": editor_target(r), "field": field, "value": editor_value(r) }),
+        1 => json!({ "op": "set_transform", "target": editor_target(r), "translate": [r.below(3), 0, 0],
+                     "rotate": editor_value(r), "scale": editor_value(r) }),
+        2 => json!({ "op": "set_fields", "target": editor_target(r), "fields": { field: editor_value(r) } }),
+        3 => json!({ "op": "delete", "target": editor_target(r) }),
+        4 => json!({ "op": "duplicate", "target": editor_target(r) }),
+        5 => json!({ "op": "add", "kind": *r.pick(&["shape", "light", "material", "camera"]),
+                     "table": { "type": *r.pick(&["mesh", "sphere", "diffuse", "area", "x"]),
+                                "material": "white", "file": editor_file(r), "radius": editor_value(r) },
+                     "name": *r.pick(&["new", "white", "", "a b"]) }),
+        6 => json!({ "op": "set_texture", "material": *r.pick(&["white", "red", "nope"]),
+                     "field": *r.pick(&["reflectance", "emission", "roughness", "bump", "x"]),
+                     "file": editor_file(r), "linear": r.chance(50) }),
+        7 => json!({ "op": "set", "target": "environment", "field": "file", "value": editor_file(r) }),
+        _ => json!({ "op": *r.pick(&["set", "nope", ""]), "bogus": editor_value(r) }),
+    };
+    if r.chance(10) {
+        command[*r.pick(&["op", "target", "value", "extra"])] = editor_value(r);
+    }
+    command
+}
+
+/// An OBJ body for an import: the grammar's, or one naming files out of the folder.
+fn editor_obj(r: &mut Rng) -> Vec<u8> {
+    let mut obj = if r.chance(50) { grammar_obj(r) } else { b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n".to_vec() };
+    if r.chance(50) {
+        let mtl = *r.pick(&["../outside/secret.mtl", "link.mtl", "/etc/passwd", "missing.mtl", "../outside"]);
+        obj.splice(0..0, format!("mtllib {mtl}\nusemtl {SECRET}\n").into_bytes());
+    }
+    obj
+}
+
+/// One case: `http METHOD PATH` or `ws` on the first line, the body or message after it.
+fn editor_case(r: &mut Rng) -> Vec<u8> {
+    use serde_json::json;
+    let command = editor_command(r);
+    let (head, body): (String, Vec<u8>) = match r.below(12) {
+        0..=2 => ("http POST /api/edit".into(), command.to_string().into_bytes()),
+        3..=4 => {
+            let id = if r.chance(80) { json!(r.below(1000)) } else { editor_value(r) };
+            let message = match r.below(7) {
+                0..=2 => json!({ "type": "edit", "id": id, "command": command }),
+                3 => json!({ "type": *r.pick(&["undo", "redo", "save"]), "id": id }),
+                4 => json!({ "type": "view", "view": { "position": [0, 1, 4], "look_at": editor_value(r),
+                             "up": [0, 1, 0], "fov": editor_value(r), "width": 16, "height": editor_value(r) } }),
+                5 => json!({ "type": "bogus" }),
+                _ => editor_value(r),
+            };
+            ("ws".into(), message.to_string().into_bytes())
+        }
+        5 => {
+            let name = *r.pick(&["m.obj", "../m.obj", "m.toml", ".m.obj", "a%2Fb.obj", "scene.toml", "M.OBJ"]);
+            let material = *r.pick(&["white", "nope", ""]);
+            (format!("http POST /api/import?name={name}&material={material}"), editor_obj(r))
+        }
+        6 => {
+            let body = match r.below(4) {
+                0 => json!({ "seconds": editor_value(r) }),
+                1 => json!({ "passes": editor_value(r) }),
+                2 => json!({ "passes": 1, "bogus": 1 }),
+                _ => json!({}),
+            };
+            (format!("http POST {}", r.pick(&["/api/render", "/api/render/cancel"])), body.to_string().into_bytes())
+        }
+        7 => (format!("http POST {}", r.pick(&["/api/undo", "/api/redo", "/api/save"])), Vec::new()),
+        8 => {
+            let path = *r.pick(&[
+                "/api/scene",
+                "/api/scene.toml",
+                "/api/images",
+                "/api/render/status",
+                "/api/render/image.png",
+                "/api/render/image.exr",
+                "/api/nope",
+                "/../outside/secret.toml",
+                "/%2e%2e/outside/secret.toml",
+            ]);
+            (format!("http GET {path}"), Vec::new())
+        }
+        _ => {
+            // A valid edit, mutated byte by byte.
+            let body = mutate(r, command.to_string().as_bytes());
+            (format!("http POST {}", r.pick(&["/api/edit", "/api/render"])), body)
+        }
+    };
+    let mut out = head.into_bytes();
+    out.push(b'\n');
+    out.extend(body);
+    out
+}
+
+/// Sends one case and checks the server's answer: a status below 500, JSON errors with
+/// `ok: false` and a message, nothing from outside the folder in any reply, a document that still
+/// parses, no file written outside the folder, and a server that still answers.
+fn check_editor_case(t: &EditorTarget, input: &[u8]) -> Result<(), Failure> {
+    let f = &t.fixture;
+    let fail = |key: &str, message: String| Err(Failure { key: key.to_string(), message });
+    let split = input.iter().position(|&c| c == b'\n').unwrap_or(input.len());
+    let head = String::from_utf8_lossy(&input[..split]).to_string();
+    let body = input.get(split + 1..).unwrap_or_default();
+    let mut replies: Vec<String> = Vec::new();
+    if let Some(request) = head.strip_prefix("http ") {
+        let (method, path) = request.split_once(' ').unwrap_or(("GET", "/"));
+        // The request line takes no spaces or control characters; the generator makes none.
+        let r = f.call(method, path, body);
+        *t.answers.borrow_mut().entry(format!("http {}", r.status)).or_default() += 1;
+        let text = r.text();
+        if r.status >= 500 {
+            return fail("5xx", format!("{method} {path}: {} {text}", r.status));
+        }
+        let json_expected = path.starts_with("/api/") && (r.status >= 400 || !path.contains('.'));
+        if json_expected && path != "/api/images" {
+            let Ok(value) = serde_json::from_slice::<serde_json::Value>(&r.body) else {
+                return fail("not json", format!("{method} {path}: {} {text}", r.status));
+            };
+            if r.status >= 400 && (value["ok"] != false || !value["error"].is_string()) {
+                return fail("error shape", format!("{method} {path}: {} {text}", r.status));
+            }
+        }
+        replies.push(text);
+    } else {
+        let messages = f.runtime.block_on(websocket_exchange(f, body));
+        match messages {
+            Ok(m) => {
+                let last: serde_json::Value = m.last().and_then(|l| serde_json::from_str(l).ok()).unwrap_or_default();
+                let kind = match (last["type"].as_str(), last["ok"].as_bool()) {
+                    (Some("reply"), Some(true)) => "ws reply ok",
+                    (Some("reply"), _) => "ws reply refused",
+                    (Some("error"), _) => "ws error",
+                    _ => "ws no reply",
+                };
+                *t.answers.borrow_mut().entry(kind.to_string()).or_default() += 1;
+                replies.extend(m)
+            }
+            Err(e) => return fail("websocket", e),
+        }
+    }
+    for reply in &replies {
+        if reply.contains(SECRET) {
+            return fail("leak", format!("{head}: a reply shows a file outside the folder: {reply}"));
+        }
+    }
+    let text = f.text();
+    if text.contains(SECRET) {
+        return fail("leak", "the scene text holds the outside file's words".into());
+    }
+    if let Err(e) = parse_scene(&text, &t.scene) {
+        return fail("document", format!("{head}: the document no longer parses: {e}"));
+    }
+    let outside: Vec<_> = std::fs::read_dir(&t.outside).unwrap().flatten().map(|e| e.file_name()).collect();
+    if outside.len() != 4 {
+        return fail("wrote outside", format!("{head}: the outside folder now holds {outside:?}"));
+    }
+    if f.call("GET", "/api/render/status", b"").status != 200 {
+        return fail("dead", format!("{head}: the server stopped answering"));
+    }
+    Ok(())
+}
+
+/// Sends `message` on a fresh WebSocket and collects the text messages until the reply (or an
+/// error) arrives; a view gets no reply, so it waits a moment only.
+async fn websocket_exchange(f: &editor_support::Fixture, message: &[u8]) -> Result<Vec<String>, String> {
+    use futures_util::{SinkExt, StreamExt};
+    use tokio_tungstenite::tungstenite::Message;
+    let url = format!("ws://{}/ws?token={}", f.addr(), f.token());
+    let (mut socket, _) = tokio_tungstenite::connect_async(url).await.map_err(|e| format!("connect: {e}"))?;
+    let text = String::from_utf8_lossy(message).to_string();
+    socket.send(Message::Text(text.clone().into())).await.map_err(|e| format!("send: {e}"))?;
+    let is_view = text.contains("\"view\"");
+    let wait = Duration::from_millis(if is_view { 300 } else { 20_000 });
+    let mut got = Vec::new();
+    loop {
+        match tokio::time::timeout(wait, socket.next()).await {
+            Err(_) if is_view => break,
+            Err(_) => return Err(format!("no reply within {wait:?} to {text}")),
+            Ok(None) | Ok(Some(Err(_))) => break,
+            Ok(Some(Ok(Message::Text(t)))) => {
+                let t = t.to_string();
+                let value: serde_json::Value =
+                    serde_json::from_str(&t).map_err(|e| format!("a message that is not JSON ({e}): {t}"))?;
+                let kind = value["type"].as_str().unwrap_or_default().to_string();
+                got.push(t);
+                if kind == "reply" || kind == "error" {
+                    if value["type"] == "reply" && value["ok"] == false && !value["error"].is_string() {
+                        return Err(format!("a failed reply without a message: {value}"));
+                    }
+                    break;
+                }
+            }
+            Ok(Some(Ok(_))) => {}
+        }
+    }
+    let _ = socket.close(None).await;
+    Ok(got)
+}
+
+#[test]
+fn fuzz_editor_api() {
+    let target = EditorTarget::new();
+    fuzz("editor", "editor", 200, editor_case, |input, _| check_editor_case(&target, input));
+    let answers = target.answers.borrow();
+    eprintln!("editor answers: {}", answers.iter().map(|(k, n)| format!("{n} x {k}")).collect::<Vec<_>>().join(", "));
 }
 
 #[test]

@@ -135,6 +135,7 @@ fn furnace() -> Scene {
         media: vec![],
         medium_names: vec![],
         atmosphere: None,
+        inputs: vec![],
     }
 }
 

@@ -115,6 +115,7 @@ fn closed_box(rho: f32) -> Scene {
         warnings: vec![],
         objects: vec![],
         instances: vec![],
+        inputs: vec![],
         media: vec![],
         medium_names: vec![],
         atmosphere: None,

@@ -60,6 +60,7 @@ fn light_over_plane() -> Scene {
         warnings: vec![],
         objects: vec![],
         instances: vec![],
+        inputs: vec![],
         media: vec![],
         medium_names: vec![],
         atmosphere: None,

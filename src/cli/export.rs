@@ -7,7 +7,7 @@ use anyhow::{anyhow, bail, Result};
 
 use photonix::editor::gltf::scene_glb;
 use photonix::editor::SceneDocument;
-use photonix::io::image::{same_file, write_atomically};
+use photonix::io::image::{check_not_input, same_file, write_atomically};
 
 #[derive(clap::Args)]
 pub struct ExportArgs {
@@ -30,7 +30,8 @@ pub fn run(args: ExportArgs) -> Result<()> {
     if same_file(&args.output, &args.scene) {
         bail!("{} is the scene file itself; give another output name", args.output.display());
     }
-    let doc = SceneDocument::load(&args.scene).map_err(|e| anyhow!("{e}"))?;
+    let doc = SceneDocument::load_unconfined(&args.scene).map_err(|e| anyhow!("{e}"))?;
+    check_not_input(&args.output, &doc.scene().inputs)?;
     for warning in &doc.scene().warnings {
         note!("warning: {warning}");
     }

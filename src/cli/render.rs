@@ -9,7 +9,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::BackendArg;
 use photonix::gpu::{list_devices, GpuContext, GpuOptions};
-use photonix::io::{check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr};
+use photonix::io::{
+    check_not_input, check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr,
+};
 use photonix::limits::{printable_message, MAX_PASSES};
 use photonix::render::accumulation::{format_ranges, write_accumulation, Provenance};
 use photonix::render::memory::{self, available_host_memory, check_fits};
@@ -213,9 +215,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Fail on a bad output path now, not after a long render, and never overwrite the inputs.
     check_output_path(&output)?;
     check_not_overwriting(&output, &args.scene, "the scene file")?;
+    check_not_input(&output, &scene.inputs)?;
     if let Some(sheet) = &args.contact_sheet {
         check_output_path(sheet)?;
         check_not_overwriting(sheet, &args.scene, "the scene file")?;
+        check_not_input(sheet, &scene.inputs)?;
         check_not_overwriting(sheet, &output, "the output image")?;
     }
 

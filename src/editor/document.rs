@@ -11,7 +11,7 @@ use serde::Deserialize;
 use serde_json::Value as Json;
 use toml_edit::{DocumentMut, Item, Table, TableLike, Value};
 
-use crate::scene::{parse_scene_with_origins, Scene, SceneOrigins};
+use crate::scene::{parse_scene_in, Scene, SceneOrigins};
 
 /// Undo steps kept; older ones are dropped.
 const MAX_UNDO: usize = 200;
@@ -143,6 +143,9 @@ pub struct SceneDocument {
     path: PathBuf,
     /// The folder files may be read from and written to (canonical).
     folder: PathBuf,
+    /// Whether every parse reads files inside `folder` only (the editor's server), or wherever
+    /// the scene names them (`photonix export`, run by the user on their own scene).
+    confined: bool,
     text: String,
     scene: Scene,
     origins: SceneOrigins,
@@ -158,8 +161,18 @@ pub struct SceneDocument {
 type Parsed = (Scene, SceneOrigins);
 
 impl SceneDocument {
-    /// Loads `path`, which must parse as a scene.
+    /// Loads `path`, which must parse as a scene reading no file outside its folder (the
+    /// editor's server: no model, texture or file a model names is read outside it).
     pub fn load(path: &Path) -> Result<SceneDocument, EditError> {
+        SceneDocument::open(path, true)
+    }
+
+    /// `load`, reading the files the scene names wherever they are (`photonix export`).
+    pub fn load_unconfined(path: &Path) -> Result<SceneDocument, EditError> {
+        SceneDocument::open(path, false)
+    }
+
+    fn open(path: &Path, confined: bool) -> Result<SceneDocument, EditError> {
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
             EditError::Invalid(match e {
                 Some(cause) => format!("cannot read {}: {cause}", path.display()),
@@ -174,10 +187,11 @@ impl SceneDocument {
             .unwrap_or(Path::new("."))
             .canonicalize()
             .map_err(|e| EditError::Invalid(format!("cannot open the folder of {}: {e}", path.display())))?;
-        let (scene, origins) = parse(&text, path)?;
+        let (scene, origins) = parse(&text, path, confined.then_some(folder.as_path()))?;
         Ok(SceneDocument {
             path: path.to_path_buf(),
             folder,
+            confined,
             saved: text.clone(),
             text,
             scene,
@@ -194,6 +208,9 @@ impl SceneDocument {
     /// The scene's folder, canonical: the only folder the editor reads or writes.
     pub fn folder(&self) -> &Path {
         &self.folder
+    }
+    fn confinement(&self) -> Option<&Path> {
+        self.confined.then_some(self.folder.as_path())
     }
     pub fn text(&self) -> &str {
         &self.text
@@ -247,7 +264,7 @@ impl SceneDocument {
     pub fn undo(&mut self) -> Result<(), EditError> {
         let text = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
         // The text was valid when it was current; files it names may have gone since.
-        let parsed = parse(&text, &self.path)?;
+        let parsed = parse(&text, &self.path, self.confinement())?;
         self.undo.pop();
         self.redo.push(std::mem::replace(&mut self.text, text));
         self.install(parsed);
@@ -256,7 +273,7 @@ impl SceneDocument {
 
     pub fn redo(&mut self) -> Result<(), EditError> {
         let text = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
-        let parsed = parse(&text, &self.path)?;
+        let parsed = parse(&text, &self.path, self.confinement())?;
         self.redo.pop();
         self.undo.push(std::mem::replace(&mut self.text, text));
         self.install(parsed);
@@ -295,28 +312,33 @@ impl SceneDocument {
         for file in file_fields(text).difference(&before) {
             self.check_inside(file)?;
         }
-        parse(text, &self.path)
+        parse(text, &self.path, self.confinement())
     }
 
     /// Resolves `file` (relative to the scene's folder) and refuses it unless it exists inside
     /// the folder once every symbolic link is followed.
+    /// The same gate as every loader's (`scene::files`): a path out of the folder is refused
+    /// alike whether or not something is there, so the page cannot probe for files outside.
     pub fn check_inside(&self, file: &str) -> Result<PathBuf, EditError> {
-        let resolved = self.folder.join(file).canonicalize().map_err(|e| {
-            bad(format!("file \"{}\": {e} (paths are relative to the scene's folder)", crate::limits::printable(file)))
-        })?;
-        if !resolved.starts_with(&self.folder) {
-            return Err(bad(format!(
+        let path = self.folder.join(file);
+        let (checked, _) = crate::scene::files::collect(Some(&self.folder), || crate::scene::files::check(&path));
+        checked.map_err(|e| match e {
+            crate::scene::files::FileError::Outside { .. } => bad(format!(
                 "file \"{}\" is outside the scene's folder; the editor reads only files inside {}",
                 crate::limits::printable(file),
                 self.folder.display()
-            )));
-        }
-        Ok(resolved)
+            )),
+            e => bad(format!(
+                "file \"{}\": {e} (paths are relative to the scene's folder)",
+                crate::limits::printable(file)
+            )),
+        })
     }
 }
 
-fn parse(text: &str, path: &Path) -> Result<Parsed, EditError> {
-    parse_scene_with_origins(text, path).map_err(|e| EditError::Invalid(e.to_string()))
+/// Parses `text`; with `folder`, every file the scene or its models name must be inside it.
+fn parse(text: &str, path: &Path, folder: Option<&Path>) -> Result<Parsed, EditError> {
+    parse_scene_in(text, path, folder).map_err(|e| EditError::Invalid(e.to_string()))
 }
 
 /// Every `file = "..."` value of the text (meshes, textures, the environment map).

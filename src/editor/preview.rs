@@ -66,6 +66,21 @@ impl View {
         if self.width == 0 || self.height == 0 || self.width > 16384 || self.height > 16384 {
             return Err("the view's size must be 1 to 16384 pixels a side".into());
         }
+        // The tests of `Camera::basis`, one at a time, so the message blames the right vector.
+        let (position, look_at, up) = (Vec3::from(self.position), Vec3::from(self.look_at), Vec3::from(self.up));
+        let Some(forward) = (look_at - position).try_normalize() else {
+            return Err(
+                "the view's position equals its target (look_at), so it has no direction of view; move one of them"
+                    .into(),
+            );
+        };
+        match up.try_normalize() {
+            None => return Err("the view's up direction is zero; give one roughly perpendicular to the view".into()),
+            Some(u) if forward.cross(u).length() <= 1e-6 => {
+                return Err("the view's up direction is parallel to its direction of view".into())
+            }
+            Some(_) => {}
+        }
         Ok(())
     }
 }
@@ -205,8 +220,20 @@ impl Renderer {
     /// Queues a final render of `scene` (its own camera and settings).
     pub fn start_final(&self, request: FinalRequest, scene: Arc<Scene>) -> Result<(), String> {
         if let Some(s) = request.seconds {
-            if !(s.is_finite() && s > 0.0 && s <= crate::limits::MAX_DURATION_SECONDS) {
-                return Err("the time budget must be a positive number of seconds".into());
+            // Say which bound is broken: 1e300 s is positive, just beyond the longest budget.
+            if !(s.is_finite() && s > 0.0) {
+                return Err(format!(
+                    "the time budget is {} s; give a positive number of seconds, at most {} (365 days)",
+                    crate::limits::fmt_number(s),
+                    crate::limits::MAX_DURATION_SECONDS
+                ));
+            }
+            if s > crate::limits::MAX_DURATION_SECONDS {
+                return Err(format!(
+                    "the time budget is {} s, more than the longest, {} s (365 days); give a shorter one",
+                    crate::limits::fmt_number(s),
+                    crate::limits::MAX_DURATION_SECONDS
+                ));
             }
         }
         if request.passes.is_some_and(|p| p == 0 || p > crate::limits::MAX_PASSES) {
@@ -683,4 +710,25 @@ pub fn encode_exr(image: &Image) -> Result<Vec<u8>, String> {
         .to_buffered(&mut out)
         .map_err(|e| e.to_string())?;
     Ok(out.into_inner())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn view(position: [f32; 3], look_at: [f32; 3], up: [f32; 3]) -> View {
+        View { position, look_at, up, fov: 45.0, width: 64, height: 48 }
+    }
+
+    #[test]
+    fn a_bad_view_blames_the_vector_at_fault() {
+        // Position on the target: the up direction is not to blame.
+        let e = view([1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [0.0, 1.0, 0.0]).check().unwrap_err();
+        assert!(e.contains("position equals its target") && !e.contains("up direction"), "{e}");
+        let e = view([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 0.0, 0.0]).check().unwrap_err();
+        assert!(e.contains("up direction is zero"), "{e}");
+        let e = view([0.0, 0.0, 0.0], [0.0, 5.0, 0.0], [0.0, 2.0, 0.0]).check().unwrap_err();
+        assert!(e.contains("parallel to its direction of view"), "{e}");
+        assert!(view([0.0, 1.0, 4.0], [0.0, 0.5, 0.0], [0.0, 1.0, 0.0]).check().is_ok());
+    }
 }

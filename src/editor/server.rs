@@ -210,6 +210,7 @@ fn router(app: Arc<App>) -> Router {
         .route("/ws", get(websocket))
         .fallback(get(static_asset))
         .layer(DefaultBodyLimit::max(MAX_REQUEST_BYTES))
+        .layer(middleware::map_response_with_state(app.clone(), json_errors))
         .layer(middleware::from_fn_with_state(app.clone(), auth))
         .with_state(app)
 }
@@ -271,6 +272,24 @@ async fn auth(State(app): State<Arc<App>>, request: Request, next: Next) -> Resp
 /// Compares without an early exit, so the time taken says nothing about the token.
 fn same_token(a: &str, b: &str) -> bool {
     a.len() == b.len() && a.bytes().zip(b.bytes()).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+/// Replies that axum makes itself (a body over the limit: 413 in plain text) become JSON like
+/// every other error of the API, so the page reads them the same way.
+async fn json_errors(State(app): State<Arc<App>>, response: Response) -> Response {
+    let json =
+        response.headers().get(header::CONTENT_TYPE).is_some_and(|v| v.as_bytes().starts_with(b"application/json"));
+    if response.status() == StatusCode::PAYLOAD_TOO_LARGE && !json {
+        return error(
+            StatusCode::PAYLOAD_TOO_LARGE,
+            &format!(
+                "the request is too large: at most {} for an edit or other request, {} for an import (--max-upload-mib)",
+                crate::limits::fmt_bytes(MAX_REQUEST_BYTES as u64),
+                crate::limits::fmt_bytes(app.max_upload_bytes as u64)
+            ),
+        );
+    }
+    response
 }
 
 fn error(status: StatusCode, message: &str) -> Response {

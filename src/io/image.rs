@@ -87,6 +87,7 @@ pub fn check_output_path(path: &Path) -> Result<(), ImageError> {
     if path.is_dir() {
         return Err(ImageError::NotWritable { path: path.to_owned(), reason: "it is a folder".into() });
     }
+    check_not_read_only(path)?;
     let probe = temp_path_for(path);
     std::fs::write(&probe, b"")
         .map_err(|e| ImageError::NotWritable { path: path.to_owned(), reason: e.to_string() })?;
@@ -131,6 +132,32 @@ pub fn check_not_overwriting(output: &Path, input: &Path, what: &str) -> Result<
         return Err(ImageError::Overwrites { path: output.to_owned(), what: what.to_string() });
     }
     Ok(())
+}
+
+/// Refuses to write `output` when it is one of `inputs`, the files a scene read
+/// (`Scene::inputs`: textures, environment maps, models and what they name, voxel grids).
+pub fn check_not_input(output: &Path, inputs: &[PathBuf]) -> Result<(), ImageError> {
+    for input in inputs {
+        if same_file(output, input) {
+            return Err(ImageError::Overwrites {
+                path: output.to_owned(),
+                what: format!("{}, a file the scene reads,", input.display()),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Refuses to replace a file the user made read-only: renaming over it would succeed (only the
+/// folder's permissions matter) where the shell's `>` would fail.
+fn check_not_read_only(path: &Path) -> Result<(), ImageError> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() && meta.permissions().readonly() => Err(ImageError::NotWritable {
+            path: path.to_owned(),
+            reason: "the file is read-only; make it writable (chmod u+w) or give another name".into(),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// Refuses what is not an EXR before the EXR reader sees it (it would say "file identifier
@@ -204,10 +231,18 @@ pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<(), Imag
 }
 
 /// Runs `write` on a temporary file next to `path`, then renames it into place; on failure the
-/// temporary file is removed and `path` is untouched.
+/// temporary file is removed and `path` is untouched. A read-only `path` is refused; a file it
+/// replaces keeps its permissions.
 pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
+    check_not_read_only(path)?;
+    let old_permissions = std::fs::metadata(path).ok().filter(|m| m.is_file()).map(|m| m.permissions());
     let tmp = temp_path_for(path);
-    let finished = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
+    let finished = write(&tmp)
+        .and_then(|()| match old_permissions {
+            Some(p) => std::fs::set_permissions(&tmp, p).map_err(|e| e.to_string()),
+            None => Ok(()),
+        })
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
     finished.map_err(|reason| {
         let _ = std::fs::remove_file(&tmp);
         ImageError::Write { path: path.to_owned(), reason }

@@ -464,7 +464,7 @@ fn emit(
         let photons = ctx.create_buffer(name, capacity * photon_bytes)?;
         let volume_photons = ctx.create_buffer("volume_photons", volume_capacity * photon_bytes)?;
         let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
-        let counters = ctx.create_buffer("photon_counters", 12)?;
+        let counters = ctx.create_buffer("photon_counters", 16)?;
         let mut begin = 0;
         let per_dispatch =
             super::thread_stop_paths().map_or(PATHS_PER_DISPATCH, |p| p.min(PATHS_PER_DISPATCH as u64) as u32);
@@ -489,6 +489,16 @@ fn emit(
             begin += p.path_count;
         }
         let counts: Vec<u32> = ctx.download(&counters)?;
+        // Paths the driver broke off mid-loop (lavapipe's limit of 65535 loop iterations per
+        // invocation): their photons are missing, so the maps would be darker than the CPU's.
+        if counts[3] > 0 {
+            return Err(GpuError::Unsupported(format!(
+                "the device broke off {} of {} photon paths at its loop limit (lavapipe stops an invocation after \
+                 65535 loop iterations): their rays cross too many overlapping objects or instances, and the image \
+                 would miss their light; render with --backend cpu, or lower --photon-depth",
+                counts[3], params.total_paths
+            )));
+        }
         let wanted = counts[caustic as usize] as u64;
         let wanted_volume = if volume { counts[2] as u64 } else { 0 };
         if wanted <= capacity && wanted_volume <= volume_capacity {

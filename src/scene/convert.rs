@@ -109,11 +109,18 @@ const ENVIRONMENT_TYPES: &[&str] = &["map", "gradient", "uniform", "sky"];
 const GRADIENT_ROWS: u32 = 512;
 const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere", "disc"];
 
-pub(crate) fn convert(file: SceneFile, src: &Source<'_>) -> Result<Scene> {
-    convert_with_origins(file, src).map(|(scene, _)| scene)
+/// What a texture parameter's values must be, as the same parameter typed in the scene.
+#[derive(Clone, Copy)]
+enum TexelRole<'w> {
+    /// A fraction of light per channel, [0, 1] (reflectance, transmittance).
+    Fraction,
+    /// Finite and >= 0 (emission, conductor eta and k).
+    NonNegative,
+    /// A number in [min, max]; `what` says the range as the scene's message does.
+    Scalar { min: f32, max: f32, what: &'w str },
 }
 
-/// `convert`, also saying which shapes each `[[shapes]]` and `[[lights]]` entry became.
+/// The scene of a parsed file, and which shapes each `[[shapes]]` and `[[lights]]` entry became.
 pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<(Scene, SceneOrigins)> {
     let mut origins = SceneOrigins::default();
     let mut builder = Builder {
@@ -233,6 +240,8 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         atmosphere: builder.atmosphere,
         objects,
         instances,
+        // Filled in by `parse_scene_in`, which saw every file read.
+        inputs: Vec::new(),
     };
     Ok((scene, origins))
 }
@@ -893,7 +902,10 @@ impl Builder<'_> {
             }
             (None, Some(n)) => match n.get_ref() {
                 ParamDef::Texture { name, scale: None } => {
-                    NormalMod::NormalMap { texture: self.texture_id(name, &n.span(), &object)? }
+                    let texture = self.texture_id(name, &n.span(), &object)?;
+                    let role = TexelRole::Scalar { min: -f32::MAX, max: f32::MAX, what: "a finite number" };
+                    self.check_texels(texture, Vec3::ONE, role, &n.span(), &object, "normal_map")?;
+                    NormalMod::NormalMap { texture }
                 }
                 _ => {
                     return Err(self.invalid(
@@ -1088,7 +1100,10 @@ impl Builder<'_> {
                     Some(v) => number(v).ok_or_else(|| self.invalid(&span, object, what.to_string()))?,
                     None => 1.0,
                 };
-                ([scale, scale], Some(self.texture_id(name, &span, object)?))
+                let id = self.texture_id(name, &span, object)?;
+                let role = TexelRole::Scalar { min: 0.0, max: 1.0, what: "a GGX alpha in [0, 1]" };
+                self.check_texels(id, Vec3::splat(scale as f32), role, &span, object, "roughness")?;
+                ([scale, scale], Some(id))
             }
             v => match number(v) {
                 Some(a) => ([a, a], None),
@@ -1123,12 +1138,14 @@ impl Builder<'_> {
                 Ok(ColorParam::constant(Vec3::from(c)))
             }
             ParamDef::Texture { name, scale } => {
-                let texture = Some(self.texture_id(name, &value.span(), object)?);
-                let value = match scale {
+                let id = self.texture_id(name, &value.span(), object)?;
+                let scale = match scale {
                     Some(s) => Vec3::from(self.color(&Spanned::new(value.span(), *s), object, field, at_most_one)?),
                     None => Vec3::ONE,
                 };
-                Ok(ColorParam { value, texture })
+                let role = if at_most_one { TexelRole::Fraction } else { TexelRole::NonNegative };
+                self.check_texels(id, scale, role, &value.span(), object, field)?;
+                Ok(ColorParam { value: scale, texture: Some(id) })
             }
         }
     }
@@ -1164,7 +1181,71 @@ impl Builder<'_> {
             let shown = fmt_number(number);
             return Err(self.invalid(&value.span(), object, format!("`{field}` is {shown}; it must be {what}")));
         }
+        if let Some(id) = texture {
+            self.check_texels(id, Vec3::splat(v), TexelRole::Scalar { min, max, what }, &value.span(), object, field)?;
+        }
         Ok(ScalarParam { value: v, texture })
+    }
+
+    /// Checks the values an image texture gives parameter `field` (its texels, times `scale`,
+    /// per channel) against the range the same parameter typed in the scene must have, with the
+    /// same words: an EXR or HDR texel of 3 is a reflectance of 3, which `reflectance = 3` is
+    /// refused as. (8- and 16-bit files hold [0, 1] already; NaN texels were made 0 at load.)
+    fn check_texels(
+        &self,
+        id: u32,
+        scale: Vec3,
+        role: TexelRole<'_>,
+        span: &Range<usize>,
+        object: &str,
+        field: &str,
+    ) -> Result<()> {
+        let TextureKind::Image { image, channel, .. } = &self.textures[id as usize].kind else {
+            return Ok(());
+        };
+        let channels: &[usize] = match channel {
+            Channel::Rgb => &[0, 1, 2],
+            Channel::R => &[0],
+            Channel::G => &[1],
+            Channel::B => &[2],
+            Channel::Alpha => &[3],
+        };
+        let name = printable(&self.texture_names[id as usize]);
+        for (k, t) in image.texels.iter().enumerate() {
+            for &c in channels {
+                let v = t[c] * if c < 3 { scale[c] } else { scale.x };
+                let problem = match role {
+                    _ if v.is_infinite() => Some("give finite numbers".to_string()),
+                    TexelRole::Fraction | TexelRole::NonNegative if v < 0.0 => {
+                        Some("it must be >= 0 in every channel".to_string())
+                    }
+                    TexelRole::Fraction if v > 1.0 => {
+                        Some("it is a fraction of light, in [0, 1] per channel".to_string())
+                    }
+                    TexelRole::NonNegative if v as f64 > MAX_SCENE_VALUE => {
+                        Some(format!("give values up to the largest scene value, {MAX_SCENE_VALUE:e}"))
+                    }
+                    TexelRole::Scalar { min, max, what } if !(v >= min && v <= max) => {
+                        Some(format!("it must be {what}"))
+                    }
+                    _ => None,
+                };
+                if let Some(problem) = problem {
+                    let (x, y) = (k % image.width as usize, k / image.width as usize);
+                    let shown = if v.is_infinite() { format!("{v}") } else { fmt_f32(v) };
+                    let scaled = if scale == Vec3::ONE { "" } else { " (times its `scale`)" };
+                    return Err(self.invalid(
+                        span,
+                        object,
+                        format!(
+                            "`{field}` is {shown} at texel ({x}, {y}) of texture \"{name}\"{scaled}; {problem} \
+                             (clamp the image, or lower `scale`)"
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
     }
 
     fn texture_id(&mut self, name: &str, span: &Range<usize>, object: &str) -> Result<u32> {
@@ -1246,7 +1327,7 @@ impl Builder<'_> {
         Ok(())
     }
 
-    fn image_texture(&self, t: &TextureDef, table: &Range<usize>, object: &str) -> Result<TextureKind> {
+    fn image_texture(&mut self, t: &TextureDef, table: &Range<usize>, object: &str) -> Result<TextureKind> {
         let file = self.require(&t.file, table, object, "file", "file = \"textures/wood.png\"")?;
         let color_space = match &t.color_space {
             Some(cs) => match self.one_of(cs, object, "color_space", &["srgb", "linear"])? {
@@ -1274,8 +1355,19 @@ impl Builder<'_> {
             None => Channel::Rgb,
         };
         let base = self.src.path.parent().unwrap_or(Path::new(""));
-        let image = load_image_texture(&base.join(file.get_ref()), color_space)
+        let mut image = load_image_texture(&base.join(file.get_ref()), color_space)
             .map_err(|e| self.invalid(&file.span(), object, e.to_string()))?;
+        // As the environment map does: NaN (EXR and HDR hold them) means nothing, so 0, said once.
+        let mut cleared = 0usize;
+        for c in image.texels.iter_mut().flatten().filter(|c| c.is_nan()) {
+            *c = 0.0;
+            cleared += 1;
+        }
+        if cleared > 0 {
+            let at = self.src.at(&file.span());
+            self.warnings
+                .push(format!("{at}: {object}: {cleared} texel channels of the image are NaN; they are taken as 0"));
+        }
         Ok(TextureKind::Image { image: std::sync::Arc::new(image), wrap, channel })
     }
 
@@ -2366,6 +2458,7 @@ impl Builder<'_> {
                     Some(id) => id,
                     None => {
                         let id = self.model_material(&model.materials[k as usize], &stem);
+                        self.check_model_texels(id, &file.span(), object)?;
                         scene_material[k as usize] = Some(id);
                         id
                     }
@@ -2598,6 +2691,28 @@ impl Builder<'_> {
                 object,
                 "the patch has no area (its points are equal or on a line)".into(),
             ));
+        }
+        Ok(())
+    }
+
+    /// `check_texels` for the images a model's material `id` (and a mix's parts) got: its
+    /// colour is a reflectance, its emission an emission, as in the scene.
+    fn check_model_texels(&self, id: u32, span: &Range<usize>, object: &str) -> Result<()> {
+        let m = &self.materials[id as usize];
+        if let Some(t) = m.emission.texture {
+            self.check_texels(t, m.emission.value, TexelRole::NonNegative, span, object, "emission")?;
+        }
+        match &m.kind {
+            MaterialKind::Diffuse { reflectance } | MaterialKind::Plastic { reflectance, .. } => {
+                if let Some(t) = reflectance.texture {
+                    self.check_texels(t, reflectance.value, TexelRole::Fraction, span, object, "reflectance")?;
+                }
+            }
+            MaterialKind::Mix { a, b, .. } => {
+                self.check_model_texels(*a, span, object)?;
+                self.check_model_texels(*b, span, object)?;
+            }
+            _ => {}
         }
         Ok(())
     }
@@ -2923,7 +3038,7 @@ impl Builder<'_> {
                 table,
                 object,
                 "outer_angle",
-                "outer_angle = 30` (degrees from the axis)",
+                "outer_angle = 30  # degrees from the axis",
             )?;
             let outer = angle(outer_def, "outer_angle", true, "the cone's half-angle in degrees, in (0, 90]")?;
             let inner = match &l.inner_angle {

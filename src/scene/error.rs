@@ -100,7 +100,13 @@ impl Source<'_> {
 
     /// Turns an error of `toml::from_str` into a `SceneError` that names the object and field.
     pub fn toml_error(&self, error: &toml::de::Error) -> SceneError {
-        let span = error.span().unwrap_or(0..0);
+        let mut span = error.span().unwrap_or(0..0);
+        // The parser's nesting limit on dotted keys comes without a place (it says 1:1): point at
+        // the deepest nesting, where the limit was crossed.
+        if span == (0..0) && error.message().contains("recursion") {
+            let at = deepest_nesting(self.text);
+            span = at..at;
+        }
         let location = self.at_column(&span);
         // The parser quotes values as written: escape what a terminal would act on, and write
         // long numbers (`1e300` arrives as 1 followed by 300 zeros) in exponent form.
@@ -128,6 +134,9 @@ impl Source<'_> {
         if key_path.is_empty() || message == "duplicate key" || error.span().is_none() {
             let message = if message == "duplicate key" {
                 "duplicate key; each field may appear once per table".to_string()
+            } else if message.contains("recursion") {
+                "nested too deeply (dotted keys, arrays or inline tables many levels down); a scene needs a few levels"
+                    .to_string()
             } else {
                 message
             };
@@ -147,6 +156,45 @@ impl Source<'_> {
         let object = describe_table(self.text, &key_path[..owner_len]);
         SceneError::Syntax { location, message: format!("{object}: `{field}`: {}", friendly_types(&message)) }
     }
+}
+
+/// The byte offset where `text` nests deepest: arrays and inline tables (`[`, `{` outside
+/// strings and comments) plus the dots of the key being written.
+fn deepest_nesting(text: &str) -> usize {
+    let (mut depth, mut dots, mut best, mut best_at) = (0usize, 0usize, 0usize, 0usize);
+    let mut in_string: Option<char> = None;
+    let mut comment = false;
+    let mut in_key = true;
+    for (i, c) in text.char_indices() {
+        if comment {
+            comment = c != '\n';
+            if !comment {
+                (dots, in_key) = (0, depth == 0);
+            }
+            continue;
+        }
+        if let Some(quote) = in_string {
+            if c == quote {
+                in_string = None;
+            }
+            continue;
+        }
+        match c {
+            '"' | '\'' => in_string = Some(c),
+            '#' => comment = true,
+            '[' | '{' => depth += 1,
+            ']' | '}' => depth = depth.saturating_sub(1),
+            '.' if in_key => dots += 1,
+            '=' => in_key = false,
+            ',' if depth > 0 => in_key = true,
+            '\n' => (dots, in_key) = (0, depth == 0 || in_key),
+            _ => {}
+        }
+        if depth + dots > best {
+            (best, best_at) = (depth + dots, i);
+        }
+    }
+    best_at
 }
 
 /// One step of the path from the document root to a value.

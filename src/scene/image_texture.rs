@@ -69,7 +69,7 @@ pub enum ImageTextureError {
     /// The file does not exist or cannot be read. `error` is not a `source`, so a report that
     /// prints the chain does not repeat the OS reason.
     #[error("{}: cannot read the image texture: {error}", path.display())]
-    Read { path: PathBuf, error: std::io::Error },
+    Read { path: PathBuf, error: crate::scene::files::FileError },
     /// Neither the content nor the extension is a supported format. `found` says what it is:
     /// "a `.txt` file", "a GIF image named `.png`".
     #[error("{}: unsupported image format ({found}); {SUPPORTED}", path.display())]
@@ -95,7 +95,10 @@ pub fn srgb_to_linear(c: f64) -> f64 {
 /// Reads an image texture. The content decides the format (PNG, JPEG, OpenEXR, Radiance HDR),
 /// whatever the extension; `color_space` applies to 8- and 16-bit colour channels only.
 pub fn load_image_texture(path: &Path, color_space: ColorSpace) -> Result<ImageTexture, ImageTextureError> {
-    let bytes = std::fs::read(path).map_err(|error| ImageTextureError::Read { path: path.to_owned(), error })?;
+    // Through the scene's file gate: recorded as an input, confined in the editor. The size is
+    // checked on the decoded image (`MAX_IMAGE_SIDE`), not on the file.
+    let bytes = crate::scene::files::read(path, u64::MAX - 1)
+        .map_err(|error| ImageTextureError::Read { path: path.to_owned(), error })?;
     decode_image_texture(&bytes, path, color_space)
 }
 

@@ -14,6 +14,7 @@ pub mod analytic;
 mod convert;
 pub mod csg;
 mod error;
+pub mod files;
 mod format;
 mod material;
 mod medium;
@@ -74,6 +75,10 @@ pub struct Scene {
     pub objects: Vec<ObjectDesc>,
     /// Every placement of an object, nested placements resolved (their transforms composed).
     pub instances: Vec<InstanceDesc>,
+    /// Every file the scene read, resolved through links: the scene file (when it exists), then
+    /// textures, environment maps, models with their MTL files, buffers and images, voxel grids.
+    /// No command may write over one of them (`io::image::check_not_input`).
+    pub inputs: Vec<PathBuf>,
 }
 
 /// A named object: shapes defined once (object space) and placed by instances. No shape of an
@@ -408,16 +413,30 @@ pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
 /// Parses scene text. `path` names the file in messages, gives the scene its name, and is the
 /// base for relative mesh paths.
 pub fn parse_scene(source: &str, path: &Path) -> Result<Scene, SceneError> {
-    let src = error::Source { text: source, path };
-    let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
-    convert::convert(file, &src)
+    parse_scene_with_origins(source, path).map(|(scene, _)| scene)
 }
 
 /// `parse_scene`, also returning which shapes each entry of the file became.
 pub fn parse_scene_with_origins(source: &str, path: &Path) -> Result<(Scene, SceneOrigins), SceneError> {
+    parse_scene_in(source, path, None)
+}
+
+/// `parse_scene_with_origins` that reads no file outside `folder` (canonical), whatever the
+/// scene or a model names: the editor's server. A file outside is an error that does not name
+/// it (`files::FileError::Outside`).
+pub fn parse_scene_in(source: &str, path: &Path, folder: Option<&Path>) -> Result<(Scene, SceneOrigins), SceneError> {
     let src = error::Source { text: source, path };
-    let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
-    convert::convert_with_origins(file, &src)
+    let (result, mut inputs) = files::collect(folder, || -> Result<_, SceneError> {
+        let file: format::SceneFile = toml::from_str(source).map_err(|e| src.toml_error(&e))?;
+        convert::convert_with_origins(file, &src)
+    });
+    let (mut scene, origins) = result?;
+    if let Ok(own) = std::fs::canonicalize(path) {
+        inputs.retain(|p| *p != own);
+        inputs.insert(0, own);
+    }
+    scene.inputs = inputs;
+    Ok((scene, origins))
 }
 
 #[cfg(test)]

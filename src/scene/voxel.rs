@@ -52,9 +52,9 @@ impl VoxelGrid {
 /// Reads and checks a PXVOL1 file. The error says what is wrong (not the path: the caller names
 /// the file and the scene line).
 pub fn load_voxel_grid(path: &Path) -> Result<VoxelGrid, String> {
-    let bytes = std::fs::read(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::NotFound => "voxel file not found (paths are relative to the scene file)".to_string(),
-        _ => format!("cannot read the voxel file: {e}"),
+    let bytes = crate::scene::files::read(path, u64::MAX - 1).map_err(|e| match e {
+        e if e.not_found() => "voxel file not found (paths are relative to the scene file)".to_string(),
+        e => format!("cannot read the voxel file: {e}"),
     })?;
     parse_voxel_grid(&bytes)
 }

@@ -31,25 +31,116 @@ pub fn parse_gltf(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
     }
 }
 
+/// The `asset.version` a `.gltf` file's JSON declares, or "1" for a version-1 binary container.
+fn declared_version(bytes: &[u8]) -> Option<String> {
+    if bytes.starts_with(b"glTF") {
+        let version = u32::from_le_bytes(bytes.get(4..8)?.try_into().ok()?);
+        return Some(version.to_string());
+    }
+    let json: serde_json::Value = serde_json::from_slice(bytes).ok()?;
+    json.get("asset")?.get("version")?.as_str().map(str::to_string)
+}
+
+/// Checks a `.glb` container (a 12-byte header, then chunks of a length, a type and the data;
+/// glTF 2.0 spec, section 4.4) against the file's size, so a truncated file is reported at the
+/// byte where it ends rather than as the reader's bare "unexpected end". `None`: not a binary
+/// container, or a sound one.
+fn check_binary_container(bytes: &[u8]) -> Option<(String, String)> {
+    if !bytes.starts_with(b"glTF") {
+        return None;
+    }
+    let size = bytes.len();
+    let word = |at: usize| bytes.get(at..at + 4).map(|w| u32::from_le_bytes(w.try_into().expect("4 bytes")) as usize);
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Some((
+            format!("byte {size}"),
+            format!("the file ends at byte {size}, inside its 12-byte header (truncated file?)"),
+        ));
+    };
+    if version != 2 {
+        let hint = if version == 1 { "; convert glTF 1.0 files to 2.0 first, e.g. with Blender" } else { "" };
+        return Some(("byte 4".into(), format!("the binary container is version {version}, not 2{hint}")));
+    }
+    if length > size {
+        return Some((
+            format!("byte {size}"),
+            format!("the file ends at byte {size}, but its header declares {length} bytes (truncated file?)"),
+        ));
+    }
+    let mut at = 12;
+    while at < length {
+        let Some(chunk) = word(at) else {
+            return Some((format!("byte {at}"), format!("a chunk header at byte {at} runs past the end of the file")));
+        };
+        let end = at.saturating_add(8).saturating_add(chunk);
+        if end > length {
+            return Some((
+                format!("byte {at}"),
+                format!("the chunk at byte {at} declares {chunk} bytes, past the file's end at byte {length} (truncated file?)"),
+            ));
+        }
+        at = end;
+    }
+    None
+}
+
+/// The file a glTF URI names, as the `gltf` crate resolves it (its `Scheme`): `file:` paths as
+/// they are, relative references percent-decoded under `base`; `None` for embedded `data:` and
+/// schemes the crate refuses itself.
+fn uri_file(base: &Path, uri: &str) -> Option<std::path::PathBuf> {
+    if uri.contains(':') {
+        let rest = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:"))?;
+        return Some(std::path::PathBuf::from(rest));
+    }
+    // The crate unwraps this decoding: a URI it cannot decode panics there (caught by
+    // `parse_gltf`) before anything is opened.
+    let decoded = urlencoding::decode(uri).unwrap_or(std::borrow::Cow::Borrowed(uri));
+    Some(base.join(&*decoded))
+}
+
 fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
     let err = |at: String, message: String| ModelError::new(path, at, message);
+    if let Some((at, message)) = check_binary_container(bytes) {
+        return Err(err(at, message));
+    }
     let gltf = ::gltf::Gltf::from_slice(bytes).map_err(|e| {
-        err(String::new(), format!("not a valid glTF 2.0 file: {e} (glTF 1.0 files must be converted to 2.0 first)"))
+        // The hint about glTF 1.0 only where the file says it is 1.0: every 2.0 error carried it.
+        let hint = if declared_version(bytes).is_some_and(|v| v.starts_with('1')) {
+            " (this is a glTF 1.0 file; convert it to 2.0 first, e.g. with Blender)"
+        } else {
+            ""
+        };
+        err(String::new(), format!("not a valid glTF 2.0 file: {e}{hint}"))
     })?;
     let base = path.parent().unwrap_or(Path::new(""));
     let document = gltf.document;
-    // The crate's own message for a missing buffer file does not say which file it looked for.
-    for buffer in document.buffers() {
-        if let ::gltf::buffer::Source::Uri(uri) = buffer.source() {
-            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+    // Every file a buffer or an image names passes the scene's file gate before the crate opens
+    // it (recorded as an input; confined to the scene's folder in the editor). The crate's own
+    // message for a missing file does not say which file it looked for.
+    let uris = document
+        .buffers()
+        .filter_map(|b| match b.source() {
+            ::gltf::buffer::Source::Uri(uri) => Some((format!("buffer {}", b.index()), "data file", uri)),
+            ::gltf::buffer::Source::Bin => None,
+        })
+        .chain(document.images().filter_map(|i| match i.source() {
+            ::gltf::image::Source::Uri { uri, .. } => Some((format!("image {}", i.index()), "image file", uri)),
+            ::gltf::image::Source::View { .. } => None,
+        }));
+    for (at, what, uri) in uris {
+        let Some(file) = uri_file(base, uri) else { continue };
+        match crate::scene::files::check(&file) {
+            Ok(_) => {}
+            Err(e) if e.not_found() => {
                 return Err(err(
-                    format!("buffer {}", buffer.index()),
+                    at,
                     format!(
-                        "its data file `{}` is missing; put it next to the glTF file, or export a .glb",
+                        "its {what} `{}` is missing; put it next to the glTF file, or export a .glb",
                         crate::limits::printable_message(uri)
                     ),
-                ));
+                ))
             }
+            Err(e) => return Err(err(at, format!("its {what}: {e}"))),
         }
     }
     let buffers = ::gltf::import_buffers(&document, Some(base), gltf.blob)

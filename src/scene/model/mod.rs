@@ -275,19 +275,10 @@ pub fn load_model(path: &Path, options: &LoadOptions) -> Result<Model, ModelErro
 /// The bytes of a model file, at most `MAX_MODEL_FILE_BYTES`.
 pub fn read_model_file(path: &Path) -> Result<Vec<u8>, ModelError> {
     let limit = crate::limits::MAX_MODEL_FILE_BYTES;
-    crate::limits::read_limited(path, limit).map_err(|e| match e {
-        Some(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            ModelError { not_found: true, ..ModelError::new(path, "", "file not found") }
-        }
-        Some(e) => ModelError::new(path, "", format!("cannot read the file: {e}")),
-        None => ModelError::new(
-            path,
-            "",
-            format!(
-                "the file is larger than {} (the most photonix reads; see docs/limits.md)",
-                crate::limits::fmt_bytes(limit)
-            ),
-        ),
+    crate::scene::files::read(path, limit).map_err(|e| match e {
+        e if e.not_found() => ModelError { not_found: true, ..ModelError::new(path, "", "file not found") },
+        crate::scene::files::FileError::Io(e) => ModelError::new(path, "", format!("cannot read the file: {e}")),
+        e => ModelError::new(path, "", e.to_string()),
     })
 }
 
@@ -368,7 +359,7 @@ pub struct Shading {
     pub smooth_angle_deg: f32,
 }
 
-/// The mesh's faces fanned into triangles (keeping their winding) in model space, with smooth
+/// The mesh's faces cut into triangles (`triangulate_polygon`, keeping their winding) in model space, with smooth
 /// normals per `shading` (file normals, else computed, see `normals.rs`). A triangle whose
 /// three normals equal its face normal is flat (`normals: None`): it costs the kernels nothing.
 pub fn mesh_triangles(mesh: &ModelMesh, shading: Shading) -> Vec<ModelTriangle> {
@@ -381,11 +372,15 @@ pub fn mesh_triangles(mesh: &ModelMesh, shading: Shading) -> Vec<ModelTriangle> 
     let normal_matrix = transform.matrix3.inverse().transpose();
     let mirrored = transform.matrix3.determinant() < 0.0;
     let mut out = Vec::with_capacity(mesh.corners.len());
+    let mut polygon = Vec::new();
+    let mut triangles = Vec::new();
     for f in 0..mesh.face_count() {
         let range = mesh.face(f);
-        let first = range.start;
-        for k in range.start + 1..range.end.saturating_sub(1) {
-            let mut c = [first, k, k + 1];
+        polygon.clear();
+        polygon.extend(range.clone().map(|c| mesh.positions[mesh.corners[c] as usize]));
+        triangulate_polygon(&polygon, &mut triangles);
+        for &[a, b, c] in &triangles {
+            let mut c = [range.start + a, range.start + b, range.start + c];
             if mirrored {
                 c.swap(1, 2);
             }
@@ -403,6 +398,81 @@ pub fn mesh_triangles(mesh: &ModelMesh, shading: Shading) -> Vec<ModelTriangle> 
 }
 
 use glam::Vec3A;
+
+/// Most corners of a polygon that is ear-clipped; a larger concave one is fanned (clipping
+/// costs O(n^2) per polygon, and such faces come from damaged files, not modellers).
+const MAX_EAR_CLIPPED_CORNERS: usize = 4096;
+
+/// Triangles (corner indices into `polygon`, in its winding) covering the planar polygon
+/// `polygon`: a fan from corner 0 when it is convex (as before, so convex faces triangulate as
+/// they always did), else ear clipping (Eberly, "Triangulation by Ear Clipping", 2002) in the
+/// plane of its Newell normal. A ring drawn as one face (outer loop, a bridge edge, inner loop
+/// backwards) is clipped around its hole: a corner sitting on an ear's own corners (the two ends
+/// of the bridge) does not block it.
+pub fn triangulate_polygon(polygon: &[Vec3], out: &mut Vec<[usize; 3]>) {
+    out.clear();
+    let n = polygon.len();
+    let fan = |out: &mut Vec<[usize; 3]>| out.extend((1..n.saturating_sub(1)).map(|k| [0, k, k + 1]));
+    if n <= 3 {
+        fan(out);
+        return;
+    }
+    // Newell's normal: robust for non-planar and concave polygons.
+    let mut normal = Vec3::ZERO;
+    for i in 0..n {
+        let (a, b) = (polygon[i], polygon[(i + 1) % n]);
+        normal += Vec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
+    }
+    let Some(normal) = normal.try_normalize() else {
+        fan(out);
+        return;
+    };
+    // A right-handed frame (u, v, normal): the polygon winds counter-clockwise in (u, v).
+    let u = normal.any_orthonormal_vector();
+    let v = normal.cross(u);
+    let p: Vec<Vec2> = polygon.iter().map(|q| Vec2::new(q.dot(u), q.dot(v))).collect();
+    let cross = |a: Vec2, b: Vec2, c: Vec2| (b - a).perp_dot(c - a);
+    let convex = (0..n).all(|i| cross(p[(i + n - 1) % n], p[i], p[(i + 1) % n]) >= 0.0);
+    if convex || n > MAX_EAR_CLIPPED_CORNERS {
+        fan(out);
+        return;
+    }
+    let mut ring: Vec<usize> = (0..n).collect();
+    while ring.len() > 3 {
+        let m = ring.len();
+        let ear = (0..m).find(|&i| {
+            let (a, b, c) = (ring[(i + m - 1) % m], ring[i], ring[(i + 1) % m]);
+            if cross(p[a], p[b], p[c]) <= 0.0 {
+                return false; // reflex or flat: not an ear
+            }
+            // No other corner inside or on the triangle, except copies of its own corners.
+            ring.iter().all(|&k| {
+                let q = p[k];
+                if k == a || k == b || k == c || q == p[a] || q == p[b] || q == p[c] {
+                    return true;
+                }
+                !(cross(p[a], p[b], q) >= 0.0 && cross(p[b], p[c], q) >= 0.0 && cross(p[c], p[a], q) >= 0.0)
+            })
+        });
+        if let Some(i) = ear {
+            out.push([ring[(i + m - 1) % m], ring[i], ring[(i + 1) % m]]);
+            ring.remove(i);
+            continue;
+        }
+        // No ear: a corner on the line of its neighbours (the bridge of a ring, once its sides
+        // are clipped) bounds no area; drop it without a zero-area triangle.
+        let flat = (0..m).find(|&i| cross(p[ring[(i + m - 1) % m]], p[ring[i]], p[ring[(i + 1) % m]]) == 0.0);
+        // Else a self-intersecting remainder: cut the first corner off as a fan would.
+        let i = flat.unwrap_or(0);
+        if flat.is_none() {
+            out.push([ring[(i + m - 1) % m], ring[i], ring[(i + 1) % m]]);
+        }
+        ring.remove(i);
+    }
+    if cross(p[ring[0]], p[ring[1]], p[ring[2]]) != 0.0 {
+        out.push([ring[0], ring[1], ring[2]]);
+    }
+}
 
 /// Orients vertex normals `ns` to the side of the winding normal and says whether they make
 /// the triangle smooth: false when they are missing (zero), or all equal the face normal (a flat
@@ -444,6 +514,45 @@ mod tests {
             assert!(n.z > 0.0);
             assert_eq!(t.normals, None, "a planar face needs no smooth normals");
         }
+    }
+
+    /// Area of the triangles of `polygon`, each signed by its winding against +z.
+    fn covered_area(polygon: &[Vec3]) -> f32 {
+        let mut tris = Vec::new();
+        triangulate_polygon(polygon, &mut tris);
+        tris.iter().map(|&[a, b, c]| 0.5 * (polygon[b] - polygon[a]).cross(polygon[c] - polygon[a]).z).sum()
+    }
+
+    #[test]
+    fn concave_faces_and_rings_are_clipped_not_fanned() {
+        // An L of area 3: a fan from corner 0 would cover the notch and overlap itself.
+        let l = [(0., 0.), (2., 0.), (2., 1.), (1., 1.), (1., 2.), (0., 2.)];
+        let l: Vec<Vec3> = l.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+        // Start the fan at the reflex corner's neighbour to make fanning wrong.
+        let rotated: Vec<Vec3> = l.iter().cycle().skip(4).take(6).copied().collect();
+        assert!((covered_area(&rotated) - 3.0).abs() < 1e-5, "{}", covered_area(&rotated));
+        // A square ring 4x4 with a 2x2 hole, as one face: outer loop counter-clockwise, a bridge to
+        // the hole, the hole clockwise, and back along the bridge. Area 16 - 4 = 12.
+        let ring = [(0., 0.), (4., 0.), (4., 4.), (0., 4.), (0., 0.), (1., 1.), (1., 3.), (3., 3.), (3., 1.), (1., 1.)];
+        let ring: Vec<Vec3> = ring.iter().map(|&(x, y)| Vec3::new(x, y, 0.0)).collect();
+        let mut tris = Vec::new();
+        triangulate_polygon(&ring, &mut tris);
+        let area = covered_area(&ring);
+        assert!((area - 12.0).abs() < 1e-4, "ring covers {area}, not 12 (a fan fills the hole)");
+        // No triangle covers the hole's centre.
+        let centre = Vec3::new(2.0, 2.0, 0.0);
+        for &[a, b, c] in &tris {
+            let (a, b, c) = (ring[a], ring[b], ring[c]);
+            let side = |p: Vec3, q: Vec3| (q - p).cross(centre - p).z;
+            let inside = side(a, b) > 0.0 && side(b, c) > 0.0 && side(c, a) > 0.0;
+            assert!(!inside, "triangle {a} {b} {c} covers the hole");
+        }
+        // Every triangle keeps the face's winding (front side +z).
+        assert!(tris.iter().all(|&[a, b, c]| (ring[b] - ring[a]).cross(ring[c] - ring[a]).z >= 0.0));
+        // A convex face is fanned from corner 0 exactly as before.
+        let mut tris = Vec::new();
+        triangulate_polygon(&square().positions, &mut tris);
+        assert_eq!(tris, vec![[0, 1, 2], [0, 2, 3]]);
     }
 
     #[test]

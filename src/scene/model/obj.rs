@@ -37,6 +37,21 @@ pub fn parse_obj(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
             crate::limits::printable_message(&path.display().to_string())
         )),
     }
+    // `v x y z r g b` (an extension of MeshLab and ZBrush exports): the renderer has no
+    // per-vertex colour, so say the colours are dropped rather than drop them silently.
+    let coloured: Vec<&str> =
+        models.iter().filter(|m| !m.mesh.vertex_color.is_empty()).map(|m| m.name.as_str()).collect();
+    if !coloured.is_empty() {
+        model.warnings.push(format!(
+            "{}: its vertices carry colours (`v x y z r g b`, in {}), which photonix does not use; the faces get \
+             their material's colour (bake the colours into a texture to keep them)",
+            crate::limits::printable_message(&path.display().to_string()),
+            match coloured.len() {
+                1 => format!("mesh \"{}\"", crate::limits::printable(coloured[0])),
+                n => format!("{n} meshes"),
+            }
+        ));
+    }
     for m in &models {
         let mesh = &m.mesh;
         let mut out = ModelMesh { name: m.name.clone(), model_from_mesh: Affine3A::IDENTITY, ..Default::default() };
@@ -285,7 +300,8 @@ fn parse(bytes: &[u8], base: &Path) -> Result<(Vec<tobj::Model>, MaterialsResult
     // An MTL file beyond the size limit, or missing, loads no materials (a warning).
     tobj::load_obj_buf(&mut BufReader::new(bytes), &options, |p| {
         let file = base.join(p);
-        match crate::limits::read_limited(&file, crate::limits::MAX_MODEL_FILE_BYTES) {
+        // Through the scene's file gate, like the OBJ itself: confined in the editor.
+        match crate::scene::files::read(&file, crate::limits::MAX_MODEL_FILE_BYTES) {
             Ok(text) => tobj::load_mtl_buf(&mut BufReader::new(&text[..])),
             Err(_) => Err(tobj::LoadError::OpenFileFailed),
         }

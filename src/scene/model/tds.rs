@@ -339,15 +339,16 @@ fn percent(bytes: &[u8], mut at: usize, end: usize) -> Result<Option<f32>, Fail>
 }
 
 /// `name` in `dir`, matched without regard to case (3DS files name textures in 8.3 upper case).
+/// Both lookups pass the scene's file gate: in the editor a name leading out of the scene's
+/// folder is "not found", whether or not something is there.
 fn find_file(dir: &Path, name: &str) -> Option<std::path::PathBuf> {
     let name = name.replace('\\', "/");
     let direct = dir.join(&name);
-    if direct.is_file() {
+    if direct.is_file() && crate::scene::files::check(&direct).is_ok() {
         return Some(direct);
     }
     let file = Path::new(&name).file_name()?.to_str()?.to_ascii_lowercase();
-    std::fs::read_dir(dir)
-        .ok()?
+    crate::scene::files::read_dir(dir)?
         .flatten()
         .map(|e| e.path())
         .find(|p| p.file_name().and_then(|f| f.to_str()).is_some_and(|f| f.to_ascii_lowercase() == file))
