@@ -79,6 +79,8 @@ pub enum ObjKind {
         children: Vec<Obj>,
     },
     Light(Box<Light>),
+    /// An object POV-Ray has and Photonix not yet (a quadric, text, ...): an error if placed.
+    Unsupported(&'static str),
 }
 
 #[derive(Clone, Debug)]

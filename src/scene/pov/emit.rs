@@ -219,6 +219,7 @@ impl Emitter<'_> {
         let tex = o.tex.as_ref().or(inherited);
         let int = o.interior.as_ref().or(interior);
         match &o.kind {
+            ObjKind::Unsupported(kind) => Err(PovError::at(o.pos, format!("{kind} is not supported yet"))),
             ObjKind::Light(l) => self.light(l),
             ObjKind::Csg { op: CsgOp::Union, children } => {
                 for c in children {
@@ -227,7 +228,7 @@ impl Emitter<'_> {
                 Ok(())
             }
             ObjKind::Triangles { tris } => {
-                let material = self.material(tex, int, o.pos)?;
+                let material = self.material(tex, int, o.pos, true)?;
                 let m = MIRROR * o.xform;
                 for t in tris.iter() {
                     let v: Vec<DVec3> = t.iter().map(|p| m.transform_point3(*p)).collect();
@@ -380,16 +381,22 @@ impl Emitter<'_> {
                 s.insert("children".into(), T::Array(kids));
                 return Ok(s);
             }
+            ObjKind::Unsupported(kind) => {
+                return Err(PovError::at(o.pos, format!("{kind} is not supported yet")));
+            }
             ObjKind::Triangles { .. } | ObjKind::Light(_) => unreachable!("handled by `object`"),
         }
-        let material = self.material(tex, int, o.pos)?;
+        // An infinite plane cannot glow (its power would be infinite): POV-Ray's ambient-lit
+        // sky planes keep their colour and lose the glow.
+        let glow_ok = !matches!(o.kind, ObjKind::Plane { .. });
+        let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
         Ok(s)
     }
 
     /// The material for a texture and an interior (docs/pov-ray.md, "Finish"), written once
     /// per distinct result.
-    fn material(&mut self, tex: Option<&Vec<Tex>>, int: Option<&Interior>, pos: Pos) -> Result<String> {
+    fn material(&mut self, tex: Option<&Vec<Tex>>, int: Option<&Interior>, pos: Pos, glow_ok: bool) -> Result<String> {
         let default = self.scene.default_tex.clone();
         let Some(t) = tex.and_then(|l| l.first()).or(default.as_ref()) else {
             return Err(PovError::at(pos, "internal: no default texture".into()));
@@ -431,7 +438,7 @@ impl Emitter<'_> {
         }
         m.insert("reflectance".into(), reflectance);
         let glow = f.emission.iter().any(|e| *e > 0.0) || f.ambient.iter().cloned().fold(0.0, f64::max) > f.diffuse;
-        if glow {
+        if glow && glow_ok {
             let e = [0, 1, 2]
                 .map(|i| colour[i] * (f.emission[i] + if f.ambient[i] > f.diffuse { f.ambient[i] } else { 0.0 }));
             if e.iter().any(|x| *x > 0.0) {
@@ -495,6 +502,10 @@ impl Emitter<'_> {
                 tab.insert(k.clone(), v.clone());
             }
         }
+        // POV-Ray reads a colour map's entries in any order; ours must be sorted (stable, so
+        // equal positions keep their order and make a sharp step).
+        let mut map = map.clone();
+        map.sort_by(|a, b| a.0.total_cmp(&b.0));
         if !map.is_empty() {
             if listed {
                 tab.insert("colors".into(), T::Array(map.iter().map(|(_, c)| rgb(self.linear(*c))).collect()));

@@ -162,7 +162,13 @@ impl Parser {
             }
             "texture" => {
                 self.next()?;
-                Value::Texture(self.texture()?)
+                let mut layers = self.texture()?;
+                // `#declare T = texture { ... } texture { ... }`: layers, bottom first.
+                while matches!(self.peek_raw()?, Some(t) if t.tok == Tok::Word("texture".into())) {
+                    self.next()?;
+                    layers.extend(self.texture()?);
+                }
+                Value::Texture(layers)
             }
             "pigment" => {
                 self.next()?;
@@ -196,6 +202,17 @@ impl Parser {
             "array" => {
                 self.next()?;
                 self.array(pos)?
+            }
+            "function" => {
+                // Declared, not evaluated: calling it is the error (functions.inc declares dozens).
+                self.next()?;
+                if self.accept_sym("(")? {
+                    while !self.accept_sym(")")? {
+                        self.expect_any("`)`")?;
+                    }
+                }
+                self.skip_block()?;
+                Value::Other("a function")
             }
             "normal" | "media" | "density" | "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow"
             | "sky_sphere" | "spline" | "interior_texture" | "fog" | "photons" | "radiosity" | "warp" => {
@@ -262,7 +279,16 @@ impl Parser {
 
     fn object(&mut self, kind: &str, pos: Pos) -> Result<Obj> {
         if UNSUPPORTED_OBJECTS.contains(&kind) {
-            return self.err(pos, format!("{kind} is not supported yet"));
+            // Read past it: the standard includes declare shapes (quadrics, text) that scenes
+            // rarely place; placing one is the error (`emit`).
+            self.skip_block()?;
+            let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
+            let mut o = Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, pos };
+            let mut open = false;
+            // Modifiers after the block belong to an `object { Ident ... }` wrapper, not here.
+            let _ = &mut open;
+            o.xform = DMat4::IDENTITY;
+            return Ok(o);
         }
         if kind == "light_source" {
             let l = self.light(pos)?;
@@ -279,48 +305,48 @@ impl Parser {
         let body = match kind {
             "sphere" => {
                 let center = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 ObjKind::Sphere { center, radius: self.float()? }
             }
             "box" => {
                 let a = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let b = self.vec3()?;
                 ObjKind::Box { a: a.min(b), b: a.max(b) }
             }
             "cylinder" => {
                 let a = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let b = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 ObjKind::Cylinder { a, b, radius: self.float()?, open: false }
             }
             "cone" => {
                 let a = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let ra = self.float()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let b = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 ObjKind::Cone { a, ra, b, rb: self.float()?, open: false }
             }
             "plane" => {
                 let normal = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 ObjKind::Plane { normal, offset: self.float()? }
             }
             "disc" => {
                 let center = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let normal = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let radius = self.float()?;
                 let hole = if self.accept_sym(",")? { self.float()? } else { 0.0 };
                 ObjKind::Disc { center, normal, radius, hole }
             }
             "torus" => {
                 let major = self.float()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 ObjKind::Torus { major, minor: self.float()? }
             }
             "superellipsoid" => {
@@ -329,9 +355,9 @@ impl Parser {
             }
             "triangle" => {
                 let a = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let b = self.vec3()?;
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
                 let c = self.vec3()?;
                 ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]) }
             }
@@ -381,10 +407,10 @@ impl Parser {
         let mut p = [DVec3::ZERO; 3];
         for (i, v) in p.iter_mut().enumerate() {
             if i > 0 {
-                self.expect_sym(",")?;
+                self.accept_sym(",")?;
             }
             *v = self.vec3()?;
-            self.expect_sym(",")?;
+            self.accept_sym(",")?;
             self.vec3()?; // the normal: smooth shading of POV meshes is not kept yet
         }
         Ok(p)
@@ -398,9 +424,9 @@ impl Parser {
                     self.next()?;
                     self.expect_sym("{")?;
                     let a = self.vec3()?;
-                    self.expect_sym(",")?;
+                    self.accept_sym(",")?;
                     let b = self.vec3()?;
-                    self.expect_sym(",")?;
+                    self.accept_sym(",")?;
                     let c = self.vec3()?;
                     self.triangle_tail()?;
                     tris.push([a, b, c]);
@@ -498,10 +524,7 @@ impl Parser {
                 "normal" | "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
                 "hollow" | "no_shadow" | "no_image" | "no_reflection" | "double_illuminate" | "sturm"
                 | "no_radiosity" => {
-                    // An optional on/off follows some of them.
-                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
-                        self.float()?;
-                    }
+                    self.optional_bool()?;
                 }
                 "split_union" | "cutaway_textures" => {
                     if let Some(Tok::Num(_) | Tok::Word(_)) = self.peek()?.map(|t| t.tok) {
@@ -516,6 +539,30 @@ impl Parser {
                 }
             }
         }
+    }
+
+    /// An optional on/off after a flag (`hollow`, `shadowless on`, `jitter off`); true when absent.
+    fn optional_bool(&mut self) -> Result<bool> {
+        if self.starts_float()? {
+            return Ok(self.float()? != 0.0);
+        }
+        match self.peek()?.map(|t| t.tok) {
+            Some(Tok::Word(w)) if matches!(w.as_str(), "on" | "off" | "yes" | "no" | "true" | "false") => {
+                self.next()?;
+                Ok(matches!(w.as_str(), "on" | "yes" | "true"))
+            }
+            _ => Ok(true),
+        }
+    }
+
+    /// Whether a float expression comes next (for the optional numbers after `metallic`,
+    /// `fresnel`, `poly_wave`...): a number, `(`, `-`, or a declared float.
+    fn starts_float(&mut self) -> Result<bool> {
+        Ok(match self.peek()?.map(|t| t.tok) {
+            Some(Tok::Num(_)) | Some(Tok::Sym("(")) | Some(Tok::Sym("-")) => true,
+            Some(Tok::Word(w)) => matches!(self.lookup(&w), Some(Value::Float(_))),
+            _ => false,
+        })
     }
 
     /// The texture layer a bare `pigment` or `finish` in an object changes (made on first use).
@@ -598,14 +645,7 @@ impl Parser {
     /// `matrix <m00, m01, m02, m10, ..., m32>`: POV-Ray's rows, the last row the translation.
     fn matrix(&mut self) -> Result<DMat4> {
         let pos = self.expect_sym("<")?;
-        let mut v = Vec::new();
-        loop {
-            v.push(self.float()?);
-            if self.accept_sym(">")? {
-                break;
-            }
-            self.expect_sym(",")?;
-        }
+        let v = self.angle_list()?;
         if v.len() != 12 {
             return self.err(pos, format!("`matrix` takes 12 numbers, not {}", v.len()));
         }
@@ -642,6 +682,7 @@ impl Parser {
                 "pigment" => top.pigment = self.pigment(pos)?,
                 "finish" => top.finish = self.finish()?,
                 "normal" => self.skip_block()?,
+                "uv_mapping" => {}
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries).
                     self.warnings.push(format!(
@@ -711,6 +752,17 @@ impl Parser {
                 map = m;
                 continue;
             }
+            if matches!(self.lookup(&w), Some(Value::Vector(_)) | Some(Value::Float(_))) {
+                // A declared colour, possibly in an expression (`White * 1.4`).
+                let c = self.colour()?;
+                if pattern.is_some() {
+                    list.push(c);
+                } else {
+                    p.kind = PigmentKind::Solid(c);
+                }
+                self.accept_sym(",")?;
+                continue;
+            }
             self.next()?;
             if let Some(m) = self.transform_word(&w)? {
                 p.xform = m * p.xform;
@@ -734,6 +786,18 @@ impl Parser {
                     } else {
                         self.warnings.push(format!("{}: warp is not supported yet; it is left out", self.loc(tpos)));
                     }
+                }
+                "uv_mapping" => {}
+                "red" | "green" | "blue" | "filter" | "transmit" => {
+                    let i = ["red", "green", "blue", "filter", "transmit"].iter().position(|k| *k == w).unwrap_or(0);
+                    let v = self.float()?;
+                    if let PigmentKind::Solid(c) = &mut p.kind {
+                        c[i] = v;
+                    }
+                }
+                "pigment_pattern" => {
+                    self.skip_block()?;
+                    pattern = Some("unsupported:pigment_pattern".into());
                 }
                 "quick_color" | "quick_colour" => {
                     self.colour()?;
@@ -764,7 +828,7 @@ impl Parser {
                 }
                 "poly_wave" => {
                     fields.push(("wave".into(), toml::Value::String("poly".into())));
-                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+                    if self.starts_float()? {
                         let e = self.float()?;
                         fields.push(("exponent".into(), num(e)));
                     }
@@ -789,6 +853,9 @@ impl Parser {
                     // Arguments of these patterns (a vector, a float) are skipped with the map.
                     if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Num(_))) {
                         self.expr()?;
+                    }
+                    if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                        self.skip_block()?;
                     }
                 }
                 _ => match self.lookup(&w).cloned() {
@@ -899,7 +966,7 @@ impl Parser {
             self.expect_sym("[")?;
             let a = self.float()?;
             self.accept_sym(",")?;
-            if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+            if self.starts_float()? {
                 // The old form: [a b color c1 color c2].
                 let b = self.float()?;
                 let c1 = self.colour()?;
@@ -950,7 +1017,7 @@ impl Parser {
                 "roughness" => f.roughness = self.float()?,
                 "metallic" => {
                     f.metallic = 1.0;
-                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+                    if self.starts_float()? {
                         f.metallic = self.float()?;
                     }
                 }
@@ -965,7 +1032,7 @@ impl Parser {
                             match self.peek_word()?.as_deref() {
                                 Some("fresnel") => {
                                     self.next()?;
-                                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+                                    if self.starts_float()? {
                                         self.float()?;
                                     }
                                 }
@@ -976,7 +1043,7 @@ impl Parser {
                                 Some("metallic") => {
                                     self.next()?;
                                     f.metallic = 1.0;
-                                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+                                    if self.starts_float()? {
                                         f.metallic = self.float()?;
                                     }
                                 }
@@ -1145,7 +1212,7 @@ impl Parser {
                 "sky" => c.sky = self.vec3()?,
                 "angle" => {
                     let a = self.float()?;
-                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
+                    if self.starts_float()? {
                         self.float()?;
                     }
                     if !(a > 0.0 && a < 180.0) {
@@ -1239,11 +1306,11 @@ impl Parser {
                 "tightness" => tightness = self.float()?,
                 "area_light" => {
                     let axis1 = self.vec3()?;
-                    self.expect_sym(",")?;
+                    self.accept_sym(",")?;
                     let axis2 = self.vec3()?;
-                    self.expect_sym(",")?;
+                    self.accept_sym(",")?;
                     let n1 = self.float()?;
-                    self.expect_sym(",")?;
+                    self.accept_sym(",")?;
                     let n2 = self.float()?;
                     let clamp = |n: f64| n.round().clamp(1.0, 64.0) as u32;
                     l.area = Some(AreaLight { axis1, axis2, n1: clamp(n1), n2: clamp(n2), adaptive: 0, jitter: false });
@@ -1255,16 +1322,14 @@ impl Parser {
                     }
                 }
                 "jitter" => {
+                    self.optional_bool()?;
                     if let Some(area) = &mut l.area {
                         area.jitter = true;
                     }
                 }
                 "circular" | "orient" => {}
                 "area_illumination" | "shadowless" | "media_interaction" | "media_attenuation" => {
-                    let mut on = true;
-                    if let Some(Tok::Num(_)) = self.peek()?.map(|t| t.tok) {
-                        on = self.float()? != 0.0;
-                    }
+                    let on = self.optional_bool()?;
                     if w == "shadowless" {
                         l.shadowless = on;
                     }
@@ -1346,7 +1411,10 @@ impl Parser {
                 "ambient_light" | "irid_wavelength" => {
                     self.colour()?;
                 }
-                "adc_bailout" | "number_of_waves" | "max_intersections" | "hf_gray_16" | "noise_generator" => {
+                "hf_gray_16" => {
+                    self.optional_bool()?;
+                }
+                "adc_bailout" | "number_of_waves" | "max_intersections" | "noise_generator" => {
                     self.float()?;
                 }
                 "charset" => {

@@ -114,6 +114,12 @@ pub struct Parser {
     pub default_pigment: Option<Pigment>,
     last_pos: Pos,
     scene_dir: PathBuf,
+    /// Open `{` and `(` delivered so far.
+    nesting: i64,
+    /// While a `#declare` reads its value: (frame count, nesting) where it started. At that
+    /// level, peeking stops at a directive instead of running it, so that looking for an
+    /// optional `,` or `filter` after the value cannot run the next `#declare` first.
+    barriers: Vec<(usize, i64)>,
 }
 
 /// Directives that open a block closed by `#end`.
@@ -136,6 +142,8 @@ impl Parser {
             default_pigment: None,
             last_pos: Pos::default(),
             scene_dir,
+            nesting: 0,
+            barriers: Vec::new(),
         }
     }
 
@@ -220,6 +228,9 @@ impl Parser {
         loop {
             let Some(t) = self.peek_raw()? else { return Ok(None) };
             match &t.tok {
+                Tok::Directive(_) if self.barriers.last() == Some(&(self.frames.len(), self.nesting)) => {
+                    return Ok(Some(t));
+                }
                 Tok::Directive(d) => {
                     self.advance();
                     self.directive(d, t.pos)?;
@@ -240,6 +251,11 @@ impl Parser {
             self.advance();
             self.last_pos = t.pos;
             self.delivered += 1;
+            match t.tok {
+                Tok::Sym("{") | Tok::Sym("(") => self.nesting += 1,
+                Tok::Sym("}") | Tok::Sym(")") => self.nesting -= 1,
+                _ => {}
+            }
             if self.delivered > MAX_TOKENS {
                 return self.err(
                     t.pos,
@@ -380,7 +396,17 @@ impl Parser {
     fn directive(&mut self, d: &str, pos: Pos) -> Result<()> {
         match d {
             "declare" | "local" => {
-                let (name, npos) = self.raw_word("an identifier")?;
+                let (mut name, mut npos) = self.raw_word("an identifier")?;
+                if name == "deprecated" {
+                    // `#declare deprecated [once] "message" Name = ...` (3.7's include files).
+                    if matches!(self.peek_raw()?, Some(t) if t.tok == Tok::Word("once".into())) {
+                        self.advance();
+                    }
+                    if let Some(Token { tok: Tok::Str(_), .. }) = self.peek_raw()? {
+                        self.advance();
+                    }
+                    (name, npos) = self.raw_word("an identifier")?;
+                }
                 if is_reserved(&name) {
                     return self.err(npos, format!("`{name}` is a POV-Ray keyword and cannot be declared"));
                 }
@@ -390,7 +416,10 @@ impl Parser {
                     self.expect_sym("]")?;
                 }
                 self.expect_sym("=")?;
-                let value = self.rvalue()?;
+                self.barriers.push((self.frames.len(), self.nesting));
+                let value = self.rvalue();
+                self.barriers.pop();
+                let value = value?;
                 self.accept_sym_raw(";")?;
                 if index.is_empty() {
                     self.declare(&name, value, d == "local");
@@ -823,6 +852,10 @@ impl Parser {
             if (op == ">" || op == ">=") && self.angle.last() == Some(&true) {
                 return Ok(a);
             }
+            // `<a, b> <c, d>`: a vector followed by another (a list without commas), not a comparison.
+            if op == "<" && matches!(a, Value::Vector(_)) {
+                return Ok(a);
+            }
             self.next()?;
             let pos = self.here();
             let b = self.sum()?;
@@ -900,25 +933,26 @@ impl Parser {
             if let Some(Token { tok: Tok::Sym("."), .. }) = self.peek_raw()? {
                 self.next()?;
                 let (m, pos) = self.raw_word("a component such as .x or .red")?;
-                let i =
-                    match m.as_str() {
-                        "x" | "u" | "red" => 0,
-                        "y" | "v" | "green" => 1,
-                        "z" | "blue" => 2,
-                        "t" | "filter" => 3,
-                        "transmit" => 4,
-                        "gray" | "grey" => {
-                            let c = vec_of(&v, 3, pos, self)?;
-                            v = Value::Float(0.297 * c[0] + 0.589 * c[1] + 0.114 * c[2]);
-                            continue;
-                        }
-                        other => return self.err(
+                let i = match m.as_str() {
+                    "x" | "u" | "red" => 0,
+                    "y" | "v" | "green" => 1,
+                    "z" | "blue" => 2,
+                    "t" | "filter" => 3,
+                    "transmit" => 4,
+                    "gray" | "grey" => {
+                        let c = vec_of(&v, 3, pos, self)?;
+                        v = Value::Float(0.297 * c[0] + 0.589 * c[1] + 0.114 * c[2]);
+                        continue;
+                    }
+                    other => {
+                        return self.err(
                             pos,
                             format!(
                                 "unknown component `.{other}`; use .x .y .z .t or .red .green .blue .filter .transmit"
                             ),
-                        ),
-                    };
+                        )
+                    }
+                };
                 let c = vec_of(&v, 5, pos, self)?;
                 v = Value::Float(c[i]);
                 continue;
@@ -959,19 +993,7 @@ impl Parser {
                 Ok(v)
             }
             Tok::Sym("<") => {
-                self.angle.push(true);
-                let mut comps = Vec::new();
-                let result = (|| -> Result<()> {
-                    loop {
-                        comps.push(self.float()?);
-                        if self.accept_sym(">")? {
-                            return Ok(());
-                        }
-                        self.expect_sym(",")?;
-                    }
-                })();
-                self.angle.pop();
-                result?;
+                let comps = self.angle_list()?;
                 if comps.len() < 2 || comps.len() > 5 {
                     return self.err(pos, format!("a vector has 2 to 5 components, not {}", comps.len()));
                 }
@@ -982,7 +1004,31 @@ impl Parser {
         }
     }
 
+    /// The numbers of `< a, b, ... >` after the `<`, up to and including the `>`. Commas are
+    /// optional, as in POV-Ray (`< -1 0 0 >`).
+    pub fn angle_list(&mut self) -> Result<Vec<f64>> {
+        self.angle.push(true);
+        let mut comps = Vec::new();
+        let result = (|| -> Result<()> {
+            loop {
+                comps.push(self.float()?);
+                if self.accept_sym(">")? {
+                    return Ok(());
+                }
+                self.accept_sym(",")?;
+                if comps.len() > 16 {
+                    return self.err(self.here(), "a vector this long never closes; add `>`".into());
+                }
+            }
+        })();
+        self.angle.pop();
+        result.map(|()| comps)
+    }
+
     fn word_value(&mut self, w: &str, pos: Pos) -> Result<Value> {
+        if let Some(Value::Other("a function")) = self.lookup(w) {
+            return self.err(pos, format!("`{w}` is a user-defined function, and functions are not supported yet"));
+        }
         if let Some(v) = self.lookup(w) {
             return Ok(v.clone());
         }
