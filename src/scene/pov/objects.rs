@@ -283,12 +283,7 @@ impl Parser {
             // rarely place; placing one is the error (`emit`).
             self.skip_block()?;
             let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
-            let mut o = Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, pos };
-            let mut open = false;
-            // Modifiers after the block belong to an `object { Ident ... }` wrapper, not here.
-            let _ = &mut open;
-            o.xform = DMat4::IDENTITY;
-            return Ok(o);
+            return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, pos });
         }
         if kind == "light_source" {
             let l = self.light(pos)?;

@@ -120,6 +120,8 @@ pub struct Parser {
     /// level, peeking stops at a directive instead of running it, so that looking for an
     /// optional `,` or `filter` after the value cannot run the next `#declare` first.
     barriers: Vec<(usize, i64)>,
+    /// `MAX_TOKENS`, lowered by tests.
+    pub max_tokens: u64,
 }
 
 /// Directives that open a block closed by `#end`.
@@ -144,6 +146,7 @@ impl Parser {
             scene_dir,
             nesting: 0,
             barriers: Vec::new(),
+            max_tokens: MAX_TOKENS,
         }
     }
 
@@ -151,6 +154,20 @@ impl Parser {
     pub fn run_file(&mut self, path: &Path) -> Result<PovScene> {
         let tokens = self.read_file(path, None)?;
         let start = Pos { file: (self.files.len() - 1) as u32, line: 1, col: 1 };
+        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
+        while self.peek()?.is_some() {
+            self.statement()?;
+        }
+        self.scene.default_tex = Some(self.default_tex(start));
+        Ok(std::mem::take(&mut self.scene))
+    }
+
+    /// Evaluates scene text as if it were the file `path` (the unit tests).
+    #[cfg(test)]
+    pub fn run_text(&mut self, text: &str, path: &Path) -> Result<PovScene> {
+        self.files.push(path.to_path_buf());
+        let tokens = lex(text, 0)?;
+        let start = Pos { file: 0, line: 1, col: 1 };
         self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
         while self.peek()?.is_some() {
             self.statement()?;
@@ -256,10 +273,13 @@ impl Parser {
                 Tok::Sym("}") | Tok::Sym(")") => self.nesting -= 1,
                 _ => {}
             }
-            if self.delivered > MAX_TOKENS {
+            if self.delivered > self.max_tokens {
                 return self.err(
                     t.pos,
-                    format!("the scene ran past {MAX_TOKENS} tokens (a runaway #while or macro?); see docs/pov-ray.md"),
+                    format!(
+                        "the scene ran past {} tokens (a runaway #while or macro?); see docs/pov-ray.md",
+                        self.max_tokens
+                    ),
                 );
             }
         }
@@ -1526,4 +1546,193 @@ fn is_reserved(w: &str) -> bool {
 pub fn axis_angle(axis: DVec3, degrees: f64) -> DMat3 {
     let a = if axis.length() > 0.0 { axis / axis.length() } else { DVec3::Y };
     DMat3::from_axis_angle(a, degrees.to_radians())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs `text` and returns the value declared as `R`.
+    fn eval(text: &str) -> Value {
+        let mut p = Parser::new(Path::new("test.pov"), PovOptions::default());
+        if let Err(e) = p.run_text(text, Path::new("test.pov")) {
+            panic!("{text}: {} at {:?}", e.message, e.pos);
+        }
+        p.lookup("R").cloned().expect("the text declares R")
+    }
+
+    fn float(text: &str) -> f64 {
+        match eval(text) {
+            Value::Float(f) => f,
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+
+    fn vector(text: &str) -> Vec<f64> {
+        match eval(text) {
+            Value::Vector(v) => v,
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+
+    fn error(text: &str) -> PovError {
+        let mut p = Parser::new(Path::new("test.pov"), PovOptions::default());
+        p.max_tokens = 100_000;
+        match p.run_text(text, Path::new("test.pov")) {
+            Ok(_) => panic!("{text}: no error"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn arithmetic_follows_povray_precedence() {
+        assert_eq!(float("#declare R = 1 + 2 * 3 - 4 / 2;"), 5.0);
+        assert_eq!(float("#declare R = -2 * -3;"), 6.0);
+        assert_eq!(float("#declare R = (1 < 2) & (3 >= 3) | 0;"), 1.0);
+        assert_eq!(float("#declare R = 1 = 2 ? 10 : 20;"), 20.0);
+        assert_eq!(float("#declare R = !0 + (2 != 2);"), 1.0);
+        // Values POV-Ray 3.7 printed for the same expressions (#debug str(...)).
+        assert_eq!(float("#declare R = mod(-7, 3);"), -1.0);
+        assert_eq!(float("#declare R = int(-2.5);"), -2.0);
+        assert_eq!(float("#declare R = div(-7, 2);"), -3.0);
+        assert!((float("#declare R = vlength(vrotate(<1,0,0>, <0,90,0>));") - 1.0).abs() < 1e-12);
+        assert_eq!(float("#declare R = max(1, 5, 3) + min(4, 2) + abs(-1) + pow(2, 3) + sqrt(16);"), 20.0);
+        assert!((float("#declare R = degrees(atan2(1, 1)) + radians(180) - pi;") - 45.0).abs() < 1e-12);
+        assert_eq!(float("#declare R = select(-1, 10, 20) + select(0, 1, 2, 3);"), 12.0);
+    }
+
+    #[test]
+    fn vrotate_matches_povray() {
+        // POV-Ray 3.7: vstr(3, vrotate(<1,2,3>, <30,40,50>), ",", 0, 9) = 1.801281062,2.507690147,2.113498678
+        let v = vector("#declare R = vrotate(<1,2,3>, <30,40,50>);");
+        let want = [1.801281062, 2.507690147, 2.113498678];
+        for i in 0..3 {
+            assert!((v[i] - want[i]).abs() < 1e-9, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn vectors_colours_and_components() {
+        assert_eq!(vector("#declare R = <1, 2, 3> * 2 + x;"), vec![3.0, 4.0, 6.0]);
+        assert_eq!(vector("#declare R = vcross(x, y);"), vec![0.0, 0.0, 1.0]);
+        assert_eq!(float("#declare V = <1, 2, 3>; #declare R = V.y + V.z;"), 5.0);
+        assert_eq!(vector("#declare R = rgb <1, 0.5, 0>;"), vec![1.0, 0.5, 0.0, 0.0, 0.0]);
+        assert_eq!(vector("#declare R = color rgb 1 filter 0.5;"), vec![1.0, 1.0, 1.0, 0.5, 0.0]);
+        assert_eq!(vector("#declare R = rgbt <0.2, 0.3, 0.4, 0.9>;"), vec![0.2, 0.3, 0.4, 0.0, 0.9]);
+        assert_eq!(
+            vector("#declare C = rgb <1, 0, 0>; #declare R = color C * 0.5 green 1;"),
+            vec![0.5, 1.0, 0.0, 0.0, 0.0]
+        );
+        // A vector list without commas is two vectors, not a comparison.
+        assert_eq!(vector("#declare A = array[2] { <1, 2> <3, 4> } #declare R = A[1];"), vec![3.0, 4.0]);
+    }
+
+    #[test]
+    fn strings_and_their_functions() {
+        let s = |t: &str| match eval(t) {
+            Value::Str(s) => s,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(s("#declare R = concat(\"a\", str(1.5, 0, 2), chr(66));"), "a1.50B");
+        assert_eq!(s("#declare R = substr(\"photonix\", 2, 4);"), "hoto");
+        assert_eq!(float("#declare R = strlen(\"abc\") + val(\"2.5\");"), 5.5);
+    }
+
+    #[test]
+    fn rand_gives_povray_numbers() {
+        // Printed by POV-Ray 3.7.0 (Debian's povray): seed(42) then three rand(), seed(-7) then one.
+        let v = vector("#declare S = seed(42); #declare R = <rand(S), rand(S), rand(S)>;");
+        let want = [0.723582911241, 0.329979259598, 0.755761670357];
+        for i in 0..3 {
+            assert!((v[i] - want[i]).abs() < 1e-12, "{v:?}");
+        }
+        let f = float("#declare S = seed(1); #declare T = seed(-7); #declare R = rand(T);");
+        assert!((f - 0.046072868175).abs() < 1e-12, "{f}");
+        assert!((float("#declare S = seed(0); #declare R = rand(S);") - 0.000002874294).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loops_conditionals_and_switch() {
+        assert_eq!(
+            float("#declare R = 0; #declare I = 0; #while (I < 10) #declare R = R + I; #declare I = I + 1; #end"),
+            45.0
+        );
+        assert_eq!(float("#declare R = 0; #for (I, 1, 9, 2) #declare R = R + I; #end"), 25.0);
+        assert_eq!(float("#declare R = 0; #for (I, 3, 1, -1) #declare R = R * 10 + I; #end"), 321.0);
+        assert_eq!(float("#declare R = 0; #for (I, 5, 1) #declare R = 1; #end"), 0.0);
+        let sw = |v: f64| {
+            float(&format!(
+                "#declare R = 0; #switch ({v}) #case (1) #declare R = 10; #break #case (2) #case (3) #declare R = 23; #break \
+                 #range (4, 6) #declare R = 46; #else #declare R = -1; #end"
+            ))
+        };
+        assert_eq!((sw(1.0), sw(2.0), sw(3.0), sw(5.0), sw(9.0)), (10.0, 23.0, 23.0, 46.0, -1.0));
+        assert_eq!(float("#declare A = 1; #if (A > 2) #declare R = 1; #elseif (A = 1) #declare R = 2; #else #declare R = 3; #end"), 2.0);
+        assert_eq!(float("#ifdef (Nope) #declare R = 1; #else #declare R = 2; #end"), 2.0);
+        assert_eq!(
+            float(
+                "#declare X = 1; #ifndef (X) #declare R = 1; #else #if (0) #declare R = 5; #end #declare R = 3; #end"
+            ),
+            3.0
+        );
+    }
+
+    #[test]
+    fn macros_take_parameters_and_recurse_to_a_limit() {
+        assert_eq!(float("#macro Fact(N) #if (N <= 1) 1 #else N * Fact(N - 1) #end #end #declare R = Fact(5);"), 120.0);
+        assert_eq!(float("#macro Add(A, B) (A + B) #end #declare R = Add(2, 3) * 2;"), 10.0);
+        assert_eq!(float("#macro Set(V) #local T = V * 2; #declare R = T; #end Set(4)"), 8.0);
+        // #local in a macro does not leak; #declare of a global inside does.
+        let e = error("#macro F() #local Q = 1; #end F() #declare R = Q;");
+        assert!(e.message.contains("unknown identifier `Q`"), "{}", e.message);
+        let e = error("#macro Loop(N) Loop(N + 1) #end #declare R = Loop(1);");
+        assert!(e.message.contains("deeper than"), "{}", e.message);
+        assert_eq!(e.pos.map(|p| p.line), Some(1));
+        let e = error("#macro Two(A, B) A #end #declare R = Two(1);");
+        assert!(e.message.contains("takes 2 arguments"), "{}", e.message);
+    }
+
+    #[test]
+    fn arrays_hold_values_and_check_their_bounds() {
+        assert_eq!(
+            float(
+                "#declare A = array[3] {1, 2, 3} #declare A[1] = 5; #declare R = A[0] + A[1] + dimension_size(A, 1);"
+            ),
+            9.0
+        );
+        assert_eq!(float("#declare A = array[2][2] {{1, 2}, {3, 4}} #declare R = A[1][0];"), 3.0);
+        let e = error("#declare A = array[2]; #declare R = A[2];");
+        assert!(e.message.contains("outside the array"), "{}", e.message);
+        let e = error("#declare A = array[2]; #declare R = A[1];");
+        assert!(e.message.contains("never set"), "{}", e.message);
+    }
+
+    #[test]
+    fn errors_name_line_and_column_and_refuse_what_is_missing() {
+        let e = error("#declare A = 1;\n#declare R = A + Bogus;");
+        assert_eq!(e.pos.map(|p| (p.line, p.col)), Some((2, 18)));
+        assert!(e.message.contains("unknown identifier `Bogus`"));
+        let e = error("#declare F = function { x * 2 }\n#declare R = F(1);");
+        assert!(e.message.contains("functions are not supported yet"), "{}", e.message);
+        assert_eq!(e.pos.map(|p| p.line), Some(2));
+        let e = error("#declare R = trace(A, <0,0,0>, y);");
+        assert!(e.message.contains("`trace` is not supported yet"), "{}", e.message);
+        let e = error("#fopen F \"out.txt\" write");
+        assert!(e.message.contains("file I/O"), "{}", e.message);
+        let e = error("#if (1) #declare R = 1;");
+        assert!(e.message.contains("no #end"), "{}", e.message);
+        let e = error("#declare R = 0; #while (1) #declare R = R + 1; #end");
+        assert!(e.message.contains("runaway"), "{}", e.message);
+    }
+
+    #[test]
+    fn image_size_and_clock_come_from_the_options() {
+        let mut p = Parser::new(
+            Path::new("t.pov"),
+            PovOptions { width: 640, height: 480, clock: 0.25, ..PovOptions::default() },
+        );
+        p.run_text("#declare R = image_width / image_height + clock;", Path::new("t.pov")).unwrap();
+        let Some(Value::Float(r)) = p.lookup("R") else { panic!() };
+        assert!((r - (640.0 / 480.0 + 0.25)).abs() < 1e-12);
+    }
 }
