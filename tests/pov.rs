@@ -355,3 +355,15 @@ fn fuzzed_pov_text_never_panics() {
         assert!(result.is_ok(), "case {case} panicked on:\n{}", String::from_utf8_lossy(&bytes));
     }
 }
+
+#[test]
+fn the_editor_opens_a_pov_scene_as_its_toml_translation() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "edit.pov", &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} }}\n"));
+    let doc = photonix::editor::SceneDocument::load(&p).unwrap();
+    // It saves beside the .pov as TOML, and nothing is written until the user saves.
+    assert_eq!(doc.path(), dir.path().join("edit.toml"));
+    assert!(doc.text().contains("[[shapes]]"));
+    assert!(doc.dirty());
+    assert!(!dir.path().join("edit.toml").exists());
+}
