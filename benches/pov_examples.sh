@@ -32,7 +32,11 @@ awk -F'|' -v ex="$EXAMPLES/" '{
     p = $1; sub(ex, "", p); n = split(p, parts, "/"); d = (n > 1) ? parts[1] : ".";
     total[d]++; all++; if ($2 == "") { ok[d]++; good++ }
 } END {
-    printf "| folder | scenes | ok | share |\n| --- | --- | --- | --- |\n";
     for (d in total) printf "| %s | %d | %d | %.0f%% |\n", d, total[d], ok[d], 100 * ok[d] / total[d];
-    printf "| **all** | %d | %d | %.1f%% |\n", all, good, 100 * good / all;
-}' "$LOG" | sort
+    printf "| zz all | %d | %d | %.1f%% |\n", all, good, 100 * good / all;
+}' "$LOG" | sort | sed 's/^| zz all/| **all**/' > "$TMP/rows"
+printf '| folder | scenes | ok | share |\n| --- | --- | --- | --- |\n'
+cat "$TMP/rows"
+# The most frequent reasons, for the refusals.
+echo
+grep -v '|$' "$LOG" | sed 's/^[^|]*|error: [^ ]* //; s/ (in the scene as translated.*//' | sort | uniq -c | sort -rn | head -15
