@@ -367,3 +367,43 @@ fn the_editor_opens_a_pov_scene_as_its_toml_translation() {
     assert!(doc.dirty());
     assert!(!dir.path().join("edit.toml").exists());
 }
+
+#[test]
+fn inverse_in_csg_is_written_as_a_difference() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = |text: &str| {
+        let p = write(dir.path(), "inv.pov", &format!("{CAMERA}{text}"));
+        let t = translate_file(&p, &options()).unwrap().toml;
+        // Drop the comment lines, which name .pov positions.
+        t.lines().filter(|l| !l.starts_with('#')).collect::<Vec<_>>().join("\n")
+    };
+    let a = toml("intersection { sphere { 0, 1 } sphere { x, 1 inverse } pigment { rgb 1 } }\n");
+    let b = toml("difference { sphere { 0, 1 } sphere { x, 1 } pigment { rgb 1 } }\n");
+    assert_eq!(a, b);
+    // difference { A, inverse B } keeps what is in both.
+    let c = toml("difference { sphere { 0, 1 } sphere { x, 1 inverse } pigment { rgb 1 } }\n");
+    let d = toml("intersection { sphere { 0, 1 } sphere { x, 1 } pigment { rgb 1 } }\n");
+    assert_eq!(c, d);
+}
+
+#[test]
+fn arrays_hold_objects_and_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}#declare O = array[2] {{ sphere {{ 0, 1 }}, sphere {{ x * 3, 1 }} }}
+#declare T = array[1] {{ texture {{ pigment {{ rgb <0, 0, 1> }} }} }}
+object {{ O[1] texture {{ T[0] }} }}
+"
+        ),
+    );
+    let (sphere, m) = s.spheres().next().unwrap();
+    assert!(sphere.center.abs_diff_eq(Vec3::new(3.0, 0.0, 0.0), 1e-6));
+    match &s.materials[m as usize].kind {
+        photonix::scene::MaterialKind::Diffuse { reflectance } => {
+            assert!(reflectance.value.abs_diff_eq(Vec3::new(0.0, 0.0, 0.6), 1e-6))
+        }
+        other => panic!("{other:?}"),
+    }
+}

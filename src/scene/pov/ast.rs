@@ -18,6 +18,8 @@ pub struct Obj {
     /// The texture layers (first is the bottom); `None` inherits the parent's or the default.
     pub tex: Option<Vec<Tex>>,
     pub interior: Option<Interior>,
+    /// `inverse`: inside and outside swapped (written as a difference in CSG, see `emit`).
+    pub inverse: bool,
     pub pos: Pos,
 }
 

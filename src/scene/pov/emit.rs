@@ -353,6 +353,11 @@ impl Emitter<'_> {
                     s.insert("transform".into(), t);
                 }
             }
+            ObjKind::Csg { op: op @ (CsgOp::Intersection | CsgOp::Difference), children }
+                if children.iter().any(|c| c.inverse) =>
+            {
+                return self.inverted_csg(o, *op, children, tex, int);
+            }
             ObjKind::Csg { op, children } => {
                 kind(&mut s, "csg");
                 let name = match op {
@@ -392,6 +397,57 @@ impl Emitter<'_> {
         let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
         Ok(s)
+    }
+
+    /// An intersection or difference with `inverse` children, rewritten without them:
+    /// difference { A B } is intersection { A, inverse B }, and intersection { N..., inverse I... }
+    /// is difference { intersection { N... }, I... }.
+    fn inverted_csg(
+        &mut self,
+        o: &Obj,
+        op: CsgOp,
+        children: &[Obj],
+        tex: Option<&Vec<Tex>>,
+        int: Option<&Interior>,
+    ) -> Result<Table> {
+        let mut plain = Vec::new();
+        let mut inverted = Vec::new();
+        for (i, c) in children.iter().enumerate() {
+            let inv = c.inverse != (op == CsgOp::Difference && i > 0);
+            let mut c = c.clone();
+            c.inverse = false;
+            if inv {
+                inverted.push(c);
+            } else {
+                plain.push(c);
+            }
+        }
+        if plain.is_empty() {
+            return Err(PovError::at(
+                o.pos,
+                "every part of this CSG is `inverse`: an unbounded solid is not supported".into(),
+            ));
+        }
+        if inverted.is_empty() {
+            let all =
+                Obj { kind: ObjKind::Csg { op: CsgOp::Intersection, children: plain }, inverse: false, ..o.clone() };
+            return self.shape(&all, tex, int);
+        }
+        let base = if plain.len() == 1 {
+            plain.pop().expect("one element")
+        } else {
+            Obj {
+                kind: ObjKind::Csg { op: CsgOp::Intersection, children: plain },
+                tex: None,
+                interior: None,
+                ..o.clone()
+            }
+        };
+        let mut kids = vec![base];
+        kids.extend(inverted);
+        let rewritten =
+            Obj { kind: ObjKind::Csg { op: CsgOp::Difference, children: kids }, inverse: false, ..o.clone() };
+        self.shape(&rewritten, tex, int)
     }
 
     /// The material for a texture and an interior (docs/pov-ray.md, "Finish"), written once

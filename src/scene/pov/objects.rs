@@ -283,7 +283,7 @@ impl Parser {
             // rarely place; placing one is the error (`emit`).
             self.skip_block()?;
             let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
-            return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, pos });
+            return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos });
         }
         if kind == "light_source" {
             let l = self.light(pos)?;
@@ -292,6 +292,7 @@ impl Parser {
                 xform: DMat4::IDENTITY,
                 tex: None,
                 interior: None,
+                inverse: false,
                 pos,
             });
         }
@@ -375,8 +376,8 @@ impl Parser {
                         self.object(w, t.pos)?
                     }
                     Tok::Word(w) if w == "light_source" => self.object(w, t.pos)?,
-                    Tok::Word(w) => match self.lookup(w) {
-                        Some(Value::Object(o)) => (**o).clone(),
+                    Tok::Word(w) => match self.lookup(w).cloned().map(|v| self.postfix(v)).transpose()? {
+                        Some(Value::Object(o)) => *o,
                         Some(other) => {
                             return self.err(t.pos, format!("`{w}` is {}, not an object", other.kind()));
                         }
@@ -389,7 +390,7 @@ impl Parser {
                 return Ok(o);
             }
         };
-        let mut o = Obj { kind: body, xform: DMat4::IDENTITY, tex: None, interior: None, pos };
+        let mut o = Obj { kind: body, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos };
         self.modifiers(&mut o, &mut open)?;
         match &mut o.kind {
             ObjKind::Cylinder { open: o_, .. } | ObjKind::Cone { open: o_, .. } => *o_ = open,
@@ -528,7 +529,8 @@ impl Parser {
                         }
                     }
                 }
-                "inverse" | "clipped_by" => return self.err(pos, format!("`{w}` is not supported yet")),
+                "inverse" => o.inverse = !o.inverse,
+                "clipped_by" => return self.err(pos, format!("`{w}` is not supported yet")),
                 other => {
                     return self.err(pos, format!("`{other}` is not an object modifier this front-end knows"));
                 }
@@ -687,7 +689,7 @@ impl Parser {
                     self.skip_to_brace()?;
                     return Ok(layers);
                 }
-                _ => match self.lookup(&w).cloned() {
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
                     Some(Value::Texture(t)) => layers = t,
                     Some(other) => return self.err(pos, format!("`{w}` is {}, not a texture", other.kind())),
                     None => return self.err(pos, format!("`{w}` does not belong in a texture")),

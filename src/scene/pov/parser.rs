@@ -938,7 +938,7 @@ impl Parser {
         self.postfix(v)
     }
 
-    fn postfix(&mut self, mut v: Value) -> Result<Value> {
+    pub fn postfix(&mut self, mut v: Value) -> Result<Value> {
         loop {
             if let Some(Token { tok: Tok::Sym("["), .. }) = self.peek_raw()? {
                 if let Value::Array(_) = v {
