@@ -23,13 +23,8 @@ pub struct Obj {
     pub pos: Pos,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CsgOp {
-    Union,
-    Merge,
-    Intersection,
-    Difference,
-}
+/// POV-Ray's four CSG operations are the scene's own.
+pub use crate::scene::CsgOp;
 
 #[derive(Clone, Debug)]
 pub enum ObjKind {

@@ -138,16 +138,7 @@ impl Parser {
     /// Skips `{ ... }`, nested blocks included (directives in it still run).
     pub fn skip_block(&mut self) -> Result<()> {
         self.expect_sym("{")?;
-        let mut depth = 1;
-        while depth > 0 {
-            let t = self.expect_any("`}`")?;
-            match t.tok {
-                Tok::Sym("{") => depth += 1,
-                Tok::Sym("}") => depth -= 1,
-                _ => {}
-            }
-        }
-        Ok(())
+        self.skip_to_brace()
     }
 
     /// A value that starts with a keyword (an object, a texture, ...), or `None` for an
