@@ -23,6 +23,7 @@ macro_rules! note {
 }
 
 pub mod bench;
+pub mod convert;
 pub mod devices;
 pub mod diff;
 pub mod export;
@@ -64,4 +65,6 @@ pub enum Command {
     Serve(serve::ServeArgs),
     /// Write a scene's geometry, materials and camera as glTF 2.0 binary (.glb)
     Export(export::ExportArgs),
+    /// Translate a POV-Ray scene (.pov) into Photonix's TOML scene format
+    Convert(convert::ConvertArgs),
 }

@@ -173,6 +173,15 @@ impl SceneDocument {
     }
 
     fn open(path: &Path, confined: bool) -> Result<SceneDocument, EditError> {
+        // A POV-Ray scene is translated (scene::pov); the editor edits the translation and saves
+        // it as the .toml beside the .pov file, never the .pov file itself. Until then it is unsaved.
+        if crate::scene::pov::is_pov_path(path) {
+            let t = crate::scene::pov::translate_file(path, &crate::scene::pov::PovOptions::default())
+                .map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
+            doc.saved = String::new();
+            return Ok(doc);
+        }
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
             EditError::Invalid(match e {
                 Some(cause) => format!("cannot read {}: {cause}", path.display()),
@@ -181,6 +190,12 @@ impl SceneDocument {
         })?;
         let text = String::from_utf8(bytes)
             .map_err(|_| EditError::Invalid(format!("{} is not UTF-8 text", path.display())))?;
+        Self::from_text(path, text, confined)
+    }
+
+    /// A document of `text`, to be saved at `path`; with `confined`, reading no file outside
+    /// the folder of `path`.
+    fn from_text(path: &Path, text: String, confined: bool) -> Result<SceneDocument, EditError> {
         let folder = path
             .parent()
             .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p })

@@ -21,6 +21,7 @@ mod medium;
 pub mod model;
 pub mod pattern;
 mod photons;
+pub mod pov;
 pub mod sky;
 pub mod voxel;
 
@@ -395,7 +396,11 @@ pub struct SceneOrigins {
 
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
 /// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
+/// A `.pov` file is read by the POV-Ray front-end (`pov`), with its default options.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    if pov::is_pov_path(path) {
+        return pov::load_pov(path, &pov::PovOptions::default());
+    }
     let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
         Some(cause) => SceneError::Read { path: path.to_path_buf(), cause },
         None => SceneError::TooLarge { path: path.to_path_buf(), limit: crate::limits::MAX_SCENE_FILE_BYTES },

@@ -1,0 +1,256 @@
+//! What a POV-Ray scene holds once its language is evaluated: objects with their transforms and
+//! textures, lights, the camera and the atmosphere, still in POV-Ray's left-handed coordinates.
+//! `emit.rs` turns it into the TOML scene format.
+
+use glam::{DMat4, DVec3};
+
+use super::Pos;
+
+/// A colour as POV-Ray holds it: red, green, blue, filter, transmit.
+pub type Colour = [f64; 5];
+
+#[derive(Clone, Debug)]
+pub struct Obj {
+    pub kind: ObjKind,
+    /// world_from_object, POV-Ray coordinates. CSG nodes keep the identity: their transforms are
+    /// pushed down to the children as POV-Ray does.
+    pub xform: DMat4,
+    /// The texture layers (first is the bottom); `None` inherits the parent's or the default.
+    pub tex: Option<Vec<Tex>>,
+    pub interior: Option<Interior>,
+    /// `inverse`: inside and outside swapped (written as a difference in CSG, see `emit`).
+    pub inverse: bool,
+    pub pos: Pos,
+}
+
+/// POV-Ray's four CSG operations are the scene's own.
+pub use crate::scene::CsgOp;
+
+#[derive(Clone, Debug)]
+pub enum ObjKind {
+    Sphere {
+        center: DVec3,
+        radius: f64,
+    },
+    Box {
+        a: DVec3,
+        b: DVec3,
+    },
+    Cylinder {
+        a: DVec3,
+        b: DVec3,
+        radius: f64,
+        open: bool,
+    },
+    Cone {
+        a: DVec3,
+        ra: f64,
+        b: DVec3,
+        rb: f64,
+        open: bool,
+    },
+    Plane {
+        normal: DVec3,
+        offset: f64,
+    },
+    Disc {
+        center: DVec3,
+        normal: DVec3,
+        radius: f64,
+        hole: f64,
+    },
+    Torus {
+        major: f64,
+        minor: f64,
+    },
+    Superellipsoid {
+        e: f64,
+        n: f64,
+    },
+    /// Triangles of a triangle, smooth_triangle or mesh (smooth normals are not kept yet).
+    Triangles {
+        tris: std::rc::Rc<Vec<[DVec3; 3]>>,
+    },
+    Csg {
+        op: CsgOp,
+        children: Vec<Obj>,
+    },
+    Light(Box<Light>),
+    /// An object POV-Ray has and Photonix not yet (a quadric, text, ...): an error if placed.
+    Unsupported(&'static str),
+}
+
+#[derive(Clone, Debug)]
+pub struct Tex {
+    pub pigment: Pigment,
+    pub finish: Finish,
+    /// world_from_texture: the transforms written in the texture and applied to the object
+    /// after the texture was given.
+    pub xform: DMat4,
+}
+
+#[derive(Clone, Debug)]
+pub struct Pigment {
+    pub kind: PigmentKind,
+    /// texture_from_pattern: the pigment's own transforms.
+    pub xform: DMat4,
+    pub pos: Pos,
+}
+
+#[derive(Clone, Debug)]
+pub enum PigmentKind {
+    Solid(Colour),
+    /// A pattern Photonix has, with its colour map and the fields `docs/patterns.md` lists.
+    Pattern {
+        name: String,
+        map: Vec<(f64, Colour)>,
+        fields: Vec<(String, toml::Value)>,
+    },
+}
+
+impl Pigment {
+    pub fn solid(c: Colour, pos: Pos) -> Pigment {
+        Pigment { kind: PigmentKind::Solid(c), xform: DMat4::IDENTITY, pos }
+    }
+
+    /// The mean colour: a constant colour's own, a colour map's mean entry.
+    pub fn mean(&self) -> Colour {
+        match &self.kind {
+            PigmentKind::Solid(c) => *c,
+            PigmentKind::Pattern { map, .. } if !map.is_empty() => {
+                let mut m = [0.0; 5];
+                for (_, c) in map {
+                    for i in 0..5 {
+                        m[i] += c[i] / map.len() as f64;
+                    }
+                }
+                m
+            }
+            PigmentKind::Pattern { .. } => [0.5, 0.5, 0.5, 0.0, 0.0],
+        }
+    }
+}
+
+/// POV-Ray's finish, with its defaults (3.7 reference manual, "Finish").
+#[derive(Clone, Debug, PartialEq)]
+pub struct Finish {
+    pub ambient: [f64; 3],
+    pub emission: [f64; 3],
+    pub diffuse: f64,
+    pub phong: f64,
+    pub phong_size: f64,
+    pub specular: f64,
+    pub roughness: f64,
+    pub reflection: [f64; 3],
+    pub metallic: f64,
+}
+
+impl Default for Finish {
+    fn default() -> Finish {
+        Finish {
+            ambient: [0.1; 3],
+            emission: [0.0; 3],
+            diffuse: 0.6,
+            phong: 0.0,
+            phong_size: 40.0,
+            specular: 0.0,
+            roughness: 0.05,
+            reflection: [0.0; 3],
+            metallic: 0.0,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Interior {
+    pub ior: f64,
+}
+
+#[derive(Clone, Debug)]
+pub enum LightKind {
+    Point,
+    Spot { point_at: DVec3, radius: f64, falloff: f64, tightness: f64 },
+    Parallel { point_at: DVec3 },
+}
+
+#[derive(Clone, Debug)]
+pub struct AreaLight {
+    pub axis1: DVec3,
+    pub axis2: DVec3,
+    pub n1: u32,
+    pub n2: u32,
+    pub adaptive: u32,
+    pub jitter: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct Light {
+    pub position: DVec3,
+    pub colour: [f64; 3],
+    pub kind: LightKind,
+    pub area: Option<AreaLight>,
+    pub fade_distance: f64,
+    pub fade_power: f64,
+    pub shadowless: bool,
+    pub pos: Pos,
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub orthographic: bool,
+    pub location: DVec3,
+    pub direction: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+    pub sky: DVec3,
+    /// The point `look_at` named, where the light's brightness is matched (docs/pov-ray.md).
+    pub look_at: Option<DVec3>,
+    pub aperture: f64,
+    pub focal_point: Option<DVec3>,
+    pub blur_samples: i64,
+    pub pos: Pos,
+}
+
+impl Default for Camera {
+    fn default() -> Camera {
+        // POV-Ray's default camera (reference manual, "Camera").
+        Camera {
+            orthographic: false,
+            location: DVec3::ZERO,
+            direction: DVec3::Z,
+            right: DVec3::new(1.33, 0.0, 0.0),
+            up: DVec3::Y,
+            sky: DVec3::Y,
+            look_at: None,
+            aperture: 0.0,
+            focal_point: None,
+            blur_samples: 0,
+            pos: Pos::default(),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct Fog {
+    pub ground: bool,
+    pub distance: f64,
+    pub colour: Colour,
+    pub offset: f64,
+    pub alt: f64,
+    pub turbulence: Option<DVec3>,
+    pub pos: Pos,
+}
+
+/// Everything the scene's statements produced.
+#[derive(Clone, Debug, Default)]
+pub struct PovScene {
+    pub camera: Option<Camera>,
+    pub objects: Vec<Obj>,
+    pub background: Option<(Colour, Pos)>,
+    pub fog: Option<Fog>,
+    pub assumed_gamma: Option<f64>,
+    pub max_trace_level: Option<i64>,
+    /// The texture of objects without one (POV-Ray's: black, with `#default` applied).
+    pub default_tex: Option<Tex>,
+    pub warnings: Vec<String>,
+}

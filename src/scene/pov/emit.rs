@@ -1,0 +1,680 @@
+//! Writes an evaluated POV-Ray scene as a Photonix TOML scene: coordinates mirrored into
+//! Photonix's right-handed frame, POV-Ray's finish mapped onto physical materials and its lights
+//! onto physical intensities (docs/pov-ray.md gives each rule and why).
+
+use std::collections::HashMap;
+use std::f64::consts::PI;
+use std::path::PathBuf;
+
+use glam::{DMat3, DMat4, DVec3};
+use toml::{Table, Value as T};
+
+use super::ast::{Colour, CsgOp, Interior, Light, LightKind, Obj, ObjKind, PigmentKind, PovScene, Tex};
+use super::parser::Result;
+use super::{Pos, PovError, PovOptions};
+
+/// POV-Ray is left-handed with +z into the screen; Photonix is right-handed. Mirroring z maps
+/// one onto the other and keeps x right and y up on the image.
+const MIRROR: DMat4 =
+    DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+
+fn mirror(p: DVec3) -> DVec3 {
+    DVec3::new(p.x, p.y, -p.z)
+}
+
+fn num(x: f64) -> T {
+    T::Float(x)
+}
+
+fn vec3(v: DVec3) -> T {
+    T::Array(vec![num(v.x), num(v.y), num(v.z)])
+}
+
+fn rgb(c: [f64; 3]) -> T {
+    T::Array(c.iter().map(|x| num(*x)).collect())
+}
+
+/// A linear map as scale, then rotation about x, y, z (degrees), then translation: the TOML
+/// `transform` (world_from_object = T Rz Ry Rx S). `None` when the map shears (no such product).
+pub fn decompose(m: &DMat4) -> Option<(DVec3, DVec3, DVec3)> {
+    let l = DMat3::from_mat4(*m);
+    let (c0, c1, c2) = (l.x_axis, l.y_axis, l.z_axis);
+    let mut s = DVec3::new(c0.length(), c1.length(), c2.length());
+    if s.min_element() <= 1e-300 {
+        return None;
+    }
+    let tol = 1e-6;
+    if c0.dot(c1).abs() > tol * s.x * s.y || c0.dot(c2).abs() > tol * s.x * s.z || c1.dot(c2).abs() > tol * s.y * s.z {
+        return None;
+    }
+    let mut r = DMat3::from_cols(c0 / s.x, c1 / s.y, c2 / s.z);
+    if r.determinant() < 0.0 {
+        s.z = -s.z;
+        r.z_axis = -r.z_axis;
+    }
+    // R = Rz(c) Ry(b) Rx(a): R[2][0] = -sin b, R[2][1] = cos b sin a, R[1][0] = sin c cos b.
+    let sb = (-r.x_axis.z).clamp(-1.0, 1.0);
+    let b = sb.asin();
+    let (a, c) = if sb.abs() < 1.0 - 1e-9 {
+        (r.y_axis.z.atan2(r.z_axis.z), r.x_axis.y.atan2(r.x_axis.x))
+    } else {
+        (0.0, (-r.y_axis.x).atan2(r.y_axis.y))
+    };
+    let rot = DVec3::new(a, b, c) * 180.0 / PI;
+    Some((s, rot, m.w_axis.truncate()))
+}
+
+fn transform_table(m: &DMat4, pos: Pos, what: &str) -> Result<Option<T>> {
+    if m.abs_diff_eq(DMat4::IDENTITY, 1e-12) {
+        return Ok(None);
+    }
+    let Some((s, r, t)) = decompose(m) else {
+        return Err(PovError::at(
+            pos,
+            format!("this {what}'s transforms shear it (a rotation followed by a non-uniform scale), which Photonix's {what} cannot take yet"),
+        ));
+    };
+    let mut tab = Table::new();
+    if !s.abs_diff_eq(DVec3::ONE, 1e-12) {
+        tab.insert("scale".into(), vec3(s));
+    }
+    if !r.abs_diff_eq(DVec3::ZERO, 1e-12) {
+        tab.insert("rotate".into(), vec3(r));
+    }
+    if !t.abs_diff_eq(DVec3::ZERO, 0.0) {
+        tab.insert("translate".into(), vec3(t));
+    }
+    Ok(Some(T::Table(tab)))
+}
+
+struct Emitter<'a> {
+    scene: &'a PovScene,
+    files: &'a [PathBuf],
+    text: String,
+    origins: Vec<(usize, Pos)>,
+    materials: HashMap<String, String>,
+    textures: HashMap<String, String>,
+    gamma: f64,
+    /// Where the camera looks (POV-Ray coordinates): lights are matched to POV-Ray there.
+    target: DVec3,
+    lights: Vec<(Table, Pos)>,
+    skipped_triangles: usize,
+    warnings: Vec<String>,
+}
+
+/// The TOML text and, for each entry, its first line and the `.pov` position it came from.
+pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result<(String, Vec<(usize, Pos)>)> {
+    let camera = scene.camera.clone().unwrap_or_default();
+    let target = camera.look_at.unwrap_or(camera.location + camera.direction);
+    let mut e = Emitter {
+        scene,
+        files,
+        text: String::new(),
+        origins: Vec::new(),
+        materials: HashMap::new(),
+        textures: HashMap::new(),
+        gamma: scene.assumed_gamma.unwrap_or(1.0),
+        target,
+        lights: Vec::new(),
+        skipped_triangles: 0,
+        warnings: Vec::new(),
+    };
+    e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
+    e.camera(&camera, options)?;
+    if let Some(depth) = scene.max_trace_level {
+        let mut r = Table::new();
+        r.insert("max_depth".into(), T::Integer(depth.clamp(1, 1024)));
+        e.entry("render", T::Table(r), camera.pos)?;
+    }
+    if let Some((c, pos)) = scene.background {
+        let mut t = Table::new();
+        t.insert("type".into(), T::String("uniform".into()));
+        t.insert("radiance".into(), rgb(e.linear(c)));
+        e.entry("environment", T::Table(t), pos)?;
+    }
+    if let Some(f) = &scene.fog {
+        if f.distance > 0.0 {
+            let mut t = Table::new();
+            if f.ground {
+                t.insert("type".into(), T::String("ground".into()));
+                t.insert("fog_offset".into(), num(f.offset));
+                t.insert("fog_alt".into(), num(f.alt));
+            }
+            t.insert("distance".into(), num(f.distance));
+            t.insert("color".into(), rgb(e.linear(f.colour)));
+            if let Some(turb) = f.turbulence {
+                t.insert("turbulence".into(), vec3(turb));
+            }
+            e.entry("fog", T::Table(t), f.pos)?;
+        }
+    }
+    let default_tex = scene.default_tex.clone().map(|t| vec![t]);
+    for o in &scene.objects {
+        e.object(o, default_tex.as_ref(), None)?;
+    }
+    for (light, pos) in std::mem::take(&mut e.lights) {
+        e.entry("lights", T::Array(vec![T::Table(light)]), pos)?;
+    }
+    if e.skipped_triangles > 0 {
+        e.warnings.push(format!("{} triangles with no area were left out", e.skipped_triangles));
+    }
+    Ok((e.text, e.origins))
+}
+
+impl Emitter<'_> {
+    /// Appends one top-level entry (`key` holding `value`), remembering where it came from.
+    fn entry(&mut self, key: &str, value: T, pos: Pos) -> Result<()> {
+        let mut doc = Table::new();
+        doc.insert(key.into(), value);
+        let text = toml::to_string(&doc).map_err(|e| PovError::at(pos, format!("cannot write this as TOML: {e}")))?;
+        self.text.push('\n');
+        let line = self.text.matches('\n').count() + 1;
+        self.origins.push((line, pos));
+        let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+        self.text.push_str(&format!("# {}:{}:{}\n", crate::limits::printable_message(&path), pos.line, pos.col));
+        self.text.push_str(&text);
+        Ok(())
+    }
+
+    /// A colour of the file in linear RGB: with `assumed_gamma` g other than 1, colours were
+    /// written gamma-encoded (POV-Ray 3.6 and earlier): c^g.
+    fn linear(&self, c: Colour) -> [f64; 3] {
+        let g = if self.gamma > 0.0 { self.gamma } else { 1.0 };
+        [c[0].max(0.0).powf(g), c[1].max(0.0).powf(g), c[2].max(0.0).powf(g)]
+    }
+
+    fn camera(&mut self, c: &super::ast::Camera, options: &PovOptions) -> Result<()> {
+        let mut t = Table::new();
+        let forward = c.direction;
+        if forward.length() <= 0.0 || c.up.length() <= 0.0 || c.right.length() <= 0.0 {
+            return Err(PovError::at(c.pos, "the camera's direction, right and up must not be zero".into()));
+        }
+        t.insert("position".into(), vec3(mirror(c.location)));
+        t.insert("look_at".into(), vec3(mirror(c.location + forward.normalize())));
+        t.insert("up".into(), vec3(mirror(c.up)));
+        t.insert(
+            "resolution".into(),
+            T::Array(vec![T::Integer(options.width as i64), T::Integer(options.height as i64)]),
+        );
+        if c.orthographic {
+            t.insert("type".into(), T::String("orthographic".into()));
+            t.insert("view_height".into(), num(c.up.length()));
+        } else {
+            // The vertical field of view that up and direction span.
+            let fov = 2.0 * (0.5 * c.up.length() / forward.length()).atan();
+            t.insert("fov".into(), num(fov.to_degrees()));
+        }
+        if c.aperture > 0.0 {
+            t.insert("aperture".into(), num(c.aperture));
+            // POV-Ray's default focal point is the origin.
+            t.insert("focal_point".into(), vec3(mirror(c.focal_point.unwrap_or(DVec3::ZERO))));
+            if c.blur_samples > 0 {
+                t.insert("blur_samples".into(), T::Integer(c.blur_samples));
+            }
+        }
+        self.entry("camera", T::Table(t), c.pos)
+    }
+
+    fn object(&mut self, o: &Obj, inherited: Option<&Vec<Tex>>, interior: Option<&Interior>) -> Result<()> {
+        let tex = o.tex.as_ref().or(inherited);
+        let int = o.interior.as_ref().or(interior);
+        match &o.kind {
+            ObjKind::Unsupported(kind) => Err(PovError::at(o.pos, format!("{kind} is not supported yet"))),
+            ObjKind::Light(l) => self.light(l),
+            ObjKind::Csg { op: CsgOp::Union, children } => {
+                for c in children {
+                    self.object(c, tex, int)?;
+                }
+                Ok(())
+            }
+            ObjKind::Triangles { tris } => {
+                let material = self.material(tex, int, o.pos, true)?;
+                let m = MIRROR * o.xform;
+                for t in tris.iter() {
+                    let v: Vec<DVec3> = t.iter().map(|p| m.transform_point3(*p)).collect();
+                    if (v[1] - v[0]).cross(v[2] - v[0]).length() <= 1e-12 * (v[1] - v[0]).length().max(1e-300) {
+                        self.skipped_triangles += 1;
+                        continue;
+                    }
+                    let mut s = Table::new();
+                    s.insert("type".into(), T::String("triangle".into()));
+                    s.insert("material".into(), T::String(material.clone()));
+                    s.insert("vertices".into(), T::Array(v.into_iter().map(vec3).collect()));
+                    self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
+                }
+                Ok(())
+            }
+            _ => {
+                let shape = self.shape(o, tex, int)?;
+                self.entry("shapes", T::Array(vec![T::Table(shape)]), o.pos)
+            }
+        }
+    }
+
+    /// A shape table: a primitive, or a CSG node with its children inline.
+    fn shape(&mut self, o: &Obj, tex: Option<&Vec<Tex>>, int: Option<&Interior>) -> Result<Table> {
+        let mut s = Table::new();
+        let m = MIRROR * o.xform * MIRROR;
+        let kind = |s: &mut Table, k: &str| {
+            s.insert("type".into(), T::String(k.into()));
+        };
+        match &o.kind {
+            ObjKind::Sphere { center, radius } => {
+                let l = DMat3::from_mat4(m);
+                let scale = l.x_axis.length();
+                let uniform = decompose(&m)
+                    .is_some_and(|(sc, _, _)| (sc.abs() - DVec3::splat(scale)).abs().max_element() <= 1e-9 * scale);
+                if uniform {
+                    kind(&mut s, "sphere");
+                    s.insert("center".into(), vec3(m.transform_point3(mirror(*center))));
+                    s.insert("radius".into(), num(radius * scale));
+                } else {
+                    // An ellipsoid: the round superellipsoid, scaled.
+                    kind(&mut s, "superellipsoid");
+                    s.insert("exponents".into(), T::Array(vec![num(1.0), num(1.0)]));
+                    let local = m * DMat4::from_translation(mirror(*center)) * DMat4::from_scale(DVec3::splat(*radius));
+                    if let Some(t) = transform_table(&local, o.pos, "sphere")? {
+                        s.insert("transform".into(), t);
+                    }
+                }
+            }
+            ObjKind::Box { a, b } => {
+                kind(&mut s, "box");
+                let (p, q) = (mirror(*a), mirror(*b));
+                s.insert("min".into(), vec3(p.min(q)));
+                s.insert("max".into(), vec3(p.max(q)));
+                if let Some(t) = transform_table(&m, o.pos, "box")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Cylinder { a, b, radius, open } => {
+                kind(&mut s, "cylinder");
+                s.insert("base".into(), vec3(mirror(*a)));
+                s.insert("cap".into(), vec3(mirror(*b)));
+                s.insert("radius".into(), num(*radius));
+                if *open {
+                    s.insert("open".into(), T::Boolean(true));
+                }
+                if let Some(t) = transform_table(&m, o.pos, "cylinder")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Cone { a, ra, b, rb, open } => {
+                kind(&mut s, "cone");
+                s.insert("base".into(), vec3(mirror(*a)));
+                s.insert("cap".into(), vec3(mirror(*b)));
+                s.insert("base_radius".into(), num(*ra));
+                s.insert("cap_radius".into(), num(*rb));
+                if *open {
+                    s.insert("open".into(), T::Boolean(true));
+                }
+                if let Some(t) = transform_table(&m, o.pos, "cone")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Plane { normal, offset } => {
+                // Baked exactly: any affine map takes a plane to a plane.
+                kind(&mut s, "plane");
+                let n = mirror(*normal);
+                let len = n.length();
+                if len <= 0.0 {
+                    return Err(PovError::at(o.pos, "the plane's normal is zero".into()));
+                }
+                let point = m.transform_point3(n / len * *offset);
+                let nw = DMat3::from_mat4(m).inverse().transpose() * n;
+                let nw = nw.normalize_or_zero();
+                s.insert("normal".into(), vec3(nw));
+                s.insert("offset".into(), num(nw.dot(point)));
+            }
+            ObjKind::Disc { center, normal, radius, hole } => {
+                kind(&mut s, "disc");
+                s.insert("center".into(), vec3(mirror(*center)));
+                s.insert("normal".into(), vec3(mirror(*normal)));
+                s.insert("radius".into(), num(*radius));
+                if *hole > 0.0 {
+                    s.insert("inner_radius".into(), num(*hole));
+                }
+                if let Some(t) = transform_table(&m, o.pos, "disc")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Torus { major, minor } => {
+                kind(&mut s, "torus");
+                s.insert("major_radius".into(), num(*major));
+                s.insert("minor_radius".into(), num(*minor));
+                if let Some(t) = transform_table(&m, o.pos, "torus")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Superellipsoid { e, n } => {
+                kind(&mut s, "superellipsoid");
+                s.insert("exponents".into(), T::Array(vec![num(*e), num(*n)]));
+                if let Some(t) = transform_table(&m, o.pos, "superellipsoid")? {
+                    s.insert("transform".into(), t);
+                }
+            }
+            ObjKind::Csg { op: op @ (CsgOp::Intersection | CsgOp::Difference), children }
+                if children.iter().any(|c| c.inverse) =>
+            {
+                return self.inverted_csg(o, *op, children, tex, int);
+            }
+            ObjKind::Csg { op, children } => {
+                kind(&mut s, "csg");
+                let name = match op {
+                    CsgOp::Union => "union",
+                    CsgOp::Merge => "merge",
+                    CsgOp::Intersection => "intersection",
+                    CsgOp::Difference => "difference",
+                };
+                s.insert("operation".into(), T::String(name.into()));
+                let mut kids = Vec::new();
+                for c in children {
+                    let ctex = c.tex.as_ref().or(tex);
+                    let cint = c.interior.as_ref().or(int);
+                    match &c.kind {
+                        ObjKind::Light(l) => self.light(l)?,
+                        ObjKind::Triangles { .. } => {
+                            return Err(PovError::at(
+                                c.pos,
+                                "a triangle or mesh inside intersection, difference or merge is not supported yet"
+                                    .into(),
+                            ))
+                        }
+                        _ => kids.push(T::Table(self.shape(c, ctex, cint)?)),
+                    }
+                }
+                s.insert("children".into(), T::Array(kids));
+                return Ok(s);
+            }
+            ObjKind::Unsupported(kind) => {
+                return Err(PovError::at(o.pos, format!("{kind} is not supported yet")));
+            }
+            ObjKind::Triangles { .. } | ObjKind::Light(_) => unreachable!("handled by `object`"),
+        }
+        // An infinite plane cannot glow (its power would be infinite): POV-Ray's ambient-lit
+        // sky planes keep their colour and lose the glow.
+        let glow_ok = !matches!(o.kind, ObjKind::Plane { .. });
+        let material = self.material(tex, int, o.pos, glow_ok)?;
+        s.insert("material".into(), T::String(material));
+        Ok(s)
+    }
+
+    /// An intersection or difference with `inverse` children, rewritten without them:
+    /// difference { A B } is intersection { A, inverse B }, and intersection { N..., inverse I... }
+    /// is difference { intersection { N... }, I... }.
+    fn inverted_csg(
+        &mut self,
+        o: &Obj,
+        op: CsgOp,
+        children: &[Obj],
+        tex: Option<&Vec<Tex>>,
+        int: Option<&Interior>,
+    ) -> Result<Table> {
+        let mut plain = Vec::new();
+        let mut inverted = Vec::new();
+        for (i, c) in children.iter().enumerate() {
+            let inv = c.inverse != (op == CsgOp::Difference && i > 0);
+            let mut c = c.clone();
+            c.inverse = false;
+            if inv {
+                inverted.push(c);
+            } else {
+                plain.push(c);
+            }
+        }
+        if plain.is_empty() {
+            return Err(PovError::at(
+                o.pos,
+                "every part of this CSG is `inverse`: an unbounded solid is not supported".into(),
+            ));
+        }
+        if inverted.is_empty() {
+            let all =
+                Obj { kind: ObjKind::Csg { op: CsgOp::Intersection, children: plain }, inverse: false, ..o.clone() };
+            return self.shape(&all, tex, int);
+        }
+        let base = if plain.len() == 1 {
+            plain.pop().expect("one element")
+        } else {
+            Obj {
+                kind: ObjKind::Csg { op: CsgOp::Intersection, children: plain },
+                tex: None,
+                interior: None,
+                ..o.clone()
+            }
+        };
+        let mut kids = vec![base];
+        kids.extend(inverted);
+        let rewritten =
+            Obj { kind: ObjKind::Csg { op: CsgOp::Difference, children: kids }, inverse: false, ..o.clone() };
+        self.shape(&rewritten, tex, int)
+    }
+
+    /// The material for a texture and an interior (docs/pov-ray.md, "Finish"), written once
+    /// per distinct result.
+    fn material(&mut self, tex: Option<&Vec<Tex>>, int: Option<&Interior>, pos: Pos, glow_ok: bool) -> Result<String> {
+        let default = self.scene.default_tex.clone();
+        let Some(t) = tex.and_then(|l| l.first()).or(default.as_ref()) else {
+            return Err(PovError::at(pos, "internal: no default texture".into()));
+        };
+        let t = t.clone();
+        let f = &t.finish;
+        let mean = t.pigment.mean();
+        let colour = self.linear(mean);
+        let transparency = (mean[3] + mean[4]).clamp(0.0, 1.0);
+        let ior = int.map_or(1.0, |i| i.ior);
+        let mut m = Table::new();
+
+        // The base: diffuse, or plastic when the finish has a highlight.
+        let reflectance = match &t.pigment.kind {
+            PigmentKind::Solid(_) => rgb(colour.map(|c| (c * f.diffuse).clamp(0.0, 1.0))),
+            PigmentKind::Pattern { .. } => {
+                let name = self.pattern_texture(&t, pos)?;
+                let mut p = Table::new();
+                p.insert("texture".into(), T::String(name));
+                p.insert("scale".into(), num(f.diffuse.clamp(0.0, 1.0)));
+                T::Table(p)
+            }
+        };
+        if transparency >= 0.5 && ior > 1.0 {
+            m.insert("type".into(), T::String("dielectric".into()));
+            m.insert("ior".into(), num(ior));
+            return self.write_material(m, pos);
+        }
+        let glossy = f.phong > 0.0 || f.specular > 0.0;
+        if glossy {
+            // Blinn-Phong exponent n to GGX alpha: sqrt(2 / (n + 2)) (Walter et al. 2007); POV's
+            // phong_size is that exponent, its specular highlight's is 1 / roughness.
+            let n = if f.phong > 0.0 { f.phong_size } else { 1.0 / f.roughness.max(1e-4) };
+            let alpha = (2.0 / (n.max(0.0) + 2.0)).sqrt().clamp(0.001, 1.0);
+            m.insert("type".into(), T::String("plastic".into()));
+            m.insert("roughness".into(), num(alpha));
+        } else {
+            m.insert("type".into(), T::String("diffuse".into()));
+        }
+        m.insert("reflectance".into(), reflectance);
+        let glow = f.emission.iter().any(|e| *e > 0.0) || f.ambient.iter().cloned().fold(0.0, f64::max) > f.diffuse;
+        if glow && glow_ok {
+            let e = [0, 1, 2]
+                .map(|i| colour[i] * (f.emission[i] + if f.ambient[i] > f.diffuse { f.ambient[i] } else { 0.0 }));
+            if e.iter().any(|x| *x > 0.0) {
+                m.insert("emission".into(), rgb(e));
+            }
+        }
+        let reflection = f.reflection.iter().cloned().fold(0.0, f64::max);
+        if reflection > 0.02 {
+            // A mirror for the reflected share, mixed over the base by its strength.
+            let tint = if f.metallic > 0.0 {
+                [0, 1, 2].map(|i| (f.reflection[i] * (1.0 - f.metallic + f.metallic * colour[i])).clamp(0.0, 1.0))
+            } else {
+                [0, 1, 2].map(|i| (f.reflection[i] / reflection).clamp(0.0, 1.0))
+            };
+            let mut mirror = Table::new();
+            mirror.insert("type".into(), T::String("mirror".into()));
+            mirror.insert("tint".into(), rgb(tint));
+            let mirror_name = self.write_material(mirror, pos)?;
+            if reflection >= 0.95 {
+                return Ok(mirror_name);
+            }
+            m.remove("emission");
+            let base = self.write_material(m, pos)?;
+            let mut mix = Table::new();
+            mix.insert("type".into(), T::String("mix".into()));
+            mix.insert("materials".into(), T::Array(vec![T::String(base), T::String(mirror_name)]));
+            mix.insert("weight".into(), num(reflection.clamp(0.0, 1.0)));
+            return self.write_material(mix, pos);
+        }
+        if transparency > 0.02 {
+            m.insert("opacity".into(), num(1.0 - transparency));
+        }
+        self.write_material(m, pos)
+    }
+
+    fn write_material(&mut self, m: Table, pos: Pos) -> Result<String> {
+        let key = toml::to_string(&m).unwrap_or_default();
+        if let Some(name) = self.materials.get(&key) {
+            return Ok(name.clone());
+        }
+        let name = format!("m{}", self.materials.len());
+        self.materials.insert(key, name.clone());
+        let mut wrap = Table::new();
+        wrap.insert(name.clone(), T::Table(m));
+        self.entry("materials", T::Table(wrap), pos)?;
+        Ok(name)
+    }
+
+    /// A pattern texture in world space that follows the object as POV-Ray's does.
+    fn pattern_texture(&mut self, t: &Tex, pos: Pos) -> Result<String> {
+        let PigmentKind::Pattern { name, map, fields } = &t.pigment.kind else {
+            unreachable!("called for patterns only")
+        };
+        let mut tab = Table::new();
+        tab.insert("type".into(), T::String("pattern".into()));
+        tab.insert("pattern".into(), T::String(name.clone()));
+        tab.insert("space".into(), T::String("world".into()));
+        let listed = fields.iter().any(|(k, _)| k == "colors");
+        for (k, v) in fields {
+            if k != "colors" {
+                tab.insert(k.clone(), v.clone());
+            }
+        }
+        // POV-Ray reads a colour map's entries in any order; ours must be sorted (stable, so
+        // equal positions keep their order and make a sharp step).
+        let mut map = map.clone();
+        map.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if !map.is_empty() {
+            if listed {
+                tab.insert("colors".into(), T::Array(map.iter().map(|(_, c)| rgb(self.linear(*c))).collect()));
+            } else {
+                tab.insert(
+                    "color_map".into(),
+                    T::Array(
+                        map.iter().map(|(v, c)| T::Array(vec![num(v.clamp(0.0, 1.0)), rgb(self.linear(*c))])).collect(),
+                    ),
+                );
+            }
+        }
+        // The pattern is evaluated at pattern_from_world(p) in POV-Ray's coordinates:
+        // world_from_pattern = mirror * texture transforms * pigment transforms.
+        let w = MIRROR * t.xform * t.pigment.xform;
+        if let Some(tr) = transform_table(&w, t.pigment.pos, "pattern")? {
+            tab.insert("transform".into(), tr);
+        }
+        let key = toml::to_string(&tab).unwrap_or_default();
+        if let Some(n) = self.textures.get(&key) {
+            return Ok(n.clone());
+        }
+        let n = format!("t{}", self.textures.len());
+        self.textures.insert(key, n.clone());
+        let mut wrap = Table::new();
+        wrap.insert(n.clone(), T::Table(tab));
+        self.entry("textures", T::Table(wrap), pos)?;
+        Ok(n)
+    }
+
+    /// A light whose brightness matches POV-Ray's where the camera looks: a POV-Ray light of
+    /// colour c lights a white diffuse surface facing it with c; a point light of intensity I at
+    /// distance d gives radiance I / (pi d^2) there, so I = pi c d^2 (times POV-Ray's fade).
+    fn light(&mut self, l: &Light) -> Result<()> {
+        let colour = self.linear([l.colour[0], l.colour[1], l.colour[2], 0.0, 0.0]);
+        let d = (l.position - self.target).length().max(1e-6);
+        let fade = if l.fade_distance > 0.0 && l.fade_power > 0.0 {
+            2.0 / (1.0 + (d / l.fade_distance).powf(l.fade_power))
+        } else {
+            1.0
+        };
+        let intensity = colour.map(|c| PI * c * d * d * fade);
+        let mut t = Table::new();
+        match &l.kind {
+            LightKind::Parallel { point_at } => {
+                t.insert("type".into(), T::String("distant".into()));
+                let dir = mirror(*point_at - l.position);
+                if dir.length() <= 0.0 {
+                    return Err(PovError::at(l.pos, "a parallel light needs point_at away from its position".into()));
+                }
+                t.insert("direction".into(), vec3(dir));
+                t.insert("irradiance".into(), rgb(colour.map(|c| PI * c)));
+            }
+            LightKind::Spot { point_at, radius, falloff, tightness } => {
+                t.insert("type".into(), T::String("spot".into()));
+                t.insert("position".into(), vec3(mirror(l.position)));
+                t.insert("point_at".into(), vec3(mirror(*point_at)));
+                t.insert("intensity".into(), rgb(intensity));
+                let falloff = falloff.clamp(1e-3, 90.0);
+                t.insert("radius".into(), num(radius.clamp(0.0, falloff)));
+                t.insert("falloff".into(), num(falloff));
+                if *tightness > 0.0 {
+                    t.insert("tightness".into(), num(tightness.min(1000.0)));
+                }
+            }
+            LightKind::Point => match &l.area {
+                Some(a) => {
+                    // A sphere as wide as the larger side of POV-Ray's light array: the same
+                    // intensity I = pi r^2 L in every direction.
+                    let r = 0.5 * a.axis1.length().max(a.axis2.length()).max(1e-6);
+                    t.insert("type".into(), T::String("area".into()));
+                    t.insert("shape".into(), T::String("sphere".into()));
+                    t.insert("center".into(), vec3(mirror(l.position)));
+                    t.insert("radius".into(), num(r));
+                    t.insert("radiance".into(), rgb(intensity.map(|i| i / (PI * r * r))));
+                    t.insert("samples".into(), T::Array(vec![T::Integer(a.n1 as i64), T::Integer(a.n2 as i64)]));
+                    t.insert("jitter".into(), T::Boolean(a.jitter));
+                    if a.adaptive > 0 && a.n1 * a.n2 >= 2 {
+                        t.insert("adaptive".into(), T::Integer(a.adaptive as i64));
+                    }
+                }
+                None => {
+                    t.insert("type".into(), T::String("point".into()));
+                    t.insert("position".into(), vec3(mirror(l.position)));
+                    t.insert("intensity".into(), rgb(intensity));
+                }
+            },
+        }
+        self.lights.push((t, l.pos));
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decompose_recomposes_scale_rotation_translation() {
+        let m = DMat4::from_translation(DVec3::new(1.0, -2.0, 3.0))
+            * DMat4::from_rotation_z(0.4)
+            * DMat4::from_rotation_y(-1.1)
+            * DMat4::from_rotation_x(2.0)
+            * DMat4::from_scale(DVec3::new(2.0, 0.5, -3.0));
+        let (s, r, t) = decompose(&m).unwrap();
+        let back = DMat4::from_translation(t)
+            * DMat4::from_rotation_z(r.z.to_radians())
+            * DMat4::from_rotation_y(r.y.to_radians())
+            * DMat4::from_rotation_x(r.x.to_radians())
+            * DMat4::from_scale(s);
+        assert!(back.abs_diff_eq(m, 1e-9), "{back:?} vs {m:?}");
+        // A shear has no such decomposition.
+        let shear = DMat4::from_scale(DVec3::new(2.0, 1.0, 1.0)) * DMat4::from_rotation_z(0.5);
+        assert!(decompose(&shear).is_none());
+    }
+}

@@ -1,0 +1,158 @@
+//! A front-end for POV-Ray's scene description language (3.7): `photonix render scene.pov`.
+//!
+//! The language is evaluated here (`lexer`, `parser`: directives, expressions, macros, loops,
+//! includes) into POV-Ray's objects (`ast`), which `emit` writes as a scene in Photonix's own TOML
+//! format (docs/scene-format.md). The TOML is then loaded by the same code as any `.toml` file,
+//! so every check, default and the renderer are shared; each TOML entry remembers the `.pov`
+//! position it came from, and errors found in the TOML are reported there. docs/pov-ray.md
+//! describes what is read and how POV-Ray's shading maps onto physics.
+
+mod ast;
+mod emit;
+mod lexer;
+mod objects;
+mod parser;
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use super::SceneError;
+
+/// POV-Ray's standard include folder as Debian's `povray-includes` installs it.
+pub const STANDARD_INCLUDE_DIR: &str = "/usr/share/povray-3.7/include";
+
+/// A place in a `.pov` file or an include: file number (see `Translation::files`), line and
+/// column, from 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Pos {
+    pub file: u32,
+    pub line: u32,
+    pub col: u32,
+}
+
+/// An error of the front-end, at a position when it has one.
+#[derive(Clone, Debug)]
+pub struct PovError {
+    pub pos: Option<Pos>,
+    pub message: String,
+}
+
+impl PovError {
+    pub fn at(pos: Pos, message: String) -> PovError {
+        PovError { pos: Some(pos), message }
+    }
+}
+
+impl fmt::Display for PovError {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+/// What POV-Ray takes from its command line: the image size (`image_width`, `image_height`)
+/// and the animation clock.
+#[derive(Clone, Debug)]
+pub struct PovOptions {
+    pub width: u32,
+    pub height: u32,
+    pub clock: f64,
+    /// Folders searched for `#include` after the scene's own folder.
+    pub include_dirs: Vec<PathBuf>,
+}
+
+impl Default for PovOptions {
+    fn default() -> PovOptions {
+        // 320x240 is the size of POV-Ray's own quick renders; `--resolution` overrides it.
+        PovOptions { width: 320, height: 240, clock: 0.0, include_dirs: vec![PathBuf::from(STANDARD_INCLUDE_DIR)] }
+    }
+}
+
+/// A `.pov` scene as TOML text, with where each TOML entry came from.
+#[derive(Clone, Debug)]
+pub struct Translation {
+    pub toml: String,
+    /// (first TOML line of an entry, 1-based; the `.pov` position it came from), in line order.
+    pub origins: Vec<(usize, Pos)>,
+    /// Every file read: the scene, then its includes in the order they were first read.
+    pub files: Vec<PathBuf>,
+    pub warnings: Vec<String>,
+}
+
+impl Translation {
+    /// `file:line:column` of a position.
+    pub fn location(&self, pos: Pos) -> String {
+        let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+        format!("{}:{}:{}", crate::limits::printable_message(&path), pos.line, pos.col)
+    }
+
+    /// The `.pov` position of the entry that holds TOML line `line`.
+    pub fn origin_of_line(&self, line: usize) -> Option<Pos> {
+        self.origins.iter().take_while(|(l, _)| *l <= line).last().map(|(_, p)| *p)
+    }
+}
+
+/// Reads, evaluates and translates a `.pov` file.
+pub fn translate_file(path: &Path, options: &PovOptions) -> Result<Translation, SceneError> {
+    let mut p = parser::Parser::new(path, options.clone());
+    let result = p.run_file(path).and_then(|scene| emit::emit(&scene, options, &p.files));
+    match result {
+        Ok((toml, origins)) => {
+            let mut warnings = p.scene.warnings.clone();
+            warnings.append(&mut p.warnings);
+            Ok(Translation { toml, origins, files: p.files.clone(), warnings })
+        }
+        Err(e) => Err(to_scene_error(&e, &p.files, path)),
+    }
+}
+
+fn to_scene_error(e: &PovError, files: &[PathBuf], main: &Path) -> SceneError {
+    let location = match e.pos {
+        Some(pos) => {
+            let path = files.get(pos.file as usize).map(PathBuf::as_path).unwrap_or(main);
+            format!("{}:{}:{}", crate::limits::printable_message(&path.display().to_string()), pos.line, pos.col)
+        }
+        None => crate::limits::printable_message(&main.display().to_string()),
+    };
+    SceneError::Syntax { location, message: crate::limits::printable_message(&e.message) }
+}
+
+/// Loads a `.pov` scene: translates it and loads the TOML as `load_scene` loads a file. An error
+/// the TOML checks find is reported at the `.pov` position its entry came from.
+pub fn load_pov(path: &Path, options: &PovOptions) -> Result<super::Scene, SceneError> {
+    let t = translate_file(path, options)?;
+    let mut scene = super::parse_scene(&t.toml, path).map_err(|e| relocate(e, &t, path))?;
+    scene.warnings.extend(t.warnings);
+    Ok(scene)
+}
+
+/// Replaces the `path:line` (or `path:line:column`) of a TOML error with the `.pov` position of
+/// the entry at that line, and says that the field names are those of the translated scene.
+fn relocate(e: SceneError, t: &Translation, path: &Path) -> SceneError {
+    let prefix = format!("{}:", crate::limits::printable_message(&path.display().to_string()));
+    let message = e.to_string();
+    let Some(rest) = message.strip_prefix(&prefix) else { return e };
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    let Ok(line) = digits.parse::<usize>() else { return e };
+    let mut tail = &rest[digits.len()..];
+    // Drop a column: it counts in the TOML text, not in the .pov file.
+    if let Some(after) = tail.strip_prefix(':') {
+        let col: String = after.chars().take_while(char::is_ascii_digit).collect();
+        if !col.is_empty() {
+            tail = &after[col.len()..];
+        }
+    }
+    let location = match t.origin_of_line(line) {
+        Some(pos) => t.location(pos),
+        None => format!("{}", path.display()),
+    };
+    let tail = tail.trim_start_matches(':').trim_start();
+    SceneError::Syntax {
+        location,
+        message: format!("{tail} (in the scene as translated; `photonix convert` shows it)"),
+    }
+}
+
+/// True when `path` names a POV-Ray scene (extension `.pov`, any case).
+pub fn is_pov_path(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("pov"))
+}

@@ -1,0 +1,1445 @@
+//! The scene's statements: camera, lights, objects and their modifiers, textures (pigment,
+//! finish, interior), background, fog and global settings, read into `ast` values.
+
+use glam::{DMat4, DVec3, DVec4};
+
+use super::ast::{
+    AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Obj, ObjKind, Pigment, PigmentKind, Tex,
+};
+use super::lexer::Tok;
+use super::parser::{describe, rotation, Parser, PovArray, Result, Value, MAX_ARRAY};
+use super::Pos;
+
+/// Objects POV-Ray has and this front-end does not read yet.
+const UNSUPPORTED_OBJECTS: [&str; 20] = [
+    "isosurface",
+    "parametric",
+    "julia_fractal",
+    "poly",
+    "polynomial",
+    "cubic",
+    "quartic",
+    "quadric",
+    "lathe",
+    "sor",
+    "prism",
+    "height_field",
+    "blob",
+    "text",
+    "bicubic_patch",
+    "polygon",
+    "mesh2",
+    "sphere_sweep",
+    "ovus",
+    "lemon",
+];
+
+const OBJECTS: [&str; 16] = [
+    "sphere",
+    "box",
+    "cylinder",
+    "cone",
+    "plane",
+    "disc",
+    "torus",
+    "superellipsoid",
+    "triangle",
+    "smooth_triangle",
+    "mesh",
+    "union",
+    "merge",
+    "intersection",
+    "difference",
+    "object",
+];
+
+/// Patterns Photonix has (docs/patterns.md), by POV-Ray's name.
+const PATTERNS: [&str; 18] = [
+    "agate", "bozo", "brick", "bumps", "checker", "crackle", "dents", "gradient", "granite", "hexagon", "leopard",
+    "marble", "onion", "ripples", "spotted", "waves", "wood", "wrinkles",
+];
+
+/// POV-Ray patterns this front-end does not have: their mean colour stands in, with a warning.
+const OTHER_PATTERNS: [&str; 24] = [
+    "radial",
+    "spiral1",
+    "spiral2",
+    "cells",
+    "planar",
+    "spherical",
+    "cylindrical",
+    "boxed",
+    "quilted",
+    "facets",
+    "tiling",
+    "pavement",
+    "julia",
+    "mandel",
+    "magnet",
+    "object",
+    "slope",
+    "aoi",
+    "average",
+    "density_file",
+    "image_map",
+    "image_pattern",
+    "cubic",
+    "function",
+];
+
+impl Parser {
+    /// One statement of the scene at the top level.
+    pub fn statement(&mut self) -> Result<()> {
+        let t = self.expect_any("a statement")?;
+        let pos = t.pos;
+        let word = match t.tok {
+            Tok::Word(w) => w,
+            Tok::Sym(";") => return Ok(()),
+            other => {
+                return self.err(pos, format!("expected an object or a statement here, found {}", describe(&other)))
+            }
+        };
+        match word.as_str() {
+            "camera" => {
+                let c = self.camera(pos)?;
+                self.scene.camera = Some(c);
+            }
+            "background" => {
+                self.expect_sym("{")?;
+                let c = self.colour()?;
+                self.expect_sym("}")?;
+                self.scene.background = Some((c, pos));
+            }
+            "fog" => {
+                let f = self.fog(pos)?;
+                self.scene.fog = Some(f);
+            }
+            "global_settings" => self.global_settings()?,
+            "sky_sphere" | "rainbow" | "media" => {
+                self.skip_block()?;
+                self.scene.warnings.push(format!("{}: {word} is not supported yet; it is left out", self.loc(pos)));
+            }
+            w if OBJECTS.contains(&w) || w == "light_source" || UNSUPPORTED_OBJECTS.contains(&w) => {
+                let o = self.object(w, pos)?;
+                self.scene.objects.push(o);
+            }
+            other => {
+                return self.err(pos, format!("expected an object or a statement here, found `{other}`"));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn loc(&self, pos: Pos) -> String {
+        let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+        format!("{path}:{}:{}", pos.line, pos.col)
+    }
+
+    /// Skips `{ ... }`, nested blocks included (directives in it still run).
+    pub fn skip_block(&mut self) -> Result<()> {
+        self.expect_sym("{")?;
+        self.skip_to_brace()
+    }
+
+    /// A value that starts with a keyword (an object, a texture, ...), or `None` for an
+    /// expression.
+    pub fn block_value(&mut self, w: &str) -> Result<Option<Value>> {
+        let Some(t) = self.peek()? else { return Ok(None) };
+        let pos = t.pos;
+        let v = match w {
+            _ if OBJECTS.contains(&w) || w == "light_source" || UNSUPPORTED_OBJECTS.contains(&w) => {
+                self.next()?;
+                Value::Object(Box::new(self.object(w, pos)?))
+            }
+            "texture" => {
+                self.next()?;
+                let mut layers = self.texture()?;
+                // `#declare T = texture { ... } texture { ... }`: layers, bottom first.
+                while matches!(self.peek_raw()?, Some(t) if t.tok == Tok::Word("texture".into())) {
+                    self.next()?;
+                    layers.extend(self.texture()?);
+                }
+                Value::Texture(layers)
+            }
+            "pigment" => {
+                self.next()?;
+                Value::Pigment(self.pigment(pos)?)
+            }
+            "finish" => {
+                self.next()?;
+                Value::Finish(self.finish()?)
+            }
+            "interior" => {
+                self.next()?;
+                Value::Interior(self.interior()?)
+            }
+            "material" => {
+                self.next()?;
+                let (t, i) = self.material()?;
+                Value::Material(t, i)
+            }
+            "camera" => {
+                self.next()?;
+                Value::Camera(Box::new(self.camera(pos)?))
+            }
+            "color_map" | "colour_map" => {
+                self.next()?;
+                Value::ColorMap(self.colour_map()?)
+            }
+            "transform" => {
+                self.next()?;
+                Value::Transform(self.transform_block()?)
+            }
+            "array" => {
+                self.next()?;
+                self.array(pos)?
+            }
+            "function" => {
+                // Declared, not evaluated: calling it is the error (functions.inc declares dozens).
+                self.next()?;
+                if self.accept_sym("(")? {
+                    while !self.accept_sym(")")? {
+                        self.expect_any("`)`")?;
+                    }
+                }
+                self.skip_block()?;
+                Value::Other("a function")
+            }
+            "normal" | "media" | "density" | "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow"
+            | "sky_sphere" | "spline" | "interior_texture" | "fog" | "photons" | "radiosity" | "warp" => {
+                self.next()?;
+                self.skip_block()?;
+                Value::Other(match w {
+                    "normal" => "a normal",
+                    "media" => "a media",
+                    "spline" => "a spline",
+                    _ => "a block this front-end does not read",
+                })
+            }
+            _ => return Ok(None),
+        };
+        Ok(Some(v))
+    }
+
+    fn array(&mut self, pos: Pos) -> Result<Value> {
+        let mut dims = Vec::new();
+        while self.accept_sym("[")? {
+            let n = self.float()?;
+            self.expect_sym("]")?;
+            if n.is_nan() || n < 1.0 || n > MAX_ARRAY as f64 {
+                return self.err(pos, format!("an array dimension must be 1 to {MAX_ARRAY}, not {n}"));
+            }
+            dims.push(n as usize);
+        }
+        if dims.is_empty() {
+            return self.err(pos, "give the array's size: array[N] or array[N][M]".into());
+        }
+        let total: usize = dims.iter().try_fold(1usize, |a, d| a.checked_mul(*d)).unwrap_or(usize::MAX);
+        if total > MAX_ARRAY {
+            return self.err(pos, format!("the array has more than {MAX_ARRAY} elements"));
+        }
+        let mut items: Vec<Option<Value>> = vec![None; total];
+        if self.accept_sym("{")? {
+            // Nested braces initialise a multi-dimensional array in row order.
+            let mut i = 0;
+            let mut depth = 1;
+            while depth > 0 {
+                if self.accept_sym("{")? {
+                    depth += 1;
+                    continue;
+                }
+                if self.accept_sym("}")? {
+                    depth -= 1;
+                    self.accept_sym(",")?;
+                    continue;
+                }
+                let v = self.rvalue()?;
+                if i >= total {
+                    return self.err(pos, format!("the array's initialiser has more than its {total} elements"));
+                }
+                items[i] = Some(v);
+                i += 1;
+                self.accept_sym(",")?;
+            }
+        }
+        Ok(Value::Array(Box::new(PovArray { dims, items })))
+    }
+
+    // -------------------------------------------------------------------------------------------
+    // Objects
+
+    fn object(&mut self, kind: &str, pos: Pos) -> Result<Obj> {
+        if UNSUPPORTED_OBJECTS.contains(&kind) {
+            // Read past it: the standard includes declare shapes (quadrics, text) that scenes
+            // rarely place; placing one is the error (`emit`).
+            self.skip_block()?;
+            let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
+            return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos });
+        }
+        if kind == "light_source" {
+            let l = self.light(pos)?;
+            return Ok(Obj {
+                kind: ObjKind::Light(Box::new(l)),
+                xform: DMat4::IDENTITY,
+                tex: None,
+                interior: None,
+                inverse: false,
+                pos,
+            });
+        }
+        self.expect_sym("{")?;
+        let mut open = false;
+        let body = match kind {
+            "sphere" => {
+                let center = self.vec3()?;
+                self.accept_sym(",")?;
+                ObjKind::Sphere { center, radius: self.float()? }
+            }
+            "box" => {
+                let a = self.vec3()?;
+                self.accept_sym(",")?;
+                let b = self.vec3()?;
+                ObjKind::Box { a: a.min(b), b: a.max(b) }
+            }
+            "cylinder" => {
+                let a = self.vec3()?;
+                self.accept_sym(",")?;
+                let b = self.vec3()?;
+                self.accept_sym(",")?;
+                ObjKind::Cylinder { a, b, radius: self.float()?, open: false }
+            }
+            "cone" => {
+                let a = self.vec3()?;
+                self.accept_sym(",")?;
+                let ra = self.float()?;
+                self.accept_sym(",")?;
+                let b = self.vec3()?;
+                self.accept_sym(",")?;
+                ObjKind::Cone { a, ra, b, rb: self.float()?, open: false }
+            }
+            "plane" => {
+                let normal = self.vec3()?;
+                self.accept_sym(",")?;
+                ObjKind::Plane { normal, offset: self.float()? }
+            }
+            "disc" => {
+                let center = self.vec3()?;
+                self.accept_sym(",")?;
+                let normal = self.vec3()?;
+                self.accept_sym(",")?;
+                let radius = self.float()?;
+                let hole = if self.accept_sym(",")? { self.float()? } else { 0.0 };
+                ObjKind::Disc { center, normal, radius, hole }
+            }
+            "torus" => {
+                let major = self.float()?;
+                self.accept_sym(",")?;
+                ObjKind::Torus { major, minor: self.float()? }
+            }
+            "superellipsoid" => {
+                let v = self.vector(2)?;
+                ObjKind::Superellipsoid { e: v[0], n: v[1] }
+            }
+            "triangle" => {
+                let a = self.vec3()?;
+                self.accept_sym(",")?;
+                let b = self.vec3()?;
+                self.accept_sym(",")?;
+                let c = self.vec3()?;
+                ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]) }
+            }
+            "smooth_triangle" => ObjKind::Triangles { tris: std::rc::Rc::new(vec![self.smooth_triangle()?]) },
+            "mesh" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh(pos)?) },
+            "union" | "merge" | "intersection" | "difference" => {
+                let op = match kind {
+                    "union" => CsgOp::Union,
+                    "merge" => CsgOp::Merge,
+                    "intersection" => CsgOp::Intersection,
+                    _ => CsgOp::Difference,
+                };
+                ObjKind::Csg { op, children: Vec::new() }
+            }
+            _ => {
+                // object { Ident modifiers } or object { sphere { ... } modifiers }
+                let t = self.expect_any("an object")?;
+                let inner = match &t.tok {
+                    Tok::Word(w) if OBJECTS.contains(&w.as_str()) || UNSUPPORTED_OBJECTS.contains(&w.as_str()) => {
+                        self.object(w, t.pos)?
+                    }
+                    Tok::Word(w) if w == "light_source" => self.object(w, t.pos)?,
+                    Tok::Word(w) => match self.lookup(w).cloned().map(|v| self.postfix(v)).transpose()? {
+                        Some(Value::Object(o)) => *o,
+                        Some(other) => {
+                            return self.err(t.pos, format!("`{w}` is {}, not an object", other.kind()));
+                        }
+                        None => return self.err(t.pos, format!("unknown object `{w}` (not declared)")),
+                    },
+                    other => return self.err(t.pos, format!("expected an object here, found {}", describe(other))),
+                };
+                let mut o = inner;
+                self.modifiers(&mut o, &mut open)?;
+                return Ok(o);
+            }
+        };
+        let mut o = Obj { kind: body, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos };
+        self.modifiers(&mut o, &mut open)?;
+        match &mut o.kind {
+            ObjKind::Cylinder { open: o_, .. } | ObjKind::Cone { open: o_, .. } => *o_ = open,
+            _ => {}
+        }
+        Ok(o)
+    }
+
+    fn smooth_triangle(&mut self) -> Result<[DVec3; 3]> {
+        let mut p = [DVec3::ZERO; 3];
+        for (i, v) in p.iter_mut().enumerate() {
+            if i > 0 {
+                self.accept_sym(",")?;
+            }
+            *v = self.vec3()?;
+            self.accept_sym(",")?;
+            self.vec3()?; // the normal: smooth shading of POV meshes is not kept yet
+        }
+        Ok(p)
+    }
+
+    fn mesh(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+        let mut tris = Vec::new();
+        loop {
+            match self.peek_word()?.as_deref() {
+                Some("triangle") => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let a = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let b = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let c = self.vec3()?;
+                    self.triangle_tail()?;
+                    tris.push([a, b, c]);
+                }
+                Some("smooth_triangle") => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let t = self.smooth_triangle()?;
+                    self.triangle_tail()?;
+                    tris.push(t);
+                }
+                Some("inside_vector") => {
+                    self.next()?;
+                    self.vec3()?;
+                }
+                Some("hierarchy") => {
+                    self.next()?;
+                    self.float()?;
+                }
+                _ => break,
+            }
+        }
+        if tris.is_empty() {
+            return self.err(pos, "this mesh has no triangles".into());
+        }
+        Ok(tris)
+    }
+
+    /// The end of a mesh triangle: an optional texture (not kept per triangle) and `}`.
+    fn triangle_tail(&mut self) -> Result<()> {
+        loop {
+            if self.accept_sym("}")? {
+                return Ok(());
+            }
+            if self.accept_word("texture")? {
+                self.texture()?;
+                continue;
+            }
+            let t = self.expect_any("`}`")?;
+            return self.err(t.pos, format!("expected `}}` closing the triangle, found {}", describe(&t.tok)));
+        }
+    }
+
+    /// Modifiers up to and including the closing `}`. CSG children are read here too.
+    fn modifiers(&mut self, o: &mut Obj, open: &mut bool) -> Result<()> {
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(()),
+                Tok::Word(w) => w,
+                other => {
+                    return self
+                        .err(pos, format!("expected an object modifier or `}}` here, found {}", describe(&other)))
+                }
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                transform_obj(o, &m);
+                continue;
+            }
+            match w.as_str() {
+                _ if matches!(o.kind, ObjKind::Csg { .. })
+                    && (OBJECTS.contains(&w.as_str())
+                        || w == "light_source"
+                        || UNSUPPORTED_OBJECTS.contains(&w.as_str())) =>
+                {
+                    let child = self.object(&w, pos)?;
+                    if let ObjKind::Csg { children, .. } = &mut o.kind {
+                        children.push(child);
+                    }
+                }
+                "texture" => {
+                    let layers = self.texture()?;
+                    o.tex.get_or_insert_with(Vec::new).extend(layers);
+                }
+                "pigment" => {
+                    let p = self.pigment(pos)?;
+                    self.top_layer(o).pigment = p;
+                }
+                "finish" => {
+                    let f = self.finish()?;
+                    self.top_layer(o).finish = f;
+                }
+                "interior" => o.interior = Some(self.interior()?),
+                "material" => {
+                    let (t, i) = self.material()?;
+                    if !t.is_empty() {
+                        o.tex = Some(t);
+                    }
+                    if i.is_some() {
+                        o.interior = i;
+                    }
+                }
+                "open" => *open = true,
+                "normal" | "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
+                "hollow" | "no_shadow" | "no_image" | "no_reflection" | "double_illuminate" | "sturm"
+                | "no_radiosity" => {
+                    self.optional_bool()?;
+                }
+                "split_union" | "cutaway_textures" => {
+                    if let Some(Tok::Num(_) | Tok::Word(_)) = self.peek()?.map(|t| t.tok) {
+                        if !matches!(self.peek_word()?.as_deref(), Some(w) if OBJECTS.contains(&w)) {
+                            self.float()?;
+                        }
+                    }
+                }
+                "inverse" => o.inverse = !o.inverse,
+                "clipped_by" => return self.err(pos, format!("`{w}` is not supported yet")),
+                other => {
+                    return self.err(pos, format!("`{other}` is not an object modifier this front-end knows"));
+                }
+            }
+        }
+    }
+
+    /// An optional on/off after a flag (`hollow`, `shadowless on`, `jitter off`); true when absent.
+    fn optional_bool(&mut self) -> Result<bool> {
+        if self.starts_float()? {
+            return Ok(self.float()? != 0.0);
+        }
+        match self.peek()?.map(|t| t.tok) {
+            Some(Tok::Word(w)) if matches!(w.as_str(), "on" | "off" | "yes" | "no" | "true" | "false") => {
+                self.next()?;
+                Ok(matches!(w.as_str(), "on" | "yes" | "true"))
+            }
+            _ => Ok(true),
+        }
+    }
+
+    /// Whether a float expression comes next (for the optional numbers after `metallic`,
+    /// `fresnel`, `poly_wave`...): a number, `(`, `-`, or a declared float.
+    fn starts_float(&mut self) -> Result<bool> {
+        Ok(match self.peek()?.map(|t| t.tok) {
+            Some(Tok::Num(_)) | Some(Tok::Sym("(")) | Some(Tok::Sym("-")) => true,
+            Some(Tok::Word(w)) => matches!(self.lookup(&w), Some(Value::Float(_))),
+            _ => false,
+        })
+    }
+
+    /// The texture layer a bare `pigment` or `finish` in an object changes (made on first use).
+    fn top_layer<'a>(&self, o: &'a mut Obj) -> &'a mut Tex {
+        let default = self.default_tex(o.pos);
+        let layers = o.tex.get_or_insert_with(Vec::new);
+        if layers.is_empty() {
+            layers.push(default);
+        }
+        layers.last_mut().expect("a layer was just pushed")
+    }
+
+    pub fn default_tex(&self, pos: Pos) -> Tex {
+        Tex {
+            pigment: self.default_pigment.clone().unwrap_or_else(|| Pigment::solid([0.0, 0.0, 0.0, 0.0, 0.0], pos)),
+            finish: self.default_finish.clone(),
+            xform: DMat4::IDENTITY,
+        }
+    }
+
+    /// `translate`, `rotate`, `scale`, `matrix`, `transform`: the matrix (world_from_object of
+    /// the change), or `None` for another word. The word is already consumed.
+    fn transform_word(&mut self, w: &str) -> Result<Option<DMat4>> {
+        Ok(Some(match w {
+            "translate" => DMat4::from_translation(self.vec3()?),
+            "rotate" => rotation(self.vec3()?),
+            "scale" => {
+                let pos = self.here();
+                let s = self.vec3()?;
+                if s.x == 0.0 || s.y == 0.0 || s.z == 0.0 {
+                    // POV-Ray warns and uses 1 for a zero scale component.
+                    self.warnings
+                        .push(format!("{}: a zero scale component is taken as 1, as POV-Ray does", self.loc(pos)));
+                }
+                let fix = |v: f64| if v == 0.0 { 1.0 } else { v };
+                DMat4::from_scale(DVec3::new(fix(s.x), fix(s.y), fix(s.z)))
+            }
+            "matrix" => self.matrix()?,
+            "transform" => {
+                if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                    self.transform_block()?
+                } else {
+                    let t = self.expect_any("a transform")?;
+                    match (&t.tok, &t.tok) {
+                        (Tok::Word(n), _) => match self.lookup(n) {
+                            Some(Value::Transform(m)) => *m,
+                            _ => return self.err(t.pos, format!("`{n}` is not a declared transform")),
+                        },
+                        _ => return self.err(t.pos, format!("expected a transform, found {}", describe(&t.tok))),
+                    }
+                }
+            }
+            _ => return Ok(None),
+        }))
+    }
+
+    /// `{ translate ... rotate ... [Ident] [inverse] }`.
+    fn transform_block(&mut self) -> Result<DMat4> {
+        self.expect_sym("{")?;
+        let mut m = DMat4::IDENTITY;
+        loop {
+            let t = self.expect_any("`}`")?;
+            match t.tok {
+                Tok::Sym("}") => return Ok(m),
+                Tok::Word(w) if w == "inverse" => m = m.inverse(),
+                Tok::Word(w) => {
+                    if let Some(t2) = self.transform_word(&w)? {
+                        m = t2 * m;
+                    } else if let Some(Value::Transform(t2)) = self.lookup(&w) {
+                        m = *t2 * m;
+                    } else {
+                        return self.err(t.pos, format!("`{w}` does not belong in a transform"));
+                    }
+                }
+                other => return self.err(t.pos, format!("expected a transform item, found {}", describe(&other))),
+            }
+        }
+    }
+
+    /// `matrix <m00, m01, m02, m10, ..., m32>`: POV-Ray's rows, the last row the translation.
+    fn matrix(&mut self) -> Result<DMat4> {
+        let pos = self.expect_sym("<")?;
+        let v = self.angle_list()?;
+        if v.len() != 12 {
+            return self.err(pos, format!("`matrix` takes 12 numbers, not {}", v.len()));
+        }
+        // POV-Ray multiplies row vectors: p' = p M, so M's columns here are its rows there.
+        Ok(DMat4::from_cols(
+            DVec4::new(v[0], v[1], v[2], 0.0),
+            DVec4::new(v[3], v[4], v[5], 0.0),
+            DVec4::new(v[6], v[7], v[8], 0.0),
+            DVec4::new(v[9], v[10], v[11], 1.0),
+        ))
+    }
+
+    // -------------------------------------------------------------------------------------------
+    // Textures
+
+    /// `{ ... }` after `texture`: one or more layers (a declared layered texture).
+    pub fn texture(&mut self) -> Result<Vec<Tex>> {
+        let open = self.expect_sym("{")?;
+        let mut layers = vec![self.default_tex(open)];
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(layers),
+                Tok::Word(w) => w,
+                other => return self.err(pos, format!("expected a texture item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                layers.iter_mut().for_each(|l| l.xform = m * l.xform);
+                continue;
+            }
+            let top = layers.last_mut().expect("a texture has a layer");
+            match w.as_str() {
+                "pigment" => top.pigment = self.pigment(pos)?,
+                "finish" => top.finish = self.finish()?,
+                "normal" => self.skip_block()?,
+                "uv_mapping" => {}
+                _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
+                    // A patterned texture (texture_map, or textures as a checker's entries).
+                    self.warnings.push(format!(
+                        "{}: patterned textures (texture_map) are not supported yet; the default texture is used",
+                        self.loc(pos)
+                    ));
+                    self.skip_to_brace()?;
+                    return Ok(layers);
+                }
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
+                    Some(Value::Texture(t)) => layers = t,
+                    Some(other) => return self.err(pos, format!("`{w}` is {}, not a texture", other.kind())),
+                    None => return self.err(pos, format!("`{w}` does not belong in a texture")),
+                },
+            }
+        }
+    }
+
+    /// Skips to the `}` that closes the block we are in (consumed).
+    fn skip_to_brace(&mut self) -> Result<()> {
+        let mut depth = 1;
+        while depth > 0 {
+            let t = self.expect_any("`}`")?;
+            match t.tok {
+                Tok::Sym("{") => depth += 1,
+                Tok::Sym("}") => depth -= 1,
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    pub fn pigment(&mut self, pos: Pos) -> Result<Pigment> {
+        self.expect_sym("{")?;
+        let mut p = Pigment::solid([0.0; 5], pos);
+        let mut fields: Vec<(String, toml::Value)> = Vec::new();
+        let mut pattern: Option<String> = None;
+        let mut map: Vec<(f64, Colour)> = Vec::new();
+        let mut list: Vec<Colour> = Vec::new();
+        loop {
+            let Some(t) = self.peek()? else { return self.err(pos, "this pigment is never closed; add `}`".into()) };
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => {
+                    self.next()?;
+                    break;
+                }
+                Tok::Word(w) => w,
+                _ => {
+                    let c = self.colour()?;
+                    p.kind = PigmentKind::Solid(c);
+                    continue;
+                }
+            };
+            if let Some(Value::Pigment(base)) = self.lookup(&w).cloned() {
+                self.next()?;
+                p = base;
+                if let PigmentKind::Pattern { name, map: m, fields: f } = &p.kind {
+                    pattern = Some(name.clone());
+                    map = m.clone();
+                    fields = f.clone();
+                }
+                continue;
+            }
+            if let Some(Value::ColorMap(m)) = self.lookup(&w).cloned() {
+                self.next()?;
+                map = m;
+                continue;
+            }
+            if matches!(self.lookup(&w), Some(Value::Vector(_)) | Some(Value::Float(_))) {
+                // A declared colour, possibly in an expression (`White * 1.4`).
+                let c = self.colour()?;
+                if pattern.is_some() {
+                    list.push(c);
+                } else {
+                    p.kind = PigmentKind::Solid(c);
+                }
+                self.accept_sym(",")?;
+                continue;
+            }
+            self.next()?;
+            if let Some(m) = self.transform_word(&w)? {
+                p.xform = m * p.xform;
+                continue;
+            }
+            let num = |v: f64| toml::Value::Float(v);
+            match w.as_str() {
+                "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
+                    let v = self.word_colour(&w, tpos)?;
+                    if pattern.is_some() {
+                        list.push(v);
+                    } else {
+                        p.kind = PigmentKind::Solid(v);
+                    }
+                }
+                "color_map" | "colour_map" => map = self.colour_map()?,
+                "pigment_map" | "warp" | "image_map" => {
+                    self.skip_block()?;
+                    if w != "warp" {
+                        pattern = Some(format!("unsupported:{w}"));
+                    } else {
+                        self.warnings.push(format!("{}: warp is not supported yet; it is left out", self.loc(tpos)));
+                    }
+                }
+                "uv_mapping" => {}
+                "red" | "green" | "blue" | "filter" | "transmit" => {
+                    let i = ["red", "green", "blue", "filter", "transmit"].iter().position(|k| *k == w).unwrap_or(0);
+                    let v = self.float()?;
+                    if let PigmentKind::Solid(c) = &mut p.kind {
+                        c[i] = v;
+                    }
+                }
+                "pigment_pattern" => {
+                    self.skip_block()?;
+                    pattern = Some("unsupported:pigment_pattern".into());
+                }
+                "quick_color" | "quick_colour" => {
+                    self.colour()?;
+                }
+                "turbulence" => {
+                    let v = self.vec3()?;
+                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                }
+                "octaves" => {
+                    let v = self.float()?;
+                    fields.push((w.clone(), toml::Value::Integer(v.round().clamp(1.0, 10.0) as i64)));
+                }
+                "omega" | "lambda" | "frequency" | "phase" | "mortar" | "agate_turb" | "metric" | "offset" => {
+                    let v = self.float()?;
+                    fields.push((w.clone(), num(v)));
+                }
+                "brick_size" => {
+                    let v = self.vec3()?;
+                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                }
+                "form" => {
+                    let v = self.vec3()?;
+                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                }
+                "solid" => fields.push((w.clone(), toml::Value::Boolean(true))),
+                "ramp_wave" | "sine_wave" | "triangle_wave" | "scallop_wave" | "cubic_wave" => {
+                    fields.push(("wave".into(), toml::Value::String(w.trim_end_matches("_wave").into())));
+                }
+                "poly_wave" => {
+                    fields.push(("wave".into(), toml::Value::String("poly".into())));
+                    if self.starts_float()? {
+                        let e = self.float()?;
+                        fields.push(("exponent".into(), num(e)));
+                    }
+                }
+                "gradient" => {
+                    pattern = Some(w.clone());
+                    let v = self.vec3()?;
+                    fields.push(("direction".into(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                }
+                _ if PATTERNS.contains(&w.as_str()) => {
+                    pattern = Some(w.clone());
+                    if w == "brick" || w == "checker" || w == "hexagon" {
+                        // Inline colours: `checker color A, color B`.
+                        while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}"))) && self.starts_colour()? {
+                            list.push(self.colour()?);
+                            self.accept_sym(",")?;
+                        }
+                    }
+                }
+                _ if OTHER_PATTERNS.contains(&w.as_str()) => {
+                    pattern = Some(format!("unsupported:{w}"));
+                    // Arguments of these patterns (a vector, a float) are skipped with the map.
+                    if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Num(_))) {
+                        self.expr()?;
+                    }
+                    if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                        self.skip_block()?;
+                    }
+                }
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Vector(_)) | Some(Value::Float(_)) => {
+                        let c = super::parser::to_colour(
+                            self.lookup(&w).cloned().unwrap_or(Value::Float(0.0)),
+                            tpos,
+                            self,
+                        )?;
+                        if pattern.is_some() {
+                            list.push(c);
+                        } else {
+                            p.kind = PigmentKind::Solid(c);
+                        }
+                    }
+                    _ => return self.err(tpos, format!("`{w}` does not belong in a pigment")),
+                },
+            }
+        }
+        if let Some(name) = pattern {
+            if !list.is_empty() && map.is_empty() {
+                let n = list.len();
+                map = list.iter().enumerate().map(|(i, c)| (i as f64 / (n.max(2) - 1) as f64, *c)).collect();
+                fields.push(("colors".into(), toml::Value::Boolean(true)));
+            }
+            if let Some(other) = name.strip_prefix("unsupported:") {
+                self.warnings.push(format!(
+                    "{}: the {other} pattern is not supported yet; its mean colour stands in",
+                    self.loc(pos)
+                ));
+                let mean =
+                    Pigment { kind: PigmentKind::Pattern { name: other.into(), map, fields: Vec::new() }, ..p }.mean();
+                return Ok(Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos });
+            }
+            p.kind = PigmentKind::Pattern { name, map, fields };
+        }
+        Ok(p)
+    }
+
+    /// Whether the next token starts a colour (a colour keyword, a number, a vector, a declared colour).
+    fn starts_colour(&mut self) -> Result<bool> {
+        Ok(match self.peek()?.map(|t| t.tok) {
+            Some(Tok::Word(w)) => {
+                matches!(w.as_str(), "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb")
+                    || matches!(self.lookup(&w), Some(Value::Vector(_)))
+            }
+            Some(Tok::Sym("<")) | Some(Tok::Num(_)) => true,
+            _ => false,
+        })
+    }
+
+    fn word_colour(&mut self, w: &str, _pos: Pos) -> Result<Colour> {
+        // The keyword is consumed: read the rest as `color` would.
+        let mut c = [0.0; 5];
+        let v = match w {
+            "color" | "colour" => return self.colour(),
+            _ => {
+                let v = self.expr()?;
+                super::parser::to_colour(v, self.here(), self)?
+            }
+        };
+        let n = match w.trim_start_matches('s') {
+            "rgb" => 3,
+            "rgbf" | "rgbt" => 4,
+            _ => 5,
+        };
+        c[..3].copy_from_slice(&v[..3]);
+        if n >= 4 {
+            if w.ends_with("rgbt") {
+                c[4] = v[3];
+            } else {
+                c[3] = v[3];
+            }
+        }
+        if n == 5 {
+            c[4] = v[4];
+        }
+        // Trailing `filter 0.5` / `transmit 0.5`.
+        loop {
+            match self.peek_word()?.as_deref() {
+                Some("filter") => {
+                    self.next()?;
+                    c[3] = self.float()?;
+                }
+                Some("transmit") => {
+                    self.next()?;
+                    c[4] = self.float()?;
+                }
+                _ => return Ok(c),
+            }
+        }
+    }
+
+    pub fn colour_map(&mut self) -> Result<Vec<(f64, Colour)>> {
+        self.expect_sym("{")?;
+        let mut map = Vec::new();
+        loop {
+            if self.accept_sym("}")? {
+                return Ok(map);
+            }
+            if let Some(w) = self.peek_word()? {
+                if let Some(Value::ColorMap(m)) = self.lookup(&w).cloned() {
+                    self.next()?;
+                    map = m;
+                    continue;
+                }
+            }
+            self.expect_sym("[")?;
+            let a = self.float()?;
+            self.accept_sym(",")?;
+            if self.starts_float()? {
+                // The old form: [a b color c1 color c2].
+                let b = self.float()?;
+                let c1 = self.colour()?;
+                let c2 = self.colour()?;
+                map.push((a, c1));
+                map.push((b, c2));
+            } else {
+                map.push((a, self.colour()?));
+            }
+            self.expect_sym("]")?;
+            if map.len() > 256 {
+                return self.err(self.here(), "a color_map has at most 256 entries".into());
+            }
+        }
+    }
+
+    pub fn finish(&mut self) -> Result<Finish> {
+        self.expect_sym("{")?;
+        let mut f = self.default_finish.clone();
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(f),
+                Tok::Word(w) => w,
+                other => return self.err(pos, format!("expected a finish item or `}}`, found {}", describe(&other))),
+            };
+            let rgb = |c: Colour| [c[0], c[1], c[2]];
+            match w.as_str() {
+                "ambient" => f.ambient = rgb(self.colour()?),
+                "emission" => f.emission = rgb(self.colour()?),
+                "diffuse" => {
+                    self.accept_word("albedo")?;
+                    f.diffuse = self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
+                "phong" => {
+                    self.accept_word("albedo")?;
+                    f.phong = self.float()?;
+                }
+                "specular" => {
+                    self.accept_word("albedo")?;
+                    f.specular = self.float()?;
+                }
+                "phong_size" => f.phong_size = self.float()?,
+                "roughness" => f.roughness = self.float()?,
+                "metallic" => {
+                    f.metallic = 1.0;
+                    if self.starts_float()? {
+                        f.metallic = self.float()?;
+                    }
+                }
+                "reflection" => {
+                    if self.accept_sym("{")? {
+                        // reflection { [min,] max [fresnel] [falloff f] [exponent e] [metallic m] }
+                        let mut first = true;
+                        loop {
+                            if self.accept_sym("}")? {
+                                break;
+                            }
+                            match self.peek_word()?.as_deref() {
+                                Some("fresnel") => {
+                                    self.next()?;
+                                    if self.starts_float()? {
+                                        self.float()?;
+                                    }
+                                }
+                                Some("falloff") | Some("exponent") => {
+                                    self.next()?;
+                                    self.float()?;
+                                }
+                                Some("metallic") => {
+                                    self.next()?;
+                                    f.metallic = 1.0;
+                                    if self.starts_float()? {
+                                        f.metallic = self.float()?;
+                                    }
+                                }
+                                _ => {
+                                    let c = rgb(self.colour()?);
+                                    self.accept_sym(",")?;
+                                    // With two colours, the second (the maximum) is kept.
+                                    if first || c != [0.0; 3] {
+                                        f.reflection = c;
+                                    }
+                                    first = false;
+                                }
+                            }
+                        }
+                    } else {
+                        f.reflection = rgb(self.colour()?);
+                    }
+                }
+                "brilliance" | "crand" | "reflection_exponent" => {
+                    self.float()?;
+                }
+                "conserve_energy" => {}
+                "irid" | "subsurface" => self.skip_block()?,
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Finish(base)) => f = base,
+                    _ => return self.err(pos, format!("`{w}` does not belong in a finish")),
+                },
+            }
+        }
+    }
+
+    pub fn interior(&mut self) -> Result<Interior> {
+        self.expect_sym("{")?;
+        let mut i = Interior { ior: 1.0 };
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(i),
+                Tok::Word(w) => w,
+                other => {
+                    return self.err(pos, format!("expected an interior item or `}}`, found {}", describe(&other)))
+                }
+            };
+            match w.as_str() {
+                "ior" => i.ior = self.float()?,
+                "caustics" | "dispersion" | "dispersion_samples" | "fade_distance" | "fade_power" => {
+                    self.float()?;
+                }
+                "fade_color" | "fade_colour" => {
+                    self.colour()?;
+                }
+                "media" => {
+                    self.skip_block()?;
+                    self.warnings
+                        .push(format!("{}: media in an interior is not supported yet; left out", self.loc(pos)));
+                }
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Interior(base)) => i = base,
+                    _ => return self.err(pos, format!("`{w}` does not belong in an interior")),
+                },
+            }
+        }
+    }
+
+    fn material(&mut self) -> Result<(Vec<Tex>, Option<Interior>)> {
+        self.expect_sym("{")?;
+        let (mut tex, mut int) = (Vec::new(), None);
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok((tex, int)),
+                Tok::Word(w) => w,
+                other => return self.err(pos, format!("expected a material item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                tex.iter_mut().for_each(|l: &mut Tex| l.xform = m * l.xform);
+                continue;
+            }
+            match w.as_str() {
+                "texture" => tex.extend(self.texture()?),
+                "interior" => int = Some(self.interior()?),
+                "interior_texture" => self.skip_block()?,
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Material(t, i)) => {
+                        tex = t;
+                        int = i;
+                    }
+                    _ => return self.err(pos, format!("`{w}` does not belong in a material")),
+                },
+            }
+        }
+    }
+
+    /// `#default { texture { ... } }`, `#default { finish { ... } }`, `#default { pigment { ... } }`.
+    pub fn default_block(&mut self) -> Result<()> {
+        self.expect_sym("{")?;
+        loop {
+            let t = self.expect_any("`}`")?;
+            let pos = t.pos;
+            match t.tok {
+                Tok::Sym("}") => return Ok(()),
+                Tok::Word(w) if w == "finish" => self.default_finish = self.finish()?,
+                Tok::Word(w) if w == "pigment" => self.default_pigment = Some(self.pigment(pos)?),
+                Tok::Word(w) if w == "texture" => {
+                    let layers = self.texture()?;
+                    if let Some(l) = layers.last() {
+                        self.default_finish = l.finish.clone();
+                        self.default_pigment = Some(l.pigment.clone());
+                    }
+                }
+                Tok::Word(w) if w == "normal" => self.skip_block()?,
+                other => {
+                    return self.err(
+                        pos,
+                        format!("expected texture, pigment or finish in #default, found {}", describe(&other)),
+                    )
+                }
+            }
+        }
+    }
+
+    // -------------------------------------------------------------------------------------------
+    // Camera, lights, atmosphere
+
+    fn camera(&mut self, pos: Pos) -> Result<Camera> {
+        self.expect_sym("{")?;
+        let mut c = Camera { pos, ..Camera::default() };
+        if let Some(w) = self.peek_word()? {
+            if let Some(Value::Camera(base)) = self.lookup(&w).cloned() {
+                self.next()?;
+                c = *base;
+                c.pos = pos;
+            }
+        }
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(c),
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a camera item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                c.location = m.transform_point3(c.location);
+                c.direction = m.transform_vector3(c.direction);
+                c.right = m.transform_vector3(c.right);
+                c.up = m.transform_vector3(c.up);
+                if let Some(f) = &mut c.focal_point {
+                    *f = m.transform_point3(*f);
+                }
+                continue;
+            }
+            match w.as_str() {
+                "perspective" => c.orthographic = false,
+                "orthographic" => c.orthographic = true,
+                "fisheye" | "ultra_wide_angle" | "omnimax" | "panoramic" | "cylinder" | "spherical" | "mesh_camera" => {
+                    return self
+                        .err(tpos, format!("the {w} camera is not supported yet; use perspective or orthographic"));
+                }
+                "location" => c.location = self.vec3()?,
+                "direction" => c.direction = self.vec3()?,
+                "right" => c.right = self.vec3()?,
+                "up" => c.up = self.vec3()?,
+                "sky" => c.sky = self.vec3()?,
+                "angle" => {
+                    let a = self.float()?;
+                    if self.starts_float()? {
+                        self.float()?;
+                    }
+                    if !(a > 0.0 && a < 180.0) {
+                        return self.err(tpos, format!("camera angle {a} must be between 0 and 180 degrees"));
+                    }
+                    if !c.orthographic {
+                        // |direction| = 0.5 |right| / tan(angle / 2) (POV-Ray's reference manual).
+                        let len = 0.5 * c.right.length() / (a.to_radians() / 2.0).tan();
+                        c.direction = c.direction.normalize_or(DVec3::Z) * len;
+                    } else {
+                        // An orthographic camera with an angle sees as wide as a perspective one
+                        // would at the look_at distance; approximated by keeping right and up.
+                    }
+                }
+                "look_at" => {
+                    let at = self.vec3()?;
+                    // POV-Ray keeps the lengths of direction, right and up and turns them.
+                    let (ld, lr, lu) = (c.direction.length(), c.right.length(), c.up.length());
+                    let handed = c.up.cross(c.direction).dot(c.right) >= 0.0;
+                    let d = (at - c.location).normalize_or(DVec3::Z);
+                    let mut r = c.sky.cross(d).normalize_or(DVec3::X);
+                    if !handed {
+                        r = -r;
+                    }
+                    let u = d.cross(r).normalize_or(DVec3::Y) * if handed { 1.0 } else { -1.0 };
+                    c.look_at = Some(at);
+                    c.direction = d * ld;
+                    c.right = r * lr;
+                    c.up = u * lu;
+                }
+                "aperture" => c.aperture = self.float()?,
+                "focal_point" => c.focal_point = Some(self.vec3()?),
+                "blur_samples" => {
+                    c.blur_samples = self.float()? as i64;
+                    if self.accept_sym(",")? {
+                        c.blur_samples = self.float()? as i64;
+                    }
+                }
+                "confidence" | "variance" => {
+                    self.float()?;
+                }
+                "normal" => self.skip_block()?,
+                _ => return self.err(tpos, format!("`{w}` does not belong in a camera")),
+            }
+        }
+    }
+
+    fn light(&mut self, pos: Pos) -> Result<Light> {
+        self.expect_sym("{")?;
+        let position = self.vec3()?;
+        self.accept_sym(",")?;
+        let c = self.colour()?;
+        let mut l = Light {
+            position,
+            colour: [c[0], c[1], c[2]],
+            kind: LightKind::Point,
+            area: None,
+            fade_distance: 0.0,
+            fade_power: 0.0,
+            shadowless: false,
+            pos,
+        };
+        let (mut point_at, mut radius, mut falloff, mut tightness) = (DVec3::ZERO, 30.0, 45.0, 0.0);
+        let mut spot = 0;
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a light item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                l.position = m.transform_point3(l.position);
+                point_at = m.transform_point3(point_at);
+                if let Some(a) = &mut l.area {
+                    a.axis1 = m.transform_vector3(a.axis1);
+                    a.axis2 = m.transform_vector3(a.axis2);
+                }
+                continue;
+            }
+            match w.as_str() {
+                "spotlight" => spot = 1,
+                "parallel" => spot = 2,
+                "cylinder" => {
+                    return self.err(tpos, "cylinder lights are not supported yet; use spotlight".into());
+                }
+                "point_at" => point_at = self.vec3()?,
+                "radius" => radius = self.float()?,
+                "falloff" => falloff = self.float()?,
+                "tightness" => tightness = self.float()?,
+                "area_light" => {
+                    let axis1 = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let axis2 = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let n1 = self.float()?;
+                    self.accept_sym(",")?;
+                    let n2 = self.float()?;
+                    let clamp = |n: f64| n.round().clamp(1.0, 64.0) as u32;
+                    l.area = Some(AreaLight { axis1, axis2, n1: clamp(n1), n2: clamp(n2), adaptive: 0, jitter: false });
+                }
+                "adaptive" => {
+                    let a = self.float()?;
+                    if let Some(area) = &mut l.area {
+                        area.adaptive = a.max(0.0) as u32;
+                    }
+                }
+                "jitter" => {
+                    self.optional_bool()?;
+                    if let Some(area) = &mut l.area {
+                        area.jitter = true;
+                    }
+                }
+                "circular" | "orient" => {}
+                "area_illumination" | "shadowless" | "media_interaction" | "media_attenuation" => {
+                    let on = self.optional_bool()?;
+                    if w == "shadowless" {
+                        l.shadowless = on;
+                    }
+                }
+                "fade_distance" => l.fade_distance = self.float()?,
+                "fade_power" => l.fade_power = self.float()?,
+                "looks_like" | "projected_through" | "photons" => {
+                    self.skip_block()?;
+                    if w == "looks_like" {
+                        self.warnings.push(format!(
+                            "{}: looks_like is not supported yet; the light is invisible",
+                            self.loc(tpos)
+                        ));
+                    }
+                }
+                "color" | "colour" | "rgb" => {
+                    let c = self.word_colour(&w, tpos)?;
+                    l.colour = [c[0], c[1], c[2]];
+                }
+                _ => return self.err(tpos, format!("`{w}` does not belong in a light_source")),
+            }
+        }
+        l.kind = match spot {
+            1 => LightKind::Spot { point_at, radius, falloff, tightness },
+            2 => LightKind::Parallel { point_at },
+            _ => LightKind::Point,
+        };
+        Ok(l)
+    }
+
+    fn fog(&mut self, pos: Pos) -> Result<Fog> {
+        self.expect_sym("{")?;
+        let mut f =
+            Fog { ground: false, distance: 0.0, colour: [0.0; 5], offset: 0.0, alt: 0.0, turbulence: None, pos };
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(f),
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a fog item or `}}`, found {}", describe(&other))),
+            };
+            if self.transform_word(&w)?.is_some() {
+                continue;
+            }
+            match w.as_str() {
+                "fog_type" => f.ground = self.float()? == 2.0,
+                "distance" => f.distance = self.float()?,
+                "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" => f.colour = self.word_colour(&w, tpos)?,
+                "fog_offset" => f.offset = self.float()?,
+                "fog_alt" => f.alt = self.float()?,
+                "turbulence" => f.turbulence = Some(self.vec3()?),
+                "octaves" | "omega" | "lambda" | "turb_depth" => {
+                    self.float()?;
+                }
+                "up" => {
+                    self.vec3()?;
+                }
+                _ => return self.err(tpos, format!("`{w}` does not belong in a fog")),
+            }
+        }
+    }
+
+    fn global_settings(&mut self) -> Result<()> {
+        self.expect_sym("{")?;
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(()),
+                Tok::Word(w) => w,
+                other => {
+                    return self.err(tpos, format!("expected a global setting or `}}`, found {}", describe(&other)))
+                }
+            };
+            match w.as_str() {
+                "assumed_gamma" => self.scene.assumed_gamma = Some(self.float()?),
+                "max_trace_level" => self.scene.max_trace_level = Some(self.float()? as i64),
+                "ambient_light" | "irid_wavelength" => {
+                    self.colour()?;
+                }
+                "hf_gray_16" => {
+                    self.optional_bool()?;
+                }
+                "adc_bailout" | "number_of_waves" | "max_intersections" | "noise_generator" => {
+                    self.float()?;
+                }
+                "charset" => {
+                    self.next()?;
+                }
+                // Photon and radiosity settings are hints: Photonix always maps photons.
+                "photons" | "radiosity" | "subsurface" | "mm_per_unit" => {
+                    if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                        self.skip_block()?;
+                    } else {
+                        self.float()?;
+                    }
+                }
+                _ => return self.err(tpos, format!("`{w}` is not a global setting this front-end knows")),
+            }
+        }
+    }
+}
+
+/// Moves an object by `m` (world_from_object of the change), as POV-Ray's Transform_Object does:
+/// CSG children one by one, and every texture given so far with its object.
+pub fn transform_obj(o: &mut Obj, m: &DMat4) {
+    if let Some(layers) = &mut o.tex {
+        layers.iter_mut().for_each(|l| l.xform = *m * l.xform);
+    }
+    match &mut o.kind {
+        ObjKind::Csg { children, .. } => children.iter_mut().for_each(|c| transform_obj(c, m)),
+        ObjKind::Light(l) => {
+            l.position = m.transform_point3(l.position);
+            if let LightKind::Spot { point_at, .. } | LightKind::Parallel { point_at } = &mut l.kind {
+                *point_at = m.transform_point3(*point_at);
+            }
+            if let Some(a) = &mut l.area {
+                a.axis1 = m.transform_vector3(a.axis1);
+                a.axis2 = m.transform_vector3(a.axis2);
+            }
+        }
+        _ => o.xform = *m * o.xform,
+    }
+}

@@ -1,0 +1,1738 @@
+//! The evaluator of POV-Ray's language: a token stream that runs directives as it goes
+//! (`#declare`, `#if`, `#while`, `#macro`, `#include`, ...), as POV-Ray's own parser does, and
+//! the expressions (floats, vectors, colours, strings, arrays, the built-in functions).
+//! The scene's statements are read in `objects.rs`.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use glam::{DMat3, DVec3};
+
+use super::ast::{Camera, Colour, Finish, Interior, Obj, Pigment, PovScene, Tex};
+use super::lexer::{lex, Tok, Token};
+use super::{Pos, PovError, PovOptions};
+
+/// Most nested frames (include files and macro calls): deeper is runaway recursion.
+pub const MAX_DEPTH: usize = 128;
+/// Most tokens one scene may deliver, loops and macros counted out (runaway loops stop here).
+pub const MAX_TOKENS: u64 = 50_000_000;
+/// Most elements of one array.
+pub const MAX_ARRAY: usize = 1 << 22;
+
+pub type Result<T> = std::result::Result<T, PovError>;
+
+#[derive(Clone, Debug)]
+pub struct MacroDef {
+    pub tokens: Rc<Vec<Token>>,
+    pub body: usize,
+    pub params: Vec<String>,
+}
+
+#[derive(Clone, Debug)]
+pub struct PovArray {
+    pub dims: Vec<usize>,
+    pub items: Vec<Option<Value>>,
+}
+
+/// A value of the language.
+#[derive(Clone, Debug)]
+pub enum Value {
+    Float(f64),
+    /// 2 to 5 components (a colour is 5: red, green, blue, filter, transmit).
+    Vector(Vec<f64>),
+    Str(String),
+    Array(Box<PovArray>),
+    Object(Box<Obj>),
+    Texture(Vec<Tex>),
+    Pigment(Pigment),
+    Finish(Finish),
+    Interior(Interior),
+    /// A `material`: texture layers and an interior.
+    Material(Vec<Tex>, Option<Interior>),
+    Camera(Box<Camera>),
+    ColorMap(Vec<(f64, Colour)>),
+    Transform(glam::DMat4),
+    Macro(Rc<MacroDef>),
+    /// Something read but not used by the translation (a normal, a media, a density): its kind.
+    Other(&'static str),
+}
+
+impl Value {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Value::Float(_) => "a float",
+            Value::Vector(_) => "a vector",
+            Value::Str(_) => "a string",
+            Value::Array(_) => "an array",
+            Value::Object(_) => "an object",
+            Value::Texture(_) => "a texture",
+            Value::Pigment(_) => "a pigment",
+            Value::Finish(_) => "a finish",
+            Value::Interior(_) => "an interior",
+            Value::Material(..) => "a material",
+            Value::Camera(_) => "a camera",
+            Value::ColorMap(_) => "a color_map",
+            Value::Transform(_) => "a transform",
+            Value::Macro(_) => "a macro",
+            Value::Other(k) => k,
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+enum Ctrl {
+    If,
+    While { cond: usize },
+    For { var: String, end: f64, step: f64, body: usize },
+    Switch { delivered: u64 },
+}
+
+#[derive(Clone, Debug)]
+struct Frame {
+    tokens: Rc<Vec<Token>>,
+    pos: usize,
+    /// A macro call returns at its `#end`; a file ends with its tokens.
+    is_macro: bool,
+    control: Vec<(Ctrl, Pos)>,
+    /// Where the file or the macro call started, for "never closed" messages.
+    start: Pos,
+}
+
+pub struct Parser {
+    pub files: Vec<PathBuf>,
+    frames: Vec<Frame>,
+    scopes: Vec<HashMap<String, Value>>,
+    rand: Vec<u32>,
+    pub options: PovOptions,
+    pub scene: PovScene,
+    pub warnings: Vec<String>,
+    delivered: u64,
+    /// Whether `>` closes a vector rather than compares: one entry per open `<` or `(`.
+    angle: Vec<bool>,
+    pub default_finish: Finish,
+    pub default_pigment: Option<Pigment>,
+    last_pos: Pos,
+    scene_dir: PathBuf,
+    /// Open `{` and `(` delivered so far.
+    nesting: i64,
+    /// While a `#declare` reads its value: (frame count, nesting) where it started. At that
+    /// level, peeking stops at a directive instead of running it, so that looking for an
+    /// optional `,` or `filter` after the value cannot run the next `#declare` first.
+    barriers: Vec<(usize, i64)>,
+    /// `MAX_TOKENS`, lowered by tests.
+    pub max_tokens: u64,
+}
+
+/// Directives that open a block closed by `#end`.
+const OPENERS: [&str; 7] = ["if", "ifdef", "ifndef", "while", "for", "switch", "macro"];
+
+impl Parser {
+    pub fn new(path: &Path, options: PovOptions) -> Parser {
+        let scene_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Parser {
+            files: Vec::new(),
+            frames: Vec::new(),
+            scopes: vec![HashMap::new()],
+            rand: Vec::new(),
+            options,
+            scene: PovScene::default(),
+            warnings: Vec::new(),
+            delivered: 0,
+            angle: Vec::new(),
+            default_finish: Finish::default(),
+            default_pigment: None,
+            last_pos: Pos::default(),
+            scene_dir,
+            nesting: 0,
+            barriers: Vec::new(),
+            max_tokens: MAX_TOKENS,
+        }
+    }
+
+    /// Evaluates the scene file: every statement, include and macro.
+    pub fn run_file(&mut self, path: &Path) -> Result<PovScene> {
+        let tokens = self.read_file(path, None)?;
+        let start = Pos { file: (self.files.len() - 1) as u32, line: 1, col: 1 };
+        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
+        while self.peek()?.is_some() {
+            self.statement()?;
+        }
+        self.scene.default_tex = Some(self.default_tex(start));
+        Ok(std::mem::take(&mut self.scene))
+    }
+
+    /// Evaluates scene text as if it were the file `path` (the unit tests).
+    #[cfg(test)]
+    pub fn run_text(&mut self, text: &str, path: &Path) -> Result<PovScene> {
+        self.files.push(path.to_path_buf());
+        let tokens = lex(text, 0)?;
+        let start = Pos { file: 0, line: 1, col: 1 };
+        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
+        while self.peek()?.is_some() {
+            self.statement()?;
+        }
+        self.scene.default_tex = Some(self.default_tex(start));
+        Ok(std::mem::take(&mut self.scene))
+    }
+
+    fn read_file(&mut self, path: &Path, at: Option<Pos>) -> Result<Vec<Token>> {
+        let fail = |message: String| match at {
+            Some(pos) => PovError::at(pos, message),
+            None => PovError { pos: None, message },
+        };
+        let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+            Some(cause) => fail(format!("cannot read {}: {cause}", path.display())),
+            None => fail(format!("{} is larger than the most photonix reads", path.display())),
+        })?;
+        // POV-Ray files are often Latin-1: read bytes above 127 as such rather than refusing them.
+        let text: String = match String::from_utf8(bytes) {
+            Ok(s) => s,
+            Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
+        };
+        self.files.push(path.to_path_buf());
+        lex(&text, (self.files.len() - 1) as u32)
+    }
+
+    // ---------------------------------------------------------------------------------------
+    // The token stream
+
+    pub fn err<T>(&self, pos: Pos, message: String) -> Result<T> {
+        Err(PovError::at(pos, message))
+    }
+
+    /// The position of the last token delivered (for messages about what ended too soon).
+    pub fn here(&self) -> Pos {
+        self.last_pos
+    }
+
+    /// The next token without running directives, after returning from macros at their `#end`
+    /// and leaving finished include files. `None` at the end of the scene.
+    pub fn peek_raw(&mut self) -> Result<Option<Token>> {
+        loop {
+            let Some(frame) = self.frames.last() else { return Ok(None) };
+            match frame.tokens.get(frame.pos) {
+                None => {
+                    if let Some((_, pos)) = frame.control.last() {
+                        return self.err(*pos, "this directive has no #end; add one".into());
+                    }
+                    if frame.is_macro {
+                        return self.err(frame.start, "this macro's body has no #end".into());
+                    }
+                    if self.frames.len() == 1 {
+                        return Ok(None);
+                    }
+                    self.frames.pop();
+                    self.scopes.pop();
+                }
+                Some(t) if frame.is_macro && frame.control.is_empty() && t.tok == Tok::Directive("end".into()) => {
+                    self.frames.pop();
+                    self.scopes.pop();
+                }
+                Some(t) => return Ok(Some(t.clone())),
+            }
+        }
+    }
+
+    fn advance(&mut self) {
+        if let Some(f) = self.frames.last_mut() {
+            f.pos += 1;
+        }
+    }
+
+    /// The next token after running directives and expanding macros, not consumed.
+    pub fn peek(&mut self) -> Result<Option<Token>> {
+        loop {
+            let Some(t) = self.peek_raw()? else { return Ok(None) };
+            match &t.tok {
+                Tok::Directive(_) if self.barriers.last() == Some(&(self.frames.len(), self.nesting)) => {
+                    return Ok(Some(t));
+                }
+                Tok::Directive(d) => {
+                    self.advance();
+                    self.directive(d, t.pos)?;
+                }
+                Tok::Word(w) if matches!(self.lookup(w), Some(Value::Macro(_))) => {
+                    self.advance();
+                    self.call_macro(w, t.pos)?;
+                }
+                _ => return Ok(Some(t)),
+            }
+        }
+    }
+
+    /// The next token, consumed.
+    pub fn next(&mut self) -> Result<Option<Token>> {
+        let t = self.peek()?;
+        if let Some(t) = &t {
+            self.advance();
+            self.last_pos = t.pos;
+            self.delivered += 1;
+            match t.tok {
+                Tok::Sym("{") | Tok::Sym("(") => self.nesting += 1,
+                Tok::Sym("}") | Tok::Sym(")") => self.nesting -= 1,
+                _ => {}
+            }
+            if self.delivered > self.max_tokens {
+                return self.err(
+                    t.pos,
+                    format!(
+                        "the scene ran past {} tokens (a runaway #while or macro?); see docs/pov-ray.md",
+                        self.max_tokens
+                    ),
+                );
+            }
+        }
+        Ok(t)
+    }
+
+    /// The next token, which must exist.
+    pub fn expect_any(&mut self, what: &str) -> Result<Token> {
+        match self.next()? {
+            Some(t) => Ok(t),
+            None => self.err(self.here(), format!("the file ends where {what} was expected")),
+        }
+    }
+
+    pub fn expect_sym(&mut self, sym: &str) -> Result<Pos> {
+        let t = self.expect_any(&format!("`{sym}`"))?;
+        if t.tok == Tok::Sym(leak(sym)) {
+            Ok(t.pos)
+        } else {
+            self.err(t.pos, format!("expected `{sym}` here, found {}", describe(&t.tok)))
+        }
+    }
+
+    /// Consumes `sym` when it comes next (after directives).
+    pub fn accept_sym(&mut self, sym: &str) -> Result<bool> {
+        match self.peek()? {
+            Some(t) if matches!(&t.tok, Tok::Sym(s) if *s == sym) => {
+                self.next()?;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// Consumes `sym` when it comes next in the raw stream (no directive is run to see it).
+    pub fn accept_sym_raw(&mut self, sym: &str) -> Result<bool> {
+        match self.peek_raw()? {
+            Some(t) if matches!(&t.tok, Tok::Sym(s) if *s == sym) => {
+                self.next()?;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+
+    /// The next word, if the next token is one (after directives), not consumed.
+    pub fn peek_word(&mut self) -> Result<Option<String>> {
+        Ok(match self.peek()? {
+            Some(Token { tok: Tok::Word(w), .. }) => Some(w),
+            _ => None,
+        })
+    }
+
+    pub fn accept_word(&mut self, word: &str) -> Result<bool> {
+        if self.peek_word()?.as_deref() == Some(word) {
+            self.next()?;
+            return Ok(true);
+        }
+        Ok(false)
+    }
+
+    // ---------------------------------------------------------------------------------------
+    // Identifiers
+
+    pub fn lookup(&self, name: &str) -> Option<&Value> {
+        self.scopes.iter().rev().find_map(|s| s.get(name))
+    }
+
+    fn declare(&mut self, name: &str, value: Value, local: bool) {
+        let depth = if local {
+            self.scopes.len() - 1
+        } else {
+            // #declare changes a local of that name where one is in scope, else the global.
+            self.scopes.iter().rposition(|s| s.contains_key(name)).unwrap_or(0)
+        };
+        self.scopes[depth].insert(name.to_string(), value);
+    }
+
+    // ---------------------------------------------------------------------------------------
+    // Directives
+
+    fn raw_word(&mut self, what: &str) -> Result<(String, Pos)> {
+        let t = self.peek_raw()?;
+        match t {
+            Some(Token { tok: Tok::Word(w), pos }) => {
+                self.advance();
+                Ok((w, pos))
+            }
+            Some(t) => self.err(t.pos, format!("expected {what} here, found {}", describe(&t.tok))),
+            None => self.err(self.here(), format!("the file ends where {what} was expected")),
+        }
+    }
+
+    /// Skips raw tokens of the current frame up to the directive in `stops` at this nesting level,
+    /// which is consumed and returned.
+    fn skip_to(&mut self, stops: &[&str], from: Pos) -> Result<String> {
+        let mut depth = 0usize;
+        loop {
+            let frame = self.frames.last_mut().expect("a directive runs inside a frame");
+            let Some(t) = frame.tokens.get(frame.pos).cloned() else {
+                return self.err(from, "this directive has no #end; add one".into());
+            };
+            frame.pos += 1;
+            if let Tok::Directive(d) = &t.tok {
+                let d = d.as_str();
+                if depth == 0 && stops.contains(&d) {
+                    self.last_pos = t.pos;
+                    return Ok(d.to_string());
+                }
+                if OPENERS.contains(&d) {
+                    depth += 1;
+                } else if d == "end" {
+                    if depth == 0 {
+                        return self.err(t.pos, "unexpected #end".into());
+                    }
+                    depth -= 1;
+                }
+            }
+        }
+    }
+
+    fn push_ctrl(&mut self, c: Ctrl, pos: Pos) {
+        self.frames.last_mut().expect("inside a frame").control.push((c, pos));
+    }
+
+    fn pop_ctrl(&mut self) -> Option<(Ctrl, Pos)> {
+        self.frames.last_mut().and_then(|f| f.control.pop())
+    }
+
+    fn cond(&mut self) -> Result<bool> {
+        Ok(self.float()? != 0.0)
+    }
+
+    fn directive(&mut self, d: &str, pos: Pos) -> Result<()> {
+        match d {
+            "declare" | "local" => {
+                let (mut name, mut npos) = self.raw_word("an identifier")?;
+                if name == "deprecated" {
+                    // `#declare deprecated [once] "message" Name = ...` (3.7's include files).
+                    if matches!(self.peek_raw()?, Some(t) if t.tok == Tok::Word("once".into())) {
+                        self.advance();
+                    }
+                    if let Some(Token { tok: Tok::Str(_), .. }) = self.peek_raw()? {
+                        self.advance();
+                    }
+                    (name, npos) = self.raw_word("an identifier")?;
+                }
+                if is_reserved(&name) {
+                    return self.err(npos, format!("`{name}` is a POV-Ray keyword and cannot be declared"));
+                }
+                let mut index = Vec::new();
+                while self.accept_sym_raw("[")? {
+                    index.push(self.float()?);
+                    self.expect_sym("]")?;
+                }
+                self.expect_sym("=")?;
+                self.barriers.push((self.frames.len(), self.nesting));
+                let value = self.rvalue();
+                self.barriers.pop();
+                let value = value?;
+                self.accept_sym_raw(";")?;
+                if index.is_empty() {
+                    self.declare(&name, value, d == "local");
+                } else {
+                    self.assign_element(&name, &index, value, npos)?;
+                }
+            }
+            "undef" => {
+                let (name, _) = self.raw_word("an identifier")?;
+                if let Some(s) = self.scopes.iter_mut().rev().find(|s| s.contains_key(&name)) {
+                    s.remove(&name);
+                }
+            }
+            "if" => {
+                let c = self.cond()?;
+                self.branch(c, pos)?;
+            }
+            "ifdef" | "ifndef" => {
+                self.expect_sym("(")?;
+                let (name, _) = self.raw_word("an identifier")?;
+                let mut defined = self.lookup(&name).is_some();
+                // `#ifdef (A[i])`: the element must be set.
+                let mut index = Vec::new();
+                while self.accept_sym_raw("[")? {
+                    index.push(self.float()?);
+                    self.expect_sym("]")?;
+                }
+                if defined && !index.is_empty() {
+                    defined = matches!(self.lookup(&name), Some(Value::Array(a)) if element_index(a, &index).is_some_and(|i| a.items[i].is_some()));
+                }
+                self.expect_sym(")")?;
+                self.branch(defined == (d == "ifdef"), pos)?;
+            }
+            "else" | "elseif" => match self.pop_ctrl() {
+                Some((Ctrl::If, _)) | Some((Ctrl::Switch { .. }, _)) => {
+                    self.skip_to(&["end"], pos)?;
+                }
+                _ => return self.err(pos, format!("#{d} without a matching #if")),
+            },
+            "while" => {
+                let cond = self.frames.last().expect("inside a frame").pos;
+                if self.cond()? {
+                    self.push_ctrl(Ctrl::While { cond }, pos);
+                } else {
+                    self.skip_to(&["end"], pos)?;
+                }
+            }
+            "for" => {
+                self.expect_sym("(")?;
+                let (var, _) = self.raw_word("the loop's identifier")?;
+                self.expect_sym(",")?;
+                let start = self.float()?;
+                self.expect_sym(",")?;
+                let end = self.float()?;
+                let step = if self.accept_sym(",")? { self.float()? } else { 1.0 };
+                self.expect_sym(")")?;
+                if step == 0.0 {
+                    return self.err(pos, "#for with a step of 0 never ends; give a step other than 0".into());
+                }
+                self.declare(&var, Value::Float(start), false);
+                if (step > 0.0 && start <= end) || (step < 0.0 && start >= end) {
+                    let body = self.frames.last().expect("inside a frame").pos;
+                    self.push_ctrl(Ctrl::For { var, end, step, body }, pos);
+                } else {
+                    self.skip_to(&["end"], pos)?;
+                }
+            }
+            "switch" => {
+                let v = self.float()?;
+                loop {
+                    match self.skip_to(&["case", "range", "else", "end"], pos)?.as_str() {
+                        "case" => {
+                            self.expect_sym("(")?;
+                            let c = self.float()?;
+                            self.expect_sym(")")?;
+                            if (c - v).abs() < 1e-10 {
+                                break;
+                            }
+                        }
+                        "range" => {
+                            self.expect_sym("(")?;
+                            let a = self.float()?;
+                            self.expect_sym(",")?;
+                            let b = self.float()?;
+                            self.expect_sym(")")?;
+                            if a <= v && v <= b {
+                                break;
+                            }
+                        }
+                        "else" => break,
+                        _ => return Ok(()),
+                    }
+                }
+                self.push_ctrl(Ctrl::Switch { delivered: self.delivered }, pos);
+            }
+            "case" | "range" => match self.frames.last().and_then(|f| f.control.last()).cloned() {
+                // Consecutive labels share the statements that follow them.
+                Some((Ctrl::Switch { delivered }, _)) if delivered == self.delivered => {
+                    self.expect_sym("(")?;
+                    self.float()?;
+                    if d == "range" {
+                        self.expect_sym(",")?;
+                        self.float()?;
+                    }
+                    self.expect_sym(")")?;
+                }
+                Some((Ctrl::Switch { .. }, _)) => {
+                    self.pop_ctrl();
+                    self.skip_to(&["end"], pos)?;
+                }
+                _ => return self.err(pos, format!("#{d} outside a #switch")),
+            },
+            "break" => loop {
+                match self.pop_ctrl() {
+                    Some((Ctrl::If, _)) => {
+                        self.skip_to(&["end"], pos)?;
+                    }
+                    Some(_) => {
+                        self.skip_to(&["end"], pos)?;
+                        break;
+                    }
+                    None => return self.err(pos, "#break outside a #switch or a loop".into()),
+                }
+            },
+            "end" => match self.pop_ctrl() {
+                Some((Ctrl::If, _)) | Some((Ctrl::Switch { .. }, _)) => {}
+                Some((Ctrl::While { cond }, at)) => {
+                    self.frames.last_mut().expect("inside a frame").pos = cond;
+                    if self.cond()? {
+                        self.push_ctrl(Ctrl::While { cond }, at);
+                    } else {
+                        self.skip_to(&["end"], at)?;
+                    }
+                }
+                Some((Ctrl::For { var, end, step, body }, at)) => {
+                    let v = match self.lookup(&var) {
+                        Some(Value::Float(v)) => *v + step,
+                        _ => return self.err(at, format!("the #for variable `{var}` is no longer a float")),
+                    };
+                    self.declare(&var, Value::Float(v), false);
+                    if (step > 0.0 && v <= end) || (step < 0.0 && v >= end) {
+                        self.frames.last_mut().expect("inside a frame").pos = body;
+                        self.push_ctrl(Ctrl::For { var, end, step, body }, at);
+                    }
+                }
+                None => return self.err(pos, "#end without a matching #if, #while, #for, #switch or #macro".into()),
+            },
+            "macro" => {
+                let (name, _) = self.raw_word("the macro's name")?;
+                self.expect_sym("(")?;
+                let mut params = Vec::new();
+                if !self.accept_sym_raw(")")? {
+                    loop {
+                        let (mut p, _) = self.raw_word("a parameter name")?;
+                        if p == "optional" {
+                            p = self.raw_word("a parameter name")?.0;
+                        }
+                        params.push(p);
+                        if self.accept_sym_raw(")")? {
+                            break;
+                        }
+                        self.expect_sym(",")?;
+                    }
+                }
+                let frame = self.frames.last().expect("inside a frame");
+                let def = MacroDef { tokens: frame.tokens.clone(), body: frame.pos, params };
+                self.skip_to(&["end"], pos)?;
+                self.declare(&name, Value::Macro(Rc::new(def)), false);
+            }
+            "include" => {
+                let name = self.string()?;
+                let path = self.find_include(&name, pos)?;
+                if self.frames.len() >= MAX_DEPTH {
+                    return self
+                        .err(pos, format!("includes nest deeper than {MAX_DEPTH}; does a file include itself?"));
+                }
+                let tokens = self.read_file(&path, Some(pos))?;
+                let start = Pos { file: (self.files.len() - 1) as u32, line: 1, col: 1 };
+                self.frames.push(Frame {
+                    tokens: Rc::new(tokens),
+                    pos: 0,
+                    is_macro: false,
+                    control: Vec::new(),
+                    start,
+                });
+                self.scopes.push(HashMap::new());
+            }
+            "version" => {
+                self.float()?;
+                self.accept_sym_raw(";")?;
+            }
+            "debug" | "warning" | "render" | "statistics" => {
+                let text = self.string()?;
+                if d == "warning" {
+                    self.warnings.push(format!("#warning: {}", text.trim()));
+                }
+            }
+            "error" => {
+                let text = self.string()?;
+                return self.err(pos, format!("#error in the scene: {}", text.trim()));
+            }
+            "default" => self.default_block()?,
+            "fopen" | "fclose" | "read" | "write" => {
+                return self.err(pos, format!("file I/O (#{d}) is not supported yet"));
+            }
+            other => return self.err(pos, format!("unknown directive #{other}")),
+        }
+        Ok(())
+    }
+
+    fn branch(&mut self, taken: bool, pos: Pos) -> Result<()> {
+        if taken {
+            self.push_ctrl(Ctrl::If, pos);
+            return Ok(());
+        }
+        loop {
+            match self.skip_to(&["else", "elseif", "end"], pos)?.as_str() {
+                "else" => {
+                    self.push_ctrl(Ctrl::If, pos);
+                    return Ok(());
+                }
+                "elseif" => {
+                    if self.cond()? {
+                        self.push_ctrl(Ctrl::If, pos);
+                        return Ok(());
+                    }
+                }
+                _ => return Ok(()),
+            }
+        }
+    }
+
+    fn find_include(&self, name: &str, pos: Pos) -> Result<PathBuf> {
+        let here = self.files.get(pos.file as usize).and_then(|p| p.parent()).map(Path::to_path_buf);
+        let mut dirs: Vec<PathBuf> = here.into_iter().collect();
+        dirs.push(self.scene_dir.clone());
+        dirs.extend(self.options.include_dirs.iter().cloned());
+        for dir in &dirs {
+            let p = dir.join(name);
+            if p.is_file() {
+                return Ok(p);
+            }
+        }
+        let hint = if Path::new(super::STANDARD_INCLUDE_DIR).is_dir() {
+            String::new()
+        } else {
+            " (POV-Ray's standard includes are not installed: `apt-get install povray-includes`)".into()
+        };
+        self.err(
+            pos,
+            format!(
+                "#include \"{name}\": no such file in {}{hint}",
+                dirs.iter().map(|d| d.display().to_string()).collect::<Vec<_>>().join(", ")
+            ),
+        )
+    }
+
+    fn call_macro(&mut self, name: &str, pos: Pos) -> Result<()> {
+        let Some(Value::Macro(def)) = self.lookup(name).cloned() else { unreachable!("checked by peek") };
+        self.expect_sym("(")?;
+        let mut args = Vec::new();
+        if !self.accept_sym(")")? {
+            loop {
+                args.push(self.rvalue()?);
+                if self.accept_sym(")")? {
+                    break;
+                }
+                self.expect_sym(",")?;
+            }
+        }
+        if args.len() != def.params.len() {
+            return self.err(pos, format!("macro `{name}` takes {} arguments, not {}", def.params.len(), args.len()));
+        }
+        if self.frames.len() >= MAX_DEPTH {
+            return self.err(
+                pos,
+                format!(
+                    "macro calls nest deeper than {MAX_DEPTH} (runaway recursion in `{name}`?); see docs/pov-ray.md"
+                ),
+            );
+        }
+        let scope: HashMap<String, Value> = def.params.iter().cloned().zip(args).collect();
+        self.scopes.push(scope);
+        self.frames.push(Frame {
+            tokens: def.tokens.clone(),
+            pos: def.body,
+            is_macro: true,
+            control: Vec::new(),
+            start: pos,
+        });
+        Ok(())
+    }
+
+    fn assign_element(&mut self, name: &str, index: &[f64], value: Value, pos: Pos) -> Result<()> {
+        let depth = self.scopes.iter().rposition(|s| s.contains_key(name));
+        let Some(depth) = depth else { return self.err(pos, format!("`{name}` is not a declared array")) };
+        let Some(Value::Array(a)) = self.scopes[depth].get_mut(name) else {
+            return self.err(pos, format!("`{name}` is not an array"));
+        };
+        let Some(i) = element_index(a, index) else {
+            let dims = a.dims.clone();
+            return self.err(pos, format!("index {index:?} is outside the array `{name}` of size {dims:?}"));
+        };
+        a.items[i] = Some(value);
+        Ok(())
+    }
+
+    // ---------------------------------------------------------------------------------------
+    // Values
+
+    /// The right-hand side of `#declare`, or a macro argument: an object, a texture, ... or an
+    /// expression.
+    pub fn rvalue(&mut self) -> Result<Value> {
+        if let Some(w) = self.peek_word()? {
+            if let Some(v) = self.block_value(&w)? {
+                return Ok(v);
+            }
+        }
+        self.expr()
+    }
+
+    pub fn float(&mut self) -> Result<f64> {
+        let pos = self.peek()?.map(|t| t.pos).unwrap_or(self.here());
+        match self.expr()? {
+            Value::Float(f) => Ok(f),
+            Value::Vector(v) => Ok(v[0]),
+            other => self.err(pos, format!("expected a float here, found {}", other.kind())),
+        }
+    }
+
+    /// A vector of `n` components (a float is promoted to all of them).
+    pub fn vector(&mut self, n: usize) -> Result<Vec<f64>> {
+        let pos = self.peek()?.map(|t| t.pos).unwrap_or(self.here());
+        match self.expr()? {
+            Value::Float(f) => Ok(vec![f; n]),
+            Value::Vector(mut v) => {
+                v.resize(n, 0.0);
+                Ok(v)
+            }
+            other => self.err(pos, format!("expected a vector here, found {}", other.kind())),
+        }
+    }
+
+    pub fn vec3(&mut self) -> Result<DVec3> {
+        let v = self.vector(3)?;
+        Ok(DVec3::new(v[0], v[1], v[2]))
+    }
+
+    pub fn string(&mut self) -> Result<String> {
+        let pos = self.peek()?.map(|t| t.pos).unwrap_or(self.here());
+        match self.expr()? {
+            Value::Str(s) => Ok(s),
+            other => self.err(pos, format!("expected a string here, found {}", other.kind())),
+        }
+    }
+
+    /// A colour: `rgb <..>`, `color Red filter 0.5`, `White * 0.8`, ...
+    pub fn colour(&mut self) -> Result<Colour> {
+        let mut c = [0.0; 5];
+        let mut first = true;
+        loop {
+            let Some(w) = self.peek_word()? else {
+                if first {
+                    c = to_colour(self.expr()?, self.here(), self)?;
+                }
+                return Ok(c);
+            };
+            match w.as_str() {
+                "color" | "colour" if first => {
+                    self.next()?;
+                    continue;
+                }
+                "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
+                    c = to_colour(self.expr()?, self.here(), self)?;
+                }
+                "red" | "green" | "blue" | "filter" | "transmit" => {
+                    self.next()?;
+                    let i = ["red", "green", "blue", "filter", "transmit"].iter().position(|k| *k == w).unwrap_or(0);
+                    c[i] = self.float()?;
+                }
+                _ if first => c = to_colour(self.expr()?, self.here(), self)?,
+                _ => return Ok(c),
+            }
+            first = false;
+        }
+    }
+
+    // Expressions, lowest precedence first: ?:, |, &, comparisons, + -, * /, unary, postfix.
+
+    pub fn expr(&mut self) -> Result<Value> {
+        let c = self.or()?;
+        if self.accept_sym_raw("?")? {
+            let pos = self.here();
+            let a = self.expr()?;
+            self.expect_sym(":")?;
+            let b = self.expr()?;
+            return Ok(if truth(&c, pos, self)? { a } else { b });
+        }
+        Ok(c)
+    }
+
+    fn or(&mut self) -> Result<Value> {
+        let mut a = self.and()?;
+        while self.accept_sym_raw("|")? {
+            let pos = self.here();
+            let b = self.and()?;
+            a = Value::Float((truth(&a, pos, self)? || truth(&b, pos, self)?) as u8 as f64);
+        }
+        Ok(a)
+    }
+
+    fn and(&mut self) -> Result<Value> {
+        let mut a = self.compare()?;
+        while self.accept_sym_raw("&")? {
+            let pos = self.here();
+            let b = self.compare()?;
+            a = Value::Float((truth(&a, pos, self)? && truth(&b, pos, self)?) as u8 as f64);
+        }
+        Ok(a)
+    }
+
+    fn compare(&mut self) -> Result<Value> {
+        let mut a = self.sum()?;
+        loop {
+            let op = match self.peek_raw()? {
+                Some(Token { tok: Tok::Sym(s), .. }) if ["<", "<=", "=", "!=", ">=", ">"].contains(&s) => s,
+                _ => return Ok(a),
+            };
+            // Inside `< ... >` a `>` closes the vector (POV-Ray asks for parentheses there).
+            if (op == ">" || op == ">=") && self.angle.last() == Some(&true) {
+                return Ok(a);
+            }
+            // `<a, b> <c, d>`: a vector followed by another (a list without commas), not a comparison.
+            if op == "<" && matches!(a, Value::Vector(_)) {
+                return Ok(a);
+            }
+            self.next()?;
+            let pos = self.here();
+            let b = self.sum()?;
+            let (x, y) = (scalar(&a, pos, self)?, scalar(&b, pos, self)?);
+            let r = match op {
+                "<" => x < y,
+                "<=" => x <= y,
+                "=" => (x - y).abs() < 1e-10,
+                "!=" => (x - y).abs() >= 1e-10,
+                ">=" => x >= y,
+                _ => x > y,
+            };
+            a = Value::Float(r as u8 as f64);
+        }
+    }
+
+    fn sum(&mut self) -> Result<Value> {
+        let mut a = self.product()?;
+        loop {
+            let op = match self.peek_raw()? {
+                Some(Token { tok: Tok::Sym(s @ ("+" | "-")), .. }) => s,
+                _ => return Ok(a),
+            };
+            self.next()?;
+            let pos = self.here();
+            let b = self.product()?;
+            a = arith(a, b, op, pos, self)?;
+        }
+    }
+
+    fn product(&mut self) -> Result<Value> {
+        let mut a = self.unary()?;
+        loop {
+            let op = match self.peek_raw()? {
+                Some(Token { tok: Tok::Sym(s @ ("*" | "/")), .. }) => s,
+                _ => return Ok(a),
+            };
+            self.next()?;
+            let pos = self.here();
+            let b = self.unary()?;
+            a = arith(a, b, op, pos, self)?;
+        }
+    }
+
+    fn unary(&mut self) -> Result<Value> {
+        if self.accept_sym("-")? {
+            let pos = self.here();
+            let v = self.unary()?;
+            return arith(Value::Float(0.0), v, "-", pos, self);
+        }
+        if self.accept_sym("+")? {
+            return self.unary();
+        }
+        if self.accept_sym("!")? {
+            let pos = self.here();
+            let v = self.unary()?;
+            return Ok(Value::Float((!truth(&v, pos, self)?) as u8 as f64));
+        }
+        let v = self.factor()?;
+        self.postfix(v)
+    }
+
+    pub fn postfix(&mut self, mut v: Value) -> Result<Value> {
+        loop {
+            if let Some(Token { tok: Tok::Sym("["), .. }) = self.peek_raw()? {
+                if let Value::Array(_) = v {
+                    self.next()?;
+                    let pos = self.here();
+                    let i = self.float()?;
+                    self.expect_sym("]")?;
+                    v = index_array(v, i, pos, self)?;
+                    continue;
+                }
+            }
+            if let Some(Token { tok: Tok::Sym("."), .. }) = self.peek_raw()? {
+                self.next()?;
+                let (m, pos) = self.raw_word("a component such as .x or .red")?;
+                let i = match m.as_str() {
+                    "x" | "u" | "red" => 0,
+                    "y" | "v" | "green" => 1,
+                    "z" | "blue" => 2,
+                    "t" | "filter" => 3,
+                    "transmit" => 4,
+                    "gray" | "grey" => {
+                        let c = vec_of(&v, 3, pos, self)?;
+                        v = Value::Float(0.297 * c[0] + 0.589 * c[1] + 0.114 * c[2]);
+                        continue;
+                    }
+                    other => {
+                        return self.err(
+                            pos,
+                            format!(
+                                "unknown component `.{other}`; use .x .y .z .t or .red .green .blue .filter .transmit"
+                            ),
+                        )
+                    }
+                };
+                let c = vec_of(&v, 5, pos, self)?;
+                v = Value::Float(c[i]);
+                continue;
+            }
+            return Ok(v);
+        }
+    }
+
+    fn args(&mut self) -> Result<Vec<Value>> {
+        self.expect_sym("(")?;
+        self.angle.push(false);
+        let mut out = Vec::new();
+        if !self.accept_sym(")")? {
+            loop {
+                out.push(self.expr()?);
+                if self.accept_sym(")")? {
+                    break;
+                }
+                self.expect_sym(",")?;
+            }
+        }
+        self.angle.pop();
+        Ok(out)
+    }
+
+    fn factor(&mut self) -> Result<Value> {
+        let t = self.expect_any("a value")?;
+        let pos = t.pos;
+        match t.tok {
+            Tok::Num(n) => Ok(Value::Float(n)),
+            Tok::Str(s) => Ok(Value::Str(s)),
+            Tok::Sym("(") => {
+                self.angle.push(false);
+                let v = self.expr();
+                self.angle.pop();
+                let v = v?;
+                self.expect_sym(")")?;
+                Ok(v)
+            }
+            Tok::Sym("<") => {
+                let comps = self.angle_list()?;
+                if comps.len() < 2 || comps.len() > 5 {
+                    return self.err(pos, format!("a vector has 2 to 5 components, not {}", comps.len()));
+                }
+                Ok(Value::Vector(comps))
+            }
+            Tok::Word(w) => self.word_value(&w, pos),
+            other => self.err(pos, format!("expected a value here, found {}", describe(&other))),
+        }
+    }
+
+    /// The numbers of `< a, b, ... >` after the `<`, up to and including the `>`. Commas are
+    /// optional, as in POV-Ray (`< -1 0 0 >`).
+    pub fn angle_list(&mut self) -> Result<Vec<f64>> {
+        self.angle.push(true);
+        let mut comps = Vec::new();
+        let result = (|| -> Result<()> {
+            loop {
+                comps.push(self.float()?);
+                if self.accept_sym(">")? {
+                    return Ok(());
+                }
+                self.accept_sym(",")?;
+                if comps.len() > 16 {
+                    return self.err(self.here(), "a vector this long never closes; add `>`".into());
+                }
+            }
+        })();
+        self.angle.pop();
+        result.map(|()| comps)
+    }
+
+    fn word_value(&mut self, w: &str, pos: Pos) -> Result<Value> {
+        if let Some(Value::Other("a function")) = self.lookup(w) {
+            return self.err(pos, format!("`{w}` is a user-defined function, and functions are not supported yet"));
+        }
+        if let Some(v) = self.lookup(w) {
+            return Ok(v.clone());
+        }
+        let f = |x: f64| Ok(Value::Float(x));
+        let vec3 = |x: f64, y: f64, z: f64| Ok(Value::Vector(vec![x, y, z]));
+        match w {
+            "pi" => f(std::f64::consts::PI),
+            "tau" => f(std::f64::consts::TAU),
+            "true" | "yes" | "on" => f(1.0),
+            "false" | "no" | "off" => f(0.0),
+            "x" => vec3(1.0, 0.0, 0.0),
+            "y" => vec3(0.0, 1.0, 0.0),
+            "z" => vec3(0.0, 0.0, 1.0),
+            "t" => Ok(Value::Vector(vec![0.0, 0.0, 0.0, 1.0])),
+            "u" => Ok(Value::Vector(vec![1.0, 0.0])),
+            "v" => Ok(Value::Vector(vec![0.0, 1.0])),
+            "clock" | "initial_clock" => f(self.options.clock),
+            "final_clock" => f(1.0),
+            "clock_delta" => f(0.0),
+            "clock_on" => f(0.0),
+            "frame_number" | "initial_frame" | "final_frame" => f(0.0),
+            "image_width" => f(self.options.width as f64),
+            "image_height" => f(self.options.height as f64),
+            "version" => f(3.7),
+            "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
+                self.colour_word(w, pos)
+            }
+            "function" => self.err(pos, "user-defined functions (`function`) are not supported yet".into()),
+            "trace" | "inside" | "eval_pigment" | "vturbulence" | "now" => {
+                self.err(pos, format!("`{w}` is not supported yet"))
+            }
+            _ => self.builtin(w, pos),
+        }
+    }
+
+    fn colour_word(&mut self, w: &str, pos: Pos) -> Result<Value> {
+        if w == "color" || w == "colour" {
+            return Ok(Value::Vector(self.colour()?.to_vec()));
+        }
+        let n = match w.trim_start_matches('s') {
+            "rgb" => 3,
+            "rgbf" | "rgbt" => 4,
+            _ => 5,
+        };
+        let v = self.unary()?;
+        let c = vec_of(&v, n, pos, self)?;
+        let mut out = [0.0; 5];
+        out[..3].copy_from_slice(&c[..3]);
+        match w.trim_start_matches('s') {
+            "rgbf" => out[3] = c[3],
+            "rgbt" => out[4] = c[3],
+            "rgbft" => {
+                out[3] = c[3];
+                out[4] = c[4];
+            }
+            _ => {}
+        }
+        if w.starts_with('s') {
+            // sRGB-encoded colour (3.7.1): decode with the exact curve.
+            for c in &mut out[..3] {
+                *c = if *c <= 0.04045 { *c / 12.92 } else { ((*c + 0.055) / 1.055).powf(2.4) };
+            }
+        }
+        Ok(Value::Vector(out.to_vec()))
+    }
+
+    fn builtin(&mut self, w: &str, pos: Pos) -> Result<Value> {
+        let one = |p: &mut Parser| -> Result<f64> {
+            let a = p.args()?;
+            if a.len() != 1 {
+                return p.err(pos, format!("{w}() takes 1 argument, not {}", a.len()));
+            }
+            scalar(&a[0], pos, p)
+        };
+        let two = |p: &mut Parser| -> Result<(f64, f64)> {
+            let a = p.args()?;
+            if a.len() != 2 {
+                return p.err(pos, format!("{w}() takes 2 arguments, not {}", a.len()));
+            }
+            Ok((scalar(&a[0], pos, p)?, scalar(&a[1], pos, p)?))
+        };
+        let f1: Option<fn(f64) -> f64> = match w {
+            "abs" => Some(f64::abs),
+            "acos" => Some(f64::acos),
+            "acosh" => Some(f64::acosh),
+            "asin" => Some(f64::asin),
+            "asinh" => Some(f64::asinh),
+            "atan" => Some(f64::atan),
+            "atanh" => Some(f64::atanh),
+            "ceil" => Some(f64::ceil),
+            "cos" => Some(f64::cos),
+            "cosh" => Some(f64::cosh),
+            "degrees" => Some(f64::to_degrees),
+            "radians" => Some(f64::to_radians),
+            "exp" => Some(f64::exp),
+            "floor" => Some(f64::floor),
+            "int" => Some(f64::trunc),
+            "ln" => Some(f64::ln),
+            "log" => Some(f64::log10),
+            "sin" => Some(f64::sin),
+            "sinh" => Some(f64::sinh),
+            "sqrt" => Some(f64::sqrt),
+            "tan" => Some(f64::tan),
+            "tanh" => Some(f64::tanh),
+            _ => None,
+        };
+        if let Some(f) = f1 {
+            return Ok(Value::Float(f(one(self)?)));
+        }
+        let v = match w {
+            "atan2" => {
+                let (a, b) = two(self)?;
+                Value::Float(a.atan2(b))
+            }
+            "pow" => {
+                let (a, b) = two(self)?;
+                Value::Float(a.powf(b))
+            }
+            // C's fmod and truncating division, as POV-Ray computes them.
+            "mod" => {
+                let (a, b) = two(self)?;
+                Value::Float(a % b)
+            }
+            "div" => {
+                let (a, b) = two(self)?;
+                Value::Float((a / b).trunc())
+            }
+            "bitwise_and" | "bitwise_or" | "bitwise_xor" => {
+                let a = self.args()?;
+                let mut r: Option<i64> = None;
+                for x in &a {
+                    let x = scalar(x, pos, self)? as i64;
+                    r = Some(match (r, w) {
+                        (None, _) => x,
+                        (Some(r), "bitwise_and") => r & x,
+                        (Some(r), "bitwise_or") => r | x,
+                        (Some(r), _) => r ^ x,
+                    });
+                }
+                Value::Float(r.unwrap_or(0) as f64)
+            }
+            "min" | "max" => {
+                let a = self.args()?;
+                if a.is_empty() {
+                    return self.err(pos, format!("{w}() needs at least 1 argument"));
+                }
+                let mut r = scalar(&a[0], pos, self)?;
+                for x in &a[1..] {
+                    let x = scalar(x, pos, self)?;
+                    r = if w == "min" { r.min(x) } else { r.max(x) };
+                }
+                Value::Float(r)
+            }
+            "select" => {
+                let a = self.args()?;
+                if a.len() != 3 && a.len() != 4 {
+                    return self.err(pos, "select() takes 3 or 4 arguments".into());
+                }
+                let c = scalar(&a[0], pos, self)?;
+                if a.len() == 3 {
+                    if c < 0.0 {
+                        a[1].clone()
+                    } else {
+                        a[2].clone()
+                    }
+                } else if c < 0.0 {
+                    a[1].clone()
+                } else if c == 0.0 {
+                    a[2].clone()
+                } else {
+                    a[3].clone()
+                }
+            }
+            "seed" => {
+                // POV-Ray's stream_seed: a new stream starting at the integer seed.
+                let s = one(self)?;
+                self.rand.push((s as i64) as i32 as u32);
+                Value::Float((self.rand.len() - 1) as f64)
+            }
+            "rand" => {
+                let s = one(self)?;
+                let i = s as i64;
+                if i < 0 || i as usize >= self.rand.len() {
+                    return self.err(pos, format!("rand({s}): no such random stream; create one with seed()"));
+                }
+                Value::Float(pov_rand(&mut self.rand[i as usize]))
+            }
+            "vlength" => {
+                let a = self.args()?;
+                Value::Float(vec3_of(a.first(), pos, self)?.length())
+            }
+            "vnormalize" => {
+                let a = self.args()?;
+                let v = vec3_of(a.first(), pos, self)?;
+                let n = if v.length() > 0.0 { v / v.length() } else { v };
+                vec_value(n)
+            }
+            "vaxis_rotate" => {
+                let a = self.args()?;
+                if a.len() != 3 {
+                    return self.err(pos, "vaxis_rotate() takes 3 arguments: the point, the axis and degrees".into());
+                }
+                let (p, axis) = (vec3_of(a.first(), pos, self)?, vec3_of(a.get(1), pos, self)?);
+                let angle = scalar(&a[2], pos, self)?;
+                vec_value(axis_angle(axis, angle) * p)
+            }
+            "vdot" | "vcross" | "vrotate" => {
+                let a = self.args()?;
+                if a.len() != 2 {
+                    return self.err(pos, format!("{w}() takes 2 arguments"));
+                }
+                let (p, q) = (vec3_of(a.first(), pos, self)?, vec3_of(a.get(1), pos, self)?);
+                match w {
+                    "vdot" => Value::Float(p.dot(q)),
+                    "vcross" => vec_value(p.cross(q)),
+                    _ => vec_value(rotation(q).transform_vector3(p)),
+                }
+            }
+            "strlen" => {
+                let a = self.args()?;
+                Value::Float(str_of(a.first(), pos, self)?.chars().count() as f64)
+            }
+            "val" => {
+                let a = self.args()?;
+                let s = str_of(a.first(), pos, self)?;
+                Value::Float(s.trim().parse().unwrap_or(0.0))
+            }
+            "asc" => {
+                let a = self.args()?;
+                Value::Float(str_of(a.first(), pos, self)?.chars().next().map_or(0.0, |c| c as u32 as f64))
+            }
+            "strcmp" => {
+                let a = self.args()?;
+                let (x, y) = (str_of(a.first(), pos, self)?, str_of(a.get(1), pos, self)?);
+                Value::Float(x.cmp(&y) as i8 as f64)
+            }
+            "chr" => {
+                let c = one(self)?;
+                Value::Str(char::from_u32(c as u32).unwrap_or(' ').to_string())
+            }
+            "concat" => {
+                let a = self.args()?;
+                let mut s = String::new();
+                for x in &a {
+                    s += &str_of(Some(x), pos, self)?;
+                }
+                Value::Str(s)
+            }
+            "strupr" | "strlwr" => {
+                let a = self.args()?;
+                let s = str_of(a.first(), pos, self)?;
+                Value::Str(if w == "strupr" { s.to_uppercase() } else { s.to_lowercase() })
+            }
+            "substr" => {
+                let a = self.args()?;
+                let s = str_of(a.first(), pos, self)?;
+                let start = scalar(a.get(1).unwrap_or(&Value::Float(1.0)), pos, self)? as usize;
+                let len = scalar(a.get(2).unwrap_or(&Value::Float(0.0)), pos, self)? as usize;
+                Value::Str(s.chars().skip(start.saturating_sub(1)).take(len).collect())
+            }
+            "str" => {
+                let a = self.args()?;
+                let x = scalar(a.first().unwrap_or(&Value::Float(0.0)), pos, self)?;
+                let width = scalar(a.get(1).unwrap_or(&Value::Float(0.0)), pos, self)?;
+                let prec = scalar(a.get(2).unwrap_or(&Value::Float(6.0)), pos, self)?;
+                Value::Str(pov_str(x, width, prec))
+            }
+            "vstr" => {
+                let a = self.args()?;
+                let n = scalar(a.first().unwrap_or(&Value::Float(3.0)), pos, self)? as usize;
+                let v = vec_of(a.get(1).unwrap_or(&Value::Float(0.0)), n.clamp(2, 5), pos, self)?;
+                let sep = str_of(a.get(2), pos, self)?;
+                let width = scalar(a.get(3).unwrap_or(&Value::Float(0.0)), pos, self)?;
+                let prec = scalar(a.get(4).unwrap_or(&Value::Float(6.0)), pos, self)?;
+                Value::Str(v.iter().map(|x| pov_str(*x, width, prec)).collect::<Vec<_>>().join(&sep))
+            }
+            "file_exists" => {
+                let a = self.args()?;
+                let name = str_of(a.first(), pos, self)?;
+                Value::Float(self.find_include(&name, pos).is_ok() as u8 as f64)
+            }
+            "defined" => {
+                self.expect_sym("(")?;
+                let (name, _) = self.raw_word("an identifier")?;
+                self.expect_sym(")")?;
+                Value::Float(self.lookup(&name).is_some() as u8 as f64)
+            }
+            "dimensions" | "dimension_size" => {
+                let a = self.args()?;
+                let Some(Value::Array(arr)) = a.first() else {
+                    return self.err(pos, format!("{w}() takes an array"));
+                };
+                if w == "dimensions" {
+                    Value::Float(arr.dims.len() as f64)
+                } else {
+                    let d = scalar(a.get(1).unwrap_or(&Value::Float(1.0)), pos, self)? as usize;
+                    Value::Float(arr.dims.get(d.wrapping_sub(1)).copied().unwrap_or(0) as f64)
+                }
+            }
+            _ => {
+                return self.err(
+                    pos,
+                    format!(
+                        "unknown identifier `{w}` (not declared; check its spelling, or the #include that declares it)"
+                    ),
+                )
+            }
+        };
+        Ok(v)
+    }
+}
+
+/// POV-Ray's `rand`: the linear congruential generator of its `POV_rand`
+/// (source/core/math/randomsequences.cpp): next = next * 1812433253 + 12345 in 32 bits, divided
+/// by 2^32 - 1.
+pub fn pov_rand(state: &mut u32) -> f64 {
+    *state = state.wrapping_mul(1_812_433_253).wrapping_add(12_345);
+    *state as f64 / 4_294_967_295.0
+}
+
+/// `str(x, width, precision)`: printf's `%*.*f` (a negative width pads with zeros).
+fn pov_str(x: f64, width: f64, prec: f64) -> String {
+    let prec = if prec < 0.0 { 6 } else { prec.min(20.0) as usize };
+    let w = width.abs().min(64.0) as usize;
+    if width < 0.0 {
+        format!("{x:0w$.prec$}")
+    } else {
+        format!("{x:w$.prec$}")
+    }
+}
+
+/// POV-Ray's rotate <a, b, c>: about x, then y, then z, degrees.
+pub fn rotation(angles: DVec3) -> glam::DMat4 {
+    let r = angles * std::f64::consts::PI / 180.0;
+    glam::DMat4::from_rotation_z(r.z) * glam::DMat4::from_rotation_y(r.y) * glam::DMat4::from_rotation_x(r.x)
+}
+
+fn vec_value(v: DVec3) -> Value {
+    Value::Vector(vec![v.x, v.y, v.z])
+}
+
+fn truth(v: &Value, pos: Pos, p: &Parser) -> Result<bool> {
+    Ok(scalar(v, pos, p)? != 0.0)
+}
+
+fn scalar(v: &Value, pos: Pos, p: &Parser) -> Result<f64> {
+    match v {
+        Value::Float(f) => Ok(*f),
+        other => p.err(pos, format!("expected a float here, found {}", other.kind())),
+    }
+}
+
+fn vec_of(v: &Value, n: usize, pos: Pos, p: &Parser) -> Result<Vec<f64>> {
+    match v {
+        Value::Float(f) => Ok(vec![*f; n]),
+        Value::Vector(c) => {
+            let mut c = c.clone();
+            c.resize(n.max(c.len()), 0.0);
+            Ok(c)
+        }
+        other => p.err(pos, format!("expected a vector here, found {}", other.kind())),
+    }
+}
+
+fn vec3_of(v: Option<&Value>, pos: Pos, p: &Parser) -> Result<DVec3> {
+    let Some(v) = v else { return p.err(pos, "a vector argument is missing".into()) };
+    let c = vec_of(v, 3, pos, p)?;
+    Ok(DVec3::new(c[0], c[1], c[2]))
+}
+
+fn str_of(v: Option<&Value>, pos: Pos, p: &Parser) -> Result<String> {
+    match v {
+        Some(Value::Str(s)) => Ok(s.clone()),
+        Some(other) => p.err(pos, format!("expected a string here, found {}", other.kind())),
+        None => p.err(pos, "a string argument is missing".into()),
+    }
+}
+
+pub fn to_colour(v: Value, pos: Pos, p: &Parser) -> Result<Colour> {
+    let c = vec_of(&v, 5, pos, p)?;
+    Ok([c[0], c[1], c[2], c[3], c[4]])
+}
+
+fn arith(a: Value, b: Value, op: &str, pos: Pos, p: &Parser) -> Result<Value> {
+    let f = |x: f64, y: f64| match op {
+        "+" => x + y,
+        "-" => x - y,
+        "*" => x * y,
+        _ => x / y,
+    };
+    match (&a, &b) {
+        (Value::Float(x), Value::Float(y)) => Ok(Value::Float(f(*x, *y))),
+        (Value::Str(x), Value::Str(y)) if op == "+" => Ok(Value::Str(format!("{x}{y}"))),
+        (Value::Float(_) | Value::Vector(_), Value::Float(_) | Value::Vector(_)) => {
+            let n = match (&a, &b) {
+                (Value::Vector(x), Value::Vector(y)) => x.len().max(y.len()),
+                (Value::Vector(x), _) | (_, Value::Vector(x)) => x.len(),
+                _ => 3,
+            };
+            let (x, y) = (vec_of(&a, n, pos, p)?, vec_of(&b, n, pos, p)?);
+            Ok(Value::Vector(x.iter().zip(&y).map(|(x, y)| f(*x, *y)).collect()))
+        }
+        _ => p.err(pos, format!("cannot apply `{op}` to {} and {}", a.kind(), b.kind())),
+    }
+}
+
+fn element_index(a: &PovArray, index: &[f64]) -> Option<usize> {
+    if index.len() != a.dims.len() {
+        return None;
+    }
+    let mut i = 0usize;
+    for (x, d) in index.iter().zip(&a.dims) {
+        if *x < 0.0 || *x as usize >= *d {
+            return None;
+        }
+        i = i * d + *x as usize;
+    }
+    Some(i)
+}
+
+fn index_array(v: Value, i: f64, pos: Pos, p: &Parser) -> Result<Value> {
+    let Value::Array(a) = v else { unreachable!("checked by the caller") };
+    let d = a.dims[0];
+    if i < 0.0 || i as usize >= d {
+        return p.err(pos, format!("index {i} is outside the array (size {d})"));
+    }
+    let i = i as usize;
+    if a.dims.len() == 1 {
+        return match &a.items[i] {
+            Some(v) => Ok(v.clone()),
+            None => p.err(pos, format!("element {i} of the array was never set")),
+        };
+    }
+    let stride: usize = a.dims[1..].iter().product();
+    Ok(Value::Array(Box::new(PovArray {
+        dims: a.dims[1..].to_vec(),
+        items: a.items[i * stride..(i + 1) * stride].to_vec(),
+    })))
+}
+
+pub fn describe(t: &Tok) -> String {
+    match t {
+        Tok::Num(n) => format!("the number {n}"),
+        Tok::Str(s) => format!("the string \"{s}\""),
+        Tok::Word(w) => format!("`{w}`"),
+        Tok::Directive(d) => format!("#{d}"),
+        Tok::Sym(s) => format!("`{s}`"),
+    }
+}
+
+/// Interns a symbol for comparison with `Tok::Sym` (symbols are the lexer's static strings).
+fn leak(sym: &str) -> &'static str {
+    [
+        "<=", ">=", "!=", "{", "}", "(", ")", "[", "]", "<", ">", "=", "+", "-", "*", "/", ",", ";", ".", "?", ":",
+        "!", "&", "|",
+    ]
+    .into_iter()
+    .find(|s| *s == sym)
+    .unwrap_or("")
+}
+
+fn is_reserved(w: &str) -> bool {
+    matches!(
+        w,
+        "sphere"
+            | "box"
+            | "cylinder"
+            | "cone"
+            | "plane"
+            | "torus"
+            | "union"
+            | "difference"
+            | "intersection"
+            | "merge"
+            | "object"
+            | "texture"
+            | "pigment"
+            | "finish"
+            | "camera"
+            | "light_source"
+            | "rgb"
+            | "color"
+            | "colour"
+            | "x"
+            | "y"
+            | "z"
+            | "pi"
+            | "clock"
+            | "declare"
+            | "local"
+    )
+}
+
+/// Rotation matrix about the unit axis by degrees (POV-Ray's vaxis_rotate and `axis_rotate`).
+pub fn axis_angle(axis: DVec3, degrees: f64) -> DMat3 {
+    let a = if axis.length() > 0.0 { axis / axis.length() } else { DVec3::Y };
+    DMat3::from_axis_angle(a, degrees.to_radians())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Runs `text` and returns the value declared as `R`.
+    fn eval(text: &str) -> Value {
+        let mut p = Parser::new(Path::new("test.pov"), PovOptions::default());
+        if let Err(e) = p.run_text(text, Path::new("test.pov")) {
+            panic!("{text}: {} at {:?}", e.message, e.pos);
+        }
+        p.lookup("R").cloned().expect("the text declares R")
+    }
+
+    fn float(text: &str) -> f64 {
+        match eval(text) {
+            Value::Float(f) => f,
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+
+    fn vector(text: &str) -> Vec<f64> {
+        match eval(text) {
+            Value::Vector(v) => v,
+            other => panic!("{text}: {other:?}"),
+        }
+    }
+
+    fn error(text: &str) -> PovError {
+        let mut p = Parser::new(Path::new("test.pov"), PovOptions::default());
+        p.max_tokens = 100_000;
+        match p.run_text(text, Path::new("test.pov")) {
+            Ok(_) => panic!("{text}: no error"),
+            Err(e) => e,
+        }
+    }
+
+    #[test]
+    fn arithmetic_follows_povray_precedence() {
+        assert_eq!(float("#declare R = 1 + 2 * 3 - 4 / 2;"), 5.0);
+        assert_eq!(float("#declare R = -2 * -3;"), 6.0);
+        assert_eq!(float("#declare R = (1 < 2) & (3 >= 3) | 0;"), 1.0);
+        assert_eq!(float("#declare R = 1 = 2 ? 10 : 20;"), 20.0);
+        assert_eq!(float("#declare R = !0 + (2 != 2);"), 1.0);
+        // Values POV-Ray 3.7 printed for the same expressions (#debug str(...)).
+        assert_eq!(float("#declare R = mod(-7, 3);"), -1.0);
+        assert_eq!(float("#declare R = int(-2.5);"), -2.0);
+        assert_eq!(float("#declare R = div(-7, 2);"), -3.0);
+        assert!((float("#declare R = vlength(vrotate(<1,0,0>, <0,90,0>));") - 1.0).abs() < 1e-12);
+        assert_eq!(float("#declare R = max(1, 5, 3) + min(4, 2) + abs(-1) + pow(2, 3) + sqrt(16);"), 20.0);
+        assert!((float("#declare R = degrees(atan2(1, 1)) + radians(180) - pi;") - 45.0).abs() < 1e-12);
+        assert_eq!(float("#declare R = select(-1, 10, 20) + select(0, 1, 2, 3);"), 12.0);
+    }
+
+    #[test]
+    fn vrotate_matches_povray() {
+        // POV-Ray 3.7: vstr(3, vrotate(<1,2,3>, <30,40,50>), ",", 0, 9) = 1.801281062,2.507690147,2.113498678
+        let v = vector("#declare R = vrotate(<1,2,3>, <30,40,50>);");
+        let want = [1.801281062, 2.507690147, 2.113498678];
+        for i in 0..3 {
+            assert!((v[i] - want[i]).abs() < 1e-9, "{v:?}");
+        }
+    }
+
+    #[test]
+    fn vectors_colours_and_components() {
+        assert_eq!(vector("#declare R = <1, 2, 3> * 2 + x;"), vec![3.0, 4.0, 6.0]);
+        assert_eq!(vector("#declare R = vcross(x, y);"), vec![0.0, 0.0, 1.0]);
+        assert_eq!(float("#declare V = <1, 2, 3>; #declare R = V.y + V.z;"), 5.0);
+        assert_eq!(vector("#declare R = rgb <1, 0.5, 0>;"), vec![1.0, 0.5, 0.0, 0.0, 0.0]);
+        assert_eq!(vector("#declare R = color rgb 1 filter 0.5;"), vec![1.0, 1.0, 1.0, 0.5, 0.0]);
+        assert_eq!(vector("#declare R = rgbt <0.2, 0.3, 0.4, 0.9>;"), vec![0.2, 0.3, 0.4, 0.0, 0.9]);
+        assert_eq!(
+            vector("#declare C = rgb <1, 0, 0>; #declare R = color C * 0.5 green 1;"),
+            vec![0.5, 1.0, 0.0, 0.0, 0.0]
+        );
+        // A vector list without commas is two vectors, not a comparison.
+        assert_eq!(vector("#declare A = array[2] { <1, 2> <3, 4> } #declare R = A[1];"), vec![3.0, 4.0]);
+    }
+
+    #[test]
+    fn strings_and_their_functions() {
+        let s = |t: &str| match eval(t) {
+            Value::Str(s) => s,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(s("#declare R = concat(\"a\", str(1.5, 0, 2), chr(66));"), "a1.50B");
+        assert_eq!(s("#declare R = substr(\"photonix\", 2, 4);"), "hoto");
+        assert_eq!(float("#declare R = strlen(\"abc\") + val(\"2.5\");"), 5.5);
+    }
+
+    #[test]
+    fn rand_gives_povray_numbers() {
+        // Printed by POV-Ray 3.7.0 (Debian's povray): seed(42) then three rand(), seed(-7) then one.
+        let v = vector("#declare S = seed(42); #declare R = <rand(S), rand(S), rand(S)>;");
+        let want = [0.723582911241, 0.329979259598, 0.755761670357];
+        for i in 0..3 {
+            assert!((v[i] - want[i]).abs() < 1e-12, "{v:?}");
+        }
+        let f = float("#declare S = seed(1); #declare T = seed(-7); #declare R = rand(T);");
+        assert!((f - 0.046072868175).abs() < 1e-12, "{f}");
+        assert!((float("#declare S = seed(0); #declare R = rand(S);") - 0.000002874294).abs() < 1e-12);
+    }
+
+    #[test]
+    fn loops_conditionals_and_switch() {
+        assert_eq!(
+            float("#declare R = 0; #declare I = 0; #while (I < 10) #declare R = R + I; #declare I = I + 1; #end"),
+            45.0
+        );
+        assert_eq!(float("#declare R = 0; #for (I, 1, 9, 2) #declare R = R + I; #end"), 25.0);
+        assert_eq!(float("#declare R = 0; #for (I, 3, 1, -1) #declare R = R * 10 + I; #end"), 321.0);
+        assert_eq!(float("#declare R = 0; #for (I, 5, 1) #declare R = 1; #end"), 0.0);
+        let sw = |v: f64| {
+            float(&format!(
+                "#declare R = 0; #switch ({v}) #case (1) #declare R = 10; #break #case (2) #case (3) #declare R = 23; #break \
+                 #range (4, 6) #declare R = 46; #else #declare R = -1; #end"
+            ))
+        };
+        assert_eq!((sw(1.0), sw(2.0), sw(3.0), sw(5.0), sw(9.0)), (10.0, 23.0, 23.0, 46.0, -1.0));
+        assert_eq!(float("#declare A = 1; #if (A > 2) #declare R = 1; #elseif (A = 1) #declare R = 2; #else #declare R = 3; #end"), 2.0);
+        assert_eq!(float("#ifdef (Nope) #declare R = 1; #else #declare R = 2; #end"), 2.0);
+        assert_eq!(
+            float(
+                "#declare X = 1; #ifndef (X) #declare R = 1; #else #if (0) #declare R = 5; #end #declare R = 3; #end"
+            ),
+            3.0
+        );
+    }
+
+    #[test]
+    fn macros_take_parameters_and_recurse_to_a_limit() {
+        assert_eq!(float("#macro Fact(N) #if (N <= 1) 1 #else N * Fact(N - 1) #end #end #declare R = Fact(5);"), 120.0);
+        assert_eq!(float("#macro Add(A, B) (A + B) #end #declare R = Add(2, 3) * 2;"), 10.0);
+        assert_eq!(float("#macro Set(V) #local T = V * 2; #declare R = T; #end Set(4)"), 8.0);
+        // #local in a macro does not leak; #declare of a global inside does.
+        let e = error("#macro F() #local Q = 1; #end F() #declare R = Q;");
+        assert!(e.message.contains("unknown identifier `Q`"), "{}", e.message);
+        let e = error("#macro Loop(N) Loop(N + 1) #end #declare R = Loop(1);");
+        assert!(e.message.contains("deeper than"), "{}", e.message);
+        assert_eq!(e.pos.map(|p| p.line), Some(1));
+        let e = error("#macro Two(A, B) A #end #declare R = Two(1);");
+        assert!(e.message.contains("takes 2 arguments"), "{}", e.message);
+    }
+
+    #[test]
+    fn arrays_hold_values_and_check_their_bounds() {
+        assert_eq!(
+            float(
+                "#declare A = array[3] {1, 2, 3} #declare A[1] = 5; #declare R = A[0] + A[1] + dimension_size(A, 1);"
+            ),
+            9.0
+        );
+        assert_eq!(float("#declare A = array[2][2] {{1, 2}, {3, 4}} #declare R = A[1][0];"), 3.0);
+        let e = error("#declare A = array[2]; #declare R = A[2];");
+        assert!(e.message.contains("outside the array"), "{}", e.message);
+        let e = error("#declare A = array[2]; #declare R = A[1];");
+        assert!(e.message.contains("never set"), "{}", e.message);
+    }
+
+    #[test]
+    fn errors_name_line_and_column_and_refuse_what_is_missing() {
+        let e = error("#declare A = 1;\n#declare R = A + Bogus;");
+        assert_eq!(e.pos.map(|p| (p.line, p.col)), Some((2, 18)));
+        assert!(e.message.contains("unknown identifier `Bogus`"));
+        let e = error("#declare F = function { x * 2 }\n#declare R = F(1);");
+        assert!(e.message.contains("functions are not supported yet"), "{}", e.message);
+        assert_eq!(e.pos.map(|p| p.line), Some(2));
+        let e = error("#declare R = trace(A, <0,0,0>, y);");
+        assert!(e.message.contains("`trace` is not supported yet"), "{}", e.message);
+        let e = error("#fopen F \"out.txt\" write");
+        assert!(e.message.contains("file I/O"), "{}", e.message);
+        let e = error("#if (1) #declare R = 1;");
+        assert!(e.message.contains("no #end"), "{}", e.message);
+        let e = error("#declare R = 0; #while (1) #declare R = R + 1; #end");
+        assert!(e.message.contains("runaway"), "{}", e.message);
+    }
+
+    #[test]
+    fn image_size_and_clock_come_from_the_options() {
+        let mut p = Parser::new(
+            Path::new("t.pov"),
+            PovOptions { width: 640, height: 480, clock: 0.25, ..PovOptions::default() },
+        );
+        p.run_text("#declare R = image_width / image_height + clock;", Path::new("t.pov")).unwrap();
+        let Some(Value::Float(r)) = p.lookup("R") else { panic!() };
+        assert!((r - (640.0 / 480.0 + 0.25)).abs() < 1e-12);
+    }
+}

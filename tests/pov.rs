@@ -1,0 +1,409 @@
+//! The POV-Ray front-end end to end: objects and transforms against the same scene written in
+//! TOML, include search, errors at `.pov` positions (in the scene and in includes, and errors the
+//! TOML checks find), the command line, and a small fuzz (no panic on garbage).
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use photonix::scene::pov::{load_pov, translate_file, PovOptions};
+use photonix::scene::{load_scene, parse_scene, Geometry, LightKind, Scene};
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn options() -> PovOptions {
+    PovOptions { width: 64, height: 48, ..PovOptions::default() }
+}
+
+fn load(dir: &Path, text: &str) -> Scene {
+    let p = write(dir, "scene.pov", text);
+    match load_pov(&p, &options()) {
+        Ok(s) => s,
+        Err(e) => panic!("{e}"),
+    }
+}
+
+fn error(dir: &Path, text: &str) -> String {
+    let p = write(dir, "scene.pov", text);
+    match load_pov(&p, &options()) {
+        Ok(_) => panic!("no error for {text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// The bounds of every shape, in order: geometry compared without caring how it is stored.
+fn bounds(s: &Scene) -> Vec<(Vec3, Vec3)> {
+    s.shapes.iter().map(|sh| sh.geometry.bounds()).collect()
+}
+
+const CAMERA: &str = "camera { location <0, 2, -6> look_at <0, 1, 0> }\nlight_source { <3, 6, -4>, rgb 1 }\n";
+
+#[test]
+fn shapes_and_transforms_match_the_same_scene_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    // POV-Ray is left-handed: the same scene in Photonix's frame has z negated, and POV-Ray's
+    // rotations (x, then y, then z, about the axes) become rotations with the y and x angles negated.
+    let pov = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}
+sphere {{ <1, 2, 3>, 0.5 pigment {{ rgb 1 }} }}
+box {{ <-1, 0, -1>, <1, 0.5, 2> rotate <0, 30, 0> translate <0, 0, 4> pigment {{ rgb 1 }} }}
+cylinder {{ <0, 0, 0>, <0, 1, 1>, 0.25 scale 2 translate x pigment {{ rgb 1 }} }}
+cone {{ <0, 0, 0>, 1, <0, 2, 0>, 0 open rotate x * 90 pigment {{ rgb 1 }} }}
+torus {{ 1, 0.2 rotate <20, 40, 0> translate <2, 1, 2> pigment {{ rgb 1 }} }}
+disc {{ <0, 1, 2>, <0, 0, -1>, 0.5 pigment {{ rgb 1 }} }}
+superellipsoid {{ <0.5, 0.5> scale <1, 2, 3> translate -x * 3 pigment {{ rgb 1 }} }}
+triangle {{ <0, 0, 0>, <1, 0, 0>, <0, 1, 1> pigment {{ rgb 1 }} }}
+union {{ sphere {{ 0, 1 }} sphere {{ x, 1 }} translate z * 5 pigment {{ rgb 1 }} }}
+"
+        ),
+    );
+    let toml = r#"
+[camera]
+position = [0, 2, 6]
+look_at = [0, 1, 0]
+fov = 53.13
+[materials.w]
+type = "diffuse"
+[[shapes]]
+type = "sphere"
+material = "w"
+center = [1, 2, -3]
+radius = 0.5
+[[shapes]]
+type = "box"
+material = "w"
+min = [-1, 0, -2]
+max = [1, 0.5, 1]
+transform = { rotate = [0, -30, 0], translate = [0, 0, -4] }
+[[shapes]]
+type = "cylinder"
+material = "w"
+base = [1, 0, 0]
+cap = [1, 2, -2]
+radius = 0.5
+[[shapes]]
+type = "cone"
+material = "w"
+base = [0, 0, 0]
+cap = [0, 0, -2]
+base_radius = 1
+cap_radius = 0
+open = true
+[[shapes]]
+type = "torus"
+material = "w"
+major_radius = 1
+minor_radius = 0.2
+transform = { rotate = [-20, -40, 0], translate = [2, 1, -2] }
+[[shapes]]
+type = "disc"
+material = "w"
+center = [0, 1, -2]
+normal = [0, 0, 1]
+radius = 0.5
+[[shapes]]
+type = "superellipsoid"
+material = "w"
+exponents = [0.5, 0.5]
+transform = { scale = [1, 2, 3], translate = [-3, 0, 0] }
+[[shapes]]
+type = "triangle"
+material = "w"
+vertices = [[0, 0, 0], [1, 0, 0], [0, 1, -1]]
+[[shapes]]
+type = "sphere"
+material = "w"
+center = [0, 0, -5]
+radius = 1
+[[shapes]]
+type = "sphere"
+material = "w"
+center = [1, 0, -5]
+radius = 1
+"#;
+    let want = parse_scene(toml, Path::new("same.toml")).unwrap();
+    let (a, b) = (bounds(&pov), bounds(&want));
+    assert_eq!(a.len(), b.len(), "{a:?}\nvs\n{b:?}");
+    for (i, ((amin, amax), (bmin, bmax))) in a.iter().zip(&b).enumerate() {
+        // Both go through f32 and the same analytic bounds; 1e-4 covers the rounding of angles.
+        assert!(
+            amin.abs_diff_eq(*bmin, 1e-4) && amax.abs_diff_eq(*bmax, 1e-4),
+            "shape {i}: {amin} {amax} vs {bmin} {bmax}"
+        );
+    }
+    // The camera looks the same way: POV-Ray's +z into the screen is Photonix's -z.
+    assert!(pov.camera.position.abs_diff_eq(Vec3::new(0.0, 2.0, 6.0), 1e-6));
+    let f = (pov.camera.look_at - pov.camera.position).normalize();
+    let g = (want.camera.look_at - want.camera.position).normalize();
+    assert!(f.abs_diff_eq(g, 1e-6), "{f} vs {g}");
+    // POV-Ray's default camera: up 1 and direction 1 span 2 atan(0.5) vertically.
+    assert!((pov.camera.fov_deg - 53.130_1).abs() < 1e-3, "{}", pov.camera.fov_deg);
+}
+
+#[test]
+fn csg_lights_and_finishes_map_as_documented() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> }
+light_source { <0, 0, -10>, rgb <1, 0.5, 0.25> }
+light_source { <10, 0, 0>, rgb 1 spotlight point_at <0, 0, 0> radius 10 falloff 20 }
+light_source { <0, 10, 0>, rgb 1 parallel point_at <0, 0, 0> }
+difference { sphere { 0, 1 } box { 0, 2 } pigment { rgb <1, 0, 0> } }
+sphere { <3, 0, 0>, 1 pigment { rgbf <1, 1, 1, 0.9> } interior { ior 1.5 } }
+sphere { <-3, 0, 0>, 1 pigment { rgb 1 } finish { reflection 1 } }
+sphere { <0, 3, 0>, 1 pigment { rgb <0, 1, 0> } finish { ambient 1 diffuse 0 } }
+sphere { <0, -3, 0>, 1 pigment { rgb 0.5 } finish { phong 1 phong_size 60 } }
+",
+    );
+    let kinds: Vec<&str> = s
+        .shapes
+        .iter()
+        .map(|sh| match &sh.geometry {
+            Geometry::Csg(_) => "csg",
+            Geometry::Sphere(_) => "sphere",
+            _ => "other",
+        })
+        .collect();
+    assert_eq!(&kinds[..5], ["csg", "sphere", "sphere", "sphere", "sphere"]);
+    let material = |i: usize| &s.materials[s.shapes[i].material as usize];
+    use photonix::scene::MaterialKind;
+    assert!(matches!(material(1).kind, MaterialKind::Dielectric { .. }), "{:?}", material(1).kind);
+    assert!(matches!(material(2).kind, MaterialKind::Mirror { .. }), "{:?}", material(2).kind);
+    // ambient 1, diffuse 0: it glows with its pigment.
+    assert!(material(3).emission.value.abs_diff_eq(Vec3::new(0.0, 1.0, 0.0), 1e-6));
+    assert!(matches!(material(4).kind, MaterialKind::Plastic { .. }), "{:?}", material(4).kind);
+    // A light of colour c, 10 units from where the camera looks: I = pi c d^2.
+    let pi = std::f32::consts::PI;
+    match &s.lights[0].kind {
+        LightKind::Point { intensity, position } => {
+            assert!(intensity.abs_diff_eq(Vec3::new(1.0, 0.5, 0.25) * pi * 100.0, 1e-2), "{intensity}");
+            assert!(position.abs_diff_eq(Vec3::new(0.0, 0.0, 10.0), 1e-6));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(s.lights[1].kind, LightKind::Spot { .. }));
+    match &s.lights[2].kind {
+        LightKind::Distant { direction, irradiance, .. } => {
+            assert!(direction.abs_diff_eq(Vec3::new(0.0, -1.0, 0.0), 1e-6));
+            assert!(irradiance.abs_diff_eq(Vec3::splat(pi), 1e-5));
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn macros_loops_and_rand_place_objects() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}
+#declare S = seed(42);
+#macro Ball(P) sphere {{ P, 0.1 pigment {{ rgb 1 }} }} #end
+#for (I, 0, 2) Ball(<rand(S), I, 0>) #end
+"
+        ),
+    );
+    // POV-Ray 3.7's rand(seed(42)): 0.723582911241, 0.329979259598, 0.755761670357.
+    let xs: Vec<f32> = s.spheres().map(|(sp, _)| sp.center.x).collect();
+    let want = [0.723_582_9, 0.329_979_26, 0.755_761_7];
+    for (x, w) in xs.iter().zip(want) {
+        assert!((x - w).abs() < 1e-6, "{xs:?}");
+    }
+    assert_eq!(xs.len(), 3);
+}
+
+#[test]
+fn includes_are_found_beside_the_scene_and_in_the_include_folders() {
+    let dir = tempfile::tempdir().unwrap();
+    let inc = tempfile::tempdir().unwrap();
+    write(dir.path(), "local.inc", "#declare Local = 2;\n");
+    write(inc.path(), "lib.inc", "#declare Lib = 3;\n#include \"local.inc\"\n");
+    let p = write(
+        dir.path(),
+        "scene.pov",
+        &format!("#include \"lib.inc\"\n{CAMERA}sphere {{ <Local, Lib, 0>, 1 pigment {{ rgb 1 }} }}\n"),
+    );
+    let o = PovOptions { include_dirs: vec![inc.path().to_path_buf()], ..options() };
+    let s = load_pov(&p, &o).unwrap();
+    let c = s.spheres().next().unwrap().0.center;
+    assert!(c.abs_diff_eq(Vec3::new(2.0, 3.0, 0.0), 1e-6), "{c}");
+    // A missing include names the folders it looked in.
+    let p = write(dir.path(), "missing.pov", "#include \"nope.inc\"\n");
+    let e = load_pov(&p, &o).unwrap_err().to_string();
+    assert!(
+        e.contains("missing.pov:1:1") && e.contains("nope.inc") && e.contains(&inc.path().display().to_string()),
+        "{e}"
+    );
+}
+
+#[test]
+fn standard_includes_are_read_where_debian_installs_them() {
+    if !Path::new(photonix::scene::pov::STANDARD_INCLUDE_DIR).join("colors.inc").is_file() {
+        // ci/setup installs povray-includes; without it this test has nothing to read.
+        eprintln!("skipped: povray-includes is not installed");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        &format!("#include \"colors.inc\"\n#include \"textures.inc\"\n{CAMERA}sphere {{ 0, 1 pigment {{ Red }} }}\nplane {{ y, -1 texture {{ pigment {{ Jade }} }} }}\nsphere {{ x * 3, 1 texture {{ Polished_Chrome }} }}\n"),
+    );
+    let m = &s.materials[s.shapes[0].material as usize];
+    // Red is rgb <1, 0, 0> with POV-Ray's default diffuse 0.6.
+    match &m.kind {
+        photonix::scene::MaterialKind::Diffuse { reflectance } => {
+            assert!(reflectance.value.abs_diff_eq(Vec3::new(0.6, 0.0, 0.0), 1e-6), "{:?}", reflectance.value)
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn errors_point_at_the_pov_file_and_its_includes() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = error(dir.path(), &format!("{CAMERA}\nsphere {{ <0, 0, 0>, 1\n  pigment {{ rgb Nope }} }}\n"));
+    assert!(e.contains("scene.pov:5:17") && e.contains("unknown identifier `Nope`"), "{e}");
+    write(dir.path(), "bad.inc", "#declare A = 1;\n#declare B = A +;\n");
+    let e = error(dir.path(), "#include \"bad.inc\"\n");
+    assert!(e.contains("bad.inc:2:17"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}isosurface {{ function {{ x }} }}\n"));
+    assert!(e.contains("scene.pov:3:1") && e.contains("isosurface is not supported yet"), "{e}");
+    // Found by the TOML checks, reported at the .pov line of the object.
+    let e = error(dir.path(), &format!("{CAMERA}\n\ntorus {{ 1, 2 pigment {{ rgb 1 }} }}\n"));
+    assert!(e.contains("scene.pov:5:1") && e.contains("minor_radius"), "{e}");
+    let e = error(dir.path(), "camera { location 0 look_at z fisheye }");
+    assert!(e.contains("scene.pov:1:31") && e.contains("fisheye"), "{e}");
+}
+
+#[test]
+fn load_scene_and_the_command_line_read_pov_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "tiny.pov", &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} }}\n"));
+    let s = load_scene(&p).unwrap();
+    assert_eq!((s.camera.width, s.camera.height), (320, 240));
+    assert_eq!(s.name, "tiny");
+    let out = dir.path().join("tiny.toml");
+    let status = std::process::Command::new(env!("CARGO_BIN_EXE_photonix"))
+        .args(["convert", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "--resolution", "32x24"])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    // The TOML it writes is a scene of its own, with the same shapes.
+    let t = load_scene(&out).unwrap();
+    assert_eq!(bounds(&t), bounds(&s));
+    assert_eq!((t.camera.width, t.camera.height), (32, 24));
+}
+
+/// A small xorshift for the fuzz cases (reproducible by case number).
+fn xorshift(state: &mut u64) -> u64 {
+    *state ^= *state << 13;
+    *state ^= *state >> 7;
+    *state ^= *state << 17;
+    *state
+}
+
+#[test]
+fn fuzzed_pov_text_never_panics() {
+    let seed_text = format!(
+        "{CAMERA}#declare S = seed(3);\n#macro M(A) sphere {{ A, 0.5 pigment {{ rgb <1, 0.5, 0> }} }} #end\n\
+         #for (I, 0, 3) M(<I, rand(S), 0>) #end\n#while (0) #end\n#switch (2) #case (2) box {{ 0, 1 }} #break #end\n\
+         union {{ cylinder {{ 0, y, 0.2 }} cone {{ 0, 1, y, 0 }} rotate <10, 20, 30> texture {{ pigment {{ checker rgb 1 rgb 0 scale 0.2 }} finish {{ phong 1 }} }} }}\n\
+         #declare A = array[2] {{ 1, 2 }}\ntorus {{ A[0], 0.25 }}\n"
+    );
+    let alphabet: &[u8] = b"{}()<>[],;.#\"+-*/=!&|?: 0123456789xyzabcdeif\n";
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("fuzz.pov");
+    let cases = std::env::var("PHOTONIX_POV_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(300u64);
+    for case in 0..cases {
+        let mut st = 0x9e37_79b9_7f4a_7c15 ^ (case + 1).wrapping_mul(0x2545_f491_4f6c_dd1d);
+        let mut bytes = seed_text.as_bytes().to_vec();
+        for _ in 0..1 + xorshift(&mut st) % 6 {
+            let i = (xorshift(&mut st) % bytes.len() as u64) as usize;
+            match xorshift(&mut st) % 4 {
+                0 => {
+                    bytes.remove(i);
+                }
+                1 => bytes.insert(i, alphabet[(xorshift(&mut st) % alphabet.len() as u64) as usize]),
+                2 => bytes[i] = alphabet[(xorshift(&mut st) % alphabet.len() as u64) as usize],
+                _ => {
+                    let j = (xorshift(&mut st) % bytes.len() as u64) as usize;
+                    let k = (j + (xorshift(&mut st) % 40) as usize).min(bytes.len());
+                    let chunk = bytes[j..k].to_vec();
+                    bytes.splice(i..i, chunk);
+                }
+            }
+        }
+        std::fs::write(&path, &bytes).unwrap();
+        let result = std::panic::catch_unwind(|| {
+            let mut o = options();
+            o.include_dirs.clear();
+            match translate_file(&path, &o) {
+                // Every error names the file.
+                Err(e) => assert!(e.to_string().contains("fuzz.pov"), "{e}"),
+                Ok(t) => {
+                    let _ = parse_scene(&t.toml, &path);
+                }
+            }
+        });
+        assert!(result.is_ok(), "case {case} panicked on:\n{}", String::from_utf8_lossy(&bytes));
+    }
+}
+
+#[test]
+fn the_editor_opens_a_pov_scene_as_its_toml_translation() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "edit.pov", &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} }}\n"));
+    let doc = photonix::editor::SceneDocument::load(&p).unwrap();
+    // It saves beside the .pov as TOML, and nothing is written until the user saves.
+    assert_eq!(doc.path(), dir.path().join("edit.toml"));
+    assert!(doc.text().contains("[[shapes]]"));
+    assert!(doc.dirty());
+    assert!(!dir.path().join("edit.toml").exists());
+}
+
+#[test]
+fn inverse_in_csg_is_written_as_a_difference() {
+    let dir = tempfile::tempdir().unwrap();
+    let toml = |text: &str| {
+        let p = write(dir.path(), "inv.pov", &format!("{CAMERA}{text}"));
+        let t = translate_file(&p, &options()).unwrap().toml;
+        // Drop the comment lines, which name .pov positions.
+        t.lines().filter(|l| !l.starts_with('#')).collect::<Vec<_>>().join("\n")
+    };
+    let a = toml("intersection { sphere { 0, 1 } sphere { x, 1 inverse } pigment { rgb 1 } }\n");
+    let b = toml("difference { sphere { 0, 1 } sphere { x, 1 } pigment { rgb 1 } }\n");
+    assert_eq!(a, b);
+    // difference { A, inverse B } keeps what is in both.
+    let c = toml("difference { sphere { 0, 1 } sphere { x, 1 inverse } pigment { rgb 1 } }\n");
+    let d = toml("intersection { sphere { 0, 1 } sphere { x, 1 } pigment { rgb 1 } }\n");
+    assert_eq!(c, d);
+}
+
+#[test]
+fn arrays_hold_objects_and_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}#declare O = array[2] {{ sphere {{ 0, 1 }}, sphere {{ x * 3, 1 }} }}
+#declare T = array[1] {{ texture {{ pigment {{ rgb <0, 0, 1> }} }} }}
+object {{ O[1] texture {{ T[0] }} }}
+"
+        ),
+    );
+    let (sphere, m) = s.spheres().next().unwrap();
+    assert!(sphere.center.abs_diff_eq(Vec3::new(3.0, 0.0, 0.0), 1e-6));
+    match &s.materials[m as usize].kind {
+        photonix::scene::MaterialKind::Diffuse { reflectance } => {
+            assert!(reflectance.value.abs_diff_eq(Vec3::new(0.0, 0.0, 0.6), 1e-6))
+        }
+        other => panic!("{other:?}"),
+    }
+}
