@@ -1,0 +1,269 @@
+//! The camera stage, and the renderer that keeps its state from pass to pass.
+
+use std::time::{Duration, Instant};
+
+use super::kernels::{groups, GpuKernels};
+use super::maps::{build_maps, no_maps};
+use super::scene::DeviceScene;
+use crate::gpu::{Buffer, GpuContext, GpuError};
+use crate::layout::constants::LAYER_COUNT;
+use crate::layout::DispatchRange;
+use crate::render::photons::PhotonSettings;
+use crate::render::prepare::KernelVariant;
+use crate::render::{
+    parts_per_sample, photon_frame, resolve_band, unit_paths, work_units, Layers, RenderOutput, RenderStats,
+    SceneBuffers,
+};
+
+/// Bytes of accumulation per pixel: one vec4 per layer.
+const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
+/// Camera-path parts per submission of the camera kernel.
+const PATHS_PER_SUBMIT: u64 = 1 << 18;
+
+/// A renderer that keeps its state from pass to pass: the kernels (compute pipelines), the scene
+/// on the device and the accumulation buffer are made once; each pass then only traces its
+/// photons, builds its grids and runs the camera kernel. [`GpuRenderer::update_scene`] replaces the
+/// scene in place (an editor changing a material rewrites one small buffer).
+pub struct GpuRenderer<'a> {
+    ctx: &'a GpuContext,
+    kernels: GpuKernels,
+    buffers: SceneBuffers,
+    photons: Option<PhotonSettings>,
+    scene: DeviceScene,
+    /// Created by the first pass, then reused while the image size stays.
+    accumulation: Option<(Buffer, u32)>,
+    /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
+    photon_capacity: [u64; 3],
+    /// Wall time of uploading the scene and creating the kernels.
+    setup_time: Duration,
+    /// The arrays the last `update_scene` wrote (those that changed).
+    last_written: Vec<&'static str>,
+    /// Set while an `update_scene` runs: one that failed leaves the device's arrays unknown.
+    device_mixed: bool,
+    /// The kernels of variants used before, most recent last: an edit that switches the variant
+    /// (a texture added, then undone) finds the pipelines it had, where lavapipe would spend
+    /// seconds compiling them again.
+    spare_kernels: Vec<GpuKernels>,
+}
+
+/// Variants' kernel sets a renderer keeps besides its current one.
+const SPARE_KERNEL_SETS: usize = 3;
+
+impl<'a> GpuRenderer<'a> {
+    /// Uploads `buffers` and creates every kernel a render with (or, `photons` = `None`,
+    /// without) photon maps needs.
+    pub fn new(
+        ctx: &'a GpuContext,
+        buffers: &SceneBuffers,
+        photons: Option<&PhotonSettings>,
+    ) -> Result<GpuRenderer<'a>, GpuError> {
+        let t = Instant::now();
+        let photons = crate::render::effective_photons(buffers, photons);
+        let scene = DeviceScene::upload(ctx, buffers, photons)?;
+        let kernels = GpuKernels::for_scene(buffers.variant());
+        kernels.create_all(ctx, photons.is_some())?;
+        Ok(GpuRenderer {
+            ctx,
+            kernels,
+            buffers: buffers.clone(),
+            photons: photons.copied(),
+            scene,
+            accumulation: None,
+            photon_capacity: [0; 3],
+            setup_time: t.elapsed(),
+            last_written: Vec::new(),
+            device_mixed: false,
+            spare_kernels: Vec::new(),
+        })
+    }
+
+    /// Wall time spent in [`GpuRenderer::new`] and [`GpuRenderer::update_scene`] so far: the
+    /// scene's upload and the kernels' creation.
+    pub fn setup_time(&self) -> Duration {
+        self.setup_time
+    }
+
+    pub fn context(&self) -> &'a GpuContext {
+        self.ctx
+    }
+
+    /// The kernel variants whose pipelines this renderer holds: its scene's first, then those
+    /// it keeps from earlier scenes (the most recent last).
+    pub fn kernel_variants(&self) -> Vec<KernelVariant> {
+        std::iter::once(&self.kernels).chain(self.spare_kernels.iter().rev()).map(GpuKernels::variant).collect()
+    }
+
+    /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
+    /// differ from the scene it held ("frame", "nodes", "primitives", "materials", ...).
+    pub fn last_written(&self) -> &[&'static str] {
+        &self.last_written
+    }
+
+    /// Replaces the scene (and the photon settings) without recreating the kernels: arrays equal
+    /// to the current ones are left alone, others that keep their size are rewritten in their
+    /// buffers. Returns how many of the 9 scene arrays kept their buffers (unchanged ones
+    /// count; [`GpuRenderer::last_written`] names those written).
+    pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
+        let t = Instant::now();
+        let photons = crate::render::effective_photons(buffers, photons);
+        // After a failed update the device may hold a mix of the two scenes: compare with nothing.
+        let previous = (!self.device_mixed).then_some((&self.buffers, self.photons.as_ref()));
+        self.device_mixed = true;
+        let (in_place, written) = self.scene.update_changed(self.ctx, buffers, photons, previous)?;
+        self.device_mixed = false;
+        self.last_written = written;
+        if buffers.variant() != self.kernels.variant() {
+            let kept = self.spare_kernels.iter().position(|k| k.variant() == buffers.variant());
+            let next = match kept {
+                Some(i) => self.spare_kernels.remove(i),
+                None => GpuKernels::for_scene(buffers.variant()),
+            };
+            self.spare_kernels.push(std::mem::replace(&mut self.kernels, next));
+            if self.spare_kernels.len() > SPARE_KERNEL_SETS {
+                self.spare_kernels.remove(0);
+            }
+            self.kernels.create_all(self.ctx, photons.is_some())?;
+        }
+        if photons.is_some() {
+            self.kernels.create_all(self.ctx, true)?;
+        }
+        self.buffers = buffers.clone();
+        self.photons = photons.copied();
+        self.photon_capacity = [0; 3];
+        self.setup_time += t.elapsed();
+        Ok(in_place)
+    }
+
+    /// Renders pass `pass` with `spp` samples per pixel; `progress(done, total)` is called after
+    /// each submission of the camera kernel.
+    pub fn render_pass(
+        &mut self,
+        spp: u32,
+        pass: u32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<RenderOutput, GpuError> {
+        let ctx = self.ctx;
+        let f = photon_frame(&self.buffers, self.photons.as_ref());
+        let mut stages = Vec::new();
+
+        // Trace photons and build the grids
+        let t = Instant::now();
+        let maps = match &self.photons {
+            Some(settings) => {
+                build_maps(ctx, &self.kernels, &self.scene, &self.buffers, settings, pass, &mut self.photon_capacity)?
+            }
+            None => no_maps(ctx)?,
+        };
+        if self.photons.is_some() {
+            stages.push(("photons".to_string(), t.elapsed()));
+        }
+
+        // The accumulation buffer holds as many rows as one storage binding may address.
+        let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+        let row_bytes = f.width as u64 * ACCUMULATION_BYTES_PER_PIXEL;
+        let max_rows = (limit / row_bytes).min(f.height as u64) as u32;
+        if max_rows == 0 {
+            return Err(GpuError::Unsupported(format!(
+                "one image row of {} pixels needs {row_bytes} bytes, more than the device's storage buffer limit of {limit} bytes; lower the resolution",
+                f.width
+            )));
+        }
+        let max_rows = crate::render::stop_band_rows(f.width, max_rows);
+        let bytes = max_rows as u64 * row_bytes;
+        if self.accumulation.as_ref().is_none_or(|(b, w)| b.size() != bytes || *w != f.width) {
+            self.accumulation = Some((ctx.create_buffer("accumulation", bytes)?, f.width));
+        }
+        let accumulation = &self.accumulation.as_ref().expect("created just above").0;
+        let render_kernel = self.kernels.render(ctx)?;
+
+        // Gather, band by band
+        let t = Instant::now();
+        let mut layers = Layers::new(f.width, f.height);
+        let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
+        let total = units.total_rows();
+        let mut units = units.peekable();
+        let mut done = 0;
+        let mut rays = 0;
+        let mut download_time = Duration::ZERO;
+        // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
+        // submissions, yet none long enough to trip a GPU watchdog.
+        let mut complete = true;
+        let mut batch: Vec<DispatchRange> = Vec::new();
+        while let Some(first) = units.next() {
+            let band = first.row_begin;
+            let mut paths = first.row_count as u64 * f.width as u64;
+            batch.clear();
+            batch.push(first);
+            while paths < crate::render::thread_stop_paths().unwrap_or(PATHS_PER_SUBMIT) {
+                let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
+                paths += unit.row_count as u64 * f.width as u64;
+                batch.push(unit);
+            }
+            if crate::render::stop_requested() {
+                complete = false;
+                break;
+            }
+            if batch[0].sample_index == pass * spp && batch[0].part == 0 {
+                ctx.fill_zero(accumulation)?;
+            }
+            let invocations = batch[0].row_count * f.width;
+            ctx.run("render", |rec| {
+                for unit in &batch {
+                    rec.dispatch(
+                        render_kernel,
+                        &self.scene.bindings(&[
+                            accumulation,
+                            &maps.grids,
+                            &maps.global.photons,
+                            &maps.global.starts,
+                            &maps.caustic.photons,
+                            &maps.caustic.starts,
+                            &maps.volume.photons,
+                            &maps.volume.starts,
+                        ]),
+                        bytemuck::bytes_of(unit),
+                        groups(invocations),
+                    )?;
+                }
+                Ok(())
+            })?;
+            done += batch.iter().map(unit_paths).sum::<u64>();
+            progress(done, total);
+            if units.peek().is_none_or(|next| next.row_begin != band) {
+                let td = Instant::now();
+                let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
+                let len = (invocations * LAYER_COUNT) as usize;
+                rays += resolve_band(&mut layers, band, &sums[..len], spp);
+                download_time += td.elapsed();
+            }
+        }
+        stages.push(("render".to_string(), t.elapsed() - download_time));
+        stages.push(("download".to_string(), download_time));
+        let stats = RenderStats {
+            stages,
+            kernel_times: ctx.take_timings(),
+            rays,
+            samples_per_pixel: spp,
+            device: format!("{} ({})", ctx.info().name, ctx.info().driver),
+        };
+        Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
+    }
+}
+
+/// Renders pass `pass` on `ctx`, with photon maps when `photons` is given, with a renderer made
+/// for this one pass (its set-up time is reported as the `upload` stage); `progress(done, total)`
+/// is called after each submission of the camera kernel. Progressive renders keep one
+/// [`GpuRenderer`] instead.
+pub fn render_gpu(
+    ctx: &GpuContext,
+    buffers: &SceneBuffers,
+    spp: u32,
+    photons: Option<&PhotonSettings>,
+    pass: u32,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<RenderOutput, GpuError> {
+    let mut renderer = GpuRenderer::new(ctx, buffers, photons)?;
+    let mut out = renderer.render_pass(spp, pass, progress)?;
+    out.stats.stages.insert(0, ("upload".to_string(), renderer.setup_time()));
+    Ok(out)
+}

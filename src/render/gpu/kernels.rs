@@ -1,0 +1,185 @@
+//! The compute pipelines of a render and how they bind the scene.
+
+use std::cell::OnceCell;
+use std::time::Instant;
+
+use crate::gpu::{BindingTypes, GpuContext, GpuError, Kernel};
+use crate::layout::constants::{
+    BINDING_FRAME, BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES,
+    BINDING_SHAPE_DATA, BINDING_TEXTURES, BINDING_TEXTURE_DATA, SCENE_BINDINGS, WORKGROUP_SIZE,
+};
+use crate::layout::{DispatchRange, EmitParams};
+use crate::render::prepare::KernelVariant;
+
+fn kernel(
+    ctx: &GpuContext,
+    name: &str,
+    bindings: u32,
+    binding_types: BindingTypes,
+    push_bytes: usize,
+    constants: &[u32],
+) -> Result<Kernel, GpuError> {
+    let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
+    ctx.create_specialized_kernel(name, &spirv, bindings, binding_types, push_bytes as u32, constants)
+}
+
+/// How the kernels read the scene (shaders/scene_bindings.glsl): as texel buffers, since on
+/// lavapipe a texel fetch goes through gallivm's vectorised texture path where a storage-buffer
+/// read costs about 15 scalar instructions per lane and word; `frame`, which every lane reads
+/// alike, as a uniform buffer, whose uniform reads gallivm makes once for all lanes.
+pub const SCENE_BINDING_TYPES: BindingTypes = BindingTypes {
+    rgba: 1 << BINDING_NODES
+        | 1 << BINDING_PRIMITIVES
+        | 1 << BINDING_MATERIALS
+        | 1 << BINDING_LIGHTS
+        | 1 << BINDING_TEXTURES
+        | 1 << BINDING_MEDIA,
+    words: 1 << BINDING_TEXTURE_DATA | 1 << BINDING_SHAPE_DATA,
+    uniform: 1 << BINDING_FRAME,
+};
+/// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8)
+/// as texel buffers and the grid parameters (SCENE_BINDINGS + 1) as a uniform buffer.
+const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
+    rgba: SCENE_BINDING_TYPES.rgba | 0b01_0101 << (SCENE_BINDINGS + 2),
+    words: SCENE_BINDING_TYPES.words | 0b10_1010 << (SCENE_BINDINGS + 2),
+    uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
+};
+
+/// grid_rank's (shaders/grid_rank.comp): bucket starts (binding 1) as words, the scattered photons
+/// (binding 2) as RGBA32UI texels, since every invocation reads its whole bucket.
+const GRID_RANK_BINDING_TYPES: BindingTypes = BindingTypes { rgba: 1 << 2, words: 1 << 1, uniform: 0 };
+
+/// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
+/// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
+pub(super) fn groups(invocations: u32) -> [u32; 3] {
+    const MAX_X: u32 = 1 << 15;
+    let total = invocations.div_ceil(WORKGROUP_SIZE).max(1);
+    let x = total.min(MAX_X);
+    [x, total.div_ceil(x), 1]
+}
+
+/// The compute pipelines of a render, each created on first use and then kept: creating them
+/// (shader compilation, on lavapipe through LLVM) is the largest fixed cost of a pass.
+#[derive(Default)]
+pub struct GpuKernels {
+    emit_photons: OnceCell<Kernel>,
+    grid_count: OnceCell<Kernel>,
+    grid_scan: OnceCell<Kernel>,
+    grid_scan_add: OnceCell<Kernel>,
+    grid_scatter: OnceCell<Kernel>,
+    grid_rank: OnceCell<Kernel>,
+    render: OnceCell<Kernel>,
+    /// Which build of the scene kernels (`SceneBuffers::variant`).
+    variant: KernelVariant,
+}
+
+impl GpuKernels {
+    /// The kernels of one variant (`SceneBuffers::variant`).
+    pub fn for_scene(variant: KernelVariant) -> GpuKernels {
+        GpuKernels { variant, ..Default::default() }
+    }
+
+    pub(super) fn variant(&self) -> KernelVariant {
+        self.variant
+    }
+
+    /// `name` in the build this scene needs.
+    fn scene_kernel(&self, name: &str) -> String {
+        self.variant.kernel_name(name)
+    }
+
+    fn get<'k>(
+        cell: &'k OnceCell<Kernel>,
+        ctx: &GpuContext,
+        name: &str,
+        bindings: u32,
+        texels: BindingTypes,
+        push_bytes: usize,
+        constants: &[u32],
+    ) -> Result<&'k Kernel, GpuError> {
+        if let Some(k) = cell.get() {
+            return Ok(k);
+        }
+        let k = kernel(ctx, name, bindings, texels, push_bytes, constants)?;
+        Ok(cell.get_or_init(|| k))
+    }
+
+    pub(super) fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        let name = self.scene_kernel("emit_photons");
+        let constants = self.variant.specialization();
+        Self::get(
+            &self.emit_photons,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 4,
+            SCENE_BINDING_TYPES,
+            size_of::<EmitParams>(),
+            &constants,
+        )
+    }
+    pub(super) fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_count, ctx, "grid_count", 3, BindingTypes::default(), 0, &[])
+    }
+    pub(super) fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scan, ctx, "grid_scan", 2, BindingTypes::default(), 4, &[])
+    }
+    pub(super) fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, BindingTypes::default(), 4, &[])
+    }
+    pub(super) fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, BindingTypes::default(), 0, &[])
+    }
+    pub(super) fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        Self::get(&self.grid_rank, ctx, "grid_rank", 4, GRID_RANK_BINDING_TYPES, 0, &[])
+    }
+    pub(super) fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        // The integrator's camera kernel; both take the same bindings (render_pt reads no maps).
+        let name = self.scene_kernel(if self.variant.path_traced { "render_pt" } else { "render" });
+        let constants = self.variant.specialization();
+        Self::get(
+            &self.render,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 8,
+            RENDER_BINDING_TYPES,
+            size_of::<DispatchRange>(),
+            &constants,
+        )
+    }
+
+    /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
+    /// keeping the kernels saves per pass (`photonix bench --passes`).
+    pub fn time_creation(ctx: &GpuContext) -> Result<Vec<(&'static str, f64)>, GpuError> {
+        let k = GpuKernels::default();
+        let mut out = Vec::new();
+        let mut timed = |name: &'static str, f: &dyn Fn() -> Result<(), GpuError>| -> Result<(), GpuError> {
+            let t = Instant::now();
+            f()?;
+            out.push((name, t.elapsed().as_secs_f64()));
+            Ok(())
+        };
+        timed("emit_photons", &|| k.emit_photons(ctx).map(drop))?;
+        timed("grid_count", &|| k.grid_count(ctx).map(drop))?;
+        timed("grid_scan", &|| k.grid_scan(ctx).map(drop))?;
+        timed("grid_scan_add", &|| k.grid_scan_add(ctx).map(drop))?;
+        timed("grid_scatter", &|| k.grid_scatter(ctx).map(drop))?;
+        timed("grid_rank", &|| k.grid_rank(ctx).map(drop))?;
+        timed("render", &|| k.render(ctx).map(drop))?;
+        Ok(out)
+    }
+
+    /// Creates now every kernel a render with (`photons` true) or without photon maps uses, so
+    /// that the cost falls into set-up rather than into the first pass.
+    pub fn create_all(&self, ctx: &GpuContext, photons: bool) -> Result<(), GpuError> {
+        if photons {
+            self.emit_photons(ctx)?;
+            self.grid_count(ctx)?;
+            self.grid_scan(ctx)?;
+            self.grid_scan_add(ctx)?;
+            self.grid_scatter(ctx)?;
+            self.grid_rank(ctx)?;
+        }
+        self.render(ctx)?;
+        Ok(())
+    }
+}

@@ -1,0 +1,13 @@
+//! Rendering on a Vulkan device, by stage: the kernels (`kernels`), the scene's upload
+//! (`scene`), the light stage that traces photons and builds their grids (`maps`), and the camera
+//! stage with the renderer that drives them pass after pass (`camera`).
+
+mod camera;
+mod kernels;
+mod maps;
+mod scene;
+
+pub use camera::{render_gpu, GpuRenderer};
+pub use kernels::{GpuKernels, SCENE_BINDING_TYPES};
+pub use maps::{build_maps_gpu, DeviceMap, DeviceMaps};
+pub use scene::DeviceScene;
