@@ -208,9 +208,11 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
             if cos_l > 0.0 {
                 let emitted = material_emission(s, m, &h);
                 if emitted != Vec3::ZERO {
-                    let p = &s.primitives[hit_primitive(s, prim) as usize];
-                    let w = if prev_pdf > 0.0 && p.light != NO_LIGHT && hit_primitive(s, prim) == prim {
-                        let l = &s.lights[p.light as usize];
+                    // An instance's hit names its object's primitive, which is no light.
+                    let hp = hit_primitive(s, prim);
+                    let light = s.primitives[hp as usize].light;
+                    let w = if prev_pdf > 0.0 && light != NO_LIGHT && hp == prim {
+                        let l = &s.lights[light as usize];
                         let p_light = l.pick_probability * light_pdf(s, l, d, (h.p - prev_p).length(), cos_l);
                         mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, p_light)
                     } else {
