@@ -161,6 +161,33 @@ struct EmitParams {
     uint _pad[3];
 };
 
+struct LightVertex {
+    float origin[3];
+    uint hit;
+    float direction[3];
+    float t;
+    float throughput[3];
+    uint path_length;
+    float d_vcm;
+    float d_vc;
+    float d_vm;
+    uint flags;
+};
+
+struct VcmParams {
+    uint sample_index;
+    uint light_paths;
+    uint vertex_slots;
+    uint techniques;
+    float radius;
+    float vm_weight;
+    float vc_weight;
+    float vm_normalization;
+    uint path_begin;
+    uint path_count;
+    uint _pad[2];
+};
+
 // Stores a Photon field by field: glslang emits an invalid whole-struct OpStore when the value
 // comes from a block of another layout (the validation layer rejects the module).
 #define STORE_PHOTON(array, index, value) { Photon v_ = value; uint i_ = index; \

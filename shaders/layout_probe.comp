@@ -21,6 +21,8 @@ layout(std430, binding = 8) buffer Grids { GridParams grids[]; };
 layout(std430, binding = 9) buffer Emits { EmitParams emits[]; };
 layout(std430, binding = 10) buffer Media { Medium media[]; };
 layout(std430, binding = 11) buffer Shadings { TriangleShading shadings[]; };
+layout(std430, binding = 12) buffer LightVertices { LightVertex light_vertices[]; };
+layout(std430, binding = 13) buffer VcmParamsArray { VcmParams vcm_params[]; };
 
 void main() {
     // Element 1 of each buffer becomes a field-by-field copy of element 0.
@@ -36,4 +38,6 @@ void main() {
     shadings[1] = shadings[0];
     emits[1] = emits[0];
     media[1] = media[0];
+    light_vertices[1] = light_vertices[0];
+    vcm_params[1] = vcm_params[0];
 }

@@ -148,6 +148,9 @@ pub struct LightSample {
     /// pick probability; `light_pdf` gives the same number for a ray that meets the light):
     /// 0 for a light no ray can meet (point, spot, a distant light without a visible disc).
     pub pdf: f32,
+    /// Cosine at the light between its normal and -wi (area lights; 1 for the others): what
+    /// vertex connection and merging turns densities by area into densities by solid angle with.
+    pub cos_l: f32,
 }
 
 /// The solid-angle density `light_sample` would have drawn direction `wi` with from a point
@@ -188,7 +191,7 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             let (wi, weight) = environment_sample(s, l, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
             let pdf = environment_pdf(s, l, wi);
-            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon, pdf }
+            LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon, pdf, cos_l: 1.0 }
         }
         LIGHT_AREA => {
             // By area (see `shape_sample` for the density): L cos' / d^2 over the point's pdf.
@@ -205,14 +208,21 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             // The shadow ray stops short of the point by its offset over the cosine there: a hit on
             // the light's own surface moves along a grazing ray by its error over that cosine.
             let pdf = light_pdf(s, l, wi, dist2.sqrt(), cos_l);
-            LightSample { p: h.p, wi, weight, eps: h.eps / cos_l.max(1e-2), pdf }
+            LightSample { p: h.p, wi, weight, eps: h.eps / cos_l.max(1e-2), pdf, cos_l }
         }
         LIGHT_DISTANT => {
             // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
             let wi = -cone_direction(Vec3::from(l.direction), l.cos_outer, u);
             let beyond = (x - Vec3::from(l.position)).length() + 2.0 * l.radius;
             let pdf = light_pdf(s, l, wi, 0.0, 0.0);
-            LightSample { p: x + wi * beyond, wi, weight: Vec3::from(l.intensity), eps: s.frame.ray_epsilon, pdf }
+            LightSample {
+                p: x + wi * beyond,
+                wi,
+                weight: Vec3::from(l.intensity),
+                eps: s.frame.ray_epsilon,
+                pdf,
+                cos_l: 1.0,
+            }
         }
         _ => {
             // Point and spot lights: I(w) / d^2.
@@ -221,7 +231,7 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
             let weight = Vec3::from(l.intensity) * (spot_falloff(l, -wi) / dist2);
-            LightSample { p, wi, weight, eps: s.frame.ray_epsilon, pdf: 0.0 }
+            LightSample { p, wi, weight, eps: s.frame.ray_epsilon, pdf: 0.0, cos_l: 1.0 }
         }
     }
 }
@@ -233,12 +243,32 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
 /// uniform point of the disc of the scene's bounding sphere that faces them, uniformly in their
 /// cone of directions.
 pub fn light_emit(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) -> (Vec3, Vec3, Vec3) {
+    let e = light_emission(s, l, u_pos, u_dir);
+    (e.origin, e.direction, e.power)
+}
+
+/// A ray leaving a light (see `light_emit`) with the cosine at its origin between the light's
+/// normal and the direction (area lights; 1 for the others).
+pub struct Emission {
+    pub origin: Vec3,
+    pub direction: Vec3,
+    pub power: Vec3,
+    pub cos_l: f32,
+}
+
+pub fn light_emission(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) -> Emission {
     let axis = Vec3::from(l.direction);
     match l.kind {
         LIGHT_AREA => {
             let (h, inv_pdf) = shape_sample(s, l.primitive, u_pos);
             let emitted = material_emission(s, &s.materials[h.material as usize], &h);
-            (h.p + h.ng * h.eps, cosine_direction(h.ng, u_dir), PI * inv_pdf * emitted)
+            let direction = cosine_direction(h.ng, u_dir);
+            Emission {
+                origin: h.p + h.ng * h.eps,
+                direction,
+                power: PI * inv_pdf * emitted,
+                cos_l: direction.dot(h.ng),
+            }
         }
         LIGHT_DISTANT | LIGHT_ENVIRONMENT => {
             // The environment: a direction toward it, then a disc facing it, as for a distant light.
@@ -251,18 +281,21 @@ pub fn light_emit(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]) ->
             let (t, b) = onb(axis);
             let q = disc_point(u_pos);
             let (qx, qy) = (q[0] * l.radius, q[1] * l.radius);
-            let o = Vec3::from(l.position) - axis * l.radius + qx * t + qy * b;
+            let origin = Vec3::from(l.position) - axis * l.radius + qx * t + qy * b;
             if l.kind == LIGHT_ENVIRONMENT {
                 // Radiance over the direction's pdf, through the whole disc.
-                return (o, axis, env_weight * (PI * l.radius * l.radius));
+                let power = env_weight * (PI * l.radius * l.radius);
+                return Emission { origin, direction: axis, power, cos_l: 1.0 };
             }
             let d = cone_direction(axis, l.cos_outer, u_dir);
             // Flux through the disc: radiance times solid angle times the projected disc area.
-            (o, d, Vec3::from(l.intensity) * (PI * l.radius * l.radius * d.dot(axis)))
+            let power = Vec3::from(l.intensity) * (PI * l.radius * l.radius * d.dot(axis));
+            Emission { origin, direction: d, power, cos_l: 1.0 }
         }
         _ => {
             let d = cone_direction(axis, l.cos_outer, u_dir);
-            (Vec3::from(l.position), d, Vec3::from(l.intensity) * (2.0 * PI * (1.0 - l.cos_outer) * spot_falloff(l, d)))
+            let power = Vec3::from(l.intensity) * (2.0 * PI * (1.0 - l.cos_outer) * spot_falloff(l, d));
+            Emission { origin: Vec3::from(l.position), direction: d, power, cos_l: 1.0 }
         }
     }
 }

@@ -24,6 +24,7 @@ pub mod shading;
 pub mod shape;
 pub mod texture;
 pub mod trace;
+pub mod vcm;
 pub mod voxel;
 
 use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Primitive, Texture};

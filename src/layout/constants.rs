@@ -414,6 +414,39 @@ shared_constants! {
     /// Emission met by BSDF-sampled path rays.
     TECHNIQUE_BSDF: u32 = 2;
     TECHNIQUES_ALL: u32 = 3;
+    /// Bidirectional path tracing: vertex connection (SmallVCM's bpt mode), vcm.rs.
+    INTEGRATOR_BPT: u32 = 2;
+    /// Vertex connection and merging (Georgiev et al. 2012), vcm.rs.
+    INTEGRATOR_VCM: u32 = 3;
+    /// `VcmParams::techniques`: connections (light sampling, emission met, light sub-path
+    /// vertices joined to camera vertices and to the camera itself: the bpt estimators).
+    VCM_CONNECT: u32 = 1;
+    /// Merging: camera vertices take the light vertices within the radius (a photon estimate).
+    VCM_MERGE: u32 = 2;
+    /// Checks only (tests/integrators.rs): light tracing alone (light vertices seen by the camera,
+    /// and the emission the camera sees directly), weight 1.
+    VCM_LIGHT_TRACE_ONLY: u32 = 4;
+    /// Checks only: merging alone, at the first non-delta camera vertex, weight 1 (SmallVCM's ppm).
+    VCM_MERGE_ONLY: u32 = 8;
+    /// `LightVertex::flags`: the light sub-path met a delta vertex before its first non-delta one.
+    VERTEX_SPECULAR_FIRST: u32 = 0x1_0000;
+    VERTEX_DIFFUSE_MASK: u32 = 0xffff;
+    /// Random dimensions of light sub-paths: `RNG_VCM_LIGHT_DOMAIN + vertex *
+    /// RNG_DIMS_PER_BOUNCE + offset`, with stream = the light path's index.
+    RNG_VCM_LIGHT_DOMAIN: u32 = 0x6000_0000;
+    /// Light tracing splats into an image of 64-bit fixed-point sums, two words each (low, high):
+    /// integer additions are exact and commute, so the image does not depend on the order the
+    /// atomics land in. A splat value v adds floor(v) to the high word and fract(v) 2^32 to the
+    /// low, carrying; values are clamped to `SPLAT_MAX`.
+    SPLAT_MAX: f32 = 1.0e9;
+    /// The merging radius: `VCM_RADIUS_VERTICES` light vertices in a disc of it, were one vertex
+    /// per light path spread evenly over the scene's surfaces, shrinking as
+    /// (sample + 1)^((alpha - 1) / 2) with `VCM_ALPHA` (SmallVCM's 0.75).
+    VCM_RADIUS_VERTICES: f32 = 4.0;
+    VCM_ALPHA: f32 = 0.75;
+    /// Most light vertices stored per sample (64 bytes each): a larger image draws fewer light
+    /// paths than it has pixels.
+    VCM_MAX_LIGHT_VERTICES: u32 = 1 << 21;
     /// Photon maps of the camera kernel's lookups (`grids[]` index).
     MAP_GLOBAL: u32 = 0;
     MAP_CAUSTIC: u32 = 1;

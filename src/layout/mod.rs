@@ -294,6 +294,49 @@ gpu_structs! {
         pub uv: [f32; 6],
         pub normals: [f32; 9],
     }
+
+    /// A vertex of a light sub-path (`integrator = "vcm" | "bpt"`), 64 bytes: the ray that met it
+    /// (origin, direction, distance and the hit name, from which `shape_hit` rebuilds the surface
+    /// point for connections), the light sub-path's throughput (flux, before the division by the
+    /// path count) and the partial MIS quantities of SmallVCM's recursion (dVCM, dVC, dVM).
+    /// `path_length` counts scattering vertices from the light (0: an empty slot); `flags` holds the
+    /// non-delta vertices before this one (low 16 bits) and `VERTEX_SPECULAR_FIRST`.
+    pub struct LightVertex {
+        pub origin: [f32; 3],
+        pub hit: u32,
+        pub direction: [f32; 3],
+        pub t: f32,
+        pub throughput: [f32; 3],
+        pub path_length: u32,
+        pub d_vcm: f32,
+        pub d_vc: f32,
+        pub d_vm: f32,
+        pub flags: u32,
+    }
+
+    /// The constants of one sample of vertex connection and merging, 48 bytes (push constants of
+    /// the light-path kernel; the camera kernel reads them from its own buffer). See `cpu::vcm`.
+    pub struct VcmParams {
+        pub sample_index: u32,
+        /// Light sub-paths of the sample; camera path p connects to light path p mod this.
+        pub light_paths: u32,
+        /// Vertex slots per light path (the frame's `max_depth`).
+        pub vertex_slots: u32,
+        /// `VCM_*` techniques in use.
+        pub techniques: u32,
+        /// The merging radius of this sample.
+        pub radius: f32,
+        /// SmallVCM's misVmWeightFactor and misVcWeightFactor: Mis(eta) and Mis(1 / eta) with
+        /// eta = pi r^2 light_paths, 0 for a technique not in use.
+        pub vm_weight: f32,
+        pub vc_weight: f32,
+        /// 1 / (pi r^2 light_paths): a merge's density estimate.
+        pub vm_normalization: f32,
+        /// First light path of this dispatch and how many it traces.
+        pub path_begin: u32,
+        pub path_count: u32,
+        pub _pad: [u32; 2],
+    }
 }
 
 impl BvhNode {

@@ -24,7 +24,9 @@ pub use renderer::Renderer;
 
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
-use crate::layout::constants::{INTEGRATOR_PPM, INTEGRATOR_PT, LAYER_COUNT, LAYER_DIRECT};
+use crate::layout::constants::{
+    INTEGRATOR_BPT, INTEGRATOR_PPM, INTEGRATOR_PT, INTEGRATOR_VCM, LAYER_COUNT, LAYER_DIRECT,
+};
 use crate::layout::{DispatchRange, FrameParams};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -337,6 +339,9 @@ pub fn render_cpu(
         view.maps = maps.view();
     }
 
+    if frame.integrator == INTEGRATOR_BPT || frame.integrator == INTEGRATOR_VCM {
+        return render_vcm_cpu(buffers, &view, spp, pass, stages, progress);
+    }
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
     let band_rows = stop_band_rows(frame.width, frame.height);
@@ -361,6 +366,56 @@ pub fn render_cpu(
     }
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
+    let stats = RenderStats {
+        stages,
+        rays,
+        samples_per_pixel: spp,
+        device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
+        ..Default::default()
+    };
+    RenderOutput { image: layers.combined(), layers, stats, complete }
+}
+
+/// A pass of the bidirectional integrators on the CPU: per sample, the light stage, then the
+/// camera stage band by band (a sample's bands all read its light sub-paths).
+fn render_vcm_cpu(
+    buffers: &SceneBuffers,
+    view: &crate::cpu::SceneView,
+    spp: u32,
+    pass: u32,
+    mut stages: Vec<(String, Duration)>,
+    progress: &mut dyn FnMut(u64, u64),
+) -> RenderOutput {
+    let frame = *view.frame;
+    let mut layers = Layers::new(frame.width, frame.height);
+    let band_rows = stop_band_rows(frame.width, frame.height);
+    let total = frame.height as u64 * spp as u64;
+    let mut done = 0;
+    let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
+    let mut complete = true;
+    let (mut light_time, mut camera_time) = (Duration::ZERO, Duration::ZERO);
+    'samples: for sample in 0..spp {
+        let sample_index = pass * spp + sample;
+        let t = Instant::now();
+        let params = crate::cpu::vcm::vcm_params(&frame, buffers.surface_area, sample_index);
+        let stage = crate::cpu::vcm::light_stage(view, &params);
+        light_time += t.elapsed();
+        let t = Instant::now();
+        for unit in work_units(frame.height, 1, 1, band_rows, sample_index) {
+            if stop_requested() {
+                complete = false;
+                break 'samples;
+            }
+            let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
+            crate::cpu::vcm::render_vcm(view, &params, &stage, &unit, band);
+            done += unit_paths(&unit);
+            progress(done, total);
+        }
+        camera_time += t.elapsed();
+    }
+    let rays = resolve_band(&mut layers, 0, &accumulation, spp);
+    stages.push(("light paths".to_string(), light_time));
+    stages.push(("render".to_string(), camera_time));
     let stats = RenderStats {
         stages,
         rays,

@@ -201,11 +201,17 @@ pub enum Integrator {
     Ppm,
     /// Path tracing with light sampling, weighed by multiple importance sampling; no photons.
     Pt,
+    /// Bidirectional path tracing: light sub-paths connected to camera sub-paths (`cpu::vcm`).
+    Bpt,
+    /// Vertex connection and merging: bidirectional path tracing plus merging with light
+    /// vertices nearby, all weighed by multiple importance sampling (`cpu::vcm`).
+    Vcm,
 }
 
 impl Integrator {
     /// Every integrator by its name in scene files and on the command line.
-    pub const NAMES: &'static [(&'static str, Integrator)] = &[("ppm", Integrator::Ppm), ("pt", Integrator::Pt)];
+    pub const NAMES: &'static [(&'static str, Integrator)] =
+        &[("ppm", Integrator::Ppm), ("pt", Integrator::Pt), ("bpt", Integrator::Bpt), ("vcm", Integrator::Vcm)];
 
     pub fn from_name(name: &str) -> Option<Integrator> {
         Self::NAMES.iter().find(|(n, _)| *n == name).map(|&(_, i)| i)
@@ -220,7 +226,14 @@ impl Integrator {
         match self {
             Integrator::Ppm => crate::layout::constants::INTEGRATOR_PPM,
             Integrator::Pt => crate::layout::constants::INTEGRATOR_PT,
+            Integrator::Bpt => crate::layout::constants::INTEGRATOR_BPT,
+            Integrator::Vcm => crate::layout::constants::INTEGRATOR_VCM,
         }
+    }
+
+    /// Whether the integrator traces light sub-paths each sample (`cpu::vcm`).
+    pub fn is_bidirectional(self) -> bool {
+        matches!(self, Integrator::Bpt | Integrator::Vcm)
     }
 
     /// Whether the integrator reads photon maps (and so traces photons each pass).

@@ -1,0 +1,808 @@
+//! Vertex connection and merging (`integrator = "vcm"`) and bidirectional path tracing (`"bpt"`,
+//! the same algorithm without merging), after SmallVCM (Georgiev, Křivánek, Davidovič and
+//! Slusallek, "Light transport simulation with vertex connection and merging", 2012, and the
+//! "Implementing VCM" report); twin of `shaders/vcm_light.comp` and `shaders/render_vcm.comp`.
+//!
+//! Each sample is two stages. The light stage traces `VcmParams::light_paths` light sub-paths,
+//! stores their non-delta vertices (`LightVertex`, a fixed run of slots per path) and connects
+//! each to the camera (light tracing), splatting into an image of fixed-point sums. The camera
+//! stage traces one camera sub-path per pixel; at each non-delta vertex it samples a light,
+//! connects to every vertex of the light path of its own index, and merges with the light
+//! vertices within the radius (a photon density estimate over the hashed grid the photon maps
+//! use), adding the pixel's splats at the end. Every contribution is weighed by the power
+//! heuristic over all techniques that could have made its path, computed by SmallVCM's recursion
+//! (dVCM, dVC, dVM per sub-path, updated at each vertex) without visiting the path again.
+//!
+//! Directions follow the BSDF convention: `wo` toward the camera side, `wi` toward the light side;
+//! at a light vertex the camera side is where the connection goes, so a light sub-path evaluates
+//! `bsdf_eval(b, w_out, w_in)`, the same function of the same path a camera path evaluates (the
+//! adjoint, for our BSDFs; shading normals are taken as they are, the usual approximation).
+//!
+//! Densities of light sampling and emission use each light's uniform density by area (as `pt`'s
+//! weights do): multiple importance sampling needs only that every technique weighs a path by the
+//! same functions. Russian roulette stays out of the weights (as in pbrt's BDPT).
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::bsdf::{
+    bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_pdf, bsdf_sample, material_bsdf, material_emission, Bsdf,
+};
+use super::grid::for_each_photon_near;
+use super::grid_build::{build_grid, grid_params};
+use super::instance::hit_primitive;
+use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
+use super::render_pt::path_layer;
+use super::rng::{rand1, rand2, rand4};
+use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip};
+use super::shape::{shape_hit, Hit};
+use super::trace::trace_ray;
+use super::SceneView;
+use crate::layout::constants::*;
+use crate::layout::{DispatchRange, FrameParams, GridParams, Light, LightVertex, Photon, VcmParams};
+
+/// The heuristic's power of a density (Veach's beta = 2; SmallVCM's `Mis`).
+pub fn mis(x: f32) -> f32 {
+    x * x
+}
+
+/// Whether light sub-paths can reach the camera: a pinhole perspective camera. Thin lenses and
+/// the other projections leave light tracing out (and the weights with it).
+pub fn camera_connectable(f: &FrameParams) -> bool {
+    f.camera_kind == CAMERA_PERSPECTIVE && f.lens_radius <= 0.0
+}
+
+/// Film area of one pixel on the plane `camera_forward` away (`camera_right` and `camera_up`
+/// span half the film).
+pub fn camera_pixel_area(f: &FrameParams) -> f32 {
+    4.0 * Vec3::from(f.camera_right).length() * Vec3::from(f.camera_up).length() / (f.width * f.height) as f32
+}
+
+/// Solid-angle density, per pixel, of the camera's rays along a direction of cosine `cos` to the
+/// view axis: a point uniform on one pixel of the film, seen from the eye (SmallVCM's
+/// imageToSolidAngleFactor).
+pub fn camera_pdf_w(f: &FrameParams, cos: f32) -> f32 {
+    let fd2 = Vec3::from(f.camera_forward).length_squared();
+    fd2 / (cos * cos * cos * camera_pixel_area(f))
+}
+
+/// The pixel (index) whose film holds the image of world point `x`, if any.
+pub fn camera_pixel(f: &FrameParams, x: Vec3) -> Option<u32> {
+    let v = x - Vec3::from(f.camera_position);
+    let (fw, r, u) = (Vec3::from(f.camera_forward), Vec3::from(f.camera_right), Vec3::from(f.camera_up));
+    let k = v.dot(fw) / fw.length_squared();
+    if k <= 0.0 {
+        return None;
+    }
+    let sx = v.dot(r) / (k * r.length_squared());
+    let sy = v.dot(u) / (k * u.length_squared());
+    let fx = 0.5 * (sx + 1.0) * f.width as f32;
+    let fy = 0.5 * (1.0 - sy) * f.height as f32;
+    if !(fx >= 0.0 && fy >= 0.0 && fx < f.width as f32 && fy < f.height as f32) {
+        return None;
+    }
+    Some((fy as u32).min(f.height - 1) * f.width + (fx as u32).min(f.width - 1))
+}
+
+/// Splat value `v` >= 0 as the (low, high) words of its 64-bit fixed-point sum: 32 bits of
+/// fraction. Both words follow from exact f32 operations, so both twins add the same integers.
+pub fn splat_words(v: f32) -> (u32, u32) {
+    let v = v.clamp(0.0, SPLAT_MAX);
+    let whole = v.floor();
+    (((v - whole) * 4_294_967_296.0) as u32, whole as u32)
+}
+
+/// The f32 a fixed-point sum reads back as.
+pub fn splat_value(low: u32, high: u32) -> f32 {
+    high as f32 + low as f32 * (1.0 / 4_294_967_296.0)
+}
+
+/// The light sample's densities that the weights need, before the pick probability: the
+/// solid-angle density of drawing it from the shading point (SmallVCM's directPdfW), the density
+/// of a light sub-path leaving the light the same way (emissionPdfW: by area times solid angle
+/// for finite lights, by solid angle times the scene disc's area for infinite ones) and the
+/// cosine at the light.
+fn illumination_pdfs(s: &SceneView, l: &Light, wi: Vec3, dist: f32, pdf: f32, cos_l: f32) -> (f32, f32, f32) {
+    let disc = std::f32::consts::PI * l.radius * l.radius;
+    match l.kind {
+        LIGHT_AREA => (pdf, cos_l / (std::f32::consts::PI * l.area), cos_l),
+        LIGHT_ENVIRONMENT => (pdf, environment_pdf(s, l, wi) / disc, 1.0),
+        LIGHT_DISTANT if l.area > 0.0 => (pdf, 1.0 / (l.area * disc), 1.0),
+        LIGHT_DISTANT => (1.0, 1.0 / disc, 1.0),
+        // Point and spot lights: uniform in their cone.
+        _ => (dist * dist, 1.0 / (2.0 * std::f32::consts::PI * (1.0 - l.cos_outer)), 1.0),
+    }
+}
+
+/// Whether light `l` is a delta light (no ray meets it: point, spot, distant without a disc).
+fn light_is_delta(l: &Light) -> bool {
+    match l.kind {
+        LIGHT_AREA | LIGHT_ENVIRONMENT => false,
+        LIGHT_DISTANT => l.area <= 0.0,
+        _ => true,
+    }
+}
+
+/// Densities of a non-delta lobe choice at a vertex: the solid-angle density of sampling `wi`
+/// from `wo` (with the probability of taking the non-delta lobes) and the reverse.
+fn lobe_pdfs(b: &Bsdf, wo: Vec3, wi: Vec3) -> (f32, f32) {
+    let forward = (1.0 - bsdf_path_probability(b, wo)) * bsdf_pdf(b, wo, wi);
+    let reverse = (1.0 - bsdf_path_probability(b, wi)) * bsdf_pdf(b, wi, wo);
+    (forward, reverse)
+}
+
+/// |cos| to the shading normal, or 1 at a medium's scattering point.
+fn abs_cos(b: &Bsdf, w: Vec3) -> f32 {
+    if b.kind == MATERIAL_PHASE {
+        1.0
+    } else {
+        b.ns.dot(w).abs()
+    }
+}
+
+/// A sub-path's state: its throughput and SmallVCM's partial weights.
+#[derive(Clone, Copy, Debug)]
+struct SubPath {
+    throughput: Vec3,
+    d_vcm: f32,
+    d_vc: f32,
+    d_vm: f32,
+}
+
+impl SubPath {
+    /// Arriving at a vertex `dist` away at cosine `cos_in` (`far` false: the first segment of an
+    /// infinite light's path, whose density is by area of the scene's disc already).
+    fn arrive(&mut self, dist: f32, cos_in: f32, far: bool) {
+        if far {
+            self.d_vcm *= mis(dist * dist);
+        }
+        let c = mis(cos_in);
+        self.d_vcm /= c;
+        self.d_vc /= c;
+        self.d_vm /= c;
+    }
+
+    /// Leaving a vertex along a sampled direction of cosine `cos_out`: through a delta lobe, or a
+    /// non-delta one with densities `pdf` (forward, including the lobe choice) and `reverse`.
+    fn scatter(&mut self, p: &VcmParams, delta: bool, cos_out: f32, pdf: f32, reverse: f32) {
+        if delta {
+            self.d_vcm = 0.0;
+            self.d_vc *= mis(cos_out);
+            self.d_vm *= mis(cos_out);
+        } else {
+            let g = mis(cos_out / pdf);
+            self.d_vc = g * (self.d_vc * mis(reverse) + self.d_vcm + p.vm_weight);
+            self.d_vm = g * (self.d_vm * mis(reverse) + self.d_vcm * p.vc_weight + 1.0);
+            self.d_vcm = mis(1.0 / pdf);
+        }
+    }
+}
+
+/// Whether a technique is on.
+fn has(p: &VcmParams, t: u32) -> bool {
+    p.techniques & t != 0
+}
+
+/// The sample's parameters: the light path count, the merging radius of sample `sample_index`
+/// and the weights' factors, for an integrator (`INTEGRATOR_BPT` or `_VCM`) and the frame's
+/// techniques (`TECHNIQUES_ALL`, or one `VCM_*_ONLY` check).
+pub fn vcm_params(f: &FrameParams, surface_area: f32, sample_index: u32) -> VcmParams {
+    let slots = f.max_depth.max(1);
+    let light_paths = (f.width * f.height).min(VCM_MAX_LIGHT_VERTICES / slots).max(1);
+    let techniques = match f.techniques {
+        VCM_LIGHT_TRACE_ONLY => VCM_LIGHT_TRACE_ONLY,
+        VCM_MERGE_ONLY => VCM_MERGE_ONLY,
+        _ if f.integrator == INTEGRATOR_VCM => VCM_CONNECT | VCM_MERGE,
+        _ => VCM_CONNECT,
+    };
+    let base = (VCM_RADIUS_VERTICES * surface_area / (std::f32::consts::PI * light_paths as f32)).sqrt();
+    let radius = base * ((sample_index as f64 + 1.0).powf((VCM_ALPHA as f64 - 1.0) / 2.0)) as f32;
+    let eta = std::f32::consts::PI * radius * radius * light_paths as f32;
+    VcmParams {
+        sample_index,
+        light_paths,
+        vertex_slots: slots,
+        techniques,
+        radius,
+        vm_weight: if techniques & VCM_MERGE != 0 { mis(eta) } else { 0.0 },
+        vc_weight: if techniques & VCM_CONNECT != 0 { mis(1.0 / eta) } else { 0.0 },
+        vm_normalization: 1.0 / eta,
+        path_begin: 0,
+        path_count: light_paths,
+        _pad: [0; 2],
+    }
+}
+
+/// The light stage's results on the CPU: vertex slots (`vertex_slots` per path, unused ones with
+/// `path_length` 0), their grid for merging, and the light-tracing image (per pixel and layer,
+/// r g b, each a 64-bit fixed-point sum).
+pub struct LightStage {
+    pub vertices: Vec<LightVertex>,
+    pub grid: GridParams,
+    /// Light vertices as grid points: position, then (path, slot) in the two other words.
+    pub points: Vec<Photon>,
+    pub starts: Vec<u32>,
+    pub splats: Vec<u64>,
+}
+
+impl LightStage {
+    /// The pixel's light-tracing terms, as the kernel reads them.
+    pub fn splat_terms(&self, pixel: u32) -> [Vec3; 4] {
+        let mut terms = [Vec3::ZERO; 4];
+        let base = (pixel * LAYER_COUNT * 3) as usize;
+        for (layer, t) in terms.iter_mut().enumerate() {
+            let c = |k: usize| {
+                let v = self.splats[base + layer * 3 + k];
+                splat_value(v as u32, (v >> 32) as u32)
+            };
+            *t = Vec3::new(c(0), c(1), c(2));
+        }
+        terms
+    }
+}
+
+/// The grid a sample's light vertices merge through.
+pub fn vertex_grid(p: &VcmParams, points: u32) -> GridParams {
+    grid_params(p.radius, points, 1.0)
+}
+
+/// Runs the light stage of a sample: every light path, its vertices, its splats.
+pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
+    let f = s.frame;
+    let slots = p.vertex_slots as usize;
+    let splats: Vec<AtomicU64> = (0..(f.width * f.height * LAYER_COUNT * 3)).map(|_| AtomicU64::new(0)).collect();
+    let mut vertices = vec![LightVertex::default(); p.light_paths as usize * slots];
+    vertices.par_chunks_mut(slots).enumerate().for_each(|(path, out)| {
+        trace_light_path(s, p, path as u32, out, &mut |pixel, layer, v| {
+            let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
+            for (k, c) in [v.x, v.y, v.z].into_iter().enumerate() {
+                let (low, high) = splat_words(c);
+                splats[base + k].fetch_add(((high as u64) << 32) | low as u64, Ordering::Relaxed);
+            }
+        });
+    });
+    let mut points = Vec::new();
+    if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
+        for (i, v) in vertices.iter().enumerate().filter(|(_, v)| v.path_length > 0) {
+            points.push(Photon {
+                position: light_vertex_hit(s, v).p.into(),
+                flux_rg: (i / slots) as u32,
+                flux_b_dir: (i % slots) as u32,
+            });
+        }
+    }
+    let grid = vertex_grid(p, points.len() as u32);
+    let (points, starts) = build_grid(&points, &grid);
+    LightStage { vertices, grid, points, starts, splats: splats.into_iter().map(AtomicU64::into_inner).collect() }
+}
+
+/// The surface point of a stored light vertex, rebuilt from the ray that met it.
+fn light_vertex_hit(s: &SceneView, v: &LightVertex) -> Hit {
+    shape_hit(s, v.hit, Vec3::from(v.origin), Vec3::from(v.direction), v.t)
+}
+
+/// Whether nothing blocks the segment from `a` (leaving `ha` toward `dir`) to `target`; counts
+/// the ray.
+fn visible(s: &SceneView, ha: &Hit, skip: u32, target: Vec3, rays: &mut u32) -> bool {
+    let origin = offset_origin(ha, target - ha.p, BSDF_REFLECTION);
+    let to = target - origin;
+    let dist = to.length();
+    *rays += 1;
+    let (prim, _) = trace_ray(s, origin, to / dist, dist * (1.0 - 1e-4) - s.frame.ray_epsilon, true, skip);
+    prim == NO_LIGHT
+}
+
+/// Traces light path `path` of the sample into `out` (its vertex slots) and hands each
+/// light-tracing splat to `splat(pixel, layer, value)`.
+pub fn trace_light_path(
+    s: &SceneView,
+    p: &VcmParams,
+    path: u32,
+    out: &mut [LightVertex],
+    splat: &mut dyn FnMut(u32, u32, Vec3),
+) -> u32 {
+    let f = s.frame;
+    let mut rays = 0;
+    if f.light_count == 0 {
+        return rays;
+    }
+    let sample = p.sample_index;
+    let dim0 = RNG_VCM_LIGHT_DOMAIN;
+    let l = &s.lights[pick_light(s, rand1(path, sample, f.seed, dim0 + RNG_LIGHT_PICK), false) as usize];
+    if l.pick_probability <= 0.0 {
+        return rays;
+    }
+    let e = light_emission(
+        s,
+        l,
+        rand2(path, sample, f.seed, dim0 + RNG_LIGHT_U),
+        rand2(path, sample, f.seed, dim0 + RNG_LIGHT_V),
+    );
+    let disc = std::f32::consts::PI * l.radius * l.radius;
+    let (direct_pdf, emission_pdf) = match l.kind {
+        LIGHT_AREA => (1.0 / l.area, e.cos_l.max(0.0) / (std::f32::consts::PI * l.area)),
+        LIGHT_ENVIRONMENT => {
+            let d = environment_pdf(s, l, -e.direction);
+            (d, d / disc)
+        }
+        LIGHT_DISTANT if l.area > 0.0 => (1.0 / l.area, 1.0 / (l.area * disc)),
+        LIGHT_DISTANT => (1.0, 1.0 / disc),
+        _ => (1.0, 1.0 / (2.0 * std::f32::consts::PI * (1.0 - l.cos_outer))),
+    };
+    if emission_pdf <= 0.0 || e.power == Vec3::ZERO {
+        return rays;
+    }
+    let finite = !matches!(l.kind, LIGHT_DISTANT | LIGHT_ENVIRONMENT);
+    let mut sub = SubPath {
+        throughput: e.power / l.pick_probability,
+        d_vcm: mis(direct_pdf / emission_pdf),
+        d_vc: if light_is_delta(l) {
+            0.0
+        } else {
+            mis((if finite { e.cos_l } else { 1.0 }) / (emission_pdf * l.pick_probability))
+        },
+        d_vm: 0.0,
+    };
+    sub.d_vm = sub.d_vc * p.vc_weight;
+    let (mut o, mut d) = (e.origin, e.direction);
+    let mut skip = NO_LIGHT;
+    // The sub-path's signature so far: non-delta vertices, and whether a delta vertex came first.
+    let (mut diffuse, mut specular_first) = (0u32, false);
+    for k in 1..=p.vertex_slots {
+        rays += 1;
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
+        if prim == NO_LIGHT {
+            break;
+        }
+        let h = shape_hit(s, prim, o, d, t);
+        let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+        let flags = bsdf_flags(&b);
+        if flags == 0 {
+            break;
+        }
+        let wo = -d;
+        sub.arrive(t, abs_cos(&b, wo), k > 1 || finite);
+        if flags & BSDF_ESTIMATE != 0 {
+            out[(k - 1) as usize] = LightVertex {
+                origin: o.into(),
+                hit: prim,
+                direction: d.into(),
+                t,
+                throughput: sub.throughput.into(),
+                path_length: k,
+                d_vcm: sub.d_vcm,
+                d_vc: sub.d_vc,
+                d_vm: sub.d_vm,
+                flags: diffuse | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
+            };
+            if has(p, VCM_CONNECT | VCM_LIGHT_TRACE_ONLY) && camera_connectable(f) {
+                if let Some((pixel, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, ray_skip(s, prim), &mut rays) {
+                    let layer = path_layer(false, diffuse + 1, specular_first);
+                    splat(pixel, layer, v);
+                }
+            }
+        }
+        if k >= p.vertex_slots {
+            break;
+        }
+        let dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
+        let q = bsdf_path_probability(&b, wo);
+        let u = rand4(path, sample, f.seed, dim + RNG_FRESNEL);
+        let delta = u[3] < q;
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        if smp.flags == 0 {
+            break;
+        }
+        let cos_out = abs_cos(&b, smp.wi);
+        let factor = if smp.flags & BSDF_SPECULAR != 0 {
+            sub.scatter(p, true, cos_out, 0.0, 0.0);
+            specular_first |= diffuse == 0;
+            smp.weight / q
+        } else {
+            let (pdf, reverse) = lobe_pdfs(&b, wo, smp.wi);
+            if pdf <= 0.0 {
+                break;
+            }
+            sub.scatter(p, false, cos_out, pdf, reverse);
+            diffuse += 1;
+            // The camera's form of the BSDF: wo toward the camera side.
+            bsdf_eval(&b, smp.wi, wo) * (cos_out / pdf)
+        };
+        sub.throughput *= factor;
+        // Russian roulette on this vertex's own factor (the throughput holds flux, whose scale
+        // says nothing about the path's odds).
+        if k >= PT_ROULETTE_DEPTH {
+            let survive = factor.max_element().min(PT_ROULETTE_MAX);
+            if rand1(path, sample, f.seed, dim + RNG_ROULETTE) >= survive {
+                break;
+            }
+            sub.throughput /= survive;
+        }
+        if sub.throughput == Vec3::ZERO {
+            break;
+        }
+        skip = ray_skip(s, prim);
+        o = offset_origin(&h, wo, smp.flags);
+        d = smp.wi;
+    }
+    rays
+}
+
+/// Light tracing: the light vertex at `h` seen by the camera, as (pixel, value) when nothing is
+/// in the way (SmallVCM's ConnectToCamera).
+#[allow(clippy::too_many_arguments)]
+fn connect_to_camera(
+    s: &SceneView,
+    p: &VcmParams,
+    h: &Hit,
+    b: &Bsdf,
+    wo: Vec3,
+    sub: &SubPath,
+    skip: u32,
+    rays: &mut u32,
+) -> Option<(u32, Vec3)> {
+    let f = s.frame;
+    let eye = Vec3::from(f.camera_position);
+    let pixel = camera_pixel(f, h.p)?;
+    let to_eye = eye - h.p;
+    let dist2 = to_eye.length_squared();
+    let dist = dist2.sqrt();
+    let dir = to_eye / dist;
+    let fr = bsdf_eval(b, dir, wo);
+    if fr == Vec3::ZERO {
+        return None;
+    }
+    let cos_eye = -dir.dot(Vec3::from(f.camera_forward).normalize());
+    let image_to_surface = camera_pdf_w(f, cos_eye) * abs_cos(b, dir) / dist2;
+    let w_light = if has(p, VCM_LIGHT_TRACE_ONLY) {
+        0.0
+    } else {
+        // The density of a camera path arriving from the camera continuing toward the light.
+        let (toward_light, _) = lobe_pdfs(b, dir, wo);
+        mis(image_to_surface / p.light_paths as f32) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(toward_light))
+    };
+    let value = sub.throughput * fr * (image_to_surface / (p.light_paths as f32 * (1.0 + w_light)));
+    if value == Vec3::ZERO || !visible(s, h, skip, eye, rays) {
+        return None;
+    }
+    Some((pixel, value))
+}
+
+/// Loop steps (rays) of one camera path: a path ray per vertex, then per non-delta vertex a
+/// shadow ray toward a light and one per light vertex it connects to.
+pub fn vcm_steps(max_depth: u32) -> u32 {
+    (max_depth + 1) * (2 + max_depth)
+}
+
+/// Adds the terms of the camera path of pixel (`px`, `py`) in the sample to `terms` and the rays
+/// it casts to `rays`.
+#[allow(clippy::too_many_arguments)]
+pub fn radiance_vcm(
+    s: &SceneView,
+    p: &VcmParams,
+    stage: &LightStage,
+    px: u32,
+    py: u32,
+    terms: &mut [Vec3; 4],
+    rays: &mut u32,
+) {
+    let f = s.frame;
+    let stream = py * f.width + px;
+    let sample = p.sample_index;
+    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
+    let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
+    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
+    let light_only = has(p, VCM_LIGHT_TRACE_ONLY);
+    let merge_only = has(p, VCM_MERGE_ONLY);
+    let connect = has(p, VCM_CONNECT);
+    let cos_eye = d.dot(Vec3::from(f.camera_forward).normalize());
+    let mut sub = SubPath {
+        throughput: Vec3::ONE,
+        d_vcm: if camera_connectable(f) { mis(p.light_paths as f32 / camera_pdf_w(f, cos_eye)) } else { 0.0 },
+        d_vc: 0.0,
+        d_vm: 0.0,
+    };
+    let path = stream % p.light_paths;
+    let slots = p.vertex_slots as usize;
+    let light_vertices = &stage.vertices[path as usize * slots..(path as usize + 1) * slots];
+    let mut skip = NO_LIGHT;
+    let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
+    let mut specular_path = true;
+    for m in 1..=f.max_depth + 1 {
+        *rays += 1;
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
+        let layer = path_layer(first_specular, diffuse, specular_after) as usize;
+        // Emission the path meets is taken whole when the camera sees it directly; the check
+        // techniques take only what they cannot make themselves (emission through delta lobes).
+        let single = light_only || merge_only;
+        let emission_allowed = !single || specular_path;
+        let take_whole = m == 1 || single;
+        if prim == NO_LIGHT {
+            if !emission_allowed {
+                break;
+            }
+            for l in s.lights.iter().take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0) {
+                if d.dot(Vec3::from(l.direction)) <= -l.cos_outer {
+                    let disc = std::f32::consts::PI * l.radius * l.radius;
+                    let direct = l.pick_probability / l.area;
+                    let w = if take_whole { 1.0 } else { emission_weight(&sub, direct, direct / disc) };
+                    terms[layer] += sub.throughput * Vec3::from(l.intensity) * (w / l.area);
+                }
+            }
+            if f.environment != NO_LIGHT {
+                let l = &s.lights[f.environment as usize];
+                let direct = l.pick_probability * environment_pdf(s, l, d);
+                let disc = std::f32::consts::PI * l.radius * l.radius;
+                let w = if take_whole { 1.0 } else { emission_weight(&sub, direct, direct / disc) };
+                terms[layer] += sub.throughput * environment_radiance(s, l, d) * w;
+            }
+            break;
+        }
+        let h = shape_hit(s, prim, o, d, t);
+        let mat = &s.materials[h.material as usize];
+        let b = material_bsdf(s, mat, &h);
+        let wo = -d;
+        sub.arrive(t, abs_cos(&b, wo), true);
+        let cos_l = wo.dot(h.ng);
+        if cos_l > 0.0 && emission_allowed {
+            let emitted = material_emission(s, mat, &h);
+            if emitted != Vec3::ZERO {
+                let hp = hit_primitive(s, prim);
+                let light = s.primitives[hp as usize].light;
+                let w = if take_whole || light == NO_LIGHT || hp != prim {
+                    1.0
+                } else {
+                    let l = &s.lights[light as usize];
+                    let direct = l.pick_probability / l.area;
+                    emission_weight(&sub, direct, direct * cos_l / std::f32::consts::PI)
+                };
+                terms[layer] += sub.throughput * emitted * w;
+            }
+        }
+        if m > f.max_depth {
+            break;
+        }
+        let flags = bsdf_flags(&b);
+        if flags == 0 {
+            break;
+        }
+        skip = ray_skip(s, prim);
+        let dim = (m - 1) * RNG_DIMS_PER_BOUNCE;
+        if flags & BSDF_ESTIMATE != 0 {
+            let cam_diffuse = diffuse + 1;
+            if connect {
+                let (v, layer) = (
+                    light_sampling(s, p, &h, &b, wo, &sub, skip, stream, dim, rays),
+                    path_layer(first_specular, cam_diffuse, false),
+                );
+                terms[layer as usize] += sub.throughput * v;
+                for lv in light_vertices.iter().take_while(|v| v.path_length > 0) {
+                    if lv.path_length + m > f.max_depth {
+                        break;
+                    }
+                    let v = connect_vertices(s, p, &h, &b, wo, &sub, skip, lv, rays);
+                    let layer = path_layer(
+                        first_specular,
+                        cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1,
+                        lv.flags & VERTEX_SPECULAR_FIRST != 0,
+                    );
+                    terms[layer as usize] += sub.throughput * v;
+                }
+            }
+            if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
+                let mut merged = [Vec3::ZERO; 4];
+                for_each_photon_near(h.p, &stage.grid, &stage.points, &stage.starts, |pt, _| {
+                    let lv = &stage.vertices[(pt.flux_rg as usize) * slots + pt.flux_b_dir as usize];
+                    if lv.path_length + m - 1 > f.max_depth {
+                        return;
+                    }
+                    let light_dir = -Vec3::from(lv.direction);
+                    let fr = bsdf_eval(&b, wo, light_dir);
+                    if fr == Vec3::ZERO {
+                        return;
+                    }
+                    let w = if merge_only {
+                        1.0
+                    } else {
+                        let (forward, reverse) = lobe_pdfs(&b, wo, light_dir);
+                        let w_light = lv.d_vcm * p.vc_weight + lv.d_vm * mis(forward);
+                        let w_camera = sub.d_vcm * p.vc_weight + sub.d_vm * mis(reverse);
+                        1.0 / (w_light + 1.0 + w_camera)
+                    };
+                    let layer = path_layer(
+                        first_specular,
+                        cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
+                        lv.flags & VERTEX_SPECULAR_FIRST != 0,
+                    );
+                    merged[layer as usize] += fr * Vec3::from(lv.throughput) * w;
+                });
+                for (t, m) in terms.iter_mut().zip(merged) {
+                    *t += sub.throughput * m * p.vm_normalization;
+                }
+                if merge_only {
+                    break;
+                }
+            }
+        }
+        if light_only && flags & BSDF_ESTIMATE != 0 {
+            break;
+        }
+        // The next path ray.
+        let q = bsdf_path_probability(&b, wo);
+        let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
+        let delta = u[3] < q;
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        if smp.flags == 0 {
+            break;
+        }
+        let cos_out = abs_cos(&b, smp.wi);
+        if smp.flags & BSDF_SPECULAR != 0 {
+            sub.scatter(p, true, cos_out, 0.0, 0.0);
+            first_specular |= m == 1;
+            specular_after = diffuse > 0;
+            sub.throughput *= smp.weight / q;
+        } else {
+            let (pdf, reverse) = lobe_pdfs(&b, wo, smp.wi);
+            if pdf <= 0.0 {
+                break;
+            }
+            sub.scatter(p, false, cos_out, pdf, reverse);
+            diffuse += 1;
+            specular_after = false;
+            specular_path = false;
+            sub.throughput *= smp.weight / (1.0 - q);
+        }
+        if m >= PT_ROULETTE_DEPTH {
+            let survive = sub.throughput.max_element().min(PT_ROULETTE_MAX);
+            if rand1(stream, sample, f.seed, dim + RNG_ROULETTE) >= survive {
+                break;
+            }
+            sub.throughput /= survive;
+        }
+        if sub.throughput == Vec3::ZERO {
+            break;
+        }
+        o = offset_origin(&h, wo, smp.flags);
+        d = smp.wi;
+    }
+    // The light tracing that landed on this pixel.
+    for (t, v) in terms.iter_mut().zip(stage.splat_terms(stream)) {
+        *t += v;
+    }
+}
+
+/// The weight of emission met by a camera sub-path, from the light's densities `direct` (light
+/// sampling: by area for finite lights, by solid angle for infinite ones) and `emission` (a
+/// light sub-path leaving it the same way), pick probability included.
+fn emission_weight(sub: &SubPath, direct: f32, emission: f32) -> f32 {
+    1.0 / (1.0 + mis(direct) * sub.d_vcm + mis(emission) * sub.d_vc)
+}
+
+/// Light sampling at a camera vertex (SmallVCM's DirectIllumination): the weighed contribution
+/// (before the camera throughput) when nothing blocks the light.
+#[allow(clippy::too_many_arguments)]
+fn light_sampling(
+    s: &SceneView,
+    p: &VcmParams,
+    h: &Hit,
+    b: &Bsdf,
+    wo: Vec3,
+    sub: &SubPath,
+    skip: u32,
+    stream: u32,
+    dim: u32,
+    rays: &mut u32,
+) -> Vec3 {
+    let f = s.frame;
+    if f.light_count == 0 {
+        return Vec3::ZERO;
+    }
+    let sample = p.sample_index;
+    let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
+    if l.pick_probability <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let ul = rand2(stream, sample, f.seed, dim + RNG_LIGHT_U);
+    let ls = light_sample(s, l, h.p, grid_sample(l.grid, ul, stream, sample));
+    let cos_to_light = abs_cos(b, ls.wi);
+    let fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cos_to_light;
+    if fr == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let dist = (ls.p - h.p).length();
+    let (direct, emission, cos_at_light) = illumination_pdfs(s, l, ls.wi, dist, ls.pdf, ls.cos_l);
+    let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
+    let forward = if light_is_delta(l) { 0.0 } else { forward };
+    let w_light = mis(forward / (l.pick_probability * direct));
+    let w_camera =
+        mis(emission * cos_to_light / (direct * cos_at_light)) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(reverse));
+    let w = 1.0 / (w_light + 1.0 + w_camera);
+    // The shadow ray runs to the sampled point itself, stopping short by the sample's own offset.
+    let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
+    let to_target = ls.p - origin;
+    let length = to_target.length();
+    *rays += 1;
+    let (prim, _) = trace_ray(s, origin, to_target / length, (length - ls.eps).max(0.0), true, skip);
+    if prim != NO_LIGHT {
+        return Vec3::ZERO;
+    }
+    fr * (w / l.pick_probability)
+}
+
+/// A camera vertex joined to light vertex `lv` (SmallVCM's ConnectVertices): the weighed
+/// contribution (before the camera throughput) when nothing is in the way.
+#[allow(clippy::too_many_arguments)]
+fn connect_vertices(
+    s: &SceneView,
+    p: &VcmParams,
+    h: &Hit,
+    b: &Bsdf,
+    wo: Vec3,
+    sub: &SubPath,
+    skip: u32,
+    lv: &LightVertex,
+    rays: &mut u32,
+) -> Vec3 {
+    let lh = light_vertex_hit(s, lv);
+    let to_light = lh.p - h.p;
+    let dist2 = to_light.length_squared();
+    if dist2 <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let dist = dist2.sqrt();
+    let dir = to_light / dist;
+    let fc = bsdf_eval(b, wo, dir);
+    if fc == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let lb = material_bsdf(s, &s.materials[lh.material as usize], &lh);
+    let l_wo = -Vec3::from(lv.direction);
+    let fl = bsdf_eval(&lb, -dir, l_wo);
+    if fl == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let (cos_cam, cos_light) = (abs_cos(b, dir), abs_cos(&lb, dir));
+    let g = cos_cam * cos_light / dist2;
+    let (cam_forward, cam_reverse) = lobe_pdfs(b, wo, dir);
+    let (light_forward, light_reverse) = lobe_pdfs(&lb, l_wo, -dir);
+    // Densities by area at the other end.
+    let cam_to_area = cam_forward * cos_light / dist2;
+    let light_to_area = light_forward * cos_cam / dist2;
+    let w_light = mis(cam_to_area) * (p.vm_weight + lv.d_vcm + lv.d_vc * mis(light_reverse));
+    let w_camera = mis(light_to_area) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(cam_reverse));
+    let w = 1.0 / (w_light + 1.0 + w_camera);
+    let value = fc * fl * Vec3::from(lv.throughput) * (g * w);
+    if value == Vec3::ZERO || !visible(s, h, skip, lh.p + (h.p - lh.p).normalize() * lh.eps, rays) {
+        return Vec3::ZERO;
+    }
+    value
+}
+
+/// Adds the camera stage of `range` (one sample) to `accumulation`, as one dispatch of the
+/// kernel does.
+pub fn render_vcm(
+    s: &SceneView,
+    p: &VcmParams,
+    stage: &LightStage,
+    range: &DispatchRange,
+    accumulation: &mut [[f32; 4]],
+) {
+    let row_len = (s.frame.width * LAYER_COUNT) as usize;
+    accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
+        let py = range.row_begin + row as u32;
+        for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
+            let mut terms = [Vec3::ZERO; 4];
+            let mut rays = 0;
+            radiance_vcm(s, p, stage, px as u32, py, &mut terms, &mut rays);
+            for (layer, term) in acc.iter_mut().zip(terms) {
+                layer[0] += term.x;
+                layer[1] += term.y;
+                layer[2] += term.z;
+            }
+            acc[LAYER_DIRECT as usize][3] += rays as f32;
+        }
+    });
+}
