@@ -271,3 +271,151 @@ fn pt_each_technique_alone_converges_to_the_mis_image() {
     let (light, bsdf, mis) = (results[0].1, results[1].1, results[2].1);
     assert!(mis <= 1.1 * light.min(bsdf), "MIS relMSE {mis} against light {light}, bsdf {bsdf}");
 }
+
+// Vertex connection and merging (`vcm`) and bidirectional path tracing (`bpt`), src/cpu/vcm.rs.
+
+/// Both bidirectional integrators against the shared references (the scenes without media;
+/// media are refused, see below). At 64x64 a sample has 4096 light paths, so vcm's merging
+/// radius is wide and its bias largest here; it shrinks with the samples.
+#[test]
+fn bpt_and_vcm_match_references() {
+    for integrator in [Integrator::Bpt, Integrator::Vcm] {
+        for (name, max_rel_mse) in [("cornell-box", 0.02), ("cornell-caustics", 0.3), ("cornell-glossy", 0.3)] {
+            let scene = shipped(name, integrator);
+            let reference = downsample(&read_exr(&common::reference_path(name)).expect("shared reference"), 4);
+            let image = cpu(&common::buffers(&scene, 64, 64), 16).image;
+            let error = rel_mse(&image, &reference);
+            let ratio = mean_ratio(&image, &reference);
+            println!("{} {name}: relMSE {error:.4}, mean ratio {ratio:.4?}", integrator.name());
+            for r in ratio {
+                assert!((r - 1.0).abs() < 0.025, "{} {name}: mean ratio {ratio:?}", integrator.name());
+            }
+            assert!(error < max_rel_mse, "{} {name}: relMSE {error}", integrator.name());
+        }
+    }
+}
+
+/// The white furnace with every technique: light tracing, connections and merging all carry the
+/// emitting walls' light, and the weights must still sum to one per path.
+#[test]
+fn bpt_and_vcm_furnace_is_one_over_one_minus_albedo() {
+    for integrator in [Integrator::Bpt, Integrator::Vcm] {
+        let mut scene = furnace();
+        scene.render.integrator = integrator;
+        let image = cpu(&common::buffers(&scene, 16, 16), 64).image;
+        let n = image.pixels.len() as f64;
+        let mean: f64 = image.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0).sum::<f64>() / n;
+        let worst = image.pixels.iter().map(|p| (p[0] as f64 - 2.0).abs()).fold(0.0, f64::max);
+        println!("{}: furnace mean {mean:.5} (expected 2), worst pixel off by {worst:.4}", integrator.name());
+        assert!((mean - 2.0).abs() < 0.02, "{}: furnace mean {mean}", integrator.name());
+        assert!(worst < 0.6, "{}: a pixel is off by {worst}", integrator.name());
+    }
+}
+
+/// Multiple importance sampling of vcm checked: light tracing alone, merging alone, the path
+/// tracer and bpt each converge to vcm's image, and vcm's error is no higher than the best
+/// single technique's at equal samples (cornell-box: no delta surfaces, so light tracing alone
+/// reaches every path but the light seen directly, which the camera takes).
+#[test]
+fn vcm_each_technique_alone_converges_to_the_vcm_image() {
+    use photonix::layout::constants::{TECHNIQUES_ALL, VCM_LIGHT_TRACE_ONLY, VCM_MERGE_ONLY};
+    let reference = downsample(&read_exr(&common::reference_path("cornell-box")).expect("shared reference"), 8);
+    let mut results = Vec::new();
+    for (label, integrator, techniques) in [
+        ("light tracing", Integrator::Bpt, VCM_LIGHT_TRACE_ONLY),
+        ("merging", Integrator::Vcm, VCM_MERGE_ONLY),
+        ("path tracing", Integrator::Pt, TECHNIQUES_ALL),
+        ("bpt", Integrator::Bpt, TECHNIQUES_ALL),
+        ("vcm", Integrator::Vcm, TECHNIQUES_ALL),
+    ] {
+        let scene = shipped("cornell-box", integrator);
+        let mut buffers = common::buffers(&scene, 32, 32);
+        buffers.frame.techniques = techniques;
+        let image = cpu(&buffers, 64).image;
+        let (error, ratio) = (rel_mse(&image, &reference), mean_ratio(&image, &reference));
+        println!("{label}: relMSE {error:.5}, mean ratio {ratio:.4?}");
+        results.push((label, error, ratio));
+    }
+    for (label, _, ratio) in &results {
+        for r in ratio {
+            assert!((r - 1.0).abs() < 0.025, "{label}: mean ratio {ratio:?}");
+        }
+    }
+    let best_single = results[..3].iter().map(|r| r.1).fold(f64::MAX, f64::min);
+    let vcm = results[4].1;
+    assert!(vcm <= 1.1 * best_single, "vcm relMSE {vcm} against the best single technique's {best_single}");
+}
+
+/// vcm's layers sum to the image and hold their signatures: the glass ball's caustic seen on the
+/// floor lands in the caustics layer, by merging and light tracing alike.
+#[test]
+fn vcm_layers_split_by_path_signature_and_sum_to_the_image() {
+    let scene = shipped("cornell-caustics", Integrator::Vcm);
+    let out = cpu(&common::buffers(&scene, 32, 32), 8);
+    let total = |img: &photonix::io::Image| img.pixels.iter().map(|p| (p[0] + p[1] + p[2]) as f64).sum::<f64>();
+    let (all, sum) = (total(&out.image), total(&out.layers.combined()));
+    assert!((all - sum).abs() <= 1e-4 * all, "layers sum {sum} vs image {all}");
+    let share: Vec<f64> = out.layers.named().iter().map(|(_, l)| total(l) / all).collect();
+    println!("vcm layer shares (direct, specular, indirect, caustics): {share:.4?}");
+    for (i, s) in share.iter().enumerate() {
+        assert!(*s > 0.005, "layer {i} holds {s} of the light");
+    }
+}
+
+/// Light tracing lands through atomics in any order, yet the image is the same bits every run:
+/// the splats are 64-bit fixed-point sums.
+#[test]
+fn vcm_images_do_not_depend_on_thread_order() {
+    let scene = shipped("cornell-caustics", Integrator::Vcm);
+    let buffers = common::buffers(&scene, 24, 24);
+    let a = cpu(&buffers, 2).image;
+    let b = cpu(&buffers, 2).image;
+    assert_eq!(a.pixels, b.pixels);
+    // The words of a splat are exact: whole part high, 32 bits of fraction low.
+    use photonix::cpu::vcm::{splat_value, splat_words};
+    for v in [0.0f32, 0.5, 1.25, 3.0e-7, 12345.678, 7.0e8] {
+        let (low, high) = splat_words(v);
+        assert!((splat_value(low, high) - v).abs() <= v * 1e-6 + 2.5e-10, "{v}");
+    }
+}
+
+/// The bidirectional integrators refuse what they cannot do yet, with the way out: scenes with
+/// media (on every backend) and the GPU kernels.
+#[test]
+fn bidirectional_integrators_refuse_media_and_the_gpu_clearly() {
+    let scene = shipped("cornell-fog", Integrator::Vcm);
+    let settings = photonix::render::FrameSettings { width: 8, height: 8, max_depth: 8, seed: 1 };
+    let err = photonix::render::prepare(&scene, &settings).err().expect("media are refused").to_string();
+    println!("{err}");
+    assert!(err.contains("participating media") && err.contains("\"pt\""), "{err}");
+    let scene = shipped("cornell-box", Integrator::Bpt);
+    let buffers = common::buffers(&scene, 8, 8);
+    let ctx = common::gpu();
+    let err = photonix::render::gpu::render_gpu(&ctx, &buffers, 1, None, 0, &mut |_, _| {}).err().expect("refused");
+    println!("{err}");
+    assert!(err.to_string().contains("--backend cpu"), "{err}");
+}
+
+/// Pass ranges with vcm (each sample has its own radius, from its index): the merged parts equal
+/// one run of the same passes.
+#[test]
+fn vcm_pass_ranges_merge_to_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let scene = common::repo_path("scenes/cornell-box.toml");
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out, "--backend", "cpu", "--resolution", "24x24"];
+        args.extend_from_slice(extra);
+        let o = common::photonix(&args, p);
+        assert!(o.status.success(), "{}", common::stderr(&o));
+    };
+    render("full.exr", &["--integrator", "vcm", "--passes", "4"]);
+    render("a.exr", &["--integrator", "vcm", "--pass-range", "0..2"]);
+    render("b.exr", &["--integrator", "vcm", "--pass-range", "2..4"]);
+    let merged = common::photonix(&["merge", "b.exr", "a.exr", "-o", "merged.exr"], p);
+    assert!(merged.status.success(), "{}", common::stderr(&merged));
+    let (full, merged) = (read_exr(&p.join("full.exr")).unwrap(), read_exr(&p.join("merged.exr")).unwrap());
+    let error = rel_mse(&merged, &full);
+    println!("merged vs one run: relMSE {error:.3e}");
+    assert!(error < 1e-10, "{error}");
+}

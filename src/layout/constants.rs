@@ -442,7 +442,7 @@ shared_constants! {
     /// The merging radius: `VCM_RADIUS_VERTICES` light vertices in a disc of it, were one vertex
     /// per light path spread evenly over the scene's surfaces, shrinking as
     /// (sample + 1)^((alpha - 1) / 2) with `VCM_ALPHA` (SmallVCM's 0.75).
-    VCM_RADIUS_VERTICES: f32 = 4.0;
+    VCM_RADIUS_VERTICES: f32 = 0.5;
     VCM_ALPHA: f32 = 0.75;
     /// Most light vertices stored per sample (64 bytes each): a larger image draws fewer light
     /// paths than it has pixels.
