@@ -123,6 +123,7 @@ struct LightSample {
     vec3 weight;
     float eps;
     float pdf;
+    float cos_l;  // cosine at an area light toward -wi (1 for the others): vertex connection's
 };
 
 // Solid-angle pdf of environment_sample drawing direction d. CPU twin: src/cpu/light.rs.
@@ -159,7 +160,7 @@ float light_pdf(Light l, vec3 wi, float dist, float cos_l) {
 
 LightSample light_sample(Light l, vec3 x, vec2 u) {
     // The environment's searches are loops: no lane enters them unless it holds the environment.
-    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon, 0.0);
+    LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon, 0.0, 1.0);
     WHEN(l.kind == LIGHT_ENVIRONMENT) {
         environment_sample(l, u, env.wi, env.weight);
         env.p = x + env.wi * (length(x - load3(l.position)) + 2.0 * l.radius);
@@ -179,13 +180,13 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
         vec3 weight = cos_l > 0.0 ? material_emission(material_at(h.material), h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
         // The shadow ray stops short of the point by its offset over the cosine there: a hit on
         // the light's own surface moves along a grazing ray by its error over that cosine.
-        return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2), light_pdf(l, wi, sqrt(dist2), cos_l));
+        return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2), light_pdf(l, wi, sqrt(dist2), cos_l), cos_l);
     }
     case LIGHT_DISTANT: {
         // Uniform in the cone of directions; intensity holds radiance times the cone's solid angle.
         vec3 wi = -cone_direction(load3(l.direction), l.cos_outer, u);
         float beyond = length(x - load3(l.position)) + 2.0 * l.radius;
-        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon, l.area > 0.0 ? 1.0 / l.area : 0.0);
+        return LightSample(x + wi * beyond, wi, load3(l.intensity), frame.ray_epsilon, l.area > 0.0 ? 1.0 / l.area : 0.0, 1.0);
     }
     }
     // Point and spot lights: I(w) / d^2.
@@ -193,7 +194,7 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
     vec3 to_light = p - x;
     float dist2 = dot(to_light, to_light);
     vec3 wi = to_light / sqrt(dist2);
-    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon, 0.0);
+    return LightSample(p, wi, load3(l.intensity) * (spot_falloff(l, -wi) / dist2), frame.ray_epsilon, 0.0, 1.0);
 }
 
 // A photon leaving light l: its origin, direction and the power it carries before the division
@@ -202,7 +203,8 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
 // (Lambertian); point and spot lights uniformly in their cone, weighted by the spot's profile;
 // distant lights from a uniform point of the disc of the scene's bounding sphere that faces
 // them, uniformly in their cone of directions.
-void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec3 power) {
+void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec3 power, out float cos_l) {
+    cos_l = 1.0;
     vec3 axis = load3(l.direction);
     // The environment: a direction toward it, then a disc facing it, as for a distant light.
     vec3 env_weight = vec3(0.0);
@@ -216,6 +218,7 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
         Hit h = shape_sample(l.primitive, u_pos, inv_pdf);
         o = h.p + h.ng * h.eps;
         d = cosine_direction(h.ng, u_dir);
+        cos_l = dot(d, h.ng);
         power = PI * inv_pdf * material_emission(material_at(h.material), h);
         return;
     }

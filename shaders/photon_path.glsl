@@ -12,8 +12,9 @@ void trace_photon_path(uint path, EmitParams params) {
     // A scene whose lights all give direct light only picks one with probability 0.
     if (l.photon_probability <= 0.0) return;
     vec3 o, d, flux;
+    float cos_l;
     light_emit(l, rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION),
-               rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux);
+               rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux, cos_l);
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * float(params.total_paths);
     bool specular_only = true;

@@ -89,7 +89,10 @@ pub fn camera_pixel(f: &FrameParams, x: Vec3) -> Option<u32> {
 /// Splat value `v` >= 0 as the (low, high) words of its 64-bit fixed-point sum: 32 bits of
 /// fraction. Both words follow from exact f32 operations, so both twins add the same integers.
 pub fn splat_words(v: f32) -> (u32, u32) {
-    let v = v.clamp(0.0, SPLAT_MAX);
+    if v.is_nan() || v <= 0.0 {
+        return (0, 0);
+    }
+    let v = v.min(SPLAT_MAX);
     let whole = v.floor();
     (((v - whole) * 4_294_967_296.0) as u32, whole as u32)
 }

@@ -69,6 +69,8 @@ pub struct KernelVariant {
     pub csg: bool,
     /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
     pub path_traced: bool,
+    /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
+    pub bidirectional: bool,
 }
 
 impl KernelVariant {
@@ -118,6 +120,7 @@ impl SceneBuffers {
             instances: self.frame.instance_count > 0,
             csg: self.frame.csg_first < self.frame.primitive_count,
             path_traced: self.frame.integrator == INTEGRATOR_PT,
+            bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
         }
     }
 

@@ -6,7 +6,7 @@ use super::kernels::{groups, GpuKernels};
 use super::maps::{build_maps, no_maps};
 use super::scene::DeviceScene;
 use crate::gpu::{Buffer, GpuContext, GpuError};
-use crate::layout::constants::{INTEGRATOR_BPT, INTEGRATOR_VCM, LAYER_COUNT};
+use crate::layout::constants::LAYER_COUNT;
 use crate::layout::DispatchRange;
 use crate::render::photons::PhotonSettings;
 use crate::render::prepare::KernelVariant;
@@ -58,7 +58,6 @@ impl<'a> GpuRenderer<'a> {
         photons: Option<&PhotonSettings>,
     ) -> Result<GpuRenderer<'a>, GpuError> {
         let t = Instant::now();
-        refuse_bidirectional(buffers)?;
         let photons = crate::render::effective_photons(buffers, photons);
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
         let kernels = GpuKernels::for_scene(buffers.variant());
@@ -106,7 +105,6 @@ impl<'a> GpuRenderer<'a> {
     /// count; [`GpuRenderer::last_written`] names those written).
     pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<u32, GpuError> {
         let t = Instant::now();
-        refuse_bidirectional(buffers)?;
         let photons = crate::render::effective_photons(buffers, photons);
         // After a failed update the device may hold a mix of the two scenes: compare with nothing.
         let previous = (!self.device_mixed).then_some((&self.buffers, self.photons.as_ref()));
@@ -145,6 +143,10 @@ impl<'a> GpuRenderer<'a> {
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<RenderOutput, GpuError> {
         let ctx = self.ctx;
+        if self.kernels.variant().bidirectional {
+            let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
+            return super::bidirectional::render_pass_bidirectional(ctx, kernels, scene, buffers, spp, pass, progress);
+        }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();
 
@@ -250,20 +252,6 @@ impl<'a> GpuRenderer<'a> {
         };
         Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
     }
-}
-
-/// The bidirectional integrators (`bpt`, `vcm`) have no kernels yet: a clear refusal rather
-/// than another integrator's image.
-fn refuse_bidirectional(buffers: &SceneBuffers) -> Result<(), GpuError> {
-    let code = buffers.frame.integrator;
-    if code == INTEGRATOR_BPT || code == INTEGRATOR_VCM {
-        let name = if code == INTEGRATOR_BPT { "bpt" } else { "vcm" };
-        return Err(GpuError::Unsupported(format!(
-            "the {name} integrator runs on the CPU backend only in this version (its kernels are not written \
-             yet); render with --backend cpu, or choose --integrator pt or ppm for the GPU"
-        )));
-    }
-    Ok(())
 }
 
 /// Renders pass `pass` on `ctx`, with photon maps when `photons` is given, with a renderer made

@@ -8,7 +8,7 @@ use crate::layout::constants::{
     BINDING_FRAME, BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES,
     BINDING_SHAPE_DATA, BINDING_TEXTURES, BINDING_TEXTURE_DATA, SCENE_BINDINGS, WORKGROUP_SIZE,
 };
-use crate::layout::{DispatchRange, EmitParams};
+use crate::layout::{DispatchRange, EmitParams, VcmParams};
 use crate::render::prepare::KernelVariant;
 
 fn kernel(
@@ -69,6 +69,8 @@ pub struct GpuKernels {
     grid_scatter: OnceCell<Kernel>,
     grid_rank: OnceCell<Kernel>,
     render: OnceCell<Kernel>,
+    vcm_light: OnceCell<Kernel>,
+    render_vcm: OnceCell<Kernel>,
     /// Which build of the scene kernels (`SceneBuffers::variant`).
     variant: KernelVariant,
 }
@@ -147,6 +149,36 @@ impl GpuKernels {
         )
     }
 
+    /// The light stage of the bidirectional integrators (shaders/vcm_light.comp).
+    pub(super) fn vcm_light(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        let name = self.scene_kernel("vcm_light");
+        let constants = self.variant.specialization();
+        Self::get(
+            &self.vcm_light,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 4,
+            SCENE_BINDING_TYPES,
+            size_of::<VcmParams>(),
+            &constants,
+        )
+    }
+
+    /// The camera stage of the bidirectional integrators (shaders/render_vcm.comp).
+    pub(super) fn render_vcm(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        let name = self.scene_kernel("render_vcm");
+        let constants = self.variant.specialization();
+        Self::get(
+            &self.render_vcm,
+            ctx,
+            &name,
+            SCENE_BINDINGS + 7,
+            SCENE_BINDING_TYPES,
+            size_of::<DispatchRange>(),
+            &constants,
+        )
+    }
+
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
     /// keeping the kernels saves per pass (`photonix bench --passes`).
     pub fn time_creation(ctx: &GpuContext) -> Result<Vec<(&'static str, f64)>, GpuError> {
@@ -171,6 +203,16 @@ impl GpuKernels {
     /// Creates now every kernel a render with (`photons` true) or without photon maps uses, so
     /// that the cost falls into set-up rather than into the first pass.
     pub fn create_all(&self, ctx: &GpuContext, photons: bool) -> Result<(), GpuError> {
+        if self.variant.bidirectional {
+            self.vcm_light(ctx)?;
+            self.render_vcm(ctx)?;
+            self.grid_count(ctx)?;
+            self.grid_scan(ctx)?;
+            self.grid_scan_add(ctx)?;
+            self.grid_scatter(ctx)?;
+            self.grid_rank(ctx)?;
+            return Ok(());
+        }
         if photons {
             self.emit_photons(ctx)?;
             self.grid_count(ctx)?;

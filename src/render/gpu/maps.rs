@@ -172,7 +172,7 @@ fn scan(ctx: &GpuContext, kernels: &GpuKernels, values: &Buffer, count: u32) -> 
 /// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets;
 /// `None` when the thread's render was stopped between two of them (a stale pass uses no map,
 /// and an edit in the editor waits for one submission, not for the whole build).
-fn build_map(
+pub(super) fn build_map(
     ctx: &GpuContext,
     kernels: &GpuKernels,
     photons: Buffer,

@@ -1,7 +1,9 @@
 //! Rendering on a Vulkan device, by stage: the kernels (`kernels`), the scene's upload
 //! (`scene`), the light stage that traces photons and builds their grids (`maps`), and the camera
-//! stage with the renderer that drives them pass after pass (`camera`).
+//! stage with the renderer that drives them pass after pass (`camera`); the bidirectional
+//! integrators' two stages (`bidirectional`).
 
+mod bidirectional;
 mod camera;
 mod kernels;
 mod maps;

@@ -1,0 +1,303 @@
+#version 450
+// render_vcm: the camera stage of vertex connection and merging (integrators vcm and bpt). At
+// each non-delta vertex of a pixel's camera sub-path: light sampling, connections to the vertices
+// of the light sub-path of the pixel's index, merging with the light vertices within the radius
+// (the grid over `points`); then the light tracing that landed on the pixel. Every contribution
+// weighed by SmallVCM's MIS recursion. CPU twin: src/cpu/vcm.rs (radiance_vcm). Bindings: the
+// scene, then the accumulation (the whole image: LAYER_COUNT vec4 per pixel), the sample's
+// VcmParams, the grid's GridParams, the vertex slots, the sorted points, the bucket starts and
+// the splats.
+// variant: textured
+// variant: textured alpha
+// variant: analytic
+// variant: textured analytic
+// variant: textured alpha analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
+// variant: textured alpha analytic implicit
+// variant: analytic implicit csg
+// variant: textured analytic implicit csg
+// variant: textured alpha analytic implicit csg
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+#include "scene_bindings.glsl"
+layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
+layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Params { VcmParams params; };
+layout(std430, binding = SCENE_BINDINGS + 2) readonly buffer Grid { GridParams vgrid; };
+layout(std430, binding = SCENE_BINDINGS + 3) readonly buffer LightVertices { LightVertex vertices[]; };
+layout(std430, binding = SCENE_BINDINGS + 4) readonly buffer Points { Photon points[]; };
+layout(std430, binding = SCENE_BINDINGS + 5) readonly buffer Starts { uint starts[]; };
+layout(std430, binding = SCENE_BINDINGS + 6) readonly buffer Splats { uint splats[]; };
+layout(push_constant) uniform Push { DispatchRange range; };
+
+#include "scene.glsl"
+#include "grid.glsl"
+#include "vcm.glsl"
+
+float emission_weight(SubPath sp, float direct, float emission) {
+    return 1.0 / (1.0 + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
+}
+
+// Light sampling at a camera vertex; contract in vcm.rs, light_sampling.
+vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint stream, uint dim, inout uint rays) {
+    if (frame.light_count == 0u) return vec3(0.0);
+    uint sample_index = params.sample_index;
+    Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
+    if (l.pick_probability <= 0.0) return vec3(0.0);
+    vec2 ul = rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
+    LightSample ls = light_sample(l, h.p, grid_sample(l.grid, ul, stream, sample_index));
+    float cos_to_light = abs_cos(b, ls.wi);
+    vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cos_to_light;
+    if (fr == vec3(0.0)) return vec3(0.0);
+    float dist = length(ls.p - h.p);
+    float disc = PI * l.radius * l.radius;
+    float direct = ls.pdf;
+    float emission;
+    float cos_at_light = 1.0;
+    if (l.kind == LIGHT_AREA) {
+        emission = ls.cos_l / (PI * l.area);
+        cos_at_light = ls.cos_l;
+    } else if (l.kind == LIGHT_ENVIRONMENT) {
+        emission = 0.0;
+        WHEN(true) { emission = environment_pdf(l, ls.wi) / disc; }
+    } else if (l.kind == LIGHT_DISTANT) {
+        if (l.area > 0.0) {
+            emission = 1.0 / (l.area * disc);
+        } else {
+            direct = 1.0;
+            emission = 1.0 / disc;
+        }
+    } else {
+        direct = dist * dist;
+        emission = 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
+    }
+    vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
+    float forward = light_is_delta(l) ? 0.0 : pdfs.x;
+    float w_light = mis(forward / (l.pick_probability * direct));
+    float w_camera = mis(emission * cos_to_light / (direct * cos_at_light)) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(pdfs.y));
+    float w = 1.0 / (w_light + 1.0 + w_camera);
+    vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
+    vec3 to_target = ls.p - origin;
+    float len = length(to_target);
+    rays++;
+    float t;
+    if (trace_ray(origin, to_target / len, max(len - ls.eps, 0.0), true, skip, t) != NO_LIGHT) return vec3(0.0);
+    return fr * (w / l.pick_probability);
+}
+
+// A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.
+vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex lv, inout uint rays) {
+    Hit lh = light_vertex_hit(lv);
+    vec3 to_light = lh.p - h.p;
+    float dist2 = dot(to_light, to_light);
+    if (dist2 <= 0.0) return vec3(0.0);
+    float dist = sqrt(dist2);
+    vec3 dir = to_light / dist;
+    vec3 fc = bsdf_eval(b, wo, dir);
+    if (fc == vec3(0.0)) return vec3(0.0);
+    Bsdf lb = material_bsdf(material_at(lh.material), lh);
+    vec3 l_wo = -load3(lv.direction);
+    vec3 fl = bsdf_eval(lb, -dir, l_wo);
+    if (fl == vec3(0.0)) return vec3(0.0);
+    float cos_cam = abs_cos(b, dir);
+    float cos_light = abs_cos(lb, dir);
+    float g = cos_cam * cos_light / dist2;
+    vec2 cam = lobe_pdfs(b, wo, dir);
+    vec2 lig = lobe_pdfs(lb, l_wo, -dir);
+    float cam_to_area = cam.x * cos_light / dist2;
+    float light_to_area = lig.x * cos_cam / dist2;
+    float w_light = mis(cam_to_area) * (params.vm_weight + lv.d_vcm + lv.d_vc * mis(lig.y));
+    float w_camera = mis(light_to_area) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(cam.y));
+    float w = 1.0 / (w_light + 1.0 + w_camera);
+    vec3 value = fc * fl * load3(lv.throughput) * (g * w);
+    if (value == vec3(0.0)) return vec3(0.0);
+    rays++;
+    if (!vcm_visible(h, skip, lh.p + normalize(h.p - lh.p) * lh.eps)) return vec3(0.0);
+    return value;
+}
+
+void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
+    uint stream = py * frame.width + px;
+    uint sample_index = params.sample_index;
+    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
+    float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
+    vec3 o, d;
+    camera_ray(sx, sy, film.zw, o, d);
+    bool light_only = (params.techniques & VCM_LIGHT_TRACE_ONLY) != 0u;
+    bool merge_only = (params.techniques & VCM_MERGE_ONLY) != 0u;
+    bool connect = (params.techniques & VCM_CONNECT) != 0u;
+    bool merge = (params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u;
+    float cos_eye = dot(d, normalize(load3(frame.camera_forward)));
+    SubPath sp;
+    sp.throughput = vec3(1.0);
+    sp.d_vcm = camera_connectable() ? mis(float(params.light_paths) / camera_pdf_w(cos_eye)) : 0.0;
+    sp.d_vc = 0.0;
+    sp.d_vm = 0.0;
+    uint slot0 = (stream % params.light_paths) * params.vertex_slots;
+    uint skip = NO_LIGHT;
+    bool first_specular = false;
+    uint diffuse = 0u;
+    bool specular_after = false;
+    bool specular_path = true;
+    for (uint m = 1u; m <= frame.max_depth + 1u; m++) {
+        rays++;
+        float t;
+        uint prim = trace_ray(o, d, INF, false, skip, t);
+        uint layer = path_layer(first_specular, diffuse, specular_after);
+        bool single = light_only || merge_only;
+        bool emission_allowed = !single || specular_path;
+        bool take_whole = m == 1u || single;
+        if (prim == NO_LIGHT) {
+            if (!emission_allowed) break;
+            for (uint i = 0u; i < frame.light_count; i++) {
+                Light l = light_at(i);
+                if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
+                if (dot(d, load3(l.direction)) <= -l.cos_outer) {
+                    float disc = PI * l.radius * l.radius;
+                    float direct = l.pick_probability / l.area;
+                    float w = take_whole ? 1.0 : emission_weight(sp, direct, direct / disc);
+                    terms[layer] += sp.throughput * load3(l.intensity) * (w / l.area);
+                }
+            }
+            WHEN(frame.environment != NO_LIGHT) {
+                Light l = light_at(frame.environment);
+                float direct = l.pick_probability * environment_pdf(l, d);
+                float disc = PI * l.radius * l.radius;
+                float w = take_whole ? 1.0 : emission_weight(sp, direct, direct / disc);
+                terms[layer] += sp.throughput * environment_radiance(l, d) * w;
+            }
+            break;
+        }
+        Hit h = shape_hit(prim, o, d, t);
+        Material mat = material_at(h.material);
+        Bsdf b = material_bsdf(mat, h);
+        vec3 wo = -d;
+        sub_arrive(sp, t, abs_cos(b, wo), true);
+        float cos_l = dot(wo, h.ng);
+        if (cos_l > 0.0 && emission_allowed) {
+            vec3 emitted = material_emission(mat, h);
+            if (emitted != vec3(0.0)) {
+                uint hp = hit_primitive(prim);
+                uint light = primitive_at(hp).light;
+                float w = 1.0;
+                if (!(take_whole || light == NO_LIGHT || hp != prim)) {
+                    Light l = light_at(light);
+                    float direct = l.pick_probability / l.area;
+                    w = emission_weight(sp, direct, direct * cos_l / PI);
+                }
+                terms[layer] += sp.throughput * emitted * w;
+            }
+        }
+        if (m > frame.max_depth) break;
+        uint flags = bsdf_flags(b);
+        if (flags == 0u) break;
+        skip = ray_skip(prim);
+        uint dim = (m - 1u) * RNG_DIMS_PER_BOUNCE;
+        if ((flags & BSDF_ESTIMATE) != 0u) {
+            uint cam_diffuse = diffuse + 1u;
+            if (connect) {
+                vec3 v = light_sampling(h, b, wo, sp, skip, stream, dim, rays);
+                terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
+                for (uint k = 0u; k < params.vertex_slots; k++) {
+                    LightVertex lv = vertices[slot0 + k];
+                    if (lv.path_length == 0u || lv.path_length + m > frame.max_depth) break;
+                    vec3 c = connect_vertices(h, b, wo, sp, skip, lv, rays);
+                    uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
+                                         (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
+                    terms[cl] += sp.throughput * c;
+                }
+            }
+            if (merge && vgrid.photon_count > 0u) {
+                vec3 merged[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+                float r2 = vgrid.radius * vgrid.radius;
+                ivec3 c = grid_cell(h.p, vgrid.cell_size);
+                vec3 lower, upper;
+                grid_face_gaps(h.p, vgrid.cell_size, lower, upper);
+                for (uint kc = 0u; kc < 27u; kc++) {
+                    if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
+                    ivec3 cell = grid_neighbour(c, kc);
+                    uint bucket = grid_hash(cell, vgrid.table_mask);
+                    for (uint i = starts[bucket]; i < starts[bucket + 1u]; i++) {
+                        Photon pt = points[i];
+                        vec3 pos = load3(pt.position);
+                        vec3 dd = pos - h.p;
+                        if (dot(dd, dd) > r2 || grid_cell(pos, vgrid.cell_size) != cell) continue;
+                        LightVertex lv = vertices[pt.flux_rg * params.vertex_slots + pt.flux_b_dir];
+                        if (lv.path_length + m - 1u > frame.max_depth) continue;
+                        vec3 light_dir = -load3(lv.direction);
+                        vec3 fr = bsdf_eval(b, wo, light_dir);
+                        if (fr == vec3(0.0)) continue;
+                        float w = 1.0;
+                        if (!merge_only) {
+                            vec2 pdfs = lobe_pdfs(b, wo, light_dir);
+                            float w_light = lv.d_vcm * params.vc_weight + lv.d_vm * mis(pdfs.x);
+                            float w_camera = sp.d_vcm * params.vc_weight + sp.d_vm * mis(pdfs.y);
+                            w = 1.0 / (w_light + 1.0 + w_camera);
+                        }
+                        uint ml = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
+                                             (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
+                        merged[ml] += fr * load3(lv.throughput) * w;
+                    }
+                }
+                for (uint i = 0u; i < 4u; i++) terms[i] += sp.throughput * merged[i] * params.vm_normalization;
+                if (merge_only) break;
+            }
+        }
+        if (light_only && (flags & BSDF_ESTIMATE) != 0u) break;
+        float q = bsdf_path_probability(b, wo);
+        vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        bool delta = u.w < q;
+        BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
+        if (smp.flags == 0u) break;
+        float cos_out = abs_cos(b, smp.wi);
+        if ((smp.flags & BSDF_SPECULAR) != 0u) {
+            sub_scatter(sp, params, true, cos_out, 0.0, 0.0);
+            first_specular = first_specular || m == 1u;
+            specular_after = diffuse > 0u;
+            sp.throughput *= smp.weight / q;
+        } else {
+            vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
+            if (pdfs.x <= 0.0) break;
+            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y);
+            diffuse++;
+            specular_after = false;
+            specular_path = false;
+            sp.throughput *= smp.weight / (1.0 - q);
+        }
+        if (m >= PT_ROULETTE_DEPTH) {
+            float survive = min(max(sp.throughput.x, max(sp.throughput.y, sp.throughput.z)), PT_ROULETTE_MAX);
+            if (rand1(stream, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
+            sp.throughput /= survive;
+        }
+        if (sp.throughput == vec3(0.0)) break;
+        o = offset_origin(h, wo, smp.flags);
+        d = smp.wi;
+    }
+    // The light tracing that landed on this pixel.
+    uint base = stream * LAYER_COUNT * 3u;
+    for (uint i = 0u; i < 4u; i++) {
+        uint w = 2u * (base + i * 3u);
+        terms[i] += vec3(splat_value(splats[w], splats[w + 1u]), splat_value(splats[w + 2u], splats[w + 3u]),
+                         splat_value(splats[w + 4u], splats[w + 5u]));
+    }
+}
+
+void main() {
+    uint band_pixels = range.row_count * frame.width;
+    uint i = GLOBAL_INDEX;
+    if (i >= band_pixels) return;
+    uint px = i % frame.width;
+    uint py = range.row_begin + i / frame.width;
+    vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    uint rays = 0u;
+    radiance_vcm(px, py, terms, rays);
+    uint base = (py * frame.width + px) * LAYER_COUNT;
+    accumulation[base + LAYER_DIRECT] += vec4(terms[LAYER_DIRECT], float(rays));
+    accumulation[base + LAYER_SPECULAR] += vec4(terms[LAYER_SPECULAR], 0.0);
+    accumulation[base + LAYER_INDIRECT] += vec4(terms[LAYER_INDIRECT], 0.0);
+    accumulation[base + LAYER_CAUSTICS] += vec4(terms[LAYER_CAUSTICS], 0.0);
+}

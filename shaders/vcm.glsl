@@ -1,0 +1,105 @@
+// Vertex connection and merging: what the light-path kernel (vcm_light.comp) and the camera
+// kernel (render_vcm.comp) share. CPU twin: src/cpu/vcm.rs (the contracts are there).
+
+// The heuristic's power of a density (Veach's beta = 2; SmallVCM's Mis).
+float mis(float x) { return x * x; }
+
+// The layer of a path by its signature; contract in src/cpu/render_pt.rs, path_layer.
+uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
+    if (first_specular) return LAYER_SPECULAR;
+    if (diffuse <= 1u && !specular_after) return LAYER_DIRECT;
+    if (diffuse == 1u) return LAYER_CAUSTICS;
+    return LAYER_INDIRECT;
+}
+
+bool camera_connectable() { return frame.camera_kind == CAMERA_PERSPECTIVE && frame.lens_radius <= 0.0; }
+
+float camera_pixel_area() {
+    return 4.0 * length(load3(frame.camera_right)) * length(load3(frame.camera_up)) / float(frame.width * frame.height);
+}
+
+float camera_pdf_w(float cos_eye) {
+    vec3 fw = load3(frame.camera_forward);
+    return dot(fw, fw) / (cos_eye * cos_eye * cos_eye * camera_pixel_area());
+}
+
+// The pixel whose film holds the image of x, or NO_LIGHT.
+uint camera_pixel(vec3 x) {
+    vec3 v = x - load3(frame.camera_position);
+    vec3 fw = load3(frame.camera_forward);
+    vec3 r = load3(frame.camera_right);
+    vec3 u = load3(frame.camera_up);
+    float k = dot(v, fw) / dot(fw, fw);
+    if (k <= 0.0) return NO_LIGHT;
+    float sx = dot(v, r) / (k * dot(r, r));
+    float sy = dot(v, u) / (k * dot(u, u));
+    float fx = 0.5 * (sx + 1.0) * float(frame.width);
+    float fy = 0.5 * (1.0 - sy) * float(frame.height);
+    if (!(fx >= 0.0 && fy >= 0.0 && fx < float(frame.width) && fy < float(frame.height))) return NO_LIGHT;
+    return min(uint(fy), frame.height - 1u) * frame.width + min(uint(fx), frame.width - 1u);
+}
+
+// (low, high) words of a splat's 64-bit fixed-point value; contract in vcm.rs, splat_words.
+uvec2 splat_words(float v) {
+    if (!(v > 0.0)) return uvec2(0u);
+    v = min(v, SPLAT_MAX);
+    float whole = floor(v);
+    return uvec2(uint((v - whole) * 4294967296.0), uint(whole));
+}
+
+float splat_value(uint low, uint high) { return float(high) + float(low) * (1.0 / 4294967296.0); }
+
+// The densities of a non-delta lobe choice: x = sampling wi from wo, y = the reverse.
+vec2 lobe_pdfs(Bsdf b, vec3 wo, vec3 wi) {
+    return vec2((1.0 - bsdf_path_probability(b, wo)) * bsdf_pdf(b, wo, wi),
+                (1.0 - bsdf_path_probability(b, wi)) * bsdf_pdf(b, wi, wo));
+}
+
+float abs_cos(Bsdf b, vec3 w) { return b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, w)); }
+
+bool light_is_delta(Light l) {
+    if (l.kind == LIGHT_AREA || l.kind == LIGHT_ENVIRONMENT) return false;
+    if (l.kind == LIGHT_DISTANT) return l.area <= 0.0;
+    return true;
+}
+
+struct SubPath {
+    vec3 throughput;
+    float d_vcm;
+    float d_vc;
+    float d_vm;
+};
+
+void sub_arrive(inout SubPath sp, float dist, float cos_in, bool far) {
+    if (far) sp.d_vcm *= mis(dist * dist);
+    float c = mis(cos_in);
+    sp.d_vcm /= c;
+    sp.d_vc /= c;
+    sp.d_vm /= c;
+}
+
+void sub_scatter(inout SubPath sp, VcmParams p, bool delta, float cos_out, float pdf, float reverse) {
+    if (delta) {
+        sp.d_vcm = 0.0;
+        sp.d_vc *= mis(cos_out);
+        sp.d_vm *= mis(cos_out);
+    } else {
+        float g = mis(cos_out / pdf);
+        sp.d_vc = g * (sp.d_vc * mis(reverse) + sp.d_vcm + p.vm_weight);
+        sp.d_vm = g * (sp.d_vm * mis(reverse) + sp.d_vcm * p.vc_weight + 1.0);
+        sp.d_vcm = mis(1.0 / pdf);
+    }
+}
+
+// Whether nothing blocks the segment from h (leaving toward target) to target.
+bool vcm_visible(Hit h, uint skip, vec3 target) {
+    vec3 origin = offset_origin(h, target - h.p, BSDF_REFLECTION);
+    vec3 to = target - origin;
+    float dist = length(to);
+    float t;
+    return trace_ray(origin, to / dist, dist * (1.0 - 1e-4) - frame.ray_epsilon, true, skip, t) == NO_LIGHT;
+}
+
+Hit light_vertex_hit(LightVertex v) {
+    return shape_hit(v.hit, load3(v.origin), load3(v.direction), v.t);
+}

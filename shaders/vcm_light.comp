@@ -1,0 +1,174 @@
+#version 450
+// vcm_light: the light stage of vertex connection and merging (integrators vcm and bpt): one
+// light sub-path per invocation. Its non-delta vertices go into the path's run of vertex slots
+// and, as grid points (position, path, slot), into `points` for merging; each is connected to the
+// camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
+// layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
+// src/cpu/vcm.rs (trace_light_path, connect_to_camera). Bindings: the scene, then the vertex
+// slots, the splats, the points and the point counter.
+// variant: textured
+// variant: textured alpha
+// variant: analytic
+// variant: textured analytic
+// variant: textured alpha analytic
+// variant: analytic implicit
+// variant: textured analytic implicit
+// variant: textured alpha analytic implicit
+// variant: analytic implicit csg
+// variant: textured analytic implicit csg
+// variant: textured alpha analytic implicit csg
+#extension GL_GOOGLE_include_directive : require
+#include "layout.glsl"
+
+layout(local_size_x = WORKGROUP_SIZE) in;
+
+#include "scene_bindings.glsl"
+layout(std430, binding = SCENE_BINDINGS + 0) buffer LightVertices { LightVertex vertices[]; };
+layout(std430, binding = SCENE_BINDINGS + 1) buffer Splats { uint splats[]; };
+layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon points[]; };
+layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; };
+layout(push_constant) uniform Push { VcmParams params; };
+
+#include "scene.glsl"
+#include "vcm.glsl"
+
+void splat_add(uint index, float v) {
+    uvec2 w = splat_words(v);
+    if (w == uvec2(0u)) return;
+    uint old = atomicAdd(splats[2u * index], w.x);
+    // The low word's carry, so the pair adds as one 64-bit integer.
+    uint carry = old + w.x < old ? 1u : 0u;
+    atomicAdd(splats[2u * index + 1u], w.y + carry);
+}
+
+// Light tracing: the light vertex at h seen by the camera; contract in vcm.rs, connect_to_camera.
+void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint layer) {
+    uint pixel = camera_pixel(h.p);
+    if (pixel == NO_LIGHT) return;
+    vec3 eye = load3(frame.camera_position);
+    vec3 to_eye = eye - h.p;
+    float dist2 = dot(to_eye, to_eye);
+    float dist = sqrt(dist2);
+    vec3 dir = to_eye / dist;
+    vec3 fr = bsdf_eval(b, dir, wo);
+    if (fr == vec3(0.0)) return;
+    float cos_eye = -dot(dir, normalize(load3(frame.camera_forward)));
+    float image_to_surface = camera_pdf_w(cos_eye) * abs_cos(b, dir) / dist2;
+    float w_light = 0.0;
+    if ((params.techniques & VCM_LIGHT_TRACE_ONLY) == 0u) {
+        float toward_light = lobe_pdfs(b, dir, wo).x;
+        w_light = mis(image_to_surface / float(params.light_paths)) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(toward_light));
+    }
+    vec3 value = sp.throughput * fr * (image_to_surface / (float(params.light_paths) * (1.0 + w_light)));
+    if (value == vec3(0.0) || !vcm_visible(h, skip, eye)) return;
+    uint base = (pixel * LAYER_COUNT + layer) * 3u;
+    splat_add(base, value.x);
+    splat_add(base + 1u, value.y);
+    splat_add(base + 2u, value.z);
+}
+
+void main() {
+    uint index = GLOBAL_INDEX;
+    if (index >= params.path_count) return;
+    uint path = params.path_begin + index;
+    if (frame.light_count == 0u) return;
+    uint sample_index = params.sample_index;
+    uint dim0 = RNG_VCM_LIGHT_DOMAIN;
+    Light l = light_at(pick_light(rand1(path, sample_index, frame.seed, dim0 + RNG_LIGHT_PICK), false));
+    if (l.pick_probability <= 0.0) return;
+    vec3 o, d, power;
+    float cos_l;
+    light_emit(l, rand2(path, sample_index, frame.seed, dim0 + RNG_LIGHT_U),
+               rand2(path, sample_index, frame.seed, dim0 + RNG_LIGHT_V), o, d, power, cos_l);
+    float disc = PI * l.radius * l.radius;
+    float direct_pdf;
+    float emission_pdf;
+    if (l.kind == LIGHT_AREA) {
+        direct_pdf = 1.0 / l.area;
+        emission_pdf = max(cos_l, 0.0) / (PI * l.area);
+    } else if (l.kind == LIGHT_ENVIRONMENT) {
+        direct_pdf = 0.0;
+        WHEN(true) { direct_pdf = environment_pdf(l, -d); }
+        emission_pdf = direct_pdf / disc;
+    } else if (l.kind == LIGHT_DISTANT) {
+        direct_pdf = l.area > 0.0 ? 1.0 / l.area : 1.0;
+        emission_pdf = l.area > 0.0 ? 1.0 / (l.area * disc) : 1.0 / disc;
+    } else {
+        direct_pdf = 1.0;
+        emission_pdf = 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
+    }
+    if (emission_pdf <= 0.0 || power == vec3(0.0)) return;
+    bool finite = l.kind != LIGHT_DISTANT && l.kind != LIGHT_ENVIRONMENT;
+    SubPath sp;
+    sp.throughput = power / l.pick_probability;
+    sp.d_vcm = mis(direct_pdf / emission_pdf);
+    sp.d_vc = light_is_delta(l) ? 0.0 : mis((finite ? cos_l : 1.0) / (emission_pdf * l.pick_probability));
+    sp.d_vm = sp.d_vc * params.vc_weight;
+    uint skip = NO_LIGHT;
+    uint diffuse = 0u;
+    bool specular_first = false;
+    uint slot0 = path * params.vertex_slots;
+    for (uint k = 1u; k <= params.vertex_slots; k++) {
+        float t;
+        uint prim = trace_ray(o, d, INF, false, skip, t);
+        if (prim == NO_LIGHT) break;
+        Hit h = shape_hit(prim, o, d, t);
+        Bsdf b = material_bsdf(material_at(h.material), h);
+        uint flags = bsdf_flags(b);
+        if (flags == 0u) break;
+        vec3 wo = -d;
+        sub_arrive(sp, t, abs_cos(b, wo), k > 1u || finite);
+        if ((flags & BSDF_ESTIMATE) != 0u) {
+            uint slot = slot0 + k - 1u;
+            vertices[slot].origin = float[3](o.x, o.y, o.z);
+            vertices[slot].hit = prim;
+            vertices[slot].direction = float[3](d.x, d.y, d.z);
+            vertices[slot].t = t;
+            vertices[slot].throughput = float[3](sp.throughput.x, sp.throughput.y, sp.throughput.z);
+            vertices[slot].path_length = k;
+            vertices[slot].d_vcm = sp.d_vcm;
+            vertices[slot].d_vc = sp.d_vc;
+            vertices[slot].d_vm = sp.d_vm;
+            vertices[slot].flags = diffuse | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
+            if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u) {
+                uint at = atomicAdd(point_count, 1u);
+                points[at].position = float[3](h.p.x, h.p.y, h.p.z);
+                points[at].flux_rg = path;
+                points[at].flux_b_dir = k - 1u;
+            }
+            if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
+                connect_to_camera(h, b, wo, sp, ray_skip(prim), path_layer(false, diffuse + 1u, specular_first));
+            }
+        }
+        if (k >= params.vertex_slots) break;
+        uint dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
+        float q = bsdf_path_probability(b, wo);
+        vec4 u = rand4(path, sample_index, frame.seed, dim + RNG_FRESNEL);
+        bool delta = u.w < q;
+        BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
+        if (smp.flags == 0u) break;
+        float cos_out = abs_cos(b, smp.wi);
+        vec3 factor;
+        if ((smp.flags & BSDF_SPECULAR) != 0u) {
+            sub_scatter(sp, params, true, cos_out, 0.0, 0.0);
+            specular_first = specular_first || diffuse == 0u;
+            factor = smp.weight / q;
+        } else {
+            vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
+            if (pdfs.x <= 0.0) break;
+            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y);
+            diffuse++;
+            factor = bsdf_eval(b, smp.wi, wo) * (cos_out / pdfs.x);
+        }
+        sp.throughput *= factor;
+        if (k >= PT_ROULETTE_DEPTH) {
+            float survive = min(max(factor.x, max(factor.y, factor.z)), PT_ROULETTE_MAX);
+            if (rand1(path, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
+            sp.throughput /= survive;
+        }
+        if (sp.throughput == vec3(0.0)) break;
+        skip = ray_skip(prim);
+        o = offset_origin(h, wo, smp.flags);
+        d = smp.wi;
+    }
+}
