@@ -202,9 +202,12 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
             if (connect) {
                 vec3 v = light_sampling(h, b, wo, sp, skip, stream, dim, rays);
                 terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
+                // Slot k holds the light vertex k + 1 scattering vertices from the light, or
+                // nothing (a delta vertex, or the path ended): skip the gaps.
                 for (uint k = 0u; k < params.vertex_slots; k++) {
+                    if (k + 1u + m > frame.max_depth) break;
                     LightVertex lv = vertices[slot0 + k];
-                    if (lv.path_length == 0u || lv.path_length + m > frame.max_depth) break;
+                    if (lv.path_length == 0u) continue;
                     vec3 c = connect_vertices(h, b, wo, sp, skip, lv, rays);
                     uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
                                          (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);

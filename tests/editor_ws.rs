@@ -297,32 +297,38 @@ fn editor_preview_benchmark() {
     }
 }
 
-/// The editor's preview renders a path-traced scene (`[render] integrator = "pt"`) on both
-/// backends: its photon settings are left unused, and the passes come as for photon mapping.
+/// The editor's preview renders with the path tracer and with vertex connection and merging
+/// (`[render] integrator = "pt" | "vcm"`) on both backends: their photon settings are left
+/// unused, and the passes come as for photon mapping.
 #[test]
-fn websocket_streams_path_traced_frames() {
-    let cpu = (BackendChoice::Cpu, "cpu");
-    let gpu =
-        (BackendChoice::Gpu { options: photonix::gpu::GpuOptions::from_env(None).unwrap(), fallback: false }, "gpu");
-    for (backend, label) in [cpu, gpu] {
-        let f = Fixture::with(backend, |o| {
-            o.preview_size = 32;
-            let text = editor_support::SCENE.replace("passes = 2\n", "passes = 2\nintegrator = \"pt\"\n");
-            assert!(text.contains("integrator = \"pt\""));
-            std::fs::write(&o.scene, text).unwrap();
-        });
-        f.runtime.block_on(async {
-            let mut page = connect(&f).await;
-            send(&mut page, Message::Text(VIEW.replace("64", "32").replace("48", "24").into())).await.unwrap();
-            let mut frames = 0;
-            while frames < 3 {
-                if let Received::Frame(header, png) = receive(&mut page).await {
-                    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{label}");
-                    assert_eq!(header["kind"], "preview", "{label}");
-                    frames += 1;
+fn websocket_streams_path_traced_and_vcm_frames() {
+    for integrator in ["pt", "vcm"] {
+        let cpu = (BackendChoice::Cpu, "cpu");
+        let gpu = (
+            BackendChoice::Gpu { options: photonix::gpu::GpuOptions::from_env(None).unwrap(), fallback: false },
+            "gpu",
+        );
+        for (backend, label) in [cpu, gpu] {
+            let f = Fixture::with(backend, |o| {
+                o.preview_size = 32;
+                let line = format!("passes = 2\nintegrator = \"{integrator}\"\n");
+                let text = editor_support::SCENE.replace("passes = 2\n", &line);
+                assert!(text.contains(&line));
+                std::fs::write(&o.scene, text).unwrap();
+            });
+            f.runtime.block_on(async {
+                let mut page = connect(&f).await;
+                send(&mut page, Message::Text(VIEW.replace("64", "32").replace("48", "24").into())).await.unwrap();
+                let mut frames = 0;
+                while frames < 3 {
+                    if let Received::Frame(header, png) = receive(&mut page).await {
+                        assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n", "{label}");
+                        assert_eq!(header["kind"], "preview", "{label}");
+                        frames += 1;
+                    }
                 }
-            }
-        });
-        println!("{label}: three path-traced preview frames");
+            });
+            println!("{integrator} {label}: three preview frames");
+        }
     }
 }

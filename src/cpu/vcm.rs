@@ -582,9 +582,14 @@ pub fn radiance_vcm(
                     path_layer(first_specular, cam_diffuse, false),
                 );
                 terms[layer as usize] += sub.throughput * v;
-                for lv in light_vertices.iter().take_while(|v| v.path_length > 0) {
-                    if lv.path_length + m > f.max_depth {
+                // Slot k - 1 holds the light vertex k scattering vertices from the light, or
+                // nothing (a delta vertex, or the path ended): skip the gaps.
+                for (slot, lv) in light_vertices.iter().enumerate() {
+                    if slot as u32 + 1 + m > f.max_depth {
                         break;
+                    }
+                    if lv.path_length == 0 {
+                        continue;
                     }
                     let v = connect_vertices(s, p, &h, &b, wo, &sub, skip, lv, rays);
                     let layer = path_layer(
