@@ -1,6 +1,6 @@
 //! Ray casting against the flattened BVH; twin of `shaders/trace.glsl`.
 
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
@@ -11,13 +11,21 @@ use super::SceneView;
 use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK, TRACE_STEPS};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
-pub fn ray_box(o: Vec3, inv_d: Vec3, lo: Vec3, hi: Vec3, t_max: f32) -> f32 {
+///
+/// In SIMD lanes (`Vec3A`: SSE `minps`/`maxps`), as lavapipe runs the kernel's: for finite
+/// values every min and max is exact, so the result is the scalar form's bit for bit. They differ
+/// only where a slab's distance is NaN (a ray parallel to a box face and lying in its plane, 0 x
+/// inf), where GLSL leaves min and max undefined too; such a ray meets that face's triangles
+/// edge-on, which `ray_triangle` misses either way.
+#[inline]
+pub fn ray_box(o: Vec3A, inv_d: Vec3A, lo: Vec3A, hi: Vec3A, t_max: f32) -> f32 {
     let t0 = (lo - o) * inv_d;
     let t1 = (hi - o) * inv_d;
-    let tn = t0.min(t1);
-    let tf = t0.max(t1);
-    let enter = tn.x.max(tn.y).max(tn.z.max(0.0));
-    let leave = tf.x.min(tf.y).min(tf.z.min(t_max));
+    let enter = t0.min(t1).max_element();
+    let leave = t0.max(t1).min_element();
+    // Scalar selects rather than f32::max/min, which add NaN fix-ups to every box test.
+    let enter = if enter > 0.0 { enter } else { 0.0 };
+    let leave = if leave < t_max { leave } else { t_max };
     if enter <= leave {
         enter
     } else {
@@ -40,13 +48,15 @@ pub fn passes_through(s: &SceneView, id: u32, o: Vec3, d: Vec3, t: f32) -> bool 
 struct WalkRay {
     o: Vec3,
     d: Vec3,
-    inv_d: Vec3,
+    /// `o` and 1 / `d` in SIMD lanes, for `ray_box`.
+    o_a: Vec3A,
+    inv_d: Vec3A,
     len: f32,
 }
 
 impl WalkRay {
     fn new(o: Vec3, d: Vec3, len: f32) -> WalkRay {
-        WalkRay { o, d, inv_d: d.recip(), len }
+        WalkRay { o, d, o_a: o.into(), inv_d: Vec3A::from(d).recip(), len }
     }
 }
 
@@ -112,7 +122,7 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
         }
         let n = &nodes[node];
         let (count, skip) = (n.count(), n.skip() as usize);
-        if ray_box(r.o, r.inv_d, Vec3::from(n.aabb_min), Vec3::from(n.aabb_max), t_hit * r.len) == f32::INFINITY {
+        if ray_box(r.o_a, r.inv_d, Vec3A::from(n.aabb_min), Vec3A::from(n.aabb_max), t_hit * r.len) == f32::INFINITY {
             node = skip;
             continue;
         }
