@@ -384,7 +384,8 @@ fn vcm_images_do_not_depend_on_thread_order() {
 fn bidirectional_integrators_refuse_media_clearly() {
     let scene = shipped("cornell-fog", Integrator::Vcm);
     let settings = photonix::render::FrameSettings { width: 8, height: 8, max_depth: 8, seed: 1 };
-    let err = photonix::render::prepare(&scene, &settings).err().expect("media are refused").to_string();
+    let Err(err) = photonix::render::prepare(&scene, &settings) else { panic!("media are refused") };
+    let err = err.to_string();
     println!("{err}");
     assert!(err.contains("participating media") && err.contains("\"pt\""), "{err}");
 }
