@@ -188,20 +188,68 @@ fn has(p: &VcmParams, t: u32) -> bool {
     p.techniques & t != 0
 }
 
+/// Light sub-paths per sample: one per pixel, as many as the vertex budget allows.
+pub fn light_path_count(f: &FrameParams) -> u32 {
+    (f.width * f.height).min(VCM_MAX_LIGHT_VERTICES / f.max_depth.max(1)).max(1)
+}
+
+/// How far the camera sees: the median distance of the first hits of nine camera rays spread over
+/// the film (lens centre), or `fallback` when none hits.
+pub fn view_distance(s: &SceneView, fallback: f32) -> f32 {
+    let mut hits: Vec<f32> = Vec::new();
+    for (sx, sy) in [
+        (0.0, 0.0),
+        (-0.5, -0.5),
+        (0.5, -0.5),
+        (-0.5, 0.5),
+        (0.5, 0.5),
+        (0.0, 0.5),
+        (0.0, -0.5),
+        (0.5, 0.0),
+        (-0.5, 0.0),
+    ] {
+        let (o, d) = camera_ray(s, sx, sy, [0.5, 0.5]);
+        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, NO_LIGHT);
+        if prim != NO_LIGHT && t.is_finite() {
+            hits.push(t);
+        }
+    }
+    hits.sort_by(f32::total_cmp);
+    hits.get(hits.len() / 2).copied().unwrap_or(fallback)
+}
+
+/// The merging radius of the first sample: the smaller of `VCM_RADIUS_PIXELS` pixels' footprint
+/// at the distance the camera sees (`view_distance`) and the radius holding
+/// `VCM_RADIUS_VERTICES` light vertices were one vertex per light path spread evenly over the
+/// scene's `surface_area` (a large open scene, most of it unlit or unseen, would blur the seen part
+/// with the second alone).
+pub fn vcm_base_radius(f: &FrameParams, surface_area: f32, view_distance: f32) -> f32 {
+    let paths = light_path_count(f) as f32;
+    let by_area = (VCM_RADIUS_VERTICES * surface_area / (std::f32::consts::PI * paths)).sqrt();
+    let film = match f.camera_kind {
+        CAMERA_ORTHOGRAPHIC => 2.0 * Vec3::from(f.camera_right).length(),
+        CAMERA_LATLONG => 2.0 * std::f32::consts::PI * view_distance,
+        _ => 2.0 * Vec3::from(f.camera_right).length() * view_distance / Vec3::from(f.camera_forward).length(),
+    };
+    let by_pixel = VCM_RADIUS_PIXELS * film / f.width as f32;
+    let r = if by_pixel > 0.0 && by_pixel.is_finite() { by_area.min(by_pixel) } else { by_area };
+    r.max(f32::MIN_POSITIVE)
+}
+
 /// The sample's parameters: the light path count, the merging radius of sample `sample_index`
-/// and the weights' factors, for an integrator (`INTEGRATOR_BPT` or `_VCM`) and the frame's
-/// techniques (`TECHNIQUES_ALL`, or one `VCM_*_ONLY` check).
-pub fn vcm_params(f: &FrameParams, surface_area: f32, sample_index: u32) -> VcmParams {
+/// (from the first sample's, `base_radius`) and the weights' factors, for an integrator
+/// (`INTEGRATOR_BPT` or `_VCM`) and the frame's techniques (`TECHNIQUES_ALL`, or one
+/// `VCM_*_ONLY` check).
+pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmParams {
     let slots = f.max_depth.max(1);
-    let light_paths = (f.width * f.height).min(VCM_MAX_LIGHT_VERTICES / slots).max(1);
+    let light_paths = light_path_count(f);
     let techniques = match f.techniques {
         VCM_LIGHT_TRACE_ONLY => VCM_LIGHT_TRACE_ONLY,
         VCM_MERGE_ONLY => VCM_MERGE_ONLY,
         _ if f.integrator == INTEGRATOR_VCM => VCM_CONNECT | VCM_MERGE,
         _ => VCM_CONNECT,
     };
-    let base = (VCM_RADIUS_VERTICES * surface_area / (std::f32::consts::PI * light_paths as f32)).sqrt();
-    let radius = base * ((sample_index as f64 + 1.0).powf((VCM_ALPHA as f64 - 1.0) / 2.0)) as f32;
+    let radius = base_radius * ((sample_index as f64 + 1.0).powf((VCM_ALPHA as f64 - 1.0) / 2.0)) as f32;
     let eta = std::f32::consts::PI * radius * radius * light_paths as f32;
     VcmParams {
         sample_index,

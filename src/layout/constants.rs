@@ -439,10 +439,12 @@ shared_constants! {
     /// atomics land in. A splat value v adds floor(v) to the high word and fract(v) 2^32 to the
     /// low, carrying; values are clamped to `SPLAT_MAX`.
     SPLAT_MAX: f32 = 1.0e9;
-    /// The merging radius: `VCM_RADIUS_VERTICES` light vertices in a disc of it, were one vertex
-    /// per light path spread evenly over the scene's surfaces, shrinking as
-    /// (sample + 1)^((alpha - 1) / 2) with `VCM_ALPHA` (SmallVCM's 0.75).
+    /// The merging radius (`cpu::vcm::vcm_base_radius`): at most `VCM_RADIUS_PIXELS` pixels'
+    /// footprint where the camera looks, and at most the radius holding `VCM_RADIUS_VERTICES`
+    /// light vertices were one vertex per light path spread evenly over the scene's surfaces;
+    /// shrinking as (sample + 1)^((alpha - 1) / 2) with `VCM_ALPHA` (SmallVCM's 0.75).
     VCM_RADIUS_VERTICES: f32 = 0.5;
+    VCM_RADIUS_PIXELS: f32 = 1.0;
     VCM_ALPHA: f32 = 0.75;
     /// Most light vertices stored per sample (64 bytes each): a larger image draws fewer light
     /// paths than it has pixels.

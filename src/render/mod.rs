@@ -394,10 +394,12 @@ fn render_vcm_cpu(
     let mut accumulation = vec![[0.0f32; 4]; (frame.width * frame.height * LAYER_COUNT) as usize];
     let mut complete = true;
     let (mut light_time, mut camera_time) = (Duration::ZERO, Duration::ZERO);
+    let view_distance = crate::cpu::vcm::view_distance(view, buffers.bounding_radius);
+    let base_radius = crate::cpu::vcm::vcm_base_radius(&frame, buffers.surface_area, view_distance);
     'samples: for sample in 0..spp {
         let sample_index = pass * spp + sample;
         let t = Instant::now();
-        let params = crate::cpu::vcm::vcm_params(&frame, buffers.surface_area, sample_index);
+        let params = crate::cpu::vcm::vcm_params(&frame, base_radius, sample_index);
         let stage = crate::cpu::vcm::light_stage(view, &params);
         light_time += t.elapsed();
         let t = Instant::now();

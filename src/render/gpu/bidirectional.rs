@@ -53,10 +53,12 @@ pub(super) fn render_pass_bidirectional(
     let mut done = 0;
     let mut complete = true;
     let (mut light_time, mut camera_time) = (Duration::ZERO, Duration::ZERO);
+    let view_distance = crate::cpu::vcm::view_distance(&buffers.view(), buffers.bounding_radius);
+    let base_radius = crate::cpu::vcm::vcm_base_radius(&f, buffers.surface_area, view_distance);
     'samples: for sample in 0..spp {
         let sample_index = pass * spp + sample;
         let t = Instant::now();
-        let mut params = vcm_params(&f, buffers.surface_area, sample_index);
+        let mut params = vcm_params(&f, base_radius, sample_index);
         let slots = params.light_paths as u64 * params.vertex_slots as u64;
         let vertices = ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?;
         let points = ctx.create_buffer("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
