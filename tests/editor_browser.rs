@@ -673,7 +673,11 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     driver.wait_for("the tall block's top", "return document.body.dataset.selection", |v| v == "shape:10");
     driver.type_into("#tf-rotate-1", "137\n");
     wait_text(&f, "the rotation", |t| t.contains("rotate = [0, 137, 0]"));
-    driver.wait_for("the panel", "return document.getElementById('tf-rotate-1')?.value", |v| v == "137");
+    driver.wait_for(
+        "the page's scene",
+        "return window.photonixEditor.state.scene.shapes[10].fields.transform?.rotate?.[1]",
+        |v| v.as_f64() == Some(137.0),
+    );
     // Turned about the origin, it went elsewhere: frame it (F) to see its gizmo.
     driver.press("f");
     let before = f.text();
@@ -734,7 +738,8 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     let idle_draws = driver.script("return window.photonixEditor.viewport.draws").as_u64().unwrap() - draws;
     println!("idle page (solid shading): {idle_draws} draws in 5 s, browser CPU {:.1}% of a core", share * 100.0);
     assert_eq!(idle_draws, 0, "the idle page drew");
-    assert!(share < 0.10, "the idle page used {:.1}% of a core", share * 100.0);
+    // Issue 23's bound; about 1.7% measured on a loaded 2-core machine (BENCHMARKS.md).
+    assert!(share < 0.05, "the idle page used {:.1}% of a core", share * 100.0);
     let error = driver.script("return document.body.dataset.lastError || ''");
     assert_eq!(error, "", "the page showed an error");
 }
@@ -815,6 +820,25 @@ fn browser_imports_models_and_edits_materials() {
     );
     wait_text(&f, "the picked colour", |t| t.contains("reflectance = [0.2159, 0.2159, 0.2159]"));
     driver.screenshot("31-material-switched.png");
+    // Wireframe shading, and the Blender mouse scheme with its numpad views
+    driver.click("#wireframe");
+    let wire = driver.script(
+        "return window.photonixEditor.viewport.objects.filter((o) => o.kind === 'mesh').every((o) => [o.mesh.material].flat().every((m) => m.wireframe))",
+    );
+    assert_eq!(wire, true, "the solid view is not wireframe");
+    driver.screenshot("32-wireframe.png");
+    driver.click("#wireframe");
+    driver.click("#navigation option[value='blender']");
+    let buttons = driver.script(
+        "const c = window.photonixEditor.viewport.views[3].controls.mouseButtons; return [c.LEFT, c.MIDDLE, c.RIGHT]",
+    );
+    assert_eq!(buttons, json!([null, 0, null]), "Blender: the middle button orbits (three.js MOUSE.ROTATE is 0)");
+    driver.press("\u{E01B}"); // Numpad 1
+    let front = driver.script(
+        "const v = window.photonixEditor.viewport; const d = v.perspective.position.clone().sub(v.views[3].controls.target).normalize(); return [d.x, d.y, d.z]",
+    );
+    assert!(front[2].as_f64().unwrap() > 0.999, "numpad 1 looks from the front (+z): {front}");
+    driver.click("#navigation option[value='default']");
     // A new material
     driver.click("#new-material");
     let text = wait_text(&f, "the new material", |t| t.contains("[materials.material_1]"));

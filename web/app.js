@@ -130,6 +130,8 @@ function onFrame(buffer) {
   state.frameOwner = header.owner;
   document.body.dataset.frames = String(state.frames);
   viewport.setFrame(blob, header);
+  // In Solid shading the frame is not shown, and neither is its line (no repaint for it).
+  if (!viewport.rendered) return;
   const passes = header.passes ? `, ${header.passes} passes` : '';
   $('frame-info').textContent =
     `${header.width}×${header.height}${passes}, ${header.render_ms.toFixed(0)} ms (${header.since_change_ms.toFixed(0)} ms since the change) on ${header.device}`;

@@ -467,11 +467,15 @@ export class Viewport {
     forward.normalize();
     const base = this.perspective.position.clone().addScaledVector(forward, distance);
     const right = new THREE.Vector3().crossVectors(forward, this.perspective.up).normalize();
-    const centres = this.objects.filter((o) => o.kind === 'mesh' || o.kind === 'area').map((o) => this.worldBox(o).getCenter(new THREE.Vector3()));
+    // Things there already: their boxes grown by the new thing's size; floors and walls (a side
+    // more than half the scene across) do not count, everything stands on or beside them.
+    const boxes = this.objects.filter((o) => o.kind === 'mesh' || o.kind === 'area').map((o) => this.worldBox(o))
+      .filter((b) => { const d = b.getSize(new THREE.Vector3()); return Math.max(d.x, d.y, d.z) < this.extent * 0.5; })
+      .map((b) => b.expandByScalar(size));
     for (let k = 0; k < 40; k++) {
       const step = (k % 2 ? 1 : -1) * Math.ceil(k / 2);
       const p = base.clone().addScaledVector(right, step * size * 2.5);
-      if (!centres.some((c) => c.distanceTo(p) < size * 1.5)) return p.toArray().map(round);
+      if (!boxes.some((b) => b.containsPoint(p))) return p.toArray().map(round);
     }
     return base.toArray().map(round);
   }
