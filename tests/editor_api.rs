@@ -663,11 +663,15 @@ fn duplicate_offsets_the_copy_and_batch_is_one_undo_step() {
     // A point light moves its position.
     ok(&f.edit(json!({ "op": "duplicate", "target": { "light": 1 }, "offset": [0, 0, -1] })));
     assert_eq!(f.scene_json()["lights"][2]["fields"]["position"], json!([2, 2, 1]));
+    // The steps are the API's (author 0; a page's are its session's), shared by every page.
+    assert_eq!(f.scene_json()["undo_author"], 0);
     // Three steps back to the start.
     for _ in 0..3 {
         ok(&f.call("POST", "/api/undo", b""));
     }
     assert_eq!(f.text(), before);
+    let page = f.scene_json();
+    assert_eq!((page["undo_author"].clone(), page["redo_author"].clone()), (json!(null), json!(0)));
 
     // A batch (a multi-selection's move) is one step, and all or nothing.
     let page = f.scene_json();

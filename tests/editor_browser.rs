@@ -904,6 +904,10 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     wait_text(&f, "B's delete", |t| !t.contains("name = \"floor\""));
     driver.switch_to(&a);
     driver.wait_for("A: the ball, now shape 0", "return document.body.dataset.selection", |v| v == "shape:0");
+    // Undo is shared: A's Undo says it would take back another tab's edit.
+    driver.wait_for("A: whose step Undo takes", "return document.body.dataset.undoAuthor", |v| v == "other");
+    let label = driver.script("return document.getElementById('undo-author').textContent");
+    assert_eq!(label, "(another tab's)");
     let position = driver.script("return window.photonixEditor.viewport.perspective.position.toArray()");
     assert_eq!(position, view_a, "tab A's view moved with tab B's");
     let owner_a = driver.script("return window.photonixEditor.state.frameOwner");
@@ -926,6 +930,7 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     assert!(f.text().contains("radius = 0.5"), "the half-typed value was committed");
     driver.session("POST", &format!("/element/{radius}/value"), json!({ "text": "\n" }));
     wait_text(&f, "A's radius", |t| t.contains("radius = 0.3"));
+    driver.wait_for("A: its own step", "return document.body.dataset.undoAuthor", |v| v == "mine");
 
     // The server stops: one notice saying how to reconnect, however long it is away
     let server = f.server.take().unwrap();

@@ -105,6 +105,7 @@ function send(message) {
 function onText(msg) {
   switch (msg.type) {
     case 'scene': setScene(msg); break;
+    case 'hello': state.session = msg.session; updateButtons(); break;
     case 'reply': {
       const resolve = pending.get(msg.id);
       pending.delete(msg.id);
@@ -258,6 +259,13 @@ function updateButtons() {
   const scene = state.scene;
   $('undo').disabled = !scene || !scene.can_undo;
   $('redo').disabled = !scene || !scene.can_redo;
+  // Undo is the scene's, shared by every tab: say whose step it would take back.
+  const whose = (author) => (author === null || author === undefined ? '' : author === state.session ? 'yours' : author === 0 ? 'an API call\'s' : 'another tab\'s');
+  const undoWhose = scene ? whose(scene.undo_author) : '';
+  $('undo').title = `Undo (Ctrl+Z)${undoWhose ? `: the last edit, ${undoWhose}` : ''}`;
+  $('redo').title = `Redo (Ctrl+Shift+Z / Ctrl+Y)${scene && whose(scene.redo_author) ? `: ${whose(scene.redo_author)}` : ''}`;
+  $('undo-author').textContent = undoWhose === 'yours' || !undoWhose ? '' : `(${undoWhose})`;
+  document.body.dataset.undoAuthor = undoWhose === 'yours' ? 'mine' : undoWhose ? 'other' : '';
   const deletable = state.selection.length && state.selection.every((s) => s.kind !== 'camera');
   $('delete').disabled = !deletable;
   $('duplicate').disabled = !deletable;

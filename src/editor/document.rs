@@ -165,8 +165,11 @@ pub struct SceneDocument {
     text: String,
     scene: Scene,
     origins: SceneOrigins,
-    undo: Vec<(String, Ids)>,
-    redo: Vec<(String, Ids)>,
+    /// Each step: the text before it, its entries' ids, and who made it (`apply_by`).
+    undo: Vec<(String, Ids, u64)>,
+    redo: Vec<(String, Ids, u64)>,
+    /// Who makes the change under way (`apply_by`); 0 for anyone.
+    author: u64,
     /// The stable id of each `[[shapes]]`, `[[lights]]` and `[[instances]]` entry.
     ids: Ids,
     /// The next id to give.
@@ -251,6 +254,7 @@ impl SceneDocument {
             origins,
             undo: Vec::new(),
             redo: Vec::new(),
+            author: 0,
             ids: Ids::default(),
             next_id: 1,
             revision: 0,
@@ -286,6 +290,23 @@ impl SceneDocument {
     }
     pub fn can_redo(&self) -> bool {
         !self.redo.is_empty()
+    }
+    /// Who made the step that undo would undo (the editor's page session; 0: anyone, the API).
+    pub fn undo_author(&self) -> Option<u64> {
+        self.undo.last().map(|step| step.2)
+    }
+    /// Who made the step that redo would redo.
+    pub fn redo_author(&self) -> Option<u64> {
+        self.redo.last().map(|step| step.2)
+    }
+
+    /// `apply`, the step recorded as made by `author` (a page session), so that each page can
+    /// say whose edit Undo would undo: the undo stack is the scene's, shared by every page.
+    pub fn apply_by(&mut self, command: &Command, author: u64) -> Result<(), EditError> {
+        self.author = author;
+        let result = self.apply(command);
+        self.author = 0;
+        result
     }
     /// The stable ids of the entries (`Target::ShapeId` and its kin).
     pub fn ids(&self) -> &Ids {
@@ -436,7 +457,7 @@ impl SceneDocument {
             None => self.fresh_ids(),
         };
         let old_ids = std::mem::replace(&mut self.ids, ids);
-        self.undo.push((old, old_ids));
+        self.undo.push((old, old_ids, self.author));
         if self.undo.len() > MAX_UNDO {
             self.undo.remove(0);
         }
@@ -446,22 +467,22 @@ impl SceneDocument {
     }
 
     pub fn undo(&mut self) -> Result<(), EditError> {
-        let (text, ids) = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
+        let (text, ids, author) = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
         // The text was valid when it was current; files it names may have gone since.
         let parsed = parse(&text, &self.path, self.confinement())?;
         self.undo.pop();
         let old_ids = std::mem::replace(&mut self.ids, ids);
-        self.redo.push((std::mem::replace(&mut self.text, text), old_ids));
+        self.redo.push((std::mem::replace(&mut self.text, text), old_ids, author));
         self.install(parsed);
         Ok(())
     }
 
     pub fn redo(&mut self) -> Result<(), EditError> {
-        let (text, ids) = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
+        let (text, ids, author) = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
         let parsed = parse(&text, &self.path, self.confinement())?;
         self.redo.pop();
         let old_ids = std::mem::replace(&mut self.ids, ids);
-        self.undo.push((std::mem::replace(&mut self.text, text), old_ids));
+        self.undo.push((std::mem::replace(&mut self.text, text), old_ids, author));
         self.install(parsed);
         Ok(())
     }

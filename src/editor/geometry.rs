@@ -3,7 +3,7 @@
 //! viewport and for picking). Format (documented in docs/editor.md):
 //!
 //! ```text
-//! { "revision", "file", "dirty", "can_undo", "can_redo", "warnings": [..],
+//! { "revision", "file", "dirty", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
 //!   "bounds": { "min": [x,y,z], "max": [x,y,z] },
 //!   "camera": { "fields": {..}, "position", "look_at", "up", "fov", "width", "height", "projection", "view_height" },
 //!   "render": {..}, "photons": {..} | null, "environment": {..} | null,
@@ -13,6 +13,8 @@
 //!   "instances": [ { "id", "fields": {..}, "object", "copies", "drawn", "color", "emissive",
 //!                    "positions": [..], "groups": [..] } ] }
 //! ```
+//! `undo_author` and `redo_author` name the page session that made the step Undo or Redo would
+//! take (0: an API call; null: no step), so a page can say whether it is its own.
 //! `id` is the entry's stable id (`SceneDocument::ids`): the page selects and edits by it.
 //! `positions` lists three vertices per triangle; analytic shapes (spheres, discs, cones, tori,
 //! superellipsoids) come tessellated, an infinite plane as a square as large as the scene.
@@ -166,6 +168,8 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "dirty": doc.dirty(),
         "can_undo": doc.can_undo(),
         "can_redo": doc.can_redo(),
+        "undo_author": doc.undo_author(),
+        "redo_author": doc.redo_author(),
         "warnings": scene.warnings,
         "bounds": { "min": lo.to_array(), "max": hi.to_array() },
         "camera": {

@@ -18,7 +18,8 @@
 //!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
 //!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`,
 //!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
-//!   `{"type": "reply", "id", "ok", "error"}`). Each page's view is its own: the renderer
+//!   `{"type": "reply", "id", "ok", "error"}`); after the scene and the final render's status
+//!   it sends `{"type": "hello", "session"}`, the page's session number. Each page's view is its own: the renderer
 //!   renders the view last sent (by whichever page), and a page gets only the preview frames of
 //!   its own view (the header's `owner`), so no tab shows another's render.
 
@@ -399,12 +400,12 @@ enum Change {
 
 /// Applies a change on a blocking thread (parsing a scene may read meshes), then sends the new
 /// scene to every page and to the renderer. Returns the new revision.
-async fn change(app: &Arc<App>, change: Change) -> Result<u64, String> {
+async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, String> {
     let app2 = app.clone();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
         let result = match &change {
-            Change::Edit(command) => doc.apply(command),
+            Change::Edit(command) => doc.apply_by(command, author),
             Change::Undo => doc.undo(),
             Change::Redo => doc.redo(),
         };
@@ -436,15 +437,15 @@ async fn post_edit(State(app): State<Arc<App>>, body: Bytes) -> Response {
         Ok(c) => c,
         Err(e) => return error(StatusCode::BAD_REQUEST, &format!("malformed edit: {e}")),
     };
-    reply(change(&app, Change::Edit(command)).await)
+    reply(change(&app, Change::Edit(command), 0).await)
 }
 
 async fn post_undo(State(app): State<Arc<App>>) -> Response {
-    reply(change(&app, Change::Undo).await)
+    reply(change(&app, Change::Undo, 0).await)
 }
 
 async fn post_redo(State(app): State<Arc<App>>) -> Response {
-    reply(change(&app, Change::Redo).await)
+    reply(change(&app, Change::Redo, 0).await)
 }
 
 async fn save(app: &Arc<App>) -> Result<u64, String> {
@@ -667,6 +668,11 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     if socket.send(Message::Text(status.to_string().into())).await.is_err() {
         return;
     }
+    // The page's own session number: its frames' `owner`, its steps' `undo_author`.
+    let hello = json!({ "type": "hello", "session": me });
+    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
+        return;
+    }
     loop {
         let outgoing = tokio::select! {
             _ = closing.changed() => {
@@ -733,9 +739,9 @@ async fn handle_page_message(app: &Arc<App>, text: &str, session: u64) -> Option
                 .err()
                 .map(|m| json!({ "type": "error", "message": m }).to_string());
         }
-        PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command)).await),
-        PageMessage::Undo { id } => (id, change(app, Change::Undo).await),
-        PageMessage::Redo { id } => (id, change(app, Change::Redo).await),
+        PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command), session).await),
+        PageMessage::Undo { id } => (id, change(app, Change::Undo, session).await),
+        PageMessage::Redo { id } => (id, change(app, Change::Redo, session).await),
         PageMessage::Save { id } => (id, save(app).await),
     };
     let reply: Json = match result {
