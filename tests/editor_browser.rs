@@ -755,6 +755,20 @@ fn browser_imports_models_and_edits_materials() {
     });
     driver.click("#shading");
 
+    // Box select (B, then a left drag): the ball and the block, not the floor below them
+    let (ball, block) = (screen_of(&driver, [0.0, 0.5, 0.0]), screen_of(&driver, [1.0, 0.25, 0.0]));
+    driver.press("b");
+    driver.pointer(json!([
+        { "type": "pointerMove", "duration": 0, "origin": "viewport", "x": ball.0 - 20, "y": ball.1 - 20 },
+        { "type": "pointerDown", "button": 0 },
+        { "type": "pointerMove", "duration": 0, "origin": "viewport", "x": block.0 - 10, "y": block.1 - 5 },
+        { "type": "pointerMove", "duration": 0, "origin": "viewport", "x": block.0 + 20, "y": block.1 + 10 },
+    ]));
+    driver.screenshot("29-box-select.png");
+    driver.pointer(json!([{ "type": "pointerUp", "button": 0 }]));
+    driver.wait_for("the boxed pair", "return document.body.dataset.selection", |v| v == "shape:1,shape:2");
+    driver.press("\u{E00C}"); // Escape
+
     // Import a .glb and a .ply through the page: each in front of the view, not on each other
     let centre_of = |index: usize| -> [f64; 3] {
         let page = f.scene_json();

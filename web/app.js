@@ -413,6 +413,7 @@ export async function importModel(file) {
 const viewport = new Viewport($('canvas'), $('view-labels'), {
   select,
   pick: (sel, additive) => pick(sel, additive, true),
+  selectMany: (list, additive) => selectMany(list, additive),
   edit,
   sendView,
   state,
@@ -494,7 +495,8 @@ window.addEventListener('keydown', (e) => {
   else if (key === 'z') setShading(!viewport.rendered);
   else if (['Numpad1', 'Numpad3', 'Numpad7'].includes(e.code)) viewport.axisView(Number(e.code.slice(-1)), e.ctrlKey);
   else if (e.code === 'Numpad0') viewport.viewThroughCamera();
-  else if (key === 'escape') select([]);
+  else if (key === 'escape') { viewport.cancelBoxSelect(); select([]); }
+  else if (key === 'b') viewport.startBoxSelect();
   else if (key === 'f12') renderDialog.open();
   else handled = false;
   if (handled) e.preventDefault();

@@ -83,6 +83,11 @@ export class Viewport {
     // Our pointer listener first, so the view under the pointer owns the gesture.
     canvas.addEventListener('pointerdown', (e) => this.onPointerDown(e));
     canvas.addEventListener('pointerup', (e) => this.onPointerUp(e));
+    canvas.addEventListener('pointermove', (e) => this.onPointerMove(e));
+    // The rectangle of a box selection.
+    this.boxDiv = document.createElement('div');
+    this.boxDiv.id = 'box-select';
+    canvas.parentElement.appendChild(this.boxDiv);
     for (const view of this.views) {
       view.camera.layers.enable(view.layer);
       view.controls = new OrbitControls(view.camera, canvas);
@@ -777,6 +782,20 @@ export class Viewport {
     return this.rects().find((r) => x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h);
   }
 
+  /// B: the next left drag draws a box and selects what is in it (with the Blender mouse, a
+  /// left drag off the gizmo always does).
+  startBoxSelect() {
+    this.boxArmed = true;
+    this.canvas.style.cursor = 'crosshair';
+  }
+
+  cancelBoxSelect() {
+    this.boxArmed = false;
+    this.box = null;
+    this.boxDiv.style.display = 'none';
+    this.canvas.style.cursor = '';
+  }
+
   onPointerDown(e) {
     const rect = this.canvas.getBoundingClientRect();
     const x = e.clientX - rect.left, y = e.clientY - rect.top;
@@ -786,12 +805,54 @@ export class Viewport {
     for (const view of this.views) view.controls.enabled = view === r.view && !this.gizmo.dragging;
     this.gizmo.camera = r.view.camera;
     this.down = { x: e.clientX, y: e.clientY };
+    const blenderBox = this.navigation === 'blender' && e.button === 0 && !this.gizmo.axis;
+    if ((this.boxArmed && e.button === 0) || blenderBox) {
+      // The orbit controls see the press next: disabled, they do not start.
+      for (const view of this.views) view.controls.enabled = false;
+      this.box = { x0: x, y0: y, x1: x, y1: y, r, additive: e.shiftKey || e.ctrlKey || e.metaKey };
+    }
+  }
+
+  onPointerMove(e) {
+    if (!this.box) return;
+    const rect = this.canvas.getBoundingClientRect();
+    this.box.x1 = e.clientX - rect.left;
+    this.box.y1 = e.clientY - rect.top;
+    const b = this.box;
+    Object.assign(this.boxDiv.style, {
+      display: 'block', left: `${Math.min(b.x0, b.x1)}px`, top: `${Math.min(b.y0, b.y1)}px`,
+      width: `${Math.abs(b.x1 - b.x0)}px`, height: `${Math.abs(b.y1 - b.y0)}px`,
+    });
+  }
+
+  /// Selects the entries whose bounding box's centre the dragged box holds, in its view.
+  finishBoxSelect() {
+    const b = this.box;
+    this.cancelBoxSelect();
+    const [x0, x1] = [Math.min(b.x0, b.x1), Math.max(b.x0, b.x1)];
+    const [y0, y1] = [Math.min(b.y0, b.y1), Math.max(b.y0, b.y1)];
+    const camera = b.r.view.camera;
+    camera.updateMatrixWorld();
+    const picked = [];
+    for (const o of this.objects) {
+      if (o.kind === 'camera' || this.hidden.has(keyOf(o.target))) continue;
+      const p = this.worldBox(o).getCenter(new THREE.Vector3()).project(camera);
+      if (p.z > 1 || p.z < -1) continue;
+      const px = b.r.x + (p.x * 0.5 + 0.5) * b.r.w, py = b.r.y + (-p.y * 0.5 + 0.5) * b.r.h;
+      if (px >= x0 && px <= x1 && py >= y0 && py <= y1) picked.push({ kind: o.target.kind, id: o.target.id });
+    }
+    this.app.selectMany(picked, b.additive);
   }
 
   onPointerUp(e) {
     if (!this.down || e.button !== 0) return;
     const moved = Math.hypot(e.clientX - this.down.x, e.clientY - this.down.y);
     this.down = null;
+    if (this.box) {
+      if (moved > 4) { this.finishBoxSelect(); return; }
+      // A click, not a drag: select as any click does.
+      this.cancelBoxSelect();
+    }
     if (moved > 4 || this.gizmo.dragging || this.gizmo.axis) return;
     const rect = this.canvas.getBoundingClientRect();
     const x = e.clientX - rect.left, y = e.clientY - rect.top;
