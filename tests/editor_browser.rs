@@ -852,6 +852,33 @@ fn browser_imports_models_and_edits_materials() {
         "const v = window.photonixEditor.viewport; const d = v.perspective.position.clone().sub(v.views[3].controls.target).normalize(); return [d.x, d.y, d.z]",
     );
     assert!(front[2].as_f64().unwrap() > 0.999, "numpad 1 looks from the front (+z): {front}");
+    // Blender's G: the ball follows the mouse, a click confirms one move
+    driver.click("#tree-shape-1");
+    driver.wait_for("the ball", "return document.body.dataset.selection", |v| v == "shape:1");
+    let before = f.text();
+    let ball = screen_of(&driver, [0.0, 0.5, 0.0]);
+    driver.pointer(
+        json!([{ "type": "pointerMove", "duration": 0, "origin": "viewport", "x": ball.0 + 40, "y": ball.1 + 30 }]),
+    );
+    driver.press("g");
+    driver.pointer(
+        json!([{ "type": "pointerMove", "duration": 0, "origin": "viewport", "x": ball.0 + 100, "y": ball.1 + 30 }]),
+    );
+    assert_eq!(f.text(), before, "G wrote before the click");
+    driver.pointer(json!([{ "type": "pointerDown", "button": 0 }, { "type": "pointerUp", "button": 0 }]));
+    let text = wait_text(&f, "the grab", |t| t != before);
+    let ball_table = &shape_tables(&text)[1];
+    let moved = translate_of(ball_table).expect("the ball moved");
+    assert!(moved[0] > 0.05 && moved[1].abs() < 1e-3, "moved right in the view: {moved:?}");
+    // ... and Escape cancels one
+    let before = f.text();
+    driver.press("g");
+    driver.pointer(
+        json!([{ "type": "pointerMove", "duration": 0, "origin": "viewport", "x": ball.0 + 200, "y": ball.1 + 80 }]),
+    );
+    driver.press("\u{E00C}");
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(f.text(), before, "Escape kept the grab");
     driver.click("#navigation option[value='default']");
     // A new material
     driver.click("#new-material");

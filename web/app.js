@@ -476,6 +476,18 @@ window.addEventListener('keydown', (e) => {
   const ctrl = e.ctrlKey || e.metaKey;
   const key = e.key.toLowerCase();
   let handled = true;
+  // Blender's G / R / S under way: Enter confirms, Escape cancels.
+  if (viewport.modal) {
+    if (key === 'enter') viewport.endModal(true);
+    else if (key === 'escape') viewport.endModal(false);
+    e.preventDefault();
+    return;
+  }
+  const modal = { g: 'translate', r: 'rotate', s: 'scale' }[key];
+  if (!ctrl && !e.altKey && modal && viewport.navigation === 'blender' && viewport.pointer) {
+    setMode(modal);
+    if (viewport.startModal(modal, viewport.pointer.x, viewport.pointer.y)) { e.preventDefault(); return; }
+  }
   if (ctrl && key === 'z' && !e.shiftKey) undo();
   else if (ctrl && (key === 'y' || (key === 'z' && e.shiftKey))) redo();
   else if (ctrl && key === 's') save();

@@ -782,6 +782,66 @@ export class Viewport {
     return this.rects().find((r) => x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h);
   }
 
+  /// Blender's G / R / S: the selection follows the mouse (moved in the view's plane through
+  /// its centre, turned about the view's axis, scaled by the distance to its centre) until a
+  /// click or Enter confirms (one edit, as a gizmo drag) or Escape or a right click cancels.
+  startModal(mode, clientX, clientY) {
+    if (!this.gizmo.object || this.modal) return false;
+    const turnable = this.selection.map((s) => this.objectOf(s)).every((o) => o && (o.kind === 'mesh' || o.kind === 'area'));
+    if (mode !== 'translate' && !turnable) return false;
+    const r = this.rects().find((x) => x.view === this.activeView) || this.rects()[0];
+    this.gizmo.setMode(mode);
+    this.startGizmo();
+    const rect = this.canvas.getBoundingClientRect();
+    const centre = this.pivot.position.clone().project(r.view.camera);
+    this.modal = {
+      mode, r, x0: clientX, y0: clientY,
+      cx: rect.left + r.x + (centre.x * 0.5 + 0.5) * r.w, cy: rect.top + r.y + (-centre.y * 0.5 + 0.5) * r.h,
+      position: this.pivot.position.clone(), quaternion: this.pivot.quaternion.clone(), scale: this.pivot.scale.clone(),
+    };
+    for (const view of this.views) view.controls.enabled = false;
+    this.canvas.style.cursor = 'move';
+    return true;
+  }
+
+  moveModal(clientX, clientY) {
+    const m = this.modal;
+    if (!m) return;
+    const camera = m.r.view.camera;
+    this.pivot.position.copy(m.position);
+    this.pivot.quaternion.copy(m.quaternion);
+    this.pivot.scale.copy(m.scale);
+    if (m.mode === 'translate') {
+      // Pixels to world units at the centre's depth, along the camera's right and up.
+      const a = m.position.clone().project(camera);
+      const ndc = new THREE.Vector3(a.x + ((clientX - m.x0) / m.r.w) * 2, a.y - ((clientY - m.y0) / m.r.h) * 2, a.z);
+      this.pivot.position.copy(ndc.unproject(camera));
+    } else if (m.mode === 'rotate') {
+      const angle = Math.atan2(clientY - m.cy, clientX - m.cx) - Math.atan2(m.y0 - m.cy, m.x0 - m.cx);
+      const axis = new THREE.Vector3().setFromMatrixColumn(camera.matrixWorld, 2).normalize();
+      this.pivot.quaternion.premultiply(new THREE.Quaternion().setFromAxisAngle(axis, -angle));
+    } else {
+      const d0 = Math.max(Math.hypot(m.x0 - m.cx, m.y0 - m.cy), 1);
+      this.pivot.scale.multiplyScalar(Math.max(Math.hypot(clientX - m.cx, clientY - m.cy) / d0, 1e-3));
+    }
+    this.followGizmo();
+  }
+
+  endModal(confirm) {
+    const m = this.modal;
+    if (!m) return;
+    this.modal = null;
+    this.canvas.style.cursor = '';
+    for (const view of this.views) view.controls.enabled = true;
+    if (confirm) { this.commitGizmo(); return; }
+    this.pivot.position.copy(m.position);
+    this.pivot.quaternion.copy(m.quaternion);
+    this.pivot.scale.copy(m.scale);
+    this.followGizmo();
+    this.dragStart = null;
+    this.setSelection(this.selection);
+  }
+
   /// B: the next left drag draws a box and selects what is in it (with the Blender mouse, a
   /// left drag off the gizmo always does).
   startBoxSelect() {
@@ -797,6 +857,12 @@ export class Viewport {
   }
 
   onPointerDown(e) {
+    if (this.modal) {
+      // A left click confirms G / R / S, a right click cancels; the view does not move.
+      e.stopImmediatePropagation();
+      this.endModal(e.button === 0);
+      return;
+    }
     const rect = this.canvas.getBoundingClientRect();
     const x = e.clientX - rect.left, y = e.clientY - rect.top;
     const r = this.viewAt(x, y);
@@ -814,6 +880,8 @@ export class Viewport {
   }
 
   onPointerMove(e) {
+    this.pointer = { x: e.clientX, y: e.clientY };
+    if (this.modal) { this.moveModal(e.clientX, e.clientY); return; }
     if (!this.box) return;
     const rect = this.canvas.getBoundingClientRect();
     this.box.x1 = e.clientX - rect.left;
