@@ -195,6 +195,15 @@ pub struct Ids {
     pub instances: Vec<u64>,
 }
 
+/// The first entry id of a document: the time it was opened in milliseconds, times 1000, so the
+/// ids of a restarted server are not those of the one before (a page left open, reconnecting,
+/// then drops a selection whose entry it cannot know rather than moving it onto another);
+/// below 2^53, so JSON carries them exactly.
+fn first_id() -> u64 {
+    let ms = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_millis() as u64);
+    (ms % (1 << 42)) * 1000 + 1
+}
+
 /// The number of entries of each array of tables in `text`: shapes, lights, instances.
 fn entry_counts(text: &str) -> [usize; 3] {
     let doc: DocumentMut = text.parse().unwrap_or_default();
@@ -256,7 +265,7 @@ impl SceneDocument {
             redo: Vec::new(),
             author: 0,
             ids: Ids::default(),
-            next_id: 1,
+            next_id: first_id(),
             revision: 0,
         };
         doc.ids = doc.fresh_ids();
