@@ -604,3 +604,255 @@ fn large_grids_of_instances_are_drawn_as_boxes_then_as_one_box() {
     let (lo, hi) = vertex_bounds(&fence["positions"]);
     assert!(near(lo, [-1.6, 0.0, -1.6]) && near(hi, [-1.5 + 149.5 + 0.1, 1.2, -1.5 + 299.0 + 0.1]), "{lo:?} {hi:?}");
 }
+
+/// The stable id of entry `index` of `list` in the page's scene.
+fn id_of(page: &serde_json::Value, list: &str, index: usize) -> u64 {
+    page[list][index]["id"].as_u64().unwrap_or_else(|| panic!("no id on {list}[{index}]: {}", page[list][index]))
+}
+
+#[test]
+fn stable_ids_name_the_same_entry_after_deletes_undo_and_redo() {
+    let f = Fixture::new();
+    let page = f.scene_json();
+    let (floor, ball, block) = (id_of(&page, "shapes", 0), id_of(&page, "shapes", 1), id_of(&page, "shapes", 2));
+    assert!(floor != ball && ball != block);
+    // Another tab deletes the floor: the ball is shape 0 now, and its id still names it.
+    ok(&f.edit(json!({ "op": "delete", "target": { "shape": 0 } })));
+    let page = f.scene_json();
+    assert_eq!(id_of(&page, "shapes", 0), ball);
+    ok(&f.edit(json!({ "op": "set", "target": { "shape_id": ball }, "field": "radius", "value": 0.25 })));
+    let text = f.text();
+    let scene = parse(&text, &f.scene);
+    assert_eq!(scene.spheres().next().unwrap().0.radius, 0.25);
+    // The deleted entry's id names nothing: refused, with a message that says why.
+    let r = f.edit(json!({ "op": "set", "target": { "shape_id": floor }, "field": "name", "value": "x" }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("another page may have deleted it"), "{}", r.text());
+    // Undo brings the floor back with its id; redo takes it away again.
+    ok(&f.call("POST", "/api/undo", b""));
+    ok(&f.call("POST", "/api/undo", b""));
+    let page = f.scene_json();
+    assert_eq!([0, 1, 2].map(|i| id_of(&page, "shapes", i)), [floor, ball, block]);
+    ok(&f.call("POST", "/api/redo", b""));
+    assert_eq!(id_of(&f.scene_json(), "shapes", 1), block);
+    // New entries get new ids.
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "shape_id": block } })));
+    let page = f.scene_json();
+    let copy = id_of(&page, "shapes", 2);
+    assert!(![floor, ball, block].contains(&copy), "{copy}");
+}
+
+#[test]
+fn duplicate_offsets_the_copy_and_batch_is_one_undo_step() {
+    let f = Fixture::new();
+    let before = f.text();
+    // The turned block: the copy's translate moves by the offset, its rotation stays as typed.
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "shape": 2 }, "offset": [0.6, 0, 0] })));
+    let page = f.scene_json();
+    assert_eq!(page["shapes"][3]["fields"]["transform"]["translate"], json!([1.6, 0, 0]));
+    assert_eq!(page["shapes"][3]["fields"]["transform"]["rotate"], json!([0, 30, 0]));
+    // The ball (no transform): a transform with the offset.
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "shape": 1 }, "offset": [1, 0, 0.5] })));
+    let page = f.scene_json();
+    assert_eq!(page["shapes"][4]["fields"]["transform"], json!({ "translate": [1, 0, 0.5] }));
+    let (lo, hi) = vertex_bounds(&page["shapes"][4]["positions"]);
+    assert!(
+        near([(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0, (lo[2] + hi[2]) / 2.0], [1.0, 0.5, 0.5]),
+        "{lo:?} {hi:?}"
+    );
+    // A point light moves its position.
+    ok(&f.edit(json!({ "op": "duplicate", "target": { "light": 1 }, "offset": [0, 0, -1] })));
+    assert_eq!(f.scene_json()["lights"][2]["fields"]["position"], json!([2, 2, 1]));
+    // The steps are the API's (author 0; a page's are its session's), shared by every page.
+    assert_eq!(f.scene_json()["undo_author"], 0);
+    // Three steps back to the start.
+    for _ in 0..3 {
+        ok(&f.call("POST", "/api/undo", b""));
+    }
+    assert_eq!(f.text(), before);
+    let page = f.scene_json();
+    assert_eq!((page["undo_author"].clone(), page["redo_author"].clone()), (json!(null), json!(0)));
+
+    // A batch (a multi-selection's move) is one step, and all or nothing.
+    let page = f.scene_json();
+    let (ball, block) = (id_of(&page, "shapes", 1), id_of(&page, "shapes", 2));
+    ok(&f.edit(json!({ "op": "batch", "commands": [
+        { "op": "set_transform", "target": { "shape_id": ball }, "translate": [0, 1, 0] },
+        { "op": "set_transform", "target": { "shape_id": block }, "translate": [1, 1, 0] },
+    ] })));
+    let text = f.text();
+    assert!(text.contains("transform = { translate = [0, 1, 0] }"), "{text}");
+    assert!(text.contains("translate = [1, 1, 0]"), "{text}");
+    ok(&f.call("POST", "/api/undo", b""));
+    assert_eq!(f.text(), before);
+    let r = f.edit(json!({ "op": "batch", "commands": [
+        { "op": "set_transform", "target": { "shape_id": ball }, "translate": [0, 1, 0] },
+        { "op": "set", "target": { "shape_id": block }, "field": "radius", "value": 1 },
+    ] }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert_eq!(f.text(), before);
+    // Deleting several, highest index first, keeps the ids of the rest.
+    let lamp = id_of(&page, "lights", 0);
+    ok(&f.edit(json!({ "op": "batch", "commands": [
+        { "op": "delete", "target": { "shape_id": block } },
+        { "op": "delete", "target": { "shape_id": ball } },
+    ] })));
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 1);
+    assert_eq!(page["shapes"][0]["fields"]["name"], "floor");
+    assert_eq!(id_of(&page, "lights", 0), lamp);
+    let r = f.edit(json!({ "op": "batch", "commands": [{ "op": "batch", "commands": [] }] }));
+    assert_eq!(r.status, 422, "{}", r.text());
+}
+
+#[test]
+fn groups_are_written_in_the_file_and_checked_by_the_parser() {
+    let f = Fixture::new();
+    let page = f.scene_json();
+    let (ball, block) = (id_of(&page, "shapes", 1), id_of(&page, "shapes", 2));
+    ok(&f.edit(json!({ "op": "batch", "commands": [
+        { "op": "set", "target": { "shape_id": ball }, "field": "group", "value": "toys" },
+        { "op": "set", "target": { "shape_id": block }, "field": "group", "value": "toys" },
+        { "op": "set", "target": { "light": 0 }, "field": "group", "value": "toys" },
+    ] })));
+    let text = f.text();
+    assert_eq!(text.matches("group = \"toys\"").count(), 3, "{text}");
+    // The renderer reads the same scene with and without the groups.
+    let grouped = parse(&text, &f.scene);
+    let plain = parse(editor_support::SCENE, &f.scene);
+    assert_eq!(grouped.shapes.len(), plain.shapes.len());
+    assert_eq!(f.scene_json()["shapes"][1]["fields"]["group"], "toys");
+    // An empty name, and a group inside a csg or an object, are refused with file:line:column.
+    let r = f.edit(json!({ "op": "set", "target": { "shape_id": ball }, "field": "group", "value": "" }));
+    assert_eq!(r.status, 422, "{}", r.text());
+    assert!(r.text().contains("`group` is a name of 1 to 64 characters"), "{}", r.text());
+    let bad = format!(
+        "{}\n[[shapes]]\ntype = \"csg\"\noperation = \"union\"\nmaterial = \"red\"\nchildren = [{{ type = \"sphere\", center = [0, 0, 0], radius = 1, group = \"g\" }}, {{ type = \"sphere\", center = [1, 0, 0], radius = 1 }}]\n",
+        editor_support::SCENE
+    );
+    let e = photonix::scene::parse_scene(&bad, &f.scene).unwrap_err().to_string();
+    assert!(e.contains("scene.toml:") && e.contains("`group` applies only to top-level"), "{e}");
+    let line = bad.lines().position(|l| l.starts_with("children")).unwrap() + 1;
+    assert!(e.contains(&format!(":{line}:")), "{e}");
+    let bad = format!("{}{}", editor_support::SCENE, "\n[[objects.o.shapes]]\ntype = \"sphere\"\nmaterial = \"red\"\ncenter = [0, 0, 0]\nradius = 1\ngroup = \"g\"\n\n[[instances]]\nobject = \"o\"\ngroup = \"ok\"\n");
+    let e = photonix::scene::parse_scene(&bad, &f.scene).unwrap_err().to_string();
+    assert!(e.contains("`group` applies only to top-level"), "{e}");
+}
+
+#[test]
+fn import_takes_every_model_format_and_centres_it_where_asked() {
+    let f = Fixture::new();
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/models/assimp");
+    let glb =
+        std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/rounded-cube.glb")).unwrap();
+    let ply = std::fs::read(models.join("cube.ply")).unwrap();
+    let tds = std::fs::read(models.join("test1.3ds")).unwrap();
+    let before = f.text();
+    for (name, bytes, at) in
+        [("cube.glb", &glb, [1.0, 2.0, 3.0]), ("cube.ply", &ply, [-1.0, 0.5, 0.0]), ("t.3ds", &tds, [0.0, 0.0, -2.0])]
+    {
+        let r = f.call("POST", &format!("/api/import?name={name}&at={},{},{}", at[0], at[1], at[2]), bytes);
+        ok(&r);
+        let page = f.scene_json();
+        let shapes = page["shapes"].as_array().unwrap();
+        let last = shapes.last().unwrap();
+        assert_eq!(last["fields"]["file"], name, "{name}");
+        assert!(last["fields"].get("material").is_none(), "the file's own materials: {}", last["fields"]);
+        let (lo, hi) = vertex_bounds(&last["positions"]);
+        let centre = [0, 1, 2].map(|i| (lo[i] + hi[i]) / 2.0);
+        let size = (0..3).map(|i| hi[i] - lo[i]).fold(0.0, f64::max);
+        assert!(
+            (0..3).all(|i| (centre[i] - at[i]).abs() < 1e-3 * size.max(1.0)),
+            "{name}: centre {centre:?}, asked {at:?}"
+        );
+    }
+    // Each import is one undo step (the placement included).
+    for _ in 0..3 {
+        ok(&f.call("POST", "/api/undo", b""));
+    }
+    assert_eq!(f.text(), before);
+    let r = f.call("POST", "/api/import?name=x.png", b"x");
+    assert_eq!(r.status, 400);
+    assert!(r.text().contains(".obj, .gltf, .glb, .ply, .3ds, .ifs, .bpt"), "{}", r.text());
+    let r = f.call("POST", "/api/import?name=x.ply&at=1,2", &ply);
+    assert_eq!(r.status, 400);
+    assert!(r.text().contains("three finite numbers"), "{}", r.text());
+}
+
+#[test]
+fn a_given_token_is_used_and_a_bad_one_refused() {
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| o.token = Some("restart-me_0123456789".into()));
+    assert_eq!(f.token(), "restart-me_0123456789");
+    ok(&f.edit(json!({ "op": "set", "target": { "shape": 1 }, "field": "radius", "value": 0.3 })));
+    let runtime = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
+    for bad in ["short", "has space in it 0123456789", "ünïcode-0123456789"] {
+        let mut options = photonix::editor::ServeOptions::new(f.scene.clone());
+        options.token = Some(bad.into());
+        let e = runtime.block_on(photonix::editor::Server::start(options)).err().expect("refused").to_string();
+        assert!(e.contains("--token takes 16 to 128 letters"), "{e}");
+    }
+}
+
+/// `photonix serve` as a user runs it: the first Ctrl-C (SIGINT) with unsaved edits only warns,
+/// a second stops it; and it prints how to restart it so that open pages reconnect.
+#[test]
+fn serve_warns_on_ctrl_c_while_edits_are_unsaved() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, editor_support::SCENE).unwrap();
+    let token = "ctrl-c-test-token-0123456789";
+    let mut child = Command::new(env!("CARGO_BIN_EXE_photonix"))
+        .args(["serve", scene.to_str().unwrap(), "--backend", "cpu", "--preview-size", "16", "--token", token])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start photonix serve");
+    let stdout = BufReader::new(child.stdout.take().unwrap());
+    let (tx, rx) = std::sync::mpsc::channel::<String>();
+    let stderr = child.stderr.take().unwrap();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    let url = stdout.lines().map_while(Result::ok).find(|l| l.contains("token=")).expect("the URL");
+    let port: u16 = url.split(':').nth(2).unwrap().split('/').next().unwrap().parse().unwrap();
+    let addr: std::net::SocketAddr = format!("127.0.0.1:{port}").parse().unwrap();
+    let wait_for = |what: &str| -> Vec<String> {
+        let mut seen = Vec::new();
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(30) {
+            if let Ok(line) = rx.recv_timeout(Duration::from_millis(100)) {
+                let hit = line.contains(what);
+                seen.push(line);
+                if hit {
+                    return seen;
+                }
+            }
+        }
+        panic!("no \"{what}\" on stderr: {seen:?}");
+    };
+    let lines = wait_for("Ctrl-C stops the server");
+    assert!(lines.iter().any(|l| l.contains(&format!("restart with --port {port} --token {token}"))), "{lines:?}");
+    let edit = json!({ "op": "set", "target": { "shape": 1 }, "field": "radius", "value": 0.3 }).to_string();
+    let r = http(addr, "POST", &format!("/api/edit?token={token}"), &[], edit.as_bytes());
+    assert_eq!(r.status, 200, "{}", r.text());
+    let interrupt = |pid: u32| {
+        assert!(Command::new("kill").args(["-INT", &pid.to_string()]).status().unwrap().success());
+    };
+    interrupt(child.id());
+    let lines = wait_for("unsaved edits");
+    assert!(lines.iter().any(|l| l.contains("press Ctrl-C again within 10 s")), "{lines:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "the first Ctrl-C stopped the server");
+    interrupt(child.id());
+    wait_for("the unsaved edits are dropped");
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(start.elapsed() < Duration::from_secs(20), "the second Ctrl-C did not stop the server");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), editor_support::SCENE, "nothing was saved");
+}

@@ -178,6 +178,57 @@ fn websocket_streams_gpu_frames() {
     f.runtime.block_on(stream_frames(&f, "gpu"));
 }
 
+/// Two pages, two views: each gets the frames of its own view only (the header's `owner`), and
+/// the same view sent again does not restart the preview (switching Solid and Rendered).
+#[test]
+fn each_page_gets_the_frames_of_its_own_view() {
+    let f = Fixture::with(BackendChoice::Cpu, |o| o.preview_size = 32);
+    f.runtime.block_on(async {
+        let mut a = connect(&f).await;
+        let mut b = connect(&f).await;
+        let view = |w: u32, h: u32| json!({ "type": "view", "view": { "position": [0, 1, 4], "look_at": [0, 0.5, 0], "up": [0, 1, 0], "fov": 45, "width": w, "height": h } });
+        // The full-size frame of each view is 32 px on its longest side.
+        async fn full_frame(page: &mut Socket) -> Value {
+            loop {
+                if let Received::Frame(header, _) = receive(page).await {
+                    if header["step"].as_u64() >= Some(2) {
+                        return header;
+                    }
+                }
+            }
+        }
+        send_json(&mut a, view(64, 32)).await;
+        let ha = full_frame(&mut a).await;
+        assert_eq!((ha["width"].as_u64(), ha["height"].as_u64()), (Some(32), Some(16)), "{ha}");
+        send_json(&mut b, view(32, 64)).await;
+        let hb = full_frame(&mut b).await;
+        assert_eq!((hb["width"].as_u64(), hb["height"].as_u64()), (Some(16), Some(32)), "{hb}");
+        assert_ne!(ha["owner"], hb["owner"]);
+        // The same view again goes on with the same generation (or, when its passes are all
+        // done, sends nothing): no restart from the first step.
+        send_json(&mut b, view(32, 64)).await;
+        let deadline = Instant::now() + Duration::from_millis(1500);
+        while Instant::now() < deadline {
+            if let Ok(Some(Ok(Message::Binary(bytes)))) = tokio::time::timeout(Duration::from_millis(100), next(&mut b)).await {
+                let length = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
+                let header: Value = serde_json::from_slice(&bytes[4..4 + length]).unwrap();
+                assert_eq!(header["generation"], hb["generation"], "the same view restarted the preview: {header}");
+            }
+        }
+        // Page a saw no frame of b's view meanwhile: every frame waiting for it is its own.
+        let deadline = Instant::now() + Duration::from_millis(500);
+        while Instant::now() < deadline {
+            if let Ok(Some(Ok(Message::Binary(bytes)))) =
+                tokio::time::timeout(Duration::from_millis(100), next(&mut a)).await
+            {
+                let length = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
+                let header: Value = serde_json::from_slice(&bytes[4..4 + length]).unwrap();
+                assert_eq!(header["owner"], ha["owner"], "page a got another page's frame: {header}");
+            }
+        }
+    });
+}
+
 #[test]
 fn websocket_needs_the_token() {
     let f = Fixture::new();

@@ -3,18 +3,23 @@
 // panels.js. The server is the only source of truth: every edit goes to it, and the page redraws
 // from the scene it broadcasts back.
 
-import { Viewport } from './viewport.js';
-import { Tree, Properties, RenderDialog } from './panels.js';
+import { Viewport, keyOf } from './viewport.js';
+import { Tree, Properties, RenderDialog, MATERIAL_FIELDS } from './panels.js';
 
 const params = new URLSearchParams(location.search);
-const token = params.get('token') || '';
+// The tab keeps its token (sessionStorage: this tab only, this origin only), so after a server
+// restarted with the same --token it reconnects, and a reload works without the cookie.
+const token = params.get('token') || sessionStorage.getItem('photonix-token') || '';
+if (token) sessionStorage.setItem('photonix-token', token);
 // The first request set a cookie with the token; take it out of the address bar so it does not
 // end up in screenshots or shared links.
-if (token) history.replaceState(null, '', location.pathname);
+if (params.get('token')) history.replaceState(null, '', location.pathname);
 
 const $ = (id) => document.getElementById(id);
 
-export const state = { scene: null, selection: null, frames: 0 };
+/// `selection`: a list of entries ({kind, id, index} for shapes, lights and instances, whose
+/// stable `id` survives other tabs' edits; {kind: 'material', name}; {kind: 'camera'}).
+export const state = { scene: null, selection: [], frames: 0 };
 
 // Messages ---------------------------------------------------------------------------------------
 export function showMessage(text, kind = 'error') {
@@ -30,6 +35,20 @@ export function showMessage(text, kind = 'error') {
 let socket = null;
 let nextId = 1;
 const pending = new Map();
+let retries = 0;
+
+/// The one message about the connection (not one more toast per retry).
+function connectionNotice(text) {
+  let div = $('connection');
+  if (!text) { if (div) div.remove(); return; }
+  if (!div) {
+    div = document.createElement('div');
+    div.id = 'connection';
+    div.className = 'message error';
+    $('messages').appendChild(div);
+  }
+  div.textContent = text;
+}
 
 function connect() {
   socket = new WebSocket(`ws://${location.host}/ws${token ? `?token=${encodeURIComponent(token)}` : ''}`);
@@ -38,9 +57,29 @@ function connect() {
     if (typeof event.data === 'string') onText(JSON.parse(event.data));
     else onFrame(event.data);
   };
-  socket.onopen = () => { viewport.sendView(true); };
-  socket.onclose = () => {
-    showMessage('connection to the server lost; reconnecting…');
+  socket.onopen = () => {
+    retries = 0;
+    connectionNotice(null);
+    document.body.dataset.connected = '1';
+    document.body.dataset.connections = String(Number(document.body.dataset.connections || 0) + 1);
+    viewport.sendView(true);
+  };
+  socket.onclose = async () => {
+    document.body.dataset.connected = '0';
+    for (const resolve of pending.values()) resolve({ ok: false });
+    pending.clear();
+    retries += 1;
+    // Ask why: no answer (the server is down) or a refusal (it runs with another token).
+    let why = 'the server does not answer';
+    try {
+      const r = await fetch('api/render/status', { headers: token ? { Authorization: `token ${token}` } : {} });
+      if (r.status === 401 || r.status === 403) why = 'the server now runs with another access token';
+      else if (r.ok) why = 'the server answers again';
+    } catch (e) { /* down */ }
+    const fix = why.includes('another access token')
+      ? 'open the URL it printed, or restart it with the token this page has (photonix serve --port ' + location.port + ' --token …, the token `photonix serve` printed first)'
+      : 'restart it with the same --port and --token (both printed when it started) and this page carries on; edits not saved are in the server only';
+    connectionNotice(`connection to the server lost: ${why}. Retrying every 2 s (${retries}). To reconnect, ${fix}.`);
     setTimeout(connect, 2000);
   };
 }
@@ -49,12 +88,12 @@ function send(message) {
   return new Promise((resolve) => {
     if (!socket || socket.readyState !== WebSocket.OPEN) {
       showMessage('not connected to the server');
-      resolve(false);
+      resolve({ ok: false });
       return;
     }
     if (message.type === 'view') {
       socket.send(JSON.stringify(message));
-      resolve(true);
+      resolve({ ok: true });
       return;
     }
     const id = nextId++;
@@ -66,11 +105,12 @@ function send(message) {
 function onText(msg) {
   switch (msg.type) {
     case 'scene': setScene(msg); break;
+    case 'hello': state.session = msg.session; updateButtons(); break;
     case 'reply': {
       const resolve = pending.get(msg.id);
       pending.delete(msg.id);
       if (!msg.ok) showMessage(msg.error);
-      if (resolve) resolve(msg.ok);
+      if (resolve) resolve(msg);
       break;
     }
     case 'render': renderDialog.update(msg); break;
@@ -88,40 +128,113 @@ function onFrame(buffer) {
     return;
   }
   state.frames += 1;
+  state.frameOwner = header.owner;
   document.body.dataset.frames = String(state.frames);
   viewport.setFrame(blob, header);
+  // In Solid shading the frame is not shown, and neither is its line (no repaint for it).
+  if (!viewport.rendered) return;
   const passes = header.passes ? `, ${header.passes} passes` : '';
   $('frame-info').textContent =
     `${header.width}×${header.height}${passes}, ${header.render_ms.toFixed(0)} ms (${header.since_change_ms.toFixed(0)} ms since the change) on ${header.device}`;
 }
 
 // Commands ---------------------------------------------------------------------------------------
-export function edit(command) { return send({ type: 'edit', command }); }
+/// Sends an edit; resolves to true once the server applied it and the page has the scene of
+/// that revision (so what follows sees the change), false when refused.
+export async function edit(command) {
+  const reply = await send({ type: 'edit', command });
+  if (reply.ok && reply.revision !== undefined) await sceneAt(reply.revision);
+  return reply.ok;
+}
 export const undo = () => send({ type: 'undo' });
 export const redo = () => send({ type: 'redo' });
 export async function save() {
-  if (await send({ type: 'save' })) showMessage(`saved ${state.scene.file}`, 'info');
+  if ((await send({ type: 'save' })).ok) showMessage(`saved ${state.scene.file}`, 'info');
 }
 export function sendView(view) { send({ type: 'view', view }); }
 
-/// The edit target of a selection.
+const waiting = [];
+/// Resolves when the page has the scene of `revision` or later.
+function sceneAt(revision) {
+  if (state.scene && state.scene.revision >= revision) return Promise.resolve();
+  // A scene that never comes (the server restarted, its revisions anew) waits at most 5 s.
+  return new Promise((resolve) => { waiting.push({ revision, resolve }); setTimeout(resolve, 5000); });
+}
+
+/// The edit target of a selection entry: by stable id, so another tab's delete cannot move it.
 export function targetOf(sel) {
   if (!sel) return null;
-  if (sel.kind === 'shape') return { shape: sel.index };
-  if (sel.kind === 'light') return { light: sel.index };
-  if (sel.kind === 'instance') return { instance: sel.index };
+  if (sel.kind === 'shape') return { shape_id: sel.id };
+  if (sel.kind === 'light') return { light_id: sel.id };
+  if (sel.kind === 'instance') return { instance_id: sel.id };
   if (sel.kind === 'material') return { material: sel.name };
   if (sel.kind === 'camera') return 'camera';
   return null;
 }
 
+function listOf(kind, scene = state.scene) {
+  if (!scene) return [];
+  return kind === 'shape' ? scene.shapes : kind === 'light' ? scene.lights : kind === 'instance' ? scene.instances || [] : [];
+}
+
+/// The scene's entry a selection entry names (null when it is gone).
+export function entryOf(sel) {
+  return listOf(sel.kind).find((e) => e.id === sel.id) || null;
+}
+
+/// The selection entries still in `scene`, their indices brought up to date.
+function refreshed(list, scene) {
+  const out = [];
+  for (const sel of list) {
+    if (sel.kind === 'camera') out.push(sel);
+    else if (sel.kind === 'material') { if (scene.materials.some((m) => m.name === sel.name)) out.push(sel); }
+    else {
+      const index = listOf(sel.kind, scene).findIndex((e) => e.id === sel.id);
+      if (index >= 0) out.push({ kind: sel.kind, id: sel.id, index });
+    }
+  }
+  return out;
+}
+
 export function select(sel) {
-  state.selection = sel;
-  document.body.dataset.selection = sel ? `${sel.kind}:${sel.index ?? sel.name ?? ''}` : '';
-  viewport.setSelection(sel);
-  tree.render(state.scene, sel);
-  properties.render(state.scene, sel);
+  const list = refreshed(Array.isArray(sel) ? sel : sel ? [sel] : [], state.scene || { shapes: [], lights: [], materials: [] });
+  state.selection = list;
+  document.body.dataset.selection = list.map((s) => `${s.kind}:${s.index ?? s.name ?? ''}`).join(',');
+  document.body.dataset.selectionIds = list.map(keyOf).join(',');
+  viewport.setSelection(list);
+  tree.render(state.scene, list);
+  properties.render(state.scene, list);
   updateButtons();
+}
+
+/// The entries selected together with `sel`: its whole group when it has one (a click in the
+/// viewport picks the group, as in 3ds Max; the tree picks one entry).
+function withGroup(sel) {
+  const entry = sel.id !== undefined ? entryOf(sel) : null;
+  const group = entry && entry.fields.group;
+  if (typeof group !== 'string') return [sel];
+  const all = [];
+  for (const kind of ['shape', 'light', 'instance']) {
+    listOf(kind).forEach((e, index) => { if (e.fields.group === group) all.push({ kind, id: e.id, index }); });
+  }
+  return all;
+}
+
+/// A click on `sel`: selects it alone, or with `additive` (Shift or Ctrl) adds it to the
+/// selection or takes it out. From the viewport a grouped entry brings its group.
+export function pick(sel, additive, fromViewport = false) {
+  const picked = fromViewport ? withGroup(sel) : [sel];
+  if (!additive) { select(picked); return; }
+  const keys = new Set(picked.map(keyOf));
+  const already = picked.every((p) => state.selection.some((s) => keyOf(s) === keyOf(p)));
+  const rest = state.selection.filter((s) => !keys.has(keyOf(s)) && s.kind !== 'camera' && s.kind !== 'material');
+  select(already ? rest : [...rest, ...picked.filter((p) => p.kind !== 'camera' && p.kind !== 'material')]);
+}
+
+export function selectMany(list, additive) {
+  if (!additive) { select(list); return; }
+  const keys = new Set(state.selection.map(keyOf));
+  select([...state.selection, ...list.filter((s) => !keys.has(keyOf(s)))]);
 }
 
 function setScene(scene) {
@@ -130,57 +243,131 @@ function setScene(scene) {
   document.body.dataset.revision = String(scene.revision);
   $('file-name').textContent = scene.file + (scene.dirty ? ' •' : '');
   viewport.setScene(scene, !old);
-  // Keep the selection when it still exists.
-  let sel = state.selection;
-  if (sel && sel.kind === 'shape' && sel.index >= scene.shapes.length) sel = null;
-  if (sel && sel.kind === 'light' && sel.index >= scene.lights.length) sel = null;
-  if (sel && sel.kind === 'instance' && sel.index >= (scene.instances || []).length) sel = null;
-  if (sel && sel.kind === 'material' && !scene.materials.some((m) => m.name === sel.name)) sel = null;
-  select(sel);
-  for (const w of scene.warnings) if (!old || !old.warnings.includes(w)) showMessage(`warning: ${w}`, 'info');
+  // Keep the selection where its entries still exist (by id: another tab's delete of an
+  // entry before it does not move it).
+  select(state.selection);
+  // A warning is new when its text is, whatever line it names now (an edit above it moves it).
+  const bare = (w) => w.replace(/^[^:]*:\d+(:\d+)?: /, '');
+  const known = new Set(old ? old.warnings.map(bare) : []);
+  for (const w of scene.warnings) if (!known.has(bare(w))) showMessage(`warning: ${w}`, 'info');
+  for (let i = waiting.length - 1; i >= 0; i--) {
+    if (scene.revision >= waiting[i].revision) { waiting[i].resolve(); waiting.splice(i, 1); }
+  }
 }
 
 function updateButtons() {
   const scene = state.scene;
   $('undo').disabled = !scene || !scene.can_undo;
   $('redo').disabled = !scene || !scene.can_redo;
-  const sel = state.selection;
-  const deletable = sel && sel.kind !== 'camera';
+  // Undo is the scene's, shared by every tab: say whose step it would take back.
+  const whose = (author) => (author === null || author === undefined ? '' : author === state.session ? 'yours' : author === 0 ? 'an API call\'s' : 'another tab\'s');
+  const undoWhose = scene ? whose(scene.undo_author) : '';
+  $('undo').title = `Undo (Ctrl+Z)${undoWhose ? `: the last edit, ${undoWhose}` : ''}`;
+  $('redo').title = `Redo (Ctrl+Shift+Z / Ctrl+Y)${scene && whose(scene.redo_author) ? `: ${whose(scene.redo_author)}` : ''}`;
+  $('undo-author').textContent = undoWhose === 'yours' || !undoWhose ? '' : `(${undoWhose})`;
+  document.body.dataset.undoAuthor = undoWhose === 'yours' ? 'mine' : undoWhose ? 'other' : '';
+  const deletable = state.selection.length && state.selection.every((s) => s.kind !== 'camera');
   $('delete').disabled = !deletable;
   $('duplicate').disabled = !deletable;
 }
 
-export function deleteSelection() {
-  const target = targetOf(state.selection);
-  if (!target || target === 'camera') return;
-  edit({ op: 'delete', target });
+/// Deletes the selection (one undo step) and selects nothing, so a second press deletes
+/// nothing more.
+export async function deleteSelection() {
+  const list = state.selection.filter((s) => s.kind !== 'camera');
+  if (!list.length) return;
+  // Highest index first, so each delete leaves the others where they were.
+  const sorted = [...list].sort((a, b) => (b.index ?? 0) - (a.index ?? 0));
+  const commands = sorted.map((s) => ({ op: 'delete', target: targetOf(s) }));
+  select([]);
+  await edit(commands.length === 1 ? commands[0] : { op: 'batch', commands });
 }
 
-export function duplicateSelection() {
-  const target = targetOf(state.selection);
-  if (!target || target === 'camera') return;
-  edit({ op: 'duplicate', target });
+/// Duplicates the selection, each copy moved aside (by its width along x and a tenth more) and
+/// selected in place of the originals.
+export async function duplicateSelection() {
+  const list = state.selection.filter((s) => s.kind !== 'camera');
+  if (!list.length) return;
+  const before = new Map(['shape', 'light', 'instance'].map((k) => [k, new Set(listOf(k).map((e) => e.id))]));
+  const beforeMaterials = new Set(state.scene.materials.map((m) => m.name));
+  const commands = list.map((s) => {
+    const command = { op: 'duplicate', target: targetOf(s) };
+    if (s.kind !== 'material') command.offset = viewport.duplicateOffset(list);
+    return command;
+  });
+  if (!await edit(commands.length === 1 ? commands[0] : { op: 'batch', commands })) return;
+  const copies = [];
+  for (const [kind, ids] of before) listOf(kind).forEach((e, index) => { if (!ids.has(e.id)) copies.push({ kind, id: e.id, index }); });
+  for (const m of state.scene.materials) if (!beforeMaterials.has(m.name)) copies.push({ kind: 'material', name: m.name });
+  select(copies);
 }
 
-// Adding things, sized to the scene --------------------------------------------------------------
+/// Puts the selection in group `name` (null: out of any group), one undo step.
+export async function setGroup(list, name) {
+  const entries = list.filter((s) => ['shape', 'light', 'instance'].includes(s.kind));
+  if (!entries.length) return;
+  const value = name === null ? null : String(name).trim();
+  if (value === '') { showMessage('a group needs a name'); return; }
+  await edit({ op: 'batch', commands: entries.map((s) => ({ op: 'set', target: targetOf(s), field: 'group', value })) });
+}
+
+/// A new diffuse material, selected.
+export async function newMaterial() {
+  const names = new Set(state.scene.materials.map((m) => m.name));
+  let n = 1;
+  while (names.has(`material_${n}`)) n += 1;
+  const name = `material_${n}`;
+  if (await edit({ op: 'add', kind: 'material', name, table: { type: 'diffuse', reflectance: [0.8, 0.8, 0.8] } })) select({ kind: 'material', name });
+}
+
+/// Switches a material's type in one step: fields the new type does not take go, those it
+/// needs come with their defaults (a mix gets the first two other materials).
+export async function switchMaterialType(material, type) {
+  if (type === material.fields.type) return;
+  const takes = new Set([...Object.keys(MATERIAL_FIELDS[type] || {}),
+    ...(type === 'mix' || type === 'null' ? [] : ['emission', 'opacity', 'bump', 'normal_map']), 'type']);
+  const fields = { type };
+  for (const field of Object.keys(material.fields)) if (!takes.has(field)) fields[field] = null;
+  if (type === 'conductor' && !material.fields.preset && !material.fields.eta) fields.preset = 'gold';
+  if (type === 'mix' && !material.fields.materials) {
+    const others = state.scene.materials.filter((m) => m.name !== material.name && m.fields.type !== 'null' && m.fields.type !== 'mix').map((m) => m.name);
+    if (others.length < 2) { showMessage('a mix needs two other materials (not mix or null); add them first'); select(state.selection); return; }
+    fields.materials = others.slice(0, 2);
+  }
+  if (!await edit({ op: 'set_fields', target: { material: material.name }, fields })) select(state.selection);
+}
+
+/// Hides or shows entries in this tab's solid view.
+export function toggleHidden(list) {
+  const hidden = new Set(viewport.hidden);
+  const keys = list.filter((s) => ['shape', 'light', 'instance'].includes(s.kind)).map(keyOf);
+  const hide = keys.some((k) => !hidden.has(k));
+  for (const k of keys) { if (hide) hidden.add(k); else hidden.delete(k); }
+  viewport.setHidden([...hidden]);
+  document.body.dataset.hidden = [...hidden].join(',');
+  tree.render(state.scene, state.selection);
+}
+
+// Adding things, in front of the view --------------------------------------------------------------
 async function addThing(what) {
   const scene = state.scene;
   const [kind, type] = what.split(':');
   const lo = scene.bounds.min, hi = scene.bounds.max;
-  const c = [0, 1, 2].map((i) => round((lo[i] + hi[i]) / 2));
   const extent = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 1;
   const s = round(extent * 0.08);
+  // In front of the view, beside what is there already.
+  const c = viewport.placementPoint(s);
   const add = (v) => v.map((x, i) => round(c[i] + x));
   if (kind === 'shape' && scene.materials.length === 0) {
     if (!await edit({ op: 'add', kind: 'material', name: 'default', table: { type: 'diffuse' } })) return;
   }
-  const material = scene.materials.length ? scene.materials[0].name : 'default';
+  const material = state.scene.materials.length ? state.scene.materials[0].name : 'default';
   let table;
   switch (type) {
     case 'sphere': table = { name: 'sphere', type, material, center: c, radius: s }; break;
     case 'box': table = { name: 'box', type, material, min: add([-s, -s, -s]), max: add([s, s, s]) }; break;
     case 'quad': table = { name: 'quad', type, material, vertices: [add([-s, 0, -s]), add([-s, 0, s]), add([s, 0, s]), add([s, 0, -s])] }; break;
-    case 'cylinder': table = { name: 'cylinder', type, material, base: c, cap: add([0, 2 * s, 0]), radius: s }; break;
+    case 'cylinder': table = { name: 'cylinder', type, material, base: add([0, -s, 0]), cap: add([0, s, 0]), radius: s }; break;
     case 'torus': table = { name: 'torus', type, material, center: c, major_radius: 2 * s, minor_radius: round(s / 2) }; break;
     case 'point': table = { name: 'point light', type, position: add([0, 3 * s, 0]), intensity: round((extent * 0.3) ** 2) }; break;
     case 'spot': table = { name: 'spot light', type, position: add([0, 4 * s, 0]), point_at: c, intensity: round((extent * 0.5) ** 2), outer_angle: 30 }; break;
@@ -193,34 +380,45 @@ async function addThing(what) {
     case 'distant': table = { name: 'sun', type, direction: [0.3, -1, -0.4], irradiance: 1 }; break;
     default: return;
   }
-  const count = kind === 'shape' ? scene.shapes.length : scene.lights.length;
-  if (await edit({ op: 'add', kind, table })) select({ kind, index: count });
+  const before = new Set(listOf(kind).map((e) => e.id));
+  if (await edit({ op: 'add', kind, table })) {
+    const index = listOf(kind).findIndex((e) => !before.has(e.id));
+    if (index >= 0) select({ kind, id: listOf(kind)[index].id, index });
+  }
 }
 
 function round(v) { return Number.parseFloat(Number(v).toPrecision(4)); }
 
-async function importMesh(file) {
-  if (!state.scene.materials.length) {
-    if (!await edit({ op: 'add', kind: 'material', name: 'default', table: { type: 'diffuse' } })) return;
-  }
-  const material = state.scene.materials[0].name;
+/// Imports a model (any format the renderer reads: OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt) into the
+/// scene's folder; its materials are the file's (or a default diffuse one), its centre in front
+/// of the view.
+export async function importModel(file) {
   const name = file.name.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '');
-  const response = await fetch(`api/import?name=${encodeURIComponent(name)}&material=${encodeURIComponent(material)}`, {
+  const lo = state.scene.bounds.min, hi = state.scene.bounds.max;
+  const extent = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 1;
+  const at = viewport.placementPoint(extent * 0.08).join(',');
+  const before = new Set(state.scene.shapes.map((e) => e.id));
+  const response = await fetch(`api/import?name=${encodeURIComponent(name)}&at=${encodeURIComponent(at)}`, {
     method: 'POST', body: file, headers: token ? { Authorization: `token ${token}` } : {},
   });
   const reply = await response.json().catch(() => ({ ok: false, error: `import failed (${response.status})` }));
-  if (!reply.ok) showMessage(reply.error || `import failed (${response.status})`);
-  else showMessage(`imported ${reply.file}`, 'info');
+  if (!reply.ok) { showMessage(reply.error || `import failed (${response.status})`); return; }
+  showMessage(`imported ${reply.file}`, 'info');
+  await sceneAt(reply.revision);
+  const index = state.scene.shapes.findIndex((e) => !before.has(e.id));
+  if (index >= 0) select({ kind: 'shape', id: state.scene.shapes[index].id, index });
 }
 
 // Start ------------------------------------------------------------------------------------------
 const viewport = new Viewport($('canvas'), $('view-labels'), {
   select,
+  pick: (sel, additive) => pick(sel, additive, true),
+  selectMany: (list, additive) => selectMany(list, additive),
   edit,
   sendView,
   state,
 });
-const tree = new Tree($('tree'), { select });
+const tree = new Tree($('tree'), { select, pick, selectMany, toggleHidden, hidden: () => viewport.hidden });
 /// The image files in the scene's folder, for the texture picker.
 async function images() {
   const response = await fetch('api/images', { headers: token ? { Authorization: `token ${token}` } : {} });
@@ -232,7 +430,7 @@ async function images() {
   return reply.images;
 }
 
-const properties = new Properties($('properties'), { edit, state, showMessage, images });
+const properties = new Properties($('properties'), { edit, state, showMessage, images, entryOf, setGroup, newMaterial, switchMaterialType });
 const renderDialog = new RenderDialog($('render-dialog'), { showMessage, token });
 
 $('undo').onclick = undo;
@@ -241,7 +439,18 @@ $('delete').onclick = deleteSelection;
 $('duplicate').onclick = duplicateSelection;
 $('save').onclick = save;
 $('add').onchange = (e) => { const v = e.target.value; e.target.value = ''; if (v) addThing(v); };
-$('import').onchange = (e) => { const f = e.target.files[0]; e.target.value = ''; if (f) importMesh(f); };
+$('import').onchange = (e) => { const f = e.target.files[0]; e.target.value = ''; if (f) importModel(f); };
+$('frame').onclick = () => viewport.frameSelected();
+$('wireframe').onclick = () => setWireframe(!viewport.wireframe);
+$('navigation').onchange = (e) => { viewport.setNavigation(e.target.value); localStorage.setItem('photonix-navigation', e.target.value); };
+$('navigation').value = localStorage.getItem('photonix-navigation') === 'blender' ? 'blender' : 'default';
+viewport.setNavigation($('navigation').value);
+
+function setWireframe(on) {
+  viewport.setWireframe(on);
+  $('wireframe').classList.toggle('active', on);
+  if (on && viewport.rendered) setShading(false);
+}
 for (const mode of ['translate', 'rotate', 'scale']) $(`mode-${mode}`).onclick = () => setMode(mode);
 $('snap').onchange = (e) => viewport.setSnap(e.target.checked);
 $('shading').onclick = () => setShading(!viewport.rendered);
@@ -267,26 +476,50 @@ window.addEventListener('keydown', (e) => {
   const ctrl = e.ctrlKey || e.metaKey;
   const key = e.key.toLowerCase();
   let handled = true;
+  // Blender's G / R / S under way: Enter confirms, Escape cancels.
+  if (viewport.modal) {
+    if (key === 'enter') viewport.endModal(true);
+    else if (key === 'escape') viewport.endModal(false);
+    e.preventDefault();
+    return;
+  }
+  const modal = { g: 'translate', r: 'rotate', s: 'scale' }[key];
+  if (!ctrl && !e.altKey && modal && viewport.navigation === 'blender' && viewport.pointer) {
+    setMode(modal);
+    if (viewport.startModal(modal, viewport.pointer.x, viewport.pointer.y)) { e.preventDefault(); return; }
+  }
   if (ctrl && key === 'z' && !e.shiftKey) undo();
   else if (ctrl && (key === 'y' || (key === 'z' && e.shiftKey))) redo();
   else if (ctrl && key === 's') save();
   else if (ctrl && e.altKey && e.code === 'Numpad0') viewport.cameraToView();
   else if (ctrl && e.altKey && key === 'q') $('layout').click();
+  else if (ctrl && ['Numpad1', 'Numpad3', 'Numpad7'].includes(e.code)) viewport.axisView(Number(e.code.slice(-1)), true);
   else if (ctrl) handled = false;
   else if (key === 'delete' || key === 'x' || key === 'backspace') deleteSelection();
+  else if (key === 'h' && e.altKey) { viewport.setHidden([]); document.body.dataset.hidden = ''; tree.render(state.scene, state.selection); }
+  else if (key === 'h') toggleHidden(state.selection);
+  else if (key === 'f' || e.code === 'NumpadDecimal') viewport.frameSelected();
   else if (key === 'd' && e.shiftKey) duplicateSelection();
   else if (key === 'g' || key === 'w') setMode('translate');
   else if (key === 'r' || key === 'e') setMode('rotate');
   else if (key === 's') setMode('scale');
+  else if (key === 'z' && e.shiftKey) setWireframe(!viewport.wireframe);
   else if (key === 'z') setShading(!viewport.rendered);
+  else if (['Numpad1', 'Numpad3', 'Numpad7'].includes(e.code)) viewport.axisView(Number(e.code.slice(-1)), e.ctrlKey);
   else if (e.code === 'Numpad0') viewport.viewThroughCamera();
-  else if (key === 'escape') select(null);
+  else if (key === 'escape') { viewport.cancelBoxSelect(); select([]); }
+  else if (key === 'b') viewport.startBoxSelect();
   else if (key === 'f12') renderDialog.open();
   else handled = false;
   if (handled) e.preventDefault();
 });
 
+// A tab in front takes the renderer back for its own view (each tab gets only its own frames).
+window.addEventListener('focus', () => viewport.sendView(true));
+document.addEventListener('visibilitychange', () => { if (!document.hidden) viewport.sendView(true); });
+$('canvas').addEventListener('pointerdown', () => viewport.sendView(true));
+
 setShading(true);
 connect();
 // For the browser test and for debugging from the console.
-window.photonixEditor = { state, viewport, select, edit };
+window.photonixEditor = { state, viewport, select, pick, edit, entryOf };

@@ -1,3 +1,5 @@
+import { keyOf } from './viewport.js';
+
 // The scene tree, the properties panel and the final-render dialog. Every field the properties
 // panel shows is the file's own (as written); a change is sent as a `set` edit, and the panel
 // redraws from the scene the server sends back, so a refused value snaps back.
@@ -30,70 +32,175 @@ function nameOf(entry, fallback) {
 export class Tree {
   constructor(root, app) { this.root = root; this.app = app; }
 
+  /// `sel`: the selection (a list of entries). Entries of a `group` are listed under it; a
+  /// click on the group selects them all, Shift or Ctrl adds to the selection, the eye hides
+  /// an entry in this tab's solid view.
   render(scene, sel) {
     if (!scene) return;
+    const selected = new Set((sel || []).map(keyOf));
+    const hidden = this.app.hidden();
     this.root.innerHTML = '';
     const item = (label, target, id) => {
-      const selected = sel && sel.kind === target.kind && (sel.index === target.index && sel.name === target.name);
-      return el('li', { class: `item${selected ? ' selected' : ''}`, id, onclick: () => this.app.select(target) }, label);
+      const key = keyOf(target);
+      const li = el('li', { class: `item${selected.has(key) ? ' selected' : ''}`, id,
+        onclick: (e) => this.app.pick(target, e.shiftKey || e.ctrlKey || e.metaKey) }, label);
+      if (target.kind === 'shape' || target.kind === 'light' || target.kind === 'instance') {
+        // The eye's glyph is CSS, so the item's text is its label alone.
+        const eye = el('span', { class: `eye${hidden.has(key) ? ' off' : ''}`, id: `eye-${id}`, title: 'Hide or show in this tab\'s solid view (H / Alt+H)',
+          onclick: (e) => { e.stopPropagation(); this.app.toggleHidden([target]); } });
+        li.prepend(eye);
+      }
+      return li;
     };
-    const section = (title, items) => {
+    const section = (title, items, attrs = {}) => {
       const ul = el('ul');
       items.forEach((i) => ul.append(i));
-      return el('li', { class: 'section' }, title, ul);
+      return el('li', { class: 'section', ...attrs }, title, ul);
     };
+    const entries = [];
+    scene.shapes.forEach((s, i) => entries.push({ entry: s, list: 'Shapes', target: { kind: 'shape', id: s.id, index: i },
+      label: `${nameOf(s, `shape ${i}`)} (${s.fields.type})`, dom: `tree-shape-${i}` }));
+    scene.lights.forEach((l, i) => entries.push({ entry: l, list: 'Lights', target: { kind: 'light', id: l.id, index: i },
+      label: `${nameOf(l, `light ${i}`)} (${l.fields.type})`, dom: `tree-light-${i}` }));
+    (scene.instances || []).forEach((inst, i) => entries.push({ entry: inst, list: 'Instances', target: { kind: 'instance', id: inst.id, index: i },
+      label: `${nameOf(inst, `instance ${i}`)} (${inst.object}${inst.copies === 1 ? '' : ` ×${inst.copies}`})`, dom: `tree-instance-${i}` }));
     this.root.append(item('Camera', { kind: 'camera' }, 'tree-camera'));
-    this.root.append(section('Shapes', scene.shapes.map((s, i) =>
-      item(`${nameOf(s, `shape ${i}`)} (${s.fields.type})`, { kind: 'shape', index: i }, `tree-shape-${i}`))));
-    this.root.append(section('Lights', scene.lights.map((l, i) =>
-      item(`${nameOf(l, `light ${i}`)} (${l.fields.type})`, { kind: 'light', index: i }, `tree-light-${i}`))));
-    const instances = scene.instances || [];
-    if (instances.length) {
-      this.root.append(section('Instances', instances.map((inst, i) =>
-        item(`${nameOf(inst, `instance ${i}`)} (${inst.object}${inst.copies === 1 ? '' : ` ×${inst.copies}`})`,
-          { kind: 'instance', index: i }, `tree-instance-${i}`))));
+    // Groups first, each a folder of its entries.
+    const groups = new Map();
+    for (const e of entries) {
+      const g = e.entry.fields.group;
+      if (typeof g === 'string') { if (!groups.has(g)) groups.set(g, []); groups.get(g).push(e); }
+    }
+    if (groups.size) {
+      const folders = [...groups].map(([name, members]) => {
+        const all = members.map((m) => m.target);
+        const allSelected = all.every((t) => selected.has(keyOf(t)));
+        const ul = el('ul');
+        members.forEach((m) => ul.append(item(m.label, m.target, m.dom)));
+        const head = el('span', { class: `item group${allSelected ? ' selected' : ''}`, id: `tree-group-${name.replace(/[^A-Za-z0-9_-]/g, '_')}`,
+          title: 'Select the group (its entries move as one)',
+          onclick: (e) => this.app.selectMany(all, e.shiftKey || e.ctrlKey || e.metaKey) }, `▾ ${name} (${members.length})`);
+        return el('li', { class: 'folder' }, head, ul);
+      });
+      this.root.append(section('Groups', folders));
+    }
+    for (const list of ['Shapes', 'Lights', 'Instances']) {
+      const items = entries.filter((e) => e.list === list && typeof e.entry.fields.group !== 'string');
+      if (list === 'Instances' && !(scene.instances || []).length) continue;
+      this.root.append(section(list, items.map((e) => item(e.label, e.target, e.dom))));
     }
     this.root.append(section('Materials', scene.materials.map((m) =>
       item(`${m.name} (${m.fields.type})`, { kind: 'material', name: m.name }, `tree-material-${m.name}`))));
   }
 }
 
+/// sRGB-encoded [0, 1] from linear [0, 1] and back (IEC 61966-2-1's curve): the colour picker
+/// shows and takes sRGB, as every colour picker does, and the file stores linear reflectance.
+export function linearToSrgb(v) {
+  v = Math.min(1, Math.max(0, v));
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * v ** (1 / 2.4) - 0.055;
+}
+export function srgbToLinear(v) {
+  return v <= 0.04045 ? v / 12.92 : ((v + 0.055) / 1.055) ** 2.4;
+}
+
 function toHex(rgb) {
-  const c = (v) => Math.round(Math.min(1, Math.max(0, v)) * 255).toString(16).padStart(2, '0');
+  const c = (v) => Math.round(linearToSrgb(v) * 255).toString(16).padStart(2, '0');
   return `#${c(rgb[0])}${c(rgb[1])}${c(rgb[2])}`;
 }
 
 function fromHex(hex) {
-  return [1, 3, 5].map((i) => Number.parseFloat((parseInt(hex.slice(i, i + 2), 16) / 255).toPrecision(4)));
+  return [1, 3, 5].map((i) => Number.parseFloat(srgbToLinear(parseInt(hex.slice(i, i + 2), 16) / 255).toPrecision(4)));
 }
+
+/// Every field of each material type with its default (docs/scene-format.md), in the order the
+/// panel lists them; `emission` and `opacity` on every type but `mix` and `null`.
+export const MATERIAL_FIELDS = {
+  diffuse: { reflectance: [0.8, 0.8, 0.8] },
+  mirror: { tint: [1, 1, 1] },
+  dielectric: { ior: 1.5, roughness: 0 },
+  conductor: { preset: 'gold', roughness: 0 },
+  plastic: { reflectance: [0.8, 0.8, 0.8], ior: 1.5, roughness: 0 },
+  mix: { materials: null, weight: 0.5 },
+  null: {},
+};
+const SURFACE_FIELDS = { emission: [0, 0, 0], opacity: 1 };
+const CONDUCTOR_PRESETS = ['gold', 'silver', 'copper', 'aluminium', 'chrome', 'iron', 'platinum', 'titanium'];
+/// The fields a material of `type` takes, with their defaults.
+function materialDefaults(type) {
+  const own = MATERIAL_FIELDS[type] || {};
+  return type === 'mix' || type === 'null' ? { ...own } : { ...own, ...SURFACE_FIELDS };
+}
+/// Fields a material keeps whatever its type (textures and bumps are the kind's business too,
+/// but a switch keeps them where the new type takes them).
+const ANY_MATERIAL_FIELDS = new Set(['type', 'bump', 'normal_map']);
 
 export class Properties {
   constructor(root, app) { this.root = root; this.app = app; }
 
+  /// Redraws the panel, except while a field in it is being typed in: then the redraw waits
+  /// until the field is left, so an edit from another tab neither steals the focus nor commits
+  /// the half-typed value.
   render(scene, sel) {
-    this.root.innerHTML = '';
-    if (!scene || !sel) {
-      this.root.append(el('p', { class: 'hint' }, 'Select an object in the viewport or the tree.'));
+    const active = document.activeElement;
+    if (active && this.root.contains(active) && active.dataset.typed === '1') {
+      this.pending = [scene, sel];
+      if (!active.dataset.waits) {
+        active.dataset.waits = '1';
+        active.addEventListener('blur', () => {
+          setTimeout(() => { if (this.pending) { const [s, l] = this.pending; this.pending = null; this.render(s, l); } }, 0);
+        }, { once: true });
+      }
       return;
     }
-    if (sel.kind === 'shape' || sel.kind === 'light' || sel.kind === 'instance') {
-      const list = sel.kind === 'shape' ? scene.shapes : sel.kind === 'light' ? scene.lights : scene.instances || [];
-      const entry = list[sel.index];
+    this.pending = null;
+    const focusedId = active && this.root.contains(active) ? active.id : null;
+    this.draw(scene, sel);
+    // A field that had the focus keeps it.
+    if (focusedId) { const again = document.getElementById(focusedId); if (again) again.focus(); }
+  }
+
+  draw(scene, sel) {
+    this.root.innerHTML = '';
+    const list = sel || [];
+    if (!scene || !list.length) {
+      this.root.append(el('p', { class: 'hint' }, 'Select an object in the viewport or the tree (Shift or Ctrl to add).'));
+      this.root.append(el('button', { id: 'new-material', onclick: () => this.app.newMaterial() }, 'New material'));
+      return;
+    }
+    if (list.length > 1) {
+      const groups = new Set(list.map((s) => this.app.entryOf(s)).filter(Boolean).map((e) => e.fields.group));
+      const group = groups.size === 1 ? [...groups][0] : undefined;
+      const fs = el('fieldset', {}, el('legend', {}, `${list.length} selected`));
+      fs.append(el('p', { class: 'hint', id: 'multi-note' }, typeof group === 'string'
+        ? `Group "${group}": the gizmo moves, turns and scales its entries as one.`
+        : 'The gizmo moves, turns and scales them as one, about their common centre.'));
+      const name = el('input', { id: 'group-name', type: 'text', value: typeof group === 'string' ? group : 'group' });
+      fs.append(el('div', { class: 'row' }, el('label', {}, 'group'), name,
+        el('button', { id: 'group-set', onclick: () => this.app.setGroup(list, name.value) }, 'Group'),
+        el('button', { id: 'group-clear', onclick: () => this.app.setGroup(list, null) }, 'Ungroup')));
+      this.root.append(fs);
+      return;
+    }
+    const one = list[0];
+    if (one.kind === 'shape' || one.kind === 'light' || one.kind === 'instance') {
+      const entry = this.app.entryOf(one);
       if (!entry) return;
-      const target = { [sel.kind]: sel.index };
-      const title = sel.kind === 'instance'
-        ? `${nameOf(entry, `instance ${sel.index}`)}: object "${entry.object}"`
-        : `${nameOf(entry, `${sel.kind} ${sel.index}`)}: ${entry.fields.type}`;
+      const index = one.index;
+      const target = { [`${one.kind}_id`]: one.id };
+      const title = one.kind === 'instance'
+        ? `${nameOf(entry, `instance ${index}`)}: object "${entry.object}"`
+        : `${nameOf(entry, `${one.kind} ${index}`)}: ${entry.fields.type}`;
       this.root.append(this.fieldset(title, target, entry.fields, scene, 'obj'));
-      if (sel.kind === 'instance') this.root.append(this.instanceNote(entry));
-      const hasTransform = sel.kind !== 'light' || entry.fields.type === 'area';
+      if (one.kind === 'instance') this.root.append(this.instanceNote(entry));
+      const hasTransform = one.kind !== 'light' || entry.fields.type === 'area';
       if (hasTransform) this.root.append(this.transform(target, entry.fields.transform || {}));
       const material = entry.fields.material && scene.materials.find((m) => m.name === entry.fields.material);
       if (material) this.root.append(this.material(material, scene));
-    } else if (sel.kind === 'material') {
-      const material = scene.materials.find((m) => m.name === sel.name);
+    } else if (one.kind === 'material') {
+      const material = scene.materials.find((m) => m.name === one.name);
       if (material) this.root.append(this.material(material, scene));
-    } else if (sel.kind === 'camera') {
+    } else if (one.kind === 'camera') {
       this.root.append(this.fieldset('Camera', 'camera', scene.camera.fields, scene, 'cam'));
       if (scene.render) this.root.append(this.fieldset('Render', 'render', scene.render, scene, 'render'));
       if (scene.photons) this.root.append(this.fieldset('Photons', 'photons', scene.photons, scene, 'photons'));
@@ -113,9 +220,38 @@ export class Properties {
       'The object\'s own shapes are edited in the scene file.');
   }
 
+  /// The material's type (switchable), every field its type takes (those not in the file show
+  /// their default, greyed, and typing one writes it), and a texture picker.
   material(material, scene) {
-    const fs = this.fieldset(`Material "${material.name}": ${material.fields.type}`, { material: material.name }, material.fields, scene, 'mat');
-    if (material.fields.type !== 'null') fs.append(this.texturePicker(material));
+    const type = material.fields.type;
+    const target = { material: material.name };
+    const fs = el('fieldset', { id: 'material-panel' }, el('legend', {}, `Material "${material.name}"`));
+    const kind = el('select', { id: 'mat-type', title: 'The material\'s type: a switch keeps the fields the new type takes' });
+    for (const t of Object.keys(MATERIAL_FIELDS)) kind.append(el('option', t === type ? { value: t, selected: '' } : { value: t }, t));
+    kind.onchange = () => this.app.switchMaterialType(material, kind.value);
+    fs.append(el('div', { class: 'row' }, el('label', {}, 'type'), kind,
+      el('button', { id: 'new-material', title: 'A new diffuse material', onclick: () => this.app.newMaterial() }, 'New')));
+    const defaults = materialDefaults(type);
+    const shown = { ...defaults };
+    for (const [k, v] of Object.entries(material.fields)) shown[k] = v;
+    const written = new Set(Object.keys(material.fields));
+    for (const [field, value] of Object.entries(shown)) {
+      if (field === 'type') continue;
+      if (field === 'preset' && type === 'conductor') {
+        const select = el('select', { id: 'mat-preset', onchange: (e) => this.set(target, 'preset', e.target.value || null) });
+        select.append(el('option', { value: '' }, 'none (eta and k)'));
+        for (const p of CONDUCTOR_PRESETS) select.append(el('option', p === value && written.has('preset') ? { value: p, selected: '' } : { value: p }, p));
+        if (!written.has('preset')) select.value = '';
+        fs.append(el('div', { class: 'row' }, el('label', {}, 'preset'), select));
+        continue;
+      }
+      if (field === 'materials' && value === null) {
+        fs.append(this.rows(target, { materials: [] }, scene, 'mat', written));
+        continue;
+      }
+      fs.append(this.rows(target, { [field]: value }, scene, 'mat', written));
+    }
+    if (type !== 'null') fs.append(this.texturePicker(material));
     return fs;
   }
 
@@ -142,12 +278,20 @@ export class Properties {
     this.app.edit({ op: 'set', target, field, value });
   }
 
-  /// One row per field of `fields`, each input named `prefix-field[-axis]`.
   fieldset(title, target, fields, scene, prefix) {
     const fs = el('fieldset', {}, el('legend', {}, title));
+    fs.append(this.rows(target, fields, scene, prefix, null));
+    return fs;
+  }
+
+  /// One row per field of `fields`, each input named `prefix-field[-axis]`; with `written`,
+  /// a field not in it is a default (drawn greyed, written when changed).
+  rows(target, fields, scene, prefix, written) {
+    const out = document.createDocumentFragment();
     for (const [field, value] of Object.entries(fields || {})) {
       if (HIDDEN_FIELDS.has(field)) continue;
-      const row = el('div', { class: 'row' }, el('label', {}, field));
+      const isDefault = written && !written.has(field);
+      const row = el('div', { class: `row${isDefault ? ' default' : ''}` }, el('label', {}, isDefault ? `${field} (default)` : field));
       const id = `${prefix}-${field}`;
       if (field === 'material' && typeof value === 'string') {
         const select = el('select', { id, onchange: (e) => this.set(target, field, e.target.value) });
@@ -160,32 +304,45 @@ export class Properties {
         box.checked = value;
         row.append(box);
       } else if (typeof value === 'string') {
-        row.append(el('input', { id, type: 'text', value, onchange: (e) => this.set(target, field, e.target.value) }));
+        row.append(this.text(id, value, (v) => this.set(target, field, v)));
       } else if (Array.isArray(value) && value.length === 3 && value.every((v) => typeof v === 'number')) {
         const current = [...value];
         value.forEach((v, axis) => row.append(this.number(`${id}-${axis}`, v, (x) => { current[axis] = x; this.set(target, field, [...current]); })));
         if (COLOR_FIELDS.has(field)) {
+          // The picker shows sRGB; values above 1 (emission) are scaled into it and back.
           const max = Math.max(...value, 1e-9);
           const scale = max > 1 ? max : 1;
-          row.append(el('input', { id: `${id}-color`, type: 'color', value: toHex(value.map((v) => v / scale)),
+          row.append(el('input', { id: `${id}-color`, type: 'color', value: toHex(value.map((v) => v / scale)), title: 'sRGB colour; the file stores linear values',
             onchange: (e) => this.set(target, field, fromHex(e.target.value).map((v) => Number.parseFloat((v * scale).toPrecision(4)))) }));
         }
-      } else if (COLOR_FIELDS.has(field) && typeof value === 'number') {
-        row.append(this.number(id, value, (v) => this.set(target, field, v)));
       } else {
         // Vertices, textures, colour maps: edited as JSON.
-        row.append(el('input', { id, type: 'text', value: JSON.stringify(value), onchange: (e) => {
-          try { this.set(target, field, JSON.parse(e.target.value)); } catch (err) { this.app.showMessage(`${field}: not valid JSON (${err.message})`); }
-        } }));
+        row.append(this.text(id, JSON.stringify(value), (text) => {
+          try { this.set(target, field, JSON.parse(text)); } catch (err) { this.app.showMessage(`${field}: not valid JSON (${err.message})`); }
+        }));
       }
-      fs.append(row);
+      out.append(row);
     }
-    return fs;
+    return out;
+  }
+
+  /// Marks a field as typed in from the first key (so a redraw waits for it), and clears the
+  /// mark when the value is sent.
+  typed(input) {
+    input.addEventListener('input', () => { input.dataset.typed = '1'; });
+    return input;
+  }
+
+  text(id, value, onChange) {
+    const input = this.typed(el('input', { id, type: 'text', value }));
+    input.onchange = () => { delete input.dataset.typed; onChange(input.value); };
+    return input;
   }
 
   number(id, value, onChange) {
-    const input = el('input', { id, type: 'number', step: 'any', value: String(value) });
+    const input = this.typed(el('input', { id, type: 'number', step: 'any', value: String(value) }));
     input.onchange = () => {
+      delete input.dataset.typed;
       // Cleared while typing: keep the old value, say nothing.
       if (input.value.trim() === '') { input.value = String(value); return; }
       const v = Number.parseFloat(input.value);

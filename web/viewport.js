@@ -1,7 +1,9 @@
 // The 3D viewport: the scene's triangles drawn with three.js (solid shading) or the server's
 // rendered frames behind the overlays (rendered shading), one perspective view or four views
 // (top, front, side, perspective), a grid and axes, click selection with a silhouette outline, and
-// translate / rotate / scale gizmos whose result is sent to the server as an edit.
+// translate / rotate / scale gizmos whose result is sent to the server as an edit. The gizmo
+// pivots on the selection's own centre (its bounding box's), one gizmo for a multi-selection or a
+// group. The view is drawn only when something changed (no redraw while the page is idle).
 
 import * as THREE from './vendor/three.module.min.js';
 import { OrbitControls } from './vendor/OrbitControls.min.js';
@@ -14,6 +16,31 @@ const EULER_ORDER = 'ZYX';
 const OUTLINE_COLOR = 0xffa640;
 
 function round(v) { return Number.parseFloat(Number(v).toPrecision(7)); }
+// Angles in degrees: to a millionth of a degree, so 1e-14 from a matrix reads back as 0.
+function roundAngle(v) { return round(Math.round(v * 1e6) / 1e6); }
+
+/// The Euler angles (radians, order ZYX) of quaternion `q` nearest to `typed` (degrees, as the
+/// file has them): a rotation has two Euler triples, each up to turns of 360 degrees, and the
+/// matrix's own pick ([180, 43, 180] for a turn of 137 degrees about Y) reads nothing like what
+/// was typed. Returns degrees.
+export function eulerNearest(q, typed) {
+  const e = new THREE.Euler().setFromQuaternion(q, EULER_ORDER);
+  const a = [e.x, e.y, e.z].map((r) => r / DEG);
+  const b = [a[0] + 180, 180 - a[1], a[2] + 180];
+  const near = (v, t) => v + 360 * Math.round((t - v) / 360);
+  const fit = (c) => c.map((v, i) => near(v, typed[i]));
+  const dist = (c) => c.reduce((s, v, i) => s + (v - typed[i]) ** 2, 0);
+  const [ca, cb] = [fit(a), fit(b)];
+  return (dist(ca) <= dist(cb) ? ca : cb).map(roundAngle);
+}
+
+/// The key of a selection entry: "shape:7" (its stable id), "material:red", "camera".
+export function keyOf(sel) {
+  if (!sel) return '';
+  if (sel.kind === 'camera') return 'camera';
+  if (sel.kind === 'material') return `material:${sel.name}`;
+  return `${sel.kind}:${sel.id}`;
+}
 
 export class Viewport {
   constructor(canvas, labels, app) {
@@ -23,13 +50,16 @@ export class Viewport {
     this.rendered = true;
     this.quad = false;
     this.snap = false;
-    this.selection = null;
+    this.selection = [];
+    this.hidden = new Set();      // keys of entries hidden in this tab's solid view
+    this.draws = 0;               // views drawn, for the idle test
     this.frameTexture = null;
     this.frameAspect = 1;
     this.objects = [];          // { holder, mesh, target, kind }
     this.pickables = [];
     this.lastViewSent = '';
 
+    this.pivot = new THREE.Object3D();   // what the gizmo moves; the selection follows it
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setScissorTest(true);
@@ -53,6 +83,11 @@ export class Viewport {
     // Our pointer listener first, so the view under the pointer owns the gesture.
     canvas.addEventListener('pointerdown', (e) => this.onPointerDown(e));
     canvas.addEventListener('pointerup', (e) => this.onPointerUp(e));
+    canvas.addEventListener('pointermove', (e) => this.onPointerMove(e));
+    // The rectangle of a box selection.
+    this.boxDiv = document.createElement('div');
+    this.boxDiv.id = 'box-select';
+    canvas.parentElement.appendChild(this.boxDiv);
     for (const view of this.views) {
       view.camera.layers.enable(view.layer);
       view.controls = new OrbitControls(view.camera, canvas);
@@ -61,7 +96,10 @@ export class Viewport {
         view.controls.enableRotate = false;
         view.controls.screenSpacePanning = true;
       }
-      view.controls.addEventListener('change', () => { if (view.camera === this.perspective) this.sendView(); });
+      view.controls.addEventListener('change', () => {
+        if (view.camera === this.perspective) this.sendView();
+        this.requestDraw();
+      });
     }
     this.activeView = this.views[3];
 
@@ -69,16 +107,29 @@ export class Viewport {
     this.gizmo.setSize(0.9);
     this.gizmo.addEventListener('dragging-changed', (e) => {
       for (const view of this.views) view.controls.enabled = !e.value;
-      if (!e.value) this.commitGizmo();
+      if (e.value) this.startGizmo(); else this.commitGizmo();
     });
+    this.gizmo.addEventListener('objectChange', () => this.followGizmo());
+    this.gizmo.addEventListener('change', () => this.requestDraw());
+    this.scene.add(this.pivot);
     this.gizmoHelper = this.gizmo.getHelper();
     this.scene.add(this.gizmoHelper);
     this.makeOutlinePass();
 
     new ResizeObserver(() => this.resize()).observe(canvas);
     this.resize();
-    const loop = () => { this.draw(); requestAnimationFrame(loop); };
-    requestAnimationFrame(loop);
+    this.requestDraw();
+  }
+
+  /// Draws at the next animation frame, once however often it is asked; nothing else draws, so
+  /// an idle page costs nothing.
+  requestDraw() {
+    if (this.drawPending) return;
+    this.drawPending = true;
+    requestAnimationFrame(() => {
+      this.drawPending = false;
+      this.draw();
+    });
   }
 
   // Layout -------------------------------------------------------------------------------------
@@ -113,6 +164,7 @@ export class Viewport {
       this.fitCamera(r.view.camera, r.w, r.h);
     }
     this.sendView(true);
+    this.requestDraw();
   }
 
   fitCamera(camera, w, h) {
@@ -128,9 +180,60 @@ export class Viewport {
 
   setQuad(quad) { this.quad = quad; this.resize(); }
 
+  /// Solid or rendered shading. The server goes on refining the same view meanwhile (it
+  /// ignores a view it renders already), so switching back does not restart the preview.
   setRendered(rendered) {
     this.rendered = rendered;
+    if (rendered && this.pendingFrame) this.setFrame(this.pendingFrame);
     if (rendered) this.sendView(true);
+    this.requestDraw();
+  }
+
+  /// Wireframe shading of the solid view: every surface drawn as its triangles' edges.
+  setWireframe(on) {
+    this.wireframe = on;
+    for (const o of this.objects) {
+      if (o.kind !== 'mesh' && o.kind !== 'area') continue;
+      for (const m of [o.mesh.material].flat()) m.wireframe = on;
+    }
+    this.requestDraw();
+  }
+
+  /// The mouse scheme: 'default' (left drag orbits, right or Shift+left pans) or 'blender'
+  /// (middle drag orbits, Shift+middle pans, the left button only selects and drags gizmos).
+  setNavigation(scheme) {
+    this.navigation = scheme;
+    const buttons = scheme === 'blender'
+      ? { LEFT: null, MIDDLE: THREE.MOUSE.ROTATE, RIGHT: null }
+      : { LEFT: THREE.MOUSE.ROTATE, MIDDLE: THREE.MOUSE.DOLLY, RIGHT: THREE.MOUSE.PAN };
+    for (const view of this.views) {
+      // The orthographic views pan with the orbit button (they do not turn).
+      view.controls.mouseButtons = view.camera.isOrthographicCamera && scheme === 'blender'
+        ? { LEFT: null, MIDDLE: THREE.MOUSE.PAN, RIGHT: null } : { ...buttons };
+    }
+  }
+
+  /// Blender's numpad views in the perspective view: 1 front, 3 right, 7 top; `opposite` (Ctrl)
+  /// back, left, bottom. The distance to the orbit centre stays.
+  axisView(key, opposite) {
+    const dirs = { 1: [0, 0, 1], 3: [1, 0, 0], 7: [0, 1, 0] };
+    const d = dirs[key];
+    if (!d) return;
+    const view = this.views[3];
+    const distance = this.perspective.position.distanceTo(view.controls.target);
+    const dir = new THREE.Vector3(...d).multiplyScalar(opposite ? -1 : 1);
+    this.perspective.up.set(0, 1, 0);
+    if (key === 7) this.perspective.up.set(0, 0, opposite ? 1 : -1);
+    this.perspective.position.copy(view.controls.target).addScaledVector(dir, distance);
+    this.perspective.lookAt(view.controls.target);
+    view.controls.update();
+    this.sendView(true);
+    this.requestDraw();
+  }
+
+  setHidden(keys) {
+    this.hidden = new Set(keys);
+    this.requestDraw();
   }
 
   setSnap(snap) {
@@ -139,8 +242,10 @@ export class Viewport {
   }
 
   setMode(mode) {
+    this.mode = mode;
     this.gizmo.setMode(mode);
     this.applySnap();
+    this.setSelection(this.selection);
   }
 
   applySnap() {
@@ -163,9 +268,9 @@ export class Viewport {
     const lo = new THREE.Vector3(...scene.bounds.min), hi = new THREE.Vector3(...scene.bounds.max);
     const extent = Math.max(lo.distanceTo(hi), 1e-3);
     this.extent = extent;
-    scene.shapes.forEach((shape, index) => this.addEntry(shape, { kind: 'shape', index }));
-    scene.lights.forEach((light, index) => this.addLight(light, { kind: 'light', index }));
-    (scene.instances || []).forEach((instance, index) => this.addEntry(instance, { kind: 'instance', index }));
+    scene.shapes.forEach((shape, index) => this.addEntry(shape, { kind: 'shape', index, id: shape.id }));
+    scene.lights.forEach((light, index) => this.addLight(light, { kind: 'light', index, id: light.id }));
+    (scene.instances || []).forEach((instance, index) => this.addEntry(instance, { kind: 'instance', index, id: instance.id }));
     this.addCamera(scene.camera);
     this.buildGrid(lo, hi, extent);
     if (first) {
@@ -173,6 +278,7 @@ export class Viewport {
       this.frameOrtho(lo, hi, extent);
     }
     this.setSelection(this.selection);
+    this.requestDraw();
   }
 
   /// A holder at the entry's transform, with its world triangles mapped into the holder's space.
@@ -210,6 +316,7 @@ export class Viewport {
     // comes in groups of triangles, one colour each.
     const groups = entry.groups && entry.groups.length ? entry.groups : null;
     const material = groups ? groups.map((g) => surface(g.color, g.emissive)) : surface(entry.color, entry.emissive);
+    if (this.wireframe) for (const m of [material].flat()) m.wireframe = true;
     const mesh = this.meshOf(entry.positions, holder, material);
     if (groups) groups.forEach((g, i) => mesh.geometry.addGroup(g.start * 3, g.count * 3, i));
     holder.add(mesh);
@@ -262,7 +369,7 @@ export class Viewport {
     holder.add(body);
     this.content.add(holder);
     this.cameraIcon = holder;
-    const object = { holder, mesh: body, target: { kind: 'camera' }, kind: 'camera' };
+    const object = { holder, mesh: body, target: { kind: 'camera', id: 'camera' }, kind: 'camera' };
     body.userData.object = object;
     this.objects.push(object);
     this.pickables.push(body);
@@ -284,6 +391,7 @@ export class Viewport {
     ];
     for (const g of grids) {
       const grid = new THREE.GridHelper(size, divisions, 0x6a6f78, 0x3a3e45);
+      grid.userData.grid = true;
       if (g.rotate) grid.rotation.set(...g.rotate);
       grid.position.set(...g.pos);
       grid.layers.set(g.layer);
@@ -326,6 +434,64 @@ export class Viewport {
     this.perspective.updateProjectionMatrix();
     view.controls.update();
     this.sendView(true);
+    this.requestDraw();
+  }
+
+  /// Points the perspective view at the selection (or the whole scene) from where it looks now,
+  /// close enough that it fills about two thirds of the view.
+  frameSelected() {
+    const box = new THREE.Box3();
+    const objects = this.selection.length ? this.selection.map((s) => this.objectOf(s)).filter(Boolean) : this.objects;
+    for (const o of objects) box.union(this.worldBox(o));
+    if (box.isEmpty()) return;
+    const centre = box.getCenter(new THREE.Vector3());
+    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, this.extent * 1e-3);
+    const view = this.views[3];
+    const dir = this.perspective.position.clone().sub(view.controls.target).normalize();
+    const distance = radius / Math.sin((this.perspective.fov * DEG) / 2) * 1.1;
+    view.controls.target.copy(centre);
+    this.perspective.position.copy(centre).addScaledVector(dir, distance);
+    this.perspective.lookAt(centre);
+    view.controls.update();
+    for (const v of this.views.slice(0, 3)) {
+      v.controls.target.copy(centre);
+      v.camera.position.copy(centre).addScaledVector(new THREE.Vector3(...v.dir), this.extent * 2);
+      v.camera.userData.half = radius * 1.3;
+      v.camera.zoom = 1;
+    }
+    this.resize();
+    this.sendView(true);
+  }
+
+  /// The point new things go: in front of the perspective view, at its orbit centre (or closer,
+  /// within the scene's size), moved sideways past anything already there.
+  placementPoint(size) {
+    const view = this.views[3];
+    const forward = view.controls.target.clone().sub(this.perspective.position);
+    const distance = Math.min(forward.length(), this.extent);
+    forward.normalize();
+    const base = this.perspective.position.clone().addScaledVector(forward, distance);
+    const right = new THREE.Vector3().crossVectors(forward, this.perspective.up).normalize();
+    // Things there already: their boxes grown by the new thing's size; floors and walls (a side
+    // more than half the scene across) do not count, everything stands on or beside them.
+    const boxes = this.objects.filter((o) => o.kind === 'mesh' || o.kind === 'area').map((o) => this.worldBox(o))
+      .filter((b) => { const d = b.getSize(new THREE.Vector3()); return Math.max(d.x, d.y, d.z) < this.extent * 0.5; })
+      .map((b) => b.expandByScalar(size));
+    for (let k = 0; k < 40; k++) {
+      const step = (k % 2 ? 1 : -1) * Math.ceil(k / 2);
+      const p = base.clone().addScaledVector(right, step * size * 2.5);
+      if (!boxes.some((b) => b.containsPoint(p))) return p.toArray().map(round);
+    }
+    return base.toArray().map(round);
+  }
+
+  /// How far a duplicate of `list` moves: along x by the selection's width and a tenth more
+  /// (a twentieth of the scene for something flat along x), so the copy sits beside it.
+  duplicateOffset(list) {
+    const box = new THREE.Box3();
+    for (const s of list) { const o = this.objectOf(s); if (o) box.union(this.worldBox(o)); }
+    const width = box.isEmpty() ? 0 : box.max.x - box.min.x;
+    return [round(Math.max(width * 1.1, this.extent * 0.05)), 0, 0];
   }
 
   cameraToView() {
@@ -360,7 +526,11 @@ export class Viewport {
     }, force ? 0 : wait);
   }
 
+  /// A rendered frame: decoded and drawn in Rendered shading; in Solid shading only kept (the
+  /// last one), so frames arriving while it is not shown cost no decoding.
   setFrame(blob) {
+    if (!this.rendered) { this.pendingFrame = blob; return; }
+    this.pendingFrame = null;
     const url = URL.createObjectURL(blob);
     const image = new Image();
     image.onload = () => {
@@ -370,6 +540,7 @@ export class Viewport {
       if (this.frameTexture) this.frameTexture.dispose();
       this.frameTexture = texture;
       URL.revokeObjectURL(url);
+      if (this.rendered) this.requestDraw();
     };
     image.src = url;
   }
@@ -412,22 +583,21 @@ export class Viewport {
     this.outlineLayer = 7;
   }
 
-  /// Draws the selection's silhouette into the view rectangle (x, y from the bottom, CSS pixels).
+  /// Draws the selection's silhouettes into the view rectangle (x, y from the bottom, CSS pixels).
   drawOutline(camera, x, y, w, h) {
-    const object = this.objectOf(this.selection);
-    if (!object) return;
+    const objects = this.selection.map((s) => this.objectOf(s)).filter((o) => o && !this.hidden.has(keyOf(o.target)));
+    if (!objects.length) return;
     const ratio = this.renderer.getPixelRatio();
     const size = this.renderer.getDrawingBufferSize(new THREE.Vector2());
     if (this.outlineMask.width !== size.x || this.outlineMask.height !== size.y) this.outlineMask.setSize(size.x, size.y);
     this.outlineMask.viewport.set(x * ratio, y * ratio, w * ratio, h * ratio);
     this.outlineMask.scissor.copy(this.outlineMask.viewport);
-    // The selected object alone, in white on black, seen by this view's camera (the axes and
+    // The selected objects alone, in white on black, seen by this view's camera (the axes and
     // the gizmo are on every layer, so they are hidden).
-    const visible = object.mesh.visible, background = this.scene.background, layers = camera.layers.mask;
-    object.mesh.visible = true;
+    const visible = objects.map((o) => o.mesh.visible), background = this.scene.background, layers = camera.layers.mask;
+    for (const o of objects) { o.mesh.visible = true; o.mesh.layers.enable(this.outlineLayer); }
     this.helpers.visible = false;
     this.gizmoHelper.visible = false;
-    object.mesh.layers.enable(this.outlineLayer);
     camera.layers.set(this.outlineLayer);
     this.scene.background = null;
     this.scene.overrideMaterial = this.maskMaterial;
@@ -440,16 +610,23 @@ export class Viewport {
     this.scene.overrideMaterial = null;
     this.scene.background = background;
     camera.layers.mask = layers;
-    object.mesh.layers.disable(this.outlineLayer);
-    object.mesh.visible = visible;
+    objects.forEach((o, i) => { o.mesh.layers.disable(this.outlineLayer); o.mesh.visible = visible[i]; });
     this.helpers.visible = true;
     this.gizmoHelper.visible = true;
-    // Its border over the view, shaded only in the rectangle around the object (the pass reads
+    // Their border over the view, shaded only in the rectangle around them (the pass reads
     // up to 49 mask texels a pixel: over a whole view that is slow on a software renderer).
     const radius = Math.max(1, Math.round(1.5 * ratio));
     this.outlineQuad.material.uniforms.size.value.copy(size);
     this.outlineQuad.material.uniforms.radius.value = radius;
-    const box = this.screenBox(object.mesh, camera, x, y, w, h, radius / ratio + 2);
+    let box = null;
+    for (const o of objects) {
+      const b = this.screenBox(o.mesh, camera, x, y, w, h, radius / ratio + 2);
+      if (!b) continue;
+      box = box ? (() => {
+        const x0 = Math.min(box.x, b.x), y0 = Math.min(box.y, b.y);
+        return { x: x0, y: y0, w: Math.max(box.x + box.w, b.x + b.w) - x0, h: Math.max(box.y + box.h, b.y + b.h) - y0 };
+      })() : b;
+    }
     if (!box) return;
     this.renderer.setScissor(box.x, box.y, box.w, box.h);
     this.renderer.autoClear = false;
@@ -481,65 +658,211 @@ export class Viewport {
     return { x: left, y: bottom, w: right - left, h: top - bottom };
   }
 
+  /// The world-space bounding box of an object as drawn.
+  worldBox(object) {
+    object.holder.updateMatrixWorld(true);
+    return new THREE.Box3().setFromObject(object.holder, true);
+  }
+
+  /// `sel`: a list of selection entries ({kind, id} and the like). The gizmo goes on a pivot at
+  /// the selection's centre: one object's pivot turns and scales with its transform (so the
+  /// gizmo's axes are the object's own), several objects share an unturned one.
   setSelection(sel) {
-    this.selection = sel;
+    this.selection = Array.isArray(sel) ? sel : sel ? [sel] : [];
     this.gizmo.detach();
-    const object = this.objectOf(sel);
-    if (!object) return;
-    const movable = object.kind === 'mesh' || object.kind === 'area' || object.kind === 'point' || object.kind === 'spot' || object.kind === 'camera';
-    if (movable) {
-      // Point and spot lights and the camera move only.
-      if (object.kind !== 'mesh' && object.kind !== 'area' && this.gizmo.getMode() !== 'translate') this.gizmo.setMode('translate');
-      this.gizmo.attach(object.holder);
+    this.requestDraw();
+    const objects = this.selection.map((s) => this.objectOf(s)).filter(Boolean);
+    const movable = objects.filter((o) => ['mesh', 'area', 'point', 'spot', 'camera'].includes(o.kind));
+    if (!movable.length || movable.length !== objects.length) return;
+    const turnable = movable.every((o) => o.kind === 'mesh' || o.kind === 'area');
+    // Point and spot lights and the camera move only.
+    if (!turnable && this.gizmo.getMode() !== 'translate') this.gizmo.setMode('translate');
+    const box = new THREE.Box3();
+    for (const o of movable) box.union(this.worldBox(o));
+    this.pivot.position.copy(box.getCenter(new THREE.Vector3()));
+    if (movable.length === 1 && turnable) {
+      this.pivot.quaternion.copy(movable[0].holder.quaternion);
+      this.pivot.scale.copy(movable[0].holder.scale);
+    } else {
+      this.pivot.quaternion.identity();
+      this.pivot.scale.set(1, 1, 1);
     }
+    if (movable.length === 1 && !turnable) this.pivot.position.copy(movable[0].holder.position);
+    this.pivot.updateMatrixWorld(true);
+    this.gizmo.attach(this.pivot);
   }
 
   objectOf(sel) {
     if (!sel) return null;
-    return this.objects.find((o) => o.target.kind === sel.kind && (sel.kind === 'camera' || o.target.index === sel.index)) || null;
+    if (sel.kind === 'camera') return this.objects.find((o) => o.kind === 'camera') || null;
+    return this.objects.find((o) => o.target.kind === sel.kind && o.target.id === sel.id) || null;
   }
 
-  /// Sends the gizmo's result: a transform for shapes and area lights, a position for point
-  /// and spot lights, position and look_at for the camera.
-  commitGizmo() {
-    const object = this.objectOf(this.selection);
-    if (!object) return;
-    const h = object.holder;
-    const t = object.target;
-    if (object.kind === 'mesh' || object.kind === 'area') {
-      // A grid of instances turns about its transform's origin here; the server then places
-      // the copies along the world axes again (the grid's offsets come after the transform).
-      const target = t.kind === 'shape' ? { shape: t.index } : t.kind === 'instance' ? { instance: t.index } : { light: t.index };
-      this.app.edit({
-        op: 'set_transform', target,
-        translate: h.position.toArray().map(round),
-        rotate: [h.rotation.x, h.rotation.y, h.rotation.z].map((r) => round(r / DEG)),
-        scale: h.scale.toArray().map(round),
-      });
-    } else if (object.kind === 'point' || object.kind === 'spot') {
-      const fields = { position: h.position.toArray().map(round) };
-      if (object.kind === 'spot') {
-        const light = this.sceneData.lights[t.index];
-        if (light.fields.point_at) {
-          const start = new THREE.Vector3(...light.position);
-          const moved = new THREE.Vector3(...light.fields.point_at).add(h.position.clone().sub(start));
-          fields.point_at = moved.toArray().map(round);
-        }
-      }
-      this.app.edit({ op: 'set_fields', target: { light: t.index }, fields });
-    } else if (object.kind === 'camera') {
-      const cam = this.sceneData.camera;
-      const delta = h.position.clone().sub(new THREE.Vector3(...cam.position));
-      const lookAt = new THREE.Vector3(...cam.look_at).add(delta);
-      this.app.edit({ op: 'set_fields', target: 'camera', fields: { position: h.position.toArray().map(round), look_at: lookAt.toArray().map(round) } });
+  /// A drag begins: remember where the pivot and each selected holder were.
+  startGizmo() {
+    this.pivot.updateMatrixWorld(true);
+    this.dragStart = {
+      pivot: this.pivot.matrixWorld.clone(),
+      objects: this.selection.map((s) => this.objectOf(s)).filter(Boolean).map((o) => {
+        o.holder.updateMatrix();
+        return { object: o, matrix: o.holder.matrix.clone() };
+      }),
+    };
+  }
+
+  /// The change the drag made so far: new pivot times old pivot's inverse.
+  dragDelta() {
+    this.pivot.updateMatrixWorld(true);
+    return this.pivot.matrixWorld.clone().multiply(this.dragStart.pivot.clone().invert());
+  }
+
+  /// During a drag every selected holder follows the pivot, so the outlines move at once.
+  followGizmo() {
+    if (!this.dragStart) return;
+    const delta = this.dragDelta();
+    for (const { object, matrix } of this.dragStart.objects) {
+      const m = delta.clone().multiply(matrix);
+      m.decompose(object.holder.position, object.holder.quaternion, object.holder.scale);
     }
+    this.requestDraw();
+  }
+
+  /// Sends the drag's result as one edit (a batch for several objects): a transform for shapes,
+  /// instances and area lights (only the part the gizmo's mode changes, its angles nearest to
+  /// those typed), a position for point and spot lights, position and look_at for the camera.
+  commitGizmo() {
+    if (!this.dragStart) return;
+    const delta = this.dragDelta();
+    const mode = this.gizmo.getMode();
+    const commands = [];
+    for (const { object, matrix } of this.dragStart.objects) {
+      const t = object.target;
+      const m = delta.clone().multiply(matrix);
+      if (object.kind === 'mesh' || object.kind === 'area') {
+        // A grid of instances turns about its transform's origin here; the server then places
+        // the copies along the world axes again (the grid's offsets come after the transform).
+        const position = new THREE.Vector3(), quaternion = new THREE.Quaternion(), scale = new THREE.Vector3();
+        m.decompose(position, quaternion, scale);
+        const entry = this.entryFields(t);
+        const typed = (entry.transform && entry.transform.rotate) || [0, 0, 0];
+        const command = { op: 'set_transform', target: { [`${t.kind}_id`]: t.id }, translate: position.toArray().map(round) };
+        if (mode === 'rotate') command.rotate = eulerNearest(quaternion, typed);
+        if (mode === 'scale') command.scale = scale.toArray().map(round);
+        commands.push(command);
+      } else if (object.kind === 'point' || object.kind === 'spot') {
+        const start = new THREE.Vector3().setFromMatrixPosition(matrix);
+        const moved = start.clone().applyMatrix4(delta);
+        const fields = { position: moved.toArray().map(round) };
+        const light = this.sceneData.lights.find((l) => l.id === t.id);
+        if (object.kind === 'spot' && light && light.fields.point_at) {
+          fields.point_at = new THREE.Vector3(...light.fields.point_at).add(moved.clone().sub(start)).toArray().map(round);
+        }
+        commands.push({ op: 'set_fields', target: { light_id: t.id }, fields });
+      } else if (object.kind === 'camera') {
+        const cam = this.sceneData.camera;
+        const start = new THREE.Vector3(...cam.position);
+        const moved = start.clone().applyMatrix4(delta);
+        const lookAt = new THREE.Vector3(...cam.look_at).add(moved.clone().sub(start));
+        commands.push({ op: 'set_fields', target: 'camera', fields: { position: moved.toArray().map(round), look_at: lookAt.toArray().map(round) } });
+      }
+    }
+    this.dragStart = null;
+    if (commands.length === 1) this.app.edit(commands[0]);
+    else if (commands.length) this.app.edit({ op: 'batch', commands });
+  }
+
+  /// The fields of the entry a target names, as written in the file.
+  entryFields(t) {
+    const list = t.kind === 'shape' ? this.sceneData.shapes : t.kind === 'light' ? this.sceneData.lights : this.sceneData.instances || [];
+    const entry = list.find((e) => e.id === t.id);
+    return entry ? entry.fields : {};
   }
 
   viewAt(x, y) {
     return this.rects().find((r) => x >= r.x && x < r.x + r.w && y >= r.y && y < r.y + r.h);
   }
 
+  /// Blender's G / R / S: the selection follows the mouse (moved in the view's plane through
+  /// its centre, turned about the view's axis, scaled by the distance to its centre) until a
+  /// click or Enter confirms (one edit, as a gizmo drag) or Escape or a right click cancels.
+  startModal(mode, clientX, clientY) {
+    if (!this.gizmo.object || this.modal) return false;
+    const turnable = this.selection.map((s) => this.objectOf(s)).every((o) => o && (o.kind === 'mesh' || o.kind === 'area'));
+    if (mode !== 'translate' && !turnable) return false;
+    const r = this.rects().find((x) => x.view === this.activeView) || this.rects()[0];
+    this.gizmo.setMode(mode);
+    this.startGizmo();
+    const rect = this.canvas.getBoundingClientRect();
+    const centre = this.pivot.position.clone().project(r.view.camera);
+    this.modal = {
+      mode, r, x0: clientX, y0: clientY,
+      cx: rect.left + r.x + (centre.x * 0.5 + 0.5) * r.w, cy: rect.top + r.y + (-centre.y * 0.5 + 0.5) * r.h,
+      position: this.pivot.position.clone(), quaternion: this.pivot.quaternion.clone(), scale: this.pivot.scale.clone(),
+    };
+    for (const view of this.views) view.controls.enabled = false;
+    this.canvas.style.cursor = 'move';
+    return true;
+  }
+
+  moveModal(clientX, clientY) {
+    const m = this.modal;
+    if (!m) return;
+    const camera = m.r.view.camera;
+    this.pivot.position.copy(m.position);
+    this.pivot.quaternion.copy(m.quaternion);
+    this.pivot.scale.copy(m.scale);
+    if (m.mode === 'translate') {
+      // Pixels to world units at the centre's depth, along the camera's right and up.
+      const a = m.position.clone().project(camera);
+      const ndc = new THREE.Vector3(a.x + ((clientX - m.x0) / m.r.w) * 2, a.y - ((clientY - m.y0) / m.r.h) * 2, a.z);
+      this.pivot.position.copy(ndc.unproject(camera));
+    } else if (m.mode === 'rotate') {
+      const angle = Math.atan2(clientY - m.cy, clientX - m.cx) - Math.atan2(m.y0 - m.cy, m.x0 - m.cx);
+      const axis = new THREE.Vector3().setFromMatrixColumn(camera.matrixWorld, 2).normalize();
+      this.pivot.quaternion.premultiply(new THREE.Quaternion().setFromAxisAngle(axis, -angle));
+    } else {
+      const d0 = Math.max(Math.hypot(m.x0 - m.cx, m.y0 - m.cy), 1);
+      this.pivot.scale.multiplyScalar(Math.max(Math.hypot(clientX - m.cx, clientY - m.cy) / d0, 1e-3));
+    }
+    this.followGizmo();
+  }
+
+  endModal(confirm) {
+    const m = this.modal;
+    if (!m) return;
+    this.modal = null;
+    this.canvas.style.cursor = '';
+    for (const view of this.views) view.controls.enabled = true;
+    if (confirm) { this.commitGizmo(); return; }
+    this.pivot.position.copy(m.position);
+    this.pivot.quaternion.copy(m.quaternion);
+    this.pivot.scale.copy(m.scale);
+    this.followGizmo();
+    this.dragStart = null;
+    this.setSelection(this.selection);
+  }
+
+  /// B: the next left drag draws a box and selects what is in it (with the Blender mouse, a
+  /// left drag off the gizmo always does).
+  startBoxSelect() {
+    this.boxArmed = true;
+    this.canvas.style.cursor = 'crosshair';
+  }
+
+  cancelBoxSelect() {
+    this.boxArmed = false;
+    this.box = null;
+    this.boxDiv.style.display = 'none';
+    this.canvas.style.cursor = '';
+  }
+
   onPointerDown(e) {
+    if (this.modal) {
+      // A left click confirms G / R / S, a right click cancels; the view does not move.
+      e.stopImmediatePropagation();
+      this.endModal(e.button === 0);
+      return;
+    }
     const rect = this.canvas.getBoundingClientRect();
     const x = e.clientX - rect.left, y = e.clientY - rect.top;
     const r = this.viewAt(x, y);
@@ -548,12 +871,56 @@ export class Viewport {
     for (const view of this.views) view.controls.enabled = view === r.view && !this.gizmo.dragging;
     this.gizmo.camera = r.view.camera;
     this.down = { x: e.clientX, y: e.clientY };
+    const blenderBox = this.navigation === 'blender' && e.button === 0 && !this.gizmo.axis;
+    if ((this.boxArmed && e.button === 0) || blenderBox) {
+      // The orbit controls see the press next: disabled, they do not start.
+      for (const view of this.views) view.controls.enabled = false;
+      this.box = { x0: x, y0: y, x1: x, y1: y, r, additive: e.shiftKey || e.ctrlKey || e.metaKey };
+    }
+  }
+
+  onPointerMove(e) {
+    this.pointer = { x: e.clientX, y: e.clientY };
+    if (this.modal) { this.moveModal(e.clientX, e.clientY); return; }
+    if (!this.box) return;
+    const rect = this.canvas.getBoundingClientRect();
+    this.box.x1 = e.clientX - rect.left;
+    this.box.y1 = e.clientY - rect.top;
+    const b = this.box;
+    Object.assign(this.boxDiv.style, {
+      display: 'block', left: `${Math.min(b.x0, b.x1)}px`, top: `${Math.min(b.y0, b.y1)}px`,
+      width: `${Math.abs(b.x1 - b.x0)}px`, height: `${Math.abs(b.y1 - b.y0)}px`,
+    });
+  }
+
+  /// Selects the entries whose bounding box's centre the dragged box holds, in its view.
+  finishBoxSelect() {
+    const b = this.box;
+    this.cancelBoxSelect();
+    const [x0, x1] = [Math.min(b.x0, b.x1), Math.max(b.x0, b.x1)];
+    const [y0, y1] = [Math.min(b.y0, b.y1), Math.max(b.y0, b.y1)];
+    const camera = b.r.view.camera;
+    camera.updateMatrixWorld();
+    const picked = [];
+    for (const o of this.objects) {
+      if (o.kind === 'camera' || this.hidden.has(keyOf(o.target))) continue;
+      const p = this.worldBox(o).getCenter(new THREE.Vector3()).project(camera);
+      if (p.z > 1 || p.z < -1) continue;
+      const px = b.r.x + (p.x * 0.5 + 0.5) * b.r.w, py = b.r.y + (-p.y * 0.5 + 0.5) * b.r.h;
+      if (px >= x0 && px <= x1 && py >= y0 && py <= y1) picked.push({ kind: o.target.kind, id: o.target.id });
+    }
+    this.app.selectMany(picked, b.additive);
   }
 
   onPointerUp(e) {
     if (!this.down || e.button !== 0) return;
     const moved = Math.hypot(e.clientX - this.down.x, e.clientY - this.down.y);
     this.down = null;
+    if (this.box) {
+      if (moved > 4) { this.finishBoxSelect(); return; }
+      // A click, not a drag: select as any click does.
+      this.cancelBoxSelect();
+    }
     if (moved > 4 || this.gizmo.dragging || this.gizmo.axis) return;
     const rect = this.canvas.getBoundingClientRect();
     const x = e.clientX - rect.left, y = e.clientY - rect.top;
@@ -562,21 +929,28 @@ export class Viewport {
     const ndc = new THREE.Vector2(((x - r.x) / r.w) * 2 - 1, -((y - r.y) / r.h) * 2 + 1);
     const raycaster = new THREE.Raycaster();
     raycaster.setFromCamera(ndc, r.view.camera);
-    const hit = raycaster.intersectObjects(this.pickables, false)[0];
-    if (!hit) { this.app.select(null); return; }
-    const t = hit.object.userData.object.target;
-    this.app.select(t.kind === 'camera' ? { kind: 'camera' } : { kind: t.kind, index: t.index });
+    const hits = raycaster.intersectObjects(this.pickables.filter((m) => m.visible && !this.hidden.has(keyOf(m.userData.object.target))), false);
+    const additive = e.shiftKey || e.ctrlKey || e.metaKey;
+    if (!hits.length) { if (!additive) this.app.select(null); return; }
+    const t = hits[0].object.userData.object.target;
+    this.app.pick(t.kind === 'camera' ? { kind: 'camera' } : { kind: t.kind, id: t.id }, additive);
   }
 
   // Drawing ------------------------------------------------------------------------------------
 
   draw() {
+    this.draws += 1;
     const height = this.canvas.clientHeight;
     this.headlight.position.copy(this.perspective.position);
     for (const r of this.rects()) {
       const view = r.view;
       const rendered = this.rendered && view === this.views[3] && this.frameTexture;
-      for (const o of this.objects) if (o.kind === 'mesh' || o.kind === 'area') o.mesh.visible = !rendered;
+      for (const o of this.objects) {
+        const hidden = this.hidden.has(keyOf(o.target));
+        o.mesh.visible = !hidden && (!rendered || (o.kind !== 'mesh' && o.kind !== 'area'));
+      }
+      // The render has no grid drawn over it (the axes stay, small, at the origin).
+      for (const g of this.helpers.children) if (g.userData.grid) g.visible = !rendered;
       // Seen from (nearly) its own position, the camera's icon would fill the view.
       if (this.cameraIcon) {
         this.cameraIcon.visible = view !== this.views[3] || this.cameraIcon.position.distanceTo(this.perspective.position) > this.extent * 0.1;

@@ -29,6 +29,10 @@ pub struct ServeArgs {
     /// Longest side of the rendered preview in pixels, 16 to 4096
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(16..=4096))]
     preview_size: u32,
+    /// Access token (16 to 128 letters, digits, `-` or `_`) [default: a random one]; give the
+    /// one printed before, with the same --port, and pages left open reconnect after a restart
+    #[arg(long)]
+    token: Option<String>,
     /// Largest mesh import in MiB, 1 to 4096
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=4096))]
     max_upload_mib: u64,
@@ -55,6 +59,7 @@ pub fn run(args: ServeArgs) -> Result<()> {
     serve.backend = backend;
     serve.preview_size = args.preview_size;
     serve.max_upload_bytes = (args.max_upload_mib << 20) as usize;
+    serve.token = args.token.clone();
 
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -70,8 +75,30 @@ pub fn run(args: ServeArgs) -> Result<()> {
         note!("open this URL in a browser (it carries the access token; keep it private):");
         out!("    {}", server.url());
         note!("remote machine? tunnel first: ssh -L {0}:127.0.0.1:{0} <this host>, then open the URL on your own machine", server.addr.port());
-        note!("Ctrl-C stops the server (unsaved edits are lost)");
-        tokio::signal::ctrl_c().await.context("cannot wait for Ctrl-C")?;
+        note!(
+            "restart with --port {} --token {} and pages left open reconnect by themselves",
+            server.addr.port(),
+            server.token
+        );
+        note!("Ctrl-C stops the server (it asks again while edits are unsaved)");
+        // Unsaved edits: the first Ctrl-C warns, a second within 10 s stops.
+        loop {
+            tokio::signal::ctrl_c().await.context("cannot wait for Ctrl-C")?;
+            if !server.dirty() {
+                break;
+            }
+            note!(
+                "warning: {} has unsaved edits; save them in the page (Save or Ctrl+S), or press Ctrl-C again within 10 s to stop without them",
+                args.scene.display()
+            );
+            match tokio::time::timeout(std::time::Duration::from_secs(10), tokio::signal::ctrl_c()).await {
+                Ok(_) => {
+                    note!("stopping; the unsaved edits are dropped");
+                    break;
+                }
+                Err(_) => note!("still serving"),
+            }
+        }
         note!("stopping");
         server.shutdown().await;
         Ok::<(), anyhow::Error>(())

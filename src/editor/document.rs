@@ -48,6 +48,12 @@ pub enum Target {
     Light(usize),
     /// Entry of `[[instances]]`, from 0 in file order.
     Instance(usize),
+    /// The `[[shapes]]` entry of this stable id (`id` in the page's scene): it names the same
+    /// entry whatever is added or deleted before it, so one tab's delete never moves another
+    /// tab's edit onto the next entry.
+    ShapeId(u64),
+    LightId(u64),
+    InstanceId(u64),
     /// `[materials.<name>]`.
     Material(String),
     Camera,
@@ -62,6 +68,9 @@ impl Target {
             Target::Shape(i) => format!("shape {i}"),
             Target::Light(i) => format!("light {i}"),
             Target::Instance(i) => format!("instance {i}"),
+            Target::ShapeId(id) => format!("shape of id {id}"),
+            Target::LightId(id) => format!("light of id {id}"),
+            Target::InstanceId(id) => format!("instance of id {id}"),
             Target::Material(name) => format!("material \"{}\"", crate::limits::printable(name)),
             Target::Camera => "[camera]".into(),
             Target::Render => "[render]".into(),
@@ -115,9 +124,16 @@ pub enum Command {
         target: Target,
     },
     /// Appends a copy of a shape, light or instance (named "<name> copy"), or of a material
-    /// (as "<name>_copy"), to the file.
+    /// (as "<name>_copy"), to the file. `offset` moves the copy (its `transform`'s translate,
+    /// or a point or spot light's `position` and `point_at`), so it does not hide the original.
     Duplicate {
         target: Target,
+        #[serde(default)]
+        offset: Option<[f64; 3]>,
+    },
+    /// Several commands as one step (one undo): moving a multi-selection or a group.
+    Batch {
+        commands: Vec<Command>,
     },
     /// Points a material's colour or scalar `field` (`reflectance`, `roughness`, ...) at an
     /// image in the scene's folder: adds `[textures.<file's stem>]` of `type = "image"` (or
@@ -149,8 +165,15 @@ pub struct SceneDocument {
     text: String,
     scene: Scene,
     origins: SceneOrigins,
-    undo: Vec<String>,
-    redo: Vec<String>,
+    /// Each step: the text before it, its entries' ids, and who made it (`apply_by`).
+    undo: Vec<(String, Ids, u64)>,
+    redo: Vec<(String, Ids, u64)>,
+    /// Who makes the change under way (`apply_by`); 0 for anyone.
+    author: u64,
+    /// The stable id of each `[[shapes]]`, `[[lights]]` and `[[instances]]` entry.
+    ids: Ids,
+    /// The next id to give.
+    next_id: u64,
     /// The text last loaded or saved.
     saved: String,
     /// Counts every change of the text (edits, undo, redo).
@@ -159,6 +182,33 @@ pub struct SceneDocument {
 
 /// The result of parsing a candidate text.
 type Parsed = (Scene, SceneOrigins);
+
+/// Most commands in one `batch`.
+const MAX_BATCH: usize = 10_000;
+
+/// Stable ids of the entries of the three arrays of tables, in file order: an entry keeps its id
+/// through every edit (and undo and redo) until it is deleted; a new entry gets a new one.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Ids {
+    pub shapes: Vec<u64>,
+    pub lights: Vec<u64>,
+    pub instances: Vec<u64>,
+}
+
+/// The first entry id of a document: the time it was opened in milliseconds, times 1000, so the
+/// ids of a restarted server are not those of the one before (a page left open, reconnecting,
+/// then drops a selection whose entry it cannot know rather than moving it onto another);
+/// below 2^53, so JSON carries them exactly.
+fn first_id() -> u64 {
+    let ms = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.as_millis() as u64);
+    (ms % (1 << 42)) * 1000 + 1
+}
+
+/// The number of entries of each array of tables in `text`: shapes, lights, instances.
+fn entry_counts(text: &str) -> [usize; 3] {
+    let doc: DocumentMut = text.parse().unwrap_or_default();
+    ["shapes", "lights", "instances"].map(|k| doc.get(k).and_then(Item::as_array_of_tables).map_or(0, |a| a.len()))
+}
 
 impl SceneDocument {
     /// Loads `path`, which must parse as a scene reading no file outside its folder (the
@@ -203,7 +253,7 @@ impl SceneDocument {
             .canonicalize()
             .map_err(|e| EditError::Invalid(format!("cannot open the folder of {}: {e}", path.display())))?;
         let (scene, origins) = parse(&text, path, confined.then_some(folder.as_path()))?;
-        Ok(SceneDocument {
+        let mut doc = SceneDocument {
             path: path.to_path_buf(),
             folder,
             confined,
@@ -213,8 +263,13 @@ impl SceneDocument {
             origins,
             undo: Vec::new(),
             redo: Vec::new(),
+            author: 0,
+            ids: Ids::default(),
+            next_id: first_id(),
             revision: 0,
-        })
+        };
+        doc.ids = doc.fresh_ids();
+        Ok(doc)
     }
 
     pub fn path(&self) -> &Path {
@@ -245,6 +300,135 @@ impl SceneDocument {
     pub fn can_redo(&self) -> bool {
         !self.redo.is_empty()
     }
+    /// Who made the step that undo would undo (the editor's page session; 0: anyone, the API).
+    pub fn undo_author(&self) -> Option<u64> {
+        self.undo.last().map(|step| step.2)
+    }
+    /// Who made the step that redo would redo.
+    pub fn redo_author(&self) -> Option<u64> {
+        self.redo.last().map(|step| step.2)
+    }
+
+    /// `apply`, the step recorded as made by `author` (a page session), so that each page can
+    /// say whose edit Undo would undo: the undo stack is the scene's, shared by every page.
+    pub fn apply_by(&mut self, command: &Command, author: u64) -> Result<(), EditError> {
+        self.author = author;
+        let result = self.apply(command);
+        self.author = 0;
+        result
+    }
+    /// The stable ids of the entries (`Target::ShapeId` and its kin).
+    pub fn ids(&self) -> &Ids {
+        &self.ids
+    }
+
+    /// New ids for every entry of the current text.
+    fn fresh_ids(&mut self) -> Ids {
+        let [shapes, lights, instances] = entry_counts(&self.text);
+        let mut take = |n: usize| -> Vec<u64> {
+            let ids = (self.next_id..self.next_id + n as u64).collect();
+            self.next_id += n as u64;
+            ids
+        };
+        Ids { shapes: take(shapes), lights: take(lights), instances: take(instances) }
+    }
+
+    /// `target` with a stable id replaced by the entry's index now.
+    pub fn resolve(&self, target: &Target) -> Result<Target, EditError> {
+        let find = |ids: &[u64], id: &u64, what: &str| {
+            ids.iter().position(|x| x == id).ok_or_else(|| {
+                bad(format!("there is no {what} of id {id} any more (another page may have deleted it)"))
+            })
+        };
+        Ok(match target {
+            Target::ShapeId(id) => Target::Shape(find(&self.ids.shapes, id, "shape")?),
+            Target::LightId(id) => Target::Light(find(&self.ids.lights, id, "light")?),
+            Target::InstanceId(id) => Target::Instance(find(&self.ids.instances, id, "instance")?),
+            other => other.clone(),
+        })
+    }
+
+    /// `command` with its targets resolved (`resolve`).
+    fn resolve_command(&self, command: &Command) -> Result<Command, EditError> {
+        let mut command = command.clone();
+        match &mut command {
+            Command::SetTransform { target, .. }
+            | Command::Set { target, .. }
+            | Command::SetFields { target, .. }
+            | Command::Delete { target }
+            | Command::Duplicate { target, .. } => *target = self.resolve(target)?,
+            Command::Batch { commands } => {
+                if commands.len() > MAX_BATCH {
+                    return Err(bad(format!("a batch takes at most {MAX_BATCH} commands")));
+                }
+                for c in commands.iter_mut() {
+                    if matches!(c, Command::Batch { .. }) {
+                        return Err(bad("a batch cannot hold another batch"));
+                    }
+                    *c = self.resolve_command(c)?;
+                }
+            }
+            Command::SetTexture { .. } | Command::Add { .. } => {}
+        }
+        Ok(command)
+    }
+
+    /// The ids after `command` (resolved) is applied to entries with `ids`.
+    fn ids_after(&mut self, ids: &mut Ids, command: &Command) {
+        fn pick(ids: &mut Ids, which: usize) -> &mut Vec<u64> {
+            match which {
+                0 => &mut ids.shapes,
+                1 => &mut ids.lights,
+                _ => &mut ids.instances,
+            }
+        }
+        let which = |target: &Target| match target {
+            Target::Shape(i) => Some((0, *i)),
+            Target::Light(i) => Some((1, *i)),
+            Target::Instance(i) => Some((2, *i)),
+            _ => None,
+        };
+        match command {
+            Command::Delete { target } => {
+                if let Some((w, i)) = which(target) {
+                    let v = pick(ids, w);
+                    if i < v.len() {
+                        v.remove(i);
+                    }
+                }
+            }
+            Command::Duplicate { target, .. } => {
+                if let Some((w, _)) = which(target) {
+                    pick(ids, w).push(self.next_id);
+                    self.next_id += 1;
+                }
+            }
+            Command::Add { kind, .. } => {
+                let w = match kind {
+                    Kind::Shape => 0,
+                    Kind::Light => 1,
+                    Kind::Material => return,
+                };
+                pick(ids, w).push(self.next_id);
+                self.next_id += 1;
+            }
+            Command::Batch { commands } => {
+                for c in commands {
+                    self.ids_after(ids, c);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// Makes the last change and the one before it one step: undo goes back past both
+    /// (an import and the move that placed it).
+    pub fn merge_last_step(&mut self) {
+        if self.undo.len() >= 2 {
+            self.undo.pop();
+        }
+    }
+
     /// True when the text differs from the file as last loaded or saved.
     pub fn dirty(&self) -> bool {
         self.text != self.saved
@@ -252,22 +436,37 @@ impl SceneDocument {
 
     /// Applies `command`; on any error the document is unchanged.
     pub fn apply(&mut self, command: &Command) -> Result<(), EditError> {
+        let command = self.resolve_command(command)?;
         let mut doc: DocumentMut =
             self.text.parse().map_err(|e| EditError::Invalid(format!("the scene text no longer parses: {e}")))?;
-        edit(&mut doc, command)?;
+        edit(&mut doc, &command)?;
         let text = doc.to_string();
-        self.replace(text)
+        let next_id = self.next_id;
+        let mut ids = self.ids.clone();
+        self.ids_after(&mut ids, &command);
+        self.change_text(text, Some(ids)).inspect_err(|_| self.next_id = next_id)
     }
 
     /// Replaces the text with `text` after parsing it as a scene and checking the files it
-    /// names; pushes the old text on the undo stack.
+    /// names; pushes the old text on the undo stack. Entries keep their ids where the text has
+    /// as many of them as before; otherwise every entry gets a new id.
     pub fn replace(&mut self, text: String) -> Result<(), EditError> {
+        self.change_text(text, None)
+    }
+
+    fn change_text(&mut self, text: String, ids: Option<Ids>) -> Result<(), EditError> {
         if text == self.text {
             return Ok(());
         }
         let parsed = self.check(&text)?;
         let old = std::mem::replace(&mut self.text, text);
-        self.undo.push(old);
+        let ids = match ids {
+            Some(ids) => ids,
+            None if entry_counts(&old) == entry_counts(&self.text) => self.ids.clone(),
+            None => self.fresh_ids(),
+        };
+        let old_ids = std::mem::replace(&mut self.ids, ids);
+        self.undo.push((old, old_ids, self.author));
         if self.undo.len() > MAX_UNDO {
             self.undo.remove(0);
         }
@@ -277,20 +476,22 @@ impl SceneDocument {
     }
 
     pub fn undo(&mut self) -> Result<(), EditError> {
-        let text = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
+        let (text, ids, author) = self.undo.last().ok_or(EditError::NothingToUndo)?.clone();
         // The text was valid when it was current; files it names may have gone since.
         let parsed = parse(&text, &self.path, self.confinement())?;
         self.undo.pop();
-        self.redo.push(std::mem::replace(&mut self.text, text));
+        let old_ids = std::mem::replace(&mut self.ids, ids);
+        self.redo.push((std::mem::replace(&mut self.text, text), old_ids, author));
         self.install(parsed);
         Ok(())
     }
 
     pub fn redo(&mut self) -> Result<(), EditError> {
-        let text = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
+        let (text, ids, author) = self.redo.last().ok_or(EditError::NothingToRedo)?.clone();
         let parsed = parse(&text, &self.path, self.confinement())?;
         self.redo.pop();
-        self.undo.push(std::mem::replace(&mut self.text, text));
+        let old_ids = std::mem::replace(&mut self.ids, ids);
+        self.undo.push((std::mem::replace(&mut self.text, text), old_ids, author));
         self.install(parsed);
         Ok(())
     }
@@ -493,12 +694,22 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
                 Ok(())
             }
             Target::Camera => Err(bad("a scene needs its [camera]; it cannot be deleted")),
+            Target::ShapeId(_) | Target::LightId(_) | Target::InstanceId(_) => Err(unresolved()),
         },
-        Command::Duplicate { target } => match target {
+        Command::Batch { commands } => {
+            for c in commands {
+                edit(doc, c)?;
+            }
+            Ok(())
+        }
+        Command::Duplicate { target, offset } => match target {
             Target::Shape(_) | Target::Light(_) | Target::Instance(_) => {
                 let mut copy = fresh_copy(target_table(doc, target)?);
                 if let Some(name) = copy.get("name").and_then(|n| n.as_str()).map(str::to_string) {
                     set_key(&mut copy, "name", Value::from(format!("{name} copy")), false);
+                }
+                if let Some(offset) = offset {
+                    offset_copy(&mut copy, offset, target)?;
                 }
                 let (key, _) = array_of(doc, target)?;
                 doc[key].as_array_of_tables_mut().expect("checked by array_of").push(copy);
@@ -671,6 +882,43 @@ fn fresh_copy(table: &dyn TableLike) -> Table {
     copy
 }
 
+fn unresolved() -> EditError {
+    bad("internal: an entry id reached the edit unresolved")
+}
+
+/// Moves a duplicate by `offset`: a point or spot light's `position` (and `point_at`), anything
+/// else's `transform.translate` (a distant light stays where it is: it has no place).
+fn offset_copy(copy: &mut Table, offset: &[f64; 3], target: &Target) -> Result<(), EditError> {
+    let kind = copy.get("type").and_then(|t| t.as_str()).unwrap_or("").to_string();
+    let moved = |value: Option<&Item>| -> Option<[f64; 3]> {
+        let array = value?.as_array()?;
+        let n = |i: usize| array.get(i).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
+        Some([n(0)? + offset[0], n(1)? + offset[1], n(2)? + offset[2]])
+    };
+    if matches!(target, Target::Light(_)) && kind != "area" {
+        for field in ["position", "point_at"] {
+            if let Some(p) = moved(copy.get(field)) {
+                copy.insert(field, Item::Value(vector(&p)?));
+            }
+        }
+        return Ok(());
+    }
+    let mut transform = match copy.remove("transform") {
+        Some(Item::Value(Value::InlineTable(t))) => t,
+        Some(Item::Table(t)) => t.into_inline_table(),
+        Some(_) => return Err(bad(format!("the `transform` of {} is not a table", target.describe()))),
+        None => toml_edit::InlineTable::new(),
+    };
+    let translate = match transform.get("translate") {
+        Some(v) => moved(Some(&Item::Value(v.clone())))
+            .ok_or_else(|| bad(format!("the `transform.translate` of {} is not three numbers", target.describe())))?,
+        None => *offset,
+    };
+    transform.insert("translate", vector(&translate)?);
+    copy.insert("transform", Item::Value(Value::InlineTable(transform)));
+    Ok(())
+}
+
 /// The array of tables a shape, light or instance target lives in, and its length.
 fn array_of(doc: &DocumentMut, target: &Target) -> Result<(&'static str, usize), EditError> {
     let key = match target {
@@ -717,6 +965,7 @@ fn target_table<'d>(doc: &'d mut DocumentMut, target: &Target) -> Result<&'d mut
             }
             doc[key].as_table_like_mut().ok_or_else(|| bad(format!("`{key}` is not a table")))
         }
+        Target::ShapeId(_) | Target::LightId(_) | Target::InstanceId(_) => Err(unresolved()),
     }
 }
 

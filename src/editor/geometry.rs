@@ -3,16 +3,19 @@
 //! viewport and for picking). Format (documented in docs/editor.md):
 //!
 //! ```text
-//! { "revision", "file", "dirty", "can_undo", "can_redo", "warnings": [..],
+//! { "revision", "file", "dirty", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
 //!   "bounds": { "min": [x,y,z], "max": [x,y,z] },
 //!   "camera": { "fields": {..}, "position", "look_at", "up", "fov", "width", "height", "projection", "view_height" },
 //!   "render": {..}, "photons": {..} | null, "environment": {..} | null,
 //!   "materials": [ { "name", "fields": {..}, "color": [r,g,b], "emission": [r,g,b] } ],
-//!   "shapes": [ { "fields": {..}, "color", "emissive", "positions": [x,y,z, ...], "groups"? } ],
-//!   "lights": [ { "fields": {..}, "kind", "positions": [..], "position": [..]?, "direction": [..]? } ],
-//!   "instances": [ { "fields": {..}, "object", "copies", "drawn", "color", "emissive",
+//!   "shapes": [ { "id", "fields": {..}, "color", "emissive", "positions": [x,y,z, ...], "groups"? } ],
+//!   "lights": [ { "id", "fields": {..}, "kind", "positions": [..], "position": [..]?, "direction": [..]? } ],
+//!   "instances": [ { "id", "fields": {..}, "object", "copies", "drawn", "color", "emissive",
 //!                    "positions": [..], "groups": [..] } ] }
 //! ```
+//! `undo_author` and `redo_author` name the page session that made the step Undo or Redo would
+//! take (0: an API call; null: no step), so a page can say whether it is its own.
+//! `id` is the entry's stable id (`SceneDocument::ids`): the page selects and edits by it.
 //! `positions` lists three vertices per triangle; analytic shapes (spheres, discs, cones, tori,
 //! superellipsoids) come tessellated, an infinite plane as a square as large as the scene.
 //! `groups` (`{ "start", "count", "color" }`, in triangles) colours the runs of an entry made
@@ -141,6 +144,17 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         }
     }
 
+    // Each entry's stable id (`Target::ShapeId` and its kin), which the page selects by.
+    let with_ids = |mut entries: Vec<Json>, ids: &[u64]| -> Vec<Json> {
+        for (entry, id) in entries.iter_mut().zip(ids) {
+            entry["id"] = json!(id);
+        }
+        entries
+    };
+    let ids = doc.ids();
+    let (shapes, lights, instances) =
+        (with_ids(shapes, &ids.shapes), with_ids(lights, &ids.lights), with_ids(instances, &ids.instances));
+
     let camera = &scene.camera;
     let (projection, view_height) = match camera.projection {
         Projection::Perspective => ("perspective", None),
@@ -154,6 +168,8 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "dirty": doc.dirty(),
         "can_undo": doc.can_undo(),
         "can_redo": doc.can_redo(),
+        "undo_author": doc.undo_author(),
+        "redo_author": doc.redo_author(),
         "warnings": scene.warnings,
         "bounds": { "min": lo.to_array(), "max": hi.to_array() },
         "camera": {

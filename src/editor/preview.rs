@@ -124,6 +124,9 @@ enum Mode {
 struct State {
     scene: Option<Arc<Scene>>,
     view: Option<View>,
+    /// Whose view it is (the server's page session; 0: anyone's), named in each frame's
+    /// header so a page shows only the frames of its own view.
+    owner: u64,
     /// Bumped by every change of the scene or the view.
     generation: u64,
     /// When the current generation began, for the edit-to-frame latency.
@@ -164,6 +167,7 @@ impl Renderer {
             state: Mutex::new(State {
                 scene: None,
                 view: None,
+                owner: 0,
                 generation: 0,
                 changed_at: Instant::now(),
                 mode: Mode::Preview,
@@ -197,10 +201,20 @@ impl Renderer {
         self.change(|s| s.scene = Some(scene));
     }
 
-    /// Starts a new preview generation from `view`.
-    pub fn set_view(&self, view: View) -> Result<(), String> {
+    /// Starts a new preview generation from `view`, for the page `owner`; the same view of the
+    /// same page again changes nothing (the preview goes on refining).
+    pub fn set_view(&self, view: View, owner: u64) -> Result<(), String> {
         view.check()?;
-        self.change(|s| s.view = Some(view));
+        {
+            let s = self.shared.state.lock().expect("renderer state lock");
+            if s.view == Some(view) && s.owner == owner {
+                return Ok(());
+            }
+        }
+        self.change(|s| {
+            s.view = Some(view);
+            s.owner = owner;
+        });
         Ok(())
     }
 
@@ -468,6 +482,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         let changed_at = s.changed_at;
         let scene = s.scene.clone().expect("checked above");
         let view = s.view.expect("checked above");
+        let owner = s.owner;
         let preview_size = s.preview_size;
         drop(s);
         if preview.generation != generation {
@@ -484,6 +499,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                 let header = json!({
                     "type": "frame",
                     "kind": "preview",
+                    "owner": owner,
                     "generation": generation,
                     "step": step,
                     "passes": preview.accumulator.as_ref().map_or(0, |a| a.passes),

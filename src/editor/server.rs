@@ -8,18 +8,24 @@
 //! - `GET /api/scene.glb`: the scene's geometry as glTF 2.0 binary (`gltf.rs`, a download);
 //! - `GET /api/images`: the image files in the scene's folder (`{"images": ["textures/a.png"]}`),
 //!   for the texture picker;
-//! - `POST /api/import?name=F.obj&material=M`: the body is written to F.obj in the scene's folder
-//!   and a mesh shape using it is added;
+//! - `POST /api/import?name=F.glb&material=M&at=x,y,z`: the body is written to F.glb in the
+//!   scene's folder and a mesh shape using it is added (any model format the renderer reads:
+//!   OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt), with `material` (else the file's own materials) and
+//!   its bounding box centred on `at` (one undo step);
 //! - `POST /api/render` (`FinalRequest`), `/api/render/cancel`, `GET /api/render/status`,
 //!   `GET /api/render/image.exr`, `/api/render/image.png`: the final render;
 //! - `GET /ws`: the WebSocket; the server sends the scene (text, `{"type": "scene", ...}`), the
 //!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
 //!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`,
 //!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
-//!   `{"type": "reply", "id", "ok", "error"}`).
+//!   `{"type": "reply", "id", "ok", "error"}`); after the scene and the final render's status
+//!   it sends `{"type": "hello", "session"}`, the page's session number. Each page's view is its own: the renderer
+//!   renders the view last sent (by whichever page), and a page gets only the preview frames of
+//!   its own view (the header's `owner`), so no tab shows another's render.
 
 use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use axum::body::Bytes;
@@ -82,7 +88,7 @@ pub enum ServeError {
     Bind { addr: SocketAddr, cause: std::io::Error },
     #[error("renderer: {0}")]
     Renderer(String),
-    #[error("cannot make an access token: {0}")]
+    #[error("access token: {0}")]
     Token(String),
 }
 
@@ -96,6 +102,10 @@ struct App {
     /// Scene updates and replies that every page gets.
     updates: broadcast::Sender<Arc<String>>,
     max_upload_bytes: usize,
+    /// The next page session's number (the owner of the views it sends).
+    next_session: AtomicU64,
+    /// Set when the server stops: every page's WebSocket closes, so the pages know.
+    closing: tokio::sync::watch::Sender<bool>,
 }
 
 /// A running editor server.
@@ -112,7 +122,7 @@ impl Server {
     pub async fn start(options: ServeOptions) -> Result<Server, ServeError> {
         let doc = SceneDocument::load(&options.scene).map_err(|e| ServeError::Scene(e.to_string()))?;
         let token = match options.token {
-            Some(t) => t,
+            Some(t) => check_token(t)?,
             None => random_token()?,
         };
         let backend = options.backend.clone();
@@ -135,6 +145,8 @@ impl Server {
             scene_json: Mutex::new(json),
             updates,
             max_upload_bytes: options.max_upload_bytes,
+            next_session: AtomicU64::new(1),
+            closing: tokio::sync::watch::channel(false).0,
         });
         let router = router(app.clone());
         let (tx, rx) = tokio::sync::oneshot::channel::<()>();
@@ -162,6 +174,11 @@ impl Server {
         self.app.doc.lock().expect("document lock").text().to_string()
     }
 
+    /// True when the scene has edits that are not saved (Ctrl-C warns about them).
+    pub fn dirty(&self) -> bool {
+        self.app.doc.lock().expect("document lock").dirty()
+    }
+
     /// The renderer's device, e.g. "cpu (2 threads)".
     pub fn device(&self) -> String {
         self.app.renderer.device.clone()
@@ -170,17 +187,35 @@ impl Server {
     /// Stops listening and waits for the server task; the renderer stops when the last
     /// reference to it goes.
     pub async fn shutdown(mut self) {
+        // Close the pages' WebSockets first (a graceful shutdown waits for open connections).
+        let _ = self.app.closing.send(true);
         if let Some(tx) = self.shutdown.take() {
             let _ = tx.send(());
         }
-        if let Some(task) = self.task.take() {
-            // Open WebSockets keep a graceful shutdown waiting: give them a moment, then go.
-            let _ = tokio::time::timeout(std::time::Duration::from_secs(2), task).await;
+        if let Some(mut task) = self.task.take() {
+            // Give the connections under way a moment, then go.
+            if tokio::time::timeout(std::time::Duration::from_secs(2), &mut task).await.is_err() {
+                task.abort();
+            }
         }
         let app = self.app.clone();
         drop(self);
         // The renderer's thread joins in Drop; keep that off the async threads.
         let _ = tokio::task::spawn_blocking(move || drop(app)).await;
+    }
+}
+
+/// A token given on the command line: 16 to 128 of `A-Z a-z 0-9 - _` (it travels in URLs and
+/// cookies as is, and a short one could be guessed).
+fn check_token(token: String) -> Result<String, ServeError> {
+    let ok =
+        (16..=128).contains(&token.len()) && token.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-' || b == b'_');
+    if ok {
+        Ok(token)
+    } else {
+        Err(ServeError::Token(
+            "--token takes 16 to 128 letters, digits, '-' or '_' (leave it out for a random one)".into(),
+        ))
     }
 }
 
@@ -365,12 +400,12 @@ enum Change {
 
 /// Applies a change on a blocking thread (parsing a scene may read meshes), then sends the new
 /// scene to every page and to the renderer. Returns the new revision.
-async fn change(app: &Arc<App>, change: Change) -> Result<u64, String> {
+async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, String> {
     let app2 = app.clone();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
         let result = match &change {
-            Change::Edit(command) => doc.apply(command),
+            Change::Edit(command) => doc.apply_by(command, author),
             Change::Undo => doc.undo(),
             Change::Redo => doc.redo(),
         };
@@ -402,15 +437,15 @@ async fn post_edit(State(app): State<Arc<App>>, body: Bytes) -> Response {
         Ok(c) => c,
         Err(e) => return error(StatusCode::BAD_REQUEST, &format!("malformed edit: {e}")),
     };
-    reply(change(&app, Change::Edit(command)).await)
+    reply(change(&app, Change::Edit(command), 0).await)
 }
 
 async fn post_undo(State(app): State<Arc<App>>) -> Response {
-    reply(change(&app, Change::Undo).await)
+    reply(change(&app, Change::Undo, 0).await)
 }
 
 async fn post_redo(State(app): State<Arc<App>>) -> Response {
-    reply(change(&app, Change::Redo).await)
+    reply(change(&app, Change::Redo, 0).await)
 }
 
 async fn save(app: &Arc<App>) -> Result<u64, String> {
@@ -434,11 +469,16 @@ async fn post_save(State(app): State<Arc<App>>) -> Response {
 #[derive(Deserialize)]
 struct ImportQuery {
     name: String,
-    material: String,
+    material: Option<String>,
+    /// `x,y,z`: where the model's bounding box centre goes.
+    at: Option<String>,
 }
 
+/// The model formats the renderer reads (`scene::model::Format`), by extension.
+const IMPORT_EXTENSIONS: [&str; 7] = ["obj", "gltf", "glb", "ply", "3ds", "ifs", "bpt"];
+
 /// A file name for the scene's folder: letters, digits, `.`, `_`, `-`; no leading dot, no
-/// path; an `.obj` extension.
+/// path; the extension of a model format the renderer reads.
 fn check_import_name(name: &str) -> Result<(), String> {
     let ok_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || "._-".contains(c));
     if name.is_empty() || name.len() > 100 || !ok_chars || name.starts_with('.') {
@@ -447,21 +487,39 @@ fn check_import_name(name: &str) -> Result<(), String> {
             crate::limits::printable(name)
         ));
     }
-    if !name.to_ascii_lowercase().ends_with(".obj") {
-        return Err("only OBJ meshes (.obj) can be imported".into());
+    let ext = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase()).unwrap_or_default();
+    if !IMPORT_EXTENSIONS.contains(&ext.as_str()) {
+        return Err(format!(
+            "\"{}\" is not a model the renderer reads; import one of {}",
+            crate::limits::printable(name),
+            IMPORT_EXTENSIONS.iter().map(|e| format!(".{e}")).collect::<Vec<_>>().join(", ")
+        ));
     }
     Ok(())
+}
+
+/// `x,y,z` as three finite numbers.
+fn parse_point(text: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<f64> = text.split(',').filter_map(|p| p.trim().parse().ok()).collect();
+    match parts[..] {
+        [x, y, z] if parts.iter().all(|v| v.is_finite() && v.abs() < 1e9) => Ok([x, y, z]),
+        _ => Err(format!("`at` takes three finite numbers x,y,z, not \"{}\"", crate::limits::printable(text))),
+    }
 }
 
 async fn post_import(State(app): State<Arc<App>>, Query(query): Query<ImportQuery>, body: Bytes) -> Response {
     if let Err(message) = check_import_name(&query.name) {
         return error(StatusCode::BAD_REQUEST, &message);
     }
+    let at = match query.at.as_deref().map(parse_point).transpose() {
+        Ok(at) => at,
+        Err(message) => return error(StatusCode::BAD_REQUEST, &message),
+    };
     let app2 = app.clone();
     let result = tokio::task::spawn_blocking(move || -> Result<(u64, String), String> {
         let mut doc = app2.doc.lock().expect("document lock");
         // A name not taken yet: foo.obj, foo-2.obj, ...
-        let (stem, ext) = query.name.rsplit_once('.').expect("checked: ends in .obj");
+        let (stem, ext) = query.name.rsplit_once('.').expect("checked: has a model extension");
         let mut name = query.name.clone();
         let mut n = 2;
         while std::fs::symlink_metadata(doc.folder().join(&name)).is_ok() {
@@ -474,13 +532,39 @@ async fn post_import(State(app): State<Arc<App>>, Query(query): Query<ImportQuer
         let mut table = serde_json::Map::new();
         table.insert("name".into(), json!(stem));
         table.insert("type".into(), json!("mesh"));
-        table.insert("material".into(), json!(query.material));
+        if let Some(material) = &query.material {
+            table.insert("material".into(), json!(material));
+        }
         table.insert("file".into(), json!(name));
         let command = Command::Add { kind: super::document::Kind::Shape, table, name: None };
         if let Err(e) = doc.apply(&command) {
             // Nothing refers to the file: take it away again.
             let _ = std::fs::remove_file(&path);
             return Err(e.to_string());
+        }
+        // Centre it on `at`, in the same undo step as the import.
+        let index = doc.origins().shapes.len().saturating_sub(1);
+        let range = doc.origins().shapes.last().cloned().unwrap_or(0..0);
+        let bounds = doc
+            .scene()
+            .shapes
+            .get(range)
+            .unwrap_or(&[])
+            .iter()
+            .map(|s| s.geometry.bounds())
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
+        if let (Some(at), Some((lo, hi))) = (at, bounds) {
+            let centre = (lo + hi) * 0.5;
+            let translate = [at[0] - centre.x as f64, at[1] - centre.y as f64, at[2] - centre.z as f64];
+            let place = Command::SetTransform {
+                target: super::document::Target::Shape(index),
+                translate: Some(translate),
+                rotate: None,
+                scale: None,
+            };
+            if doc.apply(&place).is_ok() {
+                doc.merge_last_step();
+            }
         }
         publish(&app2, &doc);
         Ok((doc.revision(), name))
@@ -569,6 +653,11 @@ enum PageMessage {
 }
 
 async fn session(app: Arc<App>, mut socket: WebSocket) {
+    let me = app.next_session.fetch_add(1, Ordering::Relaxed);
+    let mut closing = app.closing.subscribe();
+    if *closing.borrow() {
+        return;
+    }
     let mut updates = app.updates.subscribe();
     let mut events = app.renderer.subscribe();
     let first = app.scene_json.lock().expect("scene json lock").clone();
@@ -579,10 +668,19 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     if socket.send(Message::Text(status.to_string().into())).await.is_err() {
         return;
     }
+    // The page's own session number: its frames' `owner`, its steps' `undo_author`.
+    let hello = json!({ "type": "hello", "session": me });
+    if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
+        return;
+    }
     loop {
         let outgoing = tokio::select! {
+            _ = closing.changed() => {
+                let _ = socket.send(Message::Close(None)).await;
+                return;
+            }
             incoming = socket.recv() => match incoming {
-                Some(Ok(Message::Text(text))) => handle_page_message(&app, text.as_str()).await,
+                Some(Ok(Message::Text(text))) => handle_page_message(&app, text.as_str(), me).await,
                 Some(Ok(Message::Binary(_))) => Some(json!({ "type": "error", "message": "the editor takes text messages only" }).to_string()),
                 Some(Ok(_)) => None,
                 Some(Err(_)) | None => return,
@@ -595,6 +693,14 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
             },
             event = events.recv() => match event {
                 Ok(Event::Message(value)) => Some(value.to_string()),
+                // Another page's view: not this page's render.
+                Ok(Event::Frame { header, .. })
+                    if header["kind"] == "preview"
+                        && !matches!(header["owner"].as_u64(), None | Some(0))
+                        && header["owner"].as_u64() != Some(me) =>
+                {
+                    None
+                }
                 Ok(Event::Frame { header, png }) => {
                     let header = header.to_string();
                     let mut bytes = Vec::with_capacity(4 + header.len() + png.len());
@@ -620,18 +726,22 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
 }
 
 /// Handles one message of a page; returns the reply to send, if any.
-async fn handle_page_message(app: &Arc<App>, text: &str) -> Option<String> {
+async fn handle_page_message(app: &Arc<App>, text: &str, session: u64) -> Option<String> {
     let message: PageMessage = match serde_json::from_str(text) {
         Ok(m) => m,
         Err(e) => return Some(json!({ "type": "error", "message": format!("malformed message: {e}") }).to_string()),
     };
     let (id, result) = match message {
         PageMessage::View { view } => {
-            return app.renderer.set_view(view).err().map(|m| json!({ "type": "error", "message": m }).to_string());
+            return app
+                .renderer
+                .set_view(view, session)
+                .err()
+                .map(|m| json!({ "type": "error", "message": m }).to_string());
         }
-        PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command)).await),
-        PageMessage::Undo { id } => (id, change(app, Change::Undo).await),
-        PageMessage::Redo { id } => (id, change(app, Change::Redo).await),
+        PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command), session).await),
+        PageMessage::Undo { id } => (id, change(app, Change::Undo, session).await),
+        PageMessage::Redo { id } => (id, change(app, Change::Redo, session).await),
         PageMessage::Save { id } => (id, save(app).await),
     };
     let reply: Json = match result {
@@ -649,7 +759,12 @@ mod tests {
     fn import_names_stay_in_the_folder() {
         assert!(check_import_name("bunny.obj").is_ok());
         assert!(check_import_name("My_Mesh-2.OBJ").is_ok());
-        for bad in ["../x.obj", "a/b.obj", ".hidden.obj", "x.txt", "", "x\u{0}.obj", "/etc/x.obj", "..obj"] {
+        for good in ["a.glb", "a.gltf", "a.ply", "a.3DS", "a.ifs", "a.bpt"] {
+            assert!(check_import_name(good).is_ok(), "{good}");
+        }
+        for bad in
+            ["../x.obj", "a/b.obj", ".hidden.obj", "x.txt", "", "x\u{0}.obj", "/etc/x.obj", "..obj", "x.png", "obj"]
+        {
             assert!(check_import_name(bad).is_err(), "{bad:?}");
         }
     }

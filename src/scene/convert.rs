@@ -306,6 +306,32 @@ impl Builder<'_> {
         Ok(())
     }
 
+    /// Checks an entry's `group` (docs/scene-format.md, "Groups"): a name of 1 to 64 characters
+    /// with no control characters, on a top-level `[[shapes]]`, `[[lights]]` or `[[instances]]`
+    /// entry only. Groups are the editor's folders: the scene is already flat, so the renderer
+    /// reads nothing more from them.
+    fn group(&self, group: &Option<Spanned<String>>, object: &str, top_level: bool) -> Result<()> {
+        let Some(group) = group else { return Ok(()) };
+        if !top_level {
+            return Err(self.invalid(
+                &group.span(),
+                object,
+                "`group` applies only to top-level [[shapes]], [[lights]] and [[instances]] entries, not to an \
+                 object's shapes or a csg's children; remove it"
+                    .to_string(),
+            ));
+        }
+        let name = group.get_ref();
+        if name.is_empty() || name.chars().count() > 64 || name.chars().any(char::is_control) {
+            return Err(self.invalid(
+                &group.span(),
+                object,
+                "a `group` is a name of 1 to 64 characters with no control characters".to_string(),
+            ));
+        }
+        Ok(())
+    }
+
     /// A `type` (or `shape`) value that must be one of `valid`.
     fn one_of<'v>(&self, value: &Spanned<String>, object: &str, field: &str, valid: &[&'v str]) -> Result<&'v str> {
         let given = value.get_ref().as_str();
@@ -1845,6 +1871,7 @@ impl Builder<'_> {
         let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
         let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;
         self.shape_fields(kind, s, &object)?;
+        self.group(&s.group, &object, self.context.is_empty())?;
         if kind == "csg" {
             return self.csg(def, &object);
         }
@@ -2838,6 +2865,7 @@ impl Builder<'_> {
         let table = def.span();
         let kind_def = self.require(&l.r#type, &table, &object, "type", "type = \"area\"")?;
         let kind = self.one_of(kind_def, &object, "type", LIGHT_TYPES)?;
+        self.group(&l.group, &object, true)?;
         let present = [
             ("name", span_of(&l.name)),
             ("type", span_of(&l.r#type)),

@@ -50,6 +50,8 @@ pub(crate) struct ObjectDef {
 #[serde(deny_unknown_fields)]
 pub(crate) struct InstanceDef {
     pub name: Option<Spanned<String>>,
+    /// The editor's group (a folder of entries moved as one); the renderer ignores it.
+    pub group: Option<Spanned<String>>,
     pub object: Option<Spanned<String>>,
     pub transform: Option<Spanned<TransformDef>>,
     pub material: Option<Spanned<String>>,
@@ -272,6 +274,8 @@ impl TextureDef {
 #[serde(deny_unknown_fields)]
 pub(crate) struct ShapeDef {
     pub name: Option<Spanned<String>>,
+    /// The editor's group (top-level `[[shapes]]` only); the renderer ignores it.
+    pub group: Option<Spanned<String>>,
     pub r#type: Option<Spanned<String>>,
     pub material: Option<Spanned<String>>,
     pub vertices: Option<Spanned<Vec<Vec3Def>>>,
@@ -315,6 +319,8 @@ pub(crate) struct ShapeDef {
 #[serde(deny_unknown_fields)]
 pub(crate) struct LightDef {
     pub name: Option<Spanned<String>>,
+    /// The editor's group; the renderer ignores it.
+    pub group: Option<Spanned<String>>,
     pub r#type: Option<Spanned<String>>,
     pub shape: Option<Spanned<String>>,
     pub vertices: Option<Spanned<Vec<Vec3Def>>>,

@@ -109,6 +109,7 @@ impl Builder<'_> {
             let kind_def = self.require(&c.r#type, &child.span(), &child_object, "type", "type = \"sphere\"")?;
             let kind = self.one_of(kind_def, &child_object, "type", SHAPE_TYPES)?;
             self.shape_fields(kind, c, &child_object)?;
+            self.group(&c.group, &child_object, false)?;
             if kind == "csg" {
                 nodes.push(self.csg_node(child, &child_object, depth + 1, default, leaves)?);
                 continue;

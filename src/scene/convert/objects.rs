@@ -37,6 +37,7 @@ impl Builder<'_> {
         let mut placed = vec![false; objects.len()];
         for (index, def) in placements.iter().enumerate() {
             let what = object_name("instance", index, def.get_ref().name.as_ref().map(|n| n.get_ref().as_str()));
+            self.group(&def.get_ref().group, &what, true)?;
             let first = instances.len();
             let mut place = Placement {
                 entries: &entries,
@@ -70,6 +71,9 @@ impl Builder<'_> {
                  other objects"
                     .to_string(),
             ));
+        }
+        for (index, placement) in o.instances.iter().enumerate() {
+            self.group(&placement.get_ref().group, &format!("{object} instance {index}"), false)?;
         }
         let outer = std::mem::take(&mut self.shapes);
         let context = std::mem::replace(&mut self.context, format!("{object} "));
