@@ -71,6 +71,10 @@ pub enum ObjKind {
     Triangles {
         tris: std::rc::Rc<Vec<[DVec3; 3]>>,
     },
+    /// A bicubic_patch: 16 control points, rows of constant v (Photonix's own bicubic_patch).
+    Patch {
+        points: Box<[DVec3; 16]>,
+    },
     Csg {
         op: CsgOp,
         children: Vec<Obj>,

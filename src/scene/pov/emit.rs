@@ -30,6 +30,23 @@ fn vec3(v: DVec3) -> T {
     T::Array(vec![num(v.x), num(v.y), num(v.z)])
 }
 
+/// A vertex of a tessellated shape to 7 significant digits (the renderer holds f32), which
+/// keeps the TOML of a shape of thousands of triangles short.
+/// Whether the TOML loader would find a triangle of no area: its own test (convert.rs,
+/// `is_degenerate`) in f32, with a margin of 2.
+fn too_thin(v: &[DVec3]) -> bool {
+    let f = |p: DVec3| p.as_vec3();
+    let (e0, e1, e2) = (f(v[1]) - f(v[0]), f(v[2]) - f(v[0]), f(v[2]) - f(v[1]));
+    let longest = e0.length_squared().max(e1.length_squared()).max(e2.length_squared());
+    let twice_area = e0.cross(e1).length();
+    !(twice_area.is_finite() && twice_area > 2e-7 * longest)
+}
+
+fn short3(v: DVec3) -> DVec3 {
+    let short = |x: f64| format!("{x:.6e}").parse::<f64>().unwrap_or(x);
+    DVec3::new(short(v.x), short(v.y), short(v.z))
+}
+
 fn rgb(c: [f64; 3]) -> T {
     T::Array(c.iter().map(|x| num(*x)).collect())
 }
@@ -100,6 +117,8 @@ struct Emitter<'a> {
     lights: Vec<(Table, Pos)>,
     skipped_triangles: usize,
     warnings: Vec<String>,
+    /// Newlines in `text`.
+    newlines: usize,
 }
 
 /// The TOML text and, for each entry, its first line and the `.pov` position it came from.
@@ -118,8 +137,10 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         lights: Vec::new(),
         skipped_triangles: 0,
         warnings: Vec::new(),
+        newlines: 0,
     };
     e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
+    e.newlines = 1;
     e.camera(&camera, options)?;
     if let Some(depth) = scene.max_trace_level {
         let mut r = Table::new();
@@ -168,10 +189,14 @@ impl Emitter<'_> {
         doc.insert(key.into(), value);
         let text = toml::to_string(&doc).map_err(|e| PovError::at(pos, format!("cannot write this as TOML: {e}")))?;
         self.text.push('\n');
-        let line = self.text.matches('\n').count() + 1;
+        // Lines so far, counted as the text grows (counting the whole text each time made a
+        // scene of many triangles quadratic).
+        self.newlines += 1;
+        let line = self.newlines + 1;
         self.origins.push((line, pos));
         let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
         self.text.push_str(&format!("# {}:{}:{}\n", crate::limits::printable_message(&path), pos.line, pos.col));
+        self.newlines += 1 + text.matches('\n').count();
         self.text.push_str(&text);
         Ok(())
     }
@@ -231,8 +256,8 @@ impl Emitter<'_> {
                 let material = self.material(tex, int, o.pos, true)?;
                 let m = MIRROR * o.xform;
                 for t in tris.iter() {
-                    let v: Vec<DVec3> = t.iter().map(|p| m.transform_point3(*p)).collect();
-                    if (v[1] - v[0]).cross(v[2] - v[0]).length() <= 1e-12 * (v[1] - v[0]).length().max(1e-300) {
+                    let v: Vec<DVec3> = t.iter().map(|p| short3(m.transform_point3(*p))).collect();
+                    if too_thin(&v) {
                         self.skipped_triangles += 1;
                         continue;
                     }
@@ -243,6 +268,16 @@ impl Emitter<'_> {
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }
                 Ok(())
+            }
+            ObjKind::Patch { points } => {
+                // A Bezier patch maps to one under any affine map: its control points are baked.
+                let material = self.material(tex, int, o.pos, true)?;
+                let m = MIRROR * o.xform;
+                let mut s = Table::new();
+                s.insert("type".into(), T::String("bicubic_patch".into()));
+                s.insert("material".into(), T::String(material));
+                s.insert("points".into(), T::Array(points.iter().map(|p| vec3(m.transform_point3(*p))).collect()));
+                self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)
             }
             _ => {
                 let shape = self.shape(o, tex, int)?;
@@ -373,10 +408,10 @@ impl Emitter<'_> {
                     let cint = c.interior.as_ref().or(int);
                     match &c.kind {
                         ObjKind::Light(l) => self.light(l)?,
-                        ObjKind::Triangles { .. } => {
+                        ObjKind::Triangles { .. } | ObjKind::Patch { .. } => {
                             return Err(PovError::at(
                                 c.pos,
-                                "a triangle or mesh inside intersection, difference or merge is not supported yet"
+                                "a triangle, mesh or tessellated shape (lathe, sor, prism, polygon, text, bicubic_patch) inside intersection, difference or merge is not supported yet"
                                     .into(),
                             ))
                         }
@@ -389,7 +424,9 @@ impl Emitter<'_> {
             ObjKind::Unsupported(kind) => {
                 return Err(PovError::at(o.pos, format!("{kind} is not supported yet")));
             }
-            ObjKind::Triangles { .. } | ObjKind::Light(_) => unreachable!("handled by `object`"),
+            ObjKind::Triangles { .. } | ObjKind::Patch { .. } | ObjKind::Light(_) => {
+                unreachable!("handled by `object`")
+            }
         }
         // An infinite plane cannot glow (its power would be infinite): POV-Ray's ambient-lit
         // sky planes keep their colour and lose the glow.

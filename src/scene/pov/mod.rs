@@ -12,6 +12,8 @@ mod emit;
 mod lexer;
 mod objects;
 mod parser;
+mod tessellate;
+mod ttf;
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -8,10 +8,12 @@ use super::ast::{
 };
 use super::lexer::Tok;
 use super::parser::{describe, rotation, Parser, PovArray, Result, Value, MAX_ARRAY};
-use super::Pos;
+use super::tessellate::{self, FillRule, Spline, Tri};
+use super::ttf;
+use super::{Pos, PovError};
 
 /// Objects POV-Ray has and this front-end does not read yet.
-const UNSUPPORTED_OBJECTS: [&str; 20] = [
+const UNSUPPORTED_OBJECTS: &[&str] = &[
     "isosurface",
     "parametric",
     "julia_fractal",
@@ -20,21 +22,14 @@ const UNSUPPORTED_OBJECTS: [&str; 20] = [
     "cubic",
     "quartic",
     "quadric",
-    "lathe",
-    "sor",
-    "prism",
     "height_field",
     "blob",
-    "text",
-    "bicubic_patch",
-    "polygon",
-    "mesh2",
     "sphere_sweep",
     "ovus",
     "lemon",
 ];
 
-const OBJECTS: [&str; 16] = [
+const OBJECTS: &[&str] = &[
     "sphere",
     "box",
     "cylinder",
@@ -46,6 +41,13 @@ const OBJECTS: [&str; 16] = [
     "triangle",
     "smooth_triangle",
     "mesh",
+    "mesh2",
+    "lathe",
+    "sor",
+    "prism",
+    "polygon",
+    "bicubic_patch",
+    "text",
     "union",
     "merge",
     "intersection",
@@ -273,7 +275,8 @@ impl Parser {
             // Read past it: the standard includes declare shapes (quadrics, text) that scenes
             // rarely place; placing one is the error (`emit`).
             self.skip_block()?;
-            let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
+            let kind =
+                ObjKind::Unsupported(UNSUPPORTED_OBJECTS.iter().find(|k| **k == kind).copied().unwrap_or("object"));
             return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos });
         }
         if kind == "light_source" {
@@ -350,6 +353,22 @@ impl Parser {
             }
             "smooth_triangle" => ObjKind::Triangles { tris: std::rc::Rc::new(vec![self.smooth_triangle()?]) },
             "mesh" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh(pos)?) },
+            "mesh2" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh2(pos)?) },
+            "lathe" | "sor" | "prism" | "polygon" | "text" => {
+                let tris = self.tessellated(kind, pos, &mut open)?;
+                if tris.len() > tessellate::MAX_TRIANGLES {
+                    return self.err(
+                        pos,
+                        format!(
+                            "this {kind} makes {} triangles; at most {} are taken",
+                            tris.len(),
+                            tessellate::MAX_TRIANGLES
+                        ),
+                    );
+                }
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris) }
+            }
+            "bicubic_patch" => ObjKind::Patch { points: Box::new(self.bicubic_patch(pos)?) },
             "union" | "merge" | "intersection" | "difference" => {
                 let op = match kind {
                     "union" => CsgOp::Union,
@@ -440,6 +459,290 @@ impl Parser {
             return self.err(pos, "this mesh has no triangles".into());
         }
         Ok(tris)
+    }
+
+    /// A count before a list of points: a whole number from `min` to `max`.
+    fn count(&mut self, what: &str, min: usize, max: usize) -> Result<usize> {
+        let pos = self.here();
+        let n = self.float()?;
+        if !(n >= min as f64 && n <= max as f64) {
+            return self.err(pos, format!("{what} must be {min} to {max}, not {n}"));
+        }
+        Ok(n as usize)
+    }
+
+    fn points2(&mut self, n: usize) -> Result<Vec<glam::DVec2>> {
+        let mut v = Vec::with_capacity(n);
+        for _ in 0..n {
+            self.accept_sym(",")?;
+            let p = self.vector(2)?;
+            v.push(glam::DVec2::new(p[0], p[1]));
+        }
+        Ok(v)
+    }
+
+    fn spline_word(&mut self) -> Result<Option<Spline>> {
+        let s = match self.peek_word()?.as_deref() {
+            Some("linear_spline") => Spline::Linear,
+            Some("quadratic_spline") => Spline::Quadratic,
+            Some("cubic_spline") => Spline::Cubic,
+            Some("bezier_spline") => Spline::Bezier,
+            _ => return Ok(None),
+        };
+        self.next()?;
+        Ok(Some(s))
+    }
+
+    /// `open` and `sturm` right after a shape's points (`open` is also read with the modifiers).
+    fn open_sturm(&mut self, open: &mut bool) -> Result<()> {
+        loop {
+            if self.accept_word("open")? {
+                *open = true;
+            } else if !self.accept_word("sturm")? {
+                return Ok(());
+            }
+        }
+    }
+
+    /// lathe, sor, prism, polygon and text, tessellated (`tessellate.rs`; docs/pov-ray.md gives
+    /// the tolerance), in the shape's own coordinates.
+    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<Vec<Tri>> {
+        const MAX_POINTS: usize = 1 << 20;
+        match kind {
+            "lathe" => {
+                let spline = self.spline_word()?.unwrap_or(Spline::Linear);
+                let n = self.count("a lathe's number of points", 2, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                let ok = match spline {
+                    Spline::Linear => n >= 2,
+                    Spline::Quadratic => n >= 3,
+                    Spline::Cubic => n >= 4,
+                    Spline::Bezier => n % 4 == 0,
+                };
+                if !ok {
+                    return self.err(
+                        pos,
+                        format!(
+                            "a lathe with {} needs {}, not {n} points",
+                            spline.name(),
+                            match spline {
+                                Spline::Linear => "at least 2",
+                                Spline::Quadratic => "at least 3",
+                                Spline::Cubic => "at least 4",
+                                Spline::Bezier => "four per segment",
+                            }
+                        ),
+                    );
+                }
+                self.open_sturm(open)?;
+                Ok(tessellate::lathe(spline, &p))
+            }
+            "sor" => {
+                let n = self.count("a sor's number of points", 4, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                if p.windows(2).skip(1).take(n.saturating_sub(3)).any(|w| w[1].y <= w[0].y) {
+                    return self.err(pos, "a sor's points must rise: each height above the one before".into());
+                }
+                self.open_sturm(open)?;
+                Ok(tessellate::sor(&p, *open))
+            }
+            "prism" => {
+                let (mut spline, mut conic) = (Spline::Linear, false);
+                loop {
+                    if let Some(s) = self.spline_word()? {
+                        spline = s;
+                    } else if self.accept_word("linear_sweep")? {
+                        conic = false;
+                    } else if self.accept_word("conic_sweep")? {
+                        conic = true;
+                    } else {
+                        break;
+                    }
+                }
+                let h1 = self.float()?;
+                self.accept_sym(",")?;
+                let h2 = self.float()?;
+                self.accept_sym(",")?;
+                let min = match spline {
+                    Spline::Linear => 3,
+                    Spline::Quadratic => 5,
+                    Spline::Cubic => 6,
+                    Spline::Bezier => 4,
+                };
+                let n = self.count(&format!("a prism's number of points ({})", spline.name()), min, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                self.open_sturm(open)?;
+                let outlines = tessellate::prism_outlines(spline, &p);
+                if outlines.is_empty() {
+                    return self.err(pos, "this prism's points enclose nothing".into());
+                }
+                Ok(tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic))
+            }
+            "polygon" => {
+                let n = self.count("a polygon's number of points", 3, MAX_POINTS)?;
+                let mut p = Vec::with_capacity(n);
+                for _ in 0..n {
+                    self.accept_sym(",")?;
+                    p.push(self.vec3()?);
+                }
+                Ok(tessellate::polygon(&p))
+            }
+            _ => self.text(),
+        }
+    }
+
+    /// `text { ttf "font.ttf" "string" thickness, offset }`: the glyphs' outlines from x = 0 on
+    /// the baseline, one em high, extruded from z = 0 to the thickness (POV-Ray's reference
+    /// manual, "Text").
+    fn text(&mut self) -> Result<Vec<Tri>> {
+        if !self.accept_word("ttf")? {
+            let t = self.expect_any("ttf")?;
+            return self.err(t.pos, format!("expected ttf \"font.ttf\" here, found {}", describe(&t.tok)));
+        }
+        let fpos = self.here();
+        let font_name = self.string()?;
+        self.accept_sym(",")?;
+        let string = self.string()?;
+        self.accept_sym(",")?;
+        let thickness = self.float()?;
+        self.accept_sym(",")?;
+        let offset = self.vector(2)?;
+        let path = self
+            .find_include(&font_name, fpos)
+            .map_err(|e| PovError { message: e.message.replacen("#include", "font", 1), ..e })?;
+        let bytes = crate::limits::read_limited(&path, crate::limits::MAX_SCENE_FILE_BYTES)
+            .map_err(|_| PovError::at(fpos, format!("cannot read the font {}", path.display())))?;
+        let Some(font) = ttf::Font::parse(bytes) else {
+            return self.err(fpos, format!("{} is not a TrueType font this front-end reads", path.display()));
+        };
+        let mut tris = Vec::new();
+        let mut pen = glam::DVec2::ZERO;
+        let (lo, hi) = (0.0f64.min(thickness), 0.0f64.max(thickness));
+        for c in string.chars() {
+            let g = font.glyph(c);
+            let Some(o) = font.outline(g) else {
+                return self.err(fpos, format!("the font {} is damaged (glyph {g})", path.display()));
+            };
+            // Glyph by glyph: a fill over the whole string would cut every glyph at every other's
+            // vertex heights.
+            let outlines: Vec<Vec<glam::DVec2>> =
+                o.into_iter().map(|c| c.into_iter().map(|p| p + pen).collect()).collect();
+            // extrude() sweeps along y with the outline in (x, z): turn that to (x, y) and z.
+            let glyph = tessellate::extrude(&outlines, FillRule::NonZero, lo, hi, false, false);
+            tris.extend(glyph.into_iter().map(|t| t.map(|v| DVec3::new(v.x, v.z, v.y))));
+            pen += glam::DVec2::new(font.advance(g) + offset[0], offset[1]);
+        }
+        Ok(tris)
+    }
+
+    /// `mesh2 { vertex_vectors { n, ... } ... face_indices { n, <a, b, c> ... } ... }`: the faces
+    /// (normals, uv and per-face textures are read and not kept yet).
+    fn mesh2(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+        const MAX_ITEMS: usize = 1 << 24;
+        let mut vertices: Vec<DVec3> = Vec::new();
+        let mut faces: Vec<(DVec3, Pos)> = Vec::new();
+        while let Some(w) = self.peek_word()? {
+            match w.as_str() {
+                "vertex_vectors" | "normal_vectors" | "uv_vectors" | "normal_indices" | "uv_indices" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count(&format!("the number of {w}"), 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        let v = self.vec3()?;
+                        if w == "vertex_vectors" {
+                            vertices.push(v);
+                        }
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "texture_list" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count("the number of textures", 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        self.expect_word_tex()?;
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "face_indices" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count("the number of face_indices", 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        let fpos = self.here();
+                        faces.push((self.vec3()?, fpos));
+                        // Texture indices (one or three) may follow each face.
+                        while self.peek()?.is_some_and(|t| t.tok == Tok::Sym(",")) {
+                            self.next()?;
+                            if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Sym("}"))) {
+                                break;
+                            }
+                            self.float()?;
+                        }
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "inside_vector" => {
+                    self.next()?;
+                    self.vec3()?;
+                }
+                _ => break,
+            }
+        }
+        let mut tris = Vec::with_capacity(faces.len());
+        for (f, fpos) in faces {
+            let mut t = [DVec3::ZERO; 3];
+            for (k, i) in [f.x, f.y, f.z].into_iter().enumerate() {
+                if !(i >= 0.0 && (i as usize) < vertices.len()) {
+                    return self.err(
+                        fpos,
+                        format!("face index {i} is out of range: this mesh2 has {} vertices", vertices.len()),
+                    );
+                }
+                t[k] = vertices[i as usize];
+            }
+            tris.push(t);
+        }
+        if tris.is_empty() {
+            return self.err(pos, "this mesh2 has no faces (face_indices)".into());
+        }
+        Ok(tris)
+    }
+
+    fn expect_word_tex(&mut self) -> Result<()> {
+        let t = self.expect_any("a texture")?;
+        match &t.tok {
+            Tok::Word(w) if w == "texture" => {
+                self.texture()?;
+                Ok(())
+            }
+            other => self.err(t.pos, format!("expected a texture in texture_list, found {}", describe(other))),
+        }
+    }
+
+    /// `bicubic_patch { type n [flatness f] u_steps n v_steps m [accuracy a] 16 points }`.
+    fn bicubic_patch(&mut self, pos: Pos) -> Result<[DVec3; 16]> {
+        while let Some("type" | "flatness" | "u_steps" | "v_steps" | "accuracy") = self.peek_word()?.as_deref() {
+            self.next()?;
+            self.float()?;
+        }
+        let mut p = [DVec3::ZERO; 16];
+        for (i, q) in p.iter_mut().enumerate() {
+            if i > 0 {
+                self.accept_sym(",")?;
+            }
+            *q = self.vec3()?;
+        }
+        if p.iter().any(|q| !q.is_finite()) {
+            return self.err(pos, "a bicubic_patch point is not a number".into());
+        }
+        Ok(p)
     }
 
     /// The end of a mesh triangle: an optional texture (not kept per triangle) and `}`.
