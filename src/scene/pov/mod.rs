@@ -98,9 +98,10 @@ pub fn translate_file(path: &Path, options: &PovOptions) -> Result<Translation, 
     let mut p = parser::Parser::new(path, options.clone());
     let result = p.run_file(path).and_then(|scene| emit::emit(&scene, options, &p.files));
     match result {
-        Ok((toml, origins)) => {
+        Ok((toml, origins, mut emitted)) => {
             let mut warnings = p.scene.warnings.clone();
             warnings.append(&mut p.warnings);
+            warnings.append(&mut emitted);
             Ok(Translation { toml, origins, files: p.files.clone(), warnings })
         }
         Err(e) => Err(to_scene_error(&e, &p.files, path)),

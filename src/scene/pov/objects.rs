@@ -607,6 +607,9 @@ impl Parser {
         let thickness = self.float()?;
         self.accept_sym(",")?;
         let offset = self.vector(2)?;
+        // POV-Ray adds `.ttf` to a name without an extension.
+        let font_name =
+            if std::path::Path::new(&font_name).extension().is_none() { format!("{font_name}.ttf") } else { font_name };
         let path = self
             .find_include(&font_name, fpos)
             .map_err(|e| PovError { message: e.message.replacen("#include", "font", 1), ..e })?;
@@ -730,8 +733,12 @@ impl Parser {
     fn bicubic_patch(&mut self, pos: Pos) -> Result<[DVec3; 16]> {
         while let Some("type" | "flatness" | "u_steps" | "v_steps" | "accuracy") = self.peek_word()?.as_deref() {
             self.next()?;
-            self.float()?;
+            self.stop_at_less = true;
+            let v = self.float();
+            self.stop_at_less = false;
+            v?;
         }
+        self.accept_sym(",")?;
         let mut p = [DVec3::ZERO; 16];
         for (i, q) in p.iter_mut().enumerate() {
             if i > 0 {
@@ -824,7 +831,46 @@ impl Parser {
                     }
                 }
                 "inverse" => o.inverse = !o.inverse,
-                "clipped_by" => return self.err(pos, format!("`{w}` is not supported yet")),
+                "clipped_by" => {
+                    // The object's surface where it is inside the clipping objects: written as
+                    // the intersection of the object and them (docs/pov-ray.md: the cut is
+                    // closed here where POV-Ray leaves it open).
+                    self.expect_sym("{")?;
+                    let mut clips = Vec::new();
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match &t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) if w == "bounded_by" => {
+                                // clipped_by { bounded_by }: the bounds are not kept, so no clip.
+                            }
+                            Tok::Word(w)
+                                if OBJECTS.contains(&w.as_str()) || UNSUPPORTED_OBJECTS.contains(&w.as_str()) =>
+                            {
+                                clips.push(self.object(w, t.pos)?);
+                            }
+                            other => {
+                                return self
+                                    .err(t.pos, format!("expected an object in clipped_by, found {}", describe(other)))
+                            }
+                        }
+                    }
+                    if !clips.is_empty() && !matches!(o.kind, ObjKind::Light(_)) {
+                        let inner = Obj { interior: None, ..o.clone() };
+                        let mut children = vec![inner];
+                        children.extend(clips);
+                        *o = Obj {
+                            kind: ObjKind::Csg { op: CsgOp::Intersection, children },
+                            xform: DMat4::IDENTITY,
+                            tex: None,
+                            interior: o.interior.clone(),
+                            inverse: false,
+                            pos: o.pos,
+                        };
+                        // The clipped object keeps its texture; one given later reaches it too
+                        // (the node's texture is the default of children without one).
+                    }
+                }
                 other => {
                     return self.err(pos, format!("`{other}` is not an object modifier this front-end knows"));
                 }

@@ -110,6 +110,9 @@ pub struct Parser {
     delivered: u64,
     /// Whether `>` closes a vector rather than compares: one entry per open `<` or `(`.
     angle: Vec<bool>,
+    /// A `<` ends the expression (a float followed by a vector, as in bicubic_patch's
+    /// `v_steps 5 <1, 0, 0>`).
+    pub stop_at_less: bool,
     pub default_finish: Finish,
     pub default_pigment: Option<Pigment>,
     last_pos: Pos,
@@ -140,6 +143,7 @@ impl Parser {
             warnings: Vec::new(),
             delivered: 0,
             angle: Vec::new(),
+            stop_at_less: false,
             default_finish: Finish::default(),
             default_pigment: None,
             last_pos: Pos::default(),
@@ -920,7 +924,7 @@ impl Parser {
                 return Ok(a);
             }
             // `<a, b> <c, d>`: a vector followed by another (a list without commas), not a comparison.
-            if op == "<" && matches!(a, Value::Vector(_)) {
+            if op == "<" && (matches!(a, Value::Vector(_)) || self.stop_at_less) {
                 return Ok(a);
             }
             self.next()?;
