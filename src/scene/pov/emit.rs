@@ -34,7 +34,7 @@ fn vec3(v: DVec3) -> T {
 /// keeps the TOML of a shape of thousands of triangles short.
 /// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
 /// out; empty, min > max, when there are none): each part's own box through its transform.
-fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
+pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::MAX);
     let mut hi = DVec3::splat(f64::MIN);
     let mut add_box = |a: DVec3, b: DVec3, m: &DMat4| {

@@ -1287,6 +1287,18 @@ impl Parser {
                 }
                 Value::Float(pov_rand(&mut self.rand[i as usize]))
             }
+            "min_extent" | "max_extent" => {
+                // The object's bounding box (POV-Ray's is its own bounding box; here each part's
+                // box through its transform, so the same for boxes and close for the rest).
+                let a = self.args()?;
+                let Some(Value::Object(o)) = a.first() else {
+                    return self.err(pos, format!("{w}() takes an object"));
+                };
+                let (lo, hi) = super::emit::bounds_of(o);
+                // POV-Ray's answer for an unbounded object: its huge bound.
+                let (lo, hi) = if lo.x <= hi.x { (lo, hi) } else { (DVec3::splat(-2e10), DVec3::splat(2e10)) };
+                vec_value(if w == "min_extent" { lo } else { hi })
+            }
             "vlength" => {
                 let a = self.args()?;
                 Value::Float(vec3_of(a.first(), pos, self)?.length())
