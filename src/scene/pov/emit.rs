@@ -34,6 +34,17 @@ fn vec3(v: DVec3) -> T {
 /// keeps the TOML of a shape of thousands of triangles short.
 /// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
 /// out; empty, min > max, when there are none): each part's own box through its transform.
+/// The first texture in an object's parts.
+fn first_tex(o: &Obj) -> Option<&Vec<Tex>> {
+    if o.tex.is_some() {
+        return o.tex.as_ref();
+    }
+    match &o.kind {
+        ObjKind::Csg { children, .. } => children.iter().find_map(first_tex),
+        _ => None,
+    }
+}
+
 pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::MAX);
     let mut hi = DVec3::splat(f64::MIN);
@@ -79,6 +90,11 @@ pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
                 }
             }
             ObjKind::Csg { children, .. } => stack.extend(children.iter()),
+            ObjKind::Implicit { bound, .. } => {
+                if let Some((a, b)) = bound {
+                    add_box(*a, *b, m);
+                }
+            }
             ObjKind::Plane { .. } | ObjKind::Light(_) | ObjKind::Unsupported(_) => {}
         }
     }
@@ -302,6 +318,21 @@ impl Emitter<'_> {
     fn object(&mut self, o: &Obj, inherited: Option<&Vec<Tex>>, interior: Option<&Interior>) -> Result<()> {
         let tex = o.tex.as_ref().or(inherited);
         let int = o.interior.as_ref().or(interior);
+        if super::implicit::needs_mesher(o) {
+            // Equations, blobs and the CSG objects that hold them: triangles of their surface,
+            // in the texture of the object (or of its first part that has one).
+            let tris = super::implicit::mesh(o).map_err(|(pos, m)| PovError::at(pos, m))?;
+            let tex = tex.or_else(|| first_tex(o));
+            let flat = Obj {
+                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris) },
+                xform: DMat4::IDENTITY,
+                tex: tex.cloned(),
+                interior: int.cloned(),
+                inverse: false,
+                pos: o.pos,
+            };
+            return self.object(&flat, None, None);
+        }
         match &o.kind {
             ObjKind::Unsupported(kind) => Err(PovError::at(o.pos, format!("{kind} is not supported yet"))),
             ObjKind::Light(l) => self.light(l),
@@ -481,8 +512,9 @@ impl Emitter<'_> {
             ObjKind::Unsupported(kind) => {
                 return Err(PovError::at(o.pos, format!("{kind} is not supported yet")));
             }
-            ObjKind::Triangles { .. } | ObjKind::Patch { .. } | ObjKind::Light(_) => {
-                unreachable!("handled by `object`")
+            ObjKind::Triangles { .. } | ObjKind::Patch { .. } | ObjKind::Light(_) | ObjKind::Implicit { .. } => {
+                // `object` writes these; reaching here is a front-end bug, reported, not a panic.
+                return Err(PovError::at(o.pos, "internal: this shape cannot be written here".into()));
             }
         }
         // An infinite plane cannot glow (its power would be infinite): POV-Ray's ambient-lit

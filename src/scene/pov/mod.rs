@@ -9,6 +9,7 @@
 
 mod ast;
 mod emit;
+mod implicit;
 mod lexer;
 mod objects;
 mod parser;

@@ -6,6 +6,7 @@ use glam::{DMat4, DVec3, DVec4};
 use super::ast::{
     AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Obj, ObjKind, Pigment, PigmentKind, Tex,
 };
+use super::implicit::{self, BlobComp, Implicit};
 use super::lexer::Tok;
 use super::parser::{describe, rotation, Parser, PovArray, Result, Value, MAX_ARRAY};
 use super::tessellate::{self, FillRule, Spline, Tri};
@@ -13,21 +14,8 @@ use super::ttf;
 use super::{Pos, PovError};
 
 /// Objects POV-Ray has and this front-end does not read yet.
-const UNSUPPORTED_OBJECTS: &[&str] = &[
-    "isosurface",
-    "parametric",
-    "julia_fractal",
-    "poly",
-    "polynomial",
-    "cubic",
-    "quartic",
-    "quadric",
-    "height_field",
-    "blob",
-    "sphere_sweep",
-    "ovus",
-    "lemon",
-];
+const UNSUPPORTED_OBJECTS: &[&str] =
+    &["isosurface", "parametric", "julia_fractal", "polynomial", "height_field", "sphere_sweep", "ovus", "lemon"];
 
 const OBJECTS: &[&str] = &[
     "sphere",
@@ -48,6 +36,11 @@ const OBJECTS: &[&str] = &[
     "polygon",
     "bicubic_patch",
     "text",
+    "quadric",
+    "cubic",
+    "quartic",
+    "poly",
+    "blob",
     "union",
     "merge",
     "intersection",
@@ -369,6 +362,15 @@ impl Parser {
                 ObjKind::Triangles { tris: std::rc::Rc::new(tris) }
             }
             "bicubic_patch" => ObjKind::Patch { points: Box::new(self.bicubic_patch(pos)?) },
+            "quadric" | "cubic" | "quartic" | "poly" => {
+                let shape = self.polynomial(kind, pos)?;
+                ObjKind::Implicit { shape: std::rc::Rc::new(shape), bound: None }
+            }
+            "blob" => {
+                let shape = self.blob(pos)?;
+                let bound = shape.blob_bounds();
+                ObjKind::Implicit { shape: std::rc::Rc::new(shape), bound }
+            }
             "union" | "merge" | "intersection" | "difference" => {
                 let op = match kind {
                     "union" => CsgOp::Union,
@@ -638,6 +640,131 @@ impl Parser {
         Ok(tris)
     }
 
+    /// quadric { <A, B, C>, <D, E, F>, <G, H, I>, J }, cubic { <20> }, quartic { <35> },
+    /// poly { n, <...> }.
+    fn polynomial(&mut self, kind: &str, pos: Pos) -> Result<Implicit> {
+        if kind == "quadric" {
+            let a = self.vec3()?;
+            self.accept_sym(",")?;
+            let d = self.vec3()?;
+            self.accept_sym(",")?;
+            let g = self.vec3()?;
+            self.accept_sym(",")?;
+            let j = self.float()?;
+            let terms = vec![
+                (a.x, [2, 0, 0]),
+                (a.y, [0, 2, 0]),
+                (a.z, [0, 0, 2]),
+                (d.x, [1, 1, 0]),
+                (d.y, [1, 0, 1]),
+                (d.z, [0, 1, 1]),
+                (g.x, [1, 0, 0]),
+                (g.y, [0, 1, 0]),
+                (g.z, [0, 0, 1]),
+                (j, [0, 0, 0]),
+            ];
+            return Ok(Implicit::Poly { terms: terms.into_iter().filter(|t| t.0 != 0.0).collect() });
+        }
+        let order = match kind {
+            "cubic" => 3,
+            "quartic" => 4,
+            _ => {
+                let n = self.float()?;
+                self.accept_sym(",")?;
+                if !(2.0..=7.0).contains(&n) || n.fract() != 0.0 {
+                    return self.err(pos, format!("a poly's order must be 2 to 7, not {n}"));
+                }
+                n as i32
+            }
+        };
+        let want = Implicit::coefficients(order);
+        let lt = self.expect_sym("<")?;
+        let c = self.angle_list_max(want + 1)?;
+        match Implicit::poly(order, &c) {
+            Some(p) => {
+                self.accept_word("sturm")?;
+                Ok(p)
+            }
+            None => self.err(lt, format!("a {kind} of order {order} takes {want} coefficients, not {}", c.len())),
+        }
+    }
+
+    /// blob { threshold t  sphere { c, r, [strength] s }  cylinder { a, b, r, [strength] s }
+    /// component s, r, c ... } (component textures are read and not kept).
+    fn blob(&mut self, pos: Pos) -> Result<Implicit> {
+        let mut threshold = 1.0;
+        let mut comps = Vec::new();
+        while let Some(w) = self.peek_word()? {
+            match w.as_str() {
+                "threshold" => {
+                    self.next()?;
+                    threshold = self.float()?;
+                }
+                "sturm" | "hierarchy" => {
+                    self.next()?;
+                    self.optional_bool()?;
+                }
+                "component" => {
+                    self.next()?;
+                    let strength = self.float()?;
+                    self.accept_sym(",")?;
+                    let radius = self.float()?;
+                    self.accept_sym(",")?;
+                    let a = self.vec3()?;
+                    comps.push(BlobComp { strength, radius, a, b: None, inv: DMat4::IDENTITY });
+                }
+                "sphere" | "cylinder" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let a = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let b = if w == "cylinder" {
+                        let b = self.vec3()?;
+                        self.accept_sym(",")?;
+                        Some(b)
+                    } else {
+                        None
+                    };
+                    let radius = self.float()?;
+                    self.accept_sym(",")?;
+                    self.accept_word("strength")?;
+                    let strength = self.float()?;
+                    let mut m = DMat4::IDENTITY;
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) => {
+                                if let Some(t2) = self.transform_word(&w)? {
+                                    m = t2 * m;
+                                } else if matches!(w.as_str(), "texture" | "pigment" | "finish" | "normal") {
+                                    self.skip_block()?;
+                                } else {
+                                    return self.err(t.pos, format!("`{w}` does not belong in a blob component"));
+                                }
+                            }
+                            other => {
+                                return self.err(
+                                    t.pos,
+                                    format!("expected `}}` closing the component, found {}", describe(&other)),
+                                )
+                            }
+                        }
+                    }
+                    if radius <= 0.0 {
+                        return self.err(pos, format!("a blob component's radius must be positive, not {radius}"));
+                    }
+                    comps.push(BlobComp { strength, radius, a, b, inv: m.inverse() });
+                }
+                _ => break,
+            }
+        }
+        if comps.is_empty() {
+            return self.err(pos, "this blob has no components".into());
+        }
+        Ok(Implicit::Blob { threshold, comps })
+    }
+
     /// `mesh2 { vertex_vectors { n, ... } ... face_indices { n, <a, b, c> ... } ... }`: the faces
     /// (normals, uv and per-face textures are read and not kept yet).
     fn mesh2(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
@@ -818,6 +945,36 @@ impl Parser {
                     }
                 }
                 "open" => *open = true,
+                "bounded_by" if matches!(o.kind, ObjKind::Implicit { .. }) => {
+                    // An equation's surface is cut at its bounds, as POV-Ray does.
+                    self.expect_sym("{")?;
+                    let mut parts = Vec::new();
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match &t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) if OBJECTS.contains(&w.as_str()) => parts.push(self.object(w, t.pos)?),
+                            other => {
+                                return self
+                                    .err(t.pos, format!("expected an object in bounded_by, found {}", describe(other)))
+                            }
+                        }
+                    }
+                    let inv = o.xform.inverse();
+                    for part in &parts {
+                        let (lo, hi) = super::emit::bounds_of(part);
+                        if lo.x > hi.x {
+                            continue;
+                        }
+                        let (lo, hi) = implicit::moved_box(lo, hi, &inv);
+                        if let ObjKind::Implicit { bound, .. } = &mut o.kind {
+                            *bound = Some(match *bound {
+                                Some((a, b)) => (a.max(lo), b.min(hi)),
+                                None => (lo, hi),
+                            });
+                        }
+                    }
+                }
                 "normal" | "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
                 "hollow" | "no_shadow" | "no_image" | "no_reflection" | "double_illuminate" | "sturm"
                 | "no_radiosity" => {

@@ -1078,6 +1078,11 @@ impl Parser {
     /// The numbers of `< a, b, ... >` after the `<`, up to and including the `>`. Commas are
     /// optional, as in POV-Ray (`< -1 0 0 >`).
     pub fn angle_list(&mut self) -> Result<Vec<f64>> {
+        self.angle_list_max(16)
+    }
+
+    /// `angle_list` for lists of up to `max` numbers (a polynomial's coefficients).
+    pub fn angle_list_max(&mut self, max: usize) -> Result<Vec<f64>> {
         self.angle.push(true);
         let mut comps = Vec::new();
         let result = (|| -> Result<()> {
@@ -1087,7 +1092,7 @@ impl Parser {
                     return Ok(());
                 }
                 self.accept_sym(",")?;
-                if comps.len() > 16 {
+                if comps.len() > max {
                     return self.err(self.here(), "a vector this long never closes; add `>`".into());
                 }
             }
