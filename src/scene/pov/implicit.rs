@@ -138,9 +138,51 @@ pub fn needs_mesher(o: &Obj) -> bool {
     }
     match &o.kind {
         ObjKind::Implicit { .. } => true,
-        ObjKind::Csg { op, children } if *op != CsgOp::Union => children.iter().any(holds),
+        ObjKind::Csg { op, children } if *op != CsgOp::Union => {
+            children.iter().any(holds) || {
+                // Beyond what Photonix's own CSG takes (docs/scene-format.md: 32 leaves, 64
+                // primitives, 4 tori and superellipsoids; no triangles): meshed here too.
+                let (mut leaves, mut prims, mut implicit, mut open) = (0usize, 0usize, 0usize, false);
+                count(o, &mut leaves, &mut prims, &mut implicit, &mut open);
+                leaves > 32 || prims > 64 || implicit > 4 || open
+            }
+        }
         _ => false,
     }
+}
+
+/// Leaves, primitives, tori and superellipsoids of a CSG as the TOML loader counts them, and
+/// whether a part has no inside there (triangles, patches).
+fn count(o: &Obj, leaves: &mut usize, prims: &mut usize, implicit: &mut usize, open: &mut bool) {
+    match &o.kind {
+        ObjKind::Csg { children, .. } => {
+            children.iter().for_each(|c| count(c, leaves, prims, implicit, open));
+            return;
+        }
+        ObjKind::Light(_) => return,
+        ObjKind::Sphere { .. } => {
+            // A sphere under a non-uniform scale is written as a superellipsoid.
+            let m = glam::DMat3::from_mat4(o.xform);
+            let (a, b, c) = (m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+            *prims += 1;
+            if (a - b).abs() > 1e-9 * a || (a - c).abs() > 1e-9 * a {
+                *implicit += 1;
+            }
+        }
+        ObjKind::Torus { .. } | ObjKind::Superellipsoid { .. } => {
+            *prims += 1;
+            *implicit += 1;
+        }
+        ObjKind::Cylinder { .. } | ObjKind::Cone { .. } => *prims += 3,
+        ObjKind::Box { .. } | ObjKind::Plane { .. } => *prims += 12,
+        ObjKind::Triangles { tris } => {
+            *prims += tris.len();
+            *open = true;
+        }
+        ObjKind::Patch { .. } | ObjKind::Disc { .. } => *open = true,
+        _ => {}
+    }
+    *leaves += 1;
 }
 
 /// The bounds of the solid (POV-Ray coordinates), or `None` when it is unbounded.
@@ -168,8 +210,25 @@ pub fn finite_bounds(o: &Obj) -> Option<(DVec3, DVec3)> {
 
 /// The solid as an inside test, object transforms inverted once.
 enum Solid {
-    Leaf { inv: DMat4, kind: ObjKind, inverse: bool },
-    Node { op: CsgOp, kids: Vec<Solid>, inverse: bool },
+    Leaf {
+        inv: DMat4,
+        kind: ObjKind,
+        inverse: bool,
+    },
+    Node {
+        op: CsgOp,
+        kids: Vec<Solid>,
+        inverse: bool,
+    },
+    /// Triangles (a mesh, lathe, prism, text): inside where a ray along +x crosses them an
+    /// odd number of times (exact for closed meshes).
+    Mesh {
+        inv: DMat4,
+        tris: std::rc::Rc<Vec<Tri>>,
+        lo: DVec3,
+        hi: DVec3,
+        inverse: bool,
+    },
 }
 
 fn solid(o: &Obj) -> Result<Solid, (super::Pos, String)> {
@@ -182,11 +241,17 @@ fn solid(o: &Obj) -> Result<Solid, (super::Pos, String)> {
                 .collect::<Result<Vec<_>, _>>()?;
             Solid::Node { op: *op, kids, inverse: o.inverse }
         }
-        ObjKind::Triangles { .. } | ObjKind::Patch { .. } | ObjKind::Disc { .. } | ObjKind::Unsupported(_) => {
+        ObjKind::Patch { .. } | ObjKind::Disc { .. } | ObjKind::Unsupported(_) => {
             return Err((
                 o.pos,
-                "this part has no inside (a triangle, mesh, disc, patch or tessellated shape) and cannot be cut together with a quadric, poly or blob yet".into(),
+                "this part has no inside (a disc or a bicubic_patch) and cannot be part of intersection, difference or merge yet".into(),
             ))
+        }
+        ObjKind::Triangles { tris } => {
+            let (lo, hi) = tris.iter().flatten().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(l, h), p| {
+                (l.min(*p), h.max(*p))
+            });
+            Solid::Mesh { inv: o.xform.inverse(), tris: tris.clone(), lo, hi, inverse: o.inverse }
         }
         kind => Solid::Leaf { inv: o.xform.inverse(), kind: kind.clone(), inverse: o.inverse },
     })
@@ -201,6 +266,33 @@ fn inside(s: &Solid, p: DVec3) -> bool {
                 CsgOp::Difference => {
                     kids.first().is_some_and(|k| inside(k, p)) && !kids.iter().skip(1).any(|k| inside(k, p))
                 }
+            };
+            r != *inverse
+        }
+        Solid::Mesh { inv, tris, lo, hi, inverse } => {
+            let q = inv.transform_point3(p);
+            let r = q.cmpge(*lo).all() && q.cmple(*hi).all() && {
+                // Crossings of the ray q + t x (t > 0) with each triangle, in the (y, z) plane.
+                let mut n = 0;
+                for t in tris.iter() {
+                    let (a, b, c) = (t[0], t[1], t[2]);
+                    if (a.y > q.y) == (b.y > q.y) && (b.y > q.y) == (c.y > q.y) {
+                        continue;
+                    }
+                    let d = (b.y - a.y) * (c.z - a.z) - (b.z - a.z) * (c.y - a.y);
+                    if d == 0.0 {
+                        continue;
+                    }
+                    let u = ((q.y - a.y) * (c.z - a.z) - (q.z - a.z) * (c.y - a.y)) / d;
+                    let v = ((b.y - a.y) * (q.z - a.z) - (b.z - a.z) * (q.y - a.y)) / d;
+                    if u >= 0.0 && v >= 0.0 && u + v < 1.0 {
+                        let x = a.x + u * (b.x - a.x) + v * (c.x - a.x);
+                        if x > q.x {
+                            n += 1;
+                        }
+                    }
+                }
+                n % 2 == 1
             };
             r != *inverse
         }
@@ -238,13 +330,66 @@ fn inside(s: &Solid, p: DVec3) -> bool {
     }
 }
 
+/// Bounds for a solid given none (POV-Ray solves such equations everywhere): the smallest cube
+/// about the origin, of half-side 2^k up to 2^12, whose faces hold no point of the solid
+/// (sampled 24 x 24 a face), shrunk to the points of the solid a 32^3 sampling inside finds,
+/// plus one sampling step.
+fn search_bounds(s: &Solid) -> Option<(DVec3, DVec3)> {
+    const FACE: usize = 24;
+    const INNER: usize = 32;
+    for k in 0..=12 {
+        let r = (1u32 << k) as f64;
+        let mut touches = false;
+        'faces: for axis in 0..3 {
+            for side in [-r, r] {
+                for i in 0..=FACE {
+                    for j in 0..=FACE {
+                        let (a, b) = (-r + 2.0 * r * i as f64 / FACE as f64, -r + 2.0 * r * j as f64 / FACE as f64);
+                        let p = match axis {
+                            0 => DVec3::new(side, a, b),
+                            1 => DVec3::new(a, side, b),
+                            _ => DVec3::new(a, b, side),
+                        };
+                        if inside(s, p) {
+                            touches = true;
+                            break 'faces;
+                        }
+                    }
+                }
+            }
+        }
+        if touches {
+            continue;
+        }
+        let step = 2.0 * r / INNER as f64;
+        let mut lo = DVec3::splat(f64::MAX);
+        let mut hi = DVec3::splat(f64::MIN);
+        for i in 0..=INNER {
+            for j in 0..=INNER {
+                for l in 0..=INNER {
+                    let p = DVec3::splat(-r) + DVec3::new(i as f64, j as f64, l as f64) * step;
+                    if inside(s, p) {
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+            }
+        }
+        if lo.x <= hi.x {
+            return Some(((lo - step).max(DVec3::splat(-r)), (hi + step).min(DVec3::splat(r))));
+        }
+    }
+    None
+}
+
 /// The six tetrahedra of a cube around its diagonal from corner 0 to corner 7 (corner bits:
 /// x 1, y 2, z 4); they share faces, so the surface is closed where the solid is.
 const TETS: [[usize; 4]; 6] = [[0, 1, 3, 7], [0, 3, 2, 7], [0, 2, 6, 7], [0, 6, 4, 7], [0, 4, 5, 7], [0, 5, 1, 7]];
 
 /// The triangles of an object's surface (POV-Ray coordinates, the object's transforms applied).
 pub fn mesh(o: &Obj) -> Result<Vec<Tri>, (super::Pos, String)> {
-    let Some((lo, hi)) = finite_bounds(o) else {
+    let s = solid(o)?;
+    let Some((lo, hi)) = finite_bounds(o).or_else(|| search_bounds(&s)) else {
         return Err((
             o.pos,
             "this surface is unbounded: give it bounded_by or clipped_by, or intersect it with a finite shape".into(),
@@ -253,7 +398,6 @@ pub fn mesh(o: &Obj) -> Result<Vec<Tri>, (super::Pos, String)> {
     if !(lo.cmplt(hi).all() && lo.is_finite() && hi.is_finite()) {
         return Err((o.pos, "this surface's bounds are empty".into()));
     }
-    let s = solid(o)?;
     let size = hi - lo;
     let cell = size.max_element() / GRID as f64;
     let n = (size / cell).ceil().as_uvec3().max(glam::UVec3::ONE);

@@ -110,6 +110,8 @@ impl Parser {
                 self.scene.fog = Some(f);
             }
             "global_settings" => self.global_settings()?,
+            // `default { ... }` without `#`, as POV-Ray also reads it.
+            "default" => self.default_block()?,
             "sky_sphere" | "rainbow" | "media" => {
                 self.skip_block()?;
                 self.scene.warnings.push(format!("{}: {word} is not supported yet; it is left out", self.loc(pos)));
@@ -466,7 +468,11 @@ impl Parser {
     /// A count before a list of points: a whole number from `min` to `max`.
     fn count(&mut self, what: &str, min: usize, max: usize) -> Result<usize> {
         let pos = self.here();
-        let n = self.float()?;
+        // `4 <1, 0>`: the count, then the first point (not a comparison).
+        self.stop_at_less = true;
+        let n = self.float();
+        self.stop_at_less = false;
+        let n = n?;
         if !(n >= min as f64 && n <= max as f64) {
             return self.err(pos, format!("{what} must be {min} to {max}, not {n}"));
         }
@@ -1177,6 +1183,18 @@ impl Parser {
                 "finish" => top.finish = self.finish()?,
                 "normal" => self.skip_block()?,
                 "uv_mapping" => {}
+                "tiles" => {
+                    // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
+                    self.warnings.push(format!(
+                        "{}: the tiles texture pattern is not supported yet; its first texture is used",
+                        self.loc(pos)
+                    ));
+                    self.expect_sym("{")?;
+                    if self.accept_word("texture")? {
+                        layers = self.texture()?;
+                    }
+                    self.skip_to_brace()?;
+                }
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries).
                     self.warnings.push(format!(
@@ -1282,6 +1300,13 @@ impl Parser {
                     }
                 }
                 "uv_mapping" => {}
+                "interior" | "exterior" => {
+                    // A fractal pattern's interior and exterior types (`interior 1, 0.5`).
+                    self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
                 "red" | "green" | "blue" | "filter" | "transmit" => {
                     let i = ["red", "green", "blue", "filter", "transmit"].iter().position(|k| *k == w).unwrap_or(0);
                     let v = self.float()?;
