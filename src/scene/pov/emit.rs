@@ -322,7 +322,7 @@ impl Emitter<'_> {
             // Equations, blobs and the CSG objects that hold them: triangles of their surface,
             // in the texture of the object (or of its first part that has one).
             let tris = super::implicit::mesh(o).map_err(|(pos, m)| PovError::at(pos, m))?;
-            let tex = tex.or_else(|| first_tex(o));
+            let tex = first_tex(o).or(inherited);
             let flat = Obj {
                 kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris) },
                 xform: DMat4::IDENTITY,

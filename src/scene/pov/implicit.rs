@@ -270,7 +270,10 @@ fn inside(s: &Solid, p: DVec3) -> bool {
             r != *inverse
         }
         Solid::Mesh { inv, tris, lo, hi, inverse } => {
-            let q = inv.transform_point3(p);
+            // Nudged off the grid's planes by odd fractions of the mesh's size: a lathe has
+            // vertices at z = 0 and rings at heights the grid also holds, and a ray through an
+            // edge would count it twice.
+            let q = inv.transform_point3(p) + DVec3::new(0.0, 1.234_567e-7, 7.654_321e-8) * (*hi - *lo).length();
             let r = q.cmpge(*lo).all() && q.cmple(*hi).all() && {
                 // Crossings of the ray q + t x (t > 0) with each triangle, in the (y, z) plane.
                 let mut n = 0;
