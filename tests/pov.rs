@@ -407,3 +407,183 @@ object {{ O[1] texture {{ T[0] }} }}
         other => panic!("{other:?}"),
     }
 }
+
+/// The bounds of all shapes together.
+fn total_bounds(s: &Scene) -> (Vec3, Vec3) {
+    bounds(s).into_iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(a, b), (c, d)| (a.min(c), b.max(d)))
+}
+
+/// The area of a scene's triangles (every shape here is a triangle).
+fn triangle_area(s: &Scene) -> f32 {
+    s.shapes
+        .iter()
+        .map(|sh| match &sh.geometry {
+            Geometry::Triangle(t) => {
+                0.5 * (t.vertices[1] - t.vertices[0]).cross(t.vertices[2] - t.vertices[0]).length()
+            }
+            other => panic!("not a triangle: {other:?}"),
+        })
+        .sum()
+}
+
+#[test]
+fn tessellated_shapes_match_the_same_shapes_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    // A linear prism of a 2 x 2 square from y = 0 to 1 is a box: same bounds and the box's area.
+    let prism = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}prism {{ 0, 1, 5, <-1, -1>, <1, -1>, <1, 1>, <-1, 1>, <-1, -1> translate z pigment {{ rgb 1 }} }}"
+        ),
+    );
+    let boxed = parse_scene(
+        "[camera]\nposition = [0, 2, 6]\nlook_at = [0, 1, 0]\nfov = 40\n[materials.w]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"box\"\nmaterial = \"w\"\nmin = [-1, 0, -2]\nmax = [1, 1, 0]\n",
+        Path::new("box.toml"),
+    )
+    .unwrap();
+    let (a, b) = (total_bounds(&prism), total_bounds(&boxed));
+    assert!(a.0.abs_diff_eq(b.0, 1e-6) && a.1.abs_diff_eq(b.1, 1e-6), "{a:?} vs {b:?}");
+    let area = triangle_area(&prism);
+    println!("prism area {area} (box 16)");
+    assert!((area - 16.0).abs() < 1e-4);
+
+    // A lathe of the profile <1, 0> <1, 2> is an open cylinder: within the revolution's chord
+    // tolerance (1 - cos(pi / 64) of the radius) of the TOML cylinder's bounds.
+    let lathe = load(dir.path(), &format!("{CAMERA}lathe {{ linear_spline 2, <1, 0>, <1, 2> pigment {{ rgb 1 }} }}"));
+    let cyl = parse_scene(
+        "[camera]\nposition = [0, 2, 6]\nlook_at = [0, 1, 0]\nfov = 40\n[materials.w]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"cylinder\"\nmaterial = \"w\"\nbase = [0, 0, 0]\ncap = [0, 2, 0]\nradius = 1\nopen = true\n",
+        Path::new("cyl.toml"),
+    )
+    .unwrap();
+    let (a, b) = (total_bounds(&lathe), total_bounds(&cyl));
+    assert!(a.0.abs_diff_eq(b.0, 2e-3) && a.1.abs_diff_eq(b.1, 2e-3), "{a:?} vs {b:?}");
+    // Its area is the 64-gon prism's: 2 h 64 sin(pi / 64) against the cylinder's 2 pi r h.
+    let want = 2.0 * 64.0 * (std::f32::consts::PI / 64.0).sin() * 2.0;
+    assert!((triangle_area(&lathe) - want).abs() < 1e-3, "{} vs {want}", triangle_area(&lathe));
+
+    // bicubic_patch is Photonix's own patch, points mirrored in z.
+    let pts = "<0,0,0>, <1,0,0>, <2,0,0>, <3,0,0>, <0,1,1>, <1,1,1>, <2,1,1>, <3,1,1>, <0,2,1>, <1,2,1>, <2,2,1>, <3,2,1>, <0,3,0>, <1,3,0>, <2,3,0>, <3,3,0>";
+    let patch = load(
+        dir.path(),
+        &format!("{CAMERA}bicubic_patch {{ type 1 flatness 0.01 u_steps 4 v_steps 4 {pts} pigment {{ rgb 1 }} }}"),
+    );
+    let toml_pts = "[0,0,0], [1,0,0], [2,0,0], [3,0,0], [0,1,-1], [1,1,-1], [2,1,-1], [3,1,-1], [0,2,-1], [1,2,-1], [2,2,-1], [3,2,-1], [0,3,0], [1,3,0], [2,3,0], [3,3,0]";
+    let same = parse_scene(
+        &format!("[camera]\nposition = [0, 2, 6]\nlook_at = [0, 1, 0]\nfov = 40\n[materials.w]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"bicubic_patch\"\nmaterial = \"w\"\npoints = [{toml_pts}]\n"),
+        Path::new("patch.toml"),
+    )
+    .unwrap();
+    assert_eq!(patch.shapes.len(), same.shapes.len());
+    assert_eq!(bounds(&patch), bounds(&same));
+
+    // mesh2 is its triangles; polygon a square of area 4.
+    let mesh2 = load(
+        dir.path(),
+        &format!("{CAMERA}mesh2 {{ vertex_vectors {{ 4, <0,0,0>, <1,0,0>, <1,1,0>, <0,1,0> }} face_indices {{ 2, <0,1,2>, <0,2,3> }} pigment {{ rgb 1 }} }}"),
+    );
+    assert_eq!(mesh2.shapes.len(), 2);
+    assert!((triangle_area(&mesh2) - 1.0).abs() < 1e-6);
+    let polygon =
+        load(dir.path(), &format!("{CAMERA}polygon {{ 5, <0,0>, <2,0>, <2,2>, <0,2>, <0,0> pigment {{ rgb 1 }} }}"));
+    assert!((triangle_area(&polygon) - 4.0).abs() < 1e-5);
+
+    // sor with a constant radius 1 from y = 0 to 1, closed: a capped 64-gon prism's area.
+    let sor = load(dir.path(), &format!("{CAMERA}sor {{ 4, <1, -1>, <1, 0>, <1, 1>, <1, 2> pigment {{ rgb 1 }} }}"));
+    // The 64-gon's perimeter times the height 1, and two 64-gon caps.
+    let pi = std::f32::consts::PI;
+    let want = 128.0 * (pi / 64.0).sin() + 2.0 * 32.0 * (2.0 * pi / 64.0).sin();
+    assert!((triangle_area(&sor) - want).abs() < 1e-3, "{} vs {want}", triangle_area(&sor));
+}
+
+#[test]
+fn text_is_drawn_from_povray_fonts() {
+    let font = Path::new(photonix::scene::pov::STANDARD_INCLUDE_DIR).join("timrom.ttf");
+    if !font.is_file() {
+        println!("skipped: {} is not installed (apt-get install povray-includes)", font.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(dir.path(), &format!("{CAMERA}text {{ ttf \"timrom.ttf\" \"Hi\" 0.25, 0 pigment {{ rgb 1 }} }}"));
+    let (lo, hi) = total_bounds(&s);
+    // On the baseline from x = 0, under one em high, from z = 0 to 0.25 (mirrored: -0.25 to 0).
+    println!("text bounds {lo} {hi}");
+    assert!(lo.x >= 0.0 && hi.x < 2.0 && lo.y >= -0.3 && hi.y <= 1.0);
+    assert!((lo.z + 0.25).abs() < 1e-6 && hi.z.abs() < 1e-6);
+    let e = error(dir.path(), &format!("{CAMERA}text {{ ttf \"nosuchfont\" \"Hi\" 1, 0 }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("nosuchfont.ttf"), "{e}");
+}
+
+#[test]
+fn equations_blobs_and_clipped_by_are_meshed_within_their_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    // The unit sphere as a quadric and as a quartic (x^2 + y^2 + z^2)^2 = 1 without bounds:
+    // the mesh lies on the unit sphere to the bisection's tolerance.
+    let on_sphere = |s: &Scene, r: f32, tol: f32| {
+        let worst = s
+            .shapes
+            .iter()
+            .flat_map(|sh| match &sh.geometry {
+                Geometry::Triangle(t) => t.vertices.to_vec(),
+                other => panic!("{other:?}"),
+            })
+            .map(|v| (v.length() - r).abs())
+            .fold(0.0f32, f32::max);
+        println!("{} triangles, at most {worst:.2e} off the sphere of radius {r}", s.shapes.len());
+        assert!(worst < tol, "{worst}");
+    };
+    let q = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}quadric {{ <1,1,1>, <0,0,0>, <0,0,0>, -1 bounded_by {{ box {{ -2, 2 }} }} pigment {{ rgb 1 }} }}"
+        ),
+    );
+    // Cell 4/40, bisected 10 times, plus f32 rounding.
+    on_sphere(&q, 1.0, 4.0 / 40.0 / 1024.0 * 2.0 + 1e-5);
+    let mut c = vec!["0"; 35];
+    // (x^2 + y^2 + z^2)^2 - 1: x^4, 2x^2y^2, 2x^2z^2, y^4, 2y^2z^2, z^4 in POV-Ray's order.
+    for (i, v) in [(0, "1"), (4, "2"), (7, "2"), (20, "1"), (23, "2"), (30, "1"), (34, "-1")] {
+        c[i] = v;
+    }
+    let quartic = load(dir.path(), &format!("{CAMERA}quartic {{ <{}> pigment {{ rgb 1 }} }}", c.join(", ")));
+    on_sphere(&quartic, 1.0, 0.01);
+    // One blob component of strength 1 and radius 2, threshold 0.25: the field 1 (1 - d^2/4)^2
+    // is 0.25 where d^2 = 2.
+    let blob = load(dir.path(), &format!("{CAMERA}blob {{ threshold 0.25 sphere {{ 0, 2, 1 }} pigment {{ rgb 1 }} }}"));
+    on_sphere(&blob, 2f32.sqrt(), 0.01);
+    // clipped_by a plane is the intersection, in Photonix's own CSG.
+    let clipped =
+        load(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 clipped_by {{ plane {{ y, 0 }} }} pigment {{ rgb 1 }} }}"));
+    assert!(matches!(clipped.shapes[0].geometry, Geometry::Csg(_)));
+    let (lo, hi) = clipped.shapes[0].geometry.bounds();
+    println!("clipped sphere bounds {lo} {hi}");
+    // The unbounded: an infinite cylinder with nothing to cut it is refused where it is.
+    let e = error(dir.path(), &format!("{CAMERA}quadric {{ <1,0,1>, <0,0,0>, <0,0,0>, -1 }}"));
+    assert!(e.contains("scene.pov:3:1") && e.contains("unbounded"), "{e}");
+    // A lathe in a difference is meshed with the rest (ray parity inside the lathe).
+    let d = load(
+        dir.path(),
+        &format!("{CAMERA}difference {{ box {{ -1, 1 }} lathe {{ linear_spline 4, <0, -2>, <0.5, -2>, <0.5, 2>, <0, 2> }} pigment {{ rgb 1 }} }}"),
+    );
+    let (lo, hi) = total_bounds(&d);
+    assert!(lo.abs_diff_eq(Vec3::splat(-1.0), 0.06) && hi.abs_diff_eq(Vec3::ONE, 0.06), "{lo} {hi}");
+}
+
+#[test]
+fn file_output_and_errors_of_the_new_shapes_have_positions() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        &format!("{CAMERA}#fopen F \"page.html\" write\n#write (F, \"<p>\", 2, \"</p>\")\n#fclose F\nsphere {{ 0, 1 pigment {{ rgb 1 }} }}"),
+    );
+    assert_eq!(s.shapes.len(), 1);
+    assert!(!dir.path().join("page.html").exists(), "nothing is written");
+    let e = error(dir.path(), &format!("{CAMERA}lathe {{ bezier_spline 3, <0,0>, <1,1>, <0,2> }}"));
+    assert!(e.contains("scene.pov:3:1") && e.contains("four per segment"), "{e}");
+    let e = error(
+        dir.path(),
+        &format!("{CAMERA}mesh2 {{ vertex_vectors {{ 1, <0,0,0> }} face_indices {{ 1, <0,1,2> }} }}"),
+    );
+    assert!(e.contains("scene.pov:3:") && e.contains("out of range"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}poly {{ 4, <1, 2, 3> }}"));
+    assert!(e.contains("takes 35 coefficients"), "{e}");
+}

@@ -71,6 +71,17 @@ pub enum ObjKind {
     Triangles {
         tris: std::rc::Rc<Vec<[DVec3; 3]>>,
     },
+    /// A bicubic_patch: 16 control points, rows of constant v (Photonix's own bicubic_patch).
+    Patch {
+        points: Box<[DVec3; 16]>,
+    },
+    /// A surface POV-Ray defines by an equation (quadric, cubic, quartic, poly) or a field
+    /// (blob), tessellated by `implicit.rs` inside `bound` (object space; from bounded_by,
+    /// clipped_by or the other parts of an intersection when absent).
+    Implicit {
+        shape: std::rc::Rc<super::implicit::Implicit>,
+        bound: Option<(DVec3, DVec3)>,
+    },
     Csg {
         op: CsgOp,
         children: Vec<Obj>,

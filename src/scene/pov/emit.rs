@@ -30,6 +30,92 @@ fn vec3(v: DVec3) -> T {
     T::Array(vec![num(v.x), num(v.y), num(v.z)])
 }
 
+/// A vertex of a tessellated shape to 7 significant digits (the renderer holds f32), which
+/// keeps the TOML of a shape of thousands of triangles short.
+/// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
+/// out; empty, min > max, when there are none): each part's own box through its transform.
+/// The first texture in an object's parts.
+fn first_tex(o: &Obj) -> Option<&Vec<Tex>> {
+    if o.tex.is_some() {
+        return o.tex.as_ref();
+    }
+    match &o.kind {
+        ObjKind::Csg { children, .. } => children.iter().find_map(first_tex),
+        _ => None,
+    }
+}
+
+pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
+    let mut lo = DVec3::splat(f64::MAX);
+    let mut hi = DVec3::splat(f64::MIN);
+    let mut add_box = |a: DVec3, b: DVec3, m: &DMat4| {
+        for i in 0..8 {
+            let p = DVec3::new(
+                if i & 1 == 0 { a.x } else { b.x },
+                if i & 2 == 0 { a.y } else { b.y },
+                if i & 4 == 0 { a.z } else { b.z },
+            );
+            let q = m.transform_point3(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        }
+    };
+    let mut stack = vec![o];
+    while let Some(o) = stack.pop() {
+        let m = &o.xform;
+        match &o.kind {
+            ObjKind::Sphere { center, radius } => add_box(*center - *radius, *center + *radius, m),
+            ObjKind::Box { a, b } => add_box(*a, *b, m),
+            ObjKind::Cylinder { a, b, radius, .. } => add_box(a.min(*b) - *radius, a.max(*b) + *radius, m),
+            ObjKind::Cone { a, ra, b, rb, .. } => {
+                let r = ra.abs().max(rb.abs());
+                add_box(a.min(*b) - r, a.max(*b) + r, m)
+            }
+            ObjKind::Disc { center, radius, .. } => add_box(*center - *radius, *center + *radius, m),
+            ObjKind::Torus { major, minor } => {
+                let r = major.abs() + minor.abs();
+                add_box(DVec3::new(-r, -minor.abs(), -r), DVec3::new(r, minor.abs(), r), m)
+            }
+            ObjKind::Superellipsoid { .. } => add_box(DVec3::splat(-1.0), DVec3::ONE, m),
+            ObjKind::Triangles { tris } => {
+                for t in tris.iter() {
+                    for p in t {
+                        add_box(*p, *p, m);
+                    }
+                }
+            }
+            ObjKind::Patch { points } => {
+                for p in points.iter() {
+                    add_box(*p, *p, m);
+                }
+            }
+            ObjKind::Csg { children, .. } => stack.extend(children.iter()),
+            ObjKind::Implicit { bound, .. } => {
+                if let Some((a, b)) = bound {
+                    add_box(*a, *b, m);
+                }
+            }
+            ObjKind::Plane { .. } | ObjKind::Light(_) | ObjKind::Unsupported(_) => {}
+        }
+    }
+    (lo, hi)
+}
+
+/// Whether the TOML loader would find a triangle of no area: its own test (convert.rs,
+/// `is_degenerate`) in f32, with a margin of 2.
+fn too_thin(v: &[DVec3]) -> bool {
+    let f = |p: DVec3| p.as_vec3();
+    let (e0, e1, e2) = (f(v[1]) - f(v[0]), f(v[2]) - f(v[0]), f(v[2]) - f(v[1]));
+    let longest = e0.length_squared().max(e1.length_squared()).max(e2.length_squared());
+    let twice_area = e0.cross(e1).length();
+    !(twice_area.is_finite() && twice_area > 2e-7 * longest)
+}
+
+fn short3(v: DVec3) -> DVec3 {
+    let short = |x: f64| format!("{x:.6e}").parse::<f64>().unwrap_or(x);
+    DVec3::new(short(v.x), short(v.y), short(v.z))
+}
+
 fn rgb(c: [f64; 3]) -> T {
     T::Array(c.iter().map(|x| num(*x)).collect())
 }
@@ -100,10 +186,17 @@ struct Emitter<'a> {
     lights: Vec<(Table, Pos)>,
     skipped_triangles: usize,
     warnings: Vec<String>,
+    /// Newlines in `text`.
+    newlines: usize,
+    /// Half the side of the boxes that stand for planes in the CSG object being written.
+    plane_box: Option<f64>,
 }
 
+/// The TOML text; for each entry, its first line and the `.pov` position it came from; warnings.
+pub type Emitted = (String, Vec<(usize, Pos)>, Vec<String>);
+
 /// The TOML text and, for each entry, its first line and the `.pov` position it came from.
-pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result<(String, Vec<(usize, Pos)>)> {
+pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result<Emitted> {
     let camera = scene.camera.clone().unwrap_or_default();
     let target = camera.look_at.unwrap_or(camera.location + camera.direction);
     let mut e = Emitter {
@@ -118,8 +211,11 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         lights: Vec::new(),
         skipped_triangles: 0,
         warnings: Vec::new(),
+        newlines: 0,
+        plane_box: None,
     };
     e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
+    e.newlines = 1;
     e.camera(&camera, options)?;
     if let Some(depth) = scene.max_trace_level {
         let mut r = Table::new();
@@ -158,7 +254,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
     if e.skipped_triangles > 0 {
         e.warnings.push(format!("{} triangles with no area were left out", e.skipped_triangles));
     }
-    Ok((e.text, e.origins))
+    Ok((e.text, e.origins, e.warnings))
 }
 
 impl Emitter<'_> {
@@ -168,10 +264,14 @@ impl Emitter<'_> {
         doc.insert(key.into(), value);
         let text = toml::to_string(&doc).map_err(|e| PovError::at(pos, format!("cannot write this as TOML: {e}")))?;
         self.text.push('\n');
-        let line = self.text.matches('\n').count() + 1;
+        // Lines so far, counted as the text grows (counting the whole text each time made a
+        // scene of many triangles quadratic).
+        self.newlines += 1;
+        let line = self.newlines + 1;
         self.origins.push((line, pos));
         let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
         self.text.push_str(&format!("# {}:{}:{}\n", crate::limits::printable_message(&path), pos.line, pos.col));
+        self.newlines += 1 + text.matches('\n').count();
         self.text.push_str(&text);
         Ok(())
     }
@@ -218,6 +318,21 @@ impl Emitter<'_> {
     fn object(&mut self, o: &Obj, inherited: Option<&Vec<Tex>>, interior: Option<&Interior>) -> Result<()> {
         let tex = o.tex.as_ref().or(inherited);
         let int = o.interior.as_ref().or(interior);
+        if super::implicit::needs_mesher(o) {
+            // Equations, blobs and the CSG objects that hold them: triangles of their surface,
+            // in the texture of the object (or of its first part that has one).
+            let tris = super::implicit::mesh(o).map_err(|(pos, m)| PovError::at(pos, m))?;
+            let tex = first_tex(o).or(inherited);
+            let flat = Obj {
+                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris) },
+                xform: DMat4::IDENTITY,
+                tex: tex.cloned(),
+                interior: int.cloned(),
+                inverse: false,
+                pos: o.pos,
+            };
+            return self.object(&flat, None, None);
+        }
         match &o.kind {
             ObjKind::Unsupported(kind) => Err(PovError::at(o.pos, format!("{kind} is not supported yet"))),
             ObjKind::Light(l) => self.light(l),
@@ -231,8 +346,8 @@ impl Emitter<'_> {
                 let material = self.material(tex, int, o.pos, true)?;
                 let m = MIRROR * o.xform;
                 for t in tris.iter() {
-                    let v: Vec<DVec3> = t.iter().map(|p| m.transform_point3(*p)).collect();
-                    if (v[1] - v[0]).cross(v[2] - v[0]).length() <= 1e-12 * (v[1] - v[0]).length().max(1e-300) {
+                    let v: Vec<DVec3> = t.iter().map(|p| short3(m.transform_point3(*p))).collect();
+                    if too_thin(&v) {
                         self.skipped_triangles += 1;
                         continue;
                     }
@@ -243,6 +358,16 @@ impl Emitter<'_> {
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }
                 Ok(())
+            }
+            ObjKind::Patch { points } => {
+                // A Bezier patch maps to one under any affine map: its control points are baked.
+                let material = self.material(tex, int, o.pos, true)?;
+                let m = MIRROR * o.xform;
+                let mut s = Table::new();
+                s.insert("type".into(), T::String("bicubic_patch".into()));
+                s.insert("material".into(), T::String(material));
+                s.insert("points".into(), T::Array(points.iter().map(|p| vec3(m.transform_point3(*p))).collect()));
+                self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)
             }
             _ => {
                 let shape = self.shape(o, tex, int)?;
@@ -368,28 +493,29 @@ impl Emitter<'_> {
                 };
                 s.insert("operation".into(), T::String(name.into()));
                 let mut kids = Vec::new();
-                for c in children {
-                    let ctex = c.tex.as_ref().or(tex);
-                    let cint = c.interior.as_ref().or(int);
-                    match &c.kind {
-                        ObjKind::Light(l) => self.light(l)?,
-                        ObjKind::Triangles { .. } => {
-                            return Err(PovError::at(
-                                c.pos,
-                                "a triangle or mesh inside intersection, difference or merge is not supported yet"
-                                    .into(),
-                            ))
-                        }
-                        _ => kids.push(T::Table(self.shape(c, ctex, cint)?)),
-                    }
+                // Planes become boxes as large as four times the rest of the outermost CSG
+                // object (its bounds' half-diagonal from the origin), computed once per object.
+                let outermost = self.plane_box.is_none();
+                if outermost {
+                    let (lo, hi) = bounds_of(o);
+                    let r = if lo.x <= hi.x { lo.abs().max(hi.abs()).length() } else { 1.0 };
+                    self.plane_box = Some(4.0 * r.max(1.0));
                 }
+                let result = self.csg_children(children, tex, int, &mut kids);
+                if outermost {
+                    self.plane_box = None;
+                }
+                result?;
                 s.insert("children".into(), T::Array(kids));
                 return Ok(s);
             }
             ObjKind::Unsupported(kind) => {
                 return Err(PovError::at(o.pos, format!("{kind} is not supported yet")));
             }
-            ObjKind::Triangles { .. } | ObjKind::Light(_) => unreachable!("handled by `object`"),
+            ObjKind::Triangles { .. } | ObjKind::Patch { .. } | ObjKind::Light(_) | ObjKind::Implicit { .. } => {
+                // `object` writes these; reaching here is a front-end bug, reported, not a panic.
+                return Err(PovError::at(o.pos, "internal: this shape cannot be written here".into()));
+            }
         }
         // An infinite plane cannot glow (its power would be infinite): POV-Ray's ambient-lit
         // sky planes keep their colour and lose the glow.
@@ -397,6 +523,62 @@ impl Emitter<'_> {
         let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
         Ok(s)
+    }
+
+    /// The children of a CSG node as shape tables (lights are placed as lights).
+    fn csg_children(
+        &mut self,
+        children: &[Obj],
+        tex: Option<&Vec<Tex>>,
+        int: Option<&Interior>,
+        kids: &mut Vec<T>,
+    ) -> Result<()> {
+        {
+            {
+                for c in children {
+                    let ctex = c.tex.as_ref().or(tex);
+                    let cint = c.interior.as_ref().or(int);
+                    match &c.kind {
+                        ObjKind::Light(l) => self.light(l)?,
+                        ObjKind::Plane { normal, offset } => {
+                            // The half-space behind the plane, as a box: y up to the plane in a
+                            // frame whose y is the normal.
+                            let half = self.plane_box.unwrap_or(1e3);
+                            let n = normal.normalize_or_zero();
+                            if n == DVec3::ZERO {
+                                return Err(PovError::at(c.pos, "the plane's normal is zero".into()));
+                            }
+                            let u = n.any_orthonormal_vector();
+                            let w = u.cross(n);
+                            let frame = DMat4::from_cols(
+                                u.extend(0.0),
+                                n.extend(0.0),
+                                w.extend(0.0),
+                                (n * (*offset / normal.length())).extend(1.0),
+                            );
+                            let b = Obj {
+                                kind: ObjKind::Box {
+                                    a: DVec3::new(-half, -2.0 * half, -half),
+                                    b: DVec3::new(half, 0.0, half),
+                                },
+                                xform: c.xform * frame,
+                                ..c.clone()
+                            };
+                            kids.push(T::Table(self.shape(&b, ctex, cint)?));
+                        }
+                        ObjKind::Triangles { .. } | ObjKind::Patch { .. } => {
+                            return Err(PovError::at(
+                                c.pos,
+                                "a triangle, mesh or tessellated shape (lathe, sor, prism, polygon, text, bicubic_patch) inside intersection, difference or merge is not supported yet"
+                                    .into(),
+                            ))
+                        }
+                        _ => kids.push(T::Table(self.shape(c, ctex, cint)?)),
+                    }
+                }
+            }
+        }
+        Ok(())
     }
 
     /// An intersection or difference with `inverse` children, rewritten without them:
@@ -603,7 +785,22 @@ impl Emitter<'_> {
         } else {
             1.0
         };
-        let intensity = colour.map(|c| PI * c * d * d * fade);
+        let mut intensity = colour.map(|c| PI * c * d * d * fade);
+        // A light far from a large scene (POV-Ray's suns at 10^4 units) can ask for more than
+        // the scene format's number limit: it is dimmed to the limit, with a warning.
+        let limit = crate::limits::MAX_SCENE_VALUE * 0.999;
+        let most = intensity.iter().cloned().fold(0.0, f64::max);
+        if most > limit {
+            intensity = intensity.map(|i| i * limit / most);
+            let path = self.files.get(l.pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+            self.warnings.push(format!(
+                "{}:{}:{}: this light is {d:.0} units from where the camera looks; its intensity is capped at {limit:.0e} (the image is {:.0}% as bright there as POV-Ray's)",
+                crate::limits::printable_message(&path),
+                l.pos.line,
+                l.pos.col,
+                100.0 * limit / most
+            ));
+        }
         let mut t = Table::new();
         match &l.kind {
             LightKind::Parallel { point_at } => {

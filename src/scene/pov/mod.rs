@@ -9,9 +9,12 @@
 
 mod ast;
 mod emit;
+mod implicit;
 mod lexer;
 mod objects;
 mod parser;
+mod tessellate;
+mod ttf;
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -96,9 +99,10 @@ pub fn translate_file(path: &Path, options: &PovOptions) -> Result<Translation, 
     let mut p = parser::Parser::new(path, options.clone());
     let result = p.run_file(path).and_then(|scene| emit::emit(&scene, options, &p.files));
     match result {
-        Ok((toml, origins)) => {
+        Ok((toml, origins, mut emitted)) => {
             let mut warnings = p.scene.warnings.clone();
             warnings.append(&mut p.warnings);
+            warnings.append(&mut emitted);
             Ok(Translation { toml, origins, files: p.files.clone(), warnings })
         }
         Err(e) => Err(to_scene_error(&e, &p.files, path)),

@@ -6,35 +6,18 @@ use glam::{DMat4, DVec3, DVec4};
 use super::ast::{
     AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Obj, ObjKind, Pigment, PigmentKind, Tex,
 };
+use super::implicit::{self, BlobComp, Implicit};
 use super::lexer::Tok;
 use super::parser::{describe, rotation, Parser, PovArray, Result, Value, MAX_ARRAY};
-use super::Pos;
+use super::tessellate::{self, FillRule, Spline, Tri};
+use super::ttf;
+use super::{Pos, PovError};
 
 /// Objects POV-Ray has and this front-end does not read yet.
-const UNSUPPORTED_OBJECTS: [&str; 20] = [
-    "isosurface",
-    "parametric",
-    "julia_fractal",
-    "poly",
-    "polynomial",
-    "cubic",
-    "quartic",
-    "quadric",
-    "lathe",
-    "sor",
-    "prism",
-    "height_field",
-    "blob",
-    "text",
-    "bicubic_patch",
-    "polygon",
-    "mesh2",
-    "sphere_sweep",
-    "ovus",
-    "lemon",
-];
+const UNSUPPORTED_OBJECTS: &[&str] =
+    &["isosurface", "parametric", "julia_fractal", "polynomial", "height_field", "sphere_sweep", "ovus", "lemon"];
 
-const OBJECTS: [&str; 16] = [
+const OBJECTS: &[&str] = &[
     "sphere",
     "box",
     "cylinder",
@@ -46,6 +29,18 @@ const OBJECTS: [&str; 16] = [
     "triangle",
     "smooth_triangle",
     "mesh",
+    "mesh2",
+    "lathe",
+    "sor",
+    "prism",
+    "polygon",
+    "bicubic_patch",
+    "text",
+    "quadric",
+    "cubic",
+    "quartic",
+    "poly",
+    "blob",
     "union",
     "merge",
     "intersection",
@@ -115,6 +110,8 @@ impl Parser {
                 self.scene.fog = Some(f);
             }
             "global_settings" => self.global_settings()?,
+            // `default { ... }` without `#`, as POV-Ray also reads it.
+            "default" => self.default_block()?,
             "sky_sphere" | "rainbow" | "media" => {
                 self.skip_block()?;
                 self.scene.warnings.push(format!("{}: {word} is not supported yet; it is left out", self.loc(pos)));
@@ -273,7 +270,8 @@ impl Parser {
             // Read past it: the standard includes declare shapes (quadrics, text) that scenes
             // rarely place; placing one is the error (`emit`).
             self.skip_block()?;
-            let kind = ObjKind::Unsupported(UNSUPPORTED_OBJECTS.into_iter().find(|k| *k == kind).unwrap_or("object"));
+            let kind =
+                ObjKind::Unsupported(UNSUPPORTED_OBJECTS.iter().find(|k| **k == kind).copied().unwrap_or("object"));
             return Ok(Obj { kind, xform: DMat4::IDENTITY, tex: None, interior: None, inverse: false, pos });
         }
         if kind == "light_source" {
@@ -350,6 +348,31 @@ impl Parser {
             }
             "smooth_triangle" => ObjKind::Triangles { tris: std::rc::Rc::new(vec![self.smooth_triangle()?]) },
             "mesh" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh(pos)?) },
+            "mesh2" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh2(pos)?) },
+            "lathe" | "sor" | "prism" | "polygon" | "text" => {
+                let tris = self.tessellated(kind, pos, &mut open)?;
+                if tris.len() > tessellate::MAX_TRIANGLES {
+                    return self.err(
+                        pos,
+                        format!(
+                            "this {kind} makes {} triangles; at most {} are taken",
+                            tris.len(),
+                            tessellate::MAX_TRIANGLES
+                        ),
+                    );
+                }
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris) }
+            }
+            "bicubic_patch" => ObjKind::Patch { points: Box::new(self.bicubic_patch(pos)?) },
+            "quadric" | "cubic" | "quartic" | "poly" => {
+                let shape = self.polynomial(kind, pos)?;
+                ObjKind::Implicit { shape: std::rc::Rc::new(shape), bound: None }
+            }
+            "blob" => {
+                let shape = self.blob(pos)?;
+                let bound = shape.blob_bounds();
+                ObjKind::Implicit { shape: std::rc::Rc::new(shape), bound }
+            }
             "union" | "merge" | "intersection" | "difference" => {
                 let op = match kind {
                     "union" => CsgOp::Union,
@@ -442,6 +465,426 @@ impl Parser {
         Ok(tris)
     }
 
+    /// A count before a list of points: a whole number from `min` to `max`.
+    fn count(&mut self, what: &str, min: usize, max: usize) -> Result<usize> {
+        let pos = self.here();
+        // `4 <1, 0>`: the count, then the first point (not a comparison).
+        self.stop_at_less = true;
+        let n = self.float();
+        self.stop_at_less = false;
+        let n = n?;
+        if !(n >= min as f64 && n <= max as f64) {
+            return self.err(pos, format!("{what} must be {min} to {max}, not {n}"));
+        }
+        Ok(n as usize)
+    }
+
+    fn points2(&mut self, n: usize) -> Result<Vec<glam::DVec2>> {
+        let mut v = Vec::with_capacity(n);
+        for _ in 0..n {
+            self.accept_sym(",")?;
+            let p = self.vector(2)?;
+            v.push(glam::DVec2::new(p[0], p[1]));
+        }
+        Ok(v)
+    }
+
+    fn spline_word(&mut self) -> Result<Option<Spline>> {
+        let s = match self.peek_word()?.as_deref() {
+            Some("linear_spline") => Spline::Linear,
+            Some("quadratic_spline") => Spline::Quadratic,
+            Some("cubic_spline") => Spline::Cubic,
+            Some("bezier_spline") => Spline::Bezier,
+            _ => return Ok(None),
+        };
+        self.next()?;
+        Ok(Some(s))
+    }
+
+    /// `open` and `sturm` right after a shape's points (`open` is also read with the modifiers).
+    fn open_sturm(&mut self, open: &mut bool) -> Result<()> {
+        loop {
+            if self.accept_word("open")? {
+                *open = true;
+            } else if !self.accept_word("sturm")? {
+                return Ok(());
+            }
+        }
+    }
+
+    /// lathe, sor, prism, polygon and text, tessellated (`tessellate.rs`; docs/pov-ray.md gives
+    /// the tolerance), in the shape's own coordinates.
+    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<Vec<Tri>> {
+        const MAX_POINTS: usize = 1 << 20;
+        match kind {
+            "lathe" => {
+                let spline = self.spline_word()?.unwrap_or(Spline::Linear);
+                let n = self.count("a lathe's number of points", 2, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                let ok = match spline {
+                    Spline::Linear => n >= 2,
+                    Spline::Quadratic => n >= 3,
+                    Spline::Cubic => n >= 4,
+                    Spline::Bezier => n % 4 == 0,
+                };
+                if !ok {
+                    return self.err(
+                        pos,
+                        format!(
+                            "a lathe with {} needs {}, not {n} points",
+                            spline.name(),
+                            match spline {
+                                Spline::Linear => "at least 2",
+                                Spline::Quadratic => "at least 3",
+                                Spline::Cubic => "at least 4",
+                                Spline::Bezier => "four per segment",
+                            }
+                        ),
+                    );
+                }
+                self.open_sturm(open)?;
+                Ok(tessellate::lathe(spline, &p))
+            }
+            "sor" => {
+                let n = self.count("a sor's number of points", 4, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                if p.windows(2).skip(1).take(n.saturating_sub(3)).any(|w| w[1].y <= w[0].y) {
+                    return self.err(pos, "a sor's points must rise: each height above the one before".into());
+                }
+                self.open_sturm(open)?;
+                Ok(tessellate::sor(&p, *open))
+            }
+            "prism" => {
+                let (mut spline, mut conic) = (Spline::Linear, false);
+                loop {
+                    if let Some(s) = self.spline_word()? {
+                        spline = s;
+                    } else if self.accept_word("linear_sweep")? {
+                        conic = false;
+                    } else if self.accept_word("conic_sweep")? {
+                        conic = true;
+                    } else {
+                        break;
+                    }
+                }
+                let h1 = self.float()?;
+                self.accept_sym(",")?;
+                let h2 = self.float()?;
+                self.accept_sym(",")?;
+                let min = match spline {
+                    Spline::Linear => 3,
+                    Spline::Quadratic => 5,
+                    Spline::Cubic => 6,
+                    Spline::Bezier => 4,
+                };
+                let n = self.count(&format!("a prism's number of points ({})", spline.name()), min, MAX_POINTS)?;
+                let p = self.points2(n)?;
+                self.open_sturm(open)?;
+                let outlines = tessellate::prism_outlines(spline, &p);
+                if outlines.is_empty() {
+                    return self.err(pos, "this prism's points enclose nothing".into());
+                }
+                Ok(tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic))
+            }
+            "polygon" => {
+                let n = self.count("a polygon's number of points", 3, MAX_POINTS)?;
+                let mut p = Vec::with_capacity(n);
+                for _ in 0..n {
+                    self.accept_sym(",")?;
+                    p.push(self.vec3()?);
+                }
+                Ok(tessellate::polygon(&p))
+            }
+            _ => self.text(),
+        }
+    }
+
+    /// `text { ttf "font.ttf" "string" thickness, offset }`: the glyphs' outlines from x = 0 on
+    /// the baseline, one em high, extruded from z = 0 to the thickness (POV-Ray's reference
+    /// manual, "Text").
+    fn text(&mut self) -> Result<Vec<Tri>> {
+        if !self.accept_word("ttf")? {
+            let t = self.expect_any("ttf")?;
+            return self.err(t.pos, format!("expected ttf \"font.ttf\" here, found {}", describe(&t.tok)));
+        }
+        let fpos = self.here();
+        let font_name = self.string()?;
+        self.accept_sym(",")?;
+        let string = self.string()?;
+        self.accept_sym(",")?;
+        let thickness = self.float()?;
+        self.accept_sym(",")?;
+        let offset = self.vector(2)?;
+        // POV-Ray adds `.ttf` to a name without an extension.
+        let font_name =
+            if std::path::Path::new(&font_name).extension().is_none() { format!("{font_name}.ttf") } else { font_name };
+        let path = self
+            .find_include(&font_name, fpos)
+            .map_err(|e| PovError { message: e.message.replacen("#include", "font", 1), ..e })?;
+        let bytes = crate::limits::read_limited(&path, crate::limits::MAX_SCENE_FILE_BYTES)
+            .map_err(|_| PovError::at(fpos, format!("cannot read the font {}", path.display())))?;
+        let Some(font) = ttf::Font::parse(bytes) else {
+            return self.err(fpos, format!("{} is not a TrueType font this front-end reads", path.display()));
+        };
+        let mut tris = Vec::new();
+        let mut pen = glam::DVec2::ZERO;
+        let (lo, hi) = (0.0f64.min(thickness), 0.0f64.max(thickness));
+        for c in string.chars() {
+            let g = font.glyph(c);
+            let Some(o) = font.outline(g) else {
+                return self.err(fpos, format!("the font {} is damaged (glyph {g})", path.display()));
+            };
+            // Glyph by glyph: a fill over the whole string would cut every glyph at every other's
+            // vertex heights.
+            let outlines: Vec<Vec<glam::DVec2>> =
+                o.into_iter().map(|c| c.into_iter().map(|p| p + pen).collect()).collect();
+            // extrude() sweeps along y with the outline in (x, z): turn that to (x, y) and z.
+            let glyph = tessellate::extrude(&outlines, FillRule::NonZero, lo, hi, false, false);
+            tris.extend(glyph.into_iter().map(|t| t.map(|v| DVec3::new(v.x, v.z, v.y))));
+            pen += glam::DVec2::new(font.advance(g) + offset[0], offset[1]);
+        }
+        Ok(tris)
+    }
+
+    /// quadric { <A, B, C>, <D, E, F>, <G, H, I>, J }, cubic { <20> }, quartic { <35> },
+    /// poly { n, <...> }.
+    fn polynomial(&mut self, kind: &str, pos: Pos) -> Result<Implicit> {
+        if kind == "quadric" {
+            let a = self.vec3()?;
+            self.accept_sym(",")?;
+            let d = self.vec3()?;
+            self.accept_sym(",")?;
+            let g = self.vec3()?;
+            self.accept_sym(",")?;
+            let j = self.float()?;
+            let terms = vec![
+                (a.x, [2, 0, 0]),
+                (a.y, [0, 2, 0]),
+                (a.z, [0, 0, 2]),
+                (d.x, [1, 1, 0]),
+                (d.y, [1, 0, 1]),
+                (d.z, [0, 1, 1]),
+                (g.x, [1, 0, 0]),
+                (g.y, [0, 1, 0]),
+                (g.z, [0, 0, 1]),
+                (j, [0, 0, 0]),
+            ];
+            return Ok(Implicit::Poly { terms: terms.into_iter().filter(|t| t.0 != 0.0).collect() });
+        }
+        let order = match kind {
+            "cubic" => 3,
+            "quartic" => 4,
+            _ => {
+                let n = self.float()?;
+                self.accept_sym(",")?;
+                if !(2.0..=7.0).contains(&n) || n.fract() != 0.0 {
+                    return self.err(pos, format!("a poly's order must be 2 to 7, not {n}"));
+                }
+                n as i32
+            }
+        };
+        let want = Implicit::coefficients(order);
+        let lt = self.expect_sym("<")?;
+        let c = self.angle_list_max(want + 1)?;
+        match Implicit::poly(order, &c) {
+            Some(p) => {
+                self.accept_word("sturm")?;
+                Ok(p)
+            }
+            None => self.err(lt, format!("a {kind} of order {order} takes {want} coefficients, not {}", c.len())),
+        }
+    }
+
+    /// blob { threshold t  sphere { c, r, [strength] s }  cylinder { a, b, r, [strength] s }
+    /// component s, r, c ... } (component textures are read and not kept).
+    fn blob(&mut self, pos: Pos) -> Result<Implicit> {
+        let mut threshold = 1.0;
+        let mut comps = Vec::new();
+        while let Some(w) = self.peek_word()? {
+            match w.as_str() {
+                "threshold" => {
+                    self.next()?;
+                    threshold = self.float()?;
+                }
+                "sturm" | "hierarchy" => {
+                    self.next()?;
+                    self.optional_bool()?;
+                }
+                "component" => {
+                    self.next()?;
+                    let strength = self.float()?;
+                    self.accept_sym(",")?;
+                    let radius = self.float()?;
+                    self.accept_sym(",")?;
+                    let a = self.vec3()?;
+                    comps.push(BlobComp { strength, radius, a, b: None, inv: DMat4::IDENTITY });
+                }
+                "sphere" | "cylinder" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let a = self.vec3()?;
+                    self.accept_sym(",")?;
+                    let b = if w == "cylinder" {
+                        let b = self.vec3()?;
+                        self.accept_sym(",")?;
+                        Some(b)
+                    } else {
+                        None
+                    };
+                    let radius = self.float()?;
+                    self.accept_sym(",")?;
+                    self.accept_word("strength")?;
+                    let strength = self.float()?;
+                    let mut m = DMat4::IDENTITY;
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) => {
+                                if let Some(t2) = self.transform_word(&w)? {
+                                    m = t2 * m;
+                                } else if matches!(w.as_str(), "texture" | "pigment" | "finish" | "normal") {
+                                    self.skip_block()?;
+                                } else {
+                                    return self.err(t.pos, format!("`{w}` does not belong in a blob component"));
+                                }
+                            }
+                            other => {
+                                return self.err(
+                                    t.pos,
+                                    format!("expected `}}` closing the component, found {}", describe(&other)),
+                                )
+                            }
+                        }
+                    }
+                    if radius <= 0.0 {
+                        return self.err(pos, format!("a blob component's radius must be positive, not {radius}"));
+                    }
+                    comps.push(BlobComp { strength, radius, a, b, inv: m.inverse() });
+                }
+                _ => break,
+            }
+        }
+        if comps.is_empty() {
+            return self.err(pos, "this blob has no components".into());
+        }
+        Ok(Implicit::Blob { threshold, comps })
+    }
+
+    /// `mesh2 { vertex_vectors { n, ... } ... face_indices { n, <a, b, c> ... } ... }`: the faces
+    /// (normals, uv and per-face textures are read and not kept yet).
+    fn mesh2(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+        const MAX_ITEMS: usize = 1 << 24;
+        let mut vertices: Vec<DVec3> = Vec::new();
+        let mut faces: Vec<(DVec3, Pos)> = Vec::new();
+        while let Some(w) = self.peek_word()? {
+            match w.as_str() {
+                "vertex_vectors" | "normal_vectors" | "uv_vectors" | "normal_indices" | "uv_indices" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count(&format!("the number of {w}"), 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        let v = self.vec3()?;
+                        if w == "vertex_vectors" {
+                            vertices.push(v);
+                        }
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "texture_list" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count("the number of textures", 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        self.expect_word_tex()?;
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "face_indices" => {
+                    self.next()?;
+                    self.expect_sym("{")?;
+                    let n = self.count("the number of face_indices", 0, MAX_ITEMS)?;
+                    for _ in 0..n {
+                        self.accept_sym(",")?;
+                        let fpos = self.here();
+                        faces.push((self.vec3()?, fpos));
+                        // Texture indices (one or three) may follow each face.
+                        while self.peek()?.is_some_and(|t| t.tok == Tok::Sym(",")) {
+                            self.next()?;
+                            if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Sym("}"))) {
+                                break;
+                            }
+                            self.float()?;
+                        }
+                    }
+                    self.accept_sym(",")?;
+                    self.expect_sym("}")?;
+                }
+                "inside_vector" => {
+                    self.next()?;
+                    self.vec3()?;
+                }
+                _ => break,
+            }
+        }
+        let mut tris = Vec::with_capacity(faces.len());
+        for (f, fpos) in faces {
+            let mut t = [DVec3::ZERO; 3];
+            for (k, i) in [f.x, f.y, f.z].into_iter().enumerate() {
+                if !(i >= 0.0 && (i as usize) < vertices.len()) {
+                    return self.err(
+                        fpos,
+                        format!("face index {i} is out of range: this mesh2 has {} vertices", vertices.len()),
+                    );
+                }
+                t[k] = vertices[i as usize];
+            }
+            tris.push(t);
+        }
+        if tris.is_empty() {
+            return self.err(pos, "this mesh2 has no faces (face_indices)".into());
+        }
+        Ok(tris)
+    }
+
+    fn expect_word_tex(&mut self) -> Result<()> {
+        let t = self.expect_any("a texture")?;
+        match &t.tok {
+            Tok::Word(w) if w == "texture" => {
+                self.texture()?;
+                Ok(())
+            }
+            other => self.err(t.pos, format!("expected a texture in texture_list, found {}", describe(other))),
+        }
+    }
+
+    /// `bicubic_patch { type n [flatness f] u_steps n v_steps m [accuracy a] 16 points }`.
+    fn bicubic_patch(&mut self, pos: Pos) -> Result<[DVec3; 16]> {
+        while let Some("type" | "flatness" | "u_steps" | "v_steps" | "accuracy") = self.peek_word()?.as_deref() {
+            self.next()?;
+            self.stop_at_less = true;
+            let v = self.float();
+            self.stop_at_less = false;
+            v?;
+        }
+        self.accept_sym(",")?;
+        let mut p = [DVec3::ZERO; 16];
+        for (i, q) in p.iter_mut().enumerate() {
+            if i > 0 {
+                self.accept_sym(",")?;
+            }
+            *q = self.vec3()?;
+        }
+        if p.iter().any(|q| !q.is_finite()) {
+            return self.err(pos, "a bicubic_patch point is not a number".into());
+        }
+        Ok(p)
+    }
+
     /// The end of a mesh triangle: an optional texture (not kept per triangle) and `}`.
     fn triangle_tail(&mut self) -> Result<()> {
         loop {
@@ -508,6 +951,36 @@ impl Parser {
                     }
                 }
                 "open" => *open = true,
+                "bounded_by" if matches!(o.kind, ObjKind::Implicit { .. }) => {
+                    // An equation's surface is cut at its bounds, as POV-Ray does.
+                    self.expect_sym("{")?;
+                    let mut parts = Vec::new();
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match &t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) if OBJECTS.contains(&w.as_str()) => parts.push(self.object(w, t.pos)?),
+                            other => {
+                                return self
+                                    .err(t.pos, format!("expected an object in bounded_by, found {}", describe(other)))
+                            }
+                        }
+                    }
+                    let inv = o.xform.inverse();
+                    for part in &parts {
+                        let (lo, hi) = super::emit::bounds_of(part);
+                        if lo.x > hi.x {
+                            continue;
+                        }
+                        let (lo, hi) = implicit::moved_box(lo, hi, &inv);
+                        if let ObjKind::Implicit { bound, .. } = &mut o.kind {
+                            *bound = Some(match *bound {
+                                Some((a, b)) => (a.max(lo), b.min(hi)),
+                                None => (lo, hi),
+                            });
+                        }
+                    }
+                }
                 "normal" | "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
                 "hollow" | "no_shadow" | "no_image" | "no_reflection" | "double_illuminate" | "sturm"
                 | "no_radiosity" => {
@@ -521,7 +994,46 @@ impl Parser {
                     }
                 }
                 "inverse" => o.inverse = !o.inverse,
-                "clipped_by" => return self.err(pos, format!("`{w}` is not supported yet")),
+                "clipped_by" => {
+                    // The object's surface where it is inside the clipping objects: written as
+                    // the intersection of the object and them (docs/pov-ray.md: the cut is
+                    // closed here where POV-Ray leaves it open).
+                    self.expect_sym("{")?;
+                    let mut clips = Vec::new();
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match &t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) if w == "bounded_by" => {
+                                // clipped_by { bounded_by }: the bounds are not kept, so no clip.
+                            }
+                            Tok::Word(w)
+                                if OBJECTS.contains(&w.as_str()) || UNSUPPORTED_OBJECTS.contains(&w.as_str()) =>
+                            {
+                                clips.push(self.object(w, t.pos)?);
+                            }
+                            other => {
+                                return self
+                                    .err(t.pos, format!("expected an object in clipped_by, found {}", describe(other)))
+                            }
+                        }
+                    }
+                    if !clips.is_empty() && !matches!(o.kind, ObjKind::Light(_)) {
+                        let inner = Obj { interior: None, ..o.clone() };
+                        let mut children = vec![inner];
+                        children.extend(clips);
+                        *o = Obj {
+                            kind: ObjKind::Csg { op: CsgOp::Intersection, children },
+                            xform: DMat4::IDENTITY,
+                            tex: None,
+                            interior: o.interior.clone(),
+                            inverse: false,
+                            pos: o.pos,
+                        };
+                        // The clipped object keeps its texture; one given later reaches it too
+                        // (the node's texture is the default of children without one).
+                    }
+                }
                 other => {
                     return self.err(pos, format!("`{other}` is not an object modifier this front-end knows"));
                 }
@@ -671,6 +1183,18 @@ impl Parser {
                 "finish" => top.finish = self.finish()?,
                 "normal" => self.skip_block()?,
                 "uv_mapping" => {}
+                "tiles" => {
+                    // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
+                    self.warnings.push(format!(
+                        "{}: the tiles texture pattern is not supported yet; its first texture is used",
+                        self.loc(pos)
+                    ));
+                    self.expect_sym("{")?;
+                    if self.accept_word("texture")? {
+                        layers = self.texture()?;
+                    }
+                    self.skip_to_brace()?;
+                }
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries).
                     self.warnings.push(format!(
@@ -776,6 +1300,13 @@ impl Parser {
                     }
                 }
                 "uv_mapping" => {}
+                "interior" | "exterior" => {
+                    // A fractal pattern's interior and exterior types (`interior 1, 0.5`).
+                    self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
                 "red" | "green" | "blue" | "filter" | "transmit" => {
                     let i = ["red", "green", "blue", "filter", "transmit"].iter().position(|k| *k == w).unwrap_or(0);
                     let v = self.float()?;

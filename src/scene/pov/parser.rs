@@ -110,6 +110,9 @@ pub struct Parser {
     delivered: u64,
     /// Whether `>` closes a vector rather than compares: one entry per open `<` or `(`.
     angle: Vec<bool>,
+    /// A `<` ends the expression (a float followed by a vector, as in bicubic_patch's
+    /// `v_steps 5 <1, 0, 0>`).
+    pub stop_at_less: bool,
     pub default_finish: Finish,
     pub default_pigment: Option<Pigment>,
     last_pos: Pos,
@@ -140,6 +143,7 @@ impl Parser {
             warnings: Vec::new(),
             delivered: 0,
             angle: Vec::new(),
+            stop_at_less: false,
             default_finish: Finish::default(),
             default_pigment: None,
             last_pos: Pos::default(),
@@ -642,9 +646,56 @@ impl Parser {
                 return self.err(pos, format!("#error in the scene: {}", text.trim()));
             }
             "default" => self.default_block()?,
-            "fopen" | "fclose" | "read" | "write" => {
-                return self.err(pos, format!("file I/O (#{d}) is not supported yet"));
+            "fopen" => {
+                // Writing is read and ignored (the portfolio scenes write HTML pages beside their
+                // images; a render has no business writing files); reading is refused.
+                let (name, _) = self.raw_word("a file identifier")?;
+                self.string()?;
+                let mode = self.raw_word("read, write or append")?;
+                match mode.0.as_str() {
+                    "write" | "append" => {
+                        self.warnings.push(format!(
+                            "{}: #fopen {name} ... {}: file output is not written (the scene's writes are ignored)",
+                            self.loc(pos),
+                            mode.0
+                        ));
+                        self.declare(&name, Value::Other("an output file"), false);
+                    }
+                    "read" => return self.err(pos, "reading files (#fopen ... read) is not supported yet".into()),
+                    other => {
+                        return self.err(mode.1, format!("#fopen takes read, write or append, not `{other}`"));
+                    }
+                }
             }
+            "fclose" => {
+                let (name, npos) = self.raw_word("a file identifier")?;
+                if !matches!(self.lookup(&name), Some(Value::Other("an output file"))) {
+                    return self.err(npos, format!("`{name}` is not an open file"));
+                }
+            }
+            "write" => {
+                // #write (File, item, item ...): the items are evaluated (their errors still
+                // count) and dropped.
+                self.expect_sym("(")?;
+                let (name, npos) = self.raw_word("a file identifier")?;
+                if !matches!(self.lookup(&name), Some(Value::Other("an output file"))) {
+                    return self.err(npos, format!("`{name}` is not a file opened for writing"));
+                }
+                loop {
+                    if self.accept_sym(")")? {
+                        break;
+                    }
+                    self.accept_sym(",")?;
+                    if self.accept_sym(")")? {
+                        break;
+                    }
+                    if self.accept_word("uint8")? || self.accept_word("sint8")? {
+                        // binary formats: the value follows
+                    }
+                    self.expr()?;
+                }
+            }
+            "read" => return self.err(pos, "reading files (#read) is not supported yet".into()),
             other => return self.err(pos, format!("unknown directive #{other}")),
         }
         Ok(())
@@ -672,7 +723,7 @@ impl Parser {
         }
     }
 
-    fn find_include(&self, name: &str, pos: Pos) -> Result<PathBuf> {
+    pub fn find_include(&self, name: &str, pos: Pos) -> Result<PathBuf> {
         let here = self.files.get(pos.file as usize).and_then(|p| p.parent()).map(Path::to_path_buf);
         let mut dirs: Vec<PathBuf> = here.into_iter().collect();
         dirs.push(self.scene_dir.clone());
@@ -873,7 +924,7 @@ impl Parser {
                 return Ok(a);
             }
             // `<a, b> <c, d>`: a vector followed by another (a list without commas), not a comparison.
-            if op == "<" && matches!(a, Value::Vector(_)) {
+            if op == "<" && (matches!(a, Value::Vector(_)) || self.stop_at_less) {
                 return Ok(a);
             }
             self.next()?;
@@ -1027,6 +1078,11 @@ impl Parser {
     /// The numbers of `< a, b, ... >` after the `<`, up to and including the `>`. Commas are
     /// optional, as in POV-Ray (`< -1 0 0 >`).
     pub fn angle_list(&mut self) -> Result<Vec<f64>> {
+        self.angle_list_max(16)
+    }
+
+    /// `angle_list` for lists of up to `max` numbers (a polynomial's coefficients).
+    pub fn angle_list_max(&mut self, max: usize) -> Result<Vec<f64>> {
         self.angle.push(true);
         let mut comps = Vec::new();
         let result = (|| -> Result<()> {
@@ -1036,7 +1092,7 @@ impl Parser {
                     return Ok(());
                 }
                 self.accept_sym(",")?;
-                if comps.len() > 16 {
+                if comps.len() > max {
                     return self.err(self.here(), "a vector this long never closes; add `>`".into());
                 }
             }
@@ -1235,6 +1291,18 @@ impl Parser {
                     return self.err(pos, format!("rand({s}): no such random stream; create one with seed()"));
                 }
                 Value::Float(pov_rand(&mut self.rand[i as usize]))
+            }
+            "min_extent" | "max_extent" => {
+                // The object's bounding box (POV-Ray's is its own bounding box; here each part's
+                // box through its transform, so the same for boxes and close for the rest).
+                let a = self.args()?;
+                let Some(Value::Object(o)) = a.first() else {
+                    return self.err(pos, format!("{w}() takes an object"));
+                };
+                let (lo, hi) = super::emit::bounds_of(o);
+                // POV-Ray's answer for an unbounded object: its huge bound.
+                let (lo, hi) = if lo.x <= hi.x { (lo, hi) } else { (DVec3::splat(-2e10), DVec3::splat(2e10)) };
+                vec_value(if w == "min_extent" { lo } else { hi })
             }
             "vlength" => {
                 let a = self.args()?;
@@ -1717,12 +1785,26 @@ mod tests {
         assert_eq!(e.pos.map(|p| p.line), Some(2));
         let e = error("#declare R = trace(A, <0,0,0>, y);");
         assert!(e.message.contains("`trace` is not supported yet"), "{}", e.message);
-        let e = error("#fopen F \"out.txt\" write");
-        assert!(e.message.contains("file I/O"), "{}", e.message);
+        let e = error("#fopen F \"in.txt\" read");
+        assert!(e.message.contains("reading files"), "{}", e.message);
+        let e = error("#write (G, \"x\")");
+        assert!(e.message.contains("not a file opened for writing"), "{}", e.message);
         let e = error("#if (1) #declare R = 1;");
         assert!(e.message.contains("no #end"), "{}", e.message);
         let e = error("#declare R = 0; #while (1) #declare R = R + 1; #end");
         assert!(e.message.contains("runaway"), "{}", e.message);
+    }
+
+    #[test]
+    fn file_output_is_evaluated_and_not_written() {
+        let mut p = Parser::new(Path::new("t.pov"), PovOptions::default());
+        p.run_text(
+            "#fopen F \"out.html\" write\n#write (F, \"<p>\", 1 + 2, \"\\n\")\n#write(F concat(\"a\", \"b\"))\n#fclose F\n#declare R = 1;",
+            Path::new("t.pov"),
+        )
+        .unwrap();
+        assert!(matches!(p.lookup("R"), Some(Value::Float(_))));
+        assert!(p.warnings.iter().any(|w| w.contains("file output is not written")), "{:?}", p.warnings);
     }
 
     #[test]
