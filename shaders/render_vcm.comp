@@ -53,27 +53,12 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint stream, 
     vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cos_to_light;
     if (fr == vec3(0.0)) return vec3(0.0);
     float dist = length(ls.p - h.p);
-    float disc = PI * l.radius * l.radius;
+    // Contract in vcm.rs, illumination_pdfs.
     float direct = ls.pdf;
-    float emission;
-    float cos_at_light = 1.0;
-    if (l.kind == LIGHT_AREA) {
-        emission = ls.cos_l / (PI * l.area);
-        cos_at_light = ls.cos_l;
-    } else if (l.kind == LIGHT_ENVIRONMENT) {
-        emission = 0.0;
-        WHEN(true) { emission = environment_pdf(l, ls.wi) / disc; }
-    } else if (l.kind == LIGHT_DISTANT) {
-        if (l.area > 0.0) {
-            emission = 1.0 / (l.area * disc);
-        } else {
-            direct = 1.0;
-            emission = 1.0 / disc;
-        }
-    } else {
-        direct = dist * dist;
-        emission = 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
-    }
+    if (l.kind == LIGHT_DISTANT && l.area <= 0.0) direct = 1.0;
+    else if (l.kind != LIGHT_AREA && l.kind != LIGHT_ENVIRONMENT && l.kind != LIGHT_DISTANT) direct = dist * dist;
+    float emission = emission_pdf(l, ls.wi, ls.cos_l);
+    float cos_at_light = l.kind == LIGHT_AREA ? ls.cos_l : 1.0;
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
     float forward = light_is_delta(l) ? 0.0 : pdfs.x;
     float w_light = mis(forward / (l.pick_probability * direct));
@@ -157,17 +142,13 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                 Light l = light_at(i);
                 if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
                 if (dot(d, load3(l.direction)) <= -l.cos_outer) {
-                    float disc = PI * l.radius * l.radius;
-                    float direct = l.pick_probability / l.area;
-                    float w = take_whole ? 1.0 : emission_weight(sp, direct, direct / disc);
+                    float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, d, 1.0));
                     terms[layer] += sp.throughput * load3(l.intensity) * (w / l.area);
                 }
             }
             WHEN(frame.environment != NO_LIGHT) {
                 Light l = light_at(frame.environment);
-                float direct = l.pick_probability * environment_pdf(l, d);
-                float disc = PI * l.radius * l.radius;
-                float w = take_whole ? 1.0 : emission_weight(sp, direct, direct / disc);
+                float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability * environment_pdf(l, d), l.pick_probability * emission_pdf(l, d, 1.0));
                 terms[layer] += sp.throughput * environment_radiance(l, d) * w;
             }
             break;
@@ -186,8 +167,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                 float w = 1.0;
                 if (!(take_whole || light == NO_LIGHT || hp != prim)) {
                     Light l = light_at(light);
-                    float direct = l.pick_probability / l.area;
-                    w = emission_weight(sp, direct, direct * cos_l / PI);
+                    w = emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, d, cos_l));
                 }
                 terms[layer] += sp.throughput * emitted * w;
             }

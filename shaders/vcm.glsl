@@ -57,6 +57,16 @@ vec2 lobe_pdfs(Bsdf b, vec3 wo, vec3 wi) {
 
 float abs_cos(Bsdf b, vec3 w) { return b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, w)); }
 
+// Density of a light sub-path leaving l along -w (w toward the light), before the pick
+// probability; contract in vcm.rs, emission_pdf.
+float emission_pdf(Light l, vec3 w, float cos_l) {
+    float disc = PI * l.radius * l.radius;
+    if (l.kind == LIGHT_AREA) return max(cos_l, 0.0) / (PI * l.area);
+    if (l.kind == LIGHT_ENVIRONMENT) return environment_pdf(l, w) / disc;
+    if (l.kind == LIGHT_DISTANT) return l.area > 0.0 ? 1.0 / (l.area * disc) : 1.0 / disc;
+    return 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
+}
+
 bool light_is_delta(Light l) {
     if (l.kind == LIGHT_AREA || l.kind == LIGHT_ENVIRONMENT) return false;
     if (l.kind == LIGHT_DISTANT) return l.area <= 0.0;

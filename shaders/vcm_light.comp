@@ -80,29 +80,18 @@ void main() {
     float cos_l;
     light_emit(l, rand2(path, sample_index, frame.seed, dim0 + RNG_LIGHT_U),
                rand2(path, sample_index, frame.seed, dim0 + RNG_LIGHT_V), o, d, power, cos_l);
-    float disc = PI * l.radius * l.radius;
-    float direct_pdf;
-    float emission_pdf;
-    if (l.kind == LIGHT_AREA) {
-        direct_pdf = 1.0 / l.area;
-        emission_pdf = max(cos_l, 0.0) / (PI * l.area);
-    } else if (l.kind == LIGHT_ENVIRONMENT) {
-        direct_pdf = 0.0;
-        WHEN(true) { direct_pdf = environment_pdf(l, -d); }
-        emission_pdf = direct_pdf / disc;
-    } else if (l.kind == LIGHT_DISTANT) {
-        direct_pdf = l.area > 0.0 ? 1.0 / l.area : 1.0;
-        emission_pdf = l.area > 0.0 ? 1.0 / (l.area * disc) : 1.0 / disc;
-    } else {
-        direct_pdf = 1.0;
-        emission_pdf = 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
-    }
-    if (emission_pdf <= 0.0 || power == vec3(0.0)) return;
+    // Light sampling's density of the start point; contract in vcm.rs, trace_light_path.
+    float direct_pdf = 1.0;
+    if (l.kind == LIGHT_AREA) direct_pdf = 1.0 / l.area;
+    else if (l.kind == LIGHT_ENVIRONMENT) direct_pdf = environment_pdf(l, -d);
+    else if (l.kind == LIGHT_DISTANT && l.area > 0.0) direct_pdf = 1.0 / l.area;
+    float emission = emission_pdf(l, -d, cos_l);
+    if (emission <= 0.0 || power == vec3(0.0)) return;
     bool finite = l.kind != LIGHT_DISTANT && l.kind != LIGHT_ENVIRONMENT;
     SubPath sp;
     sp.throughput = power / l.pick_probability;
-    sp.d_vcm = mis(direct_pdf / emission_pdf);
-    sp.d_vc = light_is_delta(l) ? 0.0 : mis((finite ? cos_l : 1.0) / (emission_pdf * l.pick_probability));
+    sp.d_vcm = mis(direct_pdf / emission);
+    sp.d_vc = light_is_delta(l) ? 0.0 : mis((finite ? cos_l : 1.0) / (emission * l.pick_probability));
     sp.d_vm = sp.d_vc * params.vc_weight;
     uint skip = NO_LIGHT;
     uint diffuse = 0u;

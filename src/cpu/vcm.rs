@@ -102,21 +102,35 @@ pub fn splat_value(low: u32, high: u32) -> f32 {
     high as f32 + low as f32 * (1.0 / 4_294_967_296.0)
 }
 
-/// The light sample's densities that the weights need, before the pick probability: the
-/// solid-angle density of drawing it from the shading point (SmallVCM's directPdfW), the density
-/// of a light sub-path leaving the light the same way (emissionPdfW: by area times solid angle
-/// for finite lights, by solid angle times the scene disc's area for infinite ones) and the
-/// cosine at the light.
-fn illumination_pdfs(s: &SceneView, l: &Light, wi: Vec3, dist: f32, pdf: f32, cos_l: f32) -> (f32, f32, f32) {
+/// Density, before the pick probability, of a light sub-path leaving light `l` along -`w` (`w`
+/// points from the scene toward the light; SmallVCM's emissionPdfW): for area lights by area
+/// times the cosine lobe at cosine `cos_l`, for infinite lights by solid angle times the area of
+/// the scene's disc they start from, for point and spot lights uniform in their cone. The one
+/// place every technique takes it from (light sub-paths, light sampling, emission met).
+pub fn emission_pdf(s: &SceneView, l: &Light, w: Vec3, cos_l: f32) -> f32 {
     let disc = std::f32::consts::PI * l.radius * l.radius;
     match l.kind {
-        LIGHT_AREA => (pdf, cos_l / (std::f32::consts::PI * l.area), cos_l),
-        LIGHT_ENVIRONMENT => (pdf, environment_pdf(s, l, wi) / disc, 1.0),
-        LIGHT_DISTANT if l.area > 0.0 => (pdf, 1.0 / (l.area * disc), 1.0),
-        LIGHT_DISTANT => (1.0, 1.0 / disc, 1.0),
-        // Point and spot lights: uniform in their cone.
-        _ => (dist * dist, 1.0 / (2.0 * std::f32::consts::PI * (1.0 - l.cos_outer)), 1.0),
+        LIGHT_AREA => cos_l.max(0.0) / (std::f32::consts::PI * l.area),
+        LIGHT_ENVIRONMENT => environment_pdf(s, l, w) / disc,
+        LIGHT_DISTANT if l.area > 0.0 => 1.0 / (l.area * disc),
+        LIGHT_DISTANT => 1.0 / disc,
+        _ => 1.0 / (2.0 * std::f32::consts::PI * (1.0 - l.cos_outer)),
     }
+}
+
+/// The light sample's densities that the weights need, before the pick probability: the
+/// solid-angle density of drawing it from the shading point `dist` away (SmallVCM's directPdfW;
+/// `pdf` is the sample's own, 0 for delta lights), `emission_pdf`, and the cosine at the light.
+fn illumination_pdfs(s: &SceneView, l: &Light, wi: Vec3, dist: f32, pdf: f32, cos_l: f32) -> (f32, f32, f32) {
+    let direct = match l.kind {
+        LIGHT_AREA | LIGHT_ENVIRONMENT => pdf,
+        LIGHT_DISTANT if l.area > 0.0 => pdf,
+        LIGHT_DISTANT => 1.0,
+        // Point and spot lights: by area at the shading point, as SmallVCM's.
+        _ => dist * dist,
+    };
+    let cos_at_light = if l.kind == LIGHT_AREA { cos_l } else { 1.0 };
+    (direct, emission_pdf(s, l, wi, cos_l), cos_at_light)
 }
 
 /// Whether light `l` is a delta light (no ray meets it: point, spot, distant without a disc).
@@ -305,8 +319,10 @@ pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
     let slots = p.vertex_slots as usize;
     let splats: Vec<AtomicU64> = (0..(f.width * f.height * LAYER_COUNT * 3)).map(|_| AtomicU64::new(0)).collect();
     let mut vertices = vec![LightVertex::default(); p.light_paths as usize * slots];
-    vertices.par_chunks_mut(slots).enumerate().for_each(|(path, out)| {
-        trace_light_path(s, p, path as u32, out, &mut |pixel, layer, v| {
+    let mut positions = vec![Vec3::ZERO; vertices.len()];
+    let runs = vertices.par_chunks_mut(slots).zip(positions.par_chunks_mut(slots));
+    runs.enumerate().for_each(|(path, (out, at))| {
+        trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
             let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
             for (k, c) in [v.x, v.y, v.z].into_iter().enumerate() {
                 let (low, high) = splat_words(c);
@@ -316,12 +332,8 @@ pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
     });
     let mut points = Vec::new();
     if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
-        for (i, v) in vertices.iter().enumerate().filter(|(_, v)| v.path_length > 0) {
-            points.push(Photon {
-                position: light_vertex_hit(s, v).p.into(),
-                flux_rg: (i / slots) as u32,
-                flux_b_dir: (i % slots) as u32,
-            });
+        for (i, (_, at)) in vertices.iter().zip(&positions).enumerate().filter(|(_, (v, _))| v.path_length > 0) {
+            points.push(Photon { position: (*at).into(), flux_rg: (i / slots) as u32, flux_b_dir: (i % slots) as u32 });
         }
     }
     let grid = vertex_grid(p, points.len() as u32);
@@ -334,8 +346,8 @@ fn light_vertex_hit(s: &SceneView, v: &LightVertex) -> Hit {
     shape_hit(s, v.hit, Vec3::from(v.origin), Vec3::from(v.direction), v.t)
 }
 
-/// Whether nothing blocks the segment from `a` (leaving `ha` toward `dir`) to `target`; counts
-/// the ray.
+/// Whether nothing blocks the segment from the surface point `ha` (its ray leaving from the
+/// offset origin on the target's side) to `target`; counts the ray.
 fn visible(s: &SceneView, ha: &Hit, skip: u32, target: Vec3, rays: &mut u32) -> bool {
     let origin = offset_origin(ha, target - ha.p, BSDF_REFLECTION);
     let to = target - origin;
@@ -345,13 +357,14 @@ fn visible(s: &SceneView, ha: &Hit, skip: u32, target: Vec3, rays: &mut u32) -> 
     prim == NO_LIGHT
 }
 
-/// Traces light path `path` of the sample into `out` (its vertex slots) and hands each
-/// light-tracing splat to `splat(pixel, layer, value)`.
+/// Traces light path `path` of the sample into `out` (its vertex slots, with their surface points
+/// in `positions`) and hands each light-tracing splat to `splat(pixel, layer, value)`.
 pub fn trace_light_path(
     s: &SceneView,
     p: &VcmParams,
     path: u32,
     out: &mut [LightVertex],
+    positions: &mut [Vec3],
     splat: &mut dyn FnMut(u32, u32, Vec3),
 ) -> u32 {
     let f = s.frame;
@@ -371,28 +384,26 @@ pub fn trace_light_path(
         rand2(path, sample, f.seed, dim0 + RNG_LIGHT_U),
         rand2(path, sample, f.seed, dim0 + RNG_LIGHT_V),
     );
-    let disc = std::f32::consts::PI * l.radius * l.radius;
-    let (direct_pdf, emission_pdf) = match l.kind {
-        LIGHT_AREA => (1.0 / l.area, e.cos_l.max(0.0) / (std::f32::consts::PI * l.area)),
-        LIGHT_ENVIRONMENT => {
-            let d = environment_pdf(s, l, -e.direction);
-            (d, d / disc)
-        }
-        LIGHT_DISTANT if l.area > 0.0 => (1.0 / l.area, 1.0 / (l.area * disc)),
-        LIGHT_DISTANT => (1.0, 1.0 / disc),
-        _ => (1.0, 1.0 / (2.0 * std::f32::consts::PI * (1.0 - l.cos_outer))),
+    // Light sampling's density of the start point: by area for area lights, by solid angle for
+    // infinite ones, 1 for delta lights (SmallVCM's directPdfA).
+    let direct_pdf = match l.kind {
+        LIGHT_AREA => 1.0 / l.area,
+        LIGHT_ENVIRONMENT => environment_pdf(s, l, -e.direction),
+        LIGHT_DISTANT if l.area > 0.0 => 1.0 / l.area,
+        _ => 1.0,
     };
-    if emission_pdf <= 0.0 || e.power == Vec3::ZERO {
+    let emission = emission_pdf(s, l, -e.direction, e.cos_l);
+    if emission <= 0.0 || e.power == Vec3::ZERO {
         return rays;
     }
     let finite = !matches!(l.kind, LIGHT_DISTANT | LIGHT_ENVIRONMENT);
     let mut sub = SubPath {
         throughput: e.power / l.pick_probability,
-        d_vcm: mis(direct_pdf / emission_pdf),
+        d_vcm: mis(direct_pdf / emission),
         d_vc: if light_is_delta(l) {
             0.0
         } else {
-            mis((if finite { e.cos_l } else { 1.0 }) / (emission_pdf * l.pick_probability))
+            mis((if finite { e.cos_l } else { 1.0 }) / (emission * l.pick_probability))
         },
         d_vm: 0.0,
     };
@@ -416,6 +427,7 @@ pub fn trace_light_path(
         let wo = -d;
         sub.arrive(t, abs_cos(&b, wo), k > 1 || finite);
         if flags & BSDF_ESTIMATE != 0 {
+            positions[(k - 1) as usize] = h.p;
             out[(k - 1) as usize] = LightVertex {
                 origin: o.into(),
                 hit: prim,
@@ -521,12 +533,6 @@ fn connect_to_camera(
     Some((pixel, value))
 }
 
-/// Loop steps (rays) of one camera path: a path ray per vertex, then per non-delta vertex a
-/// shadow ray toward a light and one per light vertex it connects to.
-pub fn vcm_steps(max_depth: u32) -> u32 {
-    (max_depth + 1) * (2 + max_depth)
-}
-
 /// Adds the terms of the camera path of pixel (`px`, `py`) in the sample to `terms` and the rays
 /// it casts to `rays`.
 #[allow(clippy::too_many_arguments)]
@@ -577,17 +583,23 @@ pub fn radiance_vcm(
             }
             for l in s.lights.iter().take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0) {
                 if d.dot(Vec3::from(l.direction)) <= -l.cos_outer {
-                    let disc = std::f32::consts::PI * l.radius * l.radius;
-                    let direct = l.pick_probability / l.area;
-                    let w = if take_whole { 1.0 } else { emission_weight(&sub, direct, direct / disc) };
+                    let w = if take_whole {
+                        1.0
+                    } else {
+                        let emission = l.pick_probability * emission_pdf(s, l, d, 1.0);
+                        emission_weight(&sub, l.pick_probability / l.area, emission)
+                    };
                     terms[layer] += sub.throughput * Vec3::from(l.intensity) * (w / l.area);
                 }
             }
             if f.environment != NO_LIGHT {
                 let l = &s.lights[f.environment as usize];
-                let direct = l.pick_probability * environment_pdf(s, l, d);
-                let disc = std::f32::consts::PI * l.radius * l.radius;
-                let w = if take_whole { 1.0 } else { emission_weight(&sub, direct, direct / disc) };
+                let w = if take_whole {
+                    1.0
+                } else {
+                    let emission = l.pick_probability * emission_pdf(s, l, d, 1.0);
+                    emission_weight(&sub, l.pick_probability * environment_pdf(s, l, d), emission)
+                };
                 terms[layer] += sub.throughput * environment_radiance(s, l, d) * w;
             }
             break;
@@ -607,8 +619,8 @@ pub fn radiance_vcm(
                     1.0
                 } else {
                     let l = &s.lights[light as usize];
-                    let direct = l.pick_probability / l.area;
-                    emission_weight(&sub, direct, direct * cos_l / std::f32::consts::PI)
+                    let emission = l.pick_probability * emission_pdf(s, l, d, cos_l);
+                    emission_weight(&sub, l.pick_probability / l.area, emission)
                 };
                 terms[layer] += sub.throughput * emitted * w;
             }

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use super::kernels::{groups, GpuKernels};
 use super::maps::build_map;
 use super::scene::DeviceScene;
-use crate::cpu::vcm::{vcm_params, vertex_grid};
+use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
 use crate::layout::{DispatchRange, LightVertex, Photon};
@@ -48,6 +48,8 @@ pub(super) fn render_pass_bidirectional(
     ctx.fill_zero(&accumulation)?;
     let splats = ctx.create_buffer("vcm_splats", splat_bytes)?;
     let counter = ctx.create_buffer("vcm_point_count", 16)?;
+    let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
+    let vertices = ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?;
     let band_rows = stop_band_rows(f.width, f.height);
     let total = f.height as u64 * spp as u64;
     let mut done = 0;
@@ -59,8 +61,7 @@ pub(super) fn render_pass_bidirectional(
         let sample_index = pass * spp + sample;
         let t = Instant::now();
         let mut params = vcm_params(&f, base_radius, sample_index);
-        let slots = params.light_paths as u64 * params.vertex_slots as u64;
-        let vertices = ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?;
+        // The grid build takes the points' buffer; the vertex slots stay for the pass.
         let points = ctx.create_buffer("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
         ctx.fill_zero(&vertices)?;
         ctx.fill_zero(&splats)?;
