@@ -9,11 +9,13 @@
 //! a step stops it within `PREVIEW_STOP_PATHS` paths (photon tracing included: the renderer's
 //! stop flag, looked at between small submissions) and the new generation starts at once.
 //!
-//! On the GPU backend the `GpuRenderer` (device, kernels, buffers) lives as long as the thread:
-//! a change re-prepares the scene and `update_scene` writes only the arrays that changed (an
+//! The thread drives one `render::Renderer` (the renderer the command line and the Python
+//! package drive), made at the first step and kept as long as the thread: a change re-prepares
+//! the scene and `Renderer::update_scene` writes only the arrays that changed on a device (an
 //! edit of a material writes the material array), in place where their sizes allow; passes of
-//! one scene, view and size reuse the prepared scene and upload nothing. The final render runs on the same thread and renderer, with the scene as it was
-//! when it started; it goes on when every page is closed, and the preview waits for it.
+//! one scene, view and size reuse the prepared scene and upload nothing. The final render runs
+//! on the same thread and renderer, with the scene as it was when it started; it goes on when
+//! every page is closed, and the preview waits for it.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -26,10 +28,9 @@ use tokio::sync::broadcast;
 
 use crate::gpu::{GpuContext, GpuOptions};
 use crate::io::Image;
-use crate::render::gpu::GpuRenderer;
 use crate::render::progressive::{Accumulator, Budget};
 use crate::render::{
-    prepare, render_cpu, set_thread_stop_flag, set_thread_stop_paths, FrameSettings, PhotonSettings, RenderOutput,
+    prepare, set_thread_stop_flag, set_thread_stop_paths, FrameSettings, PhotonSettings, RenderOutput,
 };
 use crate::scene::{Projection, Scene};
 
@@ -329,12 +330,14 @@ struct Prepared {
     buffers: crate::render::SceneBuffers,
 }
 
-/// One backend: the CPU twin, or a `GpuRenderer` kept across frames; with the scene prepared last.
+/// The editor's backend: one `render::Renderer` kept across frames (the CPU twin, or the
+/// kernels and buffers on a device), with the scene prepared last.
 struct Backend<'a> {
-    gpu: Option<(&'a GpuContext, Option<Box<GpuRenderer<'a>>>)>,
+    ctx: Option<&'a GpuContext>,
+    renderer: Option<crate::render::Renderer<'a>>,
     prepared: Option<Prepared>,
-    /// The photon settings the device's frame constants hold.
-    device_photons: Option<PhotonSettings>,
+    /// The photon settings the renderer holds.
+    renderer_photons: Option<PhotonSettings>,
 }
 
 impl Backend<'_> {
@@ -376,16 +379,13 @@ impl Backend<'_> {
         if let Some(p) = photons {
             crate::render::photons::check_radii(buffers, p).map_err(|e| e.to_string())?;
         }
-        let Some((ctx, renderer)) = &mut self.gpu else {
-            return Ok((render_cpu(buffers, spp, photons, pass, &mut |_, _| {}), cost));
-        };
         let err = |e: crate::gpu::GpuError| e.to_string();
         let t = Instant::now();
-        match renderer {
+        match &mut self.renderer {
             Some(r) => {
-                if !same || self.device_photons.as_ref() != photons {
+                if !same || self.renderer_photons.as_ref() != photons {
                     if let Err(e) = r.update_scene(buffers, photons) {
-                        // The device does not hold this scene: the next step must upload it.
+                        // The renderer does not hold this scene: the next step must upload it.
                         self.prepared = None;
                         return Err(err(e));
                     }
@@ -393,19 +393,22 @@ impl Backend<'_> {
                 }
             }
             None => {
-                // Made with the scene's photon settings, so that the photon kernels are created
-                // now and not in the first step that traces photons.
-                let mut r = GpuRenderer::new(ctx, buffers, photons.or(scene.photons.as_ref())).map_err(err)?;
+                // Made with the scene's photon settings, so that on a device the photon kernels
+                // are created now and not in the first step that traces photons.
+                let mut r =
+                    crate::render::Renderer::new(self.ctx, buffers, photons.or(scene.photons.as_ref())).map_err(err)?;
                 if photons.is_none() {
                     r.update_scene(buffers, None).map_err(err)?;
                 }
-                *renderer = Some(Box::new(r));
+                self.renderer = Some(r);
                 cost.written = vec!["all"];
             }
         }
-        self.device_photons = photons.copied();
-        cost.upload_ms = t.elapsed().as_secs_f64() * 1e3;
-        let r = renderer.as_mut().expect("made just above");
+        self.renderer_photons = photons.copied();
+        if self.ctx.is_some() {
+            cost.upload_ms = t.elapsed().as_secs_f64() * 1e3;
+        }
+        let r = self.renderer.as_mut().expect("made just above");
         let out = r.render_pass(spp, pass, &mut |_, _| {}).map_err(err)?;
         Ok((out, cost))
     }
@@ -440,7 +443,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
     };
     set_thread_stop_paths(stop_paths);
     let _ = ready.send(Ok(device.clone()));
-    let mut backend = Backend { gpu: ctx.as_ref().map(|ctx| (ctx, None)), prepared: None, device_photons: None };
+    let mut backend = Backend { ctx: ctx.as_ref(), renderer: None, prepared: None, renderer_photons: None };
     let mut preview = PreviewState::default();
     // What the last stopped step did before it stopped, reported with the next frame (where an
     // edit's wait for the stale step went).

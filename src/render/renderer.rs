@@ -60,6 +60,23 @@ impl<'a> Renderer<'a> {
         out
     }
 
+    /// Replaces the scene and the photon settings, keeping the backend's state: on a device the
+    /// kernels stay and only the arrays that changed are written (`last_written` names them).
+    pub fn update_scene(&mut self, buffers: &SceneBuffers, photons: Option<&PhotonSettings>) -> Result<(), GpuError> {
+        let photons = effective_photons(buffers, photons).copied();
+        if let Some(gpu) = &mut self.gpu {
+            gpu.update_scene(buffers, photons.as_ref())?;
+        }
+        self.buffers = buffers.clone();
+        self.photons = photons;
+        Ok(())
+    }
+
+    /// The scene arrays the last `update_scene` wrote to the device (none on the CPU backend).
+    pub fn last_written(&self) -> &[&'static str] {
+        self.gpu.as_ref().map_or(&[], GpuRenderer::last_written)
+    }
+
     /// The GPU renderer, when this one runs on a device.
     pub fn gpu(&self) -> Option<&GpuRenderer<'a>> {
         self.gpu.as_ref()
