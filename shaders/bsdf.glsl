@@ -345,6 +345,16 @@ float bsdf_path_probability(Bsdf b, vec3 wo) {
 // photon estimate may sum the irradiance first and apply the BSDF once.
 bool bsdf_estimate_is_constant(Bsdf b) { return b.kind == MATERIAL_DIFFUSE; }
 
+// The factor that makes a light path's scattering the adjoint of the camera's where a bump or
+// normal map bends ns away from ng (Veach 1997, 5.3): |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|), wo
+// toward the light side, wi where the light leaves; exactly 1 where the normals are one.
+float shading_adjoint(Bsdf b, vec3 wo, vec3 wi) {
+    if (b.kind == MATERIAL_PHASE || b.ns == b.ng) return 1.0;
+    float den = abs(dot(wo, b.ng)) * abs(dot(wi, b.ns));
+    if (den <= 0.0) return 0.0;
+    return abs(dot(wo, b.ns)) * abs(dot(wi, b.ng)) / den;
+}
+
 // f(wo, wi) of the estimate lobes, without the cosine; 0 for path lobes (they are sampled).
 vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) return vec3(0.0);

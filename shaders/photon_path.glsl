@@ -84,10 +84,10 @@ void trace_photon_path(uint path, EmitParams params) {
         }
         BsdfSample s = bsdf_sample(b, wo, rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE).xyz, LOBES_ALL);
         if (s.flags == 0u) return;
-        // Russian roulette on the sample's weight (with a collision's albedo): survivors keep
-        // their flux up to its colour.
-        vec3 w = s.weight * medium_weight;
-        float survive = max(w.r, max(w.g, w.b));
+        // Russian roulette on the sample's weight (with a collision's albedo and the adjoint's
+        // factor on a bumped surface): survivors keep their flux up to its colour.
+        vec3 w = s.weight * medium_weight * shading_adjoint(b, wo, s.wi);
+        float survive = min(max(w.r, max(w.g, w.b)), 1.0);
         if (rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive) return;
         flux *= w / survive;
         if ((s.flags & BSDF_ESTIMATE) != 0u) specular_only = false;

@@ -97,7 +97,7 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex
     float w_light = mis(cam_to_area) * (params.vm_weight + lv.d_vcm + lv.d_vc * mis(lig.y));
     float w_camera = mis(light_to_area) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(cam.y));
     float w = 1.0 / (w_light + 1.0 + w_camera);
-    vec3 value = fc * fl * load3(lv.throughput) * (g * w);
+    vec3 value = fc * fl * load3(lv.throughput) * (g * w * shading_adjoint(lb, l_wo, -dir));
     if (value == vec3(0.0)) return vec3(0.0);
     rays++;
     if (!vcm_visible(h, skip, lh.p + normalize(h.p - lh.p) * lh.eps)) return vec3(0.0);

@@ -59,7 +59,8 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint layer
         float toward_light = lobe_pdfs(b, dir, wo).x;
         w_light = mis(image_to_surface / float(params.light_paths)) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(toward_light));
     }
-    vec3 value = sp.throughput * fr * (image_to_surface / (float(params.light_paths) * (1.0 + w_light)));
+    float adjoint = shading_adjoint(b, wo, dir);
+    vec3 value = sp.throughput * fr * (image_to_surface * adjoint / (float(params.light_paths) * (1.0 + w_light)));
     if (value == vec3(0.0) || !vcm_visible(h, skip, eye)) return;
     uint base = (pixel * LAYER_COUNT + layer) * 3u;
     splat_add(base, value.x);
@@ -137,17 +138,18 @@ void main() {
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         if (smp.flags == 0u) break;
         float cos_out = abs_cos(b, smp.wi);
+        float adjoint = shading_adjoint(b, wo, smp.wi);
         vec3 factor;
         if ((smp.flags & BSDF_SPECULAR) != 0u) {
             sub_scatter(sp, params, true, cos_out, 0.0, 0.0);
             specular_first = specular_first || diffuse == 0u;
-            factor = smp.weight / q;
+            factor = smp.weight * (adjoint / q);
         } else {
             vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
             if (pdfs.x <= 0.0) break;
             sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y);
             diffuse++;
-            factor = bsdf_eval(b, smp.wi, wo) * (cos_out / pdfs.x);
+            factor = bsdf_eval(b, smp.wi, wo) * (cos_out * adjoint / pdfs.x);
         }
         sp.throughput *= factor;
         if (k >= PT_ROULETTE_DEPTH) {

@@ -41,8 +41,9 @@ pub struct RenderArgs {
     /// Samples per pixel in each pass, 1 to 4096 [default: the scene's]
     #[arg(long, value_parser = parse_spp, allow_negative_numbers = true)]
     spp: Option<u32>,
-    /// The estimator: ppm (progressive photon mapping) or pt (path tracing with multiple
-    /// importance sampling) [default: the scene's, else ppm]
+    /// The estimator: ppm (progressive photon mapping), pt (path tracing with multiple
+    /// importance sampling), bpt (bidirectional path tracing) or vcm (vertex connection and
+    /// merging) [default: the scene's, else ppm]
     #[arg(long, value_parser = parse_integrator)]
     integrator: Option<Integrator>,
     /// Seed of the random streams, 0 to 4294967295 [default: the scene's]

@@ -103,6 +103,22 @@ pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
     }
 }
 
+/// The factor that makes a light path's scattering the adjoint of the camera's where a bump or
+/// normal map bends the shading normal away from `ng` (Veach 1997, 5.3; pbrt's
+/// `CorrectShadingNormal`): |wo.ns| |wi.ng| / (|wo.ng| |wi.ns|), with `wo` toward the light side
+/// and `wi` the direction the light leaves along. Exactly 1 where the two normals are one, so
+/// unbumped surfaces are untouched; 0 at a grazing geometric angle.
+pub fn shading_adjoint(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+    if b.kind == MATERIAL_PHASE || b.ns == b.ng {
+        return 1.0;
+    }
+    let den = wo.dot(b.ng).abs() * wi.dot(b.ns).abs();
+    if den <= 0.0 {
+        return 0.0;
+    }
+    wo.dot(b.ns).abs() * wi.dot(b.ng).abs() / den
+}
+
 /// The shading normal turned to the side of `w`.
 pub fn facing(b: &Bsdf, w: Vec3) -> Vec3 {
     if w.dot(b.ng) > 0.0 {

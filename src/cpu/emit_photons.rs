@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf};
+use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf, shading_adjoint};
 use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
@@ -121,10 +121,10 @@ pub fn trace_photon_path(
         if smp.flags == 0 {
             return;
         }
-        // Russian roulette on the sample's weight (with a collision's albedo): survivors keep
-        // their flux up to its colour.
-        let w = smp.weight * medium_weight;
-        let survive = w.max_element();
+        // Russian roulette on the sample's weight (with a collision's albedo and the adjoint's
+        // factor on a bumped surface): survivors keep their flux up to its colour.
+        let w = smp.weight * medium_weight * shading_adjoint(&b, wo, smp.wi);
+        let survive = w.max_element().min(1.0);
         if rand1(path, params.pass, seed, bdim + RNG_PHOTON_ROULETTE) >= survive {
             return;
         }

@@ -16,7 +16,8 @@
 //! Directions follow the BSDF convention: `wo` toward the camera side, `wi` toward the light side;
 //! at a light vertex the camera side is where the connection goes, so a light sub-path evaluates
 //! `bsdf_eval(b, w_out, w_in)`, the same function of the same path a camera path evaluates (the
-//! adjoint, for our BSDFs; shading normals are taken as they are, the usual approximation).
+//! adjoint, for our BSDFs, where the shading normal is the geometric one; where a bump or normal
+//! map bends it, `shading_adjoint` makes light paths' scattering the adjoint, as photon tracing).
 //!
 //! Densities of light sampling and emission use each light's uniform density by area (as `pt`'s
 //! weights do): multiple importance sampling needs only that every technique weighs a path by the
@@ -28,7 +29,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bsdf::{
-    bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_pdf, bsdf_sample, material_bsdf, material_emission, Bsdf,
+    bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_pdf, bsdf_sample, material_bsdf, material_emission,
+    shading_adjoint, Bsdf,
 };
 use super::grid::for_each_photon_near;
 use super::grid_build::{build_grid, grid_params};
@@ -459,10 +461,11 @@ pub fn trace_light_path(
             break;
         }
         let cos_out = abs_cos(&b, smp.wi);
+        let adjoint = shading_adjoint(&b, wo, smp.wi);
         let factor = if smp.flags & BSDF_SPECULAR != 0 {
             sub.scatter(p, true, cos_out, 0.0, 0.0);
             specular_first |= diffuse == 0;
-            smp.weight / q
+            smp.weight * (adjoint / q)
         } else {
             let (pdf, reverse) = lobe_pdfs(&b, wo, smp.wi);
             if pdf <= 0.0 {
@@ -471,7 +474,7 @@ pub fn trace_light_path(
             sub.scatter(p, false, cos_out, pdf, reverse);
             diffuse += 1;
             // The camera's form of the BSDF: wo toward the camera side.
-            bsdf_eval(&b, smp.wi, wo) * (cos_out / pdf)
+            bsdf_eval(&b, smp.wi, wo) * (cos_out * adjoint / pdf)
         };
         sub.throughput *= factor;
         // Russian roulette on this vertex's own factor (the throughput holds flux, whose scale
@@ -526,7 +529,8 @@ fn connect_to_camera(
         let (toward_light, _) = lobe_pdfs(b, dir, wo);
         mis(image_to_surface / p.light_paths as f32) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(toward_light))
     };
-    let value = sub.throughput * fr * (image_to_surface / (p.light_paths as f32 * (1.0 + w_light)));
+    let adjoint = shading_adjoint(b, wo, dir);
+    let value = sub.throughput * fr * (image_to_surface * adjoint / (p.light_paths as f32 * (1.0 + w_light)));
     if value == Vec3::ZERO || !visible(s, h, skip, eye, rays) {
         return None;
     }
@@ -842,7 +846,7 @@ fn connect_vertices(
     let w_light = mis(cam_to_area) * (p.vm_weight + lv.d_vcm + lv.d_vc * mis(light_reverse));
     let w_camera = mis(light_to_area) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(cam_reverse));
     let w = 1.0 / (w_light + 1.0 + w_camera);
-    let value = fc * fl * Vec3::from(lv.throughput) * (g * w);
+    let value = fc * fl * Vec3::from(lv.throughput) * (g * w * shading_adjoint(&lb, l_wo, -dir));
     if value == Vec3::ZERO || !visible(s, h, skip, lh.p + (h.p - lh.p).normalize() * lh.eps, rays) {
         return Vec3::ZERO;
     }
