@@ -12,7 +12,16 @@ uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
     return LAYER_INDIRECT;
 }
 
-bool camera_connectable() { return frame.camera_kind == CAMERA_PERSPECTIVE && frame.lens_radius <= 0.0; }
+bool camera_connectable() { return frame.camera_kind == CAMERA_PERSPECTIVE; }
+
+// The point of the aperture lens sample u picks; contract in vcm.rs, lens_point.
+vec3 lens_point(vec2 u) {
+    vec3 eye = load3(frame.camera_position);
+    if (frame.lens_radius <= 0.0) return eye;
+    vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation);
+    return eye + a.x * frame.lens_radius * normalize(load3(frame.camera_right))
+        + a.y * frame.lens_radius * normalize(load3(frame.camera_up));
+}
 
 float camera_pixel_area() {
     return 4.0 * length(load3(frame.camera_right)) * length(load3(frame.camera_up)) / float(frame.width * frame.height);
@@ -23,12 +32,19 @@ float camera_pdf_w(float cos_eye) {
     return dot(fw, fw) / (cos_eye * cos_eye * cos_eye * camera_pixel_area());
 }
 
-// The pixel whose film holds the image of x, or NO_LIGHT.
-uint camera_pixel(vec3 x) {
-    vec3 v = x - load3(frame.camera_position);
+// The pixel whose film holds the image of x seen from the aperture point lens, or NO_LIGHT;
+// contract in vcm.rs, camera_pixel.
+uint camera_pixel(vec3 x, vec3 lens) {
     vec3 fw = load3(frame.camera_forward);
     vec3 r = load3(frame.camera_right);
     vec3 u = load3(frame.camera_up);
+    if (frame.lens_radius > 0.0) {
+        vec3 d = normalize(x - lens);
+        float along = dot(d, fw);
+        if (along <= 0.0) return NO_LIGHT;
+        x = lens + d * (frame.focal_distance / along);
+    }
+    vec3 v = x - load3(frame.camera_position);
     float k = dot(v, fw) / dot(fw, fw);
     if (k <= 0.0) return NO_LIGHT;
     float sx = dot(v, r) / (k * dot(r, r));

@@ -42,10 +42,10 @@ void splat_add(uint index, float v) {
 }
 
 // Light tracing: the light vertex at h seen by the camera; contract in vcm.rs, connect_to_camera.
-void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint layer) {
-    uint pixel = camera_pixel(h.p);
+void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, vec2 lens_u, uint layer) {
+    vec3 eye = lens_point(lens_u);
+    uint pixel = camera_pixel(h.p, eye);
     if (pixel == NO_LIGHT) return;
-    vec3 eye = load3(frame.camera_position);
     vec3 to_eye = eye - h.p;
     float dist2 = dot(to_eye, to_eye);
     float dist = sqrt(dist2);
@@ -127,7 +127,9 @@ void main() {
                 points[at].flux_b_dir = k - 1u;
             }
             if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
-                connect_to_camera(h, b, wo, sp, ray_skip(prim), path_layer(false, diffuse + 1u, specular_first));
+                // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
+                vec2 lens_u = rand2(path, sample_index, frame.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
+                connect_to_camera(h, b, wo, sp, ray_skip(prim), lens_u, path_layer(false, diffuse + 1u, specular_first));
             }
         }
         if (k >= params.vertex_slots) break;

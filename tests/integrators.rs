@@ -496,3 +496,45 @@ fn light_paths_on_bumped_surfaces_are_the_adjoint_of_camera_paths() {
         assert!(error < 1e-5, "{} bumped box: GPU vs CPU relMSE {error:.3e}", integrator.name());
     }
 }
+
+/// Light tracing through a thin lens: light vertices reach the camera through a point of the
+/// aperture (the pixel is where the ray crosses the plane in focus), so bpt and vcm keep the
+/// technique with focal blur. Light tracing alone and bpt agree with the path tracer, and the
+/// kernels with the CPU twin.
+#[test]
+fn light_tracing_reaches_a_thin_lens_camera() {
+    use photonix::layout::constants::{TECHNIQUES_ALL, VCM_LIGHT_TRACE_ONLY};
+    use photonix::scene::ThinLens;
+    let with_lens = |integrator| {
+        let mut scene = shipped("cornell-box", integrator);
+        // In focus on the tall block's front, the back wall blurred; a hexagonal aperture.
+        scene.camera.lens = Some(ThinLens { radius: 25.0, focal_distance: 1100.0, blades: 6, rotation_deg: 10.0 });
+        scene
+    };
+    let (w, h) = (32, 32);
+    let reference = cpu(&common::buffers(&with_lens(Integrator::Pt), w, h), 1024).image;
+    for (label, integrator, techniques, spp) in [
+        ("light tracing", Integrator::Bpt, VCM_LIGHT_TRACE_ONLY, 256),
+        ("bpt", Integrator::Bpt, TECHNIQUES_ALL, 128),
+        ("vcm", Integrator::Vcm, TECHNIQUES_ALL, 128),
+    ] {
+        let mut buffers = common::buffers(&with_lens(integrator), w, h);
+        buffers.frame.techniques = techniques;
+        let image = cpu(&buffers, spp).image;
+        let (error, ratio) = (rel_mse(&image, &reference), mean_ratio(&image, &reference));
+        println!("{label} against pt through a thin lens: relMSE {error:.5}, mean ratio {ratio:.4?}");
+        for r in ratio {
+            assert!((r - 1.0).abs() < 0.01, "{label}: mean ratio {ratio:?} against pt");
+        }
+        // Light tracing puts the light where the lens does: the image, not only its mean.
+        assert!(error < 0.006, "{label}: relMSE {error} against pt");
+    }
+    let ctx = common::gpu();
+    for integrator in [Integrator::Bpt, Integrator::Vcm] {
+        let buffers = common::buffers(&with_lens(integrator), 24, 16);
+        let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 2, None, 0, &mut |_, _| {}).unwrap();
+        let error = rel_mse(&gpu.image, &cpu(&buffers, 2).image);
+        println!("{} through a thin lens: GPU vs CPU relMSE {error:.3e}", integrator.name());
+        assert!(error < 1e-6, "{} through a thin lens: GPU vs CPU relMSE {error:.3e}", integrator.name());
+    }
+}

@@ -38,6 +38,7 @@ use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
 use super::render_pt::path_layer;
 use super::rng::{rand1, rand2, rand4};
+use super::sampling::polygon_point;
 use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -50,10 +51,22 @@ pub fn mis(x: f32) -> f32 {
     x * x
 }
 
-/// Whether light sub-paths can reach the camera: a pinhole perspective camera. Thin lenses and
-/// the other projections leave light tracing out (and the weights with it).
+/// Whether light sub-paths can reach the camera: a perspective camera, pinhole or thin lens. The
+/// other projections leave light tracing out (and the weights with it).
 pub fn camera_connectable(f: &FrameParams) -> bool {
-    f.camera_kind == CAMERA_PERSPECTIVE && f.lens_radius <= 0.0
+    f.camera_kind == CAMERA_PERSPECTIVE
+}
+
+/// The point of the aperture that lens sample `u` picks (the eye of a pinhole camera), as
+/// `camera_ray` places it.
+pub fn lens_point(f: &FrameParams, u: [f32; 2]) -> Vec3 {
+    let eye = Vec3::from(f.camera_position);
+    if f.lens_radius <= 0.0 {
+        return eye;
+    }
+    let a = polygon_point(u, f.aperture_blades, f.aperture_rotation);
+    let (right, up) = (Vec3::from(f.camera_right), Vec3::from(f.camera_up));
+    eye + a[0] * f.lens_radius * right.normalize() + a[1] * f.lens_radius * up.normalize()
 }
 
 /// Film area of one pixel on the plane `camera_forward` away (`camera_right` and `camera_up`
@@ -70,10 +83,22 @@ pub fn camera_pdf_w(f: &FrameParams, cos: f32) -> f32 {
     fd2 / (cos * cos * cos * camera_pixel_area(f))
 }
 
-/// The pixel (index) whose film holds the image of world point `x`, if any.
-pub fn camera_pixel(f: &FrameParams, x: Vec3) -> Option<u32> {
-    let v = x - Vec3::from(f.camera_position);
+/// The pixel (index) whose film holds the image of world point `x` seen from `lens` (a point of
+/// the aperture), if any. Through a thin lens that is the pixel of the point where the ray from
+/// `lens` to `x` crosses the plane in focus (every camera ray aims its pixel's pinhole ray there).
+pub fn camera_pixel(f: &FrameParams, x: Vec3, lens: Vec3) -> Option<u32> {
     let (fw, r, u) = (Vec3::from(f.camera_forward), Vec3::from(f.camera_right), Vec3::from(f.camera_up));
+    let x = if f.lens_radius > 0.0 {
+        let d = (x - lens).normalize();
+        let along = d.dot(fw);
+        if along <= 0.0 {
+            return None;
+        }
+        lens + d * (f.focal_distance / along)
+    } else {
+        x
+    };
+    let v = x - Vec3::from(f.camera_position);
     let k = v.dot(fw) / fw.length_squared();
     if k <= 0.0 {
         return None;
@@ -443,7 +468,10 @@ pub fn trace_light_path(
                 flags: diffuse | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
             };
             if has(p, VCM_CONNECT | VCM_LIGHT_TRACE_ONLY) && camera_connectable(f) {
-                if let Some((pixel, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, ray_skip(s, prim), &mut rays) {
+                // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
+                let lens_u = rand2(path, sample, f.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
+                let skip = ray_skip(s, prim);
+                if let Some((pixel, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, skip, lens_u, &mut rays) {
                     let layer = path_layer(false, diffuse + 1, specular_first);
                     splat(pixel, layer, v);
                 }
@@ -507,11 +535,12 @@ fn connect_to_camera(
     wo: Vec3,
     sub: &SubPath,
     skip: u32,
+    lens_u: [f32; 2],
     rays: &mut u32,
 ) -> Option<(u32, Vec3)> {
     let f = s.frame;
-    let eye = Vec3::from(f.camera_position);
-    let pixel = camera_pixel(f, h.p)?;
+    let eye = lens_point(f, lens_u);
+    let pixel = camera_pixel(f, h.p, eye)?;
     let to_eye = eye - h.p;
     let dist2 = to_eye.length_squared();
     let dist = dist2.sqrt();
