@@ -12,6 +12,7 @@ import math
 import sys
 
 import bpy
+from mathutils import Vector
 
 out = sys.argv[sys.argv.index("--") + 1]
 
@@ -58,8 +59,7 @@ place(bpy.context.object, "Lamp", material("Glow", (1, 1, 1), 0.5, 0.0, emission
 bpy.ops.object.camera_add(location=(0, -4.5, 1.6))
 cam = bpy.context.object
 cam.name = "Camera"
-direction = bpy.data.objects["RedBall"].location * 0 + cam.location.__class__((0, 0, 0.5)) - cam.location
-cam.rotation_euler = direction.to_track_quat("-Z", "Y").to_euler()
+cam.rotation_euler = (Vector((0, 0, 0.5)) - cam.location).to_track_quat("-Z", "Y").to_euler()
 cam.data.lens = 35
 bpy.context.scene.camera = cam
 bpy.context.scene.render.resolution_x = 640
@@ -75,7 +75,7 @@ spot.name = "Spot"
 spot.data.energy = 400.0
 spot.data.spot_size = math.radians(50)
 spot.data.spot_blend = 0.2
-spot.rotation_euler = (spot.location.__class__((0.9, 0, 0.5)) - spot.location).to_track_quat("-Z", "Y").to_euler()
+spot.rotation_euler = (Vector((0.9, 0, 0.5)) - spot.location).to_track_quat("-Z", "Y").to_euler()
 
 bpy.ops.object.light_add(type="SUN", location=(0, 0, 5), rotation=(math.radians(40), 0, math.radians(30)))
 bpy.context.object.name = "Sun"
