@@ -33,6 +33,9 @@ pub const IMAGE_HEIGHT: u32 = 360;
 /// Aspect ratio when the camera gives none (glTF leaves it to the viewport).
 const DEFAULT_ASPECT: f32 = 16.0 / 9.0;
 
+/// The first words of every translation (a saved translation keeps them).
+pub const HEADER: &str = "# Translated from the glTF scene";
+
 /// Extensions this front-end reads (the rest are named in a warning).
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
@@ -65,8 +68,8 @@ pub fn load_gltf(path: &Path) -> Result<super::Scene, SceneError> {
     Ok(scene)
 }
 
-/// The mesh importer's note that a model's cameras are not used: here the scene's `[camera]` is
-/// the file's own, so the note would mislead.
+/// The mesh importer's note that a model's cameras are not used: in a translation (text starting
+/// with `HEADER`) the scene's `[camera]` is the file's own, so the note would mislead.
 pub fn is_camera_note(warning: &str) -> bool {
     warning.ends_with("camera(s) are not used; the scene's [camera] applies")
 }
@@ -98,11 +101,7 @@ pub fn translate_file(path: &Path, model_file: Option<&str>) -> Result<Translati
         None => path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default(),
     };
     let mut toml = String::new();
-    let _ = writeln!(
-        toml,
-        "# Translated from the glTF scene {} by Photonix (docs/gltf.md).\n",
-        crate::limits::printable(&file_name)
-    );
+    let _ = writeln!(toml, "{HEADER} {} by Photonix (docs/gltf.md).\n", crate::limits::printable(&file_name));
 
     // Camera
     let (lo, hi) = bounds(&model);
