@@ -1074,3 +1074,79 @@ fn browser_opens_a_blender_gltf_scene_with_its_camera_and_lights() {
     assert_eq!(scene.lights.len(), 3);
     assert!((scene.camera.position - glam::Vec3::new(0.0, 1.6, 4.5)).length() < 1e-4);
 }
+
+/// A pyramid as IFS (Brown's indexed face set, version 1.0): four corners on the floor, an apex.
+fn write_pyramid_ifs(path: &std::path::Path) {
+    let mut b = Vec::new();
+    let string = |b: &mut Vec<u8>, s: &str| {
+        b.extend((s.len() as u32 + 1).to_le_bytes());
+        b.extend(s.as_bytes());
+        b.push(0);
+    };
+    string(&mut b, "IFS");
+    b.extend(1.0f32.to_le_bytes());
+    string(&mut b, "pyramid");
+    string(&mut b, "VERTICES");
+    let v: [[f32; 3]; 5] = [[-0.3, 0.0, -0.3], [0.3, 0.0, -0.3], [0.3, 0.0, 0.3], [-0.3, 0.0, 0.3], [0.0, 0.5, 0.0]];
+    b.extend((v.len() as u32).to_le_bytes());
+    b.extend(v.iter().flatten().flat_map(|x| x.to_le_bytes()));
+    string(&mut b, "TRIANGLES");
+    let t: [[u32; 3]; 6] = [[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
+    b.extend((t.len() as u32).to_le_bytes());
+    b.extend(t.iter().flatten().flat_map(|x| x.to_le_bytes()));
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn browser_imports_3ds_and_ifs_and_shows_the_final_render_time() {
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| o.preview_size = 64);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let models = tempfile::tempdir().unwrap();
+    let ifs = models.path().join("pyramid.ifs");
+    write_pyramid_ifs(&ifs);
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+
+    // A 3DS model and an IFS model through the page: each an entry of the scene, selected
+    driver.choose_file("#import", &root.join("tests/models/assimp/cube_with_diffuse_texture.3DS"));
+    wait_text(&f, "the .3ds", |t| t.contains("file = \"cube_with_diffuse_texture.3DS\""));
+    driver.wait_for("the .3ds selected", "return document.body.dataset.selection", |v| v == "shape:3");
+    driver.choose_file("#import", &ifs);
+    let text = wait_text(&f, "the .ifs", |t| t.contains("file = \"pyramid.ifs\""));
+    driver.wait_for("the .ifs selected", "return document.body.dataset.selection", |v| v == "shape:4");
+    let (scene, origins) = photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
+    // The cube's 12 triangles and the pyramid's 6, each entry its own.
+    assert_eq!((origins.shapes[3].len(), origins.shapes[4].len()), (12, 6), "{:?}", origins.shapes);
+    assert!(scene.triangles().count() >= 18);
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 5);
+    // Both selected and framed, in solid shading
+    driver.click("#tree-shape-3");
+    driver.ctrl_click("#tree-shape-4");
+    driver.wait_for("both imports selected", "return document.body.dataset.selection", |v| v == "shape:3,shape:4");
+    driver.click("#frame");
+    driver.click("#shading");
+    driver.screenshot("60-3ds-ifs-imported.png");
+    driver.click("#shading");
+
+    // The final render: passes with the elapsed and remaining time
+    driver.click("#render-open");
+    driver.type_into("#render-passes", "400");
+    driver.click("#render-start");
+    let status =
+        driver.wait_for("a remaining time", "return document.getElementById('render-status').textContent", |v| {
+            let s = v.as_str().unwrap_or("");
+            s.contains("running")
+                && s.contains("remaining")
+                && s.split("remaining ").nth(1).is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit()))
+        });
+    println!("final render status: {status}");
+    driver.wait_for("a few passes", "return document.getElementById('render-progress').value", |v| {
+        v.as_f64().unwrap_or(0.0) > 0.0
+    });
+    driver.screenshot("61-final-render.png");
+    driver.click("#render-cancel");
+}
