@@ -251,3 +251,54 @@ fn a_damaged_gltf_scene_is_an_error_naming_the_file() {
     let e = load_scene(&path).unwrap_err().to_string();
     assert!(e.contains("broken.glb") && e.contains("truncated"), "{e}");
 }
+
+#[test]
+fn khr_texture_transform_moves_the_uvs_of_its_material() {
+    // A quad with uvs (0, 0) .. (1, 1) and a texture whose transform takes the right half:
+    // offset (0.5, 0), scale (0.5, 1), so u' = 0.5 + 0.5 u; v' = v, then glTF's v flips to 1 - v.
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([0, 0, 255]) })
+        .save(dir.path().join("half.png"))
+        .unwrap();
+    let positions: [[f32; 3]; 4] = [[-0.5, -0.5, 0.0], [0.5, -0.5, 0.0], [0.5, 0.5, 0.0], [-0.5, 0.5, 0.0]];
+    let uvs: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    let indices: [u16; 6] = [0, 1, 2, 0, 2, 3];
+    let mut bin: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    bin.extend(uvs.iter().flatten().flat_map(|v| v.to_le_bytes()));
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.path().join("quad.bin"), &bin).unwrap();
+    let json = r#"{
+  "asset": {"version": "2.0"},
+  "extensionsUsed": ["KHR_texture_transform"],
+  "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+  "materials": [{"name": "half", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+      "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}}}],
+  "textures": [{"source": 0}],
+  "images": [{"uri": "half.png"}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-0.5, -0.5, 0], "max": [0.5, 0.5, 0]},
+    {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+    {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+  ],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+  "buffers": [{"uri": "quad.bin", "byteLength": 92}]
+}"#;
+    let path = dir.path().join("scene.gltf");
+    std::fs::write(&path, json).unwrap();
+    let scene = load_scene(&path).unwrap();
+    let mut us = Vec::new();
+    for (t, _) in scene.triangles() {
+        let uv = t.uv.expect("the file's uvs");
+        for (p, q) in t.vertices.iter().zip(uv) {
+            // Corner x = -0.5 had u = 0, x = 0.5 had u = 1; y = -0.5 had glTF v = 1, so v = 0.
+            assert!(close(q.x, 0.5 + 0.5 * (p.x + 0.5), 1e-6), "{p} -> {q}");
+            assert!(close(q.y, p.y + 0.5, 1e-6), "{p} -> {q}");
+            us.push(q.x);
+        }
+    }
+    assert!(us.iter().all(|u| (0.5..=1.0).contains(u)), "{us:?}");
+    assert!(scene.warnings.iter().all(|w| !w.contains("KHR_texture_transform")), "{:?}", scene.warnings);
+}
