@@ -6,9 +6,12 @@
 //! in four views, deletes the ball, undoes, saves and checks the file. A second run opens a
 //! scene with instances and a CSG object: it selects an instance in the scene tree, checks the
 //! properties panel and the outline, moves it by a typed value, picks a texture for a material
-//! in the properties panel and checks the server's scene and the saved file. Screenshots of
+//! in the properties panel and checks the server's scene and the saved file. A scene exported by
+//! Blender (tests/blender/export_scene.py) opens with its camera as the view and its lights in
+//! the tree, and saves as TOML beside the .glb. Screenshots of
 //! each step go to target/editor-browser/ (kept as artifacts).
 
+mod common;
 mod editor_support;
 
 use std::net::SocketAddr;
@@ -997,4 +1000,153 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     driver.type_into("#obj-radius", "0.4\n");
     wait_text(&f, "an edit after the restart", |t| t.contains("radius = 0.4"));
     driver.screenshot("42-reconnected.png");
+}
+
+#[test]
+fn browser_opens_a_blender_gltf_scene_with_its_camera_and_lights() {
+    // A scene built and exported by Blender (tests/blender/export_scene.py), opened as it is.
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| {
+        let glb = o.scene.with_extension("glb");
+        std::fs::remove_file(&o.scene).unwrap();
+        common::blender_export(&glb);
+        o.scene = glb;
+        o.preview_size = 64;
+    });
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+
+    // The view starts at the file's camera: Blender's (0, -4.5, 1.6), z up, is (0, 1.6, 4.5).
+    let cam = driver.script(
+        "const p = window.photonixEditor.viewport.perspective; return [p.position.x, p.position.y, p.position.z, p.fov];",
+    );
+    let cam: Vec<f64> = cam.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!((cam[0].abs() + (cam[1] - 1.6).abs() + (cam[2] - 4.5).abs()) < 1e-3, "view at {cam:?}");
+    let yfov = 2.0 * (18.0f64 / 35.0 / (16.0 / 9.0)).atan().to_degrees();
+    assert!((cam[3] - yfov).abs() < 0.01, "fov {} against {yfov}", cam[3]);
+
+    // Its lights are entries of their own, by their Blender names
+    let lights = driver.script(
+        "return [0, 1, 2, 3].map((i) => (document.getElementById(`tree-light-${i}`) || {}).textContent || '');",
+    );
+    let lights: Vec<&str> = lights.as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    assert_eq!(lights, ["Sun (distant)", "Spot (spot)", "Bulb (point)", ""]);
+    driver.click("#tree-light-2");
+    driver.wait_for("the bulb selected", "return document.body.dataset.selection", |v| v == "light:2");
+    let page = f.scene_json();
+    let bulb = &page["lights"][2]["fields"];
+    assert_eq!(bulb["type"], "point", "{bulb}");
+    assert_eq!(page["warnings"], json!([]), "a Blender scene reads without warnings");
+
+    // The red ball left of the view's centre, the gold cube right of it; a click picks the model
+    let canvas = driver.script(
+        "const c = window.photonixEditor.viewport.canvas.getBoundingClientRect(); return c.left + c.width / 2;",
+    );
+    let middle = canvas.as_f64().unwrap() as i64;
+    let (ball, cube) = (screen_of(&driver, [-0.9, 0.6, 0.0]), screen_of(&driver, [0.9, 0.5, 0.0]));
+    assert!(ball.0 < middle && cube.0 > middle, "ball {ball:?} cube {cube:?} middle {middle}");
+    driver.click("#shading");
+    click_at(&driver, ball);
+    driver.wait_for("the model selected", "return document.body.dataset.selection", |v| v == "shape:0");
+    driver.press("\u{E00C}"); // Escape
+    driver.click("#shading");
+    driver.wait_for("a few preview passes", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 4
+    });
+    driver.screenshot("50-gltf-scene.png");
+
+    // Saved as TOML beside the .glb, naming it, with the camera and the three lights
+    driver.click("#save");
+    let toml = f.dir.path().join("scene.toml");
+    let start = Instant::now();
+    while !toml.exists() {
+        assert!(start.elapsed() < Duration::from_secs(30), "the save did not write scene.toml");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let saved = std::fs::read_to_string(&toml).unwrap();
+    assert!(
+        saved.contains("file = \"scene.glb\"") && saved.lines().filter(|l| *l == "[[lights]]").count() == 3,
+        "{saved}"
+    );
+    let scene = photonix::scene::load_scene(&toml).unwrap();
+    assert_eq!(scene.lights.len(), 3);
+    assert!((scene.camera.position - glam::Vec3::new(0.0, 1.6, 4.5)).length() < 1e-4);
+}
+
+/// A pyramid as IFS (Brown's indexed face set, version 1.0): four corners on the floor, an apex.
+fn write_pyramid_ifs(path: &std::path::Path) {
+    let mut b = Vec::new();
+    let string = |b: &mut Vec<u8>, s: &str| {
+        b.extend((s.len() as u32 + 1).to_le_bytes());
+        b.extend(s.as_bytes());
+        b.push(0);
+    };
+    string(&mut b, "IFS");
+    b.extend(1.0f32.to_le_bytes());
+    string(&mut b, "pyramid");
+    string(&mut b, "VERTICES");
+    let v: [[f32; 3]; 5] = [[-0.3, 0.0, -0.3], [0.3, 0.0, -0.3], [0.3, 0.0, 0.3], [-0.3, 0.0, 0.3], [0.0, 0.5, 0.0]];
+    b.extend((v.len() as u32).to_le_bytes());
+    b.extend(v.iter().flatten().flat_map(|x| x.to_le_bytes()));
+    string(&mut b, "TRIANGLES");
+    let t: [[u32; 3]; 6] = [[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]];
+    b.extend((t.len() as u32).to_le_bytes());
+    b.extend(t.iter().flatten().flat_map(|x| x.to_le_bytes()));
+    std::fs::write(path, b).unwrap();
+}
+
+#[test]
+fn browser_imports_3ds_and_ifs_and_shows_the_final_render_time() {
+    let f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| o.preview_size = 64);
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let models = tempfile::tempdir().unwrap();
+    let ifs = models.path().join("pyramid.ifs");
+    write_pyramid_ifs(&ifs);
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+
+    // A 3DS model and an IFS model through the page: each an entry of the scene, selected
+    driver.choose_file("#import", &root.join("tests/models/assimp/cube_with_diffuse_texture.3DS"));
+    wait_text(&f, "the .3ds", |t| t.contains("file = \"cube_with_diffuse_texture.3DS\""));
+    driver.wait_for("the .3ds selected", "return document.body.dataset.selection", |v| v == "shape:3");
+    driver.choose_file("#import", &ifs);
+    let text = wait_text(&f, "the .ifs", |t| t.contains("file = \"pyramid.ifs\""));
+    driver.wait_for("the .ifs selected", "return document.body.dataset.selection", |v| v == "shape:4");
+    let (scene, origins) = photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
+    // The cube's 12 triangles and the pyramid's 6, each entry its own.
+    assert_eq!((origins.shapes[3].len(), origins.shapes[4].len()), (12, 6), "{:?}", origins.shapes);
+    assert!(scene.triangles().count() >= 18);
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 5);
+    // Both selected and framed, in solid shading
+    driver.click("#tree-shape-3");
+    driver.ctrl_click("#tree-shape-4");
+    driver.wait_for("both imports selected", "return document.body.dataset.selection", |v| v == "shape:3,shape:4");
+    driver.click("#frame");
+    driver.click("#shading");
+    driver.screenshot("60-3ds-ifs-imported.png");
+    driver.click("#shading");
+
+    // The final render: passes with the elapsed and remaining time
+    driver.click("#render-open");
+    driver.type_into("#render-passes", "400");
+    driver.click("#render-start");
+    let status =
+        driver.wait_for("a remaining time", "return document.getElementById('render-status').textContent", |v| {
+            let s = v.as_str().unwrap_or("");
+            s.contains("running")
+                && s.contains("remaining")
+                && s.split("remaining ").nth(1).is_some_and(|r| r.starts_with(|c: char| c.is_ascii_digit()))
+        });
+    println!("final render status: {status}");
+    driver.wait_for("a few passes", "return document.getElementById('render-progress').value", |v| {
+        v.as_f64().unwrap_or(0.0) > 0.0
+    });
+    driver.screenshot("61-final-render.png");
+    driver.click("#render-cancel");
 }

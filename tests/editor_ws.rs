@@ -383,3 +383,98 @@ fn websocket_streams_path_traced_and_vcm_frames() {
         }
     }
 }
+
+/// The latency targets of issue 23, on the CPU backend: `scenes/showcase.toml` with a 160 px
+/// preview, through the scene's own camera. N edits (`PHOTONIX_BENCH_EDITS`, default 15), each
+/// sent a different time after a full-size frame (0 to 1.4 s, so that they land in every stage
+/// of a pass), each changing a material's colour. Prints, per edit, the time from the change to
+/// the first frame as the server stamps it (`since_change_ms`: the edit applied, the stale step
+/// stopped, the quick step rendered), the same seen by the page (with the WebSocket round trip),
+/// and the time to the first full-size (160 px) frame; then median and max of each.
+#[test]
+#[ignore]
+fn editor_latency_benchmark() {
+    let edits: usize = std::env::var("PHOTONIX_BENCH_EDITS").ok().and_then(|n| n.parse().ok()).unwrap_or(15);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/showcase.toml");
+    let camera = photonix::scene::load_scene(&path).unwrap().camera;
+    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
+    let mut options = photonix::editor::ServeOptions::new(path);
+    options.backend = BackendChoice::Cpu;
+    options.preview_size = 160;
+    let server = runtime.block_on(photonix::editor::Server::start(options)).unwrap();
+    let label = server.device();
+    runtime.block_on(async {
+        let url = format!("ws://{}/ws?token={}", server.addr, server.token);
+        let mut page = tokio_tungstenite::connect_async(url).await.unwrap().0;
+        let view = json!({ "type": "view", "view": { "position": camera.position.to_array(),
+            "look_at": camera.look_at.to_array(), "up": camera.up.to_array(), "fov": camera.fov_deg,
+            "width": 640, "height": 640 } });
+        send_json(&mut page, view).await;
+        async fn frame(page: &mut Socket, after: u64, step: u64) -> Value {
+            loop {
+                if let Received::Frame(header, _) = receive(page).await {
+                    if header["generation"].as_u64().unwrap() > after && header["step"].as_u64().unwrap() >= step {
+                        return header;
+                    }
+                }
+            }
+        }
+        let full_size = frame(&mut page, 0, 2).await;
+        assert_eq!((full_size["width"].as_u64(), full_size["height"].as_u64()), (Some(160), Some(160)));
+        let mut generation = full_size["generation"].as_u64().unwrap();
+        let (mut server_first, mut page_first, mut page_full) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut server_full, mut steps) = (Vec::new(), Vec::new());
+        for i in 0..edits {
+            tokio::time::sleep(Duration::from_millis((i as u64 * 100) % 1500)).await;
+            let t = Instant::now();
+            let value = [0.1, 0.1 + 0.02 * i as f64, 0.6];
+            send_json(
+                &mut page,
+                json!({ "type": "edit", "command": {
+                "op": "set", "target": { "material": "blue" }, "field": "reflectance", "value": value } }),
+            )
+            .await;
+            let header = frame(&mut page, generation, 0).await;
+            assert_eq!(header["step"], 0, "the first frame after an edit is the quick one");
+            page_first.push(t.elapsed().as_secs_f64() * 1e3);
+            server_first.push(header["since_change_ms"].as_f64().unwrap());
+            generation = header["generation"].as_u64().unwrap();
+            // The steps up to the full-size one, each with its own render time (ms) and stages.
+            let mut ladder = vec![(0, header["render_ms"].as_f64().unwrap().round(), header["stages"].clone())];
+            let full = loop {
+                let h = frame(&mut page, generation - 1, 1).await;
+                ladder.push((
+                    h["step"].as_u64().unwrap(),
+                    h["render_ms"].as_f64().unwrap().round(),
+                    h["stages"].clone(),
+                ));
+                if h["step"].as_u64().unwrap() >= 2 {
+                    break h;
+                }
+            };
+            assert_eq!(full["width"].as_u64(), Some(160));
+            page_full.push(t.elapsed().as_secs_f64() * 1e3);
+            server_full.push(full["since_change_ms"].as_f64().unwrap());
+            steps.push(ladder);
+        }
+        let summary = |v: &[f64]| {
+            let mut s = v.to_vec();
+            s.sort_by(f64::total_cmp);
+            format!(
+                "{:?} ms (median {:.0}, max {:.0})",
+                v.iter().map(|x| x.round()).collect::<Vec<_>>(),
+                s[s.len() / 2],
+                s[s.len() - 1]
+            )
+        };
+        println!("{label}: showcase.toml, 160 px preview, {edits} edits");
+        println!("{label}: edit to first frame at the server: {}", summary(&server_first));
+        println!("{label}: edit to first frame at the page: {}", summary(&page_first));
+        println!("{label}: edit to first full-size (160 px) frame at the server: {}", summary(&server_full));
+        println!("{label}: edit to first full-size (160 px) frame at the page: {}", summary(&page_full));
+        for (i, ladder) in steps.iter().enumerate() {
+            println!("{label}: edit {i}: (step, render ms, stages) {ladder:?}");
+        }
+    });
+    runtime.block_on(server.shutdown());
+}

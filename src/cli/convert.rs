@@ -1,21 +1,23 @@
-//! `photonix convert scene.pov -o scene.toml`: the POV-Ray scene in Photonix's own format, to
-//! inspect and edit (docs/pov-ray.md). The TOML is checked by loading it before it is written.
+//! `photonix convert scene.pov -o scene.toml` (or `scene.glb`, `scene.gltf`): the POV-Ray or
+//! glTF scene in Photonix's own format, to inspect and edit (docs/pov-ray.md, docs/gltf.md). The
+//! TOML is checked by loading it before it is written.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 
 use photonix::io::image::{same_file, write_atomically};
+use photonix::scene::gltf_scene;
 use photonix::scene::pov::{is_pov_path, load_pov, translate_file, PovOptions};
 
 #[derive(clap::Args)]
 pub struct ConvertArgs {
-    /// POV-Ray scene file (.pov)
+    /// POV-Ray scene file (.pov) or glTF 2.0 scene (.gltf, .glb)
     scene: PathBuf,
     /// The TOML scene to write
     #[arg(short, long)]
     output: PathBuf,
-    /// Image size as WIDTHxHEIGHT, as POV-Ray's +W +H (the scene reads it as image_width, image_height)
+    /// POV-Ray scenes: image size as WIDTHxHEIGHT, as POV-Ray's +W +H (the scene reads it as image_width, image_height); a glTF scene's follows its camera
     #[arg(long, default_value = "320x240")]
     resolution: String,
     /// POV-Ray's clock (+K)
@@ -24,8 +26,12 @@ pub struct ConvertArgs {
 }
 
 pub fn run(args: ConvertArgs) -> Result<()> {
-    if !is_pov_path(&args.scene) {
-        bail!("{}: photonix convert reads POV-Ray scenes; give a file ending in .pov", args.scene.display());
+    let gltf = gltf_scene::is_gltf_path(&args.scene);
+    if !is_pov_path(&args.scene) && !gltf {
+        bail!(
+            "{}: photonix convert reads POV-Ray and glTF scenes; give a file ending in .pov, .gltf or .glb",
+            args.scene.display()
+        );
     }
     let toml_out = args.output.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml"));
     if !toml_out {
@@ -42,6 +48,9 @@ pub fn run(args: ConvertArgs) -> Result<()> {
     if w == 0 || h == 0 || w > 65536 || h > 65536 {
         bail!("--resolution {}: width and height must be 1 to 65536", args.resolution);
     }
+    if gltf {
+        return convert_gltf(&args);
+    }
     let options = PovOptions { width: w, height: h, clock: args.clock, ..PovOptions::default() };
     // Load once so that a scene Photonix would refuse is reported at its .pov line, not later.
     let scene = load_pov(&args.scene, &options)?;
@@ -49,6 +58,36 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         note!("warning: {warning}");
     }
     let t = translate_file(&args.scene, &options)?;
+    write_atomically(&args.output, |tmp| std::fs::write(tmp, &t.toml).map_err(|e| e.to_string()))?;
+    note!(
+        "wrote {} ({} shapes, {} lights, {} materials)",
+        args.output.display(),
+        scene.shapes.len(),
+        scene.lights.len(),
+        scene.materials.len()
+    );
+    Ok(())
+}
+
+/// A glTF scene as TOML; the TOML names the glTF file relative to its own folder when it can
+/// (the same folder), else by its absolute path.
+fn convert_gltf(args: &ConvertArgs) -> Result<()> {
+    let folder = |p: &std::path::Path| {
+        let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        parent.canonicalize().ok()
+    };
+    let model_file = match (folder(&args.scene), folder(&args.output)) {
+        (Some(a), Some(b)) if a == b => None,
+        _ => Some(std::path::absolute(&args.scene)?.display().to_string()),
+    };
+    let t = gltf_scene::translate_file(&args.scene, model_file.as_deref())?;
+    // Load the TOML as it will be read from its own place, so a refusal is reported now.
+    let mut scene = photonix::scene::parse_scene(&t.toml, &args.output)?;
+    let mut warnings = t.warnings.clone();
+    warnings.extend(scene.warnings.drain(..).filter(|w| !gltf_scene::is_camera_note(w)));
+    for warning in &warnings {
+        note!("warning: {warning}");
+    }
     write_atomically(&args.output, |tmp| std::fs::write(tmp, &t.toml).map_err(|e| e.to_string()))?;
     note!(
         "wrote {} ({} shapes, {} lights, {} materials)",

@@ -12,7 +12,7 @@ use photonix::render::{auto_backend, Backend};
 
 #[derive(clap::Args)]
 pub struct ServeArgs {
-    /// Scene file to edit (TOML, see docs/scene-format.md; a .pov is translated and saved as .toml beside it); the editor reads and writes only its folder
+    /// Scene file to edit (TOML, see docs/scene-format.md; a .pov or a glTF scene (.glb, .gltf) is translated and saved as .toml beside it); the editor reads and writes only its folder
     scene: PathBuf,
     /// Address to listen on; anything but 127.0.0.1 or ::1 lets other machines reach the editor (with the token)
     #[arg(long, default_value = "127.0.0.1")]

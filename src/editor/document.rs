@@ -232,6 +232,14 @@ impl SceneDocument {
             doc.saved = String::new();
             return Ok(doc);
         }
+        // A glTF scene likewise (scene::gltf_scene): its TOML names the .glb beside it.
+        if crate::scene::gltf_scene::is_gltf_path(path) {
+            let t =
+                crate::scene::gltf_scene::translate_file(path, None).map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
+            doc.saved = String::new();
+            return Ok(doc);
+        }
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
             EditError::Invalid(match e {
                 Some(cause) => format!("cannot read {}: {cause}", path.display()),

@@ -162,6 +162,11 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         Projection::LatLong => ("latlong", None),
     };
     let table = |key: &str| parsed.get(key).map_or(Json::Null, toml_to_json);
+    // A translated glTF scene's [camera] is the file's own camera: the importer's note that the
+    // model's cameras go unused would mislead.
+    let from_gltf = doc.text().starts_with(crate::scene::gltf_scene::HEADER);
+    let warnings: Vec<&String> =
+        scene.warnings.iter().filter(|w| !(from_gltf && crate::scene::gltf_scene::is_camera_note(w))).collect();
     json!({
         "revision": doc.revision(),
         "file": doc.path().file_name().map(|n| n.to_string_lossy().into_owned()),
@@ -170,7 +175,7 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "can_redo": doc.can_redo(),
         "undo_author": doc.undo_author(),
         "redo_author": doc.redo_author(),
-        "warnings": scene.warnings,
+        "warnings": warnings,
         "bounds": { "min": lo.to_array(), "max": hi.to_array() },
         "camera": {
             "fields": table("camera"),

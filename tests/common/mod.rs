@@ -108,3 +108,24 @@ pub fn scene_dir(scene: &str) -> tempfile::TempDir {
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).to_string()
 }
+
+/// Exports the scene of tests/blender/export_scene.py with Blender (Debian's `blender`, which
+/// ci/setup installs) into `out` (.glb). Fails, not skips, without Blender: CI runs ci/setup first.
+pub fn blender_export(out: &Path) {
+    let blender = Path::new("/usr/bin/blender");
+    assert!(blender.exists(), "/usr/bin/blender is missing; run ci/setup (it installs blender and python3-numpy)");
+    let script = repo_path("tests/blender/export_scene.py");
+    let run = Command::new(blender)
+        .args(["--background", "--factory-startup", "--python-exit-code", "1", "--python"])
+        .arg(&script)
+        .arg("--")
+        .arg(out)
+        .output()
+        .expect("blender runs");
+    let log = format!("{}{}", String::from_utf8_lossy(&run.stdout), String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success() && out.exists() && !log.contains("Traceback"),
+        "blender did not export {}; run ci/setup (the exporter needs python3-numpy):\n{log}",
+        out.display()
+    );
+}

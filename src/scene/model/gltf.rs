@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use glam::{Affine3A, Mat4, Vec2, Vec3};
+use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3};
 
 use super::{Model, ModelCamera, ModelError, ModelImage, ModelLight, ModelMaterial, ModelMesh, ModelProjection};
 use crate::scene::image_texture::{srgb_to_linear, ColorSpace, ImageTexture, Wrap};
@@ -181,6 +181,8 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         };
         Ok(ModelImage { image, wrap })
     };
+    // One uv transform per material (KHR_texture_transform), applied to the uvs of its primitives.
+    let mut uv_transforms: Vec<Option<Mat3>> = Vec::new();
     for (i, m) in document.materials().enumerate() {
         let name = m.name().map(str::to_string).unwrap_or_else(|| format!("material {i}"));
         let mut out = ModelMaterial::new(&name);
@@ -199,7 +201,29 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         if let Some(t) = m.normal_texture() {
             out.normal_texture = Some(texture(t.texture(), ColorSpace::Linear)?);
         }
-        out.emission = Vec3::from(m.emissive_factor()).max(Vec3::ZERO);
+        // KHR_materials_emissive_strength scales the factor past 1 (Blender writes its emission
+        // strength there).
+        let strength = m.emissive_strength().filter(|s| s.is_finite() && *s >= 0.0).unwrap_or(1.0);
+        out.emission = (Vec3::from(m.emissive_factor()) * strength).max(Vec3::ZERO);
+        if let Some(ior) = m.ior().filter(|i| i.is_finite() && *i >= 1.0) {
+            out.ior = ior.min(4.0);
+        }
+        if let Some(t) = m.transmission() {
+            out.transmission = t.transmission_factor().clamp(0.0, 1.0);
+            if t.transmission_texture().is_some() {
+                model.warnings.push(format!(
+                    "material \"{}\": KHR_materials_transmission's transmissionTexture is not supported; its factor applies",
+                    crate::limits::printable(&name)
+                ));
+            }
+        }
+        if let Some(v) = m.volume() {
+            let distance = v.attenuation_distance();
+            if distance.is_finite() && distance > 0.0 {
+                out.attenuation = Some((Vec3::from(v.attenuation_color()).clamp(Vec3::ZERO, Vec3::ONE), distance));
+            }
+        }
+        uv_transforms.push(uv_transform(&m, &name, &mut model.warnings));
         if let Some(t) = m.emissive_texture() {
             out.emission_texture = Some(texture(t.texture(), ColorSpace::Srgb)?);
         }
@@ -241,7 +265,7 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         }
         let affine = Affine3A::from_mat4(world);
         if let Some(mesh) = node.mesh() {
-            read_mesh(&mesh, affine, &buffers, &mut model, path)?;
+            read_mesh(&mesh, affine, &buffers, &uv_transforms, &mut model, path)?;
         }
         if let Some(camera) = node.camera() {
             let forward = affine.transform_vector3(-Vec3::Z).normalize_or_zero();
@@ -264,6 +288,7 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
             });
         }
         if let Some(light) = node.light() {
+            model.light_names.push(node.name().or(light.name()).unwrap_or("").to_string());
             let color = Vec3::from(light.color()) * light.intensity();
             let position: Vec3 = affine.translation.into();
             let direction = affine.transform_vector3(-Vec3::Z).normalize_or_zero();
@@ -289,6 +314,59 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         return Err(err(String::new(), "the glTF scene has no triangle meshes".into()));
     }
     Ok(model)
+}
+
+/// A texture slot's texture coordinates and transform.
+type Slot<'a> = (u32, Option<::gltf::texture::TextureTransform<'a>>);
+
+/// The uv transform of a material's textures (KHR_texture_transform: translation · rotation ·
+/// scale, on the file's uvs), taken from the first textured slot (base colour, then
+/// metallic-roughness, emissive; the reader does not expose a normal texture's transform, so
+/// the normal map follows the others); `None` when it has none. Slots with another transform,
+/// or reading other texture coordinates than the first, get a warning: one set of uvs serves them all.
+fn uv_transform(m: &::gltf::Material<'_>, name: &str, warnings: &mut Vec<String>) -> Option<Mat3> {
+    let pbr = m.pbr_metallic_roughness();
+    let slots: [(&str, Option<Slot<'_>>); 3] = [
+        ("baseColorTexture", pbr.base_color_texture().map(|t| (t.tex_coord(), t.texture_transform()))),
+        ("metallicRoughnessTexture", pbr.metallic_roughness_texture().map(|t| (t.tex_coord(), t.texture_transform()))),
+        ("emissiveTexture", m.emissive_texture().map(|t| (t.tex_coord(), t.texture_transform()))),
+    ];
+    let matrix = |t: &::gltf::texture::TextureTransform<'_>| {
+        let [ox, oy] = t.offset();
+        let [sx, sy] = t.scale();
+        let (sin, cos) = t.rotation().sin_cos();
+        // The extension's matrices, column-major: T * R * S with R = [[cos, sin], [-sin, cos]].
+        let m = Mat3::from_translation(Vec2::new(ox, oy))
+            * Mat3::from_cols(glam::Vec3::new(cos, -sin, 0.0), glam::Vec3::new(sin, cos, 0.0), glam::Vec3::Z)
+            * Mat3::from_scale(Vec2::new(sx, sy));
+        m.is_finite().then_some(m)
+    };
+    let printable = crate::limits::printable(name);
+    if let Some(coord) = m.normal_texture().map(|t| t.tex_coord()).filter(|c| *c != 0) {
+        warnings.push(format!(
+            "material \"{printable}\": its normalTexture reads TEXCOORD_{coord}; only TEXCOORD_0 is read, so it uses those"
+        ));
+    }
+    let mut chosen: Option<Option<Mat3>> = None;
+    for (slot, info) in slots {
+        let Some((tex_coord, transform)) = info else { continue };
+        let coord = transform.as_ref().and_then(|t| t.tex_coord()).unwrap_or(tex_coord);
+        if coord != 0 {
+            warnings.push(format!(
+                "material \"{printable}\": its {slot} reads TEXCOORD_{coord}; only TEXCOORD_0 is read, so it uses those"
+            ));
+        }
+        let this = transform.as_ref().and_then(matrix);
+        match chosen {
+            None => chosen = Some(this),
+            Some(first) if first != this => warnings.push(format!(
+                "material \"{printable}\": its {slot} has another KHR_texture_transform than its first texture; \
+                 the first one's applies to all"
+            )),
+            Some(_) => {}
+        }
+    }
+    chosen.flatten()
 }
 
 /// Checks that accessor `a` lies inside its buffer, so reading it cannot go out of bounds.
@@ -318,6 +396,7 @@ fn read_mesh(
     mesh: &::gltf::Mesh<'_>,
     model_from_mesh: Affine3A,
     buffers: &[::gltf::buffer::Data],
+    uv_transforms: &[Option<Mat3>],
     model: &mut Model,
     path: &Path,
 ) -> Result<(), ModelError> {
@@ -345,8 +424,19 @@ fn read_mesh(
         };
         let positions: Vec<Vec3> = positions.map(Vec3::from).collect();
         let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
-        let uvs: Option<Vec<Vec2>> =
-            reader.read_tex_coords(0).map(|t| t.into_f32().map(|[u, v]| Vec2::new(u, 1.0 - v)).collect());
+        // The material's texture transform acts on the file's uvs (v down), before the flip.
+        let uv_transform = primitive.material().index().and_then(|i| uv_transforms.get(i).copied().flatten());
+        let uvs: Option<Vec<Vec2>> = reader.read_tex_coords(0).map(|t| {
+            t.into_f32()
+                .map(|[u, v]| {
+                    let [u, v] = match uv_transform {
+                        Some(m) => m.transform_point2(Vec2::new(u, v)).to_array(),
+                        None => [u, v],
+                    };
+                    Vec2::new(u, 1.0 - v)
+                })
+                .collect()
+        });
         let n = positions.len();
         if normals.as_ref().is_some_and(|x| x.len() != n) || uvs.as_ref().is_some_and(|x| x.len() != n) {
             return Err(err("its attributes have different counts".into()));

@@ -104,8 +104,14 @@ pub struct ModelMaterial {
     pub normal_texture: Option<ModelImage>,
     /// Bump map (OBJ `bump`/`map_bump`) and its height scale in model units (`-bm`).
     pub bump_texture: Option<(ModelImage, f32)>,
-    /// Index of refraction of the specular coat (OBJ `Ni`), default 1.5.
+    /// Index of refraction of the specular coat (OBJ `Ni`, glTF KHR_materials_ior), default 1.5.
     pub ior: f32,
+    /// glTF KHR_materials_transmission's factor in [0, 1]: the share of light that passes through
+    /// the surface (a dielectric's refraction); 0 elsewhere.
+    pub transmission: f32,
+    /// glTF KHR_materials_volume's attenuation: the colour light keeps after travelling the
+    /// distance (model units) inside; `None`: clear.
+    pub attenuation: Option<(Vec3, f32)>,
 }
 
 impl ModelMaterial {
@@ -124,6 +130,8 @@ impl ModelMaterial {
             normal_texture: None,
             bump_texture: None,
             ior: 1.5,
+            transmission: 0.0,
+            attenuation: None,
         }
     }
 }
@@ -164,6 +172,8 @@ pub struct Model {
     pub materials: Vec<ModelMaterial>,
     pub cameras: Vec<ModelCamera>,
     pub lights: Vec<ModelLight>,
+    /// The name of each light's node (glTF), same index as `lights`; empty when it has none.
+    pub light_names: Vec<String>,
     /// Problems that do not stop the import (e.g. a missing MTL file), for `Scene::warnings`.
     pub warnings: Vec<String>,
 }
