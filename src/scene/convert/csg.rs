@@ -4,7 +4,8 @@
 
 use toml::Spanned;
 
-use super::{Builder, Result, SHAPE_TYPES};
+use super::shapes::SHAPE_TYPES;
+use super::{Builder, Result};
 use crate::layout::constants::{CSG_MAX_DEPTH, CSG_MAX_IMPLICIT, CSG_MAX_LEAVES, CSG_MAX_PRIMITIVES};
 use crate::limits::printable;
 use crate::scene::format::ShapeDef;
