@@ -8,6 +8,7 @@ use toml::Spanned;
 
 use super::{Builder, Result};
 use crate::scene::format::{ShapeDef, Vec3Def};
+use crate::scene::kinds;
 use crate::scene::{Analytic, AnalyticKind};
 
 /// Smallest superellipsoid exponent: below it the shape is a box to float precision and its
@@ -43,7 +44,7 @@ impl Builder<'_> {
                 }
                 v
             }
-            None => 0.0,
+            None => kinds::INNER_RADIUS.number() as f32,
         };
         Ok((AnalyticKind::Disc { radius, inner_radius }, frame(center, normal)))
     }
@@ -64,7 +65,10 @@ impl Builder<'_> {
             "plane" => {
                 let normal = self.require(&s.normal, table, object, "normal", "normal = [0, 1, 0]")?;
                 let normal = self.direction(normal, object, "normal")?;
-                let offset = s.offset.as_ref().map_or(Ok(0.0), |o| self.number(o, object, "offset"))?;
+                let offset = s
+                    .offset
+                    .as_ref()
+                    .map_or(Ok(kinds::PLANE_OFFSET.number() as f32), |o| self.number(o, object, "offset"))?;
                 Ok(vec![(AnalyticKind::Plane, frame(normal * offset, normal))])
             }
             "disc" => Ok(vec![self.disc(&s.center, &s.normal, &s.radius, &s.inner_radius, table, object)?]),
@@ -107,7 +111,7 @@ impl Builder<'_> {
                 };
                 let placement = frame(base, (cap - base) / height);
                 let mut pieces = vec![(AnalyticKind::Cone { r0, r1, height }, placement)];
-                if !s.open.as_ref().is_some_and(|o| *o.get_ref()) {
+                if !s.open.as_ref().map_or(kinds::OPEN.flag(), |o| *o.get_ref()) {
                     // Caps face outward: the base's disc turned upside down (a half turn about x).
                     let down = placement * Affine3A::from_rotation_x(std::f32::consts::PI);
                     let up = placement * Affine3A::from_translation(Vec3::new(0.0, height, 0.0));
@@ -121,7 +125,10 @@ impl Builder<'_> {
             }
             "torus" => {
                 let center = optional_point(&s.center, "center")?;
-                let axis = s.axis.as_ref().map_or(Ok(Vec3::Y), |a| self.direction(a, object, "axis"))?;
+                let axis = s
+                    .axis
+                    .as_ref()
+                    .map_or(Ok(Vec3::from(kinds::AXIS.triple())), |a| self.direction(a, object, "axis"))?;
                 let major_def = self.require(&s.major_radius, table, object, "major_radius", "major_radius = 1.0")?;
                 let minor_def = self.require(&s.minor_radius, table, object, "minor_radius", "minor_radius = 0.25")?;
                 let major = self.positive(major_def, object, "major_radius")?;

@@ -10,16 +10,9 @@ use crate::layout::constants::ADAPTIVE_MAX_RAYS;
 use crate::limits::{fmt_f32, MAX_LIGHT_GRID, MAX_SPOT_TIGHTNESS};
 use crate::scene::error::object_name;
 use crate::scene::format::{LightDef, Vec3Def};
+use crate::scene::kinds::{self, AREA_LIGHT_SHAPES, LIGHTS};
 use crate::scene::material::{ColorParam, MaterialDesc, MaterialKind};
 use crate::scene::{LightDesc, LightKind};
-
-/// Spot lights: the inner angle is this fraction of the outer one unless given (Mitsuba 3's
-/// default beam width); POV-Ray's defaults for `radius`, `falloff` and `tightness`.
-const DEFAULT_INNER_FRACTION: f32 = 0.75;
-const POV_SPOT_RADIUS: f32 = 30.0;
-const POV_SPOT_FALLOFF: f32 = 45.0;
-const LIGHT_TYPES: &[&str] = &["area", "point", "spot", "distant"];
-const AREA_LIGHT_SHAPES: &[&str] = &["quad", "sphere", "disc"];
 
 impl Builder<'_> {
     pub(super) fn light(&mut self, index: usize, def: &Spanned<LightDef>) -> Result<()> {
@@ -27,7 +20,7 @@ impl Builder<'_> {
         let object = object_name("light", index, l.name.as_ref().map(|n| n.get_ref().as_str()));
         let table = def.span();
         let kind_def = self.require(&l.r#type, &table, &object, "type", "type = \"area\"")?;
-        let kind = self.one_of(kind_def, &object, "type", LIGHT_TYPES)?;
+        let kind = self.one_of(kind_def, &object, "type", &LIGHTS.names())?;
         self.group(&l.group, &object, true)?;
         let present = [
             ("name", span_of(&l.name)),
@@ -56,9 +49,8 @@ impl Builder<'_> {
             ("photons", span_of(&l.photons)),
             ("direct", span_of(&l.direct)),
         ];
-        let common = ["name", "type", "photons", "direct"];
-        let direct = l.direct.as_ref().is_none_or(|d| *d.get_ref());
-        let photons = l.photons.as_ref().is_none_or(|p| *p.get_ref());
+        let direct = l.direct.as_ref().map_or(kinds::DIRECT.flag(), |d| *d.get_ref());
+        let photons = l.photons.as_ref().map_or(kinds::PHOTONS.flag(), |p| *p.get_ref());
         if !direct && !photons {
             let span = span_of(&l.direct).unwrap_or(table.clone());
             return Err(self.invalid(
@@ -70,18 +62,16 @@ impl Builder<'_> {
         }
         let kind = match kind {
             "point" => {
-                let allowed = [&common[..], &["position", "intensity"]].concat();
-                self.only_fields(&object, "a point light", &present, &allowed)?;
+                self.only_kind_fields(&object, LIGHTS.kind("point"), &present)?;
                 let position = self.require(&l.position, &table, &object, "position", "position = [0, 5, 0]")?;
                 let position = self.point(position, &object, "position")?;
                 let intensity =
                     self.light_color(&l.intensity, &table, &object, "intensity", "intensity = [10, 10, 10]")?;
                 LightKind::Point { position, intensity }
             }
-            "spot" => self.spot_light(l, &table, &object, &present, &common)?,
+            "spot" => self.spot_light(l, &table, &object, &present)?,
             "distant" => {
-                let allowed = [&common[..], &["direction", "irradiance", "angular_diameter", "visible"]].concat();
-                self.only_fields(&object, "a distant light", &present, &allowed)?;
+                self.only_kind_fields(&object, LIGHTS.kind("distant"), &present)?;
                 let direction = self.light_direction(&l.direction, &table, &object, "direction = [0, -1, 0]")?;
                 let irradiance = self.light_color(&l.irradiance, &table, &object, "irradiance", "irradiance = 3")?;
                 let half_angle_deg = match &l.angular_diameter {
@@ -100,12 +90,12 @@ impl Builder<'_> {
                         }
                         0.5 * deg
                     }
-                    None => 0.0,
+                    None => 0.5 * kinds::ANGULAR_DIAMETER.number() as f32,
                 };
-                let visible = l.visible.as_ref().is_none_or(|v| *v.get_ref());
+                let visible = l.visible.as_ref().map_or(kinds::VISIBLE.flag(), |v| *v.get_ref());
                 LightKind::Distant { direction, irradiance, half_angle_deg, visible }
             }
-            _ => return self.area_light(index, l, &table, &object, &present, &common, direct, photons),
+            _ => return self.area_light(index, l, &table, &object, &present, direct, photons),
         };
         self.lights.push(LightDesc { kind, direct, photons });
         Ok(())
@@ -157,24 +147,8 @@ impl Builder<'_> {
         table: &Range<usize>,
         object: &str,
         present: &[Present<'_>],
-        common: &[&str],
     ) -> Result<LightKind> {
-        let allowed = [
-            common,
-            &[
-                "position",
-                "direction",
-                "point_at",
-                "intensity",
-                "inner_angle",
-                "outer_angle",
-                "radius",
-                "falloff",
-                "tightness",
-            ],
-        ]
-        .concat();
-        self.only_fields(object, "a spot light", present, &allowed)?;
+        self.only_kind_fields(object, LIGHTS.kind("spot"), present)?;
         let position = self.require(&l.position, table, object, "position", "position = [0, 5, 0]")?;
         let position = self.point(position, object, "position")?;
         let direction = match (&l.direction, &l.point_at) {
@@ -216,11 +190,11 @@ impl Builder<'_> {
             }
             let inner = match &l.radius {
                 Some(r) => angle(r, "radius", false, "POV-Ray's hotspot half-angle in degrees, in [0, 90]")?,
-                None => POV_SPOT_RADIUS,
+                None => kinds::SPOT_RADIUS.number() as f32,
             };
             let outer = match &l.falloff {
                 Some(f) => angle(f, "falloff", true, "POV-Ray's falloff half-angle in degrees, in (0, 90]")?,
-                None => POV_SPOT_FALLOFF,
+                None => kinds::SPOT_FALLOFF.number() as f32,
             };
             (inner, outer, "radius", "falloff", span_of(&l.falloff).or(span_of(&l.radius)))
         } else {
@@ -234,7 +208,7 @@ impl Builder<'_> {
             let outer = angle(outer_def, "outer_angle", true, "the cone's half-angle in degrees, in (0, 90]")?;
             let inner = match &l.inner_angle {
                 Some(i) => angle(i, "inner_angle", false, "the half-angle of full intensity in degrees, in [0, 90]")?,
-                None => DEFAULT_INNER_FRACTION * outer,
+                None => kinds::INNER_FRACTION * outer,
             };
             (inner, outer, "inner_angle", "outer_angle", Some(outer_def.span()))
         };
@@ -266,7 +240,7 @@ impl Builder<'_> {
                 }
                 e
             }
-            None => 0.0,
+            None => kinds::TIGHTNESS.number() as f32,
         };
         Ok(LightKind::Spot {
             position,
@@ -286,28 +260,12 @@ impl Builder<'_> {
         table: &Range<usize>,
         object: &str,
         present: &[Present<'_>],
-        common: &[&str],
         direct: bool,
         photons: bool,
     ) -> Result<()> {
         let shape_def = self.require(&l.shape, table, object, "shape", "shape = \"quad\"")?;
-        let shape = self.one_of(shape_def, object, "shape", AREA_LIGHT_SHAPES)?;
-        let mut allowed = [common, &["shape", "radiance", "transform", "samples", "jitter", "adaptive"]].concat();
-        let what = match shape {
-            "quad" => {
-                allowed.push("vertices");
-                "a quad area light"
-            }
-            "disc" => {
-                allowed.extend_from_slice(&["center", "radius", "normal"]);
-                "a disc area light"
-            }
-            _ => {
-                allowed.extend_from_slice(&["center", "radius"]);
-                "a sphere area light"
-            }
-        };
-        self.only_fields(object, what, present, &allowed)?;
+        let shape = self.one_of(shape_def, object, "shape", &AREA_LIGHT_SHAPES.names())?;
+        self.only_kind_fields(object, AREA_LIGHT_SHAPES.kind(shape), present)?;
         let radiance_def = self.require(&l.radiance, table, object, "radiance", "radiance = [10, 10, 10]")?;
         let radiance = self.color(radiance_def, object, "radiance", false)?;
         if radiance.iter().all(|&c| c == 0.0) {
@@ -345,7 +303,7 @@ impl Builder<'_> {
             }
             None => [1, 1],
         };
-        let jitter = l.jitter.as_ref().is_none_or(|j| *j.get_ref());
+        let jitter = l.jitter.as_ref().map_or(kinds::JITTER.flag(), |j| *j.get_ref());
         let adaptive = match &l.adaptive {
             Some(a) => {
                 let level = *a.get_ref();

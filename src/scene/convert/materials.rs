@@ -9,16 +9,14 @@ use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::limits::{fmt_f32, printable, MAX_IOR};
 use crate::scene::error::suggest;
 use crate::scene::format::{MaterialDef, ParamDef};
+use crate::scene::kinds::{self, MATERIALS};
 use crate::scene::material::{ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam};
-
-pub(super) const DEFAULT_REFLECTANCE: f32 = 0.8;
-const DEFAULT_IOR: f32 = 1.5;
-const MATERIAL_TYPES: &[&str] = &["diffuse", "mirror", "dielectric", "conductor", "plastic", "mix", "null"];
 
 /// Complex indices of refraction (eta, k) of common metals at the wavelengths of the R, G and B
 /// primaries (about 650, 550 and 450 nm), from published optical constants: gold, silver and
 /// copper after Johnson and Christy (1972), aluminium after Rakic (1995), the others from
 /// refractiveindex.info's tables of Palik's data (rounded; RGB rendering has no spectrum).
+/// `kinds::METAL_PRESET_NAMES` lists the same names (tested).
 const METAL_PRESETS: &[(&str, [f32; 3], [f32; 3])] = &[
     ("gold", [0.143, 0.374, 1.442], [3.983, 2.385, 1.603]),
     ("silver", [0.155, 0.117, 0.138], [4.828, 3.122, 2.147]),
@@ -37,7 +35,7 @@ impl Builder<'_> {
         let object = format!("material \"{}\"", printable(&name));
         let m = def.get_ref();
         let kind_def = self.require(&m.r#type, &def.span(), &object, "type", "type = \"diffuse\"")?;
-        let kind = self.one_of(kind_def, &object, "type", MATERIAL_TYPES)?;
+        let kind = self.one_of(kind_def, &object, "type", &MATERIALS.names())?;
         let present = [
             ("type", span_of(&m.r#type)),
             ("reflectance", span_of(&m.reflectance)),
@@ -54,13 +52,15 @@ impl Builder<'_> {
             ("materials", span_of(&m.materials)),
             ("weight", span_of(&m.weight)),
         ];
+        let decl = MATERIALS.kind(kind);
+        self.only_fields(&object, decl.what, &present, &decl.field_names())?;
         let emission = match &m.emission {
             Some(e) => self.color_param(e, &object, "emission", false)?,
-            None => ColorParam::constant(Vec3::ZERO),
+            None => ColorParam::constant(Vec3::from(kinds::EMISSION.triple())),
         };
         let opacity = match &m.opacity {
             Some(o) => self.scalar_param(o, &object, "opacity", 0.0, 1.0, "a fraction in [0, 1] (1 is opaque)")?,
-            None => ScalarParam::constant(1.0),
+            None => ScalarParam::constant(kinds::OPACITY.number() as f32),
         };
         let normal = match (&m.bump, &m.normal_map) {
             (Some(_), Some(n)) => {
@@ -96,38 +96,27 @@ impl Builder<'_> {
             },
             (None, None) => NormalMod::None,
         };
-        let common = ["type", "emission", "opacity", "bump", "normal_map"];
         let kind = match kind {
             "diffuse" => {
-                self.only_fields(&object, "a diffuse material", &present, &[&common[..], &["reflectance"]].concat())?;
                 let reflectance = match &m.reflectance {
                     Some(r) => self.color_param(r, &object, "reflectance", true)?,
-                    None => ColorParam::constant(Vec3::splat(DEFAULT_REFLECTANCE)),
+                    None => ColorParam::constant(Vec3::from(kinds::REFLECTANCE.triple())),
                 };
                 MaterialKind::Diffuse { reflectance }
             }
             "mirror" => {
-                self.only_fields(&object, "a mirror material", &present, &[&common[..], &["tint"]].concat())?;
                 let tint = match &m.tint {
                     Some(t) => self.color_param(t, &object, "tint", true)?,
-                    None => ColorParam::constant(Vec3::ONE),
+                    None => ColorParam::constant(Vec3::from(kinds::TINT.triple())),
                 };
                 MaterialKind::Mirror { tint }
             }
             "dielectric" => {
-                self.only_fields(
-                    &object,
-                    "a dielectric material",
-                    &present,
-                    &[&common[..], &["ior", "roughness"]].concat(),
-                )?;
                 let ior = self.ior(m, &object)?;
                 let roughness = self.roughness(m, &object)?;
                 MaterialKind::Dielectric { ior, roughness }
             }
             "conductor" => {
-                let fields = [&common[..], &["eta", "k", "preset", "roughness"]].concat();
-                self.only_fields(&object, "a conductor material", &present, &fields)?;
                 let (eta, k) = match (&m.preset, &m.eta, &m.k) {
                     (Some(preset), None, None) => {
                         let names: Vec<&str> = METAL_PRESETS.iter().map(|(n, _, _)| *n).collect();
@@ -170,22 +159,16 @@ impl Builder<'_> {
                 MaterialKind::Conductor { eta, k, roughness }
             }
             "plastic" => {
-                let fields = [&common[..], &["reflectance", "ior", "roughness"]].concat();
-                self.only_fields(&object, "a plastic material", &present, &fields)?;
                 let reflectance = match &m.reflectance {
                     Some(r) => self.color_param(r, &object, "reflectance", true)?,
-                    None => ColorParam::constant(Vec3::splat(DEFAULT_REFLECTANCE)),
+                    None => ColorParam::constant(Vec3::from(kinds::REFLECTANCE.triple())),
                 };
                 let ior = self.ior(m, &object)?;
                 let roughness = self.roughness(m, &object)?;
                 MaterialKind::Plastic { reflectance, ior, roughness }
             }
-            "null" => {
-                self.only_fields(&object, "a null material (an invisible medium boundary)", &present, &["type"])?;
-                MaterialKind::Null
-            }
+            "null" => MaterialKind::Null,
             _ => {
-                self.only_fields(&object, "a mix material", &present, &["type", "materials", "weight"])?;
                 let example = "materials = [\"rust\", \"paint\"]";
                 let list = self.require(&m.materials, &def.span(), &object, "materials", example)?;
                 if list.get_ref().len() != 2 {
@@ -225,7 +208,7 @@ impl Builder<'_> {
                         1.0,
                         "a fraction in [0, 1] (of the second material)",
                     )?,
-                    None => ScalarParam::constant(0.5),
+                    None => ScalarParam::constant(kinds::WEIGHT.number() as f32),
                 };
                 MaterialKind::Mix { a: ids[0], b: ids[1], weight }
             }
@@ -236,7 +219,7 @@ impl Builder<'_> {
 
     pub(super) fn ior(&self, m: &MaterialDef, object: &str) -> Result<f32> {
         let Some(ior_def) = &m.ior else {
-            return Ok(DEFAULT_IOR);
+            return Ok(kinds::IOR.number() as f32);
         };
         let ior = self.number(ior_def, object, "ior")?;
         if !(ior as f64 >= 1.0 / MAX_IOR && ior as f64 <= MAX_IOR) {
@@ -332,5 +315,17 @@ impl Builder<'_> {
             ),
         };
         Err(self.invalid(&value.span(), object, format!("unknown material \"{shown}\" ({hint})")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::METAL_PRESETS;
+    use crate::scene::kinds::METAL_PRESET_NAMES;
+
+    #[test]
+    fn declared_presets_are_those_with_optical_constants() {
+        let names: Vec<&str> = METAL_PRESETS.iter().map(|(n, _, _)| *n).collect();
+        assert_eq!(names, METAL_PRESET_NAMES);
     }
 }

@@ -9,6 +9,7 @@ use super::{span_of, Builder, Present, Result};
 use crate::limits::{fmt_number, printable, MAX_MEDIUM_COEFFICIENT};
 use crate::scene::error::suggest;
 use crate::scene::format::{AtmosphereDef, FogDef, MediumDef, ShapeDef, Vec3Def};
+use crate::scene::kinds;
 use crate::scene::material::{TextureDesc, TextureKind, TextureSpace};
 use crate::scene::pattern::{PatternDesc, PatternKind};
 use crate::scene::{Density, Geometry, MediumDesc, MediumInterface, Phase};
@@ -72,13 +73,13 @@ impl Builder<'_> {
                 let sigma_t = coefficient(self, t, "sigma_t")?;
                 let albedo = match albedo {
                     Some(a) => Vec3::from(self.color(a, &object, "albedo", true)?),
-                    None => Vec3::ONE,
+                    None => Vec3::from(kinds::ALBEDO.triple()),
                 };
                 (sigma_t * (Vec3::ONE - albedo), sigma_t * albedo)
             }
             (a, s, None, None) if a.is_some() || s.is_some() => (
-                a.as_ref().map_or(Ok(Vec3::ZERO), |a| coefficient(self, a, "sigma_a"))?,
-                s.as_ref().map_or(Ok(Vec3::ZERO), |s| coefficient(self, s, "sigma_s"))?,
+                a.as_ref().map_or(Ok(Vec3::from(kinds::SIGMA_A.triple())), |a| coefficient(self, a, "sigma_a"))?,
+                s.as_ref().map_or(Ok(Vec3::from(kinds::SIGMA_S.triple())), |s| coefficient(self, s, "sigma_s"))?,
             ),
             (_, _, None, Some(albedo)) => {
                 return Err(self.invalid(
@@ -122,12 +123,12 @@ impl Builder<'_> {
                 }
                 c
             }
-            None => Vec3::ZERO,
+            None => Vec3::from(kinds::MEDIUM_EMISSION.triple()),
         };
         let phase_name = match &m.phase {
-            Some(p) => self.one_of(p, &object, "phase", &["isotropic", "henyey-greenstein"])?,
+            Some(p) => self.one_of(p, &object, "phase", kinds::PHASE.choices())?,
             None if m.g.is_some() => "henyey-greenstein",
-            None => "isotropic",
+            None => kinds::PHASE.text(),
         };
         let phase = match (phase_name, &m.g) {
             ("isotropic", Some(g)) => {
@@ -151,7 +152,7 @@ impl Builder<'_> {
                         }
                         v as f32
                     }
-                    None => 0.0,
+                    None => kinds::G.number() as f32,
                 };
                 Phase::HenyeyGreenstein { g }
             }

@@ -6,7 +6,6 @@ use std::path::Path;
 use glam::{Affine3A, Vec3};
 use toml::Spanned;
 
-use super::materials::DEFAULT_REFLECTANCE;
 use super::params::TexelRole;
 use super::shapes::apply_with_normals;
 use super::shapes::is_degenerate;
@@ -17,6 +16,7 @@ use crate::limits::{fmt_f32, printable_message, MIN_PATCH_FLATNESS};
 use crate::scene::error::SceneError;
 use crate::scene::format::ShapeDef;
 use crate::scene::image_texture::ImageTexture;
+use crate::scene::kinds;
 use crate::scene::material::{
     Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
     TextureSpace,
@@ -27,14 +27,6 @@ use crate::scene::model::{
     load_model, mesh_triangles, Format, LoadOptions, ModelError, ModelImage, ModelLight, ModelMaterial, Shading,
 };
 use crate::scene::{Geometry, LightDesc, LightKind, Shape, Triangle};
-
-/// Mesh defaults (docs/scene-format.md): faces whose normals differ by up to this share vertex
-/// normals where the file has none (Blender's auto-smooth default); subdivision levels; the
-/// flatness of Bezier patches in model units.
-const DEFAULT_SMOOTH_ANGLE: f32 = 30.0;
-const DEFAULT_LEVELS: i64 = 2;
-const DEFAULT_FLATNESS: f64 = 0.01;
-const SUBDIVISION_SCHEMES: &[&str] = &["catmull-clark", "loop"];
 
 impl Builder<'_> {
     /// A model file (any format of `model::Format`) as triangles, materials and lights.
@@ -75,7 +67,7 @@ impl Builder<'_> {
                 ))
             }
             Some(f) => self.flatness(f, object)?,
-            None => DEFAULT_FLATNESS as f32,
+            None => kinds::FLATNESS.number() as f32,
         };
         let model = load_model(&model_path, &LoadOptions { flatness }).map_err(model_error)?;
         let shading = self.shading(s, object)?;
@@ -125,7 +117,7 @@ impl Builder<'_> {
                     let id = self.add_material(
                         format!("{stem}: default"),
                         MaterialDesc::new(MaterialKind::Diffuse {
-                            reflectance: ColorParam::constant(Vec3::splat(DEFAULT_REFLECTANCE)),
+                            reflectance: ColorParam::constant(Vec3::from(kinds::REFLECTANCE.triple())),
                         }),
                     );
                     self.material_used[id as usize] = true;
@@ -171,7 +163,7 @@ impl Builder<'_> {
         }
 
         // Lights of the model (glTF KHR_lights_punctual), moved by the shape's transform.
-        if s.lights.as_ref().is_none_or(|l| *l.get_ref()) {
+        if s.lights.as_ref().map_or(kinds::MODEL_LIGHTS.flag(), |l| *l.get_ref()) {
             let t = transform.unwrap_or(Affine3A::IDENTITY);
             for light in &model.lights {
                 let kind = match *light {
@@ -240,9 +232,9 @@ impl Builder<'_> {
                 }
                 v
             }
-            None => DEFAULT_SMOOTH_ANGLE,
+            None => kinds::SMOOTH_ANGLE.number() as f32,
         };
-        let file_normals = s.file_normals.as_ref().is_none_or(|f| *f.get_ref());
+        let file_normals = s.file_normals.as_ref().map_or(kinds::FILE_NORMALS.flag(), |f| *f.get_ref());
         // smooth_angle = 0 asks for flat faces whatever the file says.
         Ok(Shading { file_normals: file_normals && smooth_angle_deg > 0.0, smooth_angle_deg })
     }
@@ -261,7 +253,7 @@ impl Builder<'_> {
             }
             return Ok(None);
         };
-        let scheme = match self.one_of(scheme, object, "subdivision", SUBDIVISION_SCHEMES)? {
+        let scheme = match self.one_of(scheme, object, "subdivision", kinds::SUBDIVISION.choices())? {
             "catmull-clark" => Scheme::CatmullClark,
             _ => Scheme::Loop,
         };
@@ -277,7 +269,7 @@ impl Builder<'_> {
                 }
                 v as u32
             }
-            None => DEFAULT_LEVELS as u32,
+            None => kinds::LEVELS.number() as u32,
         };
         let crease = match &s.crease_angle {
             Some(a) => {
@@ -322,7 +314,7 @@ impl Builder<'_> {
             points.try_into().map_err(|_| self.invalid(table, object, "`points` needs 16 points".into()))?;
         let flatness = match &s.flatness {
             Some(f) => self.flatness(f, object)?,
-            None => DEFAULT_FLATNESS as f32,
+            None => kinds::FLATNESS.number() as f32,
         };
         let shading = self.shading(s, object)?;
         let span = s.points.as_ref().map_or(table.clone(), |p| p.span());

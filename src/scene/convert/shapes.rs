@@ -13,23 +13,8 @@ use super::{span_of, Builder, Result};
 use crate::limits::{fmt_f32, MAX_SCENE_VALUE, MIN_SPHERE_RADIUS};
 use crate::scene::error::object_name;
 use crate::scene::format::{ShapeDef, TransformDef, Vec3Def};
+use crate::scene::kinds::SHAPES;
 use crate::scene::{Analytic, AnalyticKind, Geometry, Shape, Sphere, Triangle};
-
-pub(super) const SHAPE_TYPES: &[&str] = &[
-    "quad",
-    "triangle",
-    "sphere",
-    "box",
-    "mesh",
-    "bicubic_patch",
-    "plane",
-    "disc",
-    "cylinder",
-    "cone",
-    "torus",
-    "superellipsoid",
-    "csg",
-];
 
 impl Builder<'_> {
     pub(super) fn shape(&mut self, index: usize, def: &Spanned<ShapeDef>) -> Result<()> {
@@ -38,7 +23,7 @@ impl Builder<'_> {
             format!("{}{}", self.context, object_name("shape", index, s.name.as_ref().map(|n| n.get_ref().as_str())));
         let table = def.span();
         let kind_def = self.require(&s.r#type, &table, &object, "type", "type = \"quad\"")?;
-        let kind = self.one_of(kind_def, &object, "type", SHAPE_TYPES)?;
+        let kind = self.one_of(kind_def, &object, "type", &SHAPES.names())?;
         self.shape_fields(kind, s, &object)?;
         self.group(&s.group, &object, self.context.is_empty())?;
         if kind == "csg" {
@@ -97,38 +82,7 @@ impl Builder<'_> {
             ("operation", span_of(&s.operation)),
             ("children", span_of(&s.children)),
         ];
-        let (what, fields): (&str, &[&str]) = match kind {
-            "quad" | "triangle" => (if kind == "quad" { "a quad" } else { "a triangle" }, &["vertices"]),
-            "sphere" => ("a sphere", &["center", "radius"]),
-            "box" => ("a box", &["min", "max"]),
-            "plane" => ("a plane", &["normal", "offset"]),
-            "disc" => ("a disc", &["center", "normal", "radius", "inner_radius"]),
-            "cylinder" => ("a cylinder", &["base", "cap", "radius", "open"]),
-            "cone" => ("a cone", &["base", "cap", "base_radius", "cap_radius", "open"]),
-            "torus" => ("a torus", &["center", "axis", "major_radius", "minor_radius"]),
-            "superellipsoid" => ("a superellipsoid", &["center", "exponents"]),
-            "bicubic_patch" => ("a bicubic patch", &["points", "flatness", "smooth_angle"]),
-            "csg" => ("a csg", &["operation", "children"]),
-            _ => (
-                "a mesh",
-                &[
-                    "file",
-                    "smooth_angle",
-                    "file_normals",
-                    "subdivision",
-                    "levels",
-                    "crease_angle",
-                    "flatness",
-                    "lights",
-                ],
-            ),
-        };
-        let mut allowed = vec!["name", "type", "material", "transform", "interior", "exterior"];
-        if kind == "csg" {
-            allowed = vec!["name", "type", "material"];
-        }
-        allowed.extend_from_slice(fields);
-        self.only_fields(object, what, &present, &allowed)
+        self.only_kind_fields(object, SHAPES.kind(kind), &present)
     }
 
     /// Adds the shapes of one `[[shapes]]` table of type `kind`.

@@ -10,6 +10,7 @@ use super::{Builder, Present, Result};
 use crate::limits::{fmt_f32, fmt_number, printable, MAX_SCENE_VALUE};
 use crate::scene::error::{backticked, suggest, SceneError};
 use crate::scene::format::Vec3Def;
+use crate::scene::kinds::Kind;
 
 impl Builder<'_> {
     pub(super) fn invalid(&self, span: &Range<usize>, object: &str, message: String) -> SceneError {
@@ -30,7 +31,14 @@ impl Builder<'_> {
             .ok_or_else(|| self.invalid(table, object, format!("missing field `{name}`; add it, e.g. `{example}`")))
     }
 
-    /// Rejects fields that exist in the format but not for this `type`.
+    /// Rejects the fields of the format that `kind` does not take (`scene::kinds` declares those
+    /// it takes).
+    pub(super) fn only_kind_fields(&self, object: &str, kind: &Kind, present: &[Present<'_>]) -> Result<()> {
+        self.only_fields(object, kind.what, present, &kind.field_names())
+    }
+
+    /// Rejects fields that exist in the format but not for this `type`, suggesting the one it
+    /// takes that is spelled most like it.
     pub(super) fn only_fields(
         &self,
         object: &str,
@@ -41,10 +49,14 @@ impl Builder<'_> {
         for (name, span) in present {
             if let Some(span) = span {
                 if !allowed.contains(name) {
+                    let hint = match suggest(name, allowed) {
+                        Some(best) => format!("did you mean `{best}`? "),
+                        None => String::new(),
+                    };
                     return Err(self.invalid(
                         span,
                         object,
-                        format!("`{name}` does not apply to {what} (it takes {})", backticked(allowed)),
+                        format!("`{name}` does not apply to {what} ({hint}it takes {})", backticked(allowed)),
                     ));
                 }
             }
