@@ -1,9 +1,11 @@
 //! Every kind of material, light, shape and medium, with its fields and their defaults, declared
 //! once. `convert` reads the lists of kinds and fields from here (which fields a kind takes,
-//! "did you mean" for the others) and the defaults it fills in; the editor's panels get the same
-//! declarations as JSON (`photonix serve`, `/api/scene`'s `kinds`); `tests/kinds.rs` checks that
-//! docs/scene-format.md's table "Every field and its default" lists them as declared; the POV-Ray
-//! front-end leaves out what equals a default. A new kind is one entry here plus its conversion.
+//! "did you mean" for the others, an unknown field matched against its entry's kind in
+//! `error.rs`) and the defaults it fills in; the editor's materials panel gets the same
+//! declarations (`photonix serve`: `/kinds.js`, and `/api/kinds` as JSON); `tests/kinds.rs`
+//! checks that docs/scene-format.md's table "Every field and its default" lists them as declared
+//! and that the parser takes every declared field; the POV-Ray emitter leaves out what equals a
+//! default. A new kind is one entry here plus its conversion (and its row in the docs).
 
 use serde_json::{json, Value as Json};
 
@@ -167,11 +169,6 @@ impl Kind {
     pub fn field_names(&self) -> Vec<&'static str> {
         self.all_fields().map(|f| f.name).collect()
     }
-
-    /// The field called `name`; the caller names a declared field.
-    pub fn field(&self, name: &str) -> &'static Field {
-        self.all_fields().find(|f| f.name == name).unwrap_or_else(|| panic!("{} declares `{name}`", self.what))
-    }
 }
 
 /// The kinds of one table (`[materials.*]`) told apart by one key (`type`).
@@ -188,9 +185,13 @@ impl Family {
         self.kinds.iter().map(|k| k.name).collect()
     }
 
-    /// The kind named `name`; the caller has checked it against `names()`.
+    /// The kind named `name`; the caller has checked it against `names()` (the invariant the
+    /// message names).
     pub fn kind(&self, name: &str) -> &'static Kind {
-        self.kinds.iter().find(|k| k.name == name).unwrap_or_else(|| panic!("{} declares kind {name}", self.table))
+        self.kinds
+            .iter()
+            .find(|k| k.name == name)
+            .unwrap_or_else(|| panic!("callers check kind names against `names()`; {} has no {name}", self.table))
     }
 }
 
