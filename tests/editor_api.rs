@@ -856,3 +856,34 @@ fn serve_warns_on_ctrl_c_while_edits_are_unsaved() {
     }
     assert_eq!(std::fs::read_to_string(&scene).unwrap(), editor_support::SCENE, "nothing was saved");
 }
+
+#[test]
+fn kinds_are_served_as_the_format_declares_them() {
+    // The materials panel shows these fields and defaults; they are the parser's own.
+    let f = Fixture::new();
+    let r = f.call("GET", "/api/kinds", b"");
+    assert_eq!(r.status, 200, "{}", r.text());
+    let kinds = r.json();
+    let diffuse = kinds["materials"]["diffuse"].as_array().unwrap();
+    let reflectance = diffuse.iter().find(|f| f["name"] == "reflectance").unwrap();
+    let photonix::scene::kinds::Default::Triple(declared) = photonix::scene::kinds::REFLECTANCE.default else {
+        panic!("reflectance has a three-number default")
+    };
+    assert_eq!(reflectance["default"], json!(declared));
+    assert_eq!(reflectance["type"], "color or texture");
+    assert_eq!(reflectance["shared"], false);
+    let names: Vec<&str> = diffuse.iter().map(|f| f["name"].as_str().unwrap()).collect();
+    assert_eq!(names, photonix::scene::kinds::MATERIALS.kind("diffuse").field_names());
+    let preset = kinds["materials"]["conductor"].as_array().unwrap().iter().find(|f| f["name"] == "preset").unwrap();
+    assert!(preset["choices"].as_array().unwrap().contains(&json!("gold")));
+    assert!(
+        kinds["shapes"]["torus"].is_array()
+            && kinds["lights"]["spot"].is_array()
+            && kinds["media"]["heterogeneous"].is_array()
+    );
+    // The page imports the same as a module.
+    let module = f.call("GET", "/kinds.js", b"");
+    assert_eq!(module.status, 200);
+    assert_eq!(module.header("content-type"), Some("text/javascript; charset=utf-8"));
+    assert_eq!(module.text(), format!("export const KINDS = {kinds};\n"));
+}

@@ -4,7 +4,7 @@
 // from the scene it broadcasts back.
 
 import { Viewport, keyOf } from './viewport.js';
-import { Tree, Properties, RenderDialog, MATERIAL_FIELDS } from './panels.js';
+import { Tree, Properties, RenderDialog, materialChoices, materialDefaults, materialFieldNames } from './panels.js';
 
 const params = new URLSearchParams(location.search);
 // The tab keeps its token (sessionStorage: this tab only, this origin only), so after a server
@@ -317,18 +317,17 @@ export async function newMaterial() {
   let n = 1;
   while (names.has(`material_${n}`)) n += 1;
   const name = `material_${n}`;
-  if (await edit({ op: 'add', kind: 'material', name, table: { type: 'diffuse', reflectance: [0.8, 0.8, 0.8] } })) select({ kind: 'material', name });
+  if (await edit({ op: 'add', kind: 'material', name, table: { type: 'diffuse', reflectance: materialDefaults('diffuse').reflectance } })) select({ kind: 'material', name });
 }
 
 /// Switches a material's type in one step: fields the new type does not take go, those it
 /// needs come with their defaults (a mix gets the first two other materials).
 export async function switchMaterialType(material, type) {
   if (type === material.fields.type) return;
-  const takes = new Set([...Object.keys(MATERIAL_FIELDS[type] || {}),
-    ...(type === 'mix' || type === 'null' ? [] : ['emission', 'opacity', 'bump', 'normal_map']), 'type']);
+  const takes = new Set(materialFieldNames(type));
   const fields = { type };
   for (const field of Object.keys(material.fields)) if (!takes.has(field)) fields[field] = null;
-  if (type === 'conductor' && !material.fields.preset && !material.fields.eta) fields.preset = 'gold';
+  if (type === 'conductor' && !material.fields.preset && !material.fields.eta) [fields.preset] = materialChoices('conductor', 'preset');
   if (type === 'mix' && !material.fields.materials) {
     const others = state.scene.materials.filter((m) => m.name !== material.name && m.fields.type !== 'null' && m.fields.type !== 'mix').map((m) => m.name);
     if (others.length < 2) { showMessage('a mix needs two other materials (not mix or null); add them first'); select(state.selection); return; }

@@ -1,4 +1,5 @@
 import { keyOf } from './viewport.js';
+import { KINDS } from './kinds.js';
 
 // The scene tree, the properties panel and the final-render dialog. Every field the properties
 // panel shows is the file's own (as written); a change is sent as a `set` edit, and the panel
@@ -6,13 +7,9 @@ import { keyOf } from './viewport.js';
 
 const COLOR_FIELDS = new Set(['reflectance', 'tint', 'emission', 'radiance', 'intensity', 'irradiance', 'color']);
 const HIDDEN_FIELDS = new Set(['type', 'transform']);
-// The fields of each material type that a texture may drive (besides `opacity` and `emission`),
-// and those read as data (linear) rather than colour (sRGB).
-const TEXTURE_FIELDS = {
-  diffuse: ['reflectance'], plastic: ['reflectance', 'roughness'], mirror: ['tint'],
-  conductor: ['roughness'], dielectric: ['roughness'], mix: ['weight'],
-};
-const DATA_FIELDS = new Set(['roughness', 'opacity', 'weight']);
+// The field types (src/scene/kinds.rs) a texture may drive; all but colours are read as data
+// (linear) rather than colour (sRGB).
+const TEXTURED_TYPES = new Set(['color or texture', 'number or texture', 'roughness']);
 
 function el(tag, attrs = {}, ...children) {
   const e = document.createElement(tag);
@@ -113,27 +110,26 @@ function fromHex(hex) {
   return [1, 3, 5].map((i) => Number.parseFloat(srgbToLinear(parseInt(hex.slice(i, i + 2), 16) / 255).toPrecision(4)));
 }
 
-/// Every field of each material type with its default (docs/scene-format.md), in the order the
-/// panel lists them; `emission` and `opacity` on every type but `mix` and `null`.
-export const MATERIAL_FIELDS = {
-  diffuse: { reflectance: [0.8, 0.8, 0.8] },
-  mirror: { tint: [1, 1, 1] },
-  dielectric: { ior: 1.5, roughness: 0 },
-  conductor: { preset: 'gold', roughness: 0 },
-  plastic: { reflectance: [0.8, 0.8, 0.8], ior: 1.5, roughness: 0 },
-  mix: { materials: null, weight: 0.5 },
-  null: {},
-};
-const SURFACE_FIELDS = { emission: [0, 0, 0], opacity: 1 };
-const CONDUCTOR_PRESETS = ['gold', 'silver', 'copper', 'aluminium', 'chrome', 'iron', 'platinum', 'titanium'];
-/// The fields a material of `type` takes, with their defaults.
-function materialDefaults(type) {
-  const own = MATERIAL_FIELDS[type] || {};
-  return type === 'mix' || type === 'null' ? { ...own } : { ...own, ...SURFACE_FIELDS };
+/// Every material type's fields, as the scene format declares them (src/scene/kinds.rs, served
+/// as kinds.js): `[{ name, type, default, required, shared, choices }]`.
+export const MATERIAL_TYPES = Object.keys(KINDS.materials);
+function materialKind(type) { return KINDS.materials[type] || []; }
+/// The values a material field of the kind's list may take (a conductor's presets).
+export function materialChoices(type, field) { return (materialKind(type).find((f) => f.name === field) || { choices: [] }).choices; }
+/// The names of every field a material of `type` takes.
+export function materialFieldNames(type) { return materialKind(type).map((f) => f.name); }
+/// The fields the panel lists for a material of `type`, with their defaults: the type's own
+/// first, then those every type shares; a field with no default is listed only when required
+/// (`materials` of a mix) or a choice (a conductor's `preset`), or when the file writes it.
+export function materialDefaults(type) {
+  const kind = materialKind(type);
+  const out = {};
+  for (const f of [...kind.filter((f) => !f.shared), ...kind.filter((f) => f.shared)]) {
+    if (f.name === 'type' || f.type === 'texture') continue;
+    if (f.default !== null || f.required || f.choices.length) out[f.name] = f.default;
+  }
+  return out;
 }
-/// Fields a material keeps whatever its type (textures and bumps are the kind's business too,
-/// but a switch keeps them where the new type takes them).
-const ANY_MATERIAL_FIELDS = new Set(['type', 'bump', 'normal_map']);
 
 export class Properties {
   constructor(root, app) { this.root = root; this.app = app; }
@@ -227,7 +223,7 @@ export class Properties {
     const target = { material: material.name };
     const fs = el('fieldset', { id: 'material-panel' }, el('legend', {}, `Material "${material.name}"`));
     const kind = el('select', { id: 'mat-type', title: 'The material\'s type: a switch keeps the fields the new type takes' });
-    for (const t of Object.keys(MATERIAL_FIELDS)) kind.append(el('option', t === type ? { value: t, selected: '' } : { value: t }, t));
+    for (const t of MATERIAL_TYPES) kind.append(el('option', t === type ? { value: t, selected: '' } : { value: t }, t));
     kind.onchange = () => this.app.switchMaterialType(material, kind.value);
     fs.append(el('div', { class: 'row' }, el('label', {}, 'type'), kind,
       el('button', { id: 'new-material', title: 'A new diffuse material', onclick: () => this.app.newMaterial() }, 'New')));
@@ -240,7 +236,7 @@ export class Properties {
       if (field === 'preset' && type === 'conductor') {
         const select = el('select', { id: 'mat-preset', onchange: (e) => this.set(target, 'preset', e.target.value || null) });
         select.append(el('option', { value: '' }, 'none (eta and k)'));
-        for (const p of CONDUCTOR_PRESETS) select.append(el('option', p === value && written.has('preset') ? { value: p, selected: '' } : { value: p }, p));
+        for (const p of materialChoices('conductor', 'preset')) select.append(el('option', p === value && written.has('preset') ? { value: p, selected: '' } : { value: p }, p));
         if (!written.has('preset')) select.value = '';
         fs.append(el('div', { class: 'row' }, el('label', {}, 'preset'), select));
         continue;
@@ -258,7 +254,11 @@ export class Properties {
   /// A texture for one of the material's fields: an image file of the scene's folder (the
   /// server adds the `[textures.*]` table and checks the path).
   texturePicker(material) {
-    const fields = [...(TEXTURE_FIELDS[material.fields.type] || []), 'opacity', 'emission'];
+    const kind = materialKind(material.fields.type);
+    // The type's own fields first (the first is the one picked), then the shared ones.
+    const fields = [...kind.filter((f) => !f.shared), ...kind.filter((f) => f.shared)]
+      .filter((f) => TEXTURED_TYPES.has(f.type)).map((f) => f.name);
+    const linear = new Set(kind.filter((f) => f.type !== 'color or texture').map((f) => f.name));
     const field = el('select', { id: 'tex-field', title: 'The field the texture drives' });
     for (const f of fields) field.append(el('option', { value: f }, f));
     const file = el('select', { id: 'tex-file', title: 'An image in the scene\'s folder' }, el('option', { value: '' }, 'image…'));
@@ -269,7 +269,7 @@ export class Properties {
     });
     file.onchange = () => {
       if (!file.value) return;
-      this.app.edit({ op: 'set_texture', material: material.name, field: field.value, file: file.value, linear: DATA_FIELDS.has(field.value) });
+      this.app.edit({ op: 'set_texture', material: material.name, field: field.value, file: file.value, linear: linear.has(field.value) });
     };
     return el('div', { class: 'row texture' }, el('label', {}, 'texture'), field, file);
   }

@@ -6,6 +6,8 @@
 //! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save`;
 //! - `GET /api/scene.toml`: the scene's current text (a download);
 //! - `GET /api/scene.glb`: the scene's geometry as glTF 2.0 binary (`gltf.rs`, a download);
+//! - `GET /api/kinds`: every kind of material, light, shape and medium with its fields and
+//!   defaults (`scene::kinds::json`); `GET /kinds.js` is the same as a module the page imports;
 //! - `GET /api/images`: the image files in the scene's folder (`{"images": ["textures/a.png"]}`),
 //!   for the texture picker;
 //! - `POST /api/import?name=F.glb&material=M&at=x,y,z`: the body is written to F.glb in the
@@ -232,6 +234,8 @@ fn router(app: Arc<App>) -> Router {
         .route("/api/scene.toml", get(download_scene))
         .route("/api/scene.glb", get(download_glb))
         .route("/api/images", get(list_images))
+        .route("/api/kinds", get(get_kinds))
+        .route("/kinds.js", get(get_kinds_module))
         .route("/api/edit", post(post_edit))
         .route("/api/undo", post(post_undo))
         .route("/api/redo", post(post_redo))
@@ -342,6 +346,16 @@ fn scene_message(doc: &SceneDocument) -> String {
     let mut value = scene_json(doc);
     value["type"] = json!("scene");
     value.to_string()
+}
+
+async fn get_kinds() -> Response {
+    axum::Json(crate::scene::kinds::json()).into_response()
+}
+
+/// The declarations as `export const KINDS = {..};`, so the panels have them before they draw.
+async fn get_kinds_module() -> Response {
+    let module = format!("export const KINDS = {};\n", crate::scene::kinds::json());
+    ([(header::CONTENT_TYPE, "text/javascript; charset=utf-8")], module).into_response()
 }
 
 async fn get_scene(State(app): State<Arc<App>>) -> Response {

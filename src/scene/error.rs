@@ -120,8 +120,10 @@ impl Source<'_> {
 
         if let Some(rest) = message.strip_prefix("unknown field `") {
             let field = printable(rest.split('`').next().unwrap_or_default());
-            let valid = expected_names(rest);
-            let object = describe_table(self.text, &key_path[..key_path.len().saturating_sub(1)]);
+            let table = &key_path[..key_path.len().saturating_sub(1)];
+            // The entry's own kind knows better than the format which fields are meant.
+            let valid = kind_fields(self.text, table).unwrap_or_else(|| expected_names(rest));
+            let object = describe_table(self.text, table);
             let unknown = rest.split('`').next().unwrap_or_default();
             let hint = match suggest(unknown, &valid) {
                 Some(best) => format!("did you mean `{best}`?"),
@@ -299,6 +301,45 @@ fn expected_names(message_tail: &str) -> Vec<String> {
         return Vec::new();
     };
     expected.split('`').skip(1).step_by(2).map(str::to_string).collect()
+}
+
+/// The fields that the kind of the entry at `path` takes (`scene::kinds`): a material, a shape, a
+/// light or a medium whose `type` (and an area light's `shape`) names a kind; `None` for any
+/// other table, or a kind the file does not name.
+fn kind_fields(text: &str, path: &[KeyPart]) -> Option<Vec<String>> {
+    use super::kinds::{AREA_LIGHT_SHAPES, LIGHTS, MATERIALS, MEDIA, SHAPES};
+    let root = DeTable::parse(text).ok()?;
+    fn find<'a>(table: &DeTable<'a>, name: &str) -> Option<DeValue<'a>> {
+        table.iter().find(|(k, _)| k.get_ref().as_ref() == name).map(|(_, v)| v.get_ref().clone())
+    }
+    let (family, entry) = match path {
+        [KeyPart::Key(f), KeyPart::Key(name)] if f == "materials" || f == "media" => {
+            let DeValue::Table(list) = find(root.get_ref(), f)? else { return None };
+            (f.as_str(), find(&list, name)?)
+        }
+        [KeyPart::Key(f), KeyPart::Index(i)] if f == "shapes" || f == "lights" => {
+            let DeValue::Array(list) = find(root.get_ref(), f)? else { return None };
+            (f.as_str(), list.get(*i)?.get_ref().clone())
+        }
+        _ => return None,
+    };
+    let DeValue::Table(entry) = entry else { return None };
+    let text_of = |name: &str| match find(&entry, name) {
+        Some(DeValue::String(s)) => Some(s.to_string()),
+        _ => None,
+    };
+    let (family, kind) = match family {
+        "materials" => (MATERIALS, text_of("type")?),
+        "shapes" => (SHAPES, text_of("type")?),
+        "lights" if text_of("type")? == "area" => (AREA_LIGHT_SHAPES, text_of("shape")?),
+        "lights" => (LIGHTS, text_of("type")?),
+        _ => {
+            let heterogeneous = find(&entry, "density").is_some();
+            (MEDIA, text_of("type").unwrap_or(if heterogeneous { "heterogeneous" } else { "homogeneous" }.to_string()))
+        }
+    };
+    let kind = family.kinds.iter().find(|k| k.name == kind)?;
+    Some(kind.all_fields().map(|f| f.name.to_string()).collect())
 }
 
 /// serde names Rust types; users know numbers and integers.

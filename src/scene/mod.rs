@@ -27,6 +27,7 @@ pub mod sky;
 pub mod voxel;
 
 pub mod image_texture;
+pub mod kinds;
 
 use std::path::{Path, PathBuf};
 

@@ -4,10 +4,11 @@
 
 use toml::Spanned;
 
-use super::{Builder, Result, SHAPE_TYPES};
+use super::{Builder, Result};
 use crate::layout::constants::{CSG_MAX_DEPTH, CSG_MAX_IMPLICIT, CSG_MAX_LEAVES, CSG_MAX_PRIMITIVES};
 use crate::limits::printable;
 use crate::scene::format::ShapeDef;
+use crate::scene::kinds::SHAPES;
 use crate::scene::{Csg, CsgNode, CsgOp, Geometry, Shape};
 
 const CSG_OPERATIONS: &[&str] = &["union", "intersection", "difference", "merge"];
@@ -107,7 +108,7 @@ impl Builder<'_> {
                 None => format!("{object}, child {k}"),
             };
             let kind_def = self.require(&c.r#type, &child.span(), &child_object, "type", "type = \"sphere\"")?;
-            let kind = self.one_of(kind_def, &child_object, "type", SHAPE_TYPES)?;
+            let kind = self.one_of(kind_def, &child_object, "type", &SHAPES.names())?;
             self.shape_fields(kind, c, &child_object)?;
             self.group(&c.group, &child_object, false)?;
             if kind == "csg" {

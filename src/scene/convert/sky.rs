@@ -6,7 +6,8 @@ use std::ops::Range;
 use glam::{DVec3, Vec3};
 use toml::Spanned;
 
-use super::{span_of, vec3_text, Builder, Present, Result};
+use super::values::vec3_text;
+use super::{span_of, Builder, Present, Result};
 use crate::limits::{fmt_f32, MAX_SCENE_VALUE};
 use crate::scene::format::{EnvironmentDef, RainbowDef, Vec3Def};
 use crate::scene::image_texture::ImageTexture;

@@ -12,6 +12,7 @@ use toml::{Table, Value as T};
 use super::ast::{Colour, CsgOp, Interior, Light, LightKind, Obj, ObjKind, PigmentKind, PovScene, Tex};
 use super::parser::Result;
 use super::{Pos, PovError, PovOptions};
+use crate::scene::kinds;
 
 /// POV-Ray is left-handed with +z into the screen; Photonix is right-handed. Mirroring z maps
 /// one onto the other and keeps x right and y up on the image.
@@ -820,7 +821,8 @@ impl Emitter<'_> {
                 let falloff = falloff.clamp(1e-3, 90.0);
                 t.insert("radius".into(), num(radius.clamp(0.0, falloff)));
                 t.insert("falloff".into(), num(falloff));
-                if *tightness > 0.0 {
+                // What equals the format's default (scene::kinds) is left out.
+                if *tightness > kinds::TIGHTNESS.number() {
                     t.insert("tightness".into(), num(tightness.min(1000.0)));
                 }
             }
@@ -835,7 +837,9 @@ impl Emitter<'_> {
                     t.insert("radius".into(), num(r));
                     t.insert("radiance".into(), rgb(intensity.map(|i| i / (PI * r * r))));
                     t.insert("samples".into(), T::Array(vec![T::Integer(a.n1 as i64), T::Integer(a.n2 as i64)]));
-                    t.insert("jitter".into(), T::Boolean(a.jitter));
+                    if a.jitter != kinds::JITTER.flag() {
+                        t.insert("jitter".into(), T::Boolean(a.jitter));
+                    }
                     if a.adaptive > 0 && a.n1 * a.n2 >= 2 {
                         t.insert("adaptive".into(), T::Integer(a.adaptive as i64));
                     }
