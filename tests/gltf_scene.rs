@@ -302,3 +302,35 @@ fn khr_texture_transform_moves_the_uvs_of_its_material() {
     assert!(us.iter().all(|u| (0.5..=1.0).contains(u)), "{us:?}");
     assert!(scene.warnings.iter().all(|w| !w.contains("KHR_texture_transform")), "{:?}", scene.warnings);
 }
+
+/// KHR_materials_transmission (with _ior): the material is a mix of its opaque form and glass of
+/// its index, by the transmission factor; the volume's attenuation is warned about.
+#[test]
+fn gltf_transmission_becomes_glass_of_the_materials_index() {
+    use photonix::scene::MaterialKind;
+    let dir = tempfile::tempdir().unwrap();
+    let path = write_gltf(
+        dir.path(),
+        r#"{"mesh": 0}"#,
+        r#", "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_volume"]"#,
+        r#"{"name": "bottle", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1], "metallicFactor": 0,
+            "roughnessFactor": 0},
+            "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.75},
+                           "KHR_materials_ior": {"ior": 1.33},
+                           "KHR_materials_volume": {"attenuationColor": [0.5, 0.8, 1], "attenuationDistance": 2}}}"#,
+    );
+    let scene = load_scene(&path).unwrap();
+    let m = &scene.materials[scene.triangles().next().unwrap().1 as usize];
+    let MaterialKind::Mix { b, weight, .. } = &m.kind else { panic!("{:?}", m.kind) };
+    assert!((weight.value - 0.75).abs() < 1e-6, "{weight:?}");
+    match &scene.materials[*b as usize].kind {
+        MaterialKind::Dielectric { ior, roughness } => {
+            assert!((ior - 1.33).abs() < 1e-6, "{ior}");
+            assert_eq!(roughness.alpha, [0.0; 2]);
+        }
+        k => panic!("{k:?}"),
+    }
+    let warnings = scene.warnings.join("\n");
+    assert!(warnings.contains("KHR_materials_volume") && warnings.contains("bottle"), "{warnings}");
+    assert!(!warnings.contains("render opaque"), "{warnings}");
+}

@@ -323,10 +323,10 @@ fn document_info(bytes: &[u8]) -> DocumentInfo {
     );
     for m in doc.materials() {
         let name = crate::limits::printable(m.name().unwrap_or("unnamed"));
-        if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) {
+        if m.transmission().is_some_and(|t| t.transmission_factor() > 0.0) && m.volume().is_some() {
             info.notes.push(format!(
-                "material \"{name}\": KHR_materials_transmission (with _ior and _volume) is read but its surfaces \
-                 render opaque (a dielectric mapping of imported materials is not yet in the scene converter)"
+                "material \"{name}\": KHR_materials_volume's attenuation is not read; its transmission renders as \
+                 clear glass"
             ));
         }
     }

@@ -424,26 +424,39 @@ impl Builder<'_> {
         };
         let finish = |kind: MaterialKind| MaterialDesc { kind, emission, opacity, normal };
         let metallic = m.metallic > 0.0 || metal_tex.is_some();
+        // glTF's transmission passes light through the dielectric part (not the metal): a mix of
+        // the opaque material and smooth or rough glass of the material's index, by the factor.
+        let transmission = m.transmission * (1.0 - m.metallic.clamp(0.0, 1.0));
+        let name_opaque = if transmission > 0.0 { format!("{name} (opaque part)") } else { name.clone() };
         let id = match roughness {
             Some(roughness) if metallic => {
                 let (eta, k) = metal_eta_k(m.base_color);
                 let conductor =
                     MaterialKind::Conductor { eta: ColorParam::constant(eta), k: ColorParam::constant(k), roughness };
                 if m.metallic >= 1.0 && metal_tex.is_none() {
-                    self.add_material(name, finish(conductor))
+                    self.add_material(name_opaque, finish(conductor))
                 } else {
                     let a = self.add_material(format!("{name} (dielectric part)"), finish(base_kind));
                     let b = self.add_material(format!("{name} (metal part)"), finish(conductor));
                     self.material_used[a as usize] = true;
                     self.material_used[b as usize] = true;
                     let weight = ScalarParam { value: m.metallic, texture: metal_tex };
-                    self.add_material(name, finish(MaterialKind::Mix { a, b, weight }))
+                    self.add_material(name_opaque, finish(MaterialKind::Mix { a, b, weight }))
                 }
             }
-            _ => self.add_material(name, finish(base_kind)),
+            _ => self.add_material(name_opaque, finish(base_kind)),
         };
         self.material_used[id as usize] = true;
-        id
+        if transmission <= 0.0 {
+            return id;
+        }
+        let glass = MaterialKind::Dielectric { ior: m.ior, roughness: roughness.unwrap_or(Roughness::SMOOTH) };
+        let glass = self.add_material(format!("{name} (transmission)"), finish(glass));
+        self.material_used[glass as usize] = true;
+        let weight = ScalarParam { value: transmission.min(1.0), texture: None };
+        let mixed = self.add_material(name, finish(MaterialKind::Mix { a: id, b: glass, weight }));
+        self.material_used[mixed as usize] = true;
+        mixed
     }
 }
 
