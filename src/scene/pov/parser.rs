@@ -48,6 +48,8 @@ pub enum Value {
     Pigment(Pigment),
     Finish(Finish),
     Interior(Interior),
+    Normal(Box<super::ast::Normal>),
+    Media(Box<super::ast::Media>),
     /// A `material`: texture layers and an interior.
     Material(Vec<Tex>, Option<Interior>),
     Camera(Box<Camera>),
@@ -70,6 +72,8 @@ impl Value {
             Value::Pigment(_) => "a pigment",
             Value::Finish(_) => "a finish",
             Value::Interior(_) => "an interior",
+            Value::Normal(_) => "a normal",
+            Value::Media(_) => "a media",
             Value::Material(..) => "a material",
             Value::Camera(_) => "a camera",
             Value::ColorMap(_) => "a color_map",
