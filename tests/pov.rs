@@ -834,3 +834,26 @@ sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
     let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ once }} }} }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("names no image file"), "{e}");
 }
+
+#[test]
+fn declared_skies_densities_normals_and_function_entries_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}#declare Sky = sky_sphere {{ pigment {{ rgb <0.2, 0.4, 0.8> }} }}
+sky_sphere {{ Sky }}
+#declare D = density {{ bozo color_map {{ [0 rgb 0] [1 rgb 1] }} }}
+#declare Ns = array[2] {{ normal {{ dents 0.5 }}, normal {{ wrinkles 0.5 }} }}
+sphere {{ 0, 1 pigment {{ rgbt 1 }} hollow interior {{ media {{ scattering {{ 1, 0.5 }} density {{ D scale 0.5 }} }} }} }}
+sphere {{ x, 1 pigment {{ gradient x pigment_map {{ [0 function {{ x }} color_map {{ [0 rgb 0] [1 rgb 1] }}] [1 rgb 1] }} }} normal {{ Ns[1] }} }}"
+        ),
+    );
+    assert_eq!(t["environment"]["type"].as_str(), Some("uniform"));
+    assert_eq!(floats(&t["environment"]["radiance"]), [0.2, 0.4, 0.8]);
+    let media = t["media"].as_table().unwrap();
+    let density = media.values().next().unwrap()["density"].as_str().unwrap();
+    assert_eq!(t["textures"][density]["pattern"].as_str(), Some("bozo"));
+    assert!(t["textures"].as_table().unwrap().values().any(|x| x["pattern"].as_str() == Some("wrinkles")));
+    assert!(warnings.iter().any(|w| w.contains("function pattern")), "{warnings:?}");
+}

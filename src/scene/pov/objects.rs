@@ -243,8 +243,18 @@ impl Parser {
                 self.next()?;
                 Value::Media(Box::new(self.media(pos)?))
             }
-            "density" | "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow" | "sky_sphere"
-            | "spline" | "interior_texture" | "fog" | "photons" | "radiosity" | "warp" => {
+            "sky_sphere" => {
+                self.next()?;
+                Value::Sky(Box::new(self.sky_sphere(pos)?))
+            }
+            "density" => {
+                // A density is a pigment body (its colour map a density map).
+                self.next()?;
+                self.expect_sym("{")?;
+                Value::Pigment(self.pigment_body(pos, "}")?)
+            }
+            "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow" | "spline" | "interior_texture"
+            | "fog" | "photons" | "radiosity" | "warp" => {
                 self.next()?;
                 self.skip_block()?;
                 Value::Other(match w {
@@ -1318,6 +1328,21 @@ impl Parser {
         }
     }
 
+    /// Skips to the `]` (or other closing symbol in `close`) that ends the entry we are in,
+    /// nested brackets and braces included (consumed).
+    fn skip_entry(&mut self, close: &[&str]) -> Result<()> {
+        let mut depth = 0i32;
+        loop {
+            let t = self.expect_any("`]`")?;
+            match t.tok {
+                Tok::Sym(c) if depth == 0 && close.contains(&c) => return Ok(()),
+                Tok::Sym("{") | Tok::Sym("[") => depth += 1,
+                Tok::Sym("}") | Tok::Sym("]") => depth -= 1,
+                _ => {}
+            }
+        }
+    }
+
     /// Skips to the `}` that closes the block we are in (consumed).
     fn skip_to_brace(&mut self) -> Result<()> {
         let mut depth = 1;
@@ -1353,6 +1378,7 @@ impl Parser {
         mut pending: Option<(String, Pos)>,
     ) -> Result<(Pigment, Option<Tex>)> {
         let mut first_tex: Option<Tex> = None;
+        let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
         let mut pattern: Option<String> = None;
@@ -1402,8 +1428,21 @@ impl Parser {
                     continue;
                 }
             };
-            if let Some(Value::Pigment(base)) = self.lookup(&w).cloned() {
+            let mut declared = self.lookup(&w).cloned();
+            if let Some(Value::Array(_)) = declared {
+                // An element of an array of pigments: `pigmentArr[i]`.
                 self.next()?;
+                let v = self.lookup(&w).cloned().expect("looked up above");
+                match self.postfix(v)? {
+                    Value::Pigment(base) => declared = Some(Value::Pigment(base)),
+                    other => return self.err(tpos, format!("`{w}[...]` is {}, not a pigment", other.kind())),
+                }
+                pending_array = true;
+            }
+            if let Some(Value::Pigment(base)) = declared {
+                if !std::mem::take(&mut pending_array) {
+                    self.next()?;
+                }
                 p = base;
                 if let PigmentKind::Pattern { name, map: m, fields: f } = &p.kind {
                     pattern = Some(name.clone());
@@ -1445,8 +1484,8 @@ impl Parser {
                         p.kind = PigmentKind::Solid(v);
                     }
                 }
-                "color_map" | "colour_map" | "density_map" => map = self.colour_map()?,
-                "pigment_map" => {
+                "color_map" | "colour_map" => map = self.colour_map()?,
+                "pigment_map" | "density_map" => {
                     // Each entry's pigment stands in by its mean colour: a colour map.
                     map = self.pigment_map(tpos)?;
                 }
@@ -1470,6 +1509,15 @@ impl Parser {
                     pattern = None;
                 }
                 "uv_mapping" => {}
+                "density_file" => {
+                    // density_file df3 "file": not read (docs/pov-ray.md); its mean stands in.
+                    self.expect_any("df3")?;
+                    self.string()?;
+                    pattern = Some("unsupported:density_file".into());
+                }
+                "interpolate" | "control0" | "control1" => {
+                    self.float()?;
+                }
                 "interior" | "exterior" => {
                     // A fractal pattern's interior and exterior types (`interior 1, 0.5`).
                     self.float()?;
@@ -1575,7 +1623,7 @@ impl Parser {
             }
             let epos = self.here();
             self.expect_sym("[")?;
-            let v = self.float()?;
+            let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
             self.accept_sym(",")?;
             let layers = self.texture_body(epos, "]")?;
             if let Some(t) = layers.first() {
@@ -1685,7 +1733,18 @@ impl Parser {
         self.expect_sym("{")?;
         let mut n = Normal { pattern: String::new(), amount: 0.5, fields: Vec::new(), xform: DMat4::IDENTITY, pos };
         let mut other: Option<String> = None;
+        let mut nested: Option<Normal> = None;
         loop {
+            // A bare amount (`pigment_pattern { ... } 10`, `..., 0.5`) may follow any item.
+            if self.accept_sym(",")? {
+                continue;
+            }
+            if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Num(_) | Tok::Sym("-") | Tok::Sym("(")))
+                || (self.starts_float()? && (!n.pattern.is_empty() || other.is_some()))
+            {
+                n.amount = self.float()?;
+                continue;
+            }
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;
             let w = match t.tok {
@@ -1702,9 +1761,22 @@ impl Parser {
             }
             match w.as_str() {
                 "bump_size" => n.amount = self.float()?,
-                "accuracy" => {
+                "accuracy" | "control0" | "control1" | "coords" | "size" => {
                     self.float()?;
                 }
+                "interior" | "exterior" => {
+                    // A fractal pattern's interior and exterior types.
+                    self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
+                "normal" => {
+                    // A checker's, brick's or hexagon's normals: the first stands in.
+                    let inner = self.normal(tpos)?;
+                    nested = nested.or(inner);
+                }
+                "average" => other = Some(w.clone()),
                 "no_bump_scale" | "uv_mapping" => {}
                 "slope_map" | "normal_map" => self.skip_block()?,
                 "gradient" => {
@@ -1723,7 +1795,7 @@ impl Parser {
                         n.amount = self.float()?;
                     }
                 }
-                "bump_map" | "average" | "pigment_pattern" | "image_pattern" => {
+                "bump_map" | "pigment_pattern" | "image_pattern" => {
                     other = Some(w.clone());
                     self.skip_block()?;
                 }
@@ -1739,13 +1811,16 @@ impl Parser {
                         self.skip_block()?;
                     }
                 }
-                _ => match self.lookup(&w).cloned() {
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
                     Some(Value::Normal(base)) => n = Normal { pos, ..*base },
                     Some(Value::Other("a normal")) => other = Some("declared".into()),
                     Some(v) => return self.err(tpos, format!("`{w}` is {}, not a normal", v.kind())),
                     None => return self.err(tpos, format!("`{w}` does not belong in a normal")),
                 },
             }
+        }
+        if matches!(n.pattern.as_str(), "checker" | "brick" | "hexagon") && nested.is_some() {
+            return Ok(nested);
         }
         if let Some(o) = other {
             if o != "declared" {
@@ -1770,8 +1845,19 @@ impl Parser {
             }
             let epos = self.here();
             self.expect_sym("[")?;
-            let v = self.float()?;
+            // average's entries may leave out their weight.
+            let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
             self.accept_sym(",")?;
+            if self.peek_word()?.as_deref() == Some("function") {
+                // A pattern of a user-defined function: grey stands in.
+                self.warnings.push(format!(
+                    "{}: a function pattern (user-defined functions) is not supported yet; grey stands in",
+                    self.loc(epos)
+                ));
+                self.skip_entry(&["]"])?;
+                map.push((v, [0.5, 0.5, 0.5, 0.0, 0.0]));
+                continue;
+            }
             let p = self.pigment_body(epos, "]")?;
             map.push((v, p.mean()));
             if map.len() > 256 {
@@ -2475,6 +2561,7 @@ impl Parser {
                     sky.emission = [c[0], c[1], c[2]];
                 }
                 _ => match self.lookup(&w).cloned() {
+                    Some(Value::Sky(base)) => sky = SkySphere { pos, ..*base },
                     Some(Value::Other(_)) | None => {
                         return self.err(tpos, format!("`{w}` does not belong in a sky_sphere"));
                     }

@@ -50,6 +50,7 @@ pub enum Value {
     Interior(Interior),
     Normal(Box<super::ast::Normal>),
     Media(Box<super::ast::Media>),
+    Sky(Box<super::ast::SkySphere>),
     /// A `material`: texture layers and an interior.
     Material(Vec<Tex>, Option<Interior>),
     Camera(Box<Camera>),
@@ -74,6 +75,7 @@ impl Value {
             Value::Interior(_) => "an interior",
             Value::Normal(_) => "a normal",
             Value::Media(_) => "a media",
+            Value::Sky(_) => "a sky_sphere",
             Value::Material(..) => "a material",
             Value::Camera(_) => "a camera",
             Value::ColorMap(_) => "a color_map",
