@@ -2168,7 +2168,7 @@ impl Parser {
                 "texture" => tex.extend(self.texture()?),
                 "interior" => int = Some(self.interior()?),
                 "interior_texture" => self.skip_block()?,
-                _ => match self.lookup(&w).cloned() {
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
                     Some(Value::Material(t, i)) => {
                         tex = t;
                         int = i;
@@ -2405,6 +2405,13 @@ impl Parser {
         let mut f =
             Fog { ground: false, distance: 0.0, colour: [0.0; 5], offset: 0.0, alt: 0.0, turbulence: None, pos };
         loop {
+            // A declared colour, possibly in an expression (`Wheat * 0.5`).
+            if let Some(w) = self.peek_word()? {
+                if matches!(self.lookup(&w), Some(Value::Vector(_)) | Some(Value::Float(_))) {
+                    f.colour = self.colour()?;
+                    continue;
+                }
+            }
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;
             let w = match t.tok {
