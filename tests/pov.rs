@@ -587,3 +587,273 @@ fn file_output_and_errors_of_the_new_shapes_have_positions() {
     let e = error(dir.path(), &format!("{CAMERA}poly {{ 4, <1, 2, 3> }}"));
     assert!(e.contains("takes 35 coefficients"), "{e}");
 }
+
+/// The translated TOML of a scene, parsed, and the translation's warnings.
+fn translated(dir: &Path, text: &str) -> (toml::Table, Vec<String>) {
+    let p = write(dir, "scene.pov", text);
+    let t = translate_file(&p, &options()).unwrap_or_else(|e| panic!("{e}"));
+    // The translation must also load.
+    load_pov(&p, &options()).unwrap_or_else(|e| panic!("{e}"));
+    (t.toml.parse::<toml::Table>().unwrap(), t.warnings)
+}
+
+fn float(v: &toml::Value) -> f64 {
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64)).unwrap_or(f64::NAN)
+}
+
+fn floats(v: &toml::Value) -> Vec<f64> {
+    v.as_array().map(|a| a.iter().map(float).collect()).unwrap_or_default()
+}
+
+/// The one material of a translated scene that has `field`.
+fn material_with<'a>(t: &'a toml::Table, field: &str) -> &'a toml::Table {
+    let ms = t["materials"].as_table().unwrap();
+    let found: Vec<_> = ms.values().filter_map(|m| m.as_table()).filter(|m| m.contains_key(field)).collect();
+    assert_eq!(found.len(), 1, "{ms:?}");
+    found[0]
+}
+
+#[test]
+fn normals_become_bump_maps_of_the_documented_strength() {
+    let dir = tempfile::tempdir().unwrap();
+    // bumps: strength 0.5 x amount x the pattern's scale; the pattern placed as in POV-Ray.
+    let (t, _) = translated(
+        dir.path(),
+        &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} normal {{ bumps 0.4 scale 0.5 }} }}"),
+    );
+    let bump = material_with(&t, "bump")["bump"].as_table().unwrap();
+    assert!((float(&bump["scale"]) - 0.5 * 0.4 * 0.5).abs() < 1e-12, "{bump:?}");
+    let tex = &t["textures"][bump["texture"].as_str().unwrap()];
+    assert_eq!(tex["pattern"].as_str(), Some("bumps"));
+    assert_eq!(tex["space"].as_str(), Some("world"));
+    assert_eq!(floats(&tex["transform"]["scale"]), [0.5, 0.5, -0.5]);
+    // The same scene written in TOML loads to the same material.
+    let same = parse_scene(
+        "[camera]\nposition = [0, 2, 6]\nlook_at = [0, 1, 0]\nfov = 40\n[textures.b]\ntype = \"pattern\"\npattern = \"bumps\"\nspace = \"world\"\ntransform = { scale = [0.5, 0.5, -0.5] }\n[materials.w]\ntype = \"diffuse\"\nreflectance = 0.6\nbump = { texture = \"b\", scale = 0.1 }\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"w\"\ncenter = [0, 0, 0]\nradius = 1\n",
+        Path::new("same.toml"),
+    )
+    .unwrap();
+    let pov =
+        load(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} normal {{ bumps 0.4 scale 0.5 }} }}"));
+    let (a, b) = (&pov.materials[pov.shapes[0].material as usize], &same.materials[0]);
+    assert_eq!(format!("{:?}", a.normal), format!("{:?}", b.normal));
+
+    // Any other pattern: 5 x 0.02 x 4/3 x amount (POV-Ray's slope sampling); ripples: amount /
+    // (pi frequency); a declared normal; bump_size; a normal in a texture.
+    let (t, _) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}#declare N = normal {{ ripples frequency 2 bump_size 0.6 }}
+sphere {{ 0, 1 pigment {{ rgb 1 }} normal {{ granite 0.6 }} }}
+sphere {{ x, 1 texture {{ pigment {{ rgb <1, 0, 0> }} normal {{ N }} }} }}"
+        ),
+    );
+    let scales: Vec<f64> =
+        t["materials"].as_table().unwrap().values().filter_map(|m| m.get("bump")).map(|b| float(&b["scale"])).collect();
+    assert_eq!(scales.len(), 2);
+    assert!((scales[0] - 0.6 * 0.1 * 4.0 / 3.0).abs() < 1e-12, "{scales:?}");
+    assert!((scales[1] - 0.6 / (std::f64::consts::PI * 2.0)).abs() < 1e-12, "{scales:?}");
+
+    // A normal Photonix has no pattern for leaves the surface smooth, with a warning.
+    let (t, warnings) =
+        translated(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ rgb 1 }} normal {{ quilted 0.5 }} }}"));
+    assert!(!t.to_string().contains("bump"));
+    assert!(warnings.iter().any(|w| w.contains("scene.pov:3:") && w.contains("quilted")), "{warnings:?}");
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 normal {{ bumps 0.5 colour_of_nothing }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("`colour_of_nothing` does not belong in a normal"), "{e}");
+}
+
+#[test]
+fn height_fields_are_meshed_from_images() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 3 x 2 PGM: row 0 (the image's top) lies at z = 1 in POV-Ray, -1 here.
+    std::fs::write(dir.path().join("h.pgm"), "P2 3 2 10\n0 5 10\n10 10 10\n").unwrap();
+    let s = load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" smooth pigment {{ rgb 1 }} }}"));
+    let tops: Vec<[Vec3; 3]> = s
+        .shapes
+        .iter()
+        .filter_map(|sh| match &sh.geometry {
+            Geometry::Triangle(t) => Some(t.vertices),
+            _ => None,
+        })
+        .collect();
+    // Heights at the grid points, x = i / 2, z = -(1 - j).
+    let h = |i: usize, j: usize| [[0.0, 0.5, 1.0], [1.0, 1.0, 1.0]][j][i];
+    let p = |i: usize, j: usize| Vec3::new(i as f32 / 2.0, h(i, j), -(1.0 - j as f32));
+    for j in 0..2 {
+        for i in 0..3 {
+            assert!(
+                tops.iter().any(|t| t.iter().any(|v| v.abs_diff_eq(p(i, j), 1e-6))),
+                "no vertex at {} for pixel ({i}, {j})",
+                p(i, j)
+            );
+        }
+    }
+    let (lo, hi) = total_bounds(&s);
+    assert!(lo.abs_diff_eq(Vec3::new(0.0, 0.0, -1.0), 1e-6) && hi.abs_diff_eq(Vec3::new(1.0, 1.0, 0.0), 1e-6));
+    // Closed: the top's 4 triangles, walls (those of no height dropped), the floor's 2.
+    let area = triangle_area(&s);
+    // Top: two cells; walls: front (z = -1, heights 0, 0.5, 1), back (all 1), sides; floor 1.
+    let top = {
+        let tri = |a: Vec3, b: Vec3, c: Vec3| 0.5 * (b - a).cross(c - a).length();
+        tri(p(0, 0), p(1, 0), p(1, 1))
+            + tri(p(0, 0), p(1, 1), p(0, 1))
+            + tri(p(1, 0), p(2, 0), p(2, 1))
+            + tri(p(1, 0), p(2, 1), p(1, 1))
+    };
+    let walls = (0.5 * 0.5 * 0.5 + 0.5 * (0.5 + 1.0) * 0.5) + 1.0 + (0.0 + 1.0) / 2.0 + 1.0;
+    println!("height field area {area}, want {}", top + walls + 1.0);
+    assert!((area - (top + walls + 1.0)).abs() < 1e-5);
+
+    // water_level leaves out what lies wholly below it.
+    let wet =
+        load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" water_level 0.75 pigment {{ rgb 1 }} }}"));
+    assert!(wet.shapes.len() < s.shapes.len());
+
+    // A palette PNG: the height is the palette index, not the colour (POV-Ray's rule).
+    {
+        let f = std::fs::File::create(dir.path().join("p.png")).unwrap();
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(f), 2, 2);
+        enc.set_color(png::ColorType::Indexed);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut palette = vec![0u8; 256 * 3];
+        palette[3 * 51..3 * 51 + 3].copy_from_slice(&[255, 255, 255]);
+        enc.set_palette(palette);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[51, 51, 51, 51]).unwrap();
+    }
+    let flat = load(dir.path(), &format!("{CAMERA}height_field {{ png \"p.png\" pigment {{ rgb 1 }} }}"));
+    let (_, hi) = total_bounds(&flat);
+    assert!((hi.y - 0.2).abs() < 1e-6, "{hi}");
+
+    // Errors name the place and the way out.
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ png \"missing.png\" }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("missing.png"), "{e}");
+    std::fs::write(dir.path().join("h.tga"), [0u8; 18]).unwrap();
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ tga \"h.tga\" }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("tga images are not supported yet"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ function 10, 10 {{ x }} }}"));
+    assert!(e.contains("scene.pov:3:16") && e.contains("user-defined functions"), "{e}");
+    std::fs::write(dir.path().join("bad.pgm"), "P5 4 4 255\n\x01").unwrap();
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ pgm \"bad.pgm\" }}"));
+    assert!(e.contains("shorter than its header"), "{e}");
+}
+
+#[test]
+fn sky_sphere_rainbow_and_media_map_onto_environment_and_media() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}sky_sphere {{ pigment {{ gradient y color_map {{ [0 rgb <1, 0, 0>] [1 rgb <0, 0, 1>] }} }} }}
+rainbow {{ direction <0, 0, 1> angle 42.5 width 5 color_map {{ [0 rgbt <1, 0, 0, 0.5>] [1 rgbt <0, 0, 1, 0.5>] }} }}
+media {{ scattering {{ 1, 0.01 }} }}
+sphere {{ 0, 1 pigment {{ rgbt 1 }} hollow interior {{ media {{ absorption 0.5 scattering {{ 5, 0.3 eccentricity 0.4 }} emission 0.1 }} }} }}
+box {{ 2, 3 pigment {{ rgbt 1 }} hollow interior {{ media {{ emission <1, 0, 0> density {{ spherical }} }} }} }}"
+        ),
+    );
+    // The gradient's value at elevation e is sin e: at 30 degrees, halfway from red to blue.
+    let env = t["environment"].as_table().unwrap();
+    assert_eq!(env["type"].as_str(), Some("gradient"));
+    let els = floats(&env["elevations"]);
+    let at30 = els.iter().position(|e| *e == 30.0).unwrap();
+    let c = floats(&env["colors"].as_array().unwrap()[at30]);
+    assert!((c[0] - 0.5).abs() < 1e-3 && c[1].abs() < 1e-9 && (c[2] - 0.5).abs() < 1e-3, "{c:?}");
+    // The rainbow: direction mirrored, strength from the map's transmit.
+    let r = t["rainbow"].as_table().unwrap();
+    assert_eq!(r["type"].as_str(), Some("pov"));
+    assert_eq!(floats(&r["direction"]), [0.0, 0.0, -1.0]);
+    assert!((float(&r["strength"]) - 0.5).abs() < 1e-12);
+    // The atmosphere, and the sphere's medium inside a null boundary.
+    let media = t["media"].as_table().unwrap();
+    let atmo = &media[t["atmosphere"]["medium"].as_str().unwrap()];
+    assert_eq!(floats(&atmo["sigma_s"]), [0.01; 3]);
+    let shapes = t["shapes"].as_array().unwrap();
+    let ball = &media[shapes[0]["interior"].as_str().unwrap()];
+    assert_eq!(floats(&ball["sigma_a"]), [0.5; 3]);
+    assert_eq!(floats(&ball["sigma_s"]), [0.3; 3]);
+    assert_eq!(floats(&ball["emission"]), [0.1; 3]);
+    assert_eq!(ball["phase"].as_str(), Some("henyey-greenstein"));
+    assert!((float(&ball["g"]) - 0.4).abs() < 1e-12);
+    let m = &t["materials"][shapes[0]["material"].as_str().unwrap()];
+    assert_eq!(m["type"].as_str(), Some("null"));
+    // A glow alone gets an absorption of 0.3 across its container (the box's diagonal is sqrt 3),
+    // scaled like the rest by the density (a pattern Photonix lacks: its mean, 0.5).
+    let glow = &media[shapes[1]["interior"].as_str().unwrap()];
+    assert!((floats(&glow["sigma_a"])[0] - 0.5 * 0.3 / 3f64.sqrt()).abs() < 1e-9, "{glow:?}");
+    assert_eq!(floats(&glow["sigma_a"])[1], 0.0);
+    // The same scene's medium written in TOML loads alike.
+    let s = load(dir.path(), &std::fs::read_to_string(dir.path().join("scene.pov")).unwrap());
+    assert!(s.environment.is_some());
+
+    // Errors with positions.
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 interior {{ media {{ scattering {{ 7, 1 }} }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("scattering type 7"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}sky_sphere {{ colour_of_nothing }}"));
+    assert!(e.contains("scene.pov:3:14") && e.contains("does not belong in a sky_sphere"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}rainbow {{ direction 0 color_map {{ [0 rgb 1] [1 rgb 0] }} }}"));
+    assert!(e.contains("scene.pov:3:1") && e.contains("direction is zero"), "{e}");
+}
+
+#[test]
+fn pigment_and_texture_maps_warps_and_image_maps_are_approximated_as_documented() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 2 x 1 PNG, red and blue: its mean linear colour is (0.5, 0, 0.5).
+    image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap().save(dir.path().join("rb.png")).unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"rb.png\" map_type 0 interpolate 2 once }} }} }}
+sphere {{ x, 1 pigment {{ gradient x pigment_map {{ [0 rgb <1, 0, 0>] [1 checker rgb <0, 0, 1>, rgb <0, 1, 0>] }} warp {{ turbulence 0.5 octaves 3 }} }} }}
+sphere {{ y, 1 texture {{ bozo texture_map {{ [0 pigment {{ rgb 1 }} finish {{ phong 1 }}] [1 pigment {{ rgb 0 }}] }} }} }}
+sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
+        ),
+    );
+    let ms = t["materials"].as_table().unwrap();
+    let image = ms.values().find(|m| m["type"].as_str() == Some("diffuse") && m["reflectance"].is_array()).unwrap();
+    let c = floats(&image["reflectance"]);
+    assert!((c[0] - 0.3).abs() < 1e-9 && c[1] == 0.0 && (c[2] - 0.3).abs() < 1e-9, "{c:?}");
+    assert!(warnings.iter().any(|w| w.contains("image_map")), "{warnings:?}");
+    // pigment_map: the entries' mean colours as the colour map; the warp's turbulence kept.
+    let textures = t["textures"].as_table().unwrap();
+    let grad = textures.values().find(|x| x["pattern"].as_str() == Some("gradient")).unwrap();
+    let map = grad["color_map"].as_array().unwrap();
+    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0, 0.5, 0.5]);
+    assert_eq!(floats(&grad["turbulence"]), [0.5; 3]);
+    assert_eq!(grad["octaves"].as_integer(), Some(3));
+    // texture_map: the entries' pigments as a colour map, in the first entry's finish.
+    let bozo =
+        textures.values().find(|x| x["pattern"].as_str() == Some("bozo") && x.get("color_map").is_some()).unwrap();
+    let map = bozo["color_map"].as_array().unwrap();
+    assert_eq!(floats(&map[0].as_array().unwrap()[1]), [1.0; 3]);
+    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0; 3]);
+    assert!(ms.values().any(|m| m["type"].as_str() == Some("plastic")));
+    assert!(warnings.iter().any(|w| w.contains("black_hole warp is not supported")), "{warnings:?}");
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"none.png\" }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("none.png"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ once }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("names no image file"), "{e}");
+}
+
+#[test]
+fn declared_skies_densities_normals_and_function_entries_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}#declare Sky = sky_sphere {{ pigment {{ rgb <0.2, 0.4, 0.8> }} }}
+sky_sphere {{ Sky }}
+#declare D = density {{ bozo color_map {{ [0 rgb 0] [1 rgb 1] }} }}
+#declare Ns = array[2] {{ normal {{ dents 0.5 }}, normal {{ wrinkles 0.5 }} }}
+sphere {{ 0, 1 pigment {{ rgbt 1 }} hollow interior {{ media {{ scattering {{ 1, 0.5 }} density {{ D scale 0.5 }} }} }} }}
+sphere {{ x, 1 pigment {{ gradient x pigment_map {{ [0 function {{ x }} color_map {{ [0 rgb 0] [1 rgb 1] }}] [1 rgb 1] }} }} normal {{ Ns[1] }} }}"
+        ),
+    );
+    assert_eq!(t["environment"]["type"].as_str(), Some("uniform"));
+    assert_eq!(floats(&t["environment"]["radiance"]), [0.2, 0.4, 0.8]);
+    let media = t["media"].as_table().unwrap();
+    let density = media.values().next().unwrap()["density"].as_str().unwrap();
+    assert_eq!(t["textures"][density]["pattern"].as_str(), Some("bozo"));
+    assert!(t["textures"].as_table().unwrap().values().any(|x| x["pattern"].as_str() == Some("wrinkles")));
+    assert!(warnings.iter().any(|w| w.contains("function pattern")), "{warnings:?}");
+}

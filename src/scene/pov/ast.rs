@@ -95,6 +95,8 @@ pub enum ObjKind {
 pub struct Tex {
     pub pigment: Pigment,
     pub finish: Finish,
+    /// `normal { ... }`: a bump pattern, or `None` for a smooth surface.
+    pub normal: Option<Normal>,
     /// world_from_texture: the transforms written in the texture and applied to the object
     /// after the texture was given.
     pub xform: DMat4,
@@ -172,9 +174,62 @@ impl Default for Finish {
     }
 }
 
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Interior {
     pub ior: f64,
+    /// `media { ... }` blocks, in order (Photonix takes the first).
+    pub media: Vec<Media>,
+}
+
+/// POV-Ray's `normal { PATTERN amount ... }`: a pattern whose gradient tilts the shading normal.
+#[derive(Clone, Debug)]
+pub struct Normal {
+    pub pattern: String,
+    /// The bump amount (`bumps 0.5`, or `bump_size`).
+    pub amount: f64,
+    /// The pattern's fields as docs/patterns.md names them (turbulence, frequency, ...).
+    pub fields: Vec<(String, toml::Value)>,
+    /// texture_from_pattern: the normal's own transforms.
+    pub xform: DMat4,
+    pub pos: Pos,
+}
+
+/// POV-Ray's `media { ... }` (interior or atmospheric), per unit length.
+#[derive(Clone, Debug)]
+pub struct Media {
+    pub absorption: [f64; 3],
+    pub emission: [f64; 3],
+    pub scattering: [f64; 3],
+    /// Henyey-Greenstein asymmetry (0 isotropic).
+    pub g: f64,
+    /// `density { PATTERN color_map { ... } }`: the first density block, as a pigment.
+    pub density: Option<Pigment>,
+    /// world_from_media: transforms given in the media and applied after it.
+    pub xform: DMat4,
+    pub pos: Pos,
+}
+
+/// `sky_sphere { pigment { ... } ... }`: its pigments, bottom first.
+#[derive(Clone, Debug)]
+pub struct SkySphere {
+    pub pigments: Vec<Pigment>,
+    /// The sky_sphere's own transforms (applied to the pigments).
+    pub xform: DMat4,
+    pub emission: [f64; 3],
+    pub pos: Pos,
+}
+
+/// `rainbow { ... }` (POV-Ray's reference manual, "Rainbow").
+#[derive(Clone, Debug)]
+pub struct Rainbow {
+    pub direction: DVec3,
+    pub angle: f64,
+    pub width: f64,
+    pub map: Vec<(f64, Colour)>,
+    pub up: Option<DVec3>,
+    pub arc_angle: Option<f64>,
+    pub falloff_angle: Option<f64>,
+    pub pos: Pos,
 }
 
 #[derive(Clone, Debug)]
@@ -259,9 +314,33 @@ pub struct PovScene {
     pub objects: Vec<Obj>,
     pub background: Option<(Colour, Pos)>,
     pub fog: Option<Fog>,
+    pub sky_sphere: Option<SkySphere>,
+    pub rainbow: Option<Rainbow>,
+    /// Atmospheric `media { ... }` at the top level.
+    pub media: Option<Media>,
     pub assumed_gamma: Option<f64>,
     pub max_trace_level: Option<i64>,
     /// The texture of objects without one (POV-Ray's: black, with `#default` applied).
     pub default_tex: Option<Tex>,
     pub warnings: Vec<String>,
+}
+
+/// A colour map's colour at value `v`, as POV-Ray's `BlendMap::Search`: the first colour below
+/// the first position, the last at and above the last, linear in between (entries sorted by
+/// position first, as Photonix's maps are).
+pub fn map_eval(map: &[(f64, Colour)], v: f64) -> Colour {
+    let mut m = map.to_vec();
+    m.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let Some(first) = m.first() else { return [0.0; 5] };
+    if v <= first.0 {
+        return first.1;
+    }
+    for w in m.windows(2) {
+        let ((a, ca), (b, cb)) = (w[0], w[1]);
+        if v < b {
+            let t = if b > a { (v - a) / (b - a) } else { 1.0 };
+            return [0, 1, 2, 3, 4].map(|i| ca[i] + t * (cb[i] - ca[i]));
+        }
+    }
+    m[m.len() - 1].1
 }

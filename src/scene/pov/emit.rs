@@ -9,7 +9,10 @@ use std::path::PathBuf;
 use glam::{DMat3, DMat4, DVec3};
 use toml::{Table, Value as T};
 
-use super::ast::{Colour, CsgOp, Interior, Light, LightKind, Obj, ObjKind, PigmentKind, PovScene, Tex};
+use super::ast::{
+    Colour, CsgOp, Interior, Light, LightKind, Media, Normal, Obj, ObjKind, PigmentKind, PovScene, Rainbow, SkySphere,
+    Tex,
+};
 use super::parser::Result;
 use super::{Pos, PovError, PovOptions};
 use crate::scene::kinds;
@@ -151,6 +154,25 @@ pub fn decompose(m: &DMat4) -> Option<(DVec3, DVec3, DVec3)> {
     Some((s, rot, m.w_axis.truncate()))
 }
 
+/// The rotation and scale nearest a shearing map (the polar decomposition L = R P, by Higham's
+/// iteration R <- (R + R^-T) / 2, with P's diagonal as the scale), the translation kept: how a
+/// sheared pattern is approximated, since the scene format's transforms do not shear.
+fn unshear(m: &DMat4) -> DMat4 {
+    let l = DMat3::from_mat4(*m);
+    if l.determinant().abs() <= 1e-300 {
+        return *m;
+    }
+    let mut r = l;
+    for _ in 0..30 {
+        r = (r + r.inverse().transpose()) * 0.5;
+    }
+    let p = r.transpose() * l;
+    let s = DMat3::from_diagonal(DVec3::new(p.x_axis.x, p.y_axis.y, p.z_axis.z));
+    let mut out = DMat4::from_mat3(r * s);
+    out.w_axis = m.w_axis;
+    out
+}
+
 fn transform_table(m: &DMat4, pos: Pos, what: &str) -> Result<Option<T>> {
     if m.abs_diff_eq(DMat4::IDENTITY, 1e-12) {
         return Ok(None);
@@ -174,6 +196,32 @@ fn transform_table(m: &DMat4, pos: Pos, what: &str) -> Result<Option<T>> {
     Ok(Some(T::Table(tab)))
 }
 
+/// A sky pigment's colour at pattern-space point `q`: a constant, a gradient through its
+/// colour map (POV-Ray's value: the distance along the normalised direction, wrapped into
+/// [0, 1)), or another pattern's mean colour.
+fn sky_colour(p: &super::ast::Pigment, q: DVec3) -> Colour {
+    match &p.kind {
+        PigmentKind::Pattern { name, map, fields } if name == "gradient" && !map.is_empty() => {
+            let dir = fields
+                .iter()
+                .find(|(k, _)| k == "direction")
+                .and_then(|(_, v)| v.as_array())
+                .map(|a| {
+                    DVec3::new(
+                        a.first().and_then(T::as_float).unwrap_or(0.0),
+                        a.get(1).and_then(T::as_float).unwrap_or(0.0),
+                        a.get(2).and_then(T::as_float).unwrap_or(0.0),
+                    )
+                })
+                .unwrap_or(DVec3::Y)
+                .normalize_or(DVec3::Y);
+            let v = q.dot(dir).rem_euclid(1.0);
+            super::ast::map_eval(map, v)
+        }
+        _ => p.mean(),
+    }
+}
+
 struct Emitter<'a> {
     scene: &'a PovScene,
     files: &'a [PathBuf],
@@ -181,6 +229,7 @@ struct Emitter<'a> {
     origins: Vec<(usize, Pos)>,
     materials: HashMap<String, String>,
     textures: HashMap<String, String>,
+    media: HashMap<String, String>,
     gamma: f64,
     /// Where the camera looks (POV-Ray coordinates): lights are matched to POV-Ray there.
     target: DVec3,
@@ -207,6 +256,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         origins: Vec::new(),
         materials: HashMap::new(),
         textures: HashMap::new(),
+        media: HashMap::new(),
         gamma: scene.assumed_gamma.unwrap_or(1.0),
         target,
         lights: Vec::new(),
@@ -223,7 +273,9 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         r.insert("max_depth".into(), T::Integer(depth.clamp(1, 1024)));
         e.entry("render", T::Table(r), camera.pos)?;
     }
-    if let Some((c, pos)) = scene.background {
+    if let Some(sky) = &scene.sky_sphere {
+        e.sky(sky)?;
+    } else if let Some((c, pos)) = scene.background {
         let mut t = Table::new();
         t.insert("type".into(), T::String("uniform".into()));
         t.insert("radiance".into(), rgb(e.linear(c)));
@@ -243,6 +295,20 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
                 t.insert("turbulence".into(), vec3(turb));
             }
             e.entry("fog", T::Table(t), f.pos)?;
+        }
+    }
+    if let Some(r) = &scene.rainbow {
+        e.rainbow(r)?;
+    }
+    if let Some(md) = &scene.media {
+        if scene.fog.as_ref().is_some_and(|f| f.distance > 0.0) {
+            let at = e.location(md.pos);
+            e.warnings
+                .push(format!("{at}: atmospheric media beside a fog is left out (the fog is Photonix's atmosphere)"));
+        } else if let Some(name) = e.media(md, 1.0)? {
+            let mut t = Table::new();
+            t.insert("medium".into(), T::String(name));
+            e.entry("atmosphere", T::Table(t), md.pos)?;
         }
     }
     let default_tex = scene.default_tex.clone().map(|t| vec![t]);
@@ -523,7 +589,39 @@ impl Emitter<'_> {
         let glow_ok = !matches!(o.kind, ObjKind::Plane { .. });
         let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
+        if let Some(md) = int.and_then(|i| i.media.first()) {
+            self.interior_media(o, md, int.map_or(0, |i| i.media.len()), &mut s)?;
+        }
         Ok(s)
+    }
+
+    /// An object's interior media as the shape's `interior`: on the closed shapes Photonix fills
+    /// with a medium, outside CSG (docs/pov-ray.md); elsewhere left out with a warning.
+    fn interior_media(&mut self, o: &Obj, md: &Media, count: usize, s: &mut Table) -> Result<()> {
+        let closed = match &o.kind {
+            ObjKind::Sphere { .. } | ObjKind::Box { .. } | ObjKind::Torus { .. } | ObjKind::Superellipsoid { .. } => {
+                true
+            }
+            ObjKind::Cylinder { open, .. } | ObjKind::Cone { open, .. } => !open,
+            ObjKind::Plane { .. } => true,
+            _ => false,
+        };
+        let at = self.location(md.pos);
+        if !closed || self.plane_box.is_some() {
+            self.warnings.push(format!(
+                "{at}: media in this shape is left out (Photonix fills spheres, boxes, tori, superellipsoids, closed cylinders and cones and planes, outside CSG)"
+            ));
+            return Ok(());
+        }
+        if count > 1 {
+            self.warnings.push(format!("{at}: only the first of this interior's {count} media is kept"));
+        }
+        let (lo, hi) = bounds_of(o);
+        let size = if lo.x <= hi.x { (hi - lo).length() } else { 1.0 };
+        if let Some(name) = self.media(md, size)? {
+            s.insert("interior".into(), T::String(name));
+        }
+        Ok(())
     }
 
     /// The children of a CSG node as shape tables (lights are placed as lights).
@@ -647,6 +745,19 @@ impl Emitter<'_> {
         let transparency = (mean[3] + mean[4]).clamp(0.0, 1.0);
         let ior = int.map_or(1.0, |i| i.ior);
         let mut m = Table::new();
+        if transparency >= 0.98 && ior <= 1.0 && int.is_some_and(|i| !i.media.is_empty()) {
+            // POV-Ray's media container (`pigment { rgbt 1 } hollow interior { media ... }`): an
+            // invisible boundary.
+            m.insert("type".into(), T::String("null".into()));
+            return self.write_material(m, pos);
+        }
+        let bump = match &t.normal {
+            Some(n) => Some(self.bump(&t, n)?),
+            None => None,
+        };
+        if let Some(b) = &bump {
+            m.insert("bump".into(), b.clone());
+        }
 
         // The base: diffuse, or plastic when the finish has a highlight.
         let reflectance = match &t.pigment.kind {
@@ -695,6 +806,9 @@ impl Emitter<'_> {
             let mut mirror = Table::new();
             mirror.insert("type".into(), T::String("mirror".into()));
             mirror.insert("tint".into(), rgb(tint));
+            if let Some(b) = &bump {
+                mirror.insert("bump".into(), b.clone());
+            }
             let mirror_name = self.write_material(mirror, pos)?;
             if reflection >= 0.95 {
                 return Ok(mirror_name);
@@ -728,8 +842,17 @@ impl Emitter<'_> {
 
     /// A pattern texture in world space that follows the object as POV-Ray's does.
     fn pattern_texture(&mut self, t: &Tex, pos: Pos) -> Result<String> {
-        let PigmentKind::Pattern { name, map, fields } = &t.pigment.kind else {
-            unreachable!("called for patterns only")
+        // The pattern is evaluated at pattern_from_world(p) in POV-Ray's coordinates:
+        // world_from_pattern = mirror * texture transforms * pigment transforms.
+        let w = MIRROR * t.xform * t.pigment.xform;
+        self.world_pattern(&t.pigment.kind, &w, t.pigment.pos, pos)
+    }
+
+    /// A world-space pattern texture of a pattern pigment, placed by `world_from_pattern`
+    /// (Photonix's coordinates); `ppos` is where the pattern was given, `pos` its object.
+    fn world_pattern(&mut self, kind: &PigmentKind, world_from_pattern: &DMat4, ppos: Pos, pos: Pos) -> Result<String> {
+        let PigmentKind::Pattern { name, map, fields } = kind else {
+            return Err(PovError::at(ppos, "internal: a constant colour is not a pattern".into()));
         };
         let mut tab = Table::new();
         tab.insert("type".into(), T::String("pattern".into()));
@@ -757,10 +880,17 @@ impl Emitter<'_> {
                 );
             }
         }
-        // The pattern is evaluated at pattern_from_world(p) in POV-Ray's coordinates:
-        // world_from_pattern = mirror * texture transforms * pigment transforms.
-        let w = MIRROR * t.xform * t.pigment.xform;
-        if let Some(tr) = transform_table(&w, t.pigment.pos, "pattern")? {
+        let placed = match decompose(world_from_pattern) {
+            Some(_) => *world_from_pattern,
+            None => {
+                let at = self.location(ppos);
+                self.warnings.push(format!(
+                    "{at}: this pattern's transforms shear it (a rotation followed by a non-uniform scale); the nearest rotation and scale stand in"
+                ));
+                unshear(world_from_pattern)
+            }
+        };
+        if let Some(tr) = transform_table(&placed, ppos, "pattern")? {
             tab.insert("transform".into(), tr);
         }
         let key = toml::to_string(&tab).unwrap_or_default();
@@ -773,6 +903,192 @@ impl Emitter<'_> {
         wrap.insert(n.clone(), T::Table(tab));
         self.entry("textures", T::Table(wrap), pos)?;
         Ok(n)
+    }
+
+    /// A `normal { PATTERN amount }` as a bump map: the pattern (black to white, its value) as
+    /// a height of `strength` scene units. POV-Ray tilts the normal by amount x a pattern's
+    /// slope in pattern space; `strength` = k x amount x the pattern's scale gives the same tilt
+    /// in world space, with k from how POV-Ray perturbs (docs/pov-ray.md, "Normals").
+    fn bump(&mut self, t: &Tex, n: &Normal) -> Result<T> {
+        let w = MIRROR * t.xform * n.xform;
+        let scale = DMat3::from_mat4(w).determinant().abs().cbrt();
+        let frequency = n
+            .fields
+            .iter()
+            .find(|(k, _)| k == "frequency")
+            .and_then(|(_, v)| v.as_float())
+            .filter(|f| f.abs() > 1e-6)
+            .unwrap_or(1.0);
+        let k = match n.pattern.as_str() {
+            // POV-Ray adds amount x its vector noise (spread 0.257 a component); the scalar
+            // noise's slope here spreads about 0.5 a component.
+            "bumps" | "wrinkles" => 0.5,
+            // amount x noise^3 x vector noise: about a fifth of bumps' tilt.
+            "dents" => 0.1,
+            // amount / 10 x sin(2 pi f d) per source against the value's slope pi f / 10 cos(...).
+            "ripples" | "waves" => 1.0 / (PI * frequency.abs()),
+            // Any other pattern: -5 amount x the value at four points 0.02 away (a tetrahedron's
+            // corners), which is amount x 5 x 0.02 x 4/3 times the gradient.
+            _ => 0.02 * 5.0 * 4.0 / 3.0,
+        };
+        let kind = PigmentKind::Pattern { name: n.pattern.clone(), map: Vec::new(), fields: n.fields.clone() };
+        let name = self.world_pattern(&kind, &w, n.pos, n.pos)?;
+        let strength = (k * n.amount * scale).clamp(-1e6, 1e6);
+        let mut b = Table::new();
+        b.insert("texture".into(), T::String(name));
+        b.insert("scale".into(), num(strength));
+        Ok(T::Table(b))
+    }
+
+    /// A POV-Ray media as a `[media.NAME]` entry; `size` (scene units) is the container's
+    /// size, for the small absorption a glow alone needs. `None` (with a warning) for a media
+    /// that does nothing.
+    fn media(&mut self, md: &Media, size: f64) -> Result<Option<String>> {
+        let mut t = Table::new();
+        let mut sa = md.absorption.map(|x| x.max(0.0));
+        let ss = md.scattering.map(|x| x.max(0.0));
+        let em = md.emission.map(|x| x.max(0.0));
+        let mut density_scale = 1.0;
+        if let Some(d) = &md.density {
+            match &d.kind {
+                PigmentKind::Solid(c) => density_scale = (c[0] + c[1] + c[2]) / 3.0,
+                kind => {
+                    let w = MIRROR * md.xform * d.xform;
+                    let name = self.world_pattern(kind, &w, d.pos, md.pos)?;
+                    t.insert("density".into(), T::String(name));
+                }
+            }
+        }
+        // Photonix's emission needs extinction in its channels (it is estimated at collisions);
+        // a glow alone gets an absorption of 0.3 across the container (74% seen through it).
+        for i in 0..3 {
+            if em[i] > 0.0 && sa[i] + ss[i] <= 0.0 {
+                sa[i] = 0.3 / size.max(1e-6);
+            }
+        }
+        let scaled = |v: [f64; 3]| rgb(v.map(|x| (x * density_scale).min(crate::limits::MAX_SCENE_VALUE * 0.5)));
+        if sa.iter().chain(ss.iter()).all(|x| *x <= 0.0) || density_scale <= 0.0 {
+            let path = self.files.get(md.pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+            self.warnings.push(format!(
+                "{}:{}:{}: this media absorbs, scatters and emits nothing; left out",
+                crate::limits::printable_message(&path),
+                md.pos.line,
+                md.pos.col
+            ));
+            return Ok(None);
+        }
+        t.insert("sigma_a".into(), scaled(sa));
+        t.insert("sigma_s".into(), scaled(ss));
+        if em.iter().any(|x| *x > 0.0) {
+            t.insert("emission".into(), scaled(em));
+        }
+        if md.g != 0.0 && ss.iter().any(|x| *x > 0.0) {
+            t.insert("phase".into(), T::String("henyey-greenstein".into()));
+            t.insert("g".into(), num(md.g.clamp(-0.99, 0.99)));
+        }
+        let key = toml::to_string(&t).unwrap_or_default();
+        if let Some(n) = self.media.get(&key) {
+            return Ok(Some(n.clone()));
+        }
+        let n = format!("md{}", self.media.len());
+        self.media.insert(key, n.clone());
+        let mut wrap = Table::new();
+        wrap.insert(n.clone(), T::Table(t));
+        self.entry("media", T::Table(wrap), md.pos)?;
+        Ok(Some(n))
+    }
+
+    /// `sky_sphere` as a gradient environment: its bottom pigment's colour at each elevation
+    /// (every 10 degrees, the mean of 16 directions around), upper pigments mixed in by their
+    /// mean colour and opacity (docs/pov-ray.md).
+    fn sky(&mut self, sky: &SkySphere) -> Result<()> {
+        let Some(bottom) = sky.pigments.first() else {
+            return Err(PovError::at(
+                sky.pos,
+                "this sky_sphere has no pigment; give one: sky_sphere { pigment { ... } }".into(),
+            ));
+        };
+        let pattern_from_world = (sky.xform * bottom.xform).inverse();
+        let mut colors = Vec::new();
+        let mut elevations = Vec::new();
+        for e in 0..=18 {
+            let el = (-90.0 + 10.0 * e as f64).to_radians();
+            let mut c = [0.0; 5];
+            for a in 0..16 {
+                let az = (a as f64 + 0.5) * PI / 8.0;
+                let d = DVec3::new(el.cos() * az.cos(), el.sin(), el.cos() * az.sin());
+                let v = sky_colour(bottom, pattern_from_world.transform_point3(d));
+                for i in 0..5 {
+                    c[i] += v[i] / 16.0;
+                }
+            }
+            for layer in &sky.pigments[1..] {
+                let top = layer.mean();
+                let see = (top[3] + top[4]).clamp(0.0, 1.0);
+                for i in 0..3 {
+                    c[i] = c[i] * see + top[i] * (1.0 - see);
+                }
+            }
+            let lin = self.linear(c);
+            let round = |x: f64| (x * 1e4).round() / 1e4;
+            colors.push(rgb([0, 1, 2].map(|i| round((lin[i] * sky.emission[i]).clamp(0.0, 1e6)))));
+            elevations.push(num(-90.0 + 10.0 * e as f64));
+        }
+        if !matches!(bottom.kind, PigmentKind::Solid(_))
+            && !matches!(&bottom.kind, PigmentKind::Pattern { name, .. } if name == "gradient")
+        {
+            self.warnings.push(format!(
+                "{}: this sky_sphere's pattern is not a gradient; its mean colour stands in",
+                self.location(bottom.pos)
+            ));
+        }
+        let mut t = Table::new();
+        if colors.windows(2).all(|w| w[0] == w[1]) {
+            t.insert("type".into(), T::String("uniform".into()));
+            t.insert("radiance".into(), colors.swap_remove(0));
+            return self.entry("environment", T::Table(t), sky.pos);
+        }
+        t.insert("type".into(), T::String("gradient".into()));
+        t.insert("colors".into(), T::Array(colors));
+        t.insert("elevations".into(), T::Array(elevations));
+        self.entry("environment", T::Table(t), sky.pos)
+    }
+
+    fn rainbow(&mut self, r: &Rainbow) -> Result<()> {
+        let mut t = Table::new();
+        t.insert("type".into(), T::String("pov".into()));
+        if r.direction.length() <= 0.0 {
+            return Err(PovError::at(
+                r.pos,
+                "the rainbow's direction is zero; give the direction toward its centre".into(),
+            ));
+        }
+        t.insert("direction".into(), vec3(mirror(r.direction)));
+        t.insert("angle".into(), num(r.angle));
+        t.insert("width".into(), num(r.width));
+        let mut map = r.map.clone();
+        map.sort_by(|a, b| a.0.total_cmp(&b.0));
+        if map.len() >= 2 {
+            t.insert("colors".into(), T::Array(map.iter().map(|(_, c)| rgb(self.linear(*c))).collect()));
+            // POV-Ray's map blends the bow over the sky by its filter and transmit.
+            let see = map.iter().map(|(_, c)| (c[3] + c[4]).clamp(0.0, 1.0)).sum::<f64>() / map.len() as f64;
+            t.insert("strength".into(), num((1.0 - see).clamp(0.0, 1.0)));
+        }
+        if let Some(up) = r.up {
+            t.insert("up".into(), vec3(mirror(up)));
+        }
+        if let Some(a) = r.arc_angle {
+            t.insert("arc_angle".into(), num(a));
+        }
+        if let Some(a) = r.falloff_angle {
+            t.insert("falloff_angle".into(), num(a));
+        }
+        self.entry("rainbow", T::Table(t), r.pos)
+    }
+
+    fn location(&self, pos: Pos) -> String {
+        let path = self.files.get(pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
+        format!("{}:{}:{}", crate::limits::printable_message(&path), pos.line, pos.col)
     }
 
     /// A light whose brightness matches POV-Ray's where the camera looks: a POV-Ray light of

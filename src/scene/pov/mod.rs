@@ -9,6 +9,7 @@
 
 mod ast;
 mod emit;
+mod image;
 mod implicit;
 mod lexer;
 mod objects;

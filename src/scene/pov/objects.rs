@@ -4,7 +4,8 @@
 use glam::{DMat4, DVec3, DVec4};
 
 use super::ast::{
-    AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Obj, ObjKind, Pigment, PigmentKind, Tex,
+    AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Media, Normal, Obj, ObjKind, Pigment,
+    PigmentKind, Rainbow, SkySphere, Tex,
 };
 use super::implicit::{self, BlobComp, Implicit};
 use super::lexer::Tok;
@@ -15,7 +16,7 @@ use super::{Pos, PovError};
 
 /// Objects POV-Ray has and this front-end does not read yet.
 const UNSUPPORTED_OBJECTS: &[&str] =
-    &["isosurface", "parametric", "julia_fractal", "polynomial", "height_field", "sphere_sweep", "ovus", "lemon"];
+    &["isosurface", "parametric", "julia_fractal", "polynomial", "sphere_sweep", "ovus", "lemon"];
 
 const OBJECTS: &[&str] = &[
     "sphere",
@@ -41,6 +42,7 @@ const OBJECTS: &[&str] = &[
     "quartic",
     "poly",
     "blob",
+    "height_field",
     "union",
     "merge",
     "intersection",
@@ -82,6 +84,19 @@ const OTHER_PATTERNS: [&str; 24] = [
     "function",
 ];
 
+/// A colour map: (position, colour) entries.
+type ColourMap = Vec<(f64, Colour)>;
+
+fn num(v: f64) -> toml::Value {
+    toml::Value::Float(v)
+}
+
+/// Sets a pattern field, replacing an earlier value of the same name.
+fn set_field(fields: &mut Vec<(String, toml::Value)>, name: &str, v: toml::Value) {
+    fields.retain(|(k, _)| k != name);
+    fields.push((name.into(), v));
+}
+
 impl Parser {
     /// One statement of the scene at the top level.
     pub fn statement(&mut self) -> Result<()> {
@@ -112,9 +127,24 @@ impl Parser {
             "global_settings" => self.global_settings()?,
             // `default { ... }` without `#`, as POV-Ray also reads it.
             "default" => self.default_block()?,
-            "sky_sphere" | "rainbow" | "media" => {
-                self.skip_block()?;
-                self.scene.warnings.push(format!("{}: {word} is not supported yet; it is left out", self.loc(pos)));
+            "sky_sphere" => {
+                let sky = self.sky_sphere(pos)?;
+                self.scene.sky_sphere = Some(sky);
+            }
+            "rainbow" => {
+                let r = self.rainbow(pos)?;
+                self.scene.rainbow = Some(r);
+            }
+            "media" => {
+                let m = self.media(pos)?;
+                if self.scene.media.is_some() {
+                    self.scene.warnings.push(format!(
+                        "{}: a second atmospheric media is left out (Photonix has one atmosphere)",
+                        self.loc(pos)
+                    ));
+                } else {
+                    self.scene.media = Some(m);
+                }
             }
             w if OBJECTS.contains(&w) || w == "light_source" || UNSUPPORTED_OBJECTS.contains(&w) => {
                 let o = self.object(w, pos)?;
@@ -202,13 +232,32 @@ impl Parser {
                 self.skip_block()?;
                 Value::Other("a function")
             }
-            "normal" | "media" | "density" | "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow"
-            | "sky_sphere" | "spline" | "interior_texture" | "fog" | "photons" | "radiosity" | "warp" => {
+            "normal" => {
+                self.next()?;
+                match self.normal(pos)? {
+                    Some(n) => Value::Normal(Box::new(n)),
+                    None => Value::Other("a normal"),
+                }
+            }
+            "media" => {
+                self.next()?;
+                Value::Media(Box::new(self.media(pos)?))
+            }
+            "sky_sphere" => {
+                self.next()?;
+                Value::Sky(Box::new(self.sky_sphere(pos)?))
+            }
+            "density" => {
+                // A density is a pigment body (its colour map a density map).
+                self.next()?;
+                self.expect_sym("{")?;
+                Value::Pigment(self.pigment_body(pos, "}")?)
+            }
+            "pigment_map" | "normal_map" | "texture_map" | "slope_map" | "rainbow" | "spline" | "interior_texture"
+            | "fog" | "photons" | "radiosity" | "warp" => {
                 self.next()?;
                 self.skip_block()?;
                 Value::Other(match w {
-                    "normal" => "a normal",
-                    "media" => "a media",
                     "spline" => "a spline",
                     _ => "a block this front-end does not read",
                 })
@@ -293,6 +342,7 @@ impl Parser {
                 self.accept_sym(",")?;
                 ObjKind::Sphere { center, radius: self.float()? }
             }
+            "height_field" => ObjKind::Triangles { tris: std::rc::Rc::new(self.height_field(pos)?) },
             "box" => {
                 let a = self.vec3()?;
                 self.accept_sym(",")?;
@@ -597,6 +647,45 @@ impl Parser {
             }
             _ => self.text(),
         }
+    }
+
+    /// `height_field { [type] "file" [gamma g] [premultiplied b] ... }`: the image's samples as
+    /// a grid over the unit square of x and z, height y from 0 to 1 (image row 0 at z = 1, as
+    /// POV-Ray lays it), two triangles a cell, closed by walls and a floor at y = 0 so that it
+    /// has an inside for CSG. At most `HF_MAX_CELLS` cells a side: a larger image is sampled at
+    /// evenly spaced pixels (docs/pov-ray.md).
+    fn height_field(&mut self, pos: Pos) -> Result<Vec<Tri>> {
+        let Some(t) = self.peek()? else { return self.err(pos, "this height_field is never closed; add `}`".into()) };
+        let (kind, fpos) = match &t.tok {
+            Tok::Word(w) if w == "function" => {
+                return self.err(
+                    t.pos,
+                    "height_field { function ... } is not supported yet (user-defined functions); use an image".into(),
+                )
+            }
+            Tok::Word(w) if super::image::FORMATS.contains(&w.as_str()) => {
+                self.next()?;
+                (w.clone(), self.here())
+            }
+            // A file name: a string, or a string expression.
+            _ => (String::new(), t.pos),
+        };
+        let name = self.image_name()?;
+        while let Some("gamma") | Some("premultiplied") = self.peek_word()?.as_deref() {
+            self.next()?;
+            if !self.accept_word("srgb")? {
+                self.float()?;
+            }
+        }
+        let path = self.find_image(&name, fpos)?;
+        let h = super::image::heights(&path, &kind).map_err(|m| PovError::at(fpos, m))?;
+        if h.width < 2 || h.height < 2 {
+            return self.err(
+                fpos,
+                format!("a height field needs an image of at least 2 x 2 pixels, not {} x {}", h.width, h.height),
+            );
+        }
+        Ok(height_field_triangles(&h))
     }
 
     /// `text { ttf "font.ttf" "string" thickness, offset }`: the glyphs' outlines from x = 0 on
@@ -951,6 +1040,21 @@ impl Parser {
                     }
                 }
                 "open" => *open = true,
+                "water_level" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // A height field's parts below the level are not shown: its triangles wholly
+                    // below it are left out (object space, where the field spans y 0 to 1).
+                    let level = self.float()?;
+                    if let ObjKind::Triangles { tris } = &mut o.kind {
+                        let kept: Vec<[DVec3; 3]> =
+                            tris.iter().filter(|t| t.iter().any(|p| p.y >= level)).copied().collect();
+                        *tris = std::rc::Rc::new(kept);
+                    }
+                }
+                "smooth" | "hierarchy" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // smooth: the triangles stay flat (the scene format's triangles have no
+                    // vertex normals); hierarchy: an acceleration hint.
+                    self.optional_bool()?;
+                }
                 "bounded_by" if matches!(o.kind, ObjKind::Implicit { .. }) => {
                     // An equation's surface is cut at its bounds, as POV-Ray does.
                     self.expect_sym("{")?;
@@ -981,7 +1085,11 @@ impl Parser {
                         }
                     }
                 }
-                "normal" | "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
+                "normal" => {
+                    let n = self.normal(pos)?;
+                    self.top_layer(o).normal = n;
+                }
+                "bounded_by" | "photons" | "radiosity" | "interior_texture" => self.skip_block()?,
                 "hollow" | "no_shadow" | "no_image" | "no_reflection" | "double_illuminate" | "sturm"
                 | "no_radiosity" => {
                     self.optional_bool()?;
@@ -1079,6 +1187,7 @@ impl Parser {
         Tex {
             pigment: self.default_pigment.clone().unwrap_or_else(|| Pigment::solid([0.0, 0.0, 0.0, 0.0, 0.0], pos)),
             finish: self.default_finish.clone(),
+            normal: None,
             xform: DMat4::IDENTITY,
         }
     }
@@ -1164,12 +1273,17 @@ impl Parser {
     /// `{ ... }` after `texture`: one or more layers (a declared layered texture).
     pub fn texture(&mut self) -> Result<Vec<Tex>> {
         let open = self.expect_sym("{")?;
+        self.texture_body(open, "}")
+    }
+
+    /// A texture's items up to `close` (consumed): `}`, or `]` in a texture_map's entry.
+    fn texture_body(&mut self, open: Pos, close: &'static str) -> Result<Vec<Tex>> {
         let mut layers = vec![self.default_tex(open)];
         loop {
             let t = self.expect_any("`}`")?;
             let pos = t.pos;
             let w = match t.tok {
-                Tok::Sym("}") => return Ok(layers),
+                Tok::Sym(c) if c == close => return Ok(layers),
                 Tok::Word(w) => w,
                 other => return self.err(pos, format!("expected a texture item or `}}`, found {}", describe(&other))),
             };
@@ -1181,7 +1295,7 @@ impl Parser {
             match w.as_str() {
                 "pigment" => top.pigment = self.pigment(pos)?,
                 "finish" => top.finish = self.finish()?,
-                "normal" => self.skip_block()?,
+                "normal" => top.normal = self.normal(pos)?,
                 "uv_mapping" => {}
                 "tiles" => {
                     // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
@@ -1196,19 +1310,35 @@ impl Parser {
                     self.skip_to_brace()?;
                 }
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
-                    // A patterned texture (texture_map, or textures as a checker's entries).
-                    self.warnings.push(format!(
-                        "{}: patterned textures (texture_map) are not supported yet; the default texture is used",
-                        self.loc(pos)
-                    ));
-                    self.skip_to_brace()?;
-                    return Ok(layers);
+                    // A patterned texture (texture_map, or textures as a checker's entries): the
+                    // pattern with each texture's mean colour, in the first texture's finish and
+                    // normal (docs/pov-ray.md).
+                    let (pigment, first) = self.pattern_body(pos, close, Some((w.clone(), pos)))?;
+                    let mut t = first.unwrap_or_else(|| self.default_tex(pos));
+                    t.pigment = pigment;
+                    t.xform = DMat4::IDENTITY;
+                    return Ok(vec![t]);
                 }
                 _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
                     Some(Value::Texture(t)) => layers = t,
                     Some(other) => return self.err(pos, format!("`{w}` is {}, not a texture", other.kind())),
                     None => return self.err(pos, format!("`{w}` does not belong in a texture")),
                 },
+            }
+        }
+    }
+
+    /// Skips to the `]` (or other closing symbol in `close`) that ends the entry we are in,
+    /// nested brackets and braces included (consumed).
+    fn skip_entry(&mut self, close: &[&str]) -> Result<()> {
+        let mut depth = 0i32;
+        loop {
+            let t = self.expect_any("`]`")?;
+            match t.tok {
+                Tok::Sym(c) if depth == 0 && close.contains(&c) => return Ok(()),
+                Tok::Sym("{") | Tok::Sym("[") => depth += 1,
+                Tok::Sym("}") | Tok::Sym("]") => depth -= 1,
+                _ => {}
             }
         }
     }
@@ -1229,28 +1359,90 @@ impl Parser {
 
     pub fn pigment(&mut self, pos: Pos) -> Result<Pigment> {
         self.expect_sym("{")?;
+        self.pigment_body(pos, "}")
+    }
+
+    /// A pigment's items up to `close` (consumed): `}` for `pigment { ... }`, `]` for an entry
+    /// of a pigment_map.
+    fn pigment_body(&mut self, pos: Pos, close: &'static str) -> Result<Pigment> {
+        self.pattern_body(pos, close, None).map(|(p, _)| p)
+    }
+
+    /// A pigment's items, or a patterned texture's (`pending`: its pattern word, already read):
+    /// a texture_map's or a checker's textures stand in by their pigments' mean colours, and
+    /// the first entry's texture is returned for its finish and normal (docs/pov-ray.md).
+    fn pattern_body(
+        &mut self,
+        pos: Pos,
+        close: &'static str,
+        mut pending: Option<(String, Pos)>,
+    ) -> Result<(Pigment, Option<Tex>)> {
+        let mut first_tex: Option<Tex> = None;
+        let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
         let mut pattern: Option<String> = None;
         let mut map: Vec<(f64, Colour)> = Vec::new();
         let mut list: Vec<Colour> = Vec::new();
+        // filter all / transmit all of an image_map.
+        let mut image_ft: [Option<f64>; 2] = [None, None];
         loop {
-            let Some(t) = self.peek()? else { return self.err(pos, "this pigment is never closed; add `}`".into()) };
+            if let Some((w, tpos)) = pending.take() {
+                // The pattern word a texture read before it knew the texture was patterned.
+                if w == "gradient" {
+                    pattern = Some(w);
+                    let v = self.vec3()?;
+                    fields.push(("direction".into(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                } else if PATTERNS.contains(&w.as_str()) {
+                    pattern = Some(w);
+                } else {
+                    pattern = Some(format!("unsupported:{w}"));
+                    if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Num(_))) {
+                        self.expr()?;
+                    }
+                    if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                        self.skip_block()?;
+                    }
+                }
+                let _ = tpos;
+                continue;
+            }
+            let Some(t) = self.peek()? else {
+                return self.err(pos, format!("this pigment is never closed; add `{close}`"));
+            };
             let tpos = t.pos;
             let w = match t.tok {
-                Tok::Sym("}") => {
+                Tok::Sym(c) if c == close => {
                     self.next()?;
                     break;
                 }
                 Tok::Word(w) => w,
                 _ => {
                     let c = self.colour()?;
-                    p.kind = PigmentKind::Solid(c);
+                    if pattern.is_some() {
+                        list.push(c);
+                    } else {
+                        p.kind = PigmentKind::Solid(c);
+                    }
+                    self.accept_sym(",")?;
                     continue;
                 }
             };
-            if let Some(Value::Pigment(base)) = self.lookup(&w).cloned() {
+            let mut declared = self.lookup(&w).cloned();
+            if let Some(Value::Array(_)) = declared {
+                // An element of an array of pigments: `pigmentArr[i]`.
                 self.next()?;
+                let v = self.lookup(&w).cloned().expect("looked up above");
+                match self.postfix(v)? {
+                    Value::Pigment(base) => declared = Some(Value::Pigment(base)),
+                    other => return self.err(tpos, format!("`{w}[...]` is {}, not a pigment", other.kind())),
+                }
+                pending_array = true;
+            }
+            if let Some(Value::Pigment(base)) = declared {
+                if !std::mem::take(&mut pending_array) {
+                    self.next()?;
+                }
                 p = base;
                 if let PigmentKind::Pattern { name, map: m, fields: f } = &p.kind {
                     pattern = Some(name.clone());
@@ -1280,7 +1472,9 @@ impl Parser {
                 p.xform = m * p.xform;
                 continue;
             }
-            let num = |v: f64| toml::Value::Float(v);
+            if self.pattern_field(&w, tpos, &mut fields)? {
+                continue;
+            }
             match w.as_str() {
                 "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
                     let v = self.word_colour(&w, tpos)?;
@@ -1291,15 +1485,39 @@ impl Parser {
                     }
                 }
                 "color_map" | "colour_map" => map = self.colour_map()?,
-                "pigment_map" | "warp" | "image_map" => {
-                    self.skip_block()?;
-                    if w != "warp" {
-                        pattern = Some(format!("unsupported:{w}"));
-                    } else {
-                        self.warnings.push(format!("{}: warp is not supported yet; it is left out", self.loc(tpos)));
+                "pigment_map" | "density_map" => {
+                    // Each entry's pigment stands in by its mean colour: a colour map.
+                    map = self.pigment_map(tpos)?;
+                }
+                "texture_map" => {
+                    let (m, first) = self.texture_map(tpos)?;
+                    map = m;
+                    first_tex = first_tex.or(first);
+                }
+                "texture" if pattern.is_some() => {
+                    // A checker's, brick's or hexagon's textures.
+                    let layers = self.texture()?;
+                    if let Some(t) = layers.first() {
+                        list.push(t.pigment.mean());
+                        first_tex.get_or_insert_with(|| t.clone());
                     }
                 }
+                "image_map" => {
+                    let (mean, ft) = self.image_map(tpos)?;
+                    image_ft = ft;
+                    p.kind = PigmentKind::Solid(mean);
+                    pattern = None;
+                }
                 "uv_mapping" => {}
+                "density_file" => {
+                    // density_file df3 "file": not read (docs/pov-ray.md); its mean stands in.
+                    self.expect_any("df3")?;
+                    self.string()?;
+                    pattern = Some("unsupported:density_file".into());
+                }
+                "interpolate" | "control0" | "control1" => {
+                    self.float()?;
+                }
                 "interior" | "exterior" => {
                     // A fractal pattern's interior and exterior types (`interior 1, 0.5`).
                     self.float()?;
@@ -1321,37 +1539,6 @@ impl Parser {
                 "quick_color" | "quick_colour" => {
                     self.colour()?;
                 }
-                "turbulence" => {
-                    let v = self.vec3()?;
-                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
-                }
-                "octaves" => {
-                    let v = self.float()?;
-                    fields.push((w.clone(), toml::Value::Integer(v.round().clamp(1.0, 10.0) as i64)));
-                }
-                "omega" | "lambda" | "frequency" | "phase" | "mortar" | "agate_turb" | "metric" | "offset" => {
-                    let v = self.float()?;
-                    fields.push((w.clone(), num(v)));
-                }
-                "brick_size" => {
-                    let v = self.vec3()?;
-                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
-                }
-                "form" => {
-                    let v = self.vec3()?;
-                    fields.push((w.clone(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
-                }
-                "solid" => fields.push((w.clone(), toml::Value::Boolean(true))),
-                "ramp_wave" | "sine_wave" | "triangle_wave" | "scallop_wave" | "cubic_wave" => {
-                    fields.push(("wave".into(), toml::Value::String(w.trim_end_matches("_wave").into())));
-                }
-                "poly_wave" => {
-                    fields.push(("wave".into(), toml::Value::String("poly".into())));
-                    if self.starts_float()? {
-                        let e = self.float()?;
-                        fields.push(("exponent".into(), num(e)));
-                    }
-                }
                 "gradient" => {
                     pattern = Some(w.clone());
                     let v = self.vec3()?;
@@ -1361,7 +1548,9 @@ impl Parser {
                     pattern = Some(w.clone());
                     if w == "brick" || w == "checker" || w == "hexagon" {
                         // Inline colours: `checker color A, color B`.
-                        while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}"))) && self.starts_colour()? {
+                        while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym(c) if c == close))
+                            && self.starts_colour()?
+                        {
                             list.push(self.colour()?);
                             self.accept_sym(",")?;
                         }
@@ -1394,6 +1583,14 @@ impl Parser {
                 },
             }
         }
+        if let PigmentKind::Solid(c) = &mut p.kind {
+            if let Some(f) = image_ft[0] {
+                c[3] = f;
+            }
+            if let Some(t) = image_ft[1] {
+                c[4] = t;
+            }
+        }
         if let Some(name) = pattern {
             if !list.is_empty() && map.is_empty() {
                 let n = list.len();
@@ -1407,11 +1604,336 @@ impl Parser {
                 ));
                 let mean =
                     Pigment { kind: PigmentKind::Pattern { name: other.into(), map, fields: Vec::new() }, ..p }.mean();
-                return Ok(Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos });
+                return Ok((Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos }, first_tex));
             }
             p.kind = PigmentKind::Pattern { name, map, fields };
         }
-        Ok(p)
+        Ok((p, first_tex))
+    }
+
+    /// `texture_map { [v texture-body] ... }`: each entry by its bottom layer's mean colour, a
+    /// colour map; and the first entry's texture.
+    fn texture_map(&mut self, pos: Pos) -> Result<(ColourMap, Option<Tex>)> {
+        self.expect_sym("{")?;
+        let mut map = Vec::new();
+        let mut first = None;
+        loop {
+            if self.accept_sym("}")? {
+                return Ok((map, first));
+            }
+            let epos = self.here();
+            self.expect_sym("[")?;
+            let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
+            self.accept_sym(",")?;
+            let layers = self.texture_body(epos, "]")?;
+            if let Some(t) = layers.first() {
+                map.push((v, t.pigment.mean()));
+                first.get_or_insert_with(|| t.clone());
+            }
+            if map.len() > 256 {
+                return self.err(pos, "a texture_map has at most 256 entries".into());
+            }
+        }
+    }
+
+    /// A pattern's own modifier (turbulence, octaves, wave shape, brick size, a warp, ...) into
+    /// `fields` as docs/patterns.md names them; false for another word. The word is consumed.
+    fn pattern_field(&mut self, w: &str, pos: Pos, fields: &mut Vec<(String, toml::Value)>) -> Result<bool> {
+        let vec = |v: DVec3| toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)]);
+        match w {
+            "turbulence" => {
+                let v = self.vec3()?;
+                set_field(fields, "turbulence", vec(v));
+            }
+            "octaves" => {
+                let v = self.float()?;
+                set_field(fields, "octaves", toml::Value::Integer(v.round().clamp(1.0, 10.0) as i64));
+            }
+            "omega" | "lambda" | "frequency" | "phase" | "mortar" | "agate_turb" | "metric" | "offset" => {
+                let v = self.float()?;
+                set_field(fields, w, num(v));
+            }
+            "brick_size" | "form" => {
+                let v = self.vec3()?;
+                set_field(fields, w, vec(v));
+            }
+            "solid" => set_field(fields, "solid", toml::Value::Boolean(true)),
+            "ramp_wave" | "sine_wave" | "triangle_wave" | "scallop_wave" | "cubic_wave" => {
+                set_field(fields, "wave", toml::Value::String(w.trim_end_matches("_wave").into()));
+            }
+            "poly_wave" => {
+                set_field(fields, "wave", toml::Value::String("poly".into()));
+                if self.starts_float()? {
+                    let e = self.float()?;
+                    set_field(fields, "exponent", num(e));
+                }
+            }
+            "warp" => self.warp(pos, fields)?,
+            "noise_generator" => {
+                // Photonix has one noise (docs/patterns.md); POV-Ray's generators 1 to 3 differ
+                // in detail, not in kind.
+                self.float()?;
+            }
+            _ => return Ok(false),
+        }
+        Ok(true)
+    }
+
+    /// `warp { ... }`: a turbulence warp becomes the pattern's own turbulence (docs/pov-ray.md:
+    /// POV-Ray applies it at its place among the pattern's transforms, Photonix before them);
+    /// the other warps are left out with a warning.
+    fn warp(&mut self, pos: Pos, fields: &mut Vec<(String, toml::Value)>) -> Result<()> {
+        self.expect_sym("{")?;
+        let mut kind: Option<String> = None;
+        loop {
+            let t = self.expect_any("`}`")?;
+            let w = match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) => w,
+                other => return self.err(t.pos, format!("expected a warp item or `}}`, found {}", describe(&other))),
+            };
+            match w.as_str() {
+                "turbulence" => {
+                    kind.get_or_insert_with(|| "turbulence".into());
+                    let v = self.vec3()?;
+                    set_field(fields, "turbulence", toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)]));
+                }
+                "octaves" | "omega" | "lambda" if kind.as_deref() == Some("turbulence") => {
+                    self.pattern_field(&w, t.pos, fields)?;
+                }
+                "repeat" | "black_hole" | "cylindrical" | "spherical" | "toroidal" | "planar" | "cubic" => {
+                    kind = Some(w.clone());
+                    // Their arguments (a vector, a radius) are read and left out.
+                    while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}") | Tok::Word(_))) {
+                        self.expect_any("`}`")?;
+                    }
+                }
+                _ => {
+                    // The modifiers of the other warps (offset, flip, strength, falloff,
+                    // inverse, repeat, turbulence, orientation, dist_exp, major_radius, ...).
+                    while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}") | Tok::Word(_))) {
+                        self.expect_any("`}`")?;
+                    }
+                }
+            }
+        }
+        match kind.as_deref() {
+            Some("turbulence") => {}
+            Some(other) => {
+                self.warnings.push(format!("{}: the {other} warp is not supported yet; it is left out", self.loc(pos)))
+            }
+            None => {}
+        }
+        Ok(())
+    }
+
+    /// `normal { [declared normal] PATTERN [amount] [bump_size b] modifiers }`: a bump pattern,
+    /// or `None` (with a warning) for one Photonix has no pattern for.
+    pub fn normal(&mut self, pos: Pos) -> Result<Option<Normal>> {
+        self.expect_sym("{")?;
+        let mut n = Normal { pattern: String::new(), amount: 0.5, fields: Vec::new(), xform: DMat4::IDENTITY, pos };
+        let mut other: Option<String> = None;
+        let mut nested: Option<Normal> = None;
+        loop {
+            // A bare amount (`pigment_pattern { ... } 10`, `..., 0.5`) may follow any item.
+            if self.accept_sym(",")? {
+                continue;
+            }
+            if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Num(_) | Tok::Sym("-") | Tok::Sym("(")))
+                || (self.starts_float()? && (!n.pattern.is_empty() || other.is_some()))
+            {
+                n.amount = self.float()?;
+                continue;
+            }
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a normal item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                n.xform = m * n.xform;
+                continue;
+            }
+            if self.pattern_field(&w, tpos, &mut n.fields)? {
+                continue;
+            }
+            match w.as_str() {
+                "bump_size" => n.amount = self.float()?,
+                "accuracy" | "control0" | "control1" | "coords" | "size" => {
+                    self.float()?;
+                }
+                "interior" | "exterior" => {
+                    // A fractal pattern's interior and exterior types.
+                    self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
+                "normal" => {
+                    // A checker's, brick's or hexagon's normals: the first stands in.
+                    let inner = self.normal(tpos)?;
+                    nested = nested.or(inner);
+                }
+                "average" => other = Some(w.clone()),
+                "no_bump_scale" | "uv_mapping" => {}
+                "slope_map" | "normal_map" => self.skip_block()?,
+                "gradient" => {
+                    n.pattern = w.clone();
+                    let v = self.vec3()?;
+                    n.fields.push(("direction".into(), toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)])));
+                    self.accept_sym(",")?;
+                    if self.starts_float()? {
+                        n.amount = self.float()?;
+                    }
+                }
+                _ if PATTERNS.contains(&w.as_str()) => {
+                    n.pattern = w.clone();
+                    self.accept_sym(",")?;
+                    if self.starts_float()? {
+                        n.amount = self.float()?;
+                    }
+                }
+                "bump_map" | "pigment_pattern" | "image_pattern" => {
+                    other = Some(w.clone());
+                    self.skip_block()?;
+                }
+                _ if OTHER_PATTERNS.contains(&w.as_str()) || matches!(w.as_str(), "quilted" | "facets") => {
+                    other = Some(w.clone());
+                    // The pattern's arguments: a vector, a float, a block.
+                    while self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Num(_) | Tok::Sym(","))) {
+                        if !self.accept_sym(",")? {
+                            self.expr()?;
+                        }
+                    }
+                    if self.peek()?.is_some_and(|t| t.tok == Tok::Sym("{")) {
+                        self.skip_block()?;
+                    }
+                }
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
+                    Some(Value::Normal(base)) => n = Normal { pos, ..*base },
+                    Some(Value::Other("a normal")) => other = Some("declared".into()),
+                    Some(v) => return self.err(tpos, format!("`{w}` is {}, not a normal", v.kind())),
+                    None => return self.err(tpos, format!("`{w}` does not belong in a normal")),
+                },
+            }
+        }
+        if matches!(n.pattern.as_str(), "checker" | "brick" | "hexagon") && nested.is_some() {
+            return Ok(nested);
+        }
+        if let Some(o) = other {
+            if o != "declared" {
+                self.warnings.push(format!(
+                    "{}: the {o} normal is not supported yet; the surface is left smooth",
+                    self.loc(pos)
+                ));
+            }
+            return Ok(None);
+        }
+        Ok((!n.pattern.is_empty()).then_some(n))
+    }
+
+    /// `pigment_map { [v pigment-body] ... }`: each entry's pigment by its mean colour, a
+    /// colour map (docs/pov-ray.md).
+    fn pigment_map(&mut self, pos: Pos) -> Result<Vec<(f64, Colour)>> {
+        self.expect_sym("{")?;
+        let mut map = Vec::new();
+        loop {
+            if self.accept_sym("}")? {
+                return Ok(map);
+            }
+            let epos = self.here();
+            self.expect_sym("[")?;
+            // average's entries may leave out their weight.
+            let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
+            self.accept_sym(",")?;
+            if self.peek_word()?.as_deref() == Some("function") {
+                // A pattern of a user-defined function: grey stands in.
+                self.warnings.push(format!(
+                    "{}: a function pattern (user-defined functions) is not supported yet; grey stands in",
+                    self.loc(epos)
+                ));
+                self.skip_entry(&["]"])?;
+                map.push((v, [0.5, 0.5, 0.5, 0.0, 0.0]));
+                continue;
+            }
+            let p = self.pigment_body(epos, "]")?;
+            map.push((v, p.mean()));
+            if map.len() > 256 {
+                return self.err(pos, "a pigment_map has at most 256 entries".into());
+            }
+        }
+    }
+
+    /// `image_map { [type] "file" [map_type 0] [once] [interpolate n] [filter/transmit all|i v] }`:
+    /// the image's mean colour (Photonix's image textures are looked up in uv only, and
+    /// POV-Ray projects its image maps in space; docs/pov-ray.md), and filter all / transmit all.
+    fn image_map(&mut self, pos: Pos) -> Result<(Colour, [Option<f64>; 2])> {
+        self.expect_sym("{")?;
+        let mut ft = [None, None];
+        let mut mean = None;
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) if super::image::FORMATS.contains(&w.as_str()) => {
+                    let fpos = self.here();
+                    let name = self.image_name()?;
+                    mean = Some(self.image_mean(&w, &name, fpos)?);
+                }
+                Tok::Str(name) => mean = Some(self.image_mean("", &name, tpos)?),
+                Tok::Word(w) if w == "once" || w == "use_color" || w == "use_colour" || w == "use_index" => {}
+                Tok::Word(w) if w == "map_type" || w == "interpolate" || w == "gamma" || w == "premultiplied" => {
+                    if w == "gamma" && self.accept_word("srgb")? {
+                        continue;
+                    }
+                    self.float()?;
+                }
+                Tok::Word(w) if w == "filter" || w == "transmit" => {
+                    let i = if w == "filter" { 0 } else { 1 };
+                    if self.accept_word("all")? {
+                        ft[i] = Some(self.float()?);
+                    } else {
+                        // filter i v: one palette entry; not kept.
+                        self.float()?;
+                        self.accept_sym(",")?;
+                        self.float()?;
+                    }
+                }
+                other => {
+                    return self.err(tpos, format!("expected an image_map item or `}}`, found {}", describe(&other)))
+                }
+            }
+        }
+        let Some(mean) = mean else {
+            return self
+                .err(pos, "this image_map names no image file; give one: image_map { png \"file.png\" }".into());
+        };
+        self.warnings.push(format!(
+            "{}: image_map: the image's mean colour stands in (Photonix's image textures are looked up in uv only)",
+            self.loc(pos)
+        ));
+        Ok((mean, ft))
+    }
+
+    /// An image's file name: a string expression.
+    fn image_name(&mut self) -> Result<String> {
+        self.string()
+    }
+
+    fn find_image(&self, name: &str, pos: Pos) -> Result<std::path::PathBuf> {
+        self.find_include(name, pos).map_err(|e| PovError { message: e.message.replacen("#include", "image", 1), ..e })
+    }
+
+    /// The mean colour of an image, in the file's colour convention (linear values raised to
+    /// 1 / assumed_gamma, so that emit's gamma rule gives the linear mean back).
+    fn image_mean(&mut self, kind: &str, name: &str, pos: Pos) -> Result<Colour> {
+        let path = self.find_image(name, pos)?;
+        let rgb = super::image::mean_colour(&path, kind).map_err(|m| PovError::at(pos, m))?;
+        let g = self.scene.assumed_gamma.filter(|g| *g > 0.0).unwrap_or(1.0);
+        Ok([rgb[0].powf(1.0 / g), rgb[1].powf(1.0 / g), rgb[2].powf(1.0 / g), 0.0, 0.0])
     }
 
     /// Whether the next token starts a colour (a colour keyword, a number, a vector, a declared colour).
@@ -1596,7 +2118,7 @@ impl Parser {
 
     pub fn interior(&mut self) -> Result<Interior> {
         self.expect_sym("{")?;
-        let mut i = Interior { ior: 1.0 };
+        let mut i = Interior { ior: 1.0, media: Vec::new() };
         loop {
             let t = self.expect_any("`}`")?;
             let pos = t.pos;
@@ -1616,9 +2138,8 @@ impl Parser {
                     self.colour()?;
                 }
                 "media" => {
-                    self.skip_block()?;
-                    self.warnings
-                        .push(format!("{}: media in an interior is not supported yet; left out", self.loc(pos)));
+                    let m = self.media(pos)?;
+                    i.media.push(m);
                 }
                 _ => match self.lookup(&w).cloned() {
                     Some(Value::Interior(base)) => i = base,
@@ -1647,7 +2168,7 @@ impl Parser {
                 "texture" => tex.extend(self.texture()?),
                 "interior" => int = Some(self.interior()?),
                 "interior_texture" => self.skip_block()?,
-                _ => match self.lookup(&w).cloned() {
+                _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
                     Some(Value::Material(t, i)) => {
                         tex = t;
                         int = i;
@@ -1884,6 +2405,13 @@ impl Parser {
         let mut f =
             Fog { ground: false, distance: 0.0, colour: [0.0; 5], offset: 0.0, alt: 0.0, turbulence: None, pos };
         loop {
+            // A declared colour, possibly in an expression (`Wheat * 0.5`).
+            if let Some(w) = self.peek_word()? {
+                if matches!(self.lookup(&w), Some(Value::Vector(_)) | Some(Value::Float(_))) {
+                    f.colour = self.colour()?;
+                    continue;
+                }
+            }
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;
             let w = match t.tok {
@@ -1908,6 +2436,191 @@ impl Parser {
                     self.vec3()?;
                 }
                 _ => return self.err(tpos, format!("`{w}` does not belong in a fog")),
+            }
+        }
+    }
+
+    /// `media { ... }` (POV-Ray's reference manual, "Media"): absorption, emission, scattering
+    /// and the first density; the sampling controls are read and not needed.
+    pub fn media(&mut self, pos: Pos) -> Result<Media> {
+        self.expect_sym("{")?;
+        let mut m = Media {
+            absorption: [0.0; 3],
+            emission: [0.0; 3],
+            scattering: [0.0; 3],
+            g: 0.0,
+            density: None,
+            xform: DMat4::IDENTITY,
+            pos,
+        };
+        let rgb = |c: Colour| [c[0], c[1], c[2]];
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(m),
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a media item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(x) = self.transform_word(&w)? {
+                m.xform = x * m.xform;
+                continue;
+            }
+            match w.as_str() {
+                "absorption" => m.absorption = rgb(self.colour()?),
+                "emission" => m.emission = rgb(self.colour()?),
+                "scattering" => {
+                    self.expect_sym("{")?;
+                    let kind = self.float()?;
+                    self.accept_sym(",")?;
+                    m.scattering = rgb(self.colour()?);
+                    // Photonix has no Mie tables: hazy and murky Mie become Henyey-Greenstein
+                    // with about their forward peaks; Rayleigh is symmetric, taken as isotropic.
+                    m.g = match kind.round() as i64 {
+                        1 | 4 => 0.0,
+                        2 => 0.6,
+                        3 => 0.8,
+                        5 => 0.0,
+                        k => {
+                            return self.err(
+                                tpos,
+                                format!("scattering type {k} is not one of POV-Ray's 1 to 5 (isotropic, Mie hazy, Mie murky, Rayleigh, Henyey-Greenstein)"),
+                            )
+                        }
+                    };
+                    loop {
+                        let t = self.expect_any("`}`")?;
+                        match t.tok {
+                            Tok::Sym("}") => break,
+                            Tok::Word(w) if w == "eccentricity" => {
+                                let e = self.float()?;
+                                if kind.round() as i64 == 5 {
+                                    m.g = e.clamp(-0.99, 0.99);
+                                }
+                            }
+                            Tok::Word(w) if w == "extinction" => {
+                                self.float()?;
+                            }
+                            other => {
+                                return self.err(
+                                    t.pos,
+                                    format!("expected eccentricity, extinction or `}}`, found {}", describe(&other)),
+                                )
+                            }
+                        }
+                    }
+                }
+                "density" => {
+                    self.expect_sym("{")?;
+                    let d = self.pigment_body(tpos, "}")?;
+                    if m.density.is_some() {
+                        self.warnings.push(format!(
+                            "{}: a second density is left out (POV-Ray multiplies them; Photonix takes one)",
+                            self.loc(tpos)
+                        ));
+                    } else {
+                        m.density = Some(d);
+                    }
+                }
+                "method" | "intervals" | "confidence" | "variance" | "ratio" | "jitter" | "aa_level"
+                | "aa_threshold" | "collect" => {
+                    self.float()?;
+                }
+                "samples" => {
+                    self.float()?;
+                    if self.accept_sym(",")? {
+                        self.float()?;
+                    }
+                }
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Media(base)) => m = Media { pos, ..*base },
+                    _ => return self.err(tpos, format!("`{w}` does not belong in a media")),
+                },
+            }
+        }
+    }
+
+    /// `sky_sphere { pigment { ... } ... [emission c] transforms }`.
+    fn sky_sphere(&mut self, pos: Pos) -> Result<SkySphere> {
+        self.expect_sym("{")?;
+        let mut sky = SkySphere { pigments: Vec::new(), xform: DMat4::IDENTITY, emission: [1.0; 3], pos };
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(sky),
+                Tok::Word(w) => w,
+                other => {
+                    return self.err(tpos, format!("expected a sky_sphere item or `}}`, found {}", describe(&other)))
+                }
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                sky.xform = m * sky.xform;
+                continue;
+            }
+            match w.as_str() {
+                "pigment" => {
+                    let p = self.pigment(tpos)?;
+                    sky.pigments.push(p);
+                }
+                "emission" => {
+                    let c = self.colour()?;
+                    sky.emission = [c[0], c[1], c[2]];
+                }
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::Sky(base)) => sky = SkySphere { pos, ..*base },
+                    Some(Value::Other(_)) | None => {
+                        return self.err(tpos, format!("`{w}` does not belong in a sky_sphere"));
+                    }
+                    Some(v) => return self.err(tpos, format!("`{w}` is {}; a sky_sphere takes pigments", v.kind())),
+                },
+            }
+        }
+    }
+
+    /// `rainbow { direction d angle a width w distance r jitter j color_map { ... } [up u]
+    /// [arc_angle a] [falloff_angle f] }`.
+    fn rainbow(&mut self, pos: Pos) -> Result<Rainbow> {
+        self.expect_sym("{")?;
+        let mut r = Rainbow {
+            direction: DVec3::Z,
+            angle: 42.5,
+            width: 5.0,
+            map: Vec::new(),
+            up: None,
+            arc_angle: None,
+            falloff_angle: None,
+            pos,
+        };
+        loop {
+            let t = self.expect_any("`}`")?;
+            let tpos = t.pos;
+            let w = match t.tok {
+                Tok::Sym("}") => return Ok(r),
+                Tok::Word(w) => w,
+                other => return self.err(tpos, format!("expected a rainbow item or `}}`, found {}", describe(&other))),
+            };
+            if let Some(m) = self.transform_word(&w)? {
+                r.direction = m.transform_vector3(r.direction);
+                r.up = r.up.map(|u| m.transform_vector3(u));
+                continue;
+            }
+            match w.as_str() {
+                "direction" => r.direction = self.vec3()?,
+                "angle" => r.angle = self.float()?,
+                "width" => r.width = self.float()?,
+                "up" => r.up = Some(self.vec3()?),
+                "arc_angle" => r.arc_angle = Some(self.float()?),
+                "falloff_angle" => r.falloff_angle = Some(self.float()?),
+                "distance" | "jitter" => {
+                    // The bow is at infinity here (docs/scene-format.md, "rainbow").
+                    self.float()?;
+                }
+                "color_map" | "colour_map" => r.map = self.colour_map()?,
+                _ => match self.lookup(&w).cloned() {
+                    Some(Value::ColorMap(m)) => r.map = m,
+                    _ => return self.err(tpos, format!("`{w}` does not belong in a rainbow")),
+                },
             }
         }
     }
@@ -1955,9 +2668,59 @@ impl Parser {
 
 /// Moves an object by `m` (world_from_object of the change), as POV-Ray's Transform_Object does:
 /// CSG children one by one, and every texture given so far with its object.
+/// The most cells a height field has along a side (docs/pov-ray.md).
+pub const HF_MAX_CELLS: usize = 256;
+
+/// A height field's closed surface (see `Parser::height_field`).
+fn height_field_triangles(h: &super::image::Heights) -> Vec<Tri> {
+    // Evenly spaced sample columns and rows, the first and last always among them.
+    let picks = |n: usize| -> Vec<usize> {
+        let cells = (n - 1).min(HF_MAX_CELLS);
+        (0..=cells).map(|k| (k * (n - 1) + cells / 2) / cells).collect()
+    };
+    let (xs, rows) = (picks(h.width), picks(h.height));
+    let x_of = |i: usize| i as f64 / (h.width - 1) as f64;
+    let z_of = |j: usize| 1.0 - j as f64 / (h.height - 1) as f64;
+    let p = |i: usize, j: usize| DVec3::new(x_of(i), h.values[j * h.width + i], z_of(j));
+    let mut tris = Vec::with_capacity(2 * xs.len() * rows.len() + 8 * (xs.len() + rows.len()));
+    for w in rows.windows(2) {
+        for v in xs.windows(2) {
+            let (a, b, c, d) = (p(v[0], w[0]), p(v[1], w[0]), p(v[0], w[1]), p(v[1], w[1]));
+            tris.push([a, b, d]);
+            tris.push([a, d, c]);
+        }
+    }
+    // Walls down to y = 0 along the four edges, and the floor.
+    let floor = |q: DVec3| DVec3::new(q.x, 0.0, q.z);
+    let mut wall = |edge: Vec<DVec3>| {
+        for e in edge.windows(2) {
+            // A triangle with a corner at height 0 on the floor has no area: left out.
+            if e[0].y != 0.0 {
+                tris.push([e[0], floor(e[0]), floor(e[1])]);
+            }
+            if e[1].y != 0.0 {
+                tris.push([e[0], floor(e[1]), e[1]]);
+            }
+        }
+    };
+    let (first, last) = (rows[0], rows[rows.len() - 1]);
+    let (left, right) = (xs[0], xs[xs.len() - 1]);
+    wall(xs.iter().map(|&i| p(i, first)).collect());
+    wall(xs.iter().map(|&i| p(i, last)).collect());
+    wall(rows.iter().map(|&j| p(left, j)).collect());
+    wall(rows.iter().map(|&j| p(right, j)).collect());
+    let c = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 0.0, 1.0), DVec3::Z];
+    tris.push([c[0], c[1], c[2]]);
+    tris.push([c[0], c[2], c[3]]);
+    tris
+}
+
 pub fn transform_obj(o: &mut Obj, m: &DMat4) {
     if let Some(layers) = &mut o.tex {
         layers.iter_mut().for_each(|l| l.xform = *m * l.xform);
+    }
+    if let Some(i) = &mut o.interior {
+        i.media.iter_mut().for_each(|md| md.xform = *m * md.xform);
     }
     match &mut o.kind {
         ObjKind::Csg { children, .. } => children.iter_mut().for_each(|c| transform_obj(c, m)),
