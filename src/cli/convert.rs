@@ -58,15 +58,7 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         note!("warning: {warning}");
     }
     let t = translate_file(&args.scene, &options)?;
-    write_atomically(&args.output, |tmp| std::fs::write(tmp, &t.toml).map_err(|e| e.to_string()))?;
-    note!(
-        "wrote {} ({} shapes, {} lights, {} materials)",
-        args.output.display(),
-        scene.shapes.len(),
-        scene.lights.len(),
-        scene.materials.len()
-    );
-    Ok(())
+    write_toml(&args.output, &t.toml, &scene)
 }
 
 /// A glTF scene as TOML; the TOML names the glTF file relative to its own folder when it can
@@ -88,10 +80,15 @@ fn convert_gltf(args: &ConvertArgs) -> Result<()> {
     for warning in &warnings {
         note!("warning: {warning}");
     }
-    write_atomically(&args.output, |tmp| std::fs::write(tmp, &t.toml).map_err(|e| e.to_string()))?;
+    write_toml(&args.output, &t.toml, &scene)
+}
+
+/// Writes the translation `toml` to `output` (whole or not at all) and says what it holds.
+fn write_toml(output: &std::path::Path, toml: &str, scene: &photonix::scene::Scene) -> Result<()> {
+    write_atomically(output, |tmp| std::fs::write(tmp, toml).map_err(|e| e.to_string()))?;
     note!(
         "wrote {} ({} shapes, {} lights, {} materials)",
-        args.output.display(),
+        output.display(),
         scene.shapes.len(),
         scene.lights.len(),
         scene.materials.len()
