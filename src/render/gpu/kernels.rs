@@ -11,16 +11,35 @@ use crate::layout::constants::{
 use crate::layout::{DispatchRange, EmitParams, VcmParams};
 use crate::render::prepare::KernelVariant;
 
-fn kernel(
-    ctx: &GpuContext,
-    name: &str,
+/// One kernel of a render: its SPIR-V module's name, bindings, push constants and
+/// specialization constants.
+struct Spec {
+    name: String,
     bindings: u32,
-    binding_types: BindingTypes,
-    push_bytes: usize,
-    constants: &[u32],
-) -> Result<Kernel, GpuError> {
-    let spirv = crate::shaders::spirv(name).expect("build.rs embeds every kernel in shaders/");
-    ctx.create_specialized_kernel(name, &spirv, bindings, binding_types, push_bytes as u32, constants)
+    types: BindingTypes,
+    push: usize,
+    constants: Vec<u32>,
+}
+
+impl Spec {
+    fn create(&self, ctx: &GpuContext) -> Result<Kernel, GpuError> {
+        let spirv = crate::shaders::spirv(&self.name).expect("build.rs embeds every kernel in shaders/");
+        ctx.create_specialized_kernel(&self.name, &spirv, self.bindings, self.types, self.push as u32, &self.constants)
+    }
+}
+
+/// The kernels a render may use.
+#[derive(Clone, Copy, Debug)]
+enum Which {
+    EmitPhotons,
+    GridCount,
+    GridScan,
+    GridScanAdd,
+    GridScatter,
+    GridRank,
+    Render,
+    VcmLight,
+    RenderVcm,
 }
 
 /// How the kernels read the scene (shaders/scene_bindings.glsl): as texel buffers, since on
@@ -90,93 +109,104 @@ impl GpuKernels {
         self.variant.kernel_name(name)
     }
 
-    fn get<'k>(
-        cell: &'k OnceCell<Kernel>,
-        ctx: &GpuContext,
-        name: &str,
-        bindings: u32,
-        texels: BindingTypes,
-        push_bytes: usize,
-        constants: &[u32],
-    ) -> Result<&'k Kernel, GpuError> {
+    /// The kernel `which` of this variant: its cell and how to create it.
+    fn spec(&self, which: Which) -> (&OnceCell<Kernel>, Spec) {
+        let scene = |name: &str| self.scene_kernel(name);
+        let constants = self.variant.specialization().to_vec();
+        let plain = |name: &str, bindings: u32, types: BindingTypes, push: usize| Spec {
+            name: name.to_string(),
+            bindings,
+            types,
+            push,
+            constants: Vec::new(),
+        };
+        match which {
+            Which::EmitPhotons => (
+                &self.emit_photons,
+                Spec {
+                    name: scene("emit_photons"),
+                    bindings: SCENE_BINDINGS + 4,
+                    types: SCENE_BINDING_TYPES,
+                    push: size_of::<EmitParams>(),
+                    constants,
+                },
+            ),
+            Which::GridCount => (&self.grid_count, plain("grid_count", 3, BindingTypes::default(), 0)),
+            Which::GridScan => (&self.grid_scan, plain("grid_scan", 2, BindingTypes::default(), 4)),
+            Which::GridScanAdd => (&self.grid_scan_add, plain("grid_scan_add", 2, BindingTypes::default(), 4)),
+            Which::GridScatter => (&self.grid_scatter, plain("grid_scatter", 5, BindingTypes::default(), 0)),
+            Which::GridRank => (&self.grid_rank, plain("grid_rank", 4, GRID_RANK_BINDING_TYPES, 0)),
+            // The integrator's camera kernel; both take the same bindings (render_pt reads no maps).
+            Which::Render => (
+                &self.render,
+                Spec {
+                    name: scene(if self.variant.path_traced { "render_pt" } else { "render" }),
+                    bindings: SCENE_BINDINGS + 8,
+                    types: RENDER_BINDING_TYPES,
+                    push: size_of::<DispatchRange>(),
+                    constants,
+                },
+            ),
+            // The light stage of the bidirectional integrators (shaders/vcm_light.comp).
+            Which::VcmLight => (
+                &self.vcm_light,
+                Spec {
+                    name: scene("vcm_light"),
+                    bindings: SCENE_BINDINGS + 4,
+                    types: SCENE_BINDING_TYPES,
+                    push: size_of::<VcmParams>(),
+                    constants,
+                },
+            ),
+            // The camera stage of the bidirectional integrators (shaders/render_vcm.comp).
+            Which::RenderVcm => (
+                &self.render_vcm,
+                Spec {
+                    name: scene("render_vcm"),
+                    bindings: SCENE_BINDINGS + 7,
+                    types: SCENE_BINDING_TYPES,
+                    push: size_of::<DispatchRange>(),
+                    constants,
+                },
+            ),
+        }
+    }
+
+    fn get(&self, ctx: &GpuContext, which: Which) -> Result<&Kernel, GpuError> {
+        let (cell, spec) = self.spec(which);
         if let Some(k) = cell.get() {
             return Ok(k);
         }
-        let k = kernel(ctx, name, bindings, texels, push_bytes, constants)?;
+        let k = spec.create(ctx)?;
         Ok(cell.get_or_init(|| k))
     }
 
     pub(super) fn emit_photons(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        let name = self.scene_kernel("emit_photons");
-        let constants = self.variant.specialization();
-        Self::get(
-            &self.emit_photons,
-            ctx,
-            &name,
-            SCENE_BINDINGS + 4,
-            SCENE_BINDING_TYPES,
-            size_of::<EmitParams>(),
-            &constants,
-        )
+        self.get(ctx, Which::EmitPhotons)
     }
     pub(super) fn grid_count(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_count, ctx, "grid_count", 3, BindingTypes::default(), 0, &[])
+        self.get(ctx, Which::GridCount)
     }
     pub(super) fn grid_scan(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan, ctx, "grid_scan", 2, BindingTypes::default(), 4, &[])
+        self.get(ctx, Which::GridScan)
     }
     pub(super) fn grid_scan_add(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scan_add, ctx, "grid_scan_add", 2, BindingTypes::default(), 4, &[])
+        self.get(ctx, Which::GridScanAdd)
     }
     pub(super) fn grid_scatter(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_scatter, ctx, "grid_scatter", 5, BindingTypes::default(), 0, &[])
+        self.get(ctx, Which::GridScatter)
     }
     pub(super) fn grid_rank(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        Self::get(&self.grid_rank, ctx, "grid_rank", 4, GRID_RANK_BINDING_TYPES, 0, &[])
+        self.get(ctx, Which::GridRank)
     }
     pub(super) fn render(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        // The integrator's camera kernel; both take the same bindings (render_pt reads no maps).
-        let name = self.scene_kernel(if self.variant.path_traced { "render_pt" } else { "render" });
-        let constants = self.variant.specialization();
-        Self::get(
-            &self.render,
-            ctx,
-            &name,
-            SCENE_BINDINGS + 8,
-            RENDER_BINDING_TYPES,
-            size_of::<DispatchRange>(),
-            &constants,
-        )
+        self.get(ctx, Which::Render)
     }
-
-    /// The light stage of the bidirectional integrators (shaders/vcm_light.comp).
     pub(super) fn vcm_light(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        let name = self.scene_kernel("vcm_light");
-        let constants = self.variant.specialization();
-        Self::get(
-            &self.vcm_light,
-            ctx,
-            &name,
-            SCENE_BINDINGS + 4,
-            SCENE_BINDING_TYPES,
-            size_of::<VcmParams>(),
-            &constants,
-        )
+        self.get(ctx, Which::VcmLight)
     }
-
-    /// The camera stage of the bidirectional integrators (shaders/render_vcm.comp).
     pub(super) fn render_vcm(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
-        let name = self.scene_kernel("render_vcm");
-        let constants = self.variant.specialization();
-        Self::get(
-            &self.render_vcm,
-            ctx,
-            &name,
-            SCENE_BINDINGS + 7,
-            SCENE_BINDING_TYPES,
-            size_of::<DispatchRange>(),
-            &constants,
-        )
+        self.get(ctx, Which::RenderVcm)
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what
@@ -203,25 +233,27 @@ impl GpuKernels {
     /// Creates now every kernel a render with (`photons` true) or without photon maps uses, so
     /// that the cost falls into set-up rather than into the first pass.
     pub fn create_all(&self, ctx: &GpuContext, photons: bool) -> Result<(), GpuError> {
-        if self.variant.bidirectional {
-            self.vcm_light(ctx)?;
-            self.render_vcm(ctx)?;
-            self.grid_count(ctx)?;
-            self.grid_scan(ctx)?;
-            self.grid_scan_add(ctx)?;
-            self.grid_scatter(ctx)?;
-            self.grid_rank(ctx)?;
-            return Ok(());
+        use Which::*;
+        let wanted: &[Which] = if self.variant.bidirectional {
+            &[VcmLight, RenderVcm, GridCount, GridScan, GridScanAdd, GridScatter, GridRank]
+        } else if photons {
+            &[EmitPhotons, Render, GridCount, GridScan, GridScanAdd, GridScatter, GridRank]
+        } else {
+            &[Render]
+        };
+        let missing: Vec<(&OnceCell<Kernel>, Spec)> =
+            wanted.iter().map(|&w| self.spec(w)).filter(|(cell, _)| cell.get().is_none()).collect();
+        // Side by side: lavapipe builds a pipeline on the calling thread (seconds for the large
+        // scene kernels, mostly its own passes over the shader, which its disk cache does not
+        // skip), and Vulkan lets pipelines be created from several threads at once.
+        let made: Vec<Result<Kernel, GpuError>> = std::thread::scope(|scope| {
+            let jobs: Vec<_> = missing.iter().map(|(_, spec)| scope.spawn(|| spec.create(ctx))).collect();
+            jobs.into_iter().map(|j| j.join().expect("a kernel-creation thread panicked")).collect()
+        });
+        for ((cell, _), kernel) in missing.into_iter().zip(made) {
+            let kernel = kernel?;
+            let _ = cell.set(kernel);
         }
-        if photons {
-            self.emit_photons(ctx)?;
-            self.grid_count(ctx)?;
-            self.grid_scan(ctx)?;
-            self.grid_scan_add(ctx)?;
-            self.grid_scatter(ctx)?;
-            self.grid_rank(ctx)?;
-        }
-        self.render(ctx)?;
         Ok(())
     }
 }
