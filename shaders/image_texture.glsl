@@ -50,6 +50,22 @@ float image_coord(float x) {
                                                              : 0.0;
 }
 
+// The uv of texture-space point p under a TEXTURE_PROJECTION_*; contract in
+// src/cpu/image_texture.rs. (GLSL's atan(0, 0) is undefined, hence the test.)
+vec2 image_projection(vec3 p, uint projection) {
+    if (projection != TEXTURE_PROJECTION_SPHERICAL && projection != TEXTURE_PROJECTION_CYLINDRICAL) return p.xy;
+    float u = 0.0;
+    if (p.x * p.x + p.z * p.z > 0.0) {
+        u = atan(p.z, p.x) / 6.28318530717958647692;
+        if (u < 0.0) u += 1.0;
+    }
+    if (projection == TEXTURE_PROJECTION_CYLINDRICAL) return vec2(u, p.y);
+    float len = length(p);
+    float v = 0.5;
+    if (len > 0.0) v = 0.5 + asin(clamp(p.y / len, -1.0, 1.0)) / 3.14159265358979323846;
+    return vec2(u, v);
+}
+
 // The texel whose square holds uv, no filtering.
 vec4 image_texel(uint at, vec2 uv) {
     uint w = texture_word(at);

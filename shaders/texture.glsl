@@ -3,7 +3,7 @@
 // shape.glsl, pattern.glsl and image_texture.glsl.
 
 vec3 texture_lookup_point(Texture t, Hit h) {
-    vec3 p = t.space == TEXTURE_SPACE_UV ? vec3(h.uv, 0.0) : h.p;
+    vec3 p = (t.space & 0xffu) == TEXTURE_SPACE_UV ? vec3(h.uv, 0.0) : h.p;
     return vec3(dot(vec4(p, 1.0), vec4(t.transform[0], t.transform[1], t.transform[2], t.transform[3])),
                 dot(vec4(p, 1.0), vec4(t.transform[4], t.transform[5], t.transform[6], t.transform[7])),
                 dot(vec4(p, 1.0), vec4(t.transform[8], t.transform[9], t.transform[10], t.transform[11])));
@@ -16,7 +16,7 @@ vec3 texture_eval(uint index, Hit h) {
     vec3 c = load3(t.value);
 #ifdef VARIANT_TEXTURED
     WHEN(t.kind == TEXTURE_IMAGE) {
-        vec4 texel = image_lookup(t.data, p.xy);
+        vec4 texel = image_lookup(t.data, image_projection(p, t.space >> TEXTURE_PROJECTION_SHIFT));
         c = t.channel == TEXTURE_CHANNEL_RGB ? texel.rgb : vec3(texel[t.channel - 1u]);
     }
     WHEN(t.kind == TEXTURE_PATTERN) {

@@ -162,3 +162,82 @@ fn gpu_image_lookups_equal_cpu_lookups() {
         blocks.len()
     );
 }
+
+/// A 2x2 sRGB PNG: red top-left, green top-right, blue bottom-left, white bottom-right.
+fn write_quadrant_png(path: &std::path::Path) {
+    let colours = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]];
+    image::RgbImage::from_fn(2, 2, |x, y| image::Rgb(colours[(2 * y + x) as usize])).save(path).unwrap();
+}
+
+/// An 8x4 sRGB PNG of varied colours, so that any wrong u or v shows.
+fn write_varied_png(path: &std::path::Path) {
+    image::RgbImage::from_fn(8, 4, |x, y| {
+        image::Rgb([(30 * x + 20) as u8, (60 * y + 30) as u8, ((x * y * 37) % 256) as u8])
+    })
+    .save(path)
+    .unwrap();
+}
+
+/// A planar world-space image (POV-Ray's map_type 0) on a quad facing the camera: the quad is
+/// [-1, 1]^2 at z = 0 and the texture's transform stretches the image's unit square onto it, so
+/// each quadrant of the render shows one texel, the image's top row at +y.
+#[test]
+fn planar_world_image_lands_where_its_projection_says() {
+    let dir = tempfile::tempdir().unwrap();
+    write_quadrant_png(&dir.path().join("quadrants.png"));
+    let scene = "[camera]\nposition = [0, 0, 6]\nlook_at = [0, 0, 0]\nfov = 25\n\
+        [render]\nmax_depth = 1\n\
+        [textures.q]\ntype = \"image\"\nfile = \"quadrants.png\"\nspace = \"world\"\nprojection = \"planar\"\n\
+        transform = { scale = [2, 2, 1], translate = [-1, -1, 0] }\n\
+        [materials.screen]\ntype = \"diffuse\"\nreflectance = 0\nemission = { texture = \"q\" }\n\
+        [[shapes]]\ntype = \"quad\"\nmaterial = \"screen\"\nvertices = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]\n";
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, scene).unwrap();
+    let scene = photonix::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let size = 64;
+    let image = common::cpu_image(&common::buffers(&scene, size, size), 1);
+    // The quad spans about 2 / (2 * 6 * tan 12.5 deg) = 75% of the view: quadrant centres at
+    // +-0.5 lie at about 32 +- 12 pixels.
+    let expected =
+        [((20, 20), [1.0, 0.0, 0.0]), ((44, 20), [0.0, 1.0, 0.0]), ((20, 44), [0.0, 0.0, 1.0]), ((44, 44), [1.0; 3])];
+    for ((x, y), want) in expected {
+        let got = image.pixel(x, y);
+        for c in 0..3 {
+            // A pixel's jittered sample lies up to a pixel (1/24 of a texel) off the texel centre:
+            // a few percent of the neighbours bleed in; a wrong texel would be off by 1.
+            assert!((got[c] - want[c]).abs() < 0.1, "pixel ({x}, {y}): got {got:?}, expected {want:?}");
+        }
+    }
+    // Outside the quad: nothing.
+    assert_eq!(image.pixel(1, 1), [0.0; 3]);
+}
+
+/// Planar, spherical and cylindrical world-space images (POV-Ray's map_type 0, 1, 2), each
+/// placed by a transform, render alike on the GPU and on the CPU.
+#[test]
+fn world_space_image_projections_gpu_equals_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    write_varied_png(&dir.path().join("varied.png"));
+    let texture = |name: &str, projection: &str, transform: &str| {
+        format!(
+            "[textures.{name}]\ntype = \"image\"\nfile = \"varied.png\"\nspace = \"world\"\nprojection = \"{projection}\"\n\
+             transform = {transform}\n[materials.{name}]\ntype = \"diffuse\"\nreflectance = {{ texture = \"{name}\" }}\n"
+        )
+    };
+    let mut scene = String::from("[camera]\nposition = [0, 1, 6]\nlook_at = [0, 1, 0]\nfov = 40\n");
+    scene += "[[lights]]\ntype = \"point\"\nposition = [0, 4, 5]\nintensity = [30, 30, 30]\n";
+    scene += &texture("flat", "planar", "{ scale = [0.5, 0.5, 1], translate = [-1, 0, -1] }");
+    scene += &texture("globe", "spherical", "{ rotate = [0, 30, 0], scale = 0.8, translate = [-1.2, 1, 0] }");
+    scene += &texture("drum", "cylindrical", "{ scale = [0.6, 2, 0.6], translate = [1.2, 0, 0] }");
+    scene += "[[shapes]]\ntype = \"quad\"\nmaterial = \"flat\"\nvertices = [[-3, -1, -1], [3, -1, -1], [3, 3, -1], [-3, 3, -1]]\n";
+    scene += "[[shapes]]\ntype = \"sphere\"\nmaterial = \"globe\"\ncenter = [-1.2, 1, 0]\nradius = 0.8\n";
+    scene +=
+        "[[shapes]]\ntype = \"cylinder\"\nmaterial = \"drum\"\nbase = [1.2, 0, 0]\ncap = [1.2, 2, 0]\nradius = 0.6\n";
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, &scene).unwrap();
+    let scene = photonix::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let cpu = common::assert_twins_agree("world-space image projections", &common::buffers(&scene, 48, 36));
+    // Not black: the textures were read.
+    let mean: f32 = cpu.image.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / cpu.image.pixels.len() as f32;
+    assert!(mean > 0.05, "mean {mean}");
+}

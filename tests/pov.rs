@@ -803,7 +803,7 @@ fn pigment_and_texture_maps_warps_and_image_maps_are_approximated_as_documented(
     let (t, warnings) = translated(
         dir.path(),
         &format!(
-            "{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"rb.png\" map_type 0 interpolate 2 once }} }} }}
+            "{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"rb.png\" map_type 5 interpolate 2 once }} }} }}
 sphere {{ x, 1 pigment {{ gradient x pigment_map {{ [0 rgb <1, 0, 0>] [1 checker rgb <0, 0, 1>, rgb <0, 1, 0>] }} warp {{ turbulence 0.5 octaves 3 }} }} }}
 sphere {{ y, 1 texture {{ bozo texture_map {{ [0 pigment {{ rgb 1 }} finish {{ phong 1 }}] [1 pigment {{ rgb 0 }}] }} }} }}
 sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
@@ -813,7 +813,7 @@ sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
     let image = ms.values().find(|m| m["type"].as_str() == Some("diffuse") && m["reflectance"].is_array()).unwrap();
     let c = floats(&image["reflectance"]);
     assert!((c[0] - 0.3).abs() < 1e-9 && c[1] == 0.0 && (c[2] - 0.3).abs() < 1e-9, "{c:?}");
-    assert!(warnings.iter().any(|w| w.contains("image_map")), "{warnings:?}");
+    assert!(warnings.iter().any(|w| w.contains("image_map: map_type 5 is not supported")), "{warnings:?}");
     // pigment_map: the entries' mean colours as the colour map; the warp's turbulence kept.
     let textures = t["textures"].as_table().unwrap();
     let grad = textures.values().find(|x| x["pattern"].as_str() == Some("gradient")).unwrap();
@@ -856,4 +856,75 @@ sphere {{ x, 1 pigment {{ gradient x pigment_map {{ [0 function {{ x }} color_ma
     assert_eq!(t["textures"][density]["pattern"].as_str(), Some("bozo"));
     assert!(t["textures"].as_table().unwrap().values().any(|x| x["pattern"].as_str() == Some("wrinkles")));
     assert!(warnings.iter().any(|w| w.contains("function pattern")), "{warnings:?}");
+}
+
+/// A planar image_map (map_type 0) becomes a world-space image texture: the translated scene
+/// renders as the same scene whose texture is written by hand in TOML (the image's unit square
+/// stretched onto the box's face), and the texture shows the image, not its mean colour.
+#[test]
+fn planar_image_map_renders_as_the_same_image_texture_written_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let colours = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]];
+    image::RgbImage::from_fn(2, 2, |x, y| image::Rgb(colours[(2 * y + x) as usize]))
+        .save(dir.path().join("q.png"))
+        .unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        "camera { location <0, 0, -6> look_at <0, 0, 0> }\nlight_source { <0, 0, -6>, rgb 1 }\n\
+         box { <-1, -1, 0>, <1, 1, 0.1> pigment { image_map { png \"q.png\" map_type 0 interpolate 2 once } \
+         translate <-0.5, -0.5, 0> scale 2 } finish { ambient 0 diffuse 1 } }\n",
+    );
+    assert!(!warnings.iter().any(|w| w.contains("image_map")), "{warnings:?}");
+    let textures = t["textures"].as_table().unwrap();
+    let image = textures.values().find(|x| x["type"].as_str() == Some("image")).expect("an image texture");
+    assert_eq!(image["file"].as_str(), Some("q.png"));
+    assert_eq!(image["space"].as_str(), Some("world"));
+    assert_eq!(image["projection"].as_str(), Some("planar"));
+    assert_eq!(image["wrap"].as_str(), Some("clamp"));
+
+    let pov = load(
+        dir.path(),
+        "camera { location <0, 0, -6> look_at <0, 0, 0> }\nlight_source { <0, 0, -6>, rgb 1 }\n\
+         box { <-1, -1, 0>, <1, 1, 0.1> pigment { image_map { png \"q.png\" map_type 0 interpolate 2 once } \
+         translate <-0.5, -0.5, 0> scale 2 } finish { ambient 0 diffuse 1 } }\n",
+    );
+    // The same texture by hand: texture-space (x, y) = ((X + 1) / 2, (Y + 1) / 2) of the hit
+    // point (Photonix's z is POV-Ray's mirrored, which a planar image does not read).
+    let toml = "[camera]\nposition = [0, 0, 6]\nlook_at = [0, 0, 0]\nfov = 40\n\
+        [textures.q]\ntype = \"image\"\nfile = \"q.png\"\nspace = \"world\"\nprojection = \"planar\"\nwrap = \"clamp\"\n\
+        transform = { scale = 2, translate = [-1, -1, -1] }\n\
+        [materials.m]\ntype = \"diffuse\"\nreflectance = { texture = \"q\" }\n\
+        [[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\ncenter = [0, 0, 0]\nradius = 1\n";
+    let path = write(dir.path(), "by_hand.toml", toml);
+    let by_hand = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(pov.textures.len(), 1, "{:?}", pov.textures);
+    let mut swapped = pov.clone();
+    swapped.textures = by_hand.textures.clone();
+    let render = |s: &Scene| {
+        let settings = photonix::render::FrameSettings { width: 32, height: 32, max_depth: 2, seed: 7 };
+        let buffers = photonix::render::prepare(s, &settings).unwrap();
+        photonix::render::render_cpu(&buffers, 1, None, 0, &mut |_, _| {}).image
+    };
+    let (a, b) = (render(&pov), render(&swapped));
+    let error = photonix::io::metrics::rel_mse(&a, &b);
+    assert!(error < 1e-6, "relMSE {error:.3e}");
+    // The image reads as drawn, seen from POV-Ray's camera: the red texel's pixels lie above
+    // the blue's and left of the green's.
+    let centroid = |channel: usize| {
+        let (mut sum, mut n) = ((0.0, 0.0), 0.0);
+        for y in 0..32 {
+            for x in 0..32 {
+                let p = a.pixel(x, y);
+                let others = (0..3).filter(|c| *c != channel).map(|c| p[c]).fold(0.0, f32::max);
+                if p[channel] > 0.01 && p[channel] > 4.0 * others {
+                    (sum, n) = ((sum.0 + x as f32, sum.1 + y as f32), n + 1.0);
+                }
+            }
+        }
+        assert!(n > 0.0, "no pixels of channel {channel}");
+        (sum.0 / n, sum.1 / n)
+    };
+    let (red, green, blue) = (centroid(0), centroid(1), centroid(2));
+    assert!(red.0 < green.0 - 1.0 && (red.1 - green.1).abs() < 1.0, "red {red:?}, green {green:?}");
+    assert!(red.1 < blue.1 - 1.0 && (red.0 - blue.0).abs() < 1.0, "red {red:?}, blue {blue:?}");
 }

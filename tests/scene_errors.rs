@@ -403,3 +403,27 @@ fn analytic_shape_errors_name_the_line_and_field_and_the_fix() {
         assert_mentions(&message, pieces);
     }
 }
+
+#[test]
+fn image_projection_errors_name_the_field_and_suggest() {
+    let dir = tempfile::tempdir().unwrap();
+    image::RgbImage::new(2, 2).save(dir.path().join("t.png")).unwrap();
+    let load = |fields: &str| {
+        let path = dir.path().join("bad.toml");
+        std::fs::write(&path, format!("{CAMERA}[textures.t]\ntype = \"image\"\nfile = \"t.png\"\n{fields}")).unwrap();
+        load_scene(&path).map(|_| ()).map_err(|e| e.to_string())
+    };
+    let e = load("space = \"world\"\nprojection = \"spherial\"\n").unwrap_err();
+    assert_mentions(
+        &e,
+        &["bad.toml:9:", "texture \"t\"", "unknown projection \"spherial\"", "did you mean \"spherical\"?"],
+    );
+    let e = load("projection = \"cylindrical\"\n").unwrap_err();
+    assert_mentions(&e, &["bad.toml:8:", "`projection`", "space = \\\"world\\\""]);
+    let e = load("space = \"uv\"\nprojection = \"planar\"\n").unwrap_err();
+    assert_mentions(&e, &["bad.toml:9:", "`projection`"]);
+    for projection in ["planar", "spherical", "cylindrical"] {
+        load(&format!("space = \"world\"\nprojection = \"{projection}\"\n")).unwrap();
+    }
+    load("space = \"world\"\n").unwrap();
+}

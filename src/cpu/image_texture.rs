@@ -20,11 +20,12 @@
 //! Texture coordinates follow OBJ / OpenGL: v = 0 is the image's bottom row, v = 1 its top row.
 //! Texel (i, j) has its centre at u = (i + 0.5)/W, v = 1 - (j + 0.5)/H.
 
-use glam::{Vec2, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 // Block layout, wrap modes and limits: shared with the kernel through src/layout/constants.rs.
 pub use crate::layout::constants::{
     IMAGE_COORD_LIMIT, IMAGE_FLAG_ALPHA, IMAGE_HEADER_WORDS, IMAGE_WRAP_CLAMP, IMAGE_WRAP_MIRROR, IMAGE_WRAP_REPEAT,
+    TEXTURE_PROJECTION_CYLINDRICAL, TEXTURE_PROJECTION_SPHERICAL,
 };
 
 /// Half-float bits to f32, exactly, subnormals included (the host writes no Inf or NaN).
@@ -85,6 +86,33 @@ pub fn image_coord(x: f32) -> f32 {
     } else {
         0.0
     }
+}
+
+/// The uv of texture-space point `p` under projection `projection` (`TEXTURE_PROJECTION_*`,
+/// POV-Ray's image_map `map_type` 0, 1, 2; unknown ones are planar). Planar: (p.x, p.y).
+/// Spherical: u = atan2(p.z, p.x) / 2 pi, in [0, 1) (0 on +x, 1/4 on +z), v = 1/2 +
+/// asin(p.y / |p|) / pi (0 at the south pole, 1 at the north). Cylindrical: u as spherical,
+/// v = p.y. On the y axis u is 0; at the origin the spherical v is 1/2.
+pub fn image_projection(p: Vec3, projection: u32) -> Vec2 {
+    if projection != TEXTURE_PROJECTION_SPHERICAL && projection != TEXTURE_PROJECTION_CYLINDRICAL {
+        return p.truncate();
+    }
+    let mut u = 0.0;
+    if p.x * p.x + p.z * p.z > 0.0 {
+        u = p.z.atan2(p.x) / std::f32::consts::TAU;
+        if u < 0.0 {
+            u += 1.0;
+        }
+    }
+    if projection == TEXTURE_PROJECTION_CYLINDRICAL {
+        return Vec2::new(u, p.y);
+    }
+    let len = p.length();
+    let mut v = 0.5;
+    if len > 0.0 {
+        v = 0.5 + (p.y / len).clamp(-1.0, 1.0).asin() / std::f32::consts::PI;
+    }
+    Vec2::new(u, v)
 }
 
 /// The texel whose square holds `uv` (column floor(W u), row floor(H (1 - v)), wrapped), no
@@ -160,6 +188,29 @@ mod tests {
     fn assert_near(got: Vec4, want: Vec4) {
         // The weights are multiples of 1/4 here, so only the final sums round: a few f32 ulps.
         assert!(got.abs_diff_eq(want, 1e-5 * want.abs().max_element().max(1.0)), "got {got}, expected {want}");
+    }
+
+    #[test]
+    fn projections_follow_pov_rays_map_types() {
+        use crate::layout::constants::TEXTURE_PROJECTION_PLANAR as PLANAR;
+        use std::f32::consts::FRAC_1_SQRT_2 as H;
+        let (sph, cyl) = (TEXTURE_PROJECTION_SPHERICAL, TEXTURE_PROJECTION_CYLINDRICAL);
+        let p = Vec3::new(0.3, -2.0, 5.0);
+        assert_eq!(image_projection(p, PLANAR), Vec2::new(0.3, -2.0));
+        let near = |a: Vec2, b: Vec2| assert!(a.abs_diff_eq(b, 1e-6), "{a} != {b}");
+        // u: 0 on +x, 1/4 on +z, 1/2 on -x, 3/4 on -z; v: latitude, 1 at the north pole.
+        near(image_projection(Vec3::X, sph), Vec2::new(0.0, 0.5));
+        near(image_projection(Vec3::Z * 3.0, sph), Vec2::new(0.25, 0.5));
+        near(image_projection(-Vec3::X, sph), Vec2::new(0.5, 0.5));
+        near(image_projection(-Vec3::Z, sph), Vec2::new(0.75, 0.5));
+        near(image_projection(Vec3::new(H, H, 0.0), sph), Vec2::new(0.0, 0.75));
+        near(image_projection(Vec3::new(0.0, -1.0, 0.0), sph), Vec2::new(0.0, 0.0));
+        near(image_projection(Vec3::ZERO, sph), Vec2::new(0.0, 0.5));
+        // Cylindrical: the same u, v = y.
+        near(image_projection(Vec3::new(0.0, 0.7, -2.0), cyl), Vec2::new(0.75, 0.7));
+        near(image_projection(Vec3::new(0.0, 3.0, 0.0), cyl), Vec2::new(0.0, 3.0));
+        // Non-finite points give some uv (image_lookup reads inside the block for any uv).
+        assert!(image_projection(Vec3::NAN, sph).x.is_nan() || image_projection(Vec3::NAN, sph).x == 0.0);
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use glam::{Vec3, Vec4};
 
-use super::image_texture::image_lookup;
+use super::image_texture::{image_lookup, image_projection};
 use super::pattern::{color_map_eval, pattern_value};
 use super::shape::Hit;
 use super::voxel::{ground_fog_density, voxel_lookup};
@@ -12,7 +12,7 @@ use crate::layout::constants::*;
 use crate::layout::Texture;
 
 pub fn texture_lookup_point(t: &Texture, h: &Hit) -> Vec3 {
-    let p = if t.space == TEXTURE_SPACE_UV { h.uv.extend(0.0) } else { h.p };
+    let p = if t.space & 0xff == TEXTURE_SPACE_UV { h.uv.extend(0.0) } else { h.p };
     let p = p.extend(1.0);
     let row = |r: usize| Vec4::from_slice(&t.transform[4 * r..4 * r + 4]);
     Vec3::new(p.dot(row(0)), p.dot(row(1)), p.dot(row(2)))
@@ -25,7 +25,8 @@ pub fn texture_eval(s: &SceneView, index: u32, h: &Hit) -> Vec3 {
     match t.kind {
         TEXTURE_CONSTANT => Vec3::from(t.value),
         TEXTURE_IMAGE => {
-            let c = image_lookup(s.texture_data, t.data, p.truncate());
+            let uv = image_projection(p, t.space >> TEXTURE_PROJECTION_SHIFT);
+            let c = image_lookup(s.texture_data, t.data, uv);
             if t.channel == TEXTURE_CHANNEL_RGB {
                 c.truncate()
             } else {

@@ -256,8 +256,9 @@ shared_constants! {
 
     /// A texture of one colour, `Texture::value`.
     TEXTURE_CONSTANT: u32 = 0;
-    /// An image: `Texture::data` is its block (shaders/image_texture.glsl), looked up at (x, y)
-    /// of the texture-space point with bilinear filtering.
+    /// An image: `Texture::data` is its block (shaders/image_texture.glsl), looked up with
+    /// bilinear filtering at the uv its projection (`TEXTURE_PROJECTION_*`) makes of the
+    /// texture-space point, (x, y) for a planar one.
     TEXTURE_IMAGE: u32 = 1;
     /// A procedural 3D pattern (shaders/pattern.glsl): `data` is its block, `color_map` the map
     /// from its value in [0, 1] to a colour.
@@ -283,6 +284,15 @@ shared_constants! {
     /// Where a texture looks itself up: (u, v, 0) of the surface, or the hit point in world space.
     TEXTURE_SPACE_UV: u32 = 0;
     TEXTURE_SPACE_WORLD: u32 = 1;
+    /// An image texture's projection, in bits `TEXTURE_PROJECTION_SHIFT` and up of
+    /// `Texture::space` (the space is bits 0-7): how the texture-space point p becomes uv.
+    /// Planar: (p.x, p.y). Spherical (POV-Ray's map_type 1): u = atan2(p.z, p.x) / 2 pi in [0, 1),
+    /// v = 1/2 + asin(p.y / |p|) / pi. Cylindrical (map_type 2): u as spherical, v = p.y. u = 0
+    /// where p.x = p.z = 0, v = 1/2 at the origin.
+    TEXTURE_PROJECTION_SHIFT: u32 = 8;
+    TEXTURE_PROJECTION_PLANAR: u32 = 0;
+    TEXTURE_PROJECTION_SPHERICAL: u32 = 1;
+    TEXTURE_PROJECTION_CYLINDRICAL: u32 = 2;
 
     /// Marks no medium (vacuum): the camera, a light, or the inside of a shape outside every medium.
     NO_MEDIUM: u32 = 0xffff_ffff;

@@ -94,7 +94,8 @@ gpu_structs! {
         pub _pad: u32,
     }
 
-    /// A texture, 80 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*`) at a point
+    /// A texture, 80 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*` in bits
+    /// 0-7, an image's `TEXTURE_PROJECTION_*` from bit `TEXTURE_PROJECTION_SHIFT`) at a point
     /// moved by `transform` (the rows of a 3x4 affine map, texture space from lookup space). `data`
     /// and `color_map` are word offsets into the texture data buffer (or `NO_DATA`).
     pub struct Texture {

@@ -8,8 +8,8 @@ use crate::layout::constants::*;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    AnalyticKind, Channel, ColorParam, Geometry, MaterialDesc, MaterialKind, MediumDesc, NormalMod, Phase, ScalarParam,
-    Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+    AnalyticKind, Channel, ColorParam, Geometry, ImageProjection, MaterialDesc, MaterialKind, MediumDesc, NormalMod,
+    Phase, ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -235,8 +235,14 @@ pub fn pack_texture(t: &TextureDesc, data: &mut Vec<u32>) -> Texture {
             out.kind = TEXTURE_CONSTANT;
             out.value = (*c).into();
         }
-        TextureKind::Image { image, wrap, channel } => {
+        TextureKind::Image { image, wrap, channel, projection } => {
             out.kind = TEXTURE_IMAGE;
+            let projection = match projection {
+                ImageProjection::Planar => TEXTURE_PROJECTION_PLANAR,
+                ImageProjection::Spherical => TEXTURE_PROJECTION_SPHERICAL,
+                ImageProjection::Cylindrical => TEXTURE_PROJECTION_CYLINDRICAL,
+            };
+            out.space |= projection << TEXTURE_PROJECTION_SHIFT;
             out.data = image.pack(*wrap, data);
             out.channel = match channel {
                 Channel::Rgb => TEXTURE_CHANNEL_RGB,

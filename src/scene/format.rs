@@ -218,6 +218,7 @@ pub(crate) struct TextureDef {
     pub color_space: Option<Spanned<String>>,
     pub wrap: Option<Spanned<String>>,
     pub channel: Option<Spanned<String>>,
+    pub projection: Option<Spanned<String>>,
     // pattern: read by `pattern::parse_pattern`, which names bad fields itself
     pub colors: Option<Spanned<Vec<Vec3Def>>>,
     pub pattern: Option<Spanned<toml::Value>>,

@@ -142,6 +142,18 @@ pub enum TextureSpace {
     World,
 }
 
+/// How an image texture turns its texture-space point into uv (POV-Ray's `map_type` 0, 1, 2).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ImageProjection {
+    /// uv = (x, y): the image covers the unit square, row 0 at y = 1.
+    #[default]
+    Planar,
+    /// u = longitude around +y (0 on +x, a quarter turn on +z), v = 1/2 + latitude / pi.
+    Spherical,
+    /// u = longitude around +y as for `Spherical`, v = y.
+    Cylindrical,
+}
+
 /// Which channel of an image a texture gives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Channel {
@@ -156,11 +168,13 @@ pub enum Channel {
 #[derive(Clone, Debug, PartialEq)]
 pub enum TextureKind {
     Constant(Vec3),
-    /// An image looked up at (x, y) of the texture-space point, bilinear.
+    /// An image looked up, bilinear, at the uv that `projection` makes of the texture-space point
+    /// ((x, y) for a planar one).
     Image {
         image: Arc<ImageTexture>,
         wrap: Wrap,
         channel: Channel,
+        projection: ImageProjection,
     },
     /// A POV-Ray pattern and the map from its value to a colour.
     Pattern {

@@ -37,8 +37,8 @@ pub use analytic::{Analytic, AnalyticKind};
 pub use csg::{Csg, CsgNode, CsgOp};
 pub use error::SceneError;
 pub use material::{
-    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
-    TextureSpace,
+    Channel, ColorParam, ImageProjection, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc,
+    TextureKind, TextureSpace,
 };
 pub use medium::{Density, MediumDesc, MediumInterface, Phase};
 pub use photons::PhotonSettings;

@@ -18,8 +18,8 @@ use crate::scene::format::ShapeDef;
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::kinds;
 use crate::scene::material::{
-    Channel, ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc, TextureKind,
-    TextureSpace,
+    Channel, ColorParam, ImageProjection, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc,
+    TextureKind, TextureSpace,
 };
 use crate::scene::model::patch;
 use crate::scene::model::subdivide::{subdivide, Scheme, MAX_LEVELS};
@@ -373,7 +373,12 @@ impl Builder<'_> {
         let name = format!("{file}: {}", m.name);
         let image = |b: &mut Self, img: &ModelImage, channel: Channel| -> u32 {
             b.textures.push(TextureDesc {
-                kind: TextureKind::Image { image: img.image.clone(), wrap: img.wrap, channel },
+                kind: TextureKind::Image {
+                    image: img.image.clone(),
+                    wrap: img.wrap,
+                    channel,
+                    projection: ImageProjection::Planar,
+                },
                 space: TextureSpace::Uv,
                 lookup_from_texture: Affine3A::IDENTITY,
             });

@@ -11,7 +11,7 @@ use crate::limits::printable;
 use crate::scene::error::suggest;
 use crate::scene::format::TextureDef;
 use crate::scene::image_texture::{load_image_texture, ColorSpace, Wrap};
-use crate::scene::material::{Channel, TextureDesc, TextureKind, TextureSpace};
+use crate::scene::material::{Channel, ImageProjection, TextureDesc, TextureKind, TextureSpace};
 use crate::scene::pattern::{parse_pattern, ColorMap, PATTERN_FIELDS};
 use crate::scene::voxel::load_voxel_grid;
 
@@ -47,6 +47,7 @@ impl Builder<'_> {
             ("color_space", span_of(&t.color_space)),
             ("wrap", span_of(&t.wrap)),
             ("channel", span_of(&t.channel)),
+            ("projection", span_of(&t.projection)),
             ("colors", span_of(&t.colors)),
         ];
         let pattern_fields = t.pattern_fields();
@@ -67,7 +68,7 @@ impl Builder<'_> {
                 (TextureKind::Voxels(std::sync::Arc::new(grid)), TextureSpace::World)
             }
             "image" => {
-                let fields = ["type", "space", "transform", "file", "color_space", "wrap", "channel"];
+                let fields = ["type", "space", "transform", "file", "color_space", "wrap", "channel", "projection"];
                 self.only_fields(&object, "an image texture", &present, &fields)?;
                 (self.image_texture(t, &table, &object)?, TextureSpace::Uv)
             }
@@ -85,9 +86,11 @@ impl Builder<'_> {
             },
             None => default_space,
         };
-        if matches!(kind, TextureKind::Image { .. }) && space != TextureSpace::Uv {
-            let span = span_of(&t.space).unwrap_or(table.clone());
-            return Err(self.invalid(&span, &object, "an image is looked up in `space = \"uv\"`".to_string()));
+        if let (Some(projection), TextureSpace::Uv) = (&t.projection, space) {
+            let message =
+                "`projection` places an image in `space = \"world\"`; add that, or drop `projection` to look \
+                           the image up at the surface's uv";
+            return Err(self.invalid(&projection.span(), &object, message.to_string()));
         }
         let lookup_from_texture = self.transform(t.transform.as_ref(), &object)?.unwrap_or(Affine3A::IDENTITY);
         self.textures.push(TextureDesc { kind, space, lookup_from_texture });
@@ -137,7 +140,15 @@ impl Builder<'_> {
             self.warnings
                 .push(format!("{at}: {object}: {cleared} texel channels of the image are NaN; they are taken as 0"));
         }
-        Ok(TextureKind::Image { image: std::sync::Arc::new(image), wrap, channel })
+        let projection = match &t.projection {
+            Some(p) => match self.one_of(p, object, "projection", &["planar", "spherical", "cylindrical"])? {
+                "planar" => ImageProjection::Planar,
+                "spherical" => ImageProjection::Spherical,
+                _ => ImageProjection::Cylindrical,
+            },
+            None => ImageProjection::Planar,
+        };
+        Ok(TextureKind::Image { image: std::sync::Arc::new(image), wrap, channel, projection })
     }
 
     pub(super) fn pattern_texture(&self, t: &TextureDef, table: &Range<usize>, object: &str) -> Result<TextureKind> {

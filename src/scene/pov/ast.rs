@@ -119,6 +119,16 @@ pub enum PigmentKind {
         map: Vec<(f64, Colour)>,
         fields: Vec<(String, toml::Value)>,
     },
+    /// An image_map Photonix projects itself: the image file (for the TOML), its projection
+    /// ("planar", "spherical" or "cylindrical", POV-Ray's map_type 0, 1, 2), whether `once`
+    /// was given, and the image's mean colour with filter all / transmit all (for what needs one
+    /// colour).
+    Image {
+        file: String,
+        projection: &'static str,
+        once: bool,
+        mean: Colour,
+    },
 }
 
 impl Pigment {
@@ -129,7 +139,7 @@ impl Pigment {
     /// The mean colour: a constant colour's own, a colour map's mean entry.
     pub fn mean(&self) -> Colour {
         match &self.kind {
-            PigmentKind::Solid(c) => *c,
+            PigmentKind::Solid(c) | PigmentKind::Image { mean: c, .. } => *c,
             PigmentKind::Pattern { map, .. } if !map.is_empty() => {
                 let mut m = [0.0; 5];
                 for (_, c) in map {

@@ -762,7 +762,7 @@ impl Emitter<'_> {
         // The base: diffuse, or plastic when the finish has a highlight.
         let reflectance = match &t.pigment.kind {
             PigmentKind::Solid(_) => rgb(colour.map(|c| (c * f.diffuse).clamp(0.0, 1.0))),
-            PigmentKind::Pattern { .. } => {
+            PigmentKind::Pattern { .. } | PigmentKind::Image { .. } => {
                 let name = self.pattern_texture(&t, pos)?;
                 let mut p = Table::new();
                 p.insert("texture".into(), T::String(name));
@@ -851,10 +851,25 @@ impl Emitter<'_> {
     /// A world-space pattern texture of a pattern pigment, placed by `world_from_pattern`
     /// (Photonix's coordinates); `ppos` is where the pattern was given, `pos` its object.
     fn world_pattern(&mut self, kind: &PigmentKind, world_from_pattern: &DMat4, ppos: Pos, pos: Pos) -> Result<String> {
-        let PigmentKind::Pattern { name, map, fields } = kind else {
-            return Err(PovError::at(ppos, "internal: a constant colour is not a pattern".into()));
-        };
         let mut tab = Table::new();
+        let (name, map, fields) = match kind {
+            PigmentKind::Pattern { name, map, fields } => (name, map, fields),
+            PigmentKind::Image { file, projection, once, .. } => {
+                // An image_map: an image texture projected in world space; `once` clamps it
+                // (its edge texels stretch outward where POV-Ray shows nothing).
+                tab.insert("type".into(), T::String("image".into()));
+                tab.insert("file".into(), T::String(file.clone()));
+                tab.insert("space".into(), T::String("world".into()));
+                tab.insert("projection".into(), T::String(projection.to_string()));
+                if *once {
+                    tab.insert("wrap".into(), T::String("clamp".into()));
+                }
+                return self.place_texture(tab, world_from_pattern, ppos, pos);
+            }
+            PigmentKind::Solid(_) => {
+                return Err(PovError::at(ppos, "internal: a constant colour is not a pattern".into()));
+            }
+        };
         tab.insert("type".into(), T::String("pattern".into()));
         tab.insert("pattern".into(), T::String(name.clone()));
         tab.insert("space".into(), T::String("world".into()));
@@ -880,6 +895,11 @@ impl Emitter<'_> {
                 );
             }
         }
+        self.place_texture(tab, world_from_pattern, ppos, pos)
+    }
+
+    /// Writes texture `tab` placed by `world_from_pattern` (once per distinct table); its name.
+    fn place_texture(&mut self, mut tab: Table, world_from_pattern: &DMat4, ppos: Pos, pos: Pos) -> Result<String> {
         let placed = match decompose(world_from_pattern) {
             Some(_) => *world_from_pattern,
             None => {
@@ -951,7 +971,9 @@ impl Emitter<'_> {
         let mut density_scale = 1.0;
         if let Some(d) = &md.density {
             match &d.kind {
-                PigmentKind::Solid(c) => density_scale = (c[0] + c[1] + c[2]) / 3.0,
+                PigmentKind::Solid(c) | PigmentKind::Image { mean: c, .. } => {
+                    density_scale = (c[0] + c[1] + c[2]) / 3.0
+                }
                 kind => {
                     let w = MIRROR * md.xform * d.xform;
                     let name = self.world_pattern(kind, &w, d.pos, md.pos)?;

@@ -1503,9 +1503,20 @@ impl Parser {
                     }
                 }
                 "image_map" => {
-                    let (mean, ft) = self.image_map(tpos)?;
+                    let (mut mean, ft, image) = self.image_map(tpos)?;
                     image_ft = ft;
-                    p.kind = PigmentKind::Solid(mean);
+                    p.kind = match image {
+                        Some((file, projection, once)) => {
+                            // filter all / transmit all: the mean carries them, as for a colour.
+                            for (i, v) in ft.iter().enumerate() {
+                                if let Some(v) = v {
+                                    mean[3 + i] = *v;
+                                }
+                            }
+                            PigmentKind::Image { file, projection, once, mean }
+                        }
+                        None => PigmentKind::Solid(mean),
+                    };
                     pattern = None;
                 }
                 "uv_mapping" => {}
@@ -1866,13 +1877,19 @@ impl Parser {
         }
     }
 
-    /// `image_map { [type] "file" [map_type 0] [once] [interpolate n] [filter/transmit all|i v] }`:
-    /// the image's mean colour (Photonix's image textures are looked up in uv only, and
-    /// POV-Ray projects its image maps in space; docs/pov-ray.md), and filter all / transmit all.
-    fn image_map(&mut self, pos: Pos) -> Result<(Colour, [Option<f64>; 2])> {
+    /// `image_map { [type] "file" [map_type 0|1|2] [once] [interpolate n] [filter/transmit all|i v] }`:
+    /// the image's mean colour, filter all / transmit all, and, when Photonix can project the
+    /// image itself (a PNG, JPEG, OpenEXR or HDR file; map_type 0, 1 or 2), (file for the TOML,
+    /// projection, once). Otherwise the mean colour stands in, with a warning.
+    #[allow(clippy::type_complexity)]
+    fn image_map(&mut self, pos: Pos) -> Result<(Colour, [Option<f64>; 2], Option<(String, &'static str, bool)>)> {
         self.expect_sym("{")?;
         let mut ft = [None, None];
         let mut mean = None;
+        let mut file: Option<(String, std::path::PathBuf)> = None;
+        let mut map_type = 0.0;
+        let mut once = false;
+        let mut use_index = false;
         loop {
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;
@@ -1882,10 +1899,17 @@ impl Parser {
                     let fpos = self.here();
                     let name = self.image_name()?;
                     mean = Some(self.image_mean(&w, &name, fpos)?);
+                    file = Some((w.clone(), self.find_image(&name, fpos)?));
                 }
-                Tok::Str(name) => mean = Some(self.image_mean("", &name, tpos)?),
-                Tok::Word(w) if w == "once" || w == "use_color" || w == "use_colour" || w == "use_index" => {}
-                Tok::Word(w) if w == "map_type" || w == "interpolate" || w == "gamma" || w == "premultiplied" => {
+                Tok::Str(name) => {
+                    mean = Some(self.image_mean("", &name, tpos)?);
+                    file = Some((String::new(), self.find_image(&name, tpos)?));
+                }
+                Tok::Word(w) if w == "once" => once = true,
+                Tok::Word(w) if w == "use_index" => use_index = true,
+                Tok::Word(w) if w == "use_color" || w == "use_colour" => {}
+                Tok::Word(w) if w == "map_type" => map_type = self.float()?,
+                Tok::Word(w) if w == "interpolate" || w == "gamma" || w == "premultiplied" => {
                     if w == "gamma" && self.accept_word("srgb")? {
                         continue;
                     }
@@ -1907,15 +1931,56 @@ impl Parser {
                 }
             }
         }
-        let Some(mean) = mean else {
+        let (Some(mean), Some((kind, path))) = (mean, file) else {
             return self
                 .err(pos, "this image_map names no image file; give one: image_map { png \"file.png\" }".into());
         };
-        self.warnings.push(format!(
-            "{}: image_map: the image's mean colour stands in (Photonix's image textures are looked up in uv only)",
-            self.loc(pos)
-        ));
-        Ok((mean, ft))
+        let projection = match map_type.round() as i64 {
+            0 => Some("planar"),
+            1 => Some("spherical"),
+            2 => Some("cylindrical"),
+            _ => None,
+        };
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let readable = match kind.as_str() {
+            "png" | "jpeg" | "exr" | "hdr" => true,
+            "" => matches!(extension.as_str(), "png" | "jpg" | "jpeg" | "exr" | "hdr"),
+            _ => false,
+        };
+        let file = self.image_file_for_toml(&path);
+        let at = self.loc(pos);
+        match (projection, readable, file) {
+            (Some(projection), true, Some(file)) => {
+                if use_index {
+                    self.warnings
+                        .push(format!("{at}: image_map: use_index is not supported; the image's colours are used"));
+                }
+                Ok((mean, ft, Some((file, projection, once))))
+            }
+            (None, ..) => {
+                self.warnings.push(format!(
+                    "{at}: image_map: map_type {map_type} is not supported (0 planar, 1 spherical and 2 cylindrical are); the image's mean colour stands in"
+                ));
+                Ok((mean, ft, None))
+            }
+            _ => {
+                self.warnings.push(format!(
+                    "{at}: image_map: Photonix reads PNG, JPEG, OpenEXR and HDR images, not this one; the image's mean colour stands in"
+                ));
+                Ok((mean, ft, None))
+            }
+        }
+    }
+
+    /// An image's path as the translated TOML names it: relative to the scene's folder when it
+    /// lies in it, else absolute; `None` when it is not UTF-8.
+    fn image_file_for_toml(&self, path: &std::path::Path) -> Option<String> {
+        let folder = self.files.first().and_then(|f| f.parent()).unwrap_or(std::path::Path::new(""));
+        let path = match path.strip_prefix(folder) {
+            Ok(relative) if !folder.as_os_str().is_empty() => relative.to_path_buf(),
+            _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+        };
+        path.to_str().map(str::to_string)
     }
 
     /// An image's file name: a string expression.
