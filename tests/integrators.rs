@@ -19,6 +19,12 @@ fn cpu(buffers: &SceneBuffers, spp: u32) -> RenderOutput {
     render_cpu(buffers, spp, None, 0, &mut |_, _| {})
 }
 
+/// One pass of `spp` samples on the kernels and on the CPU twin: (GPU, CPU).
+fn both_twins(ctx: &photonix::gpu::GpuContext, buffers: &SceneBuffers, spp: u32) -> (RenderOutput, RenderOutput) {
+    let gpu = photonix::render::gpu::render_gpu(ctx, buffers, spp, None, 0, &mut |_, _| {}).unwrap();
+    (gpu, cpu(buffers, spp))
+}
+
 /// The path tracer's kernel against its CPU twin on scenes that take each kernel variant
 /// (plain, textured, media, analytic shapes with sky, sun and spot lights): the same random
 /// numbers, so the same image up to float rounding (see `common::assert_twins_agree` for the
@@ -37,8 +43,7 @@ fn pt_gpu_matches_cpu() {
     ] {
         let scene = shipped(name, Integrator::Pt);
         let buffers = common::buffers(&scene, 32, 24);
-        let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 1, None, 0, &mut |_, _| {}).unwrap();
-        let cpu = cpu(&buffers, 1);
+        let (gpu, cpu) = both_twins(&ctx, &buffers, 1);
         let error = rel_mse(&gpu.image, &cpu.image);
         let ratio = mean_ratio(&gpu.image, &cpu.image);
         println!(
@@ -409,8 +414,7 @@ fn bpt_and_vcm_gpu_match_cpu() {
         ] {
             let scene = shipped(name, integrator);
             let buffers = common::buffers(&scene, 32, 24);
-            let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 2, None, 0, &mut |_, _| {}).unwrap();
-            let cpu = cpu(&buffers, 2);
+            let (gpu, cpu) = both_twins(&ctx, &buffers, 2);
             let error = rel_mse(&gpu.image, &cpu.image);
             let ratio = mean_ratio(&gpu.image, &cpu.image);
             println!(
@@ -489,8 +493,8 @@ fn light_paths_on_bumped_surfaces_are_the_adjoint_of_camera_paths() {
     let ctx = common::gpu();
     for integrator in [Integrator::Pt, Integrator::Bpt] {
         let buffers = common::buffers(&bumped_box(integrator), 24, 16);
-        let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 2, None, 0, &mut |_, _| {}).unwrap();
-        let error = rel_mse(&gpu.image, &cpu(&buffers, 2).image);
+        let (gpu, cpu) = both_twins(&ctx, &buffers, 2);
+        let error = rel_mse(&gpu.image, &cpu.image);
         println!("{} bumped box: GPU vs CPU relMSE {error:.3e}", integrator.name());
         // The bump pattern's noise rounds differently on the two sides (pt shows 3e-6 too).
         assert!(error < 1e-5, "{} bumped box: GPU vs CPU relMSE {error:.3e}", integrator.name());
@@ -532,8 +536,8 @@ fn light_tracing_reaches_a_thin_lens_camera() {
     let ctx = common::gpu();
     for integrator in [Integrator::Bpt, Integrator::Vcm] {
         let buffers = common::buffers(&with_lens(integrator), 24, 16);
-        let gpu = photonix::render::gpu::render_gpu(&ctx, &buffers, 2, None, 0, &mut |_, _| {}).unwrap();
-        let error = rel_mse(&gpu.image, &cpu(&buffers, 2).image);
+        let (gpu, cpu) = both_twins(&ctx, &buffers, 2);
+        let error = rel_mse(&gpu.image, &cpu.image);
         println!("{} through a thin lens: GPU vs CPU relMSE {error:.3e}", integrator.name());
         assert!(error < 1e-6, "{} through a thin lens: GPU vs CPU relMSE {error:.3e}", integrator.name());
     }

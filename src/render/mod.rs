@@ -105,6 +105,28 @@ pub struct RenderStats {
 }
 
 impl RenderStats {
+    /// A pass's figures on the CPU backend.
+    pub fn cpu(stages: Vec<(String, Duration)>, rays: u64, spp: u32) -> RenderStats {
+        RenderStats {
+            stages,
+            rays,
+            samples_per_pixel: spp,
+            device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
+            ..Default::default()
+        }
+    }
+
+    /// A pass's figures on device `ctx`, with the kernel times its timestamp queries took.
+    pub fn device(ctx: &crate::gpu::GpuContext, stages: Vec<(String, Duration)>, rays: u64, spp: u32) -> RenderStats {
+        RenderStats {
+            stages,
+            kernel_times: ctx.take_timings(),
+            rays,
+            samples_per_pixel: spp,
+            device: format!("{} ({})", ctx.info().name, ctx.info().driver),
+        }
+    }
+
     pub fn stage(&self, name: &str) -> Duration {
         self.stages.iter().filter(|(n, _)| n == name).map(|(_, d)| *d).sum()
     }
@@ -366,13 +388,7 @@ pub fn render_cpu(
     }
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
-    let stats = RenderStats {
-        stages,
-        rays,
-        samples_per_pixel: spp,
-        device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
-        ..Default::default()
-    };
+    let stats = RenderStats::cpu(stages, rays, spp);
     RenderOutput { image: layers.combined(), layers, stats, complete }
 }
 
@@ -418,13 +434,7 @@ fn render_vcm_cpu(
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("light paths".to_string(), light_time));
     stages.push(("render".to_string(), camera_time));
-    let stats = RenderStats {
-        stages,
-        rays,
-        samples_per_pixel: spp,
-        device: format!("CPU reference ({} threads)", rayon::current_num_threads()),
-        ..Default::default()
-    };
+    let stats = RenderStats::cpu(stages, rays, spp);
     RenderOutput { image: layers.combined(), layers, stats, complete }
 }
 

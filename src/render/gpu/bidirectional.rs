@@ -132,12 +132,6 @@ pub(super) fn render_pass_bidirectional(
         ("render".to_string(), camera_time),
         ("download".to_string(), t.elapsed()),
     ];
-    let stats = RenderStats {
-        stages,
-        kernel_times: ctx.take_timings(),
-        rays,
-        samples_per_pixel: spp,
-        device: format!("{} ({})", ctx.info().name, ctx.info().driver),
-    };
+    let stats = RenderStats::device(ctx, stages, rays, spp);
     Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
 }

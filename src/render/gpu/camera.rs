@@ -243,13 +243,7 @@ impl<'a> GpuRenderer<'a> {
         }
         stages.push(("render".to_string(), t.elapsed() - download_time));
         stages.push(("download".to_string(), download_time));
-        let stats = RenderStats {
-            stages,
-            kernel_times: ctx.take_timings(),
-            rays,
-            samples_per_pixel: spp,
-            device: format!("{} ({})", ctx.info().name, ctx.info().driver),
-        };
+        let stats = RenderStats::device(ctx, stages, rays, spp);
         Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
     }
 }
