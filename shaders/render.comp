@@ -82,12 +82,12 @@ const uint RAY_SHAFT = 3u;  // the shadow ray of an equiangular sample of a came
 // three times the code, and as much slower to compile and to run.
 void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_since, inout vec3 terms[4], inout uint rays, inout uint blocked, inout uint lit) {
     uint stream = py * frame.width + px;
-    // xy jitter the film position, zw sample the lens.
-    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    // The film position, then the lens.
+    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, film.zw, o, d);
+    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
     float t_max = INF;
     uint ray = RAY_CAMERA;
     uint depth = 0u;           // path-lobe bounces of the current path so far
@@ -301,7 +301,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             b = material_bsdf(m, h);
         }
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
-        vec4 u = rand4(stream, sample_index, frame.seed, camera ? dim + RNG_FRESNEL : gdim + 1u + depth);
+        uint key = camera ? dim + RNG_FRESNEL : gdim + 1u + depth;
+        vec4 u = rand4(stream, sample_index, frame.seed, key);
+        u.yz = qmc2(stream, sample_index, frame.seed, key);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
         float q = bsdf_path_probability(b, wo);
         if (u.w < q) {
@@ -354,8 +356,10 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
         if (frame.photon_mapping == 0u || scattered) break;
         // Final-gather ray part - 1, sampled from the estimate lobes.
         gdim = RNG_GATHER_DOMAIN + (part - 1u) * RNG_GATHER_DIMS_PER_RAY;
+        // A pixel's gather rays are one sequence: ray j of sample i is its point i x rays + j.
         vec4 u0 = rand4(stream, sample_index, frame.seed, gdim);
-        BsdfSample first = bsdf_sample(b, wo, vec3(u0.z, u0.x, u0.y), LOBES_ESTIMATE);
+        vec2 ug = qmc2(stream, sample_index * frame.gather_rays + part - 1u, frame.seed, RNG_GATHER_DOMAIN);
+        BsdfSample first = bsdf_sample(b, wo, vec3(u0.z, ug.x, ug.y), LOBES_ESTIMATE);
         if (first.flags == 0u) break;
         gather_weight = first.weight;
         o = offset_origin(h, wo, first.flags);

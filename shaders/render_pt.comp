@@ -75,11 +75,11 @@ uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
 // lavapipe's sake (see render.comp).
 void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
-    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, film.zw, o, d);
+    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
     float t_max = INF;
     bool shadow = false;
     vec3 throughput = vec3(1.0);
@@ -214,6 +214,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
 
         // The next path ray: the delta lobes with probability q, else the others.
         vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        u.yz = qmc2(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         float choice = delta ? q : 1.0 - q;
@@ -233,7 +234,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
         if ((flags & BSDF_ESTIMATE) != 0u && frame.light_count > 0u) {
             Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
             if (l.pick_probability > 0.0) {
-                vec2 ul = rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
+                vec2 ul = qmc2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
                 LightSample ls = light_sample(l, h.p, grid_sample(l.grid, ul, stream, sample_index));
                 float cosine = scattered ? 1.0 : abs(dot(b.ns, ls.wi));
                 vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cosine;

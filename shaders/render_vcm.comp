@@ -47,7 +47,7 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint stream, 
     uint sample_index = params.sample_index;
     Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
     if (l.pick_probability <= 0.0) return vec3(0.0);
-    vec2 ul = rand2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
+    vec2 ul = qmc2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
     LightSample ls = light_sample(l, h.p, grid_sample(l.grid, ul, stream, sample_index));
     float cos_to_light = abs_cos(b, ls.wi);
     vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cos_to_light;
@@ -107,11 +107,11 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex
 void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
     uint sample_index = params.sample_index;
-    vec4 film = rand4(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, film.zw, o, d);
+    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
     bool light_only = (params.techniques & VCM_LIGHT_TRACE_ONLY) != 0u;
     bool merge_only = (params.techniques & VCM_MERGE_ONLY) != 0u;
     bool connect = (params.techniques & VCM_CONNECT) != 0u;
@@ -233,6 +233,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         if (light_only && (flags & BSDF_ESTIMATE) != 0u) break;
         float q = bsdf_path_probability(b, wo);
         vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        u.yz = qmc2(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         if (smp.flags == 0u) break;

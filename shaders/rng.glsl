@@ -28,3 +28,40 @@ vec2 rand2(uint stream, uint sample_index, uint seed, uint dim) {
 float rand1(uint stream, uint sample_index, uint seed, uint dim) {
     return rand_unit(pcg4d(uvec4(stream, sample_index, seed, dim)).x);
 }
+
+// Key that sets the scrambles of qmc2 apart from rand4's hashes of the same dimension.
+const uint QMC_KEY = 0x51ed270bu;
+
+// Laine and Karras's hash as Burley improved it ("Practical Hash-based Owen Scrambling", JCGT
+// 2020): each bit is flipped by a function of the bits below it, so on reversed bits it is an
+// Owen scramble.
+uint laine_karras(uint x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// The second dimension of the Sobol sequence, bits reversed: Pascal's triangle mod 2 in five
+// shift-and-xor steps (its blocks are [[P, 0], [P, P]]).
+uint sobol_y_reversed(uint index) {
+    index ^= (index & ~0x55555555u) >> 1u;
+    index ^= (index & ~0x33333333u) >> 2u;
+    index ^= (index & ~0x0f0f0f0fu) >> 4u;
+    index ^= (index & ~0x00ff00ffu) >> 8u;
+    index ^= (index & ~0x0000ffffu) >> 16u;
+    return index;
+}
+
+// Point sample_index of a two-dimensional Sobol sequence, Owen-scrambled and shuffled by hashes of
+// (stream, seed, dim), after Burley 2020: a pixel's first 2^k samples of one dim form a
+// (0, k, 2)-net. Twin of cpu::rng::qmc2.
+vec2 qmc2(uint stream, uint sample_index, uint seed, uint dim) {
+    uvec4 h = pcg4d(uvec4(stream, seed, dim, QMC_KEY));
+    uint index = bitfieldReverse(laine_karras(bitfieldReverse(sample_index), h.x));
+    uint x = bitfieldReverse(laine_karras(index, h.y));
+    uint y = bitfieldReverse(laine_karras(sobol_y_reversed(index), h.z));
+    return vec2(rand_unit(x), rand_unit(y));
+}

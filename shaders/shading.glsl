@@ -100,7 +100,7 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
         uint cells = (l.grid & 0xffu) * ((l.grid >> 8u) & 0xffu);
         if (penumbra_since <= sample_index - sample_index % cells) none.rays = cells;
     }
-    vec2 u = rand2(stream, sample_index, frame.seed, ray == 0u ? dim + RNG_LIGHT_U : RNG_ADAPTIVE_DOMAIN + ray);
+    vec2 u = qmc2(stream, sample_index, frame.seed, ray == 0u ? dim + RNG_LIGHT_U : RNG_ADAPTIVE_DOMAIN + ray);
     LightSample s = light_sample(l, h.p, grid_sample(l.grid, u, stream, sample_index * none.rays + ray));
     vec3 f = bsdf_eval(b, wo, s.wi) * s.weight;
     if (f == vec3(0.0)) return none;

@@ -8,13 +8,19 @@ use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf, shading_adjoint};
 use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
-use super::rng::{rand1, rand2, rand4};
+use super::rng::{qmc2, rand1, rand2, rand4};
 use super::shading::{offset_origin, ray_skip};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{EmitParams, Photon};
+
+/// The `qmc2` stream and index of photon path `path`: global and caustic passes (`pass` even
+/// and odd) are two sequences, and pass k's paths are their points k x paths + path.
+pub fn photon_sequence(path: u32, params: &EmitParams) -> (u32, u32) {
+    (params.pass & 1, (params.pass >> 1).wrapping_mul(params.total_paths).wrapping_add(path))
+}
 
 /// Traces photon path `path` and calls `store(x, flux, wi, flags, volume)` at every surface with
 /// estimate lobes it meets and (`volume` true) every collision in a medium, exactly as the kernel
@@ -36,12 +42,12 @@ pub fn trace_photon_path(
     if l.photon_probability <= 0.0 {
         return;
     }
-    let (mut o, mut d, mut flux) = light_emit(
-        s,
-        l,
-        rand2(path, params.pass, seed, dim + RNG_PHOTON_POSITION),
-        rand2(path, params.pass, seed, dim + RNG_PHOTON_DIRECTION),
-    );
+    // The render's photon paths of one kind (global or caustic) are one low-discrepancy
+    // sequence in the numbers that spread photons evenly: where they leave the light, where to,
+    // where they bounce.
+    let (qs, qi) = photon_sequence(path, params);
+    let (mut o, mut d, mut flux) =
+        light_emit(s, l, qmc2(qs, qi, seed, dim + RNG_PHOTON_POSITION), qmc2(qs, qi, seed, dim + RNG_PHOTON_DIRECTION));
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
@@ -117,7 +123,8 @@ pub fn trace_photon_path(
             }
         }
         let u = rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE);
-        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], LOBES_ALL);
+        let ub = qmc2(qs, qi, seed, bdim + RNG_PHOTON_BOUNCE);
+        let smp = bsdf_sample(&b, wo, [u[0], ub[0], ub[1]], LOBES_ALL);
         if smp.flags == 0 {
             return;
         }

@@ -13,7 +13,7 @@ use super::medium::{
     spot_span,
 };
 use super::phase::phase_hg;
-use super::rng::{rand2, rand4};
+use super::rng::{qmc2, rand2, rand4};
 use super::shading::{camera_ray, direct_light_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -79,11 +79,11 @@ pub fn radiance(
 ) {
     let f = s.frame;
     let stream = py * f.width + px;
-    // xy jitter the film position, zw sample the lens.
-    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    // The film position, then the lens.
+    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
-    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
+    let (mut o, mut d) = camera_ray(s, sx, sy, qmc2(stream, sample, f.seed, RNG_PIXEL_Y));
     let mut t_max = f32::INFINITY;
     let mut ray = Ray::Camera;
     // Path-lobe bounces of the current path so far.
@@ -308,7 +308,9 @@ pub fn radiance(
             material_bsdf(s, m, &h)
         };
         let dim = depth * RNG_DIMS_PER_BOUNCE;
-        let u = rand4(stream, sample, f.seed, if camera { dim + RNG_FRESNEL } else { gdim + 1 + depth });
+        let key = if camera { dim + RNG_FRESNEL } else { gdim + 1 + depth };
+        let mut u = rand4(stream, sample, f.seed, key);
+        [u[1], u[2]] = qmc2(stream, sample, f.seed, key);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
         let q = bsdf_path_probability(&b, wo);
         if u[3] < q {
@@ -362,8 +364,10 @@ pub fn radiance(
         }
         // Final-gather ray part - 1, sampled from the estimate lobes.
         gdim = RNG_GATHER_DOMAIN + (part - 1) * RNG_GATHER_DIMS_PER_RAY;
+        // A pixel's gather rays are one sequence: ray j of sample i is its point i x rays + j.
         let u0 = rand4(stream, sample, f.seed, gdim);
-        let first = bsdf_sample(&b, wo, [u0[2], u0[0], u0[1]], LOBES_ESTIMATE);
+        let ug = qmc2(stream, sample.wrapping_mul(f.gather_rays).wrapping_add(part - 1), f.seed, RNG_GATHER_DOMAIN);
+        let first = bsdf_sample(&b, wo, [u0[2], ug[0], ug[1]], LOBES_ESTIMATE);
         if first.flags == 0 {
             break;
         }

@@ -18,7 +18,7 @@ use super::bsdf::{
 use super::instance::hit_primitive;
 use super::light::{environment_radiance, light_pdf, light_sample, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
-use super::rng::{rand1, rand2, rand4};
+use super::rng::{qmc2, rand1, rand2, rand4};
 use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
@@ -83,10 +83,10 @@ pub fn pt_steps(max_depth: u32, media: bool) -> u32 {
 pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
-    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
-    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
+    let (mut o, mut d) = camera_ray(s, sx, sy, qmc2(stream, sample, f.seed, RNG_PIXEL_Y));
     let mut t_max = f32::INFINITY;
     let mut shadow = false;
     let mut throughput = Vec3::ONE;
@@ -233,8 +233,9 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
 
         // The next path ray: the delta lobes with probability q, else the others.
         let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
+        let ud = qmc2(stream, sample, f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         let choice = if delta { q } else { 1.0 - q };
         next_end = smp.flags == 0 || vertex + 1 >= f.max_depth;
         if !next_end {
@@ -253,7 +254,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
         if flags & BSDF_ESTIMATE != 0 && f.light_count > 0 {
             let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
             if l.pick_probability > 0.0 {
-                let ul = rand2(stream, sample, f.seed, dim + RNG_LIGHT_U);
+                let ul = qmc2(stream, sample, f.seed, dim + RNG_LIGHT_U);
                 let ls = light_sample(s, l, h.p, grid_sample(l.grid, ul, stream, sample));
                 let cos = if scattered { 1.0 } else { b.ns.dot(ls.wi).abs() };
                 let fr = bsdf_eval(&b, wo, ls.wi) * ls.weight * cos;

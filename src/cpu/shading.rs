@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::bsdf::{bsdf_eval, Bsdf};
 use super::light::{light_sample, pick_light};
-use super::rng::{rand1, rand2};
+use super::rng::{qmc2, rand1};
 use super::sampling::polygon_point;
 use super::shape::Hit;
 use super::SceneView;
@@ -144,7 +144,7 @@ pub fn direct_light_sample(
             none.rays = cells;
         }
     }
-    let u = rand2(stream, sample, f.seed, if ray == 0 { dim + RNG_LIGHT_U } else { RNG_ADAPTIVE_DOMAIN + ray });
+    let u = qmc2(stream, sample, f.seed, if ray == 0 { dim + RNG_LIGHT_U } else { RNG_ADAPTIVE_DOMAIN + ray });
     let ls = light_sample(s, l, h.p, grid_sample(l.grid, u, stream, sample.wrapping_mul(none.rays).wrapping_add(ray)));
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight;
     if fr == Vec3::ZERO {

@@ -37,7 +37,7 @@ use super::grid_build::{build_grid, grid_params};
 use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
 use super::render_pt::path_layer;
-use super::rng::{rand1, rand2, rand4};
+use super::rng::{qmc2, rand1, rand2, rand4};
 use super::sampling::polygon_point;
 use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
@@ -405,12 +405,10 @@ pub fn trace_light_path(
     if l.pick_probability <= 0.0 {
         return rays;
     }
-    let e = light_emission(
-        s,
-        l,
-        rand2(path, sample, f.seed, dim0 + RNG_LIGHT_U),
-        rand2(path, sample, f.seed, dim0 + RNG_LIGHT_V),
-    );
+    // The render's light paths are one low-discrepancy sequence (sample k's paths are its points
+    // k x light_paths + path) in the numbers that spread them: start, direction, bounces.
+    let qi = sample.wrapping_mul(p.light_paths).wrapping_add(path);
+    let e = light_emission(s, l, qmc2(0, qi, f.seed, dim0 + RNG_LIGHT_U), qmc2(0, qi, f.seed, dim0 + RNG_LIGHT_V));
     // Light sampling's density of the start point: by area for area lights, by solid angle for
     // infinite ones, 1 for delta lights (SmallVCM's directPdfA).
     let direct_pdf = match l.kind {
@@ -483,8 +481,9 @@ pub fn trace_light_path(
         let dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
         let q = bsdf_path_probability(&b, wo);
         let u = rand4(path, sample, f.seed, dim + RNG_FRESNEL);
+        let ud = qmc2(0, qi, f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         if smp.flags == 0 {
             break;
         }
@@ -581,10 +580,10 @@ pub fn radiance_vcm(
     let f = s.frame;
     let stream = py * f.width + px;
     let sample = p.sample_index;
-    let film = rand4(stream, sample, f.seed, RNG_PIXEL_X);
+    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
-    let (mut o, mut d) = camera_ray(s, sx, sy, [film[2], film[3]]);
+    let (mut o, mut d) = camera_ray(s, sx, sy, qmc2(stream, sample, f.seed, RNG_PIXEL_Y));
     let light_only = has(p, VCM_LIGHT_TRACE_ONLY);
     let merge_only = has(p, VCM_MERGE_ONLY);
     let connect = has(p, VCM_CONNECT);
@@ -734,8 +733,9 @@ pub fn radiance_vcm(
         // The next path ray.
         let q = bsdf_path_probability(&b, wo);
         let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
+        let ud = qmc2(stream, sample, f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         if smp.flags == 0 {
             break;
         }
@@ -806,7 +806,7 @@ fn light_sampling(
     if l.pick_probability <= 0.0 {
         return Vec3::ZERO;
     }
-    let ul = rand2(stream, sample, f.seed, dim + RNG_LIGHT_U);
+    let ul = qmc2(stream, sample, f.seed, dim + RNG_LIGHT_U);
     let ls = light_sample(s, l, h.p, grid_sample(l.grid, ul, stream, sample));
     let cos_to_light = abs_cos(b, ls.wi);
     let fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cos_to_light;
