@@ -87,7 +87,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
+    camera_ray(sx, sy, lens_sample(stream, sample_index), o, d);
     float t_max = INF;
     uint ray = RAY_CAMERA;
     uint depth = 0u;           // path-lobe bounces of the current path so far

@@ -79,7 +79,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
+    camera_ray(sx, sy, lens_sample(stream, sample_index), o, d);
     float t_max = INF;
     bool shadow = false;
     vec3 throughput = vec3(1.0);

@@ -111,7 +111,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;
-    camera_ray(sx, sy, qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y), o, d);
+    camera_ray(sx, sy, lens_sample(stream, sample_index), o, d);
     bool light_only = (params.techniques & VCM_LIGHT_TRACE_ONLY) != 0u;
     bool merge_only = (params.techniques & VCM_MERGE_ONLY) != 0u;
     bool connect = (params.techniques & VCM_CONNECT) != 0u;

@@ -2,6 +2,11 @@
 // The including kernel declares the scene bindings and includes rng, sampling, shape, texture,
 // bsdf, trace and light (in that order).
 
+// The lens sample of a camera path: a pinhole draws none.
+vec2 lens_sample(uint stream, uint sample_index) {
+    return frame.lens_radius > 0.0 ? qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y) : vec2(0.0);
+}
+
 // Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row, with lens
 // sample u (see FrameParams and the CAMERA_* kinds).
 void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {

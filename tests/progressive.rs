@@ -71,8 +71,11 @@ fn error_falls_as_passes_grow() {
     // must at least halve the error well beyond the run-to-run spread.
     assert!(errors[1].0 < 0.5 * errors[0].0, "{errors:?}");
     assert!(errors[2].0 < 0.6 * errors[1].0, "{errors:?}");
-    // The mean stays within 2% of the reference at every pass count (measured under 1%).
-    assert!(errors.iter().all(|(_, bias)| *bias < 0.02), "{errors:?}");
+    // One pass of 20,000 photons is one draw of the photon maps, whose mean over the image moves
+    // by up to 5.5% from seed to seed (seeds 0-3 measured: 0.95 to 1.067); averaged over 16
+    // passes the mean is within 2% (measured 0.99).
+    assert!(errors.iter().all(|(_, bias)| *bias < 0.08), "{errors:?}");
+    assert!(errors[2].1 < 0.02, "{errors:?}");
 }
 
 #[test]

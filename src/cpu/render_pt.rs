@@ -19,7 +19,7 @@ use super::instance::hit_primitive;
 use super::light::{environment_radiance, light_pdf, light_sample, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::rng::{qmc2, rand1, rand2, rand4};
-use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip, NO_RAY};
+use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
@@ -86,7 +86,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
     let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
-    let (mut o, mut d) = camera_ray(s, sx, sy, qmc2(stream, sample, f.seed, RNG_PIXEL_Y));
+    let (mut o, mut d) = camera_ray(s, sx, sy, lens_sample(s, stream, sample));
     let mut t_max = f32::INFINITY;
     let mut shadow = false;
     let mut throughput = Vec3::ONE;

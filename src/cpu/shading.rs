@@ -12,6 +12,16 @@ use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
 
+/// The lens sample of a camera path: a pinhole draws none.
+pub fn lens_sample(s: &SceneView, stream: u32, sample: u32) -> [f32; 2] {
+    let f = s.frame;
+    if f.lens_radius > 0.0 {
+        qmc2(stream, sample, f.seed, RNG_PIXEL_Y)
+    } else {
+        [0.0; 2]
+    }
+}
+
 /// Primary ray (origin, direction) through film position (sx, sy) in [-1, 1]^2, sy = +1 at the
 /// top row, with lens sample `u` (see `FrameParams` and the `CAMERA_*` kinds).
 pub fn camera_ray(s: &SceneView, sx: f32, sy: f32, u: [f32; 2]) -> (Vec3, Vec3) {

@@ -39,7 +39,7 @@ use super::light::{environment_pdf, environment_radiance, light_emission, light_
 use super::render_pt::path_layer;
 use super::rng::{qmc2, rand1, rand2, rand4};
 use super::sampling::polygon_point;
-use super::shading::{camera_ray, grid_sample, offset_origin, ray_skip};
+use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -583,7 +583,7 @@ pub fn radiance_vcm(
     let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
-    let (mut o, mut d) = camera_ray(s, sx, sy, qmc2(stream, sample, f.seed, RNG_PIXEL_Y));
+    let (mut o, mut d) = camera_ray(s, sx, sy, lens_sample(s, stream, sample));
     let light_only = has(p, VCM_LIGHT_TRACE_ONLY);
     let merge_only = has(p, VCM_MERGE_ONLY);
     let connect = has(p, VCM_CONNECT);
