@@ -187,7 +187,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                 shaft_done = false;
                 uint key = RNG_MEDIUM_DOMAIN + (ray == RAY_GATHER ? part : 0u) * RNG_MEDIUM_DIMS_PER_PART + segment;
                 segment++;
-                MediumEvent e = medium_sample(medium, o, d, t, rand2(stream, sample_index, frame.seed, key));
+                MediumEvent e = medium_sample(medium, o, d, t, qmc2(stream, sample_index, frame.seed, key));
                 if (ray == RAY_CAMERA && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * e.emission;
                 throughput *= e.weight;
                 scattered = e.scattered;

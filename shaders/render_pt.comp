@@ -117,7 +117,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
             if (shadow) {
                 unoccluded *= medium_transmittance(cur_medium, o, d, t, rand2(stream, sample_index, frame.seed, RNG_TRANSMITTANCE_DOMAIN + step));
             } else {
-                MediumEvent e = medium_sample(cur_medium, o, d, t, rand2(stream, sample_index, frame.seed, RNG_MEDIUM_DOMAIN + segment));
+                MediumEvent e = medium_sample(cur_medium, o, d, t, qmc2(stream, sample_index, frame.seed, RNG_MEDIUM_DOMAIN + segment));
                 segment++;
                 terms[path_layer(first_specular, diffuse, specular_after)] += throughput * e.emission;
                 throughput *= e.weight;

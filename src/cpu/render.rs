@@ -192,7 +192,7 @@ pub fn radiance(
                 let key =
                     RNG_MEDIUM_DOMAIN + if ray == Ray::Gather { part } else { 0 } * RNG_MEDIUM_DIMS_PER_PART + segment;
                 segment += 1;
-                let e = medium_sample(s, medium, o, d, t, rand2(stream, sample, f.seed, key));
+                let e = medium_sample(s, medium, o, d, t, qmc2(stream, sample, f.seed, key));
                 if ray == Ray::Camera && part == 0 {
                     terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] += throughput * e.emission;
                 }

@@ -122,7 +122,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
                 unoccluded *= medium_transmittance(s, cur_medium, o, d, t, u);
             } else {
                 let e =
-                    medium_sample(s, cur_medium, o, d, t, rand2(stream, sample, f.seed, RNG_MEDIUM_DOMAIN + segment));
+                    medium_sample(s, cur_medium, o, d, t, qmc2(stream, sample, f.seed, RNG_MEDIUM_DOMAIN + segment));
                 segment += 1;
                 terms[path_layer(first_specular, diffuse, specular_after) as usize] += throughput * e.emission;
                 throughput *= e.weight;
