@@ -229,9 +229,10 @@ fn has(p: &VcmParams, t: u32) -> bool {
     p.techniques & t != 0
 }
 
-/// Light sub-paths per sample: one per pixel, as many as the vertex budget allows.
+/// Light sub-paths per sample: one per `VCM_PIXELS_PER_LIGHT_PATH` pixels, as many as the vertex
+/// budget allows.
 pub fn light_path_count(f: &FrameParams) -> u32 {
-    (f.width * f.height).min(VCM_MAX_LIGHT_VERTICES / f.max_depth.max(1)).max(1)
+    (f.width * f.height).div_ceil(VCM_PIXELS_PER_LIGHT_PATH).min(VCM_MAX_LIGHT_VERTICES / f.max_depth.max(1)).max(1)
 }
 
 /// How far the camera sees: the median distance of the first hits of nine camera rays spread over

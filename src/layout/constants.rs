@@ -459,6 +459,10 @@ shared_constants! {
     /// Most light vertices stored per sample (64 bytes each): a larger image draws fewer light
     /// paths than it has pixels.
     VCM_MAX_LIGHT_VERTICES: u32 = 1 << 21;
+    /// Pixels per light sub-path: two camera paths share each light path's connections. Half
+    /// the light stage and half the light-tracing rays for a little more correlation: error x
+    /// CPU time 12-17% lower for bpt on cornell-box and cornell-glossy (BENCHMARKS.md).
+    VCM_PIXELS_PER_LIGHT_PATH: u32 = 2;
     /// Photon maps of the camera kernel's lookups (`grids[]` index).
     MAP_GLOBAL: u32 = 0;
     MAP_CAUSTIC: u32 = 1;
