@@ -796,7 +796,7 @@ box {{ 2, 3 pigment {{ rgbt 1 }} hollow interior {{ media {{ emission <1, 0, 0> 
 }
 
 #[test]
-fn pigment_and_texture_maps_warps_and_image_maps_are_approximated_as_documented() {
+fn pigment_maps_texture_maps_warps_and_image_maps_map_as_documented() {
     let dir = tempfile::tempdir().unwrap();
     // A 2 x 1 PNG, red and blue: its mean linear colour is (0.5, 0, 0.5).
     image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap().save(dir.path().join("rb.png")).unwrap();
@@ -821,18 +821,19 @@ sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
     assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0, 0.5, 0.5]);
     assert_eq!(floats(&grad["turbulence"]), [0.5; 3]);
     assert_eq!(grad["octaves"].as_integer(), Some(3));
-    // texture_map: the entries' pigments as a colour map, in the first entry's finish.
-    let bozo =
-        textures.values().find(|x| x["pattern"].as_str() == Some("bozo") && x.get("color_map").is_some()).unwrap();
-    let map = bozo["color_map"].as_array().unwrap();
-    assert_eq!(floats(&map[0].as_array().unwrap()[1]), [1.0; 3]);
-    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0; 3]);
-    assert!(ms.values().any(|m| m["type"].as_str() == Some("plastic")));
+    // texture_map: the entries' materials mixed by the pattern (tested below).
+    let mix = ms.values().find(|m| m["type"].as_str() == Some("mix")).unwrap();
+    let weight = &textures[mix["weight"]["texture"].as_str().unwrap()];
+    assert_eq!(weight["pattern"].as_str(), Some("bozo"));
+    let [a, b] = [0, 1].map(|i| &ms[mix["materials"][i].as_str().unwrap()]);
+    assert_eq!((a["type"].as_str(), b["type"].as_str()), (Some("plastic"), Some("diffuse")));
     assert!(warnings.iter().any(|w| w.contains("black_hole warp is not supported")), "{warnings:?}");
     let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"none.png\" }} }} }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("none.png"), "{e}");
     let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ once }} }} }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("names no image file"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 texture {{ material_map {{ png \"rb.png\" }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("material_map is not supported yet"), "{e}");
 }
 
 #[test]
@@ -927,4 +928,131 @@ fn planar_image_map_renders_as_the_same_image_texture_written_in_toml() {
     let (red, green, blue) = (centroid(0), centroid(1), centroid(2));
     assert!(red.0 < green.0 - 1.0 && (red.1 - green.1).abs() < 1.0, "red {red:?}, green {green:?}");
     assert!(red.1 < blue.1 - 1.0 && (red.0 - blue.0).abs() < 1.0, "red {red:?}, blue {blue:?}");
+}
+
+/// The box of `TEXTURE_MAP`: red on its left half, a blue and white checker of unit squares
+/// (POV-Ray's `scale 0.25` inside the map's `scale 4`) with a 30% reflection on its right.
+const TEXTURE_MAP: &str = "camera { location <0, 0, -5> look_at <0, 0, 0> }\nlight_source { <0, 3, -6>, rgb 1 }\n\
+box { <-2, -1, 0>, <2, 1, 0.1>
+  texture {
+    gradient x
+    texture_map {
+      [0.5 pigment { rgb <1, 0.1, 0.1> } finish { diffuse 1 }]
+      [0.5 pigment { checker rgb <0.1, 0.1, 1>, rgb 1 scale 0.25 } finish { diffuse 1 reflection 0.3 }]
+    }
+    scale 4 translate -2 * x
+  }
+}\n";
+
+/// A texture_map becomes mixes of its entries' materials weighed by the map's pattern: the
+/// translated scene renders as the same scene written by hand in TOML, and its two halves show
+/// the two textures.
+#[test]
+fn texture_map_renders_as_the_same_mix_written_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let pov = load(dir.path(), TEXTURE_MAP);
+    // By hand: POV-Ray's z mirrored (the scale's -1 on z); the light's intensity is pi d0^2,
+    // d0 the distance from the light to where the camera looks (docs/pov-ray.md).
+    let toml = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 53.13010235415598\n\
+        [textures.checks]\ntype = \"pattern\"\npattern = \"checker\"\ncolors = [[0.1, 0.1, 1], [1, 1, 1]]\n\
+        transform = { scale = [1, 1, -1], translate = [-2, 0, 0] }\n\
+        [textures.halves]\ntype = \"pattern\"\npattern = \"gradient\"\ndirection = [1, 0, 0]\n\
+        color_map = [[0.5, [0, 0, 0]], [0.5, [1, 1, 1]]]\ntransform = { scale = [4, 4, -4], translate = [-2, 0, 0] }\n\
+        [materials.red]\ntype = \"diffuse\"\nreflectance = [1, 0.1, 0.1]\n\
+        [materials.checks]\ntype = \"diffuse\"\nreflectance = { texture = \"checks\" }\n\
+        [materials.shiny]\ntype = \"mirror\"\n\
+        [materials.checks_reflecting]\ntype = \"mix\"\nmaterials = [\"checks\", \"shiny\"]\nweight = 0.3\n\
+        [materials.halves]\ntype = \"mix\"\nmaterials = [\"red\", \"checks_reflecting\"]\nweight = { texture = \"halves\" }\n\
+        [[shapes]]\ntype = \"box\"\nmaterial = \"halves\"\nmin = [-2, -1, -0.1]\nmax = [2, 1, 0]\n\
+        [[lights]]\ntype = \"point\"\nposition = [0, 3, 6]\nintensity = 141.3716694115407\n";
+    let by_hand = load_scene(&write(dir.path(), "by_hand.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
+    let render = |s: &Scene| {
+        let settings = photonix::render::FrameSettings { width: 40, height: 30, max_depth: 3, seed: 3 };
+        let buffers = photonix::render::prepare(s, &settings).unwrap();
+        photonix::render::render_cpu(&buffers, 2, None, 0, &mut |_, _| {}).image
+    };
+    let (a, b) = (render(&pov), render(&by_hand));
+    let error = photonix::io::metrics::rel_mse(&a, &b);
+    eprintln!("texture_map against the mix by hand: relMSE {error:.3e}");
+    assert!(error < 1e-6, "relMSE {error:.3e}");
+    // The box spans columns 8 to 32 and rows 9 to 21; x = 0 is column 20.
+    let (mut red, mut blue, mut white) = (0, 0, 0);
+    for y in 11..20 {
+        for x in 10..19 {
+            let p = a.pixel(x, y);
+            assert!(p[0] > 3.0 * p[2] && p[0] > 0.05, "left half, pixel ({x}, {y}): {p:?}");
+            red += 1;
+        }
+        for x in 22..31 {
+            let p = a.pixel(x, y);
+            assert!(p[2] >= p[0], "right half, pixel ({x}, {y}): {p:?}");
+            if p[2] > 3.0 * p[0] {
+                blue += 1;
+            } else if p[0] > 0.05 && p[2] < 1.5 * p[0] {
+                white += 1;
+            }
+        }
+    }
+    assert!(red == 81 && blue > 20 && white > 20, "red {red}, blue {blue}, white {white}");
+}
+
+/// The mixes' weights: a ramp of the pattern across the two entries each mix splits (POV-Ray's
+/// linear blend), a listed pattern's own values, entries of one finish and constant colours as
+/// one colour map, and the cap on nesting with its warning.
+#[test]
+fn texture_map_weights_ramp_between_entries_and_deep_maps_warn() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}sphere {{ 0, 1 texture {{ bozo turbulence 0.3 texture_map {{
+  [0.2 pigment {{ rgb <1, 0, 0> }}] [0.6 pigment {{ rgb <0, 1, 0> }} finish {{ phong 1 }}] [0.9 pigment {{ rgb <0, 0, 1> }}] }} scale 2 }} }}
+sphere {{ x, 1 texture {{ hexagon texture {{ pigment {{ rgb 1 }} }} texture {{ pigment {{ rgb 0 }} finish {{ phong 1 }} }} texture {{ pigment {{ bozo }} }} }} }}
+sphere {{ y, 1 texture {{ gradient y texture_map {{ [0 pigment {{ rgb 0 }}] [1 pigment {{ rgb 1 }}] }} }} }}
+sphere {{ z, 1 texture {{ gradient y texture_map {{ #for (I, 0, 16) [I / 16 pigment {{ rgb I / 16 }} finish {{ phong I / 16 + 0.1 }}] #end }} }} }}"
+        ),
+    );
+    let textures = t["textures"].as_table().unwrap();
+    let ms = t["materials"].as_table().unwrap();
+    let mixes: Vec<&toml::Table> =
+        ms.values().filter_map(|m| m.as_table()).filter(|m| m["type"].as_str() == Some("mix")).collect();
+    let weight_of = |m: &toml::Table| &textures[m["weight"]["texture"].as_str().unwrap()];
+    let ramps = |pattern: &str| -> Vec<Vec<f64>> {
+        let mut r: Vec<Vec<f64>> = mixes
+            .iter()
+            .map(|m| weight_of(m))
+            .filter(|w| w["pattern"].as_str() == Some(pattern))
+            .map(|w| {
+                let map = w["color_map"].as_array().unwrap();
+                map.iter().map(|e| e.as_array().unwrap()).flat_map(|e| [float(&e[0]), floats(&e[1])[0]]).collect()
+            })
+            .collect();
+        r.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        r
+    };
+    // Three entries: a mix of (entries 0, 1) and entry 2, weighed by the ramp from 0.6 to 0.9,
+    // the inner one by the ramp from 0.2 to 0.6; the pattern keeps its turbulence and scale.
+    assert_eq!(ramps("bozo"), [vec![0.2, 0.0, 0.6, 1.0], vec![0.6, 0.0, 0.9, 1.0]]);
+    let bozo_weight = mixes.iter().map(|m| weight_of(m)).find(|w| w["pattern"].as_str() == Some("bozo")).unwrap();
+    assert_eq!(floats(&bozo_weight["turbulence"]), [0.3; 3]);
+    assert_eq!(floats(&bozo_weight["transform"]["scale"]), [2.0, 2.0, -2.0]);
+    // A hexagon's three textures: its values 0, 0.5, 1; the upper half of each split weighs 1.
+    let hexagon: Vec<Vec<f64>> = mixes
+        .iter()
+        .map(|m| weight_of(m))
+        .filter(|w| w["pattern"].as_str() == Some("hexagon"))
+        .map(|w| w["colors"].as_array().unwrap().iter().map(|c| floats(c)[0]).collect())
+        .collect();
+    assert_eq!(hexagon.len(), 2, "{hexagon:?}");
+    assert!(hexagon.contains(&vec![0.0, 0.0, 1.0]) && hexagon.contains(&vec![0.0, 1.0, 1.0]), "{hexagon:?}");
+    // Constant colours in one finish: the colour map itself, no mix.
+    assert!(textures.values().any(|x| x["pattern"].as_str() == Some("gradient")
+        && x.get("color_map").is_some_and(|m| floats(&m.as_array().unwrap()[1].as_array().unwrap()[1]) == [1.0; 3])));
+    // 17 entries would nest 5 deep: the mean colours stand in, with a warning that says why.
+    assert!(
+        warnings.iter().any(|w| w.contains("scene.pov:7:")
+            && w.contains("17 entries need mixes nested 5 deep and the renderer resolves 4")),
+        "{warnings:?}"
+    );
+    assert_eq!(mixes.len(), 4, "{mixes:?}");
 }

@@ -100,6 +100,20 @@ pub struct Tex {
     /// world_from_texture: the transforms written in the texture and applied to the object
     /// after the texture was given.
     pub xform: DMat4,
+    /// A patterned texture's entries (texture_map, or textures as a checker's, brick's or
+    /// hexagon's entries): the pigment then holds the pattern, its fields and transforms, with
+    /// each entry's mean colour as its colour map (what stands in where the entries cannot be
+    /// mixed), and the finish and normal are the first entry's.
+    pub map: Option<std::rc::Rc<TexMap>>,
+}
+
+/// The textures a pattern chooses between: each entry's layers at its value (a listed
+/// pattern's entries at i / (n - 1), as its `colors` are spread).
+#[derive(Clone, Debug)]
+pub struct TexMap {
+    pub entries: Vec<(f64, Vec<Tex>)>,
+    /// The entries were listed (`checker texture { A } texture { B }`), not placed by a map.
+    pub listed: bool,
 }
 
 #[derive(Clone, Debug)]

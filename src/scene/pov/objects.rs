@@ -5,7 +5,7 @@ use glam::{DMat4, DVec3, DVec4};
 
 use super::ast::{
     AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Media, Normal, Obj, ObjKind, Pigment,
-    PigmentKind, Rainbow, SkySphere, Tex,
+    PigmentKind, Rainbow, SkySphere, Tex, TexMap,
 };
 use super::implicit::{self, BlobComp, Implicit};
 use super::lexer::Tok;
@@ -83,9 +83,6 @@ const OTHER_PATTERNS: [&str; 24] = [
     "cubic",
     "function",
 ];
-
-/// A colour map: (position, colour) entries.
-type ColourMap = Vec<(f64, Colour)>;
 
 fn num(v: f64) -> toml::Value {
     toml::Value::Float(v)
@@ -1189,6 +1186,7 @@ impl Parser {
             finish: self.default_finish.clone(),
             normal: None,
             xform: DMat4::IDENTITY,
+            map: None,
         }
     }
 
@@ -1297,6 +1295,14 @@ impl Parser {
                 "finish" => top.finish = self.finish()?,
                 "normal" => top.normal = self.normal(pos)?,
                 "uv_mapping" => {}
+                "material_map" => {
+                    return self.err(
+                        pos,
+                        "material_map is not supported yet (an image's palette indices choosing textures); \
+                         use a texture_map over a pattern instead"
+                            .into(),
+                    )
+                }
                 "tiles" => {
                     // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
                     self.warnings.push(format!(
@@ -1311,12 +1317,17 @@ impl Parser {
                 }
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries): the
-                    // pattern with each texture's mean colour, in the first texture's finish and
-                    // normal (docs/pov-ray.md).
-                    let (pigment, first) = self.pattern_body(pos, close, Some((w.clone(), pos)))?;
-                    let mut t = first.unwrap_or_else(|| self.default_tex(pos));
+                    // pattern and its entries, mixed by `emit` (docs/pov-ray.md); the pigment's
+                    // colour map holds each entry's mean colour, in the first entry's finish and
+                    // normal, for where they cannot be mixed.
+                    let (pigment, map) = self.pattern_body(pos, close, Some((w.clone(), pos)))?;
+                    let first = map.as_ref().and_then(|m| m.entries.first()).and_then(|(_, l)| l.first());
+                    let mut t = first.cloned().unwrap_or_else(|| self.default_tex(pos));
                     t.pigment = pigment;
                     t.xform = DMat4::IDENTITY;
+                    // A pattern Photonix lacks leaves the mean colour (a solid pigment): no mix.
+                    let patterned = matches!(t.pigment.kind, PigmentKind::Pattern { .. });
+                    t.map = map.filter(|m| patterned && !m.entries.is_empty()).map(std::rc::Rc::new);
                     return Ok(vec![t]);
                 }
                 _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
@@ -1369,15 +1380,16 @@ impl Parser {
     }
 
     /// A pigment's items, or a patterned texture's (`pending`: its pattern word, already read):
-    /// a texture_map's or a checker's textures stand in by their pigments' mean colours, and
-    /// the first entry's texture is returned for its finish and normal (docs/pov-ray.md).
+    /// a texture_map's or a checker's textures are returned as the map's entries, and stand in
+    /// by their pigments' mean colours in the pigment's colour map (docs/pov-ray.md).
     fn pattern_body(
         &mut self,
         pos: Pos,
         close: &'static str,
         mut pending: Option<(String, Pos)>,
-    ) -> Result<(Pigment, Option<Tex>)> {
-        let mut first_tex: Option<Tex> = None;
+    ) -> Result<(Pigment, Option<TexMap>)> {
+        let mut tex_map: Option<TexMap> = None;
+        let mut listed_tex: Vec<Vec<Tex>> = Vec::new();
         let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
@@ -1490,16 +1502,16 @@ impl Parser {
                     map = self.pigment_map(tpos)?;
                 }
                 "texture_map" => {
-                    let (m, first) = self.texture_map(tpos)?;
-                    map = m;
-                    first_tex = first_tex.or(first);
+                    let entries = self.texture_map(tpos)?;
+                    map = entries.iter().map(|(v, l)| (*v, l[0].pigment.mean())).collect();
+                    tex_map = Some(TexMap { entries, listed: false });
                 }
                 "texture" if pattern.is_some() => {
                     // A checker's, brick's or hexagon's textures.
                     let layers = self.texture()?;
                     if let Some(t) = layers.first() {
                         list.push(t.pigment.mean());
-                        first_tex.get_or_insert_with(|| t.clone());
+                        listed_tex.push(layers);
                     }
                 }
                 "image_map" => {
@@ -1605,8 +1617,13 @@ impl Parser {
         if let Some(name) = pattern {
             if !list.is_empty() && map.is_empty() {
                 let n = list.len();
-                map = list.iter().enumerate().map(|(i, c)| (i as f64 / (n.max(2) - 1) as f64, *c)).collect();
+                let at = |i: usize| i as f64 / (n.max(2) - 1) as f64;
+                map = list.iter().enumerate().map(|(i, c)| (at(i), *c)).collect();
                 fields.push(("colors".into(), toml::Value::Boolean(true)));
+                if listed_tex.len() == n {
+                    let entries = listed_tex.into_iter().enumerate().map(|(i, l)| (at(i), l)).collect();
+                    tex_map = Some(TexMap { entries, listed: true });
+                }
             }
             if let Some(other) = name.strip_prefix("unsupported:") {
                 self.warnings.push(format!(
@@ -1615,31 +1632,28 @@ impl Parser {
                 ));
                 let mean =
                     Pigment { kind: PigmentKind::Pattern { name: other.into(), map, fields: Vec::new() }, ..p }.mean();
-                return Ok((Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos }, first_tex));
+                return Ok((Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos }, tex_map));
             }
             p.kind = PigmentKind::Pattern { name, map, fields };
         }
-        Ok((p, first_tex))
+        Ok((p, tex_map))
     }
 
-    /// `texture_map { [v texture-body] ... }`: each entry by its bottom layer's mean colour, a
-    /// colour map; and the first entry's texture.
-    fn texture_map(&mut self, pos: Pos) -> Result<(ColourMap, Option<Tex>)> {
+    /// `texture_map { [v texture-body] ... }`: each entry's layers at its value.
+    fn texture_map(&mut self, pos: Pos) -> Result<Vec<(f64, Vec<Tex>)>> {
         self.expect_sym("{")?;
         let mut map = Vec::new();
-        let mut first = None;
         loop {
             if self.accept_sym("}")? {
-                return Ok((map, first));
+                return Ok(map);
             }
             let epos = self.here();
             self.expect_sym("[")?;
             let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
             self.accept_sym(",")?;
             let layers = self.texture_body(epos, "]")?;
-            if let Some(t) = layers.first() {
-                map.push((v, t.pigment.mean()));
-                first.get_or_insert_with(|| t.clone());
+            if !layers.is_empty() {
+                map.push((v, layers));
             }
             if map.len() > 256 {
                 return self.err(pos, "a texture_map has at most 256 entries".into());
