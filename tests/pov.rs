@@ -729,9 +729,9 @@ fn height_fields_are_meshed_from_images() {
     // Errors name the place and the way out.
     let e = error(dir.path(), &format!("{CAMERA}height_field {{ png \"missing.png\" }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("missing.png"), "{e}");
-    std::fs::write(dir.path().join("h.tga"), [0u8; 18]).unwrap();
-    let e = error(dir.path(), &format!("{CAMERA}height_field {{ tga \"h.tga\" }}"));
-    assert!(e.contains("scene.pov:3:") && e.contains("tga images are not supported yet"), "{e}");
+    std::fs::write(dir.path().join("h.tiff"), [0u8; 18]).unwrap();
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ tiff \"h.tiff\" }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("tiff images are not supported yet"), "{e}");
     let e = error(dir.path(), &format!("{CAMERA}height_field {{ function 10, 10 {{ x }} }}"));
     assert!(e.contains("scene.pov:3:16") && e.contains("user-defined functions"), "{e}");
     std::fs::write(dir.path().join("bad.pgm"), "P5 4 4 255\n\x01").unwrap();
@@ -1055,4 +1055,71 @@ sphere {{ z, 1 texture {{ gradient y texture_map {{ #for (I, 0, 16) [I / 16 pigm
         "{warnings:?}"
     );
     assert_eq!(mixes.len(), 4, "{mixes:?}");
+}
+
+/// A palette GIF of `indices` (w x h) whose palette entry i is `colours[i]` (black beyond).
+fn write_gif(path: &Path, w: u16, h: u16, indices: &[u8], colours: &[[u8; 3]]) {
+    let mut palette = vec![0u8; 256 * 3];
+    for (i, c) in colours.iter().enumerate() {
+        palette[3 * i..3 * i + 3].copy_from_slice(c);
+    }
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = gif::Encoder::new(file, w, h, &palette).unwrap();
+    let frame = gif::Frame { width: w, height: h, buffer: std::borrow::Cow::Borrowed(indices), ..Default::default() };
+    encoder.write_frame(&frame).unwrap();
+}
+
+/// TGA and GIF files as height fields (POV-Ray's heights: a GIF's palette index, a colour TGA's
+/// red as the high byte and green as the low byte) and as image maps (the image itself, seen
+/// where it is placed).
+#[test]
+fn tga_and_gif_images_make_height_fields_and_image_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    // GIF: every pixel index 51 of a palette whose entry 51 is white: height 51 / 255 = 0.2.
+    write_gif(
+        &dir.path().join("h.gif"),
+        2,
+        2,
+        &[51; 4],
+        &[[0, 0, 0]; 51].iter().chain(&[[255, 255, 255]]).copied().collect::<Vec<_>>(),
+    );
+    let s = load(dir.path(), &format!("{CAMERA}height_field {{ gif \"h.gif\" pigment {{ rgb 1 }} }}"));
+    let (_, hi) = total_bounds(&s);
+    assert!((hi.y - 0.2).abs() < 1e-6, "{hi}");
+    // TGA, 2 x 2 colour: red 128 and green 64 at the highest pixel: (255 x 128 + 64) / 65535.
+    let mut tga = image::RgbImage::new(2, 2);
+    tga.put_pixel(1, 0, image::Rgb([128, 64, 255]));
+    tga.put_pixel(0, 1, image::Rgb([0, 200, 0]));
+    tga.save(dir.path().join("h.tga")).unwrap();
+    let s = load(dir.path(), &format!("{CAMERA}height_field {{ tga \"h.tga\" pigment {{ rgb 1 }} }}"));
+    let (_, hi) = total_bounds(&s);
+    let want = (255.0 * 128.0 + 64.0) / 65535.0;
+    assert!((hi.y as f64 - want).abs() < 1e-6, "{hi}, want {want}");
+    // A bare name's extension picks the format, as for PNG.
+    load(dir.path(), &format!("{CAMERA}height_field {{ \"h.gif\" pigment {{ rgb 1 }} }}"));
+
+    // Image maps: a 2 x 1 image, red then blue, over the box's face (as the planar PNG test).
+    write_gif(&dir.path().join("rb.gif"), 2, 1, &[0, 1], &[[255, 0, 0], [0, 0, 255]]);
+    image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap().save(dir.path().join("rb.tga")).unwrap();
+    for (kind, file) in [("gif", "rb.gif"), ("tga", "rb.tga")] {
+        let text = format!(
+            "camera {{ location <0, 0, -6> look_at <0, 0, 0> }}\nlight_source {{ <0, 0, -6>, rgb 1 }}\n\
+             box {{ <-1, -1, 0>, <1, 1, 0.1> pigment {{ image_map {{ {kind} \"{file}\" once }} \
+             translate <-0.5, -0.5, 0> scale 2 }} finish {{ ambient 0 diffuse 1 }} }}\n"
+        );
+        let (t, warnings) = translated(dir.path(), &text);
+        assert!(!warnings.iter().any(|w| w.contains("image_map")), "{warnings:?}");
+        let image = t["textures"].as_table().unwrap().values().find(|x| x["type"].as_str() == Some("image")).unwrap();
+        assert_eq!(image["file"].as_str(), Some(file));
+        let scene = load(dir.path(), &text);
+        let settings = photonix::render::FrameSettings { width: 16, height: 16, max_depth: 2, seed: 1 };
+        let buffers = photonix::render::prepare(&scene, &settings).unwrap();
+        let a = photonix::render::render_cpu(&buffers, 1, None, 0, &mut |_, _| {}).image;
+        // Rows 6 to 9 cross the box's middle: red on the left, blue on the right.
+        for y in 6..10 {
+            let (l, r) = (a.pixel(6, y), a.pixel(9, y));
+            assert!(l[0] > 4.0 * l[2] && l[0] > 0.01, "{kind}: left ({y}) {l:?}");
+            assert!(r[2] > 4.0 * r[0] && r[2] > 0.01, "{kind}: right ({y}) {r:?}");
+        }
+    }
 }

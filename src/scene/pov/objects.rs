@@ -1957,8 +1957,10 @@ impl Parser {
         };
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         let readable = match kind.as_str() {
-            "png" | "jpeg" | "exr" | "hdr" => true,
-            "" => matches!(extension.as_str(), "png" | "jpg" | "jpeg" | "exr" | "hdr"),
+            "png" | "jpeg" | "exr" | "hdr" | "gif" => true,
+            // TGA has no signature: the image texture reads it by its extension.
+            "tga" => extension == "tga",
+            "" => matches!(extension.as_str(), "png" | "jpg" | "jpeg" | "exr" | "hdr" | "gif" | "tga"),
             _ => false,
         };
         let file = self.image_file_for_toml(&path);
@@ -1979,7 +1981,7 @@ impl Parser {
             }
             _ => {
                 self.warnings.push(format!(
-                    "{at}: image_map: Photonix reads PNG, JPEG, OpenEXR and HDR images, not this one; the image's mean colour stands in"
+                    "{at}: image_map: Photonix reads PNG, JPEG, OpenEXR, HDR, GIF and TGA images (TGA named `.tga`), not this one; the image's mean colour stands in"
                 ));
                 Ok((mean, ft, None))
             }
