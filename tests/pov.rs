@@ -1123,3 +1123,115 @@ fn tga_and_gif_images_make_height_fields_and_image_maps() {
         }
     }
 }
+
+/// The vertex normals of each triangle shape, `None` for a flat one.
+fn triangle_normals(s: &Scene) -> Vec<(Option<[Vec3; 3]>, [Vec3; 3])> {
+    s.shapes
+        .iter()
+        .filter_map(|sh| match &sh.geometry {
+            Geometry::Triangle(t) => Some((t.normals, t.vertices)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Smooth shading comes through: smooth_triangle's and mesh2's normals as written, the same as
+/// the triangle written by hand in TOML; lathes, sors and smooth height fields with normals from
+/// their faces (a lathe of a cylinder's profile gets the cylinder's radial normals); polygons,
+/// straight prisms and rough height fields stay flat.
+#[test]
+fn smooth_triangles_meshes_lathes_and_height_fields_are_shaded_smooth() {
+    let dir = tempfile::tempdir().unwrap();
+    let pov = load(
+        dir.path(),
+        &format!("{CAMERA}smooth_triangle {{ <0, 0, 0>, <0, 0, -1>, <1, 0, 0>, <0.3, 0, -1>, <0, 1, 0>, <0, 0.3, -1> pigment {{ rgb 1 }} }}"),
+    );
+    // By hand: z mirrored, the normals' too (and the vertices' order kept).
+    let toml = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n[materials.m]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"triangle\"\nmaterial = \"m\"\n\
+        vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nnormals = [[0, 0, 1], [0.3, 0, 1], [0, 0.3, 1]]\n";
+    let by_hand = load_scene(&write(dir.path(), "by_hand.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
+    let (a, b) = (triangle_normals(&pov), triangle_normals(&by_hand));
+    let (na, nb) = (a[0].0.expect("smooth"), b[0].0.expect("smooth"));
+    for k in 0..3 {
+        assert!(na[k].abs_diff_eq(nb[k], 1e-6) && a[0].1[k].abs_diff_eq(b[0].1[k], 1e-6), "{a:?} against {b:?}");
+    }
+    // The scene format's checks on `normals`.
+    for (normals, kind, want) in [
+        ("[[0, 0, 1], [0, 0, 1]]", "triangle", "`normals` has 2 directions; a triangle takes one per vertex"),
+        ("[[0, 0, 1], [0, 0, 0], [0, 0, 1]]", "triangle", "`normals`: direction 1 has no length"),
+        ("[[0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 0, 1]]", "quad", "normals"),
+    ] {
+        let vertices = if kind == "quad" {
+            "[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]"
+        } else {
+            "[[0, 0, 0], [1, 0, 0], [0, 1, 0]]"
+        };
+        let bad = format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n[materials.m]\ntype = \"diffuse\"\n\
+             [[shapes]]\ntype = \"{kind}\"\nmaterial = \"m\"\nvertices = {vertices}\nnormals = {normals}\n"
+        );
+        let e = load_scene(&write(dir.path(), "bad.toml", &bad)).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("bad.toml:") && e.contains(want), "{e}");
+    }
+    // The winding side: the normals point as the face's winding normal does.
+    let face = (b[0].1[1] - b[0].1[0]).cross(b[0].1[2] - b[0].1[0]);
+    assert!(nb.iter().all(|n| n.dot(face) > 0.0), "{nb:?}");
+
+    // mesh2: normal_vectors indexed by the face indices.
+    let mesh2 = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}mesh2 {{ vertex_vectors {{ 3, <0, 0, 0>, <1, 0, 0>, <0, 1, 0> }} \
+             normal_vectors {{ 3, <0, 0, -1>, <0.3, 0, -1>, <0, 0.3, -1> }} face_indices {{ 1, <0, 1, 2> }} pigment {{ rgb 1 }} }}"
+        ),
+    );
+    let m = triangle_normals(&mesh2);
+    assert!((0..3).all(|k| m[0].0.unwrap()[k].abs_diff_eq(nb[k], 1e-6)), "{m:?}");
+    let e = error(
+        dir.path(),
+        &format!(
+            "{CAMERA}mesh2 {{ vertex_vectors {{ 3, 0, x, y }} normal_vectors {{ 1, z }} \
+             face_indices {{ 1, <0, 1, 2> }} normal_indices {{ 1, <0, 1, 5> }} }}"
+        ),
+    );
+    assert!(e.contains("scene.pov:3:") && e.contains("normal index 1 is out of range"), "{e}");
+
+    // A lathe of a cylinder's profile: every vertex normal is radial (to the 7 digits written).
+    let lathe = load(dir.path(), &format!("{CAMERA}lathe {{ linear_spline 2, <1, 0>, <1, 1> pigment {{ rgb 1 }} }}"));
+    let tris = triangle_normals(&lathe);
+    assert!(tris.len() >= 64, "{}", tris.len());
+    for (n, v) in &tris {
+        let n = n.expect("a lathe is smooth");
+        for k in 0..3 {
+            let radial = Vec3::new(v[k].x, 0.0, v[k].z).normalize();
+            assert!(n[k].dot(radial).abs() > 1.0 - 1e-5, "normal {} at {}", n[k], v[k]);
+        }
+    }
+    // Straight-sided prisms and polygons stay flat; spline prisms and sors are smooth.
+    let flat =
+        load(dir.path(), &format!("{CAMERA}prism {{ 0, 1, 4, <0, 0>, <1, 0>, <1, 1>, <0, 0> pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&flat).iter().all(|(n, _)| n.is_none()));
+    let sor =
+        load(dir.path(), &format!("{CAMERA}sor {{ 4, <0, 0>, <1, 0.2>, <0.8, 1>, <0, 1.2> pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&sor).iter().filter(|(n, _)| n.is_some()).count() > 64);
+
+    // Height fields: smooth ones' tops get normals, the walls and floor stay flat.
+    std::fs::write(dir.path().join("h.pgm"), "P2 3 3 10\n0 5 10\n5 10 5\n10 5 0\n").unwrap();
+    let rough = load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&rough).iter().all(|(n, _)| n.is_none()));
+    let smooth = load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" smooth pigment {{ rgb 1 }} }}"));
+    let ts = triangle_normals(&smooth);
+    let top = ts.iter().filter(|(n, _)| n.is_some()).count();
+    assert_eq!(top, 8, "the top's 8 triangles are smooth: {ts:?}");
+    // At the middle vertex (the peak, height 1) the normals of the faces around it average to +y.
+    for (n, v) in &ts {
+        for k in 0..3 {
+            if let Some(n) = n {
+                assert!(n[k].y > 0.0, "{n:?}");
+                if v[k].abs_diff_eq(Vec3::new(0.5, 1.0, -0.5), 1e-6) {
+                    assert!(n[k].abs_diff_eq(Vec3::Y, 1e-5), "peak normal {}", n[k]);
+                }
+            }
+        }
+    }
+}

@@ -67,9 +67,11 @@ pub enum ObjKind {
         e: f64,
         n: f64,
     },
-    /// Triangles of a triangle, smooth_triangle or mesh (smooth normals are not kept yet).
+    /// Triangles of a triangle, smooth_triangle, mesh or tessellated shape, with their
+    /// corners' normals (object space, any length) when they are shaded smooth.
     Triangles {
         tris: std::rc::Rc<Vec<[DVec3; 3]>>,
+        normals: Option<std::rc::Rc<Vec<[DVec3; 3]>>>,
     },
     /// A bicubic_patch: 16 control points, rows of constant v (Photonix's own bicubic_patch).
     Patch {

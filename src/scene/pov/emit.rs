@@ -82,7 +82,7 @@ pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
                 add_box(DVec3::new(-r, -minor.abs(), -r), DVec3::new(r, minor.abs(), r), m)
             }
             ObjKind::Superellipsoid { .. } => add_box(DVec3::splat(-1.0), DVec3::ONE, m),
-            ObjKind::Triangles { tris } => {
+            ObjKind::Triangles { tris, .. } => {
                 for t in tris.iter() {
                     for p in t {
                         add_box(*p, *p, m);
@@ -119,6 +119,23 @@ fn too_thin(v: &[DVec3]) -> bool {
 fn short3(v: DVec3) -> DVec3 {
     let short = |x: f64| format!("{x:.6e}").parse::<f64>().unwrap_or(x);
     DVec3::new(short(v.x), short(v.y), short(v.z))
+}
+
+/// The crease angle of POV-Ray's smooth tessellated surfaces (degrees): faces that meet at a
+/// sharper angle keep their edge, as the model importer's default `smooth_angle` does.
+pub const SMOOTH_CREASE_DEG: f32 = 30.0;
+
+/// A triangle's corner normals `n` (object space) in the scene's space by `normal_matrix`, unit,
+/// to 7 digits; `None` (flat) when they all equal the face's normal of the vertices `v` (either
+/// side) or one has no direction.
+fn smooth_corners(n: &[DVec3; 3], normal_matrix: &DMat3, v: &[DVec3]) -> Option<[DVec3; 3]> {
+    let face = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+    let moved = n.map(|x| (*normal_matrix * x).normalize_or_zero());
+    if moved.iter().any(|x| *x == DVec3::ZERO || !x.is_finite()) {
+        return None;
+    }
+    let flat = moved.iter().all(|x| x.dot(face).abs() > 1.0 - 1e-9);
+    (!flat).then(|| moved.map(short3))
 }
 
 fn rgb(c: [f64; 3]) -> T {
@@ -417,8 +434,11 @@ impl Emitter<'_> {
             // in the texture of the object (or of its first part that has one).
             let tris = super::implicit::mesh(o).map_err(|(pos, m)| PovError::at(pos, m))?;
             let tex = first_tex(o).or(inherited);
+            // POV-Ray shades these surfaces by their equations' normals: smooth, but for the
+            // edges CSG makes (sharper than the crease angle).
+            let normals = super::tessellate::corner_normals(&tris, SMOOTH_CREASE_DEG);
             let flat = Obj {
-                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris) },
+                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: Some(std::rc::Rc::new(normals)) },
                 xform: DMat4::IDENTITY,
                 tex: tex.cloned(),
                 interior: int.cloned(),
@@ -436,10 +456,12 @@ impl Emitter<'_> {
                 }
                 Ok(())
             }
-            ObjKind::Triangles { tris } => {
+            ObjKind::Triangles { tris, normals } => {
                 let material = self.material(tex, int, o.pos, true)?;
                 let m = MIRROR * o.xform;
-                for t in tris.iter() {
+                // Normals move by the inverse transpose.
+                let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
+                for (k, t) in tris.iter().enumerate() {
                     let v: Vec<DVec3> = t.iter().map(|p| short3(m.transform_point3(*p))).collect();
                     if too_thin(&v) {
                         self.skipped_triangles += 1;
@@ -448,6 +470,10 @@ impl Emitter<'_> {
                     let mut s = Table::new();
                     s.insert("type".into(), T::String("triangle".into()));
                     s.insert("material".into(), T::String(material.clone()));
+                    let corners = normals.as_ref().and_then(|n| n.get(k));
+                    if let Some(n) = corners.and_then(|n| smooth_corners(n, &normal_matrix, &v)) {
+                        s.insert("normals".into(), T::Array(n.into_iter().map(vec3).collect()));
+                    }
                     s.insert("vertices".into(), T::Array(v.into_iter().map(vec3).collect()));
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }

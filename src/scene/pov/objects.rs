@@ -84,6 +84,9 @@ const OTHER_PATTERNS: [&str; 24] = [
     "function",
 ];
 
+/// A mesh's triangles and, when it is shaded smooth, their corners' normals.
+type MeshTris = (Vec<[DVec3; 3]>, Option<Vec<[DVec3; 3]>>);
+
 fn num(v: f64) -> toml::Value {
     toml::Value::Float(v)
 }
@@ -339,7 +342,7 @@ impl Parser {
                 self.accept_sym(",")?;
                 ObjKind::Sphere { center, radius: self.float()? }
             }
-            "height_field" => ObjKind::Triangles { tris: std::rc::Rc::new(self.height_field(pos)?) },
+            "height_field" => ObjKind::Triangles { tris: std::rc::Rc::new(self.height_field(pos)?), normals: None },
             "box" => {
                 let a = self.vec3()?;
                 self.accept_sym(",")?;
@@ -391,13 +394,18 @@ impl Parser {
                 let b = self.vec3()?;
                 self.accept_sym(",")?;
                 let c = self.vec3()?;
-                ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]) }
+                ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]), normals: None }
             }
-            "smooth_triangle" => ObjKind::Triangles { tris: std::rc::Rc::new(vec![self.smooth_triangle()?]) },
-            "mesh" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh(pos)?) },
-            "mesh2" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh2(pos)?) },
+            "smooth_triangle" => {
+                let (t, n) = self.smooth_triangle()?;
+                ObjKind::Triangles { tris: std::rc::Rc::new(vec![t]), normals: Some(std::rc::Rc::new(vec![n])) }
+            }
+            "mesh" | "mesh2" => {
+                let (tris, normals) = if kind == "mesh" { self.mesh(pos)? } else { self.mesh2(pos)? };
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) }
+            }
             "lathe" | "sor" | "prism" | "polygon" | "text" => {
-                let tris = self.tessellated(kind, pos, &mut open)?;
+                let (tris, smooth) = self.tessellated(kind, pos, &mut open)?;
                 if tris.len() > tessellate::MAX_TRIANGLES {
                     return self.err(
                         pos,
@@ -408,7 +416,10 @@ impl Parser {
                         ),
                     );
                 }
-                ObjKind::Triangles { tris: std::rc::Rc::new(tris) }
+                // POV-Ray's lathes, sors, spline prisms and glyphs are curved surfaces, shaded
+                // smooth but where their profiles turn sharply.
+                let normals = smooth.then(|| tessellate::corner_normals(&tris, super::emit::SMOOTH_CREASE_DEG));
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) }
             }
             "bicubic_patch" => ObjKind::Patch { points: Box::new(self.bicubic_patch(pos)?) },
             "quadric" | "cubic" | "quartic" | "poly" => {
@@ -460,21 +471,26 @@ impl Parser {
         Ok(o)
     }
 
-    fn smooth_triangle(&mut self) -> Result<[DVec3; 3]> {
-        let mut p = [DVec3::ZERO; 3];
-        for (i, v) in p.iter_mut().enumerate() {
+    /// `smooth_triangle { p0, n0, p1, n1, p2, n2 }`: the points and their normals.
+    fn smooth_triangle(&mut self) -> Result<([DVec3; 3], [DVec3; 3])> {
+        let (mut p, mut n) = ([DVec3::ZERO; 3], [DVec3::ZERO; 3]);
+        for i in 0..3 {
             if i > 0 {
                 self.accept_sym(",")?;
             }
-            *v = self.vec3()?;
+            p[i] = self.vec3()?;
             self.accept_sym(",")?;
-            self.vec3()?; // the normal: smooth shading of POV meshes is not kept yet
+            n[i] = self.vec3()?;
         }
-        Ok(p)
+        Ok((p, n))
     }
 
-    fn mesh(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+    /// A mesh's triangles, and their corner normals when any is a smooth_triangle (a flat one's
+    /// corners take its face normal).
+    fn mesh(&mut self, pos: Pos) -> Result<MeshTris> {
         let mut tris = Vec::new();
+        let mut normals: Vec<[DVec3; 3]> = Vec::new();
+        let mut smooth = false;
         loop {
             match self.peek_word()?.as_deref() {
                 Some("triangle") => {
@@ -487,13 +503,16 @@ impl Parser {
                     let c = self.vec3()?;
                     self.triangle_tail()?;
                     tris.push([a, b, c]);
+                    normals.push([(b - a).cross(c - a); 3]);
                 }
                 Some("smooth_triangle") => {
                     self.next()?;
                     self.expect_sym("{")?;
-                    let t = self.smooth_triangle()?;
+                    let (t, n) = self.smooth_triangle()?;
                     self.triangle_tail()?;
                     tris.push(t);
+                    normals.push(n);
+                    smooth = true;
                 }
                 Some("inside_vector") => {
                     self.next()?;
@@ -509,7 +528,7 @@ impl Parser {
         if tris.is_empty() {
             return self.err(pos, "this mesh has no triangles".into());
         }
-        Ok(tris)
+        Ok((tris, smooth.then_some(normals)))
     }
 
     /// A count before a list of points: a whole number from `min` to `max`.
@@ -561,7 +580,9 @@ impl Parser {
 
     /// lathe, sor, prism, polygon and text, tessellated (`tessellate.rs`; docs/pov-ray.md gives
     /// the tolerance), in the shape's own coordinates.
-    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<Vec<Tri>> {
+    /// The triangles of a lathe, sor, prism, polygon or text, and whether POV-Ray shades the
+    /// surface smooth (a curved one: not a polygon or a prism of straight sides).
+    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<(Vec<Tri>, bool)> {
         const MAX_POINTS: usize = 1 << 20;
         match kind {
             "lathe" => {
@@ -590,7 +611,7 @@ impl Parser {
                     );
                 }
                 self.open_sturm(open)?;
-                Ok(tessellate::lathe(spline, &p))
+                Ok((tessellate::lathe(spline, &p), true))
             }
             "sor" => {
                 let n = self.count("a sor's number of points", 4, MAX_POINTS)?;
@@ -599,7 +620,7 @@ impl Parser {
                     return self.err(pos, "a sor's points must rise: each height above the one before".into());
                 }
                 self.open_sturm(open)?;
-                Ok(tessellate::sor(&p, *open))
+                Ok((tessellate::sor(&p, *open), true))
             }
             "prism" => {
                 let (mut spline, mut conic) = (Spline::Linear, false);
@@ -631,7 +652,8 @@ impl Parser {
                 if outlines.is_empty() {
                     return self.err(pos, "this prism's points enclose nothing".into());
                 }
-                Ok(tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic))
+                let tris = tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic);
+                Ok((tris, !matches!(spline, Spline::Linear)))
             }
             "polygon" => {
                 let n = self.count("a polygon's number of points", 3, MAX_POINTS)?;
@@ -640,9 +662,9 @@ impl Parser {
                     self.accept_sym(",")?;
                     p.push(self.vec3()?);
                 }
-                Ok(tessellate::polygon(&p))
+                Ok((tessellate::polygon(&p), false))
             }
-            _ => self.text(),
+            _ => Ok((self.text()?, true)),
         }
     }
 
@@ -859,9 +881,15 @@ impl Parser {
 
     /// `mesh2 { vertex_vectors { n, ... } ... face_indices { n, <a, b, c> ... } ... }`: the faces
     /// (normals, uv and per-face textures are read and not kept yet).
-    fn mesh2(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+    /// `mesh2 { vertex_vectors normal_vectors uv_vectors texture_list face_indices
+    /// normal_indices ... }`: the faces, and their corners' normals when the mesh has
+    /// normal_vectors (indexed by normal_indices, or by the face indices without them, as
+    /// POV-Ray reads them).
+    fn mesh2(&mut self, pos: Pos) -> Result<MeshTris> {
         const MAX_ITEMS: usize = 1 << 24;
         let mut vertices: Vec<DVec3> = Vec::new();
+        let mut normal_vectors: Vec<DVec3> = Vec::new();
+        let mut normal_indices: Vec<(DVec3, Pos)> = Vec::new();
         let mut faces: Vec<(DVec3, Pos)> = Vec::new();
         while let Some(w) = self.peek_word()? {
             match w.as_str() {
@@ -871,9 +899,13 @@ impl Parser {
                     let n = self.count(&format!("the number of {w}"), 0, MAX_ITEMS)?;
                     for _ in 0..n {
                         self.accept_sym(",")?;
+                        let ipos = self.here();
                         let v = self.vec3()?;
-                        if w == "vertex_vectors" {
-                            vertices.push(v);
+                        match w.as_str() {
+                            "vertex_vectors" => vertices.push(v),
+                            "normal_vectors" => normal_vectors.push(v),
+                            "normal_indices" => normal_indices.push((v, ipos)),
+                            _ => {}
                         }
                     }
                     self.accept_sym(",")?;
@@ -917,24 +949,52 @@ impl Parser {
                 _ => break,
             }
         }
-        let mut tris = Vec::with_capacity(faces.len());
-        for (f, fpos) in faces {
+        // Each face's three points from `list` by its indices.
+        let pick = |this: &Self, list: &[DVec3], (f, fpos): &(DVec3, Pos), what: (&str, &str)| -> Result<[DVec3; 3]> {
             let mut t = [DVec3::ZERO; 3];
             for (k, i) in [f.x, f.y, f.z].into_iter().enumerate() {
-                if !(i >= 0.0 && (i as usize) < vertices.len()) {
-                    return self.err(
-                        fpos,
-                        format!("face index {i} is out of range: this mesh2 has {} vertices", vertices.len()),
+                if !(i >= 0.0 && (i as usize) < list.len()) {
+                    let (index, items) = what;
+                    return this.err(
+                        *fpos,
+                        format!("{index} index {i} is out of range: this mesh2 has {} {items}", list.len()),
                     );
                 }
-                t[k] = vertices[i as usize];
+                t[k] = list[i as usize];
             }
-            tris.push(t);
-        }
+            Ok(t)
+        };
+        let tris = faces.iter().map(|f| pick(self, &vertices, f, ("face", "vertices"))).collect::<Result<Vec<_>>>()?;
         if tris.is_empty() {
             return self.err(pos, "this mesh2 has no faces (face_indices)".into());
         }
-        Ok(tris)
+        let normals = if normal_vectors.is_empty() {
+            None
+        } else if normal_indices.is_empty() {
+            Some(
+                faces
+                    .iter()
+                    .map(|f| pick(self, &normal_vectors, f, ("normal", "normal_vectors")))
+                    .collect::<Result<Vec<_>>>()?,
+            )
+        } else if normal_indices.len() == faces.len() {
+            Some(
+                normal_indices
+                    .iter()
+                    .map(|f| pick(self, &normal_vectors, f, ("normal", "normal_vectors")))
+                    .collect::<Result<Vec<_>>>()?,
+            )
+        } else {
+            return self.err(
+                normal_indices[0].1,
+                format!(
+                    "this mesh2 has {} normal_indices for {} faces; give one per face (or none, to index the normals as the vertices)",
+                    normal_indices.len(),
+                    faces.len()
+                ),
+            );
+        };
+        Ok((tris, normals))
     }
 
     fn expect_word_tex(&mut self) -> Result<()> {
@@ -1041,15 +1101,42 @@ impl Parser {
                     // A height field's parts below the level are not shown: its triangles wholly
                     // below it are left out (object space, where the field spans y 0 to 1).
                     let level = self.float()?;
-                    if let ObjKind::Triangles { tris } = &mut o.kind {
-                        let kept: Vec<[DVec3; 3]> =
-                            tris.iter().filter(|t| t.iter().any(|p| p.y >= level)).copied().collect();
-                        *tris = std::rc::Rc::new(kept);
+                    if let ObjKind::Triangles { tris, normals } = &mut o.kind {
+                        let keep: Vec<bool> = tris.iter().map(|t| t.iter().any(|p| p.y >= level)).collect();
+                        let kept = |v: &[[DVec3; 3]]| -> Vec<[DVec3; 3]> {
+                            v.iter().zip(&keep).filter(|(_, k)| **k).map(|(t, _)| *t).collect()
+                        };
+                        *tris = std::rc::Rc::new(kept(tris));
+                        if let Some(n) = normals {
+                            *n = std::rc::Rc::new(kept(n));
+                        }
                     }
                 }
-                "smooth" | "hierarchy" if matches!(o.kind, ObjKind::Triangles { .. }) => {
-                    // smooth: the triangles stay flat (the scene format's triangles have no
-                    // vertex normals); hierarchy: an acceleration hint.
+                "smooth" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // A smooth height field: its top's vertex normals from the faces around
+                    // each (all of them, as POV-Ray's normals from the height differences
+                    // are); the walls and the floor (which POV-Ray has not) stay flat.
+                    if self.optional_bool()? {
+                        if let ObjKind::Triangles { tris, normals } = &mut o.kind {
+                            let top = |t: &[DVec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).y > 0.0;
+                            let tops: Vec<[DVec3; 3]> = tris.iter().filter(|t| top(t)).copied().collect();
+                            let mut smooth = tessellate::corner_normals(&tops, 180.0).into_iter();
+                            let all = tris
+                                .iter()
+                                .map(|t| {
+                                    if top(t) {
+                                        smooth.next().unwrap_or([DVec3::Y; 3])
+                                    } else {
+                                        [(t[1] - t[0]).cross(t[2] - t[0]); 3]
+                                    }
+                                })
+                                .collect();
+                            *normals = Some(std::rc::Rc::new(all));
+                        }
+                    }
+                }
+                "hierarchy" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // An acceleration hint.
                     self.optional_bool()?;
                 }
                 "bounded_by" if matches!(o.kind, ObjKind::Implicit { .. }) => {
