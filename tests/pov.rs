@@ -814,17 +814,26 @@ sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
     let c = floats(&image["reflectance"]);
     assert!((c[0] - 0.3).abs() < 1e-9 && c[1] == 0.0 && (c[2] - 0.3).abs() < 1e-9, "{c:?}");
     assert!(warnings.iter().any(|w| w.contains("image_map: map_type 5 is not supported")), "{warnings:?}");
-    // pigment_map: the entries' mean colours as the colour map; the warp's turbulence kept.
+    // pigment_map with a patterned entry: the entries' materials mixed by the gradient (its ramp
+    // from the first entry's value to the second's), the warp's turbulence kept.
     let textures = t["textures"].as_table().unwrap();
-    let grad = textures.values().find(|x| x["pattern"].as_str() == Some("gradient")).unwrap();
+    let mix_by = |pattern: &str| {
+        ms.values()
+            .filter(|m| m["type"].as_str() == Some("mix") && m["weight"].is_table())
+            .find(|m| textures[m["weight"]["texture"].as_str().unwrap()]["pattern"].as_str() == Some(pattern))
+            .unwrap_or_else(|| panic!("no mix weighed by {pattern}: {ms:?}"))
+    };
+    let grad = &textures[mix_by("gradient")["weight"]["texture"].as_str().unwrap()];
     let map = grad["color_map"].as_array().unwrap();
-    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0, 0.5, 0.5]);
+    assert_eq!(floats(&map[0].as_array().unwrap()[1]), [0.0; 3]);
+    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [1.0; 3]);
     assert_eq!(floats(&grad["turbulence"]), [0.5; 3]);
     assert_eq!(grad["octaves"].as_integer(), Some(3));
+    let checker = &ms[mix_by("gradient")["materials"][1].as_str().unwrap()];
+    let checks = &textures[checker["reflectance"]["texture"].as_str().unwrap()];
+    assert_eq!(checks["pattern"].as_str(), Some("checker"));
     // texture_map: the entries' materials mixed by the pattern (tested below).
-    let mix = ms.values().find(|m| m["type"].as_str() == Some("mix")).unwrap();
-    let weight = &textures[mix["weight"]["texture"].as_str().unwrap()];
-    assert_eq!(weight["pattern"].as_str(), Some("bozo"));
+    let mix = mix_by("bozo");
     let [a, b] = [0, 1].map(|i| &ms[mix["materials"][i].as_str().unwrap()]);
     assert_eq!((a["type"].as_str(), b["type"].as_str()), (Some("plastic"), Some("diffuse")));
     assert!(warnings.iter().any(|w| w.contains("black_hole warp is not supported")), "{warnings:?}");

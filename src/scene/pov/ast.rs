@@ -124,6 +124,9 @@ pub struct Pigment {
     /// texture_from_pattern: the pigment's own transforms.
     pub xform: DMat4,
     pub pos: Pos,
+    /// A pigment_map's entries (the pattern's colour map then holds their mean colours), for
+    /// the texture to mix them (`emit`'s texture mixes).
+    pub entries: Option<std::rc::Rc<Vec<(f64, Pigment)>>>,
 }
 
 #[derive(Clone, Debug)]
@@ -149,7 +152,7 @@ pub enum PigmentKind {
 
 impl Pigment {
     pub fn solid(c: Colour, pos: Pos) -> Pigment {
-        Pigment { kind: PigmentKind::Solid(c), xform: DMat4::IDENTITY, pos }
+        Pigment { kind: PigmentKind::Solid(c), xform: DMat4::IDENTITY, pos, entries: None }
     }
 
     /// The mean colour: a constant colour's own, a colour map's mean entry.

@@ -796,6 +796,32 @@ impl Emitter<'_> {
             if let Some(name) = self.texture_mix(&t, map, int, pos, glow_ok)? {
                 return Ok(name);
             }
+        } else if let Some(entries) =
+            t.pigment.entries.as_ref().filter(|e| e.iter().any(|(_, p)| !matches!(p.kind, PigmentKind::Solid(_))))
+        {
+            // (Constant colours only: the colour map of the pattern is exact.)
+            // A pigment_map: its pigments in the texture's finish and normal, mixed as a
+            // texture_map's textures are. texture_mix moves each entry by the texture's and
+            // the pigment's transforms; the normal follows the texture only, so it is given
+            // the pigment's inverse first.
+            let unmove = t.pigment.xform.inverse();
+            let normal = t.normal.clone().map(|n| Normal { xform: unmove * n.xform, ..n });
+            let entries = entries
+                .iter()
+                .map(|(v, p)| {
+                    let layer = Tex {
+                        pigment: p.clone(),
+                        finish: t.finish.clone(),
+                        normal: normal.clone(),
+                        xform: DMat4::IDENTITY,
+                        map: None,
+                    };
+                    (*v, vec![layer])
+                })
+                .collect();
+            if let Some(name) = self.texture_mix(&t, &TexMap { entries, listed: false }, int, pos, glow_ok)? {
+                return Ok(name);
+            }
         }
         let f = &t.finish;
         let mean = t.pigment.mean();

@@ -1585,8 +1585,11 @@ impl Parser {
                 }
                 "color_map" | "colour_map" => map = self.colour_map()?,
                 "pigment_map" | "density_map" => {
-                    // Each entry's pigment stands in by its mean colour: a colour map.
-                    map = self.pigment_map(tpos)?;
+                    // A colour map of the entries' mean colours, and the entries for a texture to
+                    // mix (emit.rs).
+                    let entries = self.pigment_map(tpos)?;
+                    map = entries.iter().map(|(v, p)| (*v, p.mean())).collect();
+                    p.entries = Some(std::rc::Rc::new(entries));
                 }
                 "texture_map" => {
                     let entries = self.texture_map(tpos)?;
@@ -1719,7 +1722,7 @@ impl Parser {
                 ));
                 let mean =
                     Pigment { kind: PigmentKind::Pattern { name: other.into(), map, fields: Vec::new() }, ..p }.mean();
-                return Ok((Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos }, tex_map));
+                return Ok((Pigment::solid(mean, pos), tex_map));
             }
             p.kind = PigmentKind::Pattern { name, map, fields };
         }
@@ -1948,7 +1951,8 @@ impl Parser {
 
     /// `pigment_map { [v pigment-body] ... }`: each entry's pigment by its mean colour, a
     /// colour map (docs/pov-ray.md).
-    fn pigment_map(&mut self, pos: Pos) -> Result<Vec<(f64, Colour)>> {
+    /// `pigment_map { [v pigment-body] ... }`: each entry's pigment at its value.
+    fn pigment_map(&mut self, pos: Pos) -> Result<Vec<(f64, Pigment)>> {
         self.expect_sym("{")?;
         let mut map = Vec::new();
         loop {
@@ -1967,11 +1971,11 @@ impl Parser {
                     self.loc(epos)
                 ));
                 self.skip_entry(&["]"])?;
-                map.push((v, [0.5, 0.5, 0.5, 0.0, 0.0]));
+                map.push((v, Pigment::solid([0.5, 0.5, 0.5, 0.0, 0.0], epos)));
                 continue;
             }
             let p = self.pigment_body(epos, "]")?;
-            map.push((v, p.mean()));
+            map.push((v, p));
             if map.len() > 256 {
                 return self.err(pos, "a pigment_map has at most 256 entries".into());
             }
