@@ -322,6 +322,14 @@ fn grammar_scene(r: &mut Rng) -> String {
                 field(r, &mut s, "vertices", |r| {
                     format!("[{}]", (0..n).map(|_| point(r)).collect::<Vec<_>>().join(", "))
                 });
+                // Vertex normals (triangles take them; a quad refuses them), wrong counts and
+                // zero lengths included.
+                if r.chance(30) {
+                    let m = if r.chance(80) { 3 } else { r.below(5) };
+                    field(r, &mut s, "normals", |r| {
+                        format!("[{}]", (0..m).map(|_| vec3(r)).collect::<Vec<_>>().join(", "))
+                    });
+                }
             }
             "sphere" => {
                 field(r, &mut s, "center", point);

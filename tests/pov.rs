@@ -729,9 +729,9 @@ fn height_fields_are_meshed_from_images() {
     // Errors name the place and the way out.
     let e = error(dir.path(), &format!("{CAMERA}height_field {{ png \"missing.png\" }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("missing.png"), "{e}");
-    std::fs::write(dir.path().join("h.tga"), [0u8; 18]).unwrap();
-    let e = error(dir.path(), &format!("{CAMERA}height_field {{ tga \"h.tga\" }}"));
-    assert!(e.contains("scene.pov:3:") && e.contains("tga images are not supported yet"), "{e}");
+    std::fs::write(dir.path().join("h.tiff"), [0u8; 18]).unwrap();
+    let e = error(dir.path(), &format!("{CAMERA}height_field {{ tiff \"h.tiff\" }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("tiff images are not supported yet"), "{e}");
     let e = error(dir.path(), &format!("{CAMERA}height_field {{ function 10, 10 {{ x }} }}"));
     assert!(e.contains("scene.pov:3:16") && e.contains("user-defined functions"), "{e}");
     std::fs::write(dir.path().join("bad.pgm"), "P5 4 4 255\n\x01").unwrap();
@@ -796,7 +796,7 @@ box {{ 2, 3 pigment {{ rgbt 1 }} hollow interior {{ media {{ emission <1, 0, 0> 
 }
 
 #[test]
-fn pigment_and_texture_maps_warps_and_image_maps_are_approximated_as_documented() {
+fn pigment_maps_texture_maps_warps_and_image_maps_map_as_documented() {
     let dir = tempfile::tempdir().unwrap();
     // A 2 x 1 PNG, red and blue: its mean linear colour is (0.5, 0, 0.5).
     image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap().save(dir.path().join("rb.png")).unwrap();
@@ -814,25 +814,35 @@ sphere {{ z, 1 pigment {{ bozo warp {{ black_hole <0, 0, 0>, 1 }} }} }}"
     let c = floats(&image["reflectance"]);
     assert!((c[0] - 0.3).abs() < 1e-9 && c[1] == 0.0 && (c[2] - 0.3).abs() < 1e-9, "{c:?}");
     assert!(warnings.iter().any(|w| w.contains("image_map: map_type 5 is not supported")), "{warnings:?}");
-    // pigment_map: the entries' mean colours as the colour map; the warp's turbulence kept.
+    // pigment_map with a patterned entry: the entries' materials mixed by the gradient (its ramp
+    // from the first entry's value to the second's), the warp's turbulence kept.
     let textures = t["textures"].as_table().unwrap();
-    let grad = textures.values().find(|x| x["pattern"].as_str() == Some("gradient")).unwrap();
+    let mix_by = |pattern: &str| {
+        ms.values()
+            .filter(|m| m["type"].as_str() == Some("mix") && m["weight"].is_table())
+            .find(|m| textures[m["weight"]["texture"].as_str().unwrap()]["pattern"].as_str() == Some(pattern))
+            .unwrap_or_else(|| panic!("no mix weighed by {pattern}: {ms:?}"))
+    };
+    let grad = &textures[mix_by("gradient")["weight"]["texture"].as_str().unwrap()];
     let map = grad["color_map"].as_array().unwrap();
-    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0, 0.5, 0.5]);
+    assert_eq!(floats(&map[0].as_array().unwrap()[1]), [0.0; 3]);
+    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [1.0; 3]);
     assert_eq!(floats(&grad["turbulence"]), [0.5; 3]);
     assert_eq!(grad["octaves"].as_integer(), Some(3));
-    // texture_map: the entries' pigments as a colour map, in the first entry's finish.
-    let bozo =
-        textures.values().find(|x| x["pattern"].as_str() == Some("bozo") && x.get("color_map").is_some()).unwrap();
-    let map = bozo["color_map"].as_array().unwrap();
-    assert_eq!(floats(&map[0].as_array().unwrap()[1]), [1.0; 3]);
-    assert_eq!(floats(&map[1].as_array().unwrap()[1]), [0.0; 3]);
-    assert!(ms.values().any(|m| m["type"].as_str() == Some("plastic")));
+    let checker = &ms[mix_by("gradient")["materials"][1].as_str().unwrap()];
+    let checks = &textures[checker["reflectance"]["texture"].as_str().unwrap()];
+    assert_eq!(checks["pattern"].as_str(), Some("checker"));
+    // texture_map: the entries' materials mixed by the pattern (tested below).
+    let mix = mix_by("bozo");
+    let [a, b] = [0, 1].map(|i| &ms[mix["materials"][i].as_str().unwrap()]);
+    assert_eq!((a["type"].as_str(), b["type"].as_str()), (Some("plastic"), Some("diffuse")));
     assert!(warnings.iter().any(|w| w.contains("black_hole warp is not supported")), "{warnings:?}");
     let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ png \"none.png\" }} }} }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("none.png"), "{e}");
     let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 pigment {{ image_map {{ once }} }} }}"));
     assert!(e.contains("scene.pov:3:") && e.contains("names no image file"), "{e}");
+    let e = error(dir.path(), &format!("{CAMERA}sphere {{ 0, 1 texture {{ material_map {{ png \"rb.png\" }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("material_map is not supported yet"), "{e}");
 }
 
 #[test]
@@ -927,4 +937,310 @@ fn planar_image_map_renders_as_the_same_image_texture_written_in_toml() {
     let (red, green, blue) = (centroid(0), centroid(1), centroid(2));
     assert!(red.0 < green.0 - 1.0 && (red.1 - green.1).abs() < 1.0, "red {red:?}, green {green:?}");
     assert!(red.1 < blue.1 - 1.0 && (red.0 - blue.0).abs() < 1.0, "red {red:?}, blue {blue:?}");
+}
+
+/// The box of `TEXTURE_MAP`: red on its left half, a blue and white checker of unit squares
+/// (POV-Ray's `scale 0.25` inside the map's `scale 4`) with a 30% reflection on its right.
+const TEXTURE_MAP: &str = "camera { location <0, 0, -5> look_at <0, 0, 0> }\nlight_source { <0, 3, -6>, rgb 1 }\n\
+box { <-2, -1, 0>, <2, 1, 0.1>
+  texture {
+    gradient x
+    texture_map {
+      [0.5 pigment { rgb <1, 0.1, 0.1> } finish { diffuse 1 }]
+      [0.5 pigment { checker rgb <0.1, 0.1, 1>, rgb 1 scale 0.25 } finish { diffuse 1 reflection 0.3 }]
+    }
+    scale 4 translate -2 * x
+  }
+}\n";
+
+/// A texture_map becomes mixes of its entries' materials weighed by the map's pattern: the
+/// translated scene renders as the same scene written by hand in TOML, and its two halves show
+/// the two textures.
+#[test]
+fn texture_map_renders_as_the_same_mix_written_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let pov = load(dir.path(), TEXTURE_MAP);
+    // By hand: POV-Ray's z mirrored (the scale's -1 on z); the light's intensity is pi d0^2,
+    // d0 the distance from the light to where the camera looks (docs/pov-ray.md).
+    let toml = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 53.13010235415598\n\
+        [textures.checks]\ntype = \"pattern\"\npattern = \"checker\"\ncolors = [[0.1, 0.1, 1], [1, 1, 1]]\n\
+        transform = { scale = [1, 1, -1], translate = [-2, 0, 0] }\n\
+        [textures.halves]\ntype = \"pattern\"\npattern = \"gradient\"\ndirection = [1, 0, 0]\n\
+        color_map = [[0.5, [0, 0, 0]], [0.5, [1, 1, 1]]]\ntransform = { scale = [4, 4, -4], translate = [-2, 0, 0] }\n\
+        [materials.red]\ntype = \"diffuse\"\nreflectance = [1, 0.1, 0.1]\n\
+        [materials.checks]\ntype = \"diffuse\"\nreflectance = { texture = \"checks\" }\n\
+        [materials.shiny]\ntype = \"mirror\"\n\
+        [materials.checks_reflecting]\ntype = \"mix\"\nmaterials = [\"checks\", \"shiny\"]\nweight = 0.3\n\
+        [materials.halves]\ntype = \"mix\"\nmaterials = [\"red\", \"checks_reflecting\"]\nweight = { texture = \"halves\" }\n\
+        [[shapes]]\ntype = \"box\"\nmaterial = \"halves\"\nmin = [-2, -1, -0.1]\nmax = [2, 1, 0]\n\
+        [[lights]]\ntype = \"point\"\nposition = [0, 3, 6]\nintensity = 141.3716694115407\n";
+    let by_hand = load_scene(&write(dir.path(), "by_hand.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
+    let render = |s: &Scene| {
+        let settings = photonix::render::FrameSettings { width: 40, height: 30, max_depth: 3, seed: 3 };
+        let buffers = photonix::render::prepare(s, &settings).unwrap();
+        photonix::render::render_cpu(&buffers, 2, None, 0, &mut |_, _| {}).image
+    };
+    let (a, b) = (render(&pov), render(&by_hand));
+    let error = photonix::io::metrics::rel_mse(&a, &b);
+    eprintln!("texture_map against the mix by hand: relMSE {error:.3e}");
+    assert!(error < 1e-6, "relMSE {error:.3e}");
+    // The box spans columns 8 to 32 and rows 9 to 21; x = 0 is column 20.
+    let (mut red, mut blue, mut white) = (0, 0, 0);
+    for y in 11..20 {
+        for x in 10..19 {
+            let p = a.pixel(x, y);
+            assert!(p[0] > 3.0 * p[2] && p[0] > 0.05, "left half, pixel ({x}, {y}): {p:?}");
+            red += 1;
+        }
+        for x in 22..31 {
+            let p = a.pixel(x, y);
+            assert!(p[2] >= p[0], "right half, pixel ({x}, {y}): {p:?}");
+            if p[2] > 3.0 * p[0] {
+                blue += 1;
+            } else if p[0] > 0.05 && p[2] < 1.5 * p[0] {
+                white += 1;
+            }
+        }
+    }
+    assert!(red == 81 && blue > 20 && white > 20, "red {red}, blue {blue}, white {white}");
+}
+
+/// The mixes' weights: a ramp of the pattern across the two entries each mix splits (POV-Ray's
+/// linear blend), a listed pattern's own values, entries of one finish and constant colours as
+/// one colour map, and the cap on nesting with its warning.
+#[test]
+fn texture_map_weights_ramp_between_entries_and_deep_maps_warn() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, warnings) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}sphere {{ 0, 1 texture {{ bozo turbulence 0.3 texture_map {{
+  [0.2 pigment {{ rgb <1, 0, 0> }}] [0.6 pigment {{ rgb <0, 1, 0> }} finish {{ phong 1 }}] [0.9 pigment {{ rgb <0, 0, 1> }}] }} scale 2 }} }}
+sphere {{ x, 1 texture {{ hexagon texture {{ pigment {{ rgb 1 }} }} texture {{ pigment {{ rgb 0 }} finish {{ phong 1 }} }} texture {{ pigment {{ bozo }} }} }} }}
+sphere {{ y, 1 texture {{ gradient y texture_map {{ [0 pigment {{ rgb 0 }}] [1 pigment {{ rgb 1 }}] }} }} }}
+sphere {{ z, 1 texture {{ gradient y texture_map {{ #for (I, 0, 16) [I / 16 pigment {{ rgb I / 16 }} finish {{ phong I / 16 + 0.1 }}] #end }} }} }}"
+        ),
+    );
+    let textures = t["textures"].as_table().unwrap();
+    let ms = t["materials"].as_table().unwrap();
+    let mixes: Vec<&toml::Table> =
+        ms.values().filter_map(|m| m.as_table()).filter(|m| m["type"].as_str() == Some("mix")).collect();
+    let weight_of = |m: &toml::Table| &textures[m["weight"]["texture"].as_str().unwrap()];
+    let ramps = |pattern: &str| -> Vec<Vec<f64>> {
+        let mut r: Vec<Vec<f64>> = mixes
+            .iter()
+            .map(|m| weight_of(m))
+            .filter(|w| w["pattern"].as_str() == Some(pattern))
+            .map(|w| {
+                let map = w["color_map"].as_array().unwrap();
+                map.iter().map(|e| e.as_array().unwrap()).flat_map(|e| [float(&e[0]), floats(&e[1])[0]]).collect()
+            })
+            .collect();
+        r.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        r
+    };
+    // Three entries: a mix of (entries 0, 1) and entry 2, weighed by the ramp from 0.6 to 0.9,
+    // the inner one by the ramp from 0.2 to 0.6; the pattern keeps its turbulence and scale.
+    assert_eq!(ramps("bozo"), [vec![0.2, 0.0, 0.6, 1.0], vec![0.6, 0.0, 0.9, 1.0]]);
+    let bozo_weight = mixes.iter().map(|m| weight_of(m)).find(|w| w["pattern"].as_str() == Some("bozo")).unwrap();
+    assert_eq!(floats(&bozo_weight["turbulence"]), [0.3; 3]);
+    assert_eq!(floats(&bozo_weight["transform"]["scale"]), [2.0, 2.0, -2.0]);
+    // A hexagon's three textures: its values 0, 0.5, 1; the upper half of each split weighs 1.
+    let hexagon: Vec<Vec<f64>> = mixes
+        .iter()
+        .map(|m| weight_of(m))
+        .filter(|w| w["pattern"].as_str() == Some("hexagon"))
+        .map(|w| w["colors"].as_array().unwrap().iter().map(|c| floats(c)[0]).collect())
+        .collect();
+    assert_eq!(hexagon.len(), 2, "{hexagon:?}");
+    assert!(hexagon.contains(&vec![0.0, 0.0, 1.0]) && hexagon.contains(&vec![0.0, 1.0, 1.0]), "{hexagon:?}");
+    // Constant colours in one finish: the colour map itself, no mix.
+    assert!(textures.values().any(|x| x["pattern"].as_str() == Some("gradient")
+        && x.get("color_map").is_some_and(|m| floats(&m.as_array().unwrap()[1].as_array().unwrap()[1]) == [1.0; 3])));
+    // 17 entries would nest 5 deep: the mean colours stand in, with a warning that says why.
+    assert!(
+        warnings.iter().any(|w| w.contains("scene.pov:7:")
+            && w.contains("17 entries need mixes nested 5 deep and the renderer resolves 4")),
+        "{warnings:?}"
+    );
+    assert_eq!(mixes.len(), 4, "{mixes:?}");
+}
+
+/// A palette GIF of `indices` (w x h) whose palette entry i is `colours[i]` (black beyond).
+fn write_gif(path: &Path, w: u16, h: u16, indices: &[u8], colours: &[[u8; 3]]) {
+    let mut palette = vec![0u8; 256 * 3];
+    for (i, c) in colours.iter().enumerate() {
+        palette[3 * i..3 * i + 3].copy_from_slice(c);
+    }
+    let file = std::fs::File::create(path).unwrap();
+    let mut encoder = gif::Encoder::new(file, w, h, &palette).unwrap();
+    let frame = gif::Frame { width: w, height: h, buffer: std::borrow::Cow::Borrowed(indices), ..Default::default() };
+    encoder.write_frame(&frame).unwrap();
+}
+
+/// TGA and GIF files as height fields (POV-Ray's heights: a GIF's palette index, a colour TGA's
+/// red as the high byte and green as the low byte) and as image maps (the image itself, seen
+/// where it is placed).
+#[test]
+fn tga_and_gif_images_make_height_fields_and_image_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    // GIF: every pixel index 51 of a palette whose entry 51 is white: height 51 / 255 = 0.2.
+    write_gif(
+        &dir.path().join("h.gif"),
+        2,
+        2,
+        &[51; 4],
+        &[[0, 0, 0]; 51].iter().chain(&[[255, 255, 255]]).copied().collect::<Vec<_>>(),
+    );
+    let s = load(dir.path(), &format!("{CAMERA}height_field {{ gif \"h.gif\" pigment {{ rgb 1 }} }}"));
+    let (_, hi) = total_bounds(&s);
+    assert!((hi.y - 0.2).abs() < 1e-6, "{hi}");
+    // TGA, 2 x 2 colour: red 128 and green 64 at the highest pixel: (255 x 128 + 64) / 65535.
+    let mut tga = image::RgbImage::new(2, 2);
+    tga.put_pixel(1, 0, image::Rgb([128, 64, 255]));
+    tga.put_pixel(0, 1, image::Rgb([0, 200, 0]));
+    tga.save(dir.path().join("h.tga")).unwrap();
+    let s = load(dir.path(), &format!("{CAMERA}height_field {{ tga \"h.tga\" pigment {{ rgb 1 }} }}"));
+    let (_, hi) = total_bounds(&s);
+    let want = (255.0 * 128.0 + 64.0) / 65535.0;
+    assert!((hi.y as f64 - want).abs() < 1e-6, "{hi}, want {want}");
+    // A bare name's extension picks the format, as for PNG.
+    load(dir.path(), &format!("{CAMERA}height_field {{ \"h.gif\" pigment {{ rgb 1 }} }}"));
+
+    // Image maps: a 2 x 1 image, red then blue, over the box's face (as the planar PNG test).
+    write_gif(&dir.path().join("rb.gif"), 2, 1, &[0, 1], &[[255, 0, 0], [0, 0, 255]]);
+    image::RgbImage::from_raw(2, 1, vec![255, 0, 0, 0, 0, 255]).unwrap().save(dir.path().join("rb.tga")).unwrap();
+    for (kind, file) in [("gif", "rb.gif"), ("tga", "rb.tga")] {
+        let text = format!(
+            "camera {{ location <0, 0, -6> look_at <0, 0, 0> }}\nlight_source {{ <0, 0, -6>, rgb 1 }}\n\
+             box {{ <-1, -1, 0>, <1, 1, 0.1> pigment {{ image_map {{ {kind} \"{file}\" once }} \
+             translate <-0.5, -0.5, 0> scale 2 }} finish {{ ambient 0 diffuse 1 }} }}\n"
+        );
+        let (t, warnings) = translated(dir.path(), &text);
+        assert!(!warnings.iter().any(|w| w.contains("image_map")), "{warnings:?}");
+        let image = t["textures"].as_table().unwrap().values().find(|x| x["type"].as_str() == Some("image")).unwrap();
+        assert_eq!(image["file"].as_str(), Some(file));
+        let scene = load(dir.path(), &text);
+        let settings = photonix::render::FrameSettings { width: 16, height: 16, max_depth: 2, seed: 1 };
+        let buffers = photonix::render::prepare(&scene, &settings).unwrap();
+        let a = photonix::render::render_cpu(&buffers, 1, None, 0, &mut |_, _| {}).image;
+        // Rows 6 to 9 cross the box's middle: red on the left, blue on the right.
+        for y in 6..10 {
+            let (l, r) = (a.pixel(6, y), a.pixel(9, y));
+            assert!(l[0] > 4.0 * l[2] && l[0] > 0.01, "{kind}: left ({y}) {l:?}");
+            assert!(r[2] > 4.0 * r[0] && r[2] > 0.01, "{kind}: right ({y}) {r:?}");
+        }
+    }
+}
+
+/// The vertex normals of each triangle shape, `None` for a flat one.
+fn triangle_normals(s: &Scene) -> Vec<(Option<[Vec3; 3]>, [Vec3; 3])> {
+    s.shapes
+        .iter()
+        .filter_map(|sh| match &sh.geometry {
+            Geometry::Triangle(t) => Some((t.normals, t.vertices)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Smooth shading comes through: smooth_triangle's and mesh2's normals as written, the same as
+/// the triangle written by hand in TOML; lathes, sors and smooth height fields with normals from
+/// their faces (a lathe of a cylinder's profile gets the cylinder's radial normals); polygons,
+/// straight prisms and rough height fields stay flat.
+#[test]
+fn smooth_triangles_meshes_lathes_and_height_fields_are_shaded_smooth() {
+    let dir = tempfile::tempdir().unwrap();
+    let pov = load(
+        dir.path(),
+        &format!("{CAMERA}smooth_triangle {{ <0, 0, 0>, <0, 0, -1>, <1, 0, 0>, <0.3, 0, -1>, <0, 1, 0>, <0, 0.3, -1> pigment {{ rgb 1 }} }}"),
+    );
+    // By hand: z mirrored, the normals' too (and the vertices' order kept).
+    let toml = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n[materials.m]\ntype = \"diffuse\"\n[[shapes]]\ntype = \"triangle\"\nmaterial = \"m\"\n\
+        vertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nnormals = [[0, 0, 1], [0.3, 0, 1], [0, 0.3, 1]]\n";
+    let by_hand = load_scene(&write(dir.path(), "by_hand.toml", toml)).unwrap_or_else(|e| panic!("{e}"));
+    let (a, b) = (triangle_normals(&pov), triangle_normals(&by_hand));
+    let (na, nb) = (a[0].0.expect("smooth"), b[0].0.expect("smooth"));
+    for k in 0..3 {
+        assert!(na[k].abs_diff_eq(nb[k], 1e-6) && a[0].1[k].abs_diff_eq(b[0].1[k], 1e-6), "{a:?} against {b:?}");
+    }
+    // The scene format's checks on `normals`.
+    for (normals, kind, want) in [
+        ("[[0, 0, 1], [0, 0, 1]]", "triangle", "`normals` has 2 directions; a triangle takes one per vertex"),
+        ("[[0, 0, 1], [0, 0, 0], [0, 0, 1]]", "triangle", "`normals`: direction 1 has no length"),
+        ("[[0, 0, 1], [0, 0, 1], [0, 0, 1], [0, 0, 1]]", "quad", "normals"),
+    ] {
+        let vertices = if kind == "quad" {
+            "[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]"
+        } else {
+            "[[0, 0, 0], [1, 0, 0], [0, 1, 0]]"
+        };
+        let bad = format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 40\n[materials.m]\ntype = \"diffuse\"\n\
+             [[shapes]]\ntype = \"{kind}\"\nmaterial = \"m\"\nvertices = {vertices}\nnormals = {normals}\n"
+        );
+        let e = load_scene(&write(dir.path(), "bad.toml", &bad)).map(|_| ()).unwrap_err().to_string();
+        assert!(e.contains("bad.toml:") && e.contains(want), "{e}");
+    }
+    // The winding side: the normals point as the face's winding normal does.
+    let face = (b[0].1[1] - b[0].1[0]).cross(b[0].1[2] - b[0].1[0]);
+    assert!(nb.iter().all(|n| n.dot(face) > 0.0), "{nb:?}");
+
+    // mesh2: normal_vectors indexed by the face indices.
+    let mesh2 = load(
+        dir.path(),
+        &format!(
+            "{CAMERA}mesh2 {{ vertex_vectors {{ 3, <0, 0, 0>, <1, 0, 0>, <0, 1, 0> }} \
+             normal_vectors {{ 3, <0, 0, -1>, <0.3, 0, -1>, <0, 0.3, -1> }} face_indices {{ 1, <0, 1, 2> }} pigment {{ rgb 1 }} }}"
+        ),
+    );
+    let m = triangle_normals(&mesh2);
+    assert!((0..3).all(|k| m[0].0.unwrap()[k].abs_diff_eq(nb[k], 1e-6)), "{m:?}");
+    let e = error(
+        dir.path(),
+        &format!(
+            "{CAMERA}mesh2 {{ vertex_vectors {{ 3, 0, x, y }} normal_vectors {{ 1, z }} \
+             face_indices {{ 1, <0, 1, 2> }} normal_indices {{ 1, <0, 1, 5> }} }}"
+        ),
+    );
+    assert!(e.contains("scene.pov:3:") && e.contains("normal index 1 is out of range"), "{e}");
+
+    // A lathe of a cylinder's profile: every vertex normal is radial (to the 7 digits written).
+    let lathe = load(dir.path(), &format!("{CAMERA}lathe {{ linear_spline 2, <1, 0>, <1, 1> pigment {{ rgb 1 }} }}"));
+    let tris = triangle_normals(&lathe);
+    assert!(tris.len() >= 64, "{}", tris.len());
+    for (n, v) in &tris {
+        let n = n.expect("a lathe is smooth");
+        for k in 0..3 {
+            let radial = Vec3::new(v[k].x, 0.0, v[k].z).normalize();
+            assert!(n[k].dot(radial).abs() > 1.0 - 1e-5, "normal {} at {}", n[k], v[k]);
+        }
+    }
+    // Straight-sided prisms and polygons stay flat; spline prisms and sors are smooth.
+    let flat =
+        load(dir.path(), &format!("{CAMERA}prism {{ 0, 1, 4, <0, 0>, <1, 0>, <1, 1>, <0, 0> pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&flat).iter().all(|(n, _)| n.is_none()));
+    let sor =
+        load(dir.path(), &format!("{CAMERA}sor {{ 4, <0, 0>, <1, 0.2>, <0.8, 1>, <0, 1.2> pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&sor).iter().filter(|(n, _)| n.is_some()).count() > 64);
+
+    // Height fields: smooth ones' tops get normals, the walls and floor stay flat.
+    std::fs::write(dir.path().join("h.pgm"), "P2 3 3 10\n0 5 10\n5 10 5\n10 5 0\n").unwrap();
+    let rough = load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" pigment {{ rgb 1 }} }}"));
+    assert!(triangle_normals(&rough).iter().all(|(n, _)| n.is_none()));
+    let smooth = load(dir.path(), &format!("{CAMERA}height_field {{ pgm \"h.pgm\" smooth pigment {{ rgb 1 }} }}"));
+    let ts = triangle_normals(&smooth);
+    let top = ts.iter().filter(|(n, _)| n.is_some()).count();
+    assert_eq!(top, 8, "the top's 8 triangles are smooth: {ts:?}");
+    // At the middle vertex (the peak, height 1) the normals of the faces around it average to +y.
+    for (n, v) in &ts {
+        for k in 0..3 {
+            if let Some(n) = n {
+                assert!(n[k].y > 0.0, "{n:?}");
+                if v[k].abs_diff_eq(Vec3::new(0.5, 1.0, -0.5), 1e-6) {
+                    assert!(n[k].abs_diff_eq(Vec3::Y, 1e-5), "peak normal {}", n[k]);
+                }
+            }
+        }
+    }
 }

@@ -280,6 +280,8 @@ pub(crate) struct ShapeDef {
     pub r#type: Option<Spanned<String>>,
     pub material: Option<Spanned<String>>,
     pub vertices: Option<Spanned<Vec<Vec3Def>>>,
+    /// A triangle's vertex normals (smooth shading).
+    pub normals: Option<Spanned<Vec<Vec3Def>>>,
     pub center: Option<Spanned<Vec3Def>>,
     pub radius: Option<Spanned<f64>>,
     pub min: Option<Spanned<Vec3Def>>,

@@ -20,7 +20,7 @@ use crate::cpu::image_texture::{
 pub const MAX_IMAGE_SIDE: u32 = 16_384;
 
 /// The formats a texture file may have, for messages.
-const SUPPORTED: &str = "use PNG, JPEG, OpenEXR or Radiance HDR (.png, .jpg, .jpeg, .exr, .hdr)";
+const SUPPORTED: &str = "use PNG, JPEG, OpenEXR, Radiance HDR, TGA or GIF (.png, .jpg, .jpeg, .exr, .hdr, .tga, .gif)";
 
 /// How the 8- and 16-bit colour channels of a file are decoded. Float files are always linear.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,8 +92,9 @@ pub fn srgb_to_linear(c: f64) -> f64 {
     }
 }
 
-/// Reads an image texture. The content decides the format (PNG, JPEG, OpenEXR, Radiance HDR),
-/// whatever the extension; `color_space` applies to 8- and 16-bit colour channels only.
+/// Reads an image texture. The content decides the format (PNG, JPEG, OpenEXR, Radiance HDR,
+/// GIF), whatever the extension; TGA, which has no signature, by the extension `.tga`.
+/// `color_space` applies to 8- and 16-bit colour channels only.
 pub fn load_image_texture(path: &Path, color_space: ColorSpace) -> Result<ImageTexture, ImageTextureError> {
     // Through the scene's file gate: recorded as an input, confined in the editor. The size is
     // checked on the decoded image (`MAX_IMAGE_SIDE`), not on the file.
@@ -108,7 +109,8 @@ pub fn decode_image_texture(
     path: &Path,
     color_space: ColorSpace,
 ) -> Result<ImageTexture, ImageTextureError> {
-    let Some(kind) = sniff(bytes) else {
+    let tga = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("tga"));
+    let Some(kind) = sniff(bytes).or(tga.then_some(FileKind::Tga)) else {
         return Err(unrecognised(bytes, path));
     };
     let decode_error = |reason: String| ImageTextureError::Decode {
@@ -122,10 +124,12 @@ pub fn decode_image_texture(
             check_size(path, width, height)?;
             decode_exr(bytes).map_err(decode_error)?
         }
-        FileKind::Png | FileKind::Jpeg | FileKind::Hdr => {
+        FileKind::Png | FileKind::Jpeg | FileKind::Hdr | FileKind::Gif | FileKind::Tga => {
             let format = match kind {
                 FileKind::Png => image::ImageFormat::Png,
                 FileKind::Jpeg => image::ImageFormat::Jpeg,
+                FileKind::Gif => image::ImageFormat::Gif,
+                FileKind::Tga => image::ImageFormat::Tga,
                 _ => image::ImageFormat::Hdr,
             };
             let reader = || image::ImageReader::with_format(Cursor::new(bytes), format);
@@ -151,6 +155,9 @@ enum FileKind {
     Jpeg,
     Exr,
     Hdr,
+    /// The first frame of a GIF.
+    Gif,
+    Tga,
 }
 
 /// The supported format of `bytes` by its signature, if any.
@@ -164,6 +171,8 @@ fn sniff(bytes: &[u8]) -> Option<FileKind> {
     } else if bytes.starts_with(b"#?") {
         // "#?RADIANCE" or "#?RGBE"
         Some(FileKind::Hdr)
+    } else if bytes.starts_with(b"GIF87a") || bytes.starts_with(b"GIF89a") {
+        Some(FileKind::Gif)
     } else {
         None
     }
@@ -176,6 +185,8 @@ impl FileKind {
             FileKind::Jpeg => "JPEG",
             FileKind::Exr => "OpenEXR",
             FileKind::Hdr => "Radiance HDR",
+            FileKind::Gif => "GIF",
+            FileKind::Tga => "TGA",
         }
     }
 }
@@ -189,13 +200,14 @@ fn unrecognised(bytes: &[u8], path: &Path) -> ImageTextureError {
         Some("jpg" | "jpeg") => Some("JPEG"),
         Some("exr") => Some("OpenEXR"),
         Some("hdr") => Some("Radiance HDR"),
+        Some("gif") => Some("GIF"),
         _ => None,
     };
     let named = match &extension {
         Some(e) => format!("`.{e}`"),
         None => "no extension".to_string(),
     };
-    // The image crate knows the signatures of formats we do not decode (GIF, BMP, TIFF, WebP...).
+    // The image crate knows the signatures of formats we do not decode (BMP, TIFF, WebP...).
     if let Ok(other) = image::guess_format(bytes) {
         let found = format!("a {} image named {named}", format!("{other:?}").to_uppercase());
         return ImageTextureError::Unsupported { path: path.to_owned(), found };
@@ -650,14 +662,14 @@ mod tests {
         assert!(matches!(err, ImageTextureError::Unsupported { .. }), "{err}");
         assert!(err.to_string().contains("notes.txt: unsupported image format (a `.txt` file); use PNG"), "{err}");
 
-        let gif = b"GIF89a\x01\x00\x01\x00\x00\x00\x00;";
-        std::fs::write(path("anim.gif"), gif).unwrap();
-        let err = load(&path("anim.gif"));
-        assert!(err.to_string().contains("(a GIF image named `.gif`)"), "{err}");
-        std::fs::write(path("renamed.png"), gif).unwrap();
+        let bmp = b"BM\x3a\x00\x00\x00\x00\x00\x00\x00\x36\x00\x00\x00";
+        std::fs::write(path("paint.bmp"), bmp).unwrap();
+        let err = load(&path("paint.bmp"));
+        assert!(err.to_string().contains("(a BMP image named `.bmp`)"), "{err}");
+        std::fs::write(path("renamed.png"), bmp).unwrap();
         let err = load(&path("renamed.png"));
         println!("{err}");
-        assert!(err.to_string().contains("renamed.png: unsupported image format (a GIF image named `.png`)"), "{err}");
+        assert!(err.to_string().contains("renamed.png: unsupported image format (a BMP image named `.png`)"), "{err}");
 
         std::fs::write(path("text.png"), "not an image").unwrap();
         let err = load(&path("text.png"));

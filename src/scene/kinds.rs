@@ -301,6 +301,8 @@ pub const LIGHTS: Family = Family {
 };
 
 pub const VERTICES: Field = field("vertices", T::List, Required);
+/// A triangle's vertex normals: unset is flat.
+pub const NORMALS: Field = field("normals", T::List, Unset);
 pub const CENTER: Field = field("center", T::Vector, Required);
 pub const RADIUS: Field = field("radius", T::Number, Required);
 pub const NORMAL: Field = field("normal", T::Vector, Required);
@@ -356,7 +358,7 @@ pub const SHAPES: Family = Family {
     key: "type",
     kinds: &[
         Kind { name: "quad", what: "a quad", common: SHAPE, fields: &[VERTICES] },
-        Kind { name: "triangle", what: "a triangle", common: SHAPE, fields: &[VERTICES] },
+        Kind { name: "triangle", what: "a triangle", common: SHAPE, fields: &[VERTICES, NORMALS] },
         Kind { name: "sphere", what: "a sphere", common: SHAPE, fields: &[CENTER, RADIUS] },
         Kind { name: "box", what: "a box", common: SHAPE, fields: &[MIN, MAX] },
         Kind {

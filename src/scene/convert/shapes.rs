@@ -51,6 +51,7 @@ impl Builder<'_> {
             ("type", span_of(&s.r#type)),
             ("material", span_of(&s.material)),
             ("vertices", span_of(&s.vertices)),
+            ("normals", span_of(&s.normals)),
             ("center", span_of(&s.center)),
             ("radius", span_of(&s.radius)),
             ("min", span_of(&s.min)),
@@ -125,7 +126,18 @@ impl Builder<'_> {
                     &object,
                     material,
                     transform,
-                )
+                )?;
+                if let Some(normals) = &s.normals {
+                    // Moved as the vertices were (a mirroring transform swaps two), turned to the
+                    // winding side; `None` when they all equal the face's normal.
+                    let normals = self.vertex_normals(normals, &object)?;
+                    let raw = [vertices[0], vertices[1], vertices[2]];
+                    let (_, _, moved) = apply_with_normals(transform, raw, None, Some(normals));
+                    if let Some(Geometry::Triangle(t)) = self.shapes.last_mut().map(|s| &mut s.geometry) {
+                        t.normals = moved;
+                    }
+                }
+                Ok(())
             }
             "sphere" => {
                 let center = self.require(&s.center, &table, &object, "center", "center = [0, 1, 0]")?;
@@ -214,6 +226,35 @@ impl Builder<'_> {
                 self.point(&spanned, object, "vertices")
             })
             .collect()
+    }
+
+    /// A triangle's `normals`: three directions (any length but 0), made unit.
+    fn vertex_normals(&self, field: &Spanned<Vec<Vec3Def>>, object: &str) -> Result<[Vec3; 3]> {
+        let list = field.get_ref();
+        if list.len() != 3 {
+            return Err(self.invalid(
+                &field.span(),
+                object,
+                format!(
+                    "`normals` has {} directions; a triangle takes one per vertex, e.g. `normals = [[0, 0, 1], [0, 0.1, 1], [0.1, 0, 1]]`",
+                    list.len()
+                ),
+            ));
+        }
+        let mut out = [Vec3::ZERO; 3];
+        for (k, v) in list.iter().enumerate() {
+            let n = self.point(&Spanned::new(field.span(), *v), object, "normals")?;
+            let n = n.normalize_or_zero();
+            if n == Vec3::ZERO || !n.is_finite() {
+                return Err(self.invalid(
+                    &field.span(),
+                    object,
+                    format!("`normals`: direction {k} has no length; give each vertex a direction such as [0, 0, 1]"),
+                ));
+            }
+            out[k] = n;
+        }
+        Ok(out)
     }
 
     /// A triangle (3 vertices) or a quad (4 vertices, split into (v0,v1,v2), (v0,v2,v3)).

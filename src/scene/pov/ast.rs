@@ -67,9 +67,11 @@ pub enum ObjKind {
         e: f64,
         n: f64,
     },
-    /// Triangles of a triangle, smooth_triangle or mesh (smooth normals are not kept yet).
+    /// Triangles of a triangle, smooth_triangle, mesh or tessellated shape, with their
+    /// corners' normals (object space, any length) when they are shaded smooth.
     Triangles {
         tris: std::rc::Rc<Vec<[DVec3; 3]>>,
+        normals: Option<std::rc::Rc<Vec<[DVec3; 3]>>>,
     },
     /// A bicubic_patch: 16 control points, rows of constant v (Photonix's own bicubic_patch).
     Patch {
@@ -100,6 +102,20 @@ pub struct Tex {
     /// world_from_texture: the transforms written in the texture and applied to the object
     /// after the texture was given.
     pub xform: DMat4,
+    /// A patterned texture's entries (texture_map, or textures as a checker's, brick's or
+    /// hexagon's entries): the pigment then holds the pattern, its fields and transforms, with
+    /// each entry's mean colour as its colour map (what stands in where the entries cannot be
+    /// mixed), and the finish and normal are the first entry's.
+    pub map: Option<std::rc::Rc<TexMap>>,
+}
+
+/// The textures a pattern chooses between: each entry's layers at its value (a listed
+/// pattern's entries at i / (n - 1), as its `colors` are spread).
+#[derive(Clone, Debug)]
+pub struct TexMap {
+    pub entries: Vec<(f64, Vec<Tex>)>,
+    /// The entries were listed (`checker texture { A } texture { B }`), not placed by a map.
+    pub listed: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -108,6 +124,9 @@ pub struct Pigment {
     /// texture_from_pattern: the pigment's own transforms.
     pub xform: DMat4,
     pub pos: Pos,
+    /// A pigment_map's entries (the pattern's colour map then holds their mean colours), for
+    /// the texture to mix them (`emit`'s texture mixes).
+    pub entries: Option<std::rc::Rc<Vec<(f64, Pigment)>>>,
 }
 
 #[derive(Clone, Debug)]
@@ -133,7 +152,7 @@ pub enum PigmentKind {
 
 impl Pigment {
     pub fn solid(c: Colour, pos: Pos) -> Pigment {
-        Pigment { kind: PigmentKind::Solid(c), xform: DMat4::IDENTITY, pos }
+        Pigment { kind: PigmentKind::Solid(c), xform: DMat4::IDENTITY, pos, entries: None }
     }
 
     /// The mean colour: a constant colour's own, a colour map's mean entry.

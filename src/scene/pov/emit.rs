@@ -11,10 +11,11 @@ use toml::{Table, Value as T};
 
 use super::ast::{
     Colour, CsgOp, Interior, Light, LightKind, Media, Normal, Obj, ObjKind, PigmentKind, PovScene, Rainbow, SkySphere,
-    Tex,
+    Tex, TexMap,
 };
 use super::parser::Result;
 use super::{Pos, PovError, PovOptions};
+use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::scene::kinds;
 
 /// POV-Ray is left-handed with +z into the screen; Photonix is right-handed. Mirroring z maps
@@ -81,7 +82,7 @@ pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
                 add_box(DVec3::new(-r, -minor.abs(), -r), DVec3::new(r, minor.abs(), r), m)
             }
             ObjKind::Superellipsoid { .. } => add_box(DVec3::splat(-1.0), DVec3::ONE, m),
-            ObjKind::Triangles { tris } => {
+            ObjKind::Triangles { tris, .. } => {
                 for t in tris.iter() {
                     for p in t {
                         add_box(*p, *p, m);
@@ -118,6 +119,23 @@ fn too_thin(v: &[DVec3]) -> bool {
 fn short3(v: DVec3) -> DVec3 {
     let short = |x: f64| format!("{x:.6e}").parse::<f64>().unwrap_or(x);
     DVec3::new(short(v.x), short(v.y), short(v.z))
+}
+
+/// The crease angle of POV-Ray's smooth tessellated surfaces (degrees): faces that meet at a
+/// sharper angle keep their edge, as the model importer's default `smooth_angle` does.
+pub const SMOOTH_CREASE_DEG: f32 = 30.0;
+
+/// A triangle's corner normals `n` (object space) in the scene's space by `normal_matrix`, unit,
+/// to 7 digits; `None` (flat) when they all equal the face's normal of the vertices `v` (either
+/// side) or one has no direction.
+fn smooth_corners(n: &[DVec3; 3], normal_matrix: &DMat3, v: &[DVec3]) -> Option<[DVec3; 3]> {
+    let face = (v[1] - v[0]).cross(v[2] - v[0]).normalize_or_zero();
+    let moved = n.map(|x| (*normal_matrix * x).normalize_or_zero());
+    if moved.iter().any(|x| *x == DVec3::ZERO || !x.is_finite()) {
+        return None;
+    }
+    let flat = moved.iter().all(|x| x.dot(face).abs() > 1.0 - 1e-9);
+    (!flat).then(|| moved.map(short3))
 }
 
 fn rgb(c: [f64; 3]) -> T {
@@ -228,6 +246,9 @@ struct Emitter<'a> {
     text: String,
     origins: Vec<(usize, Pos)>,
     materials: HashMap<String, String>,
+    /// Each written material's mix depth (0 for a material that is no mix) and whether it is a
+    /// `null` (which a mix cannot hold).
+    material_info: HashMap<String, (u32, bool)>,
     textures: HashMap<String, String>,
     media: HashMap<String, String>,
     gamma: f64,
@@ -240,6 +261,28 @@ struct Emitter<'a> {
     newlines: usize,
     /// Half the side of the boxes that stand for planes in the CSG object being written.
     plane_box: Option<f64>,
+}
+
+/// The pattern that weighs a texture map's mixes, and its entries' values (sorted).
+struct Weights {
+    pattern: String,
+    fields: Vec<(String, toml::Value)>,
+    values: Vec<f64>,
+    /// The entries are a listed pattern's (`colors`), not a map's.
+    listed: bool,
+    world_from_pattern: DMat4,
+    /// Where the pattern was given, and its object.
+    ppos: Pos,
+    pos: Pos,
+}
+
+/// How far the emitter had written (`Emitter::snapshot`).
+struct Snapshot {
+    text: usize,
+    origins: usize,
+    newlines: usize,
+    materials: usize,
+    textures: usize,
 }
 
 /// The TOML text; for each entry, its first line and the `.pov` position it came from; warnings.
@@ -255,6 +298,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         text: String::new(),
         origins: Vec::new(),
         materials: HashMap::new(),
+        material_info: HashMap::new(),
         textures: HashMap::new(),
         media: HashMap::new(),
         gamma: scene.assumed_gamma.unwrap_or(1.0),
@@ -390,8 +434,11 @@ impl Emitter<'_> {
             // in the texture of the object (or of its first part that has one).
             let tris = super::implicit::mesh(o).map_err(|(pos, m)| PovError::at(pos, m))?;
             let tex = first_tex(o).or(inherited);
+            // POV-Ray shades these surfaces by their equations' normals: smooth, but for the
+            // edges CSG makes (sharper than the crease angle).
+            let normals = super::tessellate::corner_normals(&tris, SMOOTH_CREASE_DEG);
             let flat = Obj {
-                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris) },
+                kind: ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: Some(std::rc::Rc::new(normals)) },
                 xform: DMat4::IDENTITY,
                 tex: tex.cloned(),
                 interior: int.cloned(),
@@ -409,10 +456,12 @@ impl Emitter<'_> {
                 }
                 Ok(())
             }
-            ObjKind::Triangles { tris } => {
+            ObjKind::Triangles { tris, normals } => {
                 let material = self.material(tex, int, o.pos, true)?;
                 let m = MIRROR * o.xform;
-                for t in tris.iter() {
+                // Normals move by the inverse transpose.
+                let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
+                for (k, t) in tris.iter().enumerate() {
                     let v: Vec<DVec3> = t.iter().map(|p| short3(m.transform_point3(*p))).collect();
                     if too_thin(&v) {
                         self.skipped_triangles += 1;
@@ -421,6 +470,10 @@ impl Emitter<'_> {
                     let mut s = Table::new();
                     s.insert("type".into(), T::String("triangle".into()));
                     s.insert("material".into(), T::String(material.clone()));
+                    let corners = normals.as_ref().and_then(|n| n.get(k));
+                    if let Some(n) = corners.and_then(|n| smooth_corners(n, &normal_matrix, &v)) {
+                        s.insert("normals".into(), T::Array(n.into_iter().map(vec3).collect()));
+                    }
                     s.insert("vertices".into(), T::Array(v.into_iter().map(vec3).collect()));
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }
@@ -739,6 +792,37 @@ impl Emitter<'_> {
             return Err(PovError::at(pos, "internal: no default texture".into()));
         };
         let t = t.clone();
+        if let Some(map) = &t.map {
+            if let Some(name) = self.texture_mix(&t, map, int, pos, glow_ok)? {
+                return Ok(name);
+            }
+        } else if let Some(entries) =
+            t.pigment.entries.as_ref().filter(|e| e.iter().any(|(_, p)| !matches!(p.kind, PigmentKind::Solid(_))))
+        {
+            // (Constant colours only: the colour map of the pattern is exact.)
+            // A pigment_map: its pigments in the texture's finish and normal, mixed as a
+            // texture_map's textures are. texture_mix moves each entry by the texture's and
+            // the pigment's transforms; the normal follows the texture only, so it is given
+            // the pigment's inverse first.
+            let unmove = t.pigment.xform.inverse();
+            let normal = t.normal.clone().map(|n| Normal { xform: unmove * n.xform, ..n });
+            let entries = entries
+                .iter()
+                .map(|(v, p)| {
+                    let layer = Tex {
+                        pigment: p.clone(),
+                        finish: t.finish.clone(),
+                        normal: normal.clone(),
+                        xform: DMat4::IDENTITY,
+                        map: None,
+                    };
+                    (*v, vec![layer])
+                })
+                .collect();
+            if let Some(name) = self.texture_mix(&t, &TexMap { entries, listed: false }, int, pos, glow_ok)? {
+                return Ok(name);
+            }
+        }
         let f = &t.finish;
         let mean = t.pigment.mean();
         let colour = self.linear(mean);
@@ -827,12 +911,164 @@ impl Emitter<'_> {
         self.write_material(m, pos)
     }
 
+    /// A patterned texture's entries (texture_map, or a checker's, brick's or hexagon's
+    /// textures) as a tree of `mix` materials whose weights follow the pattern (docs/pov-ray.md,
+    /// "Maps"). POV-Ray blends the two entries about the pattern's value v linearly; with the
+    /// entries sorted by value p_0 <= ... <= p_(n-1), the node that splits them after entry k
+    /// mixes its upper half in with weight clamp((v - p_k) / (p_(k+1) - p_k), 0, 1): for v
+    /// between p_j and p_(j+1) every node but the one splitting at j has weight 0 or 1, so the
+    /// tree picks entries j and j + 1 and that node blends them as POV-Ray does. A balanced tree
+    /// nests ceil(log2 n) deep. `None` where the colour map of the entries' mean colours stands
+    /// in: entries that differ only by a constant colour (the same material then, exactly and
+    /// without the mix's noise), and, with a warning, a tree deeper than the renderer's mixes
+    /// nest or an entry that is a `null` boundary.
+    fn texture_mix(
+        &mut self,
+        t: &Tex,
+        map: &TexMap,
+        int: Option<&Interior>,
+        pos: Pos,
+        glow_ok: bool,
+    ) -> Result<Option<String>> {
+        let PigmentKind::Pattern { name, fields, .. } = &t.pigment.kind else {
+            return Ok(None);
+        };
+        let mut entries: Vec<&(f64, Vec<Tex>)> = map.entries.iter().filter(|(_, l)| !l.is_empty()).collect();
+        // Stable: entries at one value keep their order and make a sharp step, as in POV-Ray.
+        entries.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((_, first)) = entries.first() else { return Ok(None) };
+        let plain = |x: &Tex| {
+            let c = x.pigment.mean();
+            let f = first[0].pigment.mean();
+            x.map.is_none()
+                && x.normal.is_none()
+                && matches!(x.pigment.kind, PigmentKind::Solid(_))
+                && x.finish == first[0].finish
+                && (c[3] + c[4] - f[3] - f[4]).abs() < 1e-9
+        };
+        if entries.iter().all(|(_, l)| plain(&l[0])) {
+            return Ok(None);
+        }
+
+        // The entries' materials: each entry's texture moved with the map's (POV-Ray transforms
+        // a texture_map's textures with the map).
+        let outer = t.xform * t.pigment.xform;
+        let saved = self.snapshot();
+        let mut leaves = Vec::with_capacity(entries.len());
+        for (_, layers) in &entries {
+            let moved: Vec<Tex> = layers.iter().map(|x| Tex { xform: outer * x.xform, ..x.clone() }).collect();
+            let m = self.material(Some(&moved), int, pos, glow_ok)?;
+            let info = self.material_info.get(&m).copied().unwrap_or((0, false));
+            leaves.push((m, info));
+        }
+        fn depth(leaves: &[(String, (u32, bool))]) -> u32 {
+            match leaves {
+                [one] => one.1 .0,
+                _ => {
+                    let (lo, hi) = leaves.split_at(leaves.len().div_ceil(2));
+                    1 + depth(lo).max(depth(hi))
+                }
+            }
+        }
+        let needed = depth(&leaves);
+        let null = leaves.iter().any(|(_, (_, n))| *n);
+        if needed > MIX_MAX_DEPTH || null {
+            self.restore(saved);
+            let at = self.location(t.pigment.pos);
+            let why = if null {
+                "an entry is an invisible media boundary, which a mix cannot hold".to_string()
+            } else {
+                format!(
+                    "its {} entries need mixes nested {needed} deep and the renderer resolves {MIX_MAX_DEPTH}",
+                    entries.len()
+                )
+            };
+            self.warnings.push(format!(
+                "{at}: this texture map cannot be mixed ({why}); its entries' mean colours stand in, in the first entry's finish"
+            ));
+            return Ok(None);
+        }
+
+        // The weights: the pattern (its fields and transforms) through a ramp from 0 to 1
+        // across the two entries a node splits; a listed pattern's values are its entries' own.
+        let weights = Weights {
+            pattern: name.clone(),
+            fields: fields.clone(),
+            values: entries.iter().map(|(v, _)| *v).collect(),
+            listed: map.listed,
+            world_from_pattern: MIRROR * t.xform * t.pigment.xform,
+            ppos: t.pigment.pos,
+            pos,
+        };
+        self.mix_range(&leaves, 0, leaves.len(), &weights).map(Some)
+    }
+
+    /// The mix of entries `lo..hi` of `leaves` (sorted by value), split in halves (see
+    /// `texture_mix`).
+    fn mix_range(&mut self, leaves: &[(String, (u32, bool))], lo: usize, hi: usize, w: &Weights) -> Result<String> {
+        if hi - lo == 1 {
+            return Ok(leaves[lo].0.clone());
+        }
+        let mid = lo + (hi - lo).div_ceil(2);
+        let a = self.mix_range(leaves, lo, mid, w)?;
+        let b = self.mix_range(leaves, mid, hi, w)?;
+        let (black, white) = ([0.0; 5], [1.0, 1.0, 1.0, 0.0, 0.0]);
+        let weight_map: Vec<(f64, Colour)> = if w.listed {
+            // `colors`: each entry at its own value; the upper half's weigh 1.
+            w.values.iter().enumerate().map(|(i, v)| (*v, if i >= mid { white } else { black })).collect()
+        } else {
+            vec![(w.values[mid - 1], black), (w.values[mid], white)]
+        };
+        let kind = PigmentKind::Pattern { name: w.pattern.clone(), map: weight_map, fields: w.fields.clone() };
+        let weight = self.world_pattern(&kind, &w.world_from_pattern, w.ppos, w.pos)?;
+        let mut mix = Table::new();
+        mix.insert("type".into(), T::String("mix".into()));
+        mix.insert("materials".into(), T::Array(vec![T::String(a), T::String(b)]));
+        let mut tex = Table::new();
+        tex.insert("texture".into(), T::String(weight));
+        mix.insert("weight".into(), T::Table(tex));
+        self.write_material(mix, w.pos)
+    }
+
+    /// What `restore` needs to take back the entries written after it.
+    fn snapshot(&self) -> Snapshot {
+        Snapshot {
+            text: self.text.len(),
+            origins: self.origins.len(),
+            newlines: self.newlines,
+            materials: self.materials.len(),
+            textures: self.textures.len(),
+        }
+    }
+
+    /// Takes back the materials and textures written since `s` (named in order: m0, m1, ...).
+    fn restore(&mut self, s: Snapshot) {
+        self.text.truncate(s.text);
+        self.origins.truncate(s.origins);
+        self.newlines = s.newlines;
+        let later = |name: &str, prefix: char, count: usize| {
+            name.strip_prefix(prefix).and_then(|n| n.parse::<usize>().ok()).is_some_and(|n| n >= count)
+        };
+        self.materials.retain(|_, name| !later(name, 'm', s.materials));
+        self.material_info.retain(|name, _| !later(name, 'm', s.materials));
+        self.textures.retain(|_, name| !later(name, 't', s.textures));
+    }
+
     fn write_material(&mut self, m: Table, pos: Pos) -> Result<String> {
         let key = toml::to_string(&m).unwrap_or_default();
         if let Some(name) = self.materials.get(&key) {
             return Ok(name.clone());
         }
         let name = format!("m{}", self.materials.len());
+        let depth = match (m.get("type").and_then(T::as_str), m.get("materials").and_then(T::as_array)) {
+            (Some("mix"), Some(mixed)) => {
+                let of = |v: &T| v.as_str().and_then(|n| self.material_info.get(n)).map_or(0, |i| i.0);
+                1 + mixed.iter().map(of).max().unwrap_or(0)
+            }
+            _ => 0,
+        };
+        let null = m.get("type").and_then(T::as_str) == Some("null");
+        self.material_info.insert(name.clone(), (depth, null));
         self.materials.insert(key, name.clone());
         let mut wrap = Table::new();
         wrap.insert(name.clone(), T::Table(m));

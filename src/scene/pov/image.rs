@@ -1,9 +1,9 @@
 //! Images a POV-Ray scene names: height fields' heights and image maps' mean colours.
 //!
-//! PNG is read with the `png` crate directly, so a palette image gives its indices (POV-Ray's
-//! height field takes the palette index as the height, not the colour); JPEG through `image`;
-//! PGM and PPM (binary and plain) here. TGA, GIF, TIFF, IFF, POT, SYS, EXR and HDR are refused
-//! with the format named.
+//! PNG and GIF are read with the `png` and `gif` crates directly, so a palette image gives its
+//! indices (POV-Ray's height field takes the palette index as the height, not the colour); JPEG
+//! and TGA through `image`; PGM and PPM (binary and plain) here. TIFF, IFF, POT, SYS, EXR and
+//! HDR are refused with the format named.
 
 use std::path::Path;
 
@@ -53,9 +53,11 @@ fn decode(path: &Path, kind: &str) -> Result<Decoded, String> {
         "png" => decode_png(&bytes),
         "jpeg" => decode_jpeg(&bytes),
         "pgm" | "ppm" => decode_pnm(&bytes),
+        "gif" => decode_gif(&bytes),
+        "tga" => decode_tga(&bytes),
         other => {
             return Err(format!(
-                "{other} images are not supported yet ({shown}); convert it to PNG (PNG, JPEG, PGM and PPM are read)"
+                "{other} images are not supported yet ({shown}); convert it to PNG (PNG, JPEG, GIF, TGA, PGM and PPM are read)"
             ))
         }
     };
@@ -121,7 +123,7 @@ fn decode_png(bytes: &[u8]) -> Result<Decoded, String> {
                 }
                 _ => {
                     let c = [sample(y, s), sample(y, s + 1), sample(y, s + 2)].map(|v| v as f64 / max);
-                    d.heights.push(grey(c));
+                    d.heights.push(colour_height(c, depth));
                     d.rgb.push(c);
                 }
             }
@@ -135,6 +137,70 @@ fn grey(c: [f64; 3]) -> f64 {
     0.299 * c[0] + 0.587 * c[1] + 0.114 * c[2]
 }
 
+/// A colour pixel's height as POV-Ray 3.7 takes it (`image_height_at`, source/core/material/
+/// imageutil.cpp): up to 8 bits a channel, red is the high byte and green the low byte of a
+/// 16-bit height (the convention of POV-Ray's TGA height fields: (255 r + g) / 65535 with r, g
+/// the 8-bit values); deeper channels give their grey.
+fn colour_height(c: [f64; 3], bits: usize) -> f64 {
+    if bits > 8 {
+        grey(c)
+    } else {
+        (c[0] * 255.0 + c[1]) * 255.0 / 65535.0
+    }
+}
+
+/// The first frame of a GIF on its logical screen (the background index around a smaller
+/// frame): heights are palette indices / 255, as for a palette PNG.
+fn decode_gif(bytes: &[u8]) -> Result<Decoded, String> {
+    let mut options = gif::DecodeOptions::new();
+    options.set_color_output(gif::ColorOutput::Indexed);
+    let mut decoder = options.read_info(std::io::Cursor::new(bytes)).map_err(|e| e.to_string())?;
+    let (w, h) = (decoder.width() as usize, decoder.height() as usize);
+    if w.saturating_mul(h) > MAX_PIXELS {
+        return Err(format!("{w} x {h} pixels is more than {MAX_PIXELS}"));
+    }
+    let global: Vec<u8> = decoder.global_palette().map(|p| p.to_vec()).unwrap_or_default();
+    let background = decoder.bg_color().unwrap_or(0);
+    let frame = decoder.read_next_frame().map_err(|e| e.to_string())?.ok_or("the file holds no image")?;
+    let palette = frame.palette.clone().unwrap_or(global);
+    let mut indices = vec![background as u8; w * h];
+    let (fx, fy, fw) = (frame.left as usize, frame.top as usize, frame.width as usize);
+    for (k, i) in frame.buffer.iter().enumerate() {
+        let (x, y) = (fx + k % fw.max(1), fy + k / fw.max(1));
+        if x < w && y < h {
+            indices[y * w + x] = *i;
+        }
+    }
+    let mut d = Decoded { width: w, height: h, rgb: Vec::with_capacity(w * h), heights: Vec::with_capacity(w * h) };
+    for i in indices {
+        let i = i as usize;
+        let c = palette.get(3 * i..3 * i + 3).map_or([0.0; 3], |p| [p[0], p[1], p[2]].map(|v| v as f64 / 255.0));
+        d.rgb.push(c);
+        d.heights.push(i as f64 / 255.0);
+    }
+    Ok(d)
+}
+
+/// A TGA through `image` (grey, colour and colour-mapped, run-length or not; a colour-mapped
+/// one expanded to its colours): grey images give their grey, colour ones red and green as
+/// POV-Ray composes them (`colour_height`).
+fn decode_tga(bytes: &[u8]) -> Result<Decoded, String> {
+    let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Tga).map_err(|e| e.to_string())?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    if w.saturating_mul(h) > MAX_PIXELS {
+        return Err(format!("{w} x {h} pixels is more than {MAX_PIXELS}"));
+    }
+    let is_grey = matches!(img.color(), image::ColorType::L8 | image::ColorType::La8 | image::ColorType::L16);
+    let rgb = img.to_rgb8();
+    let mut d = Decoded { width: w, height: h, rgb: Vec::with_capacity(w * h), heights: Vec::with_capacity(w * h) };
+    for p in rgb.pixels() {
+        let c = p.0.map(|v| v as f64 / 255.0);
+        d.heights.push(if is_grey { c[0] } else { colour_height(c, 8) });
+        d.rgb.push(c);
+    }
+    Ok(d)
+}
+
 fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
     let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Jpeg).map_err(|e| e.to_string())?;
     let (w, h) = (img.width() as usize, img.height() as usize);
@@ -143,9 +209,10 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
     }
     let rgb = img.to_rgb8();
     let mut d = Decoded { width: w, height: h, rgb: Vec::with_capacity(w * h), heights: Vec::with_capacity(w * h) };
+    let is_grey = matches!(img.color(), image::ColorType::L8 | image::ColorType::L16);
     for p in rgb.pixels() {
         let c = p.0.map(|v| v as f64 / 255.0);
-        d.heights.push(grey(c));
+        d.heights.push(if is_grey { c[0] } else { colour_height(c, 8) });
         d.rgb.push(c);
     }
     Ok(d)
@@ -216,7 +283,8 @@ fn decode_pnm(bytes: &[u8]) -> Result<Decoded, String> {
     let mut d = Decoded { width: w, height: h, rgb: Vec::with_capacity(w * h), heights: Vec::with_capacity(w * h) };
     for px in samples.chunks(channels) {
         let c = if channels == 1 { [px[0] as f64 / max; 3] } else { [px[0], px[1], px[2]].map(|v| v as f64 / max) };
-        d.heights.push(if channels == 1 { c[0] } else { grey(c) });
+        let bits = if maxval > 255 { 16 } else { 8 };
+        d.heights.push(if channels == 1 { c[0] } else { colour_height(c, bits) });
         d.rgb.push(c);
     }
     Ok(d)
@@ -260,7 +328,8 @@ mod tests {
         let mut binary = b"P6 1 1 255\n".to_vec();
         binary.extend([255, 0, 0]);
         let d = decode_pnm(&binary).unwrap();
-        assert!((d.heights[0] - 0.299).abs() < 1e-12);
+        // Red is the high byte of the height: (255 x 255 + 0) / 65535.
+        assert!((d.heights[0] - 255.0 * 255.0 / 65535.0).abs() < 1e-12, "{}", d.heights[0]);
         assert!(decode_pnm(b"P5 2 2 255\n\x00").is_err(), "a short file is an error");
         assert!(decode_pnm(b"P7 1 1 255\n").is_err());
     }

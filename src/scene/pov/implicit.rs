@@ -175,7 +175,7 @@ fn count(o: &Obj, leaves: &mut usize, prims: &mut usize, implicit: &mut usize, o
         }
         ObjKind::Cylinder { .. } | ObjKind::Cone { .. } => *prims += 3,
         ObjKind::Box { .. } | ObjKind::Plane { .. } => *prims += 12,
-        ObjKind::Triangles { tris } => {
+        ObjKind::Triangles { tris, .. } => {
             *prims += tris.len();
             *open = true;
         }
@@ -247,7 +247,7 @@ fn solid(o: &Obj) -> Result<Solid, (super::Pos, String)> {
                 "this part has no inside (a disc or a bicubic_patch) and cannot be part of intersection, difference or merge yet".into(),
             ))
         }
-        ObjKind::Triangles { tris } => {
+        ObjKind::Triangles { tris, .. } => {
             let (lo, hi) = tris.iter().flatten().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(l, h), p| {
                 (l.min(*p), h.max(*p))
             });

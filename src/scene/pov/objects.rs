@@ -5,7 +5,7 @@ use glam::{DMat4, DVec3, DVec4};
 
 use super::ast::{
     AreaLight, Camera, Colour, CsgOp, Finish, Fog, Interior, Light, LightKind, Media, Normal, Obj, ObjKind, Pigment,
-    PigmentKind, Rainbow, SkySphere, Tex,
+    PigmentKind, Rainbow, SkySphere, Tex, TexMap,
 };
 use super::implicit::{self, BlobComp, Implicit};
 use super::lexer::Tok;
@@ -84,8 +84,8 @@ const OTHER_PATTERNS: [&str; 24] = [
     "function",
 ];
 
-/// A colour map: (position, colour) entries.
-type ColourMap = Vec<(f64, Colour)>;
+/// A mesh's triangles and, when it is shaded smooth, their corners' normals.
+type MeshTris = (Vec<[DVec3; 3]>, Option<Vec<[DVec3; 3]>>);
 
 fn num(v: f64) -> toml::Value {
     toml::Value::Float(v)
@@ -342,7 +342,7 @@ impl Parser {
                 self.accept_sym(",")?;
                 ObjKind::Sphere { center, radius: self.float()? }
             }
-            "height_field" => ObjKind::Triangles { tris: std::rc::Rc::new(self.height_field(pos)?) },
+            "height_field" => ObjKind::Triangles { tris: std::rc::Rc::new(self.height_field(pos)?), normals: None },
             "box" => {
                 let a = self.vec3()?;
                 self.accept_sym(",")?;
@@ -394,13 +394,18 @@ impl Parser {
                 let b = self.vec3()?;
                 self.accept_sym(",")?;
                 let c = self.vec3()?;
-                ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]) }
+                ObjKind::Triangles { tris: std::rc::Rc::new(vec![[a, b, c]]), normals: None }
             }
-            "smooth_triangle" => ObjKind::Triangles { tris: std::rc::Rc::new(vec![self.smooth_triangle()?]) },
-            "mesh" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh(pos)?) },
-            "mesh2" => ObjKind::Triangles { tris: std::rc::Rc::new(self.mesh2(pos)?) },
+            "smooth_triangle" => {
+                let (t, n) = self.smooth_triangle()?;
+                ObjKind::Triangles { tris: std::rc::Rc::new(vec![t]), normals: Some(std::rc::Rc::new(vec![n])) }
+            }
+            "mesh" | "mesh2" => {
+                let (tris, normals) = if kind == "mesh" { self.mesh(pos)? } else { self.mesh2(pos)? };
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) }
+            }
             "lathe" | "sor" | "prism" | "polygon" | "text" => {
-                let tris = self.tessellated(kind, pos, &mut open)?;
+                let (tris, smooth) = self.tessellated(kind, pos, &mut open)?;
                 if tris.len() > tessellate::MAX_TRIANGLES {
                     return self.err(
                         pos,
@@ -411,7 +416,10 @@ impl Parser {
                         ),
                     );
                 }
-                ObjKind::Triangles { tris: std::rc::Rc::new(tris) }
+                // POV-Ray's lathes, sors, spline prisms and glyphs are curved surfaces, shaded
+                // smooth but where their profiles turn sharply.
+                let normals = smooth.then(|| tessellate::corner_normals(&tris, super::emit::SMOOTH_CREASE_DEG));
+                ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) }
             }
             "bicubic_patch" => ObjKind::Patch { points: Box::new(self.bicubic_patch(pos)?) },
             "quadric" | "cubic" | "quartic" | "poly" => {
@@ -463,21 +471,26 @@ impl Parser {
         Ok(o)
     }
 
-    fn smooth_triangle(&mut self) -> Result<[DVec3; 3]> {
-        let mut p = [DVec3::ZERO; 3];
-        for (i, v) in p.iter_mut().enumerate() {
+    /// `smooth_triangle { p0, n0, p1, n1, p2, n2 }`: the points and their normals.
+    fn smooth_triangle(&mut self) -> Result<([DVec3; 3], [DVec3; 3])> {
+        let (mut p, mut n) = ([DVec3::ZERO; 3], [DVec3::ZERO; 3]);
+        for i in 0..3 {
             if i > 0 {
                 self.accept_sym(",")?;
             }
-            *v = self.vec3()?;
+            p[i] = self.vec3()?;
             self.accept_sym(",")?;
-            self.vec3()?; // the normal: smooth shading of POV meshes is not kept yet
+            n[i] = self.vec3()?;
         }
-        Ok(p)
+        Ok((p, n))
     }
 
-    fn mesh(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+    /// A mesh's triangles, and their corner normals when any is a smooth_triangle (a flat one's
+    /// corners take its face normal).
+    fn mesh(&mut self, pos: Pos) -> Result<MeshTris> {
         let mut tris = Vec::new();
+        let mut normals: Vec<[DVec3; 3]> = Vec::new();
+        let mut smooth = false;
         loop {
             match self.peek_word()?.as_deref() {
                 Some("triangle") => {
@@ -490,13 +503,16 @@ impl Parser {
                     let c = self.vec3()?;
                     self.triangle_tail()?;
                     tris.push([a, b, c]);
+                    normals.push([(b - a).cross(c - a); 3]);
                 }
                 Some("smooth_triangle") => {
                     self.next()?;
                     self.expect_sym("{")?;
-                    let t = self.smooth_triangle()?;
+                    let (t, n) = self.smooth_triangle()?;
                     self.triangle_tail()?;
                     tris.push(t);
+                    normals.push(n);
+                    smooth = true;
                 }
                 Some("inside_vector") => {
                     self.next()?;
@@ -512,7 +528,7 @@ impl Parser {
         if tris.is_empty() {
             return self.err(pos, "this mesh has no triangles".into());
         }
-        Ok(tris)
+        Ok((tris, smooth.then_some(normals)))
     }
 
     /// A count before a list of points: a whole number from `min` to `max`.
@@ -564,7 +580,9 @@ impl Parser {
 
     /// lathe, sor, prism, polygon and text, tessellated (`tessellate.rs`; docs/pov-ray.md gives
     /// the tolerance), in the shape's own coordinates.
-    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<Vec<Tri>> {
+    /// The triangles of a lathe, sor, prism, polygon or text, and whether POV-Ray shades the
+    /// surface smooth (a curved one: not a polygon or a prism of straight sides).
+    fn tessellated(&mut self, kind: &str, pos: Pos, open: &mut bool) -> Result<(Vec<Tri>, bool)> {
         const MAX_POINTS: usize = 1 << 20;
         match kind {
             "lathe" => {
@@ -593,7 +611,7 @@ impl Parser {
                     );
                 }
                 self.open_sturm(open)?;
-                Ok(tessellate::lathe(spline, &p))
+                Ok((tessellate::lathe(spline, &p), true))
             }
             "sor" => {
                 let n = self.count("a sor's number of points", 4, MAX_POINTS)?;
@@ -602,7 +620,7 @@ impl Parser {
                     return self.err(pos, "a sor's points must rise: each height above the one before".into());
                 }
                 self.open_sturm(open)?;
-                Ok(tessellate::sor(&p, *open))
+                Ok((tessellate::sor(&p, *open), true))
             }
             "prism" => {
                 let (mut spline, mut conic) = (Spline::Linear, false);
@@ -634,7 +652,8 @@ impl Parser {
                 if outlines.is_empty() {
                     return self.err(pos, "this prism's points enclose nothing".into());
                 }
-                Ok(tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic))
+                let tris = tessellate::extrude(&outlines, FillRule::EvenOdd, h1.min(h2), h1.max(h2), *open, conic);
+                Ok((tris, !matches!(spline, Spline::Linear)))
             }
             "polygon" => {
                 let n = self.count("a polygon's number of points", 3, MAX_POINTS)?;
@@ -643,9 +662,9 @@ impl Parser {
                     self.accept_sym(",")?;
                     p.push(self.vec3()?);
                 }
-                Ok(tessellate::polygon(&p))
+                Ok((tessellate::polygon(&p), false))
             }
-            _ => self.text(),
+            _ => Ok((self.text()?, true)),
         }
     }
 
@@ -862,9 +881,15 @@ impl Parser {
 
     /// `mesh2 { vertex_vectors { n, ... } ... face_indices { n, <a, b, c> ... } ... }`: the faces
     /// (normals, uv and per-face textures are read and not kept yet).
-    fn mesh2(&mut self, pos: Pos) -> Result<Vec<[DVec3; 3]>> {
+    /// `mesh2 { vertex_vectors normal_vectors uv_vectors texture_list face_indices
+    /// normal_indices ... }`: the faces, and their corners' normals when the mesh has
+    /// normal_vectors (indexed by normal_indices, or by the face indices without them, as
+    /// POV-Ray reads them).
+    fn mesh2(&mut self, pos: Pos) -> Result<MeshTris> {
         const MAX_ITEMS: usize = 1 << 24;
         let mut vertices: Vec<DVec3> = Vec::new();
+        let mut normal_vectors: Vec<DVec3> = Vec::new();
+        let mut normal_indices: Vec<(DVec3, Pos)> = Vec::new();
         let mut faces: Vec<(DVec3, Pos)> = Vec::new();
         while let Some(w) = self.peek_word()? {
             match w.as_str() {
@@ -874,9 +899,13 @@ impl Parser {
                     let n = self.count(&format!("the number of {w}"), 0, MAX_ITEMS)?;
                     for _ in 0..n {
                         self.accept_sym(",")?;
+                        let ipos = self.here();
                         let v = self.vec3()?;
-                        if w == "vertex_vectors" {
-                            vertices.push(v);
+                        match w.as_str() {
+                            "vertex_vectors" => vertices.push(v),
+                            "normal_vectors" => normal_vectors.push(v),
+                            "normal_indices" => normal_indices.push((v, ipos)),
+                            _ => {}
                         }
                     }
                     self.accept_sym(",")?;
@@ -920,24 +949,52 @@ impl Parser {
                 _ => break,
             }
         }
-        let mut tris = Vec::with_capacity(faces.len());
-        for (f, fpos) in faces {
+        // Each face's three points from `list` by its indices.
+        let pick = |this: &Self, list: &[DVec3], (f, fpos): &(DVec3, Pos), what: (&str, &str)| -> Result<[DVec3; 3]> {
             let mut t = [DVec3::ZERO; 3];
             for (k, i) in [f.x, f.y, f.z].into_iter().enumerate() {
-                if !(i >= 0.0 && (i as usize) < vertices.len()) {
-                    return self.err(
-                        fpos,
-                        format!("face index {i} is out of range: this mesh2 has {} vertices", vertices.len()),
+                if !(i >= 0.0 && (i as usize) < list.len()) {
+                    let (index, items) = what;
+                    return this.err(
+                        *fpos,
+                        format!("{index} index {i} is out of range: this mesh2 has {} {items}", list.len()),
                     );
                 }
-                t[k] = vertices[i as usize];
+                t[k] = list[i as usize];
             }
-            tris.push(t);
-        }
+            Ok(t)
+        };
+        let tris = faces.iter().map(|f| pick(self, &vertices, f, ("face", "vertices"))).collect::<Result<Vec<_>>>()?;
         if tris.is_empty() {
             return self.err(pos, "this mesh2 has no faces (face_indices)".into());
         }
-        Ok(tris)
+        let normals = if normal_vectors.is_empty() {
+            None
+        } else if normal_indices.is_empty() {
+            Some(
+                faces
+                    .iter()
+                    .map(|f| pick(self, &normal_vectors, f, ("normal", "normal_vectors")))
+                    .collect::<Result<Vec<_>>>()?,
+            )
+        } else if normal_indices.len() == faces.len() {
+            Some(
+                normal_indices
+                    .iter()
+                    .map(|f| pick(self, &normal_vectors, f, ("normal", "normal_vectors")))
+                    .collect::<Result<Vec<_>>>()?,
+            )
+        } else {
+            return self.err(
+                normal_indices[0].1,
+                format!(
+                    "this mesh2 has {} normal_indices for {} faces; give one per face (or none, to index the normals as the vertices)",
+                    normal_indices.len(),
+                    faces.len()
+                ),
+            );
+        };
+        Ok((tris, normals))
     }
 
     fn expect_word_tex(&mut self) -> Result<()> {
@@ -1044,15 +1101,42 @@ impl Parser {
                     // A height field's parts below the level are not shown: its triangles wholly
                     // below it are left out (object space, where the field spans y 0 to 1).
                     let level = self.float()?;
-                    if let ObjKind::Triangles { tris } = &mut o.kind {
-                        let kept: Vec<[DVec3; 3]> =
-                            tris.iter().filter(|t| t.iter().any(|p| p.y >= level)).copied().collect();
-                        *tris = std::rc::Rc::new(kept);
+                    if let ObjKind::Triangles { tris, normals } = &mut o.kind {
+                        let keep: Vec<bool> = tris.iter().map(|t| t.iter().any(|p| p.y >= level)).collect();
+                        let kept = |v: &[[DVec3; 3]]| -> Vec<[DVec3; 3]> {
+                            v.iter().zip(&keep).filter(|(_, k)| **k).map(|(t, _)| *t).collect()
+                        };
+                        *tris = std::rc::Rc::new(kept(tris));
+                        if let Some(n) = normals {
+                            *n = std::rc::Rc::new(kept(n));
+                        }
                     }
                 }
-                "smooth" | "hierarchy" if matches!(o.kind, ObjKind::Triangles { .. }) => {
-                    // smooth: the triangles stay flat (the scene format's triangles have no
-                    // vertex normals); hierarchy: an acceleration hint.
+                "smooth" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // A smooth height field: its top's vertex normals from the faces around
+                    // each (all of them, as POV-Ray's normals from the height differences
+                    // are); the walls and the floor (which POV-Ray has not) stay flat.
+                    if self.optional_bool()? {
+                        if let ObjKind::Triangles { tris, normals } = &mut o.kind {
+                            let top = |t: &[DVec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).y > 0.0;
+                            let tops: Vec<[DVec3; 3]> = tris.iter().filter(|t| top(t)).copied().collect();
+                            let mut smooth = tessellate::corner_normals(&tops, 180.0).into_iter();
+                            let all = tris
+                                .iter()
+                                .map(|t| {
+                                    if top(t) {
+                                        smooth.next().unwrap_or([DVec3::Y; 3])
+                                    } else {
+                                        [(t[1] - t[0]).cross(t[2] - t[0]); 3]
+                                    }
+                                })
+                                .collect();
+                            *normals = Some(std::rc::Rc::new(all));
+                        }
+                    }
+                }
+                "hierarchy" if matches!(o.kind, ObjKind::Triangles { .. }) => {
+                    // An acceleration hint.
                     self.optional_bool()?;
                 }
                 "bounded_by" if matches!(o.kind, ObjKind::Implicit { .. }) => {
@@ -1189,6 +1273,7 @@ impl Parser {
             finish: self.default_finish.clone(),
             normal: None,
             xform: DMat4::IDENTITY,
+            map: None,
         }
     }
 
@@ -1297,6 +1382,14 @@ impl Parser {
                 "finish" => top.finish = self.finish()?,
                 "normal" => top.normal = self.normal(pos)?,
                 "uv_mapping" => {}
+                "material_map" => {
+                    return self.err(
+                        pos,
+                        "material_map is not supported yet (an image's palette indices choosing textures); \
+                         use a texture_map over a pattern instead"
+                            .into(),
+                    )
+                }
                 "tiles" => {
                     // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
                     self.warnings.push(format!(
@@ -1311,12 +1404,17 @@ impl Parser {
                 }
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries): the
-                    // pattern with each texture's mean colour, in the first texture's finish and
-                    // normal (docs/pov-ray.md).
-                    let (pigment, first) = self.pattern_body(pos, close, Some((w.clone(), pos)))?;
-                    let mut t = first.unwrap_or_else(|| self.default_tex(pos));
+                    // pattern and its entries, mixed by `emit` (docs/pov-ray.md); the pigment's
+                    // colour map holds each entry's mean colour, in the first entry's finish and
+                    // normal, for where they cannot be mixed.
+                    let (pigment, map) = self.pattern_body(pos, close, Some((w.clone(), pos)))?;
+                    let first = map.as_ref().and_then(|m| m.entries.first()).and_then(|(_, l)| l.first());
+                    let mut t = first.cloned().unwrap_or_else(|| self.default_tex(pos));
                     t.pigment = pigment;
                     t.xform = DMat4::IDENTITY;
+                    // A pattern Photonix lacks leaves the mean colour (a solid pigment): no mix.
+                    let patterned = matches!(t.pigment.kind, PigmentKind::Pattern { .. });
+                    t.map = map.filter(|m| patterned && !m.entries.is_empty()).map(std::rc::Rc::new);
                     return Ok(vec![t]);
                 }
                 _ => match self.lookup(&w).cloned().map(|v| self.postfix(v)).transpose()? {
@@ -1369,15 +1467,16 @@ impl Parser {
     }
 
     /// A pigment's items, or a patterned texture's (`pending`: its pattern word, already read):
-    /// a texture_map's or a checker's textures stand in by their pigments' mean colours, and
-    /// the first entry's texture is returned for its finish and normal (docs/pov-ray.md).
+    /// a texture_map's or a checker's textures are returned as the map's entries, and stand in
+    /// by their pigments' mean colours in the pigment's colour map (docs/pov-ray.md).
     fn pattern_body(
         &mut self,
         pos: Pos,
         close: &'static str,
         mut pending: Option<(String, Pos)>,
-    ) -> Result<(Pigment, Option<Tex>)> {
-        let mut first_tex: Option<Tex> = None;
+    ) -> Result<(Pigment, Option<TexMap>)> {
+        let mut tex_map: Option<TexMap> = None;
+        let mut listed_tex: Vec<Vec<Tex>> = Vec::new();
         let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
@@ -1486,20 +1585,23 @@ impl Parser {
                 }
                 "color_map" | "colour_map" => map = self.colour_map()?,
                 "pigment_map" | "density_map" => {
-                    // Each entry's pigment stands in by its mean colour: a colour map.
-                    map = self.pigment_map(tpos)?;
+                    // A colour map of the entries' mean colours, and the entries for a texture to
+                    // mix (emit.rs).
+                    let entries = self.pigment_map(tpos)?;
+                    map = entries.iter().map(|(v, p)| (*v, p.mean())).collect();
+                    p.entries = Some(std::rc::Rc::new(entries));
                 }
                 "texture_map" => {
-                    let (m, first) = self.texture_map(tpos)?;
-                    map = m;
-                    first_tex = first_tex.or(first);
+                    let entries = self.texture_map(tpos)?;
+                    map = entries.iter().map(|(v, l)| (*v, l[0].pigment.mean())).collect();
+                    tex_map = Some(TexMap { entries, listed: false });
                 }
                 "texture" if pattern.is_some() => {
                     // A checker's, brick's or hexagon's textures.
                     let layers = self.texture()?;
                     if let Some(t) = layers.first() {
                         list.push(t.pigment.mean());
-                        first_tex.get_or_insert_with(|| t.clone());
+                        listed_tex.push(layers);
                     }
                 }
                 "image_map" => {
@@ -1605,8 +1707,13 @@ impl Parser {
         if let Some(name) = pattern {
             if !list.is_empty() && map.is_empty() {
                 let n = list.len();
-                map = list.iter().enumerate().map(|(i, c)| (i as f64 / (n.max(2) - 1) as f64, *c)).collect();
+                let at = |i: usize| i as f64 / (n.max(2) - 1) as f64;
+                map = list.iter().enumerate().map(|(i, c)| (at(i), *c)).collect();
                 fields.push(("colors".into(), toml::Value::Boolean(true)));
+                if listed_tex.len() == n {
+                    let entries = listed_tex.into_iter().enumerate().map(|(i, l)| (at(i), l)).collect();
+                    tex_map = Some(TexMap { entries, listed: true });
+                }
             }
             if let Some(other) = name.strip_prefix("unsupported:") {
                 self.warnings.push(format!(
@@ -1615,31 +1722,28 @@ impl Parser {
                 ));
                 let mean =
                     Pigment { kind: PigmentKind::Pattern { name: other.into(), map, fields: Vec::new() }, ..p }.mean();
-                return Ok((Pigment { kind: PigmentKind::Solid(mean), xform: DMat4::IDENTITY, pos }, first_tex));
+                return Ok((Pigment::solid(mean, pos), tex_map));
             }
             p.kind = PigmentKind::Pattern { name, map, fields };
         }
-        Ok((p, first_tex))
+        Ok((p, tex_map))
     }
 
-    /// `texture_map { [v texture-body] ... }`: each entry by its bottom layer's mean colour, a
-    /// colour map; and the first entry's texture.
-    fn texture_map(&mut self, pos: Pos) -> Result<(ColourMap, Option<Tex>)> {
+    /// `texture_map { [v texture-body] ... }`: each entry's layers at its value.
+    fn texture_map(&mut self, pos: Pos) -> Result<Vec<(f64, Vec<Tex>)>> {
         self.expect_sym("{")?;
         let mut map = Vec::new();
-        let mut first = None;
         loop {
             if self.accept_sym("}")? {
-                return Ok((map, first));
+                return Ok(map);
             }
             let epos = self.here();
             self.expect_sym("[")?;
             let v = if self.starts_float()? { self.float()? } else { map.len() as f64 };
             self.accept_sym(",")?;
             let layers = self.texture_body(epos, "]")?;
-            if let Some(t) = layers.first() {
-                map.push((v, t.pigment.mean()));
-                first.get_or_insert_with(|| t.clone());
+            if !layers.is_empty() {
+                map.push((v, layers));
             }
             if map.len() > 256 {
                 return self.err(pos, "a texture_map has at most 256 entries".into());
@@ -1847,7 +1951,8 @@ impl Parser {
 
     /// `pigment_map { [v pigment-body] ... }`: each entry's pigment by its mean colour, a
     /// colour map (docs/pov-ray.md).
-    fn pigment_map(&mut self, pos: Pos) -> Result<Vec<(f64, Colour)>> {
+    /// `pigment_map { [v pigment-body] ... }`: each entry's pigment at its value.
+    fn pigment_map(&mut self, pos: Pos) -> Result<Vec<(f64, Pigment)>> {
         self.expect_sym("{")?;
         let mut map = Vec::new();
         loop {
@@ -1866,11 +1971,11 @@ impl Parser {
                     self.loc(epos)
                 ));
                 self.skip_entry(&["]"])?;
-                map.push((v, [0.5, 0.5, 0.5, 0.0, 0.0]));
+                map.push((v, Pigment::solid([0.5, 0.5, 0.5, 0.0, 0.0], epos)));
                 continue;
             }
             let p = self.pigment_body(epos, "]")?;
-            map.push((v, p.mean()));
+            map.push((v, p));
             if map.len() > 256 {
                 return self.err(pos, "a pigment_map has at most 256 entries".into());
             }
@@ -1943,8 +2048,10 @@ impl Parser {
         };
         let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
         let readable = match kind.as_str() {
-            "png" | "jpeg" | "exr" | "hdr" => true,
-            "" => matches!(extension.as_str(), "png" | "jpg" | "jpeg" | "exr" | "hdr"),
+            "png" | "jpeg" | "exr" | "hdr" | "gif" => true,
+            // TGA has no signature: the image texture reads it by its extension.
+            "tga" => extension == "tga",
+            "" => matches!(extension.as_str(), "png" | "jpg" | "jpeg" | "exr" | "hdr" | "gif" | "tga"),
             _ => false,
         };
         let file = self.image_file_for_toml(&path);
@@ -1965,7 +2072,7 @@ impl Parser {
             }
             _ => {
                 self.warnings.push(format!(
-                    "{at}: image_map: Photonix reads PNG, JPEG, OpenEXR and HDR images, not this one; the image's mean colour stands in"
+                    "{at}: image_map: Photonix reads PNG, JPEG, OpenEXR, HDR, GIF and TGA images (TGA named `.tga`), not this one; the image's mean colour stands in"
                 ));
                 Ok((mean, ft, None))
             }

@@ -442,6 +442,32 @@ pub fn polygon(points: &[DVec3]) -> Vec<Tri> {
     fill(&outlines, FillRule::EvenOdd).into_iter().map(|t| t.map(back)).collect()
 }
 
+/// Vertex normals for smooth shading of `tris`, one per corner: where triangles share a vertex
+/// (points within 1e-7 of the shape's size of each other, so that a lathe's seam at 0 and 2 pi
+/// closes), each corner takes the mean of the normals of the faces around it whose normal is
+/// within `crease_deg` of its own face's, weighted by their angles there: the model importer's
+/// "auto smooth" (`model::normals`). A degenerate face's corners are zero (the writer leaves
+/// such a triangle flat).
+pub fn corner_normals(tris: &[Tri], crease_deg: f32) -> Vec<[DVec3; 3]> {
+    let (lo, hi) =
+        tris.iter().flatten().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), p| (a.min(*p), b.max(*p)));
+    let quantum = ((hi - lo).max_element() * 1e-7).max(f64::MIN_POSITIVE);
+    let mut index: std::collections::HashMap<[i64; 3], u32> = std::collections::HashMap::new();
+    let mut mesh = crate::scene::model::ModelMesh::default();
+    for t in tris {
+        let ids = t.map(|p| {
+            let key = ((p - lo) / quantum).round().to_array().map(|c| c as i64);
+            *index.entry(key).or_insert_with(|| {
+                mesh.positions.push(p.as_vec3());
+                (mesh.positions.len() - 1) as u32
+            })
+        });
+        mesh.push_face(&ids, None);
+    }
+    let normals = crate::scene::model::normals::corner_normals(&mesh, crease_deg);
+    normals.chunks(3).map(|c| [c[0].as_dvec3(), c[1].as_dvec3(), c[2].as_dvec3()]).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
