@@ -15,8 +15,9 @@ void trace_photon_path(uint path, EmitParams params) {
     float cos_l;
     // The render's photon paths of one kind are one low-discrepancy sequence in the numbers that
     // spread photons evenly (cpu::emit_photons::photon_sequence).
-    uint qs = params.pass & 1u;
-    uint qi = (params.pass >> 1u) * params.total_paths + path;
+    uvec2 seq = sequence_point(params.pass & 1u, params.pass >> 1u, params.total_paths, path);
+    uint qs = seq.x;
+    uint qi = seq.y;
     light_emit(l, qmc2(qs, qi, seed, dim + RNG_PHOTON_POSITION),
                qmc2(qs, qi, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux, cos_l);
     // Each path carries 1/N of the picked light's power, divided by the pick probability.

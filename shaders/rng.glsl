@@ -55,6 +55,16 @@ uint sobol_y_reversed(uint index) {
     return index;
 }
 
+// The qmc2 stream and index of item `item` of batch `batch`, every batch `size` items long; every
+// 2^32 points the stream moves on by 2 (cpu::rng::sequence_point).
+uvec2 sequence_point(uint stream, uint batch, uint size, uint item) {
+    uint hi, lo;
+    umulExtended(batch, size, hi, lo);
+    uint index = lo + item;
+    if (index < lo) hi += 1u;
+    return uvec2(stream + 2u * hi, index);
+}
+
 // Point sample_index of a two-dimensional Sobol sequence, Owen-scrambled and shuffled by hashes of
 // (stream, seed, dim), after Burley 2020: a pixel's first 2^k samples of one dim form a
 // (0, k, 2)-net. Twin of cpu::rng::qmc2.

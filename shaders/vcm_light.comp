@@ -80,8 +80,8 @@ void main() {
     vec3 o, d, power;
     float cos_l;
     // The render's light paths are one low-discrepancy sequence (vcm.rs, trace_light_path).
-    uint qi = sample_index * params.light_paths + path;
-    light_emit(l, qmc2(0u, qi, frame.seed, dim0 + RNG_LIGHT_U), qmc2(0u, qi, frame.seed, dim0 + RNG_LIGHT_V), o, d, power, cos_l);
+    uvec2 seq = sequence_point(0u, sample_index, params.light_paths, path);
+    light_emit(l, qmc2(seq.x, seq.y, frame.seed, dim0 + RNG_LIGHT_U), qmc2(seq.x, seq.y, frame.seed, dim0 + RNG_LIGHT_V), o, d, power, cos_l);
     // Light sampling's density of the start point; contract in vcm.rs, trace_light_path.
     float direct_pdf = 1.0;
     if (l.kind == LIGHT_AREA) direct_pdf = 1.0 / l.area;
@@ -137,7 +137,7 @@ void main() {
         uint dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
         float q = bsdf_path_probability(b, wo);
         vec4 u = rand4(path, sample_index, frame.seed, dim + RNG_FRESNEL);
-        u.yz = qmc2(0u, qi, frame.seed, dim + RNG_FRESNEL);
+        u.yz = qmc2(seq.x, seq.y, frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         if (smp.flags == 0u) break;

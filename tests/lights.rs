@@ -536,10 +536,13 @@ fn area_light_grid_stratifies_without_changing_the_mean() {
     let (e_plain, e_grid) = (rel_mse(&plain, &reference), rel_mse(&grid, &reference));
     let (m_plain, m_grid) = (mean_ratio(&plain, &reference)[1], mean_ratio(&grid, &reference)[1]);
     println!("16 spp: plain relMSE {e_plain:.2e} (mean {m_plain:.4}), 4 x 4 grid {e_grid:.2e} (mean {m_grid:.4})");
-    // Each pixel's 16 samples visit the 16 cells once, but each lands on one of the quad's two
-    // triangles picked at random, so each triangle's cells are half visited: measured 0.60 of
-    // plain sampling's error (1.19e-2 to 7.09e-3), the mean unchanged.
-    assert!(e_grid < 0.75 * e_plain, "grid {e_grid:.3e} against plain {e_plain:.3e}");
+    // Each pixel's 16 samples visit the 16 cells once. Plain light samples are stratified too
+    // since they come from qmc2's nets: with independent numbers plain sampling measured
+    // 1.19e-2 and the grid 7.09e-3; now plain measures 6.56e-3 and the grid 6.71e-3. So the grid
+    // must stay close to plain sampling (it stratifies the same numbers another way), and plain
+    // sampling well below what independent numbers gave.
+    assert!(e_plain < 0.75 * 1.19e-2, "plain {e_plain:.3e}: no better than independent numbers");
+    assert!(e_grid < 1.15 * e_plain, "grid {e_grid:.3e} against plain {e_plain:.3e}");
     assert!((m_grid - 1.0).abs() < 0.01, "grid mean {m_grid}");
     // Cell centres without jitter: still close in the mean for a lamp this smooth.
     let centres = common::cpu_image(&common::buffers(&grid_lamp("samples = [4, 4]\njitter = false\n"), size, size), 16);

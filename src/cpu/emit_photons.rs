@@ -8,7 +8,7 @@ use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf, shading_adjoint};
 use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
-use super::rng::{qmc2, rand1, rand2, rand4};
+use super::rng::{qmc2, rand1, rand2, rand4, sequence_point};
 use super::shading::{offset_origin, ray_skip};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
@@ -19,7 +19,7 @@ use crate::layout::{EmitParams, Photon};
 /// The `qmc2` stream and index of photon path `path`: global and caustic passes (`pass` even
 /// and odd) are two sequences, and pass k's paths are their points k x paths + path.
 pub fn photon_sequence(path: u32, params: &EmitParams) -> (u32, u32) {
-    (params.pass & 1, (params.pass >> 1).wrapping_mul(params.total_paths).wrapping_add(path))
+    sequence_point(params.pass & 1, params.pass >> 1, params.total_paths, path)
 }
 
 /// Traces photon path `path` and calls `store(x, flux, wi, flags, volume)` at every surface with

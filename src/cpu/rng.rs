@@ -63,6 +63,15 @@ fn sobol_y_reversed(mut index: u32) -> u32 {
     index
 }
 
+/// The `qmc2` stream and index of item `item` of batch `batch`, every batch `size` items long:
+/// point batch x size + item of the sequence of `stream`. The index has 32 bits, so every 2^32
+/// points the stream moves on by 2 (`stream` is 0 or 1 where this is used) and the points are
+/// scrambled anew: a render long enough to wrap never draws the same points twice.
+pub fn sequence_point(stream: u32, batch: u32, size: u32, item: u32) -> (u32, u32) {
+    let i = batch as u64 * size as u64 + item as u64;
+    (stream.wrapping_add(((i >> 32) as u32).wrapping_mul(2)), i as u32)
+}
+
 /// Two numbers in [0, 1) for dimension `dim`: point `sample_index` of a two-dimensional Sobol
 /// sequence, Owen-scrambled, its points shuffled, both by hashes of (`stream`, `seed`, `dim`),
 /// after Burley 2020. A pixel's first 2^k samples of one `dim` are a (0, k, 2)-net (one point in
@@ -112,6 +121,16 @@ mod tests {
         for i in (0..5000u32).chain((0..5000).map(|k| pcg4d([k, 1, 2, 3])[0])) {
             assert_eq!(sobol_y_reversed(i).reverse_bits(), sobol_y(i), "index {i}");
         }
+    }
+
+    #[test]
+    fn sequence_points_wrap_into_a_new_scramble() {
+        assert_eq!(sequence_point(1, 3, 10, 4), (1, 34));
+        // 2^32 - 1 is the last point of the first run; the next one starts stream 1 + 2.
+        assert_eq!(sequence_point(1, 65_535, 65_537, 0), (1, u32::MAX));
+        assert_eq!(sequence_point(1, 65_535, 65_537, 1), (3, 0));
+        // The largest index, (2^32 - 1) 2^32: 2^32 - 1 wraps, stream 2 (2^32 - 1) mod 2^32.
+        assert_eq!(sequence_point(0, u32::MAX, u32::MAX, u32::MAX), (u32::MAX - 1, 0));
     }
 
     #[test]

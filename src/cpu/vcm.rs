@@ -37,7 +37,7 @@ use super::grid_build::{build_grid, grid_params};
 use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
 use super::render_pt::path_layer;
-use super::rng::{qmc2, rand1, rand2, rand4};
+use super::rng::{qmc2, rand1, rand2, rand4, sequence_point};
 use super::sampling::polygon_point;
 use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
@@ -408,8 +408,8 @@ pub fn trace_light_path(
     }
     // The render's light paths are one low-discrepancy sequence (sample k's paths are its points
     // k x light_paths + path) in the numbers that spread them: start, direction, bounces.
-    let qi = sample.wrapping_mul(p.light_paths).wrapping_add(path);
-    let e = light_emission(s, l, qmc2(0, qi, f.seed, dim0 + RNG_LIGHT_U), qmc2(0, qi, f.seed, dim0 + RNG_LIGHT_V));
+    let (qs, qi) = sequence_point(0, sample, p.light_paths, path);
+    let e = light_emission(s, l, qmc2(qs, qi, f.seed, dim0 + RNG_LIGHT_U), qmc2(qs, qi, f.seed, dim0 + RNG_LIGHT_V));
     // Light sampling's density of the start point: by area for area lights, by solid angle for
     // infinite ones, 1 for delta lights (SmallVCM's directPdfA).
     let direct_pdf = match l.kind {
@@ -482,7 +482,7 @@ pub fn trace_light_path(
         let dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
         let q = bsdf_path_probability(&b, wo);
         let u = rand4(path, sample, f.seed, dim + RNG_FRESNEL);
-        let ud = qmc2(0, qi, f.seed, dim + RNG_FRESNEL);
+        let ud = qmc2(qs, qi, f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
         let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         if smp.flags == 0 {
