@@ -16,10 +16,8 @@ void trace_photon_path(uint path, EmitParams params) {
     // The render's photon paths of one kind are one low-discrepancy sequence in the numbers that
     // spread photons evenly (cpu::emit_photons::photon_sequence).
     uvec2 seq = sequence_point(params.pass & 1u, params.pass >> 1u, params.total_paths, path);
-    uint qs = seq.x;
-    uint qi = seq.y;
-    light_emit(l, qmc2(qs, qi, seed, dim + RNG_PHOTON_POSITION),
-               qmc2(qs, qi, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux, cos_l);
+    light_emit(l, qmc2(seq.x, seq.y, seed, dim + RNG_PHOTON_POSITION),
+               qmc2(seq.x, seq.y, seed, dim + RNG_PHOTON_DIRECTION), o, d, flux, cos_l);
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * float(params.total_paths);
     bool specular_only = true;
@@ -87,9 +85,7 @@ void trace_photon_path(uint path, EmitParams params) {
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if (params.caustics_only != 0u) return;
         }
-        vec4 u = rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE);
-        u.yz = qmc2(qs, qi, seed, bdim + RNG_PHOTON_BOUNCE);
-        BsdfSample s = bsdf_sample(b, wo, u.xyz, LOBES_ALL);
+        BsdfSample s = bsdf_sample(b, wo, bsdf_numbers(path, params.pass, seq, seed, bdim + RNG_PHOTON_BOUNCE).xyz, LOBES_ALL);
         if (s.flags == 0u) return;
         // Russian roulette on the sample's weight (with a collision's albedo and the adjoint's
         // factor on a bumped surface): survivors keep their flux up to its colour.

@@ -302,8 +302,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
         }
         uint dim = depth * RNG_DIMS_PER_BOUNCE;
         uint key = camera ? dim + RNG_FRESNEL : gdim + 1u + depth;
-        vec4 u = rand4(stream, sample_index, frame.seed, key);
-        u.yz = qmc2(stream, sample_index, frame.seed, key);
+        vec4 u = bsdf_numbers(stream, sample_index, uvec2(stream, sample_index), frame.seed, key);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
         float q = bsdf_path_probability(b, wo);
         if (u.w < q) {

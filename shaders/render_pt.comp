@@ -213,8 +213,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
         float q = bsdf_path_probability(b, wo);
 
         // The next path ray: the delta lobes with probability q, else the others.
-        vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
-        u.yz = qmc2(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        vec4 u = bsdf_numbers(stream, sample_index, uvec2(stream, sample_index), frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         float choice = delta ? q : 1.0 - q;

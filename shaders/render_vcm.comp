@@ -232,8 +232,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         }
         if (light_only && (flags & BSDF_ESTIMATE) != 0u) break;
         float q = bsdf_path_probability(b, wo);
-        vec4 u = rand4(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
-        u.yz = qmc2(stream, sample_index, frame.seed, dim + RNG_FRESNEL);
+        vec4 u = bsdf_numbers(stream, sample_index, uvec2(stream, sample_index), frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         if (smp.flags == 0u) break;

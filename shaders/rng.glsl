@@ -75,3 +75,12 @@ vec2 qmc2(uint stream, uint sample_index, uint seed, uint dim) {
     uint y = bitfieldReverse(laine_karras(sobol_y_reversed(index), h.z));
     return vec2(rand_unit(x), rand_unit(y));
 }
+
+// The four numbers of a BSDF sample at dim: the lobe choices (x, w) hashed from (stream,
+// sample_index), the direction (y, z) point seq.y of qmc2's sequence seq.x; twin of
+// cpu::rng::bsdf_numbers.
+vec4 bsdf_numbers(uint stream, uint sample_index, uvec2 seq, uint seed, uint dim) {
+    vec4 u = rand4(stream, sample_index, seed, dim);
+    u.yz = qmc2(seq.x, seq.y, seed, dim);
+    return u;
+}

@@ -7,6 +7,13 @@ vec2 lens_sample(uint stream, uint sample_index) {
     return frame.lens_radius > 0.0 ? qmc2(stream, sample_index, frame.seed, RNG_PIXEL_Y) : vec2(0.0);
 }
 
+// Where lens sample u puts a ray's origin on the aperture, from its centre; contract in
+// shading.rs, lens_offset.
+vec3 lens_offset(vec2 u) {
+    vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation) * frame.lens_radius;
+    return a.x * normalize(load3(frame.camera_right)) + a.y * normalize(load3(frame.camera_up));
+}
+
 // Primary ray through film position (sx, sy) in [-1, 1]^2, sy = +1 at the top row, with lens
 // sample u (see FrameParams and the CAMERA_* kinds).
 void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
@@ -30,8 +37,7 @@ void camera_ray(float sx, float sy, vec2 u, out vec3 o, out vec3 d) {
     // meets the plane in focus.
     WHEN(frame.lens_radius > 0.0) {
         vec3 focus = o + d * (frame.focal_distance / dot(d, forward));
-        vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation) * frame.lens_radius;
-        o += a.x * normalize(right) + a.y * normalize(up);
+        o += lens_offset(u);
         d = normalize(focus - o);
     }
 }

@@ -17,10 +17,7 @@ bool camera_connectable() { return frame.camera_kind == CAMERA_PERSPECTIVE; }
 // The point of the aperture lens sample u picks; contract in vcm.rs, lens_point.
 vec3 lens_point(vec2 u) {
     vec3 eye = load3(frame.camera_position);
-    if (frame.lens_radius <= 0.0) return eye;
-    vec2 a = polygon_point(u, frame.aperture_blades, frame.aperture_rotation);
-    return eye + a.x * frame.lens_radius * normalize(load3(frame.camera_right))
-        + a.y * frame.lens_radius * normalize(load3(frame.camera_up));
+    return frame.lens_radius > 0.0 ? eye + lens_offset(u) : eye;
 }
 
 float camera_pixel_area() {

@@ -136,8 +136,7 @@ void main() {
         if (k >= params.vertex_slots) break;
         uint dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
         float q = bsdf_path_probability(b, wo);
-        vec4 u = rand4(path, sample_index, frame.seed, dim + RNG_FRESNEL);
-        u.yz = qmc2(seq.x, seq.y, frame.seed, dim + RNG_FRESNEL);
+        vec4 u = bsdf_numbers(path, sample_index, seq, frame.seed, dim + RNG_FRESNEL);
         bool delta = u.w < q;
         BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
         if (smp.flags == 0u) break;

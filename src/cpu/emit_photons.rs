@@ -8,7 +8,7 @@ use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf, shading_adjoint};
 use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
-use super::rng::{qmc2, rand1, rand2, rand4, sequence_point};
+use super::rng::{bsdf_numbers, qmc2, rand1, rand2, sequence_point};
 use super::shading::{offset_origin, ray_skip};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
@@ -45,9 +45,13 @@ pub fn trace_photon_path(
     // The render's photon paths of one kind (global or caustic) are one low-discrepancy
     // sequence in the numbers that spread photons evenly: where they leave the light, where to,
     // where they bounce.
-    let (qs, qi) = photon_sequence(path, params);
-    let (mut o, mut d, mut flux) =
-        light_emit(s, l, qmc2(qs, qi, seed, dim + RNG_PHOTON_POSITION), qmc2(qs, qi, seed, dim + RNG_PHOTON_DIRECTION));
+    let seq = photon_sequence(path, params);
+    let (mut o, mut d, mut flux) = light_emit(
+        s,
+        l,
+        qmc2(seq.0, seq.1, seed, dim + RNG_PHOTON_POSITION),
+        qmc2(seq.0, seq.1, seed, dim + RNG_PHOTON_DIRECTION),
+    );
     // Each path carries 1/N of the picked light's power, divided by the pick probability.
     flux /= l.photon_probability * params.total_paths as f32;
     let mut specular_only = true;
@@ -122,9 +126,8 @@ pub fn trace_photon_path(
                 return;
             }
         }
-        let u = rand4(path, params.pass, seed, bdim + RNG_PHOTON_BOUNCE);
-        let ub = qmc2(qs, qi, seed, bdim + RNG_PHOTON_BOUNCE);
-        let smp = bsdf_sample(&b, wo, [u[0], ub[0], ub[1]], LOBES_ALL);
+        let u = bsdf_numbers(path, params.pass, seq, seed, bdim + RNG_PHOTON_BOUNCE);
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], LOBES_ALL);
         if smp.flags == 0 {
             return;
         }

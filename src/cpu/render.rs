@@ -13,7 +13,7 @@ use super::medium::{
     spot_span,
 };
 use super::phase::phase_hg;
-use super::rng::{qmc2, rand2, rand4};
+use super::rng::{bsdf_numbers, qmc2, rand2, rand4};
 use super::shading::{camera_ray, direct_light_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -309,8 +309,7 @@ pub fn radiance(
         };
         let dim = depth * RNG_DIMS_PER_BOUNCE;
         let key = if camera { dim + RNG_FRESNEL } else { gdim + 1 + depth };
-        let mut u = rand4(stream, sample, f.seed, key);
-        [u[1], u[2]] = qmc2(stream, sample, f.seed, key);
+        let u = bsdf_numbers(stream, sample, (stream, sample), f.seed, key);
         // Follow the path lobes (mirrors, glass) with their probability; else end here.
         let q = bsdf_path_probability(&b, wo);
         if u[3] < q {

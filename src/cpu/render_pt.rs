@@ -18,7 +18,7 @@ use super::bsdf::{
 use super::instance::hit_primitive;
 use super::light::{environment_radiance, light_pdf, light_sample, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
-use super::rng::{qmc2, rand1, rand2, rand4};
+use super::rng::{bsdf_numbers, qmc2, rand1, rand2};
 use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
@@ -232,10 +232,9 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
         let q = bsdf_path_probability(&b, wo);
 
         // The next path ray: the delta lobes with probability q, else the others.
-        let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
-        let ud = qmc2(stream, sample, f.seed, dim + RNG_FRESNEL);
+        let u = bsdf_numbers(stream, sample, (stream, sample), f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         let choice = if delta { q } else { 1.0 - q };
         next_end = smp.flags == 0 || vertex + 1 >= f.max_depth;
         if !next_end {

@@ -88,6 +88,16 @@ pub fn qmc2(stream: u32, sample_index: u32, seed: u32, dim: u32) -> [f32; 2] {
     [rand_unit(x), rand_unit(y)]
 }
 
+/// The four numbers of a BSDF sample at dimension `dim`: the choices between lobes (0 and 3)
+/// hashed from (`stream`, `sample`), the direction (1 and 2) point `seq.1` of `qmc2`'s sequence
+/// `seq.0`. Camera paths pass their own stream and sample as `seq`, photon and light paths their
+/// `sequence_point`.
+pub fn bsdf_numbers(stream: u32, sample: u32, seq: (u32, u32), seed: u32, dim: u32) -> [f32; 4] {
+    let mut u = rand4(stream, sample, seed, dim);
+    [u[1], u[2]] = qmc2(seq.0, seq.1, seed, dim);
+    u
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,6 +11,7 @@ use super::sampling::polygon_point;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
+use crate::layout::FrameParams;
 
 /// The lens sample of a camera path: a pinhole draws none.
 pub fn lens_sample(s: &SceneView, stream: u32, sample: u32) -> [f32; 2] {
@@ -20,6 +21,14 @@ pub fn lens_sample(s: &SceneView, stream: u32, sample: u32) -> [f32; 2] {
     } else {
         [0.0; 2]
     }
+}
+
+/// Where lens sample `u` puts a ray's origin on the aperture, from its centre (`camera_ray`'s
+/// thin lens, and light tracing's eye).
+pub fn lens_offset(f: &FrameParams, u: [f32; 2]) -> Vec3 {
+    let a = polygon_point(u, f.aperture_blades, f.aperture_rotation);
+    let (right, up) = (Vec3::from(f.camera_right), Vec3::from(f.camera_up));
+    a[0] * f.lens_radius * right.normalize() + a[1] * f.lens_radius * up.normalize()
 }
 
 /// Primary ray (origin, direction) through film position (sx, sy) in [-1, 1]^2, sy = +1 at the
@@ -45,8 +54,7 @@ pub fn camera_ray(s: &SceneView, sx: f32, sy: f32, u: [f32; 2]) -> (Vec3, Vec3) 
     // in focus.
     if f.lens_radius > 0.0 {
         let focus = o + d * (f.focal_distance / d.dot(forward));
-        let a = polygon_point(u, f.aperture_blades, f.aperture_rotation);
-        o += a[0] * f.lens_radius * right.normalize() + a[1] * f.lens_radius * up.normalize();
+        o += lens_offset(f, u);
         d = (focus - o).normalize();
     }
     (o, d)

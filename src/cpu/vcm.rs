@@ -37,9 +37,8 @@ use super::grid_build::{build_grid, grid_params};
 use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
 use super::render_pt::path_layer;
-use super::rng::{qmc2, rand1, rand2, rand4, sequence_point};
-use super::sampling::polygon_point;
-use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip};
+use super::rng::{bsdf_numbers, qmc2, rand1, rand2, sequence_point};
+use super::shading::{camera_ray, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -61,12 +60,11 @@ pub fn camera_connectable(f: &FrameParams) -> bool {
 /// `camera_ray` places it.
 pub fn lens_point(f: &FrameParams, u: [f32; 2]) -> Vec3 {
     let eye = Vec3::from(f.camera_position);
-    if f.lens_radius <= 0.0 {
-        return eye;
+    if f.lens_radius > 0.0 {
+        eye + lens_offset(f, u)
+    } else {
+        eye
     }
-    let a = polygon_point(u, f.aperture_blades, f.aperture_rotation);
-    let (right, up) = (Vec3::from(f.camera_right), Vec3::from(f.camera_up));
-    eye + a[0] * f.lens_radius * right.normalize() + a[1] * f.lens_radius * up.normalize()
 }
 
 /// Film area of one pixel on the plane `camera_forward` away (`camera_right` and `camera_up`
@@ -408,8 +406,13 @@ pub fn trace_light_path(
     }
     // The render's light paths are one low-discrepancy sequence (sample k's paths are its points
     // k x light_paths + path) in the numbers that spread them: start, direction, bounces.
-    let (qs, qi) = sequence_point(0, sample, p.light_paths, path);
-    let e = light_emission(s, l, qmc2(qs, qi, f.seed, dim0 + RNG_LIGHT_U), qmc2(qs, qi, f.seed, dim0 + RNG_LIGHT_V));
+    let seq = sequence_point(0, sample, p.light_paths, path);
+    let e = light_emission(
+        s,
+        l,
+        qmc2(seq.0, seq.1, f.seed, dim0 + RNG_LIGHT_U),
+        qmc2(seq.0, seq.1, f.seed, dim0 + RNG_LIGHT_V),
+    );
     // Light sampling's density of the start point: by area for area lights, by solid angle for
     // infinite ones, 1 for delta lights (SmallVCM's directPdfA).
     let direct_pdf = match l.kind {
@@ -481,10 +484,9 @@ pub fn trace_light_path(
         }
         let dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
         let q = bsdf_path_probability(&b, wo);
-        let u = rand4(path, sample, f.seed, dim + RNG_FRESNEL);
-        let ud = qmc2(qs, qi, f.seed, dim + RNG_FRESNEL);
+        let u = bsdf_numbers(path, sample, seq, f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         if smp.flags == 0 {
             break;
         }
@@ -733,10 +735,9 @@ pub fn radiance_vcm(
         }
         // The next path ray.
         let q = bsdf_path_probability(&b, wo);
-        let u = rand4(stream, sample, f.seed, dim + RNG_FRESNEL);
-        let ud = qmc2(stream, sample, f.seed, dim + RNG_FRESNEL);
+        let u = bsdf_numbers(stream, sample, (stream, sample), f.seed, dim + RNG_FRESNEL);
         let delta = u[3] < q;
-        let smp = bsdf_sample(&b, wo, [u[0], ud[0], ud[1]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
+        let smp = bsdf_sample(&b, wo, [u[0], u[1], u[2]], if delta { LOBES_PATH } else { LOBES_ESTIMATE });
         if smp.flags == 0 {
             break;
         }
