@@ -27,6 +27,7 @@ pub mod trace;
 pub mod vcm;
 pub mod voxel;
 
+use crate::accel::wide::WideBvh;
 use crate::layout::{BvhNode, FrameParams, GridParams, Light, Material, Medium, Primitive, Texture};
 use photon_index::PhotonIndex;
 
@@ -43,6 +44,9 @@ pub struct SceneView<'a> {
     pub shape_data: &'a [f32],
     pub media: &'a [Medium],
     pub maps: MapsView<'a>,
+    /// The CPU backend's four-wide form of `nodes` (`accel::wide`), which `trace_ray` walks
+    /// where it is present; `None` walks `nodes` as the kernels do.
+    pub wide: Option<&'a WideBvh>,
 }
 
 /// The photon maps (`MAP_*`: global, caustic, volume) as the CPU backend reads them: the kernels
@@ -76,6 +80,7 @@ impl<'a> SceneView<'a> {
             shape_data: &[],
             media: &[],
             maps: NO_MAPS,
+            wide: None,
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Ray casting against the flattened BVH; twin of `shaders/trace.glsl`.
 
-use glam::{Vec3, Vec3A};
+use arrayvec::ArrayVec;
+use glam::{Vec3, Vec3A, Vec4};
 
 use super::bsdf::hash_point;
 use super::bsdf::material_opacity;
@@ -8,6 +9,7 @@ use super::csg::csg_intersect;
 use super::instance::{hit_primitive, object_nodes, object_ray, record};
 use super::shape::{shape_hit, shape_intersect};
 use super::SceneView;
+use crate::accel::wide::{TriangleBlock, WideBvh, WideNode, NO_BLOCK};
 use crate::layout::constants::{NO_LIGHT, PRIMITIVE_CSG, PRIMITIVE_FLAG_ALPHA, PRIMITIVE_KIND_MASK, TRACE_STEPS};
 
 /// Distance at which the ray enters the box, or infinity when it misses it within [0, t_max).
@@ -98,6 +100,16 @@ fn visit(s: &SceneView, i: u32, id: u32, r: &WalkRay, o: Vec3, d: Vec3, ignore: 
 /// shifted origin (`Hit::shift`) keeps it off the neighbouring facets. A flat triangle's rays never
 /// cross its plane, so flat scenes skip nothing.
 pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
+    if let Some(found) = s.wide.and_then(|w| trace_wide(s, w, o, d, t_max, any_hit, ignore)) {
+        return found;
+    }
+    trace_threaded(s, o, d, t_max, any_hit, ignore)
+}
+
+/// The kernels' walk (`shaders/trace.glsl`) over the binary BVH: every box in the fixed depth
+/// first order, each missed one skipped by its miss link. The CPU backend takes it for views
+/// without the wide BVH (`SceneView::geometry`) and where `trace_wide`'s stack overflows.
+fn trace_threaded(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
     let nodes = s.nodes;
     let world = WalkRay::new(o, d, 1.0);
     let mut t_hit = t_max;
@@ -163,4 +175,225 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
         node = skip;
     }
     (hit, t_hit)
+}
+
+/// Deferred children of `walk_wide`: three per level of a tree far deeper than any SAH build's.
+const WIDE_STACK: usize = 192;
+
+/// A `WalkRay` in SIMD lanes: each coordinate of the origin and of 1 / direction in all four.
+struct WideRay {
+    o: [Vec4; 3],
+    d: [Vec4; 3],
+    inv_d: [Vec4; 3],
+}
+
+impl WideRay {
+    fn new(r: &WalkRay) -> WideRay {
+        WideRay {
+            o: [0, 1, 2].map(|a| Vec4::splat(r.o_a[a])),
+            d: [0, 1, 2].map(|a| Vec4::splat(r.d[a])),
+            inv_d: [0, 1, 2].map(|a| Vec4::splat(r.inv_d[a])),
+        }
+    }
+}
+
+/// `ray_box` for a wide node's four boxes at once: their entry distances, and the lanes whose
+/// box the ray enters within [0, t_max). Each `min` and `max` takes the running bound as its
+/// second operand, which SSE returns where a slab distance is NaN, so a NaN slab (a ray in a
+/// box face's plane) is ignored rather than deciding the lane.
+#[inline]
+fn enter_wide(n: &WideNode, r: &WideRay, t_max: f32) -> (Vec4, u32) {
+    let mut enter = Vec4::ZERO;
+    let mut leave = Vec4::splat(t_max);
+    for axis in 0..3 {
+        let t0 = (n.lo[axis] - r.o[axis]) * r.inv_d[axis];
+        let t1 = (n.hi[axis] - r.o[axis]) * r.inv_d[axis];
+        enter = t0.min(t1).max(enter);
+        leave = t0.max(t1).min(leave);
+    }
+    (enter, enter.cmple(leave).bitmask() & n.lanes)
+}
+
+/// Cross and dot products of vectors in lanes, in the operations and order of glam's `Vec3`, so
+/// that each lane rounds as `ray_triangle`'s scalar form does.
+fn cross4(a: &[Vec4; 3], b: &[Vec4; 3]) -> [Vec4; 3] {
+    [a[1] * b[2] - b[1] * a[2], a[2] * b[0] - b[2] * a[0], a[0] * b[1] - b[0] * a[1]]
+}
+
+fn dot4(a: &[Vec4; 3], b: &[Vec4; 3]) -> Vec4 {
+    (a[0] * b[0]) + (a[1] * b[1]) + (a[2] * b[2])
+}
+
+/// `ray_triangle` (t_min 0) in four lanes: each lane's distance, and the lanes whose triangle
+/// the ray meets in (0, t_max). Every lane computes `ray_triangle`'s very floats; its early
+/// outs become the mask (a NaN fails every comparison, as there).
+#[inline]
+fn ray_triangles(b: &TriangleBlock, r: &WideRay, t_max: f32) -> (Vec4, u32) {
+    let pv = cross4(&r.d, &b.e2);
+    let det = dot4(&b.e1, &pv);
+    let inv_det = Vec4::ONE / det;
+    let tv = [r.o[0] - b.p0[0], r.o[1] - b.p0[1], r.o[2] - b.p0[2]];
+    let u = dot4(&tv, &pv) * inv_det;
+    let qv = cross4(&tv, &b.e1);
+    let v = dot4(&r.d, &qv) * inv_det;
+    let t = dot4(&b.e2, &qv) * inv_det;
+    let inside = det.cmpne(Vec4::ZERO)
+        & u.cmpge(Vec4::ZERO)
+        & u.cmple(Vec4::ONE)
+        & v.cmpge(Vec4::ZERO)
+        & (u + v).cmple(Vec4::ONE)
+        & t.cmpgt(Vec4::ZERO)
+        & t.cmplt(Vec4::splat(t_max));
+    (t, inside.bitmask())
+}
+
+/// `trace_threaded` over the wide BVH (`accel::wide`), front to back: a node's children that
+/// the ray enters are deferred nearest last, and a deferred child the closest hit has passed is
+/// dropped unseen. The closest hit is `trace_threaded`'s, except between primitives at exactly
+/// equal distances (a ray through a shared edge), which the two orders may give to either
+/// side, and where the kernels' `TRACE_STEPS` bound cuts their walk short, which this one
+/// finishes. Shadow rays (`any_hit`) stop at the first hit in either order; their callers ask
+/// only whether there is one. `None` when the stack overflows.
+fn trace_wide(
+    s: &SceneView,
+    w: &WideBvh,
+    o: Vec3,
+    d: Vec3,
+    t_max: f32,
+    any_hit: bool,
+    ignore: u32,
+) -> Option<(u32, f32)> {
+    let world = WalkRay::new(o, d, 1.0);
+    let mut t_hit = t_max;
+    let mut hit = NO_LIGHT;
+    for i in s.frame.unbounded_first..s.frame.csg_first {
+        visit(s, i, i, &world, o, d, ignore, &mut hit, &mut t_hit);
+        if any_hit && hit != NO_LIGHT {
+            return Some((hit, t_hit));
+        }
+    }
+    // A leaf's primitives (`base`: the hit names' offset of an instance's), true to stop.
+    let primitives = |r: &WalkRay, wr: &WideRay, base: u32, leaf: Leaf, t_hit: &mut f32, hit: &mut u32| {
+        let Leaf { first, count, block } = leaf;
+        if block != NO_BLOCK {
+            // Opaque triangles: tested at once, then taken in leaf order as `visit` would.
+            let (t, lanes) = ray_triangles(&w.blocks[block as usize], wr, *t_hit * r.len);
+            for k in 0..count {
+                let id = base + first + k;
+                let t = t[k as usize];
+                if lanes & (1 << k) != 0 && id != ignore && t < *t_hit * r.len && t / r.len < *t_hit {
+                    *t_hit = t / r.len;
+                    *hit = id;
+                    if any_hit {
+                        return true;
+                    }
+                }
+            }
+            return false;
+        }
+        for i in first..first + count {
+            let before = *hit;
+            if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
+                let (t, leaf) = csg_intersect(s, i, r.o, r.d, *t_hit * r.len);
+                let t = t / r.len;
+                if t < *t_hit {
+                    *t_hit = t;
+                    *hit = base + leaf;
+                }
+            } else {
+                visit(s, i, base + i, r, o, d, ignore, hit, t_hit);
+            }
+            if any_hit && *hit != before {
+                return true;
+            }
+        }
+        false
+    };
+    let wide_world = WideRay::new(&world);
+    let leaves = &mut |leaf, t_hit: &mut f32, hit: &mut u32| primitives(&world, &wide_world, 0, leaf, t_hit, hit);
+    if walk_wide(w, w.world, &world, &wide_world, any_hit, &mut t_hit, &mut hit, leaves)? {
+        return Some((hit, t_hit));
+    }
+    if s.frame.instance_count > 0 {
+        // The top level, one instance per leaf, each walked in its object's space.
+        let mut overflow = false;
+        let instances = &mut |leaf: Leaf, t_hit: &mut f32, hit: &mut u32| {
+            let k = leaf.first;
+            let rec = record(s, k);
+            let (oo, od, len) = object_ray(rec, o, d);
+            let r = WalkRay::new(oo, od, len);
+            let base = (k + 1) * s.frame.primitive_count;
+            let root = w.instance_roots[k as usize];
+            let wr = WideRay::new(&r);
+            let leaves = &mut |leaf, t_hit: &mut f32, hit: &mut u32| primitives(&r, &wr, base, leaf, t_hit, hit);
+            let stop = walk_wide(w, root, &r, &wr, any_hit, t_hit, hit, leaves);
+            overflow |= stop.is_none();
+            stop.unwrap_or(true)
+        };
+        let stopped = walk_wide(w, w.top, &world, &wide_world, any_hit, &mut t_hit, &mut hit, instances);
+        if overflow {
+            return None;
+        }
+        stopped?;
+    }
+    Some((hit, t_hit))
+}
+
+/// A leaf of the wide BVH: its primitives (a top-level leaf's: its instance record) and their
+/// `TriangleBlock`, if they have one.
+#[derive(Clone, Copy)]
+struct Leaf {
+    first: u32,
+    count: u32,
+    block: u32,
+}
+
+/// Walks the wide tree at `root` along `r` (`wr` its lanes), calling `leaf` with each leaf
+/// whose box the ray enters before the closest hit so far (`t_hit`, world
+/// distance). Some(true) when `leaf` asked to stop, None when the stack overflowed.
+#[allow(clippy::too_many_arguments)]
+fn walk_wide(
+    w: &WideBvh,
+    root: u32,
+    r: &WalkRay,
+    wr: &WideRay,
+    any_hit: bool,
+    t_hit: &mut f32,
+    hit: &mut u32,
+    leaf: &mut impl FnMut(Leaf, &mut f32, &mut u32) -> bool,
+) -> Option<bool> {
+    // (child, leaf count or 0 for a node, leaf block, entry distance on the walk's ray)
+    let mut stack: ArrayVec<(u32, u32, u32, f32), WIDE_STACK> = ArrayVec::new();
+    stack.push((root, 0, NO_BLOCK, 0.0));
+    while let Some((child, count, block, t_enter)) = stack.pop() {
+        if t_enter >= *t_hit * r.len {
+            continue;
+        }
+        if count > 0 {
+            if leaf(Leaf { first: child, count, block }, t_hit, hit) {
+                return Some(true);
+            }
+            continue;
+        }
+        let n = &w.nodes[child as usize];
+        let (enter, lanes) = enter_wide(n, wr, *t_hit * r.len);
+        if stack.remaining_capacity() < 4 {
+            return None;
+        }
+        // Farthest first, so that the nearest child is taken next; a shadow ray's order does
+        // not matter.
+        let first = stack.len();
+        for lane in 0..4 {
+            if lanes & (1 << lane) == 0 {
+                continue;
+            }
+            stack.push((n.child[lane], n.count[lane], n.block[lane], enter[lane]));
+            let mut at = stack.len() - 1;
+            while !any_hit && at > first && stack[at - 1].3 < stack[at].3 {
+                stack.swap(at - 1, at);
+                at -= 1;
+            }
+        }
+    }
+    Some(false)
 }

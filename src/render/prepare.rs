@@ -1,11 +1,13 @@
 //! Turns a parsed scene into the flat arrays the kernels and their CPU twins read.
 
 use std::f32::consts::PI;
+use std::sync::OnceLock;
 
 use glam::{Mat3, Vec3};
 
 use super::instances::pack_instances;
 use super::pack::{pack_environment, pack_scene};
+use crate::accel::wide::WideBvh;
 use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
@@ -42,6 +44,9 @@ pub struct SceneBuffers {
     pub surface_area: f32,
     /// Volume the media fill (scene units cubed; bounding boxes), for the automatic volume radius.
     pub media_volume: f32,
+    /// The CPU backend's wide BVH over `nodes`, built at the first `view` (the GPU backend
+    /// needs none).
+    pub wide: OnceLock<WideBvh>,
 }
 
 /// Which variant of the scene kernels a scene needs: lavapipe runs every branch of a shader
@@ -150,6 +155,9 @@ impl SceneBuffers {
             shape_data: &self.shape_data,
             media: &self.media,
             maps: crate::cpu::NO_MAPS,
+            wide: Some(
+                self.wide.get_or_init(|| WideBvh::build(&self.frame, &self.nodes, &self.primitives, &self.shape_data)),
+            ),
         }
     }
 }
@@ -596,6 +604,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         surface_area,
         media,
         media_volume,
+        wide: OnceLock::new(),
     };
     // Lights start in vacuum unless a medium is found around them.
     for l in &mut buffers.lights {
