@@ -116,10 +116,9 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
     bool merge_only = (params.techniques & VCM_MERGE_ONLY) != 0u;
     bool connect = (params.techniques & VCM_CONNECT) != 0u;
     bool merge = (params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u;
-    float cos_eye = dot(d, normalize(load3(frame.camera_forward)));
     SubPath sp;
     sp.throughput = vec3(1.0);
-    sp.d_vcm = camera_connectable() ? mis(float(params.light_paths) / camera_pdf_w(cos_eye)) : 0.0;
+    sp.d_vcm = camera_d_vcm(params.light_paths, d);
     sp.d_vc = 0.0;
     sp.d_vm = 0.0;
     uint slot0 = (stream % params.light_paths) * params.vertex_slots;
@@ -157,7 +156,8 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         Material mat = material_at(h.material);
         Bsdf b = material_bsdf(mat, h);
         vec3 wo = -d;
-        sub_arrive(sp, t, abs_cos(b, wo), true);
+        // An orthographic camera's first density is by area (camera_d_vcm).
+        sub_arrive(sp, t, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
         float cos_l = dot(wo, h.ng);
         if (cos_l > 0.0 && emission_allowed) {
             vec3 emitted = material_emission(mat, h);

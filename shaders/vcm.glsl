@@ -12,21 +12,48 @@ uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
     return LAYER_INDIRECT;
 }
 
-bool camera_connectable() { return frame.camera_kind == CAMERA_PERSPECTIVE; }
+// Contracts in vcm.rs, camera_connectable, lens_point, camera_point.
+bool camera_connectable() { return frame.camera_kind != CAMERA_ORTHOGRAPHIC || frame.lens_radius <= 0.0; }
 
-// The point of the aperture lens sample u picks; contract in vcm.rs, lens_point.
 vec3 lens_point(vec2 u) {
     vec3 eye = load3(frame.camera_position);
     return frame.lens_radius > 0.0 ? eye + lens_offset(u) : eye;
+}
+
+vec3 camera_point(vec3 x, vec2 u) {
+    if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
+        vec3 fw = normalize(load3(frame.camera_forward));
+        return x - fw * dot(x - load3(frame.camera_position), fw);
+    }
+    if (frame.camera_kind == CAMERA_LATLONG) return load3(frame.camera_position);
+    return lens_point(u);
 }
 
 float camera_pixel_area() {
     return 4.0 * length(load3(frame.camera_right)) * length(load3(frame.camera_up)) / float(frame.width * frame.height);
 }
 
-float camera_pdf_w(float cos_eye) {
+// Contracts in vcm.rs, camera_pdf_w, camera_area_pdf, camera_d_vcm.
+float camera_pdf_w(vec3 d) {
+    if (frame.camera_kind == CAMERA_LATLONG) {
+        float s = dot(d, load3(frame.camera_up));
+        float cos_latitude = sqrt(max(1.0 - s * s, 0.0));
+        return float(frame.width * frame.height) / (2.0 * PI * PI * cos_latitude);
+    }
     vec3 fw = load3(frame.camera_forward);
+    float cos_eye = dot(d, normalize(fw));
     return dot(fw, fw) / (cos_eye * cos_eye * cos_eye * camera_pixel_area());
+}
+
+float camera_area_pdf(vec3 d, float dist2, float cos_y) {
+    if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) return cos_y / camera_pixel_area();
+    return camera_pdf_w(d) * cos_y / dist2;
+}
+
+float camera_d_vcm(uint light_paths, vec3 d) {
+    if (!camera_connectable()) return 0.0;
+    if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) return mis(float(light_paths) * camera_pixel_area());
+    return mis(float(light_paths) / camera_pdf_w(d));
 }
 
 // The pixel whose film holds the image of x seen from the aperture point lens, or NO_LIGHT;
@@ -35,17 +62,29 @@ uint camera_pixel(vec3 x, vec3 lens) {
     vec3 fw = load3(frame.camera_forward);
     vec3 r = load3(frame.camera_right);
     vec3 u = load3(frame.camera_up);
-    if (frame.lens_radius > 0.0) {
-        vec3 d = normalize(x - lens);
-        float along = dot(d, fw);
-        if (along <= 0.0) return NO_LIGHT;
-        x = lens + d * (frame.focal_distance / along);
-    }
     vec3 v = x - load3(frame.camera_position);
-    float k = dot(v, fw) / dot(fw, fw);
-    if (k <= 0.0) return NO_LIGHT;
-    float sx = dot(v, r) / (k * dot(r, r));
-    float sy = dot(v, u) / (k * dot(u, u));
+    float sx, sy;
+    if (frame.camera_kind == CAMERA_LATLONG) {
+        vec3 d = normalize(v);
+        sx = atan(dot(d, r), dot(d, fw)) / PI;
+        sy = asin(clamp(dot(d, u), -1.0, 1.0)) / (0.5 * PI);
+    } else if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
+        if (dot(v, fw) <= 0.0) return NO_LIGHT;
+        sx = dot(v, r) / dot(r, r);
+        sy = dot(v, u) / dot(u, u);
+    } else {
+        if (frame.lens_radius > 0.0) {
+            vec3 d = normalize(x - lens);
+            float along = dot(d, fw);
+            if (along <= 0.0) return NO_LIGHT;
+            x = lens + d * (frame.focal_distance / along);
+            v = x - load3(frame.camera_position);
+        }
+        float k = dot(v, fw) / dot(fw, fw);
+        if (k <= 0.0) return NO_LIGHT;
+        sx = dot(v, r) / (k * dot(r, r));
+        sy = dot(v, u) / (k * dot(u, u));
+    }
     float fx = 0.5 * (sx + 1.0) * float(frame.width);
     float fy = 0.5 * (1.0 - sy) * float(frame.height);
     if (!(fx >= 0.0 && fy >= 0.0 && fx < float(frame.width) && fy < float(frame.height))) return NO_LIGHT;

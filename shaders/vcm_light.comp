@@ -43,7 +43,7 @@ void splat_add(uint index, float v) {
 
 // Light tracing: the light vertex at h seen by the camera; contract in vcm.rs, connect_to_camera.
 void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, vec2 lens_u, uint layer) {
-    vec3 eye = lens_point(lens_u);
+    vec3 eye = camera_point(h.p, lens_u);
     uint pixel = camera_pixel(h.p, eye);
     if (pixel == NO_LIGHT) return;
     vec3 to_eye = eye - h.p;
@@ -52,8 +52,7 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, vec2 lens_
     vec3 dir = to_eye / dist;
     vec3 fr = bsdf_eval(b, dir, wo);
     if (fr == vec3(0.0)) return;
-    float cos_eye = -dot(dir, normalize(load3(frame.camera_forward)));
-    float image_to_surface = camera_pdf_w(cos_eye) * abs_cos(b, dir) / dist2;
+    float image_to_surface = camera_area_pdf(-dir, dist2, abs_cos(b, dir));
     float w_light = 0.0;
     if ((params.techniques & VCM_LIGHT_TRACE_ONLY) == 0u) {
         float toward_light = lobe_pdfs(b, dir, wo).x;

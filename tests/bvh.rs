@@ -109,7 +109,8 @@ fn wide_walk_finds_the_kernels_hits_in_shipped_scenes() {
         let wide = buffers.view();
         assert!(wide.wide.is_some(), "the CPU backend's view carries the wide BVH");
         let binary = SceneView { wide: None, ..wide };
-        let (lo, hi) = buffers.nodes.first().map_or((Vec3::ZERO, Vec3::ZERO), |n| (n.aabb_min.into(), n.aabb_max.into()));
+        let (lo, hi) =
+            buffers.nodes.first().map_or((Vec3::ZERO, Vec3::ZERO), |n| (n.aabb_min.into(), n.aabb_max.into()));
         let (mut hits, mut ties) = (0, 0);
         for ray in 0..4000u32 {
             let o = lo + (hi - lo) * (random_vec(ray, 200) * 1.2 - 0.1);

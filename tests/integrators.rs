@@ -542,3 +542,51 @@ fn light_tracing_reaches_a_thin_lens_camera() {
         assert!(error < 1e-6, "{} through a thin lens: GPU vs CPU relMSE {error:.3e}", integrator.name());
     }
 }
+
+/// Light tracing reaches the orthographic camera (the film point whose parallel ray meets the
+/// vertex, a density by area) and the latlong camera (the eye, a pixel's solid angle at the
+/// vertex's latitude), so bpt and vcm keep the technique with them. Light tracing alone and
+/// bpt agree with the path tracer, and the kernels with the CPU twin.
+#[test]
+fn light_tracing_reaches_orthographic_and_latlong_cameras() {
+    const LT_SPP: u32 = 1024;
+    use photonix::layout::constants::{TECHNIQUES_ALL, VCM_LIGHT_TRACE_ONLY};
+    // The box from the front through parallel rays, and all around from inside it.
+    let cameras = [
+        ("orthographic", Projection::Orthographic { view_height: 600.0 }, Vec3::new(278.0, 273.0, -800.0), 32, 32),
+        ("latlong", Projection::LatLong, Vec3::new(150.0, 300.0, 150.0), 48, 24),
+    ];
+    let ctx = common::gpu();
+    for (camera, projection, position, w, h) in cameras {
+        let scene = |integrator| {
+            let mut scene = shipped("cornell-box", integrator);
+            scene.camera.projection = projection;
+            scene.camera.position = position;
+            scene.camera.look_at = position + Vec3::Z;
+            scene
+        };
+        let reference = cpu(&common::buffers(&scene(Integrator::Pt), w, h), 1024).image;
+        for (label, integrator, techniques, spp) in [
+            ("light tracing", Integrator::Bpt, VCM_LIGHT_TRACE_ONLY, LT_SPP),
+            ("bpt", Integrator::Bpt, TECHNIQUES_ALL, 128),
+            ("vcm", Integrator::Vcm, TECHNIQUES_ALL, 128),
+        ] {
+            let mut buffers = common::buffers(&scene(integrator), w, h);
+            buffers.frame.techniques = techniques;
+            let image = cpu(&buffers, spp).image;
+            let (error, ratio) = (rel_mse(&image, &reference), mean_ratio(&image, &reference));
+            println!("{camera}, {label} against pt: relMSE {error:.5}, mean ratio {ratio:.4?}");
+            for r in ratio {
+                assert!((r - 1.0).abs() < 0.01, "{camera}, {label}: mean ratio {ratio:?} against pt");
+            }
+            assert!(error < 0.006, "{camera}, {label}: relMSE {error} against pt");
+        }
+        for integrator in [Integrator::Bpt, Integrator::Vcm] {
+            let buffers = common::buffers(&scene(integrator), 24, 16);
+            let (gpu, cpu) = both_twins(&ctx, &buffers, 2);
+            let error = rel_mse(&gpu.image, &cpu.image);
+            println!("{camera}, {}: GPU vs CPU relMSE {error:.3e}", integrator.name());
+            assert!(error < 1e-6, "{camera}, {}: GPU vs CPU relMSE {error:.3e}", integrator.name());
+        }
+    }
+}

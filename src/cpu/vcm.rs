@@ -50,10 +50,12 @@ pub fn mis(x: f32) -> f32 {
     x * x
 }
 
-/// Whether light sub-paths can reach the camera: a perspective camera, pinhole or thin lens. The
-/// other projections leave light tracing out (and the weights with it).
+/// Whether light sub-paths can reach the camera: a perspective camera (pinhole or thin lens), an
+/// orthographic one without a lens, a latlong one. An orthographic camera's lens would make
+/// every aperture point see a point along its own tilted ray, which light tracing leaves out
+/// (and the weights with it).
 pub fn camera_connectable(f: &FrameParams) -> bool {
-    f.camera_kind == CAMERA_PERSPECTIVE
+    f.camera_kind != CAMERA_ORTHOGRAPHIC || f.lens_radius <= 0.0
 }
 
 /// The point of the aperture that lens sample `u` picks (the eye of a pinhole camera), as
@@ -67,18 +69,64 @@ pub fn lens_point(f: &FrameParams, u: [f32; 2]) -> Vec3 {
     }
 }
 
+/// The camera point a light vertex at `x` connects to: the aperture point of lens sample `u`
+/// (perspective), the eye (latlong), or the film point whose parallel ray meets `x`
+/// (orthographic).
+pub fn camera_point(f: &FrameParams, x: Vec3, u: [f32; 2]) -> Vec3 {
+    match f.camera_kind {
+        CAMERA_ORTHOGRAPHIC => {
+            let fw = Vec3::from(f.camera_forward).normalize();
+            x - fw * (x - Vec3::from(f.camera_position)).dot(fw)
+        }
+        CAMERA_LATLONG => Vec3::from(f.camera_position),
+        _ => lens_point(f, u),
+    }
+}
+
 /// Film area of one pixel on the plane `camera_forward` away (`camera_right` and `camera_up`
 /// span half the film).
 pub fn camera_pixel_area(f: &FrameParams) -> f32 {
     4.0 * Vec3::from(f.camera_right).length() * Vec3::from(f.camera_up).length() / (f.width * f.height) as f32
 }
 
-/// Solid-angle density, per pixel, of the camera's rays along a direction of cosine `cos` to the
-/// view axis: a point uniform on one pixel of the film, seen from the eye (SmallVCM's
-/// imageToSolidAngleFactor).
-pub fn camera_pdf_w(f: &FrameParams, cos: f32) -> f32 {
-    let fd2 = Vec3::from(f.camera_forward).length_squared();
-    fd2 / (cos * cos * cos * camera_pixel_area(f))
+/// Solid-angle density, per pixel, of the camera's rays along unit direction `d` (from the
+/// camera): for a perspective camera a point uniform on one pixel of the film seen from the eye
+/// (SmallVCM's imageToSolidAngleFactor), for a latlong one the inverse of a pixel's solid angle
+/// at `d`'s latitude. An orthographic camera's rays are parallel: see `camera_area_pdf`.
+pub fn camera_pdf_w(f: &FrameParams, d: Vec3) -> f32 {
+    if f.camera_kind == CAMERA_LATLONG {
+        let up = Vec3::from(f.camera_up);
+        let cos_latitude = (1.0 - d.dot(up) * d.dot(up)).max(0.0).sqrt();
+        let pi = std::f32::consts::PI;
+        return (f.width * f.height) as f32 / (2.0 * pi * pi * cos_latitude);
+    }
+    let fw = Vec3::from(f.camera_forward);
+    let cos = d.dot(fw.normalize());
+    fw.length_squared() / (cos * cos * cos * camera_pixel_area(f))
+}
+
+/// Density by area, per pixel, of the camera's rays along `d` at a point `dist2` (squared) away
+/// that they meet at cosine `cos_y` (SmallVCM's imageToSurfaceFactor). An orthographic camera's
+/// parallel rays spread over a pixel's film area whatever the distance.
+pub fn camera_area_pdf(f: &FrameParams, d: Vec3, dist2: f32, cos_y: f32) -> f32 {
+    if f.camera_kind == CAMERA_ORTHOGRAPHIC {
+        cos_y / camera_pixel_area(f)
+    } else {
+        camera_pdf_w(f, d) * cos_y / dist2
+    }
+}
+
+/// A camera sub-path's first dVCM along its first ray `d`: the light tracing technique's
+/// density relative to the camera's. An orthographic camera's is by area already, and its first
+/// `SubPath::arrive` leaves the distance out.
+pub fn camera_d_vcm(f: &FrameParams, light_paths: u32, d: Vec3) -> f32 {
+    if !camera_connectable(f) {
+        0.0
+    } else if f.camera_kind == CAMERA_ORTHOGRAPHIC {
+        mis(light_paths as f32 * camera_pixel_area(f))
+    } else {
+        mis(light_paths as f32 / camera_pdf_w(f, d))
+    }
 }
 
 /// The pixel (index) whose film holds the image of world point `x` seen from `lens` (a point of
@@ -86,23 +134,39 @@ pub fn camera_pdf_w(f: &FrameParams, cos: f32) -> f32 {
 /// `lens` to `x` crosses the plane in focus (every camera ray aims its pixel's pinhole ray there).
 pub fn camera_pixel(f: &FrameParams, x: Vec3, lens: Vec3) -> Option<u32> {
     let (fw, r, u) = (Vec3::from(f.camera_forward), Vec3::from(f.camera_right), Vec3::from(f.camera_up));
-    let x = if f.lens_radius > 0.0 {
-        let d = (x - lens).normalize();
-        let along = d.dot(fw);
-        if along <= 0.0 {
-            return None;
-        }
-        lens + d * (f.focal_distance / along)
-    } else {
-        x
-    };
     let v = x - Vec3::from(f.camera_position);
-    let k = v.dot(fw) / fw.length_squared();
-    if k <= 0.0 {
-        return None;
-    }
-    let sx = v.dot(r) / (k * r.length_squared());
-    let sy = v.dot(u) / (k * u.length_squared());
+    let (sx, sy) = match f.camera_kind {
+        // Inverting `camera_ray`: longitude from straight ahead, latitude from the horizon.
+        CAMERA_LATLONG => {
+            let d = v.normalize();
+            let pi = std::f32::consts::PI;
+            (d.dot(r).atan2(d.dot(fw)) / pi, d.dot(u).clamp(-1.0, 1.0).asin() / (0.5 * pi))
+        }
+        CAMERA_ORTHOGRAPHIC => {
+            if v.dot(fw) <= 0.0 {
+                return None;
+            }
+            (v.dot(r) / r.length_squared(), v.dot(u) / u.length_squared())
+        }
+        _ => {
+            let x = if f.lens_radius > 0.0 {
+                let d = (x - lens).normalize();
+                let along = d.dot(fw);
+                if along <= 0.0 {
+                    return None;
+                }
+                lens + d * (f.focal_distance / along)
+            } else {
+                x
+            };
+            let v = x - Vec3::from(f.camera_position);
+            let k = v.dot(fw) / fw.length_squared();
+            if k <= 0.0 {
+                return None;
+            }
+            (v.dot(r) / (k * r.length_squared()), v.dot(u) / (k * u.length_squared()))
+        }
+    };
     let fx = 0.5 * (sx + 1.0) * f.width as f32;
     let fy = 0.5 * (1.0 - sy) * f.height as f32;
     if !(fx >= 0.0 && fy >= 0.0 && fx < f.width as f32 && fy < f.height as f32) {
@@ -541,7 +605,7 @@ fn connect_to_camera(
     rays: &mut u32,
 ) -> Option<(u32, Vec3)> {
     let f = s.frame;
-    let eye = lens_point(f, lens_u);
+    let eye = camera_point(f, h.p, lens_u);
     let pixel = camera_pixel(f, h.p, eye)?;
     let to_eye = eye - h.p;
     let dist2 = to_eye.length_squared();
@@ -551,8 +615,7 @@ fn connect_to_camera(
     if fr == Vec3::ZERO {
         return None;
     }
-    let cos_eye = -dir.dot(Vec3::from(f.camera_forward).normalize());
-    let image_to_surface = camera_pdf_w(f, cos_eye) * abs_cos(b, dir) / dist2;
+    let image_to_surface = camera_area_pdf(f, -dir, dist2, abs_cos(b, dir));
     let w_light = if has(p, VCM_LIGHT_TRACE_ONLY) {
         0.0
     } else {
@@ -590,13 +653,7 @@ pub fn radiance_vcm(
     let light_only = has(p, VCM_LIGHT_TRACE_ONLY);
     let merge_only = has(p, VCM_MERGE_ONLY);
     let connect = has(p, VCM_CONNECT);
-    let cos_eye = d.dot(Vec3::from(f.camera_forward).normalize());
-    let mut sub = SubPath {
-        throughput: Vec3::ONE,
-        d_vcm: if camera_connectable(f) { mis(p.light_paths as f32 / camera_pdf_w(f, cos_eye)) } else { 0.0 },
-        d_vc: 0.0,
-        d_vm: 0.0,
-    };
+    let mut sub = SubPath { throughput: Vec3::ONE, d_vcm: camera_d_vcm(f, p.light_paths, d), d_vc: 0.0, d_vm: 0.0 };
     let path = stream % p.light_paths;
     let slots = p.vertex_slots as usize;
     let light_vertices = &stage.vertices[path as usize * slots..(path as usize + 1) * slots];
@@ -643,7 +700,8 @@ pub fn radiance_vcm(
         let mat = &s.materials[h.material as usize];
         let b = material_bsdf(s, mat, &h);
         let wo = -d;
-        sub.arrive(t, abs_cos(&b, wo), true);
+        // An orthographic camera's first density is by area (`camera_d_vcm`).
+        sub.arrive(t, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
         let cos_l = wo.dot(h.ng);
         if cos_l > 0.0 && emission_allowed {
             let emitted = material_emission(s, mat, &h);
