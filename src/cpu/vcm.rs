@@ -680,7 +680,8 @@ pub fn trace_light_path(
                     dim: RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1),
                 };
                 let at = VertexMedium { prim, medium };
-                if let Some((pixel, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
+                if let Some((pixel, v)) =
+                    connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
                 {
                     let layer = path_layer(false, diffuse + 1, specular_first);
                     splat(pixel, layer, v);
