@@ -3,10 +3,11 @@
 // each non-delta vertex of a pixel's camera sub-path: light sampling, connections to the vertices
 // of the light sub-path of the pixel's index, merging with the light vertices within the radius
 // (the grid over `points`); then the light tracing that landed on the pixel. Every contribution
-// weighed by SmallVCM's MIS recursion. CPU twin: src/cpu/vcm.rs (radiance_vcm). Bindings: the
-// scene, then the accumulation (the whole image: LAYER_COUNT vec4 per pixel), the sample's
-// VcmParams, the grid's GridParams, the vertex slots, the sorted points, the bucket starts and
-// the splats.
+// weighed by SmallVCM's MIS recursion; media in the `media` variants (free flights, scattering
+// vertices that connect but do not merge, transmittance on every connection). CPU twin:
+// src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
+// LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
+// the sorted points, the bucket starts and the splats.
 // variant: textured
 // variant: textured alpha
 // variant: analytic

@@ -4,8 +4,9 @@
 // and, as grid points (position, path, slot), into `points` for merging; each is connected to the
 // camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
 // layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
-// src/cpu/vcm.rs (trace_light_path, connect_to_camera). Bindings: the scene, then the vertex
-// slots, the splats, the points and the point counter.
+// src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
+// flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
+// scene, then the vertex slots, the splats, the points and the point counter.
 // variant: textured
 // variant: textured alpha
 // variant: analytic

@@ -22,6 +22,13 @@
 //! Densities of light sampling and emission use each light's uniform density by area (as `pt`'s
 //! weights do): multiple importance sampling needs only that every technique weighs a path by the
 //! same functions. Russian roulette stays out of the weights (as in pbrt's BDPT).
+//!
+//! In participating media both sub-paths sample free flights (`next_vertex`), pass null
+//! boundaries without a vertex, and scatter at collisions by the phase function; light vertices
+//! in media are stored (`VERTEX_MEDIUM`) and connected to, never merged, so merging's terms leave
+//! the weights at those vertices (`SubPath::scatter`, `merge_weight`). Connections carry the
+//! transmittance of the media they cross (`transmittance`). The weights leave the free-flight
+//! densities out (docs/integrators.md, "Media").
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
