@@ -3,10 +3,11 @@
 // each non-delta vertex of a pixel's camera sub-path: light sampling, connections to the vertices
 // of the light sub-path of the pixel's index, merging with the light vertices within the radius
 // (the grid over `points`); then the light tracing that landed on the pixel. Every contribution
-// weighed by SmallVCM's MIS recursion. CPU twin: src/cpu/vcm.rs (radiance_vcm). Bindings: the
-// scene, then the accumulation (the whole image: LAYER_COUNT vec4 per pixel), the sample's
-// VcmParams, the grid's GridParams, the vertex slots, the sorted points, the bucket starts and
-// the splats.
+// weighed by SmallVCM's MIS recursion; media in the `media` variants (free flights, scattering
+// vertices that connect but do not merge, transmittance on every connection). CPU twin:
+// src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
+// LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
+// the sorted points, the bucket starts and the splats.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -18,6 +19,18 @@
 // variant: analytic implicit csg
 // variant: textured analytic implicit csg
 // variant: textured alpha analytic implicit csg
+// variant: media
+// variant: textured media
+// variant: textured alpha media
+// variant: analytic media
+// variant: textured analytic media
+// variant: textured alpha analytic media
+// variant: analytic implicit media
+// variant: textured analytic implicit media
+// variant: textured alpha analytic implicit media
+// variant: analytic implicit csg media
+// variant: textured analytic implicit csg media
+// variant: textured alpha analytic implicit csg media
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -42,7 +55,7 @@ float emission_weight(SubPath sp, float direct, float emission) {
 }
 
 // Light sampling at a camera vertex; contract in vcm.rs, light_sampling.
-vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint stream, uint dim, inout uint rays) {
+vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, uint stream, uint dim, uvec3 n, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
     uint sample_index = params.sample_index;
     Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
@@ -62,20 +75,21 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint stream, 
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
     float forward = light_is_delta(l) ? 0.0 : pdfs.x;
     float w_light = mis(forward / (l.pick_probability * direct));
-    float w_camera = mis(emission * cos_to_light / (direct * cos_at_light)) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(pdfs.y));
+    float w_camera = mis(emission * cos_to_light / (direct * cos_at_light)) * (merge_weight(params, b) + sp.d_vcm + sp.d_vc * mis(pdfs.y));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     vec3 to_target = ls.p - origin;
     float len = length(to_target);
-    rays++;
-    float t;
-    if (trace_ray(origin, to_target / len, max(len - ls.eps, 0.0), true, skip, t) != NO_LIGHT) return vec3(0.0);
-    return fr * (w / l.pick_probability);
+    vec3 tr = vcm_transmittance(origin, to_target / len, max(len - ls.eps, 0.0), medium_toward(h, prim, medium, wo, ls.wi), skip, n, rays);
+    if (tr == vec3(0.0)) return vec3(0.0);
+    return fr * (w / l.pick_probability) * tr;
 }
 
 // A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.
-vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex lv, inout uint rays) {
-    Hit lh = light_vertex_hit(lv);
+vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, LightVertex lv, uvec3 n, inout uint rays) {
+    Hit lh;
+    Bsdf lb;
+    light_vertex_bsdf(lv, lh, lb);
     vec3 to_light = lh.p - h.p;
     float dist2 = dot(to_light, to_light);
     if (dist2 <= 0.0) return vec3(0.0);
@@ -83,7 +97,6 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex
     vec3 dir = to_light / dist;
     vec3 fc = bsdf_eval(b, wo, dir);
     if (fc == vec3(0.0)) return vec3(0.0);
-    Bsdf lb = material_bsdf(material_at(lh.material), lh);
     vec3 l_wo = -load3(lv.direction);
     vec3 fl = bsdf_eval(lb, -dir, l_wo);
     if (fl == vec3(0.0)) return vec3(0.0);
@@ -94,14 +107,13 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, LightVertex
     vec2 lig = lobe_pdfs(lb, l_wo, -dir);
     float cam_to_area = cam.x * cos_light / dist2;
     float light_to_area = lig.x * cos_cam / dist2;
-    float w_light = mis(cam_to_area) * (params.vm_weight + lv.d_vcm + lv.d_vc * mis(lig.y));
-    float w_camera = mis(light_to_area) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(cam.y));
+    float w_light = mis(cam_to_area) * (merge_weight(params, lb) + lv.d_vcm + lv.d_vc * mis(lig.y));
+    float w_camera = mis(light_to_area) * (merge_weight(params, b) + sp.d_vcm + sp.d_vc * mis(cam.y));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 value = fc * fl * load3(lv.throughput) * (g * w * shading_adjoint(lb, l_wo, -dir));
     if (value == vec3(0.0)) return vec3(0.0);
-    rays++;
-    if (!vcm_visible(h, skip, lh.p + normalize(h.p - lh.p) * lh.eps)) return vec3(0.0);
-    return value;
+    vec3 target = lh.p + normalize(h.p - lh.p) * lh.eps;
+    return value * vcm_visibility(h, skip, target, medium_toward(h, prim, medium, wo, dir), n, rays);
 }
 
 void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
@@ -127,15 +139,24 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
     uint diffuse = 0u;
     bool specular_after = false;
     bool specular_path = true;
+    uint medium = frame.camera_medium;
+    uint segment = 0u;
     for (uint m = 1u; m <= frame.max_depth + 1u; m++) {
-        rays++;
-        float t;
-        uint prim = trace_ray(o, d, INF, false, skip, t);
+        vec3 medium_emission = vec3(0.0);
+        NextVertex nv = next_vertex(o, d, medium, skip, uvec2(stream, sample_index), RNG_MEDIUM_DOMAIN, segment,
+                                    sp.throughput, medium_emission, rays);
         uint layer = path_layer(first_specular, diffuse, specular_after);
         bool single = light_only || merge_only;
         bool emission_allowed = !single || specular_path;
         bool take_whole = m == 1u || single;
-        if (prim == NO_LIGHT) {
+        // The media's own emission: only camera paths gather it (vcm.rs).
+        if (emission_allowed) terms[layer] += medium_emission;
+        if (!nv.found || sp.throughput == vec3(0.0)) break;
+        uint prim = nv.prim;
+        float t = nv.t;
+        o = nv.o;
+        medium = nv.medium;
+        if (prim == NO_LIGHT && !nv.scattered) {
             if (!emission_allowed) break;
             for (uint i = 0u; i < frame.light_count; i++) {
                 Light l = light_at(i);
@@ -152,15 +173,24 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
             }
             break;
         }
-        Hit h = shape_hit(prim, o, d, t);
-        Material mat = material_at(h.material);
-        Bsdf b = material_bsdf(mat, h);
         vec3 wo = -d;
+        Hit h;
+        Bsdf b;
+#ifdef VARIANT_MEDIA
+        if (nv.scattered) {
+            h = medium_hit(o + d * t, wo);
+            b = phase_bsdf(medium, wo);
+        } else
+#endif
+        {
+            h = shape_hit(prim, o, d, t);
+            b = material_bsdf(material_at(h.material), h);
+        }
         // An orthographic camera's first density is by area (camera_d_vcm).
-        sub_arrive(sp, t, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
+        sub_arrive(sp, nv.dist, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
         float cos_l = dot(wo, h.ng);
-        if (cos_l > 0.0 && emission_allowed) {
-            vec3 emitted = material_emission(mat, h);
+        if (!nv.scattered && cos_l > 0.0 && emission_allowed) {
+            vec3 emitted = material_emission(material_at(h.material), h);
             if (emitted != vec3(0.0)) {
                 uint hp = hit_primitive(prim);
                 uint light = primitive_at(hp).light;
@@ -175,12 +205,14 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         if (m > frame.max_depth) break;
         uint flags = bsdf_flags(b);
         if (flags == 0u) break;
-        skip = ray_skip(prim);
+        skip = nv.scattered ? NO_LIGHT : ray_skip(prim);
         uint dim = (m - 1u) * RNG_DIMS_PER_BOUNCE;
+        // The transmittance numbers of this vertex's connections (vcm.rs, radiance_vcm).
+        uint connection0 = RNG_VCM_TRANSMITTANCE_DOMAIN + (m - 1u) * (params.vertex_slots + 1u) * (MEDIUM_CROSSINGS + 1u);
         if ((flags & BSDF_ESTIMATE) != 0u) {
             uint cam_diffuse = diffuse + 1u;
             if (connect) {
-                vec3 v = light_sampling(h, b, wo, sp, skip, stream, dim, rays);
+                vec3 v = light_sampling(h, b, wo, sp, skip, prim, medium, stream, dim, uvec3(stream, sample_index, connection0), rays);
                 terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
                 // Slot k holds the light vertex k + 1 scattering vertices from the light, or
                 // nothing (a delta vertex, or the path ended): skip the gaps.
@@ -188,13 +220,14 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                     if (k + 1u + m > frame.max_depth) break;
                     LightVertex lv = vertices[slot0 + k];
                     if (lv.path_length == 0u) continue;
-                    vec3 c = connect_vertices(h, b, wo, sp, skip, lv, rays);
+                    uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
+                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, n, rays);
                     uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
                                          (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
                     terms[cl] += sp.throughput * c;
                 }
             }
-            if (merge && vgrid.photon_count > 0u) {
+            if (merge && vgrid.photon_count > 0u && mergeable(b)) {
                 vec3 merged[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
                 float r2 = vgrid.radius * vgrid.radius;
                 ivec3 c = grid_cell(h.p, vgrid.cell_size);
@@ -238,14 +271,14 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         if (smp.flags == 0u) break;
         float cos_out = abs_cos(b, smp.wi);
         if ((smp.flags & BSDF_SPECULAR) != 0u) {
-            sub_scatter(sp, params, true, cos_out, 0.0, 0.0);
+            sub_scatter(sp, params, true, cos_out, 0.0, 0.0, false);
             first_specular = first_specular || m == 1u;
             specular_after = diffuse > 0u;
             sp.throughput *= smp.weight / q;
         } else {
             vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
             if (pdfs.x <= 0.0) break;
-            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y);
+            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, mergeable(b));
             diffuse++;
             specular_after = false;
             specular_path = false;
@@ -257,6 +290,9 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
             sp.throughput /= survive;
         }
         if (sp.throughput == vec3(0.0)) break;
+#ifdef VARIANT_MEDIA
+        if (!nv.scattered && (smp.flags & BSDF_TRANSMISSION) != 0u) medium = medium_after(prim, h.ng, smp.wi, medium);
+#endif
         o = offset_origin(h, wo, smp.flags);
         d = smp.wi;
     }

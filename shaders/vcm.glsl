@@ -125,6 +125,12 @@ bool light_is_delta(Light l) {
     return true;
 }
 
+// Whether merging can happen at a vertex (not at a medium's scattering points); contracts in
+// vcm.rs, mergeable and merge_weight.
+bool mergeable(Bsdf b) { return b.kind != MATERIAL_PHASE; }
+
+float merge_weight(VcmParams p, Bsdf b) { return mergeable(b) ? p.vm_weight : 0.0; }
+
 struct SubPath {
     vec3 throughput;
     float d_vcm;
@@ -140,28 +146,141 @@ void sub_arrive(inout SubPath sp, float dist, float cos_in, bool far) {
     sp.d_vm /= c;
 }
 
-void sub_scatter(inout SubPath sp, VcmParams p, bool delta, float cos_out, float pdf, float reverse) {
+// Contract in vcm.rs, SubPath::scatter (merge: whether merging is a technique at the vertex).
+void sub_scatter(inout SubPath sp, VcmParams p, bool delta, float cos_out, float pdf, float reverse, bool merge) {
     if (delta) {
         sp.d_vcm = 0.0;
         sp.d_vc *= mis(cos_out);
         sp.d_vm *= mis(cos_out);
     } else {
         float g = mis(cos_out / pdf);
-        sp.d_vc = g * (sp.d_vc * mis(reverse) + sp.d_vcm + p.vm_weight);
-        sp.d_vm = g * (sp.d_vm * mis(reverse) + sp.d_vcm * p.vc_weight + 1.0);
+        float vm = merge ? p.vm_weight : 0.0;
+        float one = merge ? 1.0 : 0.0;
+        sp.d_vc = g * (sp.d_vc * mis(reverse) + sp.d_vcm + vm);
+        sp.d_vm = g * (sp.d_vm * mis(reverse) + sp.d_vcm * p.vc_weight + one);
         sp.d_vcm = mis(1.0 / pdf);
     }
 }
 
-// Whether nothing blocks the segment from h (leaving toward target) to target.
-bool vcm_visible(Hit h, uint skip, vec3 target) {
+// The medium a segment leaving vertex h (on primitive prim, NO_LIGHT in a medium, reached from
+// wo in medium) along dir starts in; contract in vcm.rs, medium_toward.
+uint medium_toward(Hit h, uint prim, uint medium, vec3 wo, vec3 dir) {
+#ifdef VARIANT_MEDIA
+    if (prim != NO_LIGHT && dot(dir, h.ng) * dot(wo, h.ng) < 0.0) return medium_after(prim, h.ng, dir, medium);
+#endif
+    return medium;
+}
+
+// Transmittance of the ray from o along d up to t_max, starting in medium: 0 when blocked, the
+// media's transmittance through null boundaries; numbers n = (stream, sample, first dimension).
+// Contract in vcm.rs, transmittance.
+vec3 vcm_transmittance(vec3 o, vec3 d, float t_max, uint medium, uint skip, uvec3 n, inout uint rays) {
+    float t;
+#ifdef VARIANT_MEDIA
+    vec3 tr = vec3(1.0);
+    for (uint crossing = 0u; crossing <= MEDIUM_CROSSINGS; crossing++) {
+        rays++;
+        uint prim = trace_ray(o, d, t_max, false, skip, t);
+        if (medium != NO_MEDIUM) {
+            float seg = prim == NO_LIGHT ? t_max : t;
+            tr *= medium_transmittance(medium, o, d, seg, rand2(n.x, n.y, frame.seed, n.z + crossing));
+        }
+        if (prim == NO_LIGHT) return tr;
+        Hit h = shape_hit(prim, o, d, t);
+        if (material_at(h.material).kind != MATERIAL_NULL || tr == vec3(0.0)) return vec3(0.0);
+        medium = medium_after(prim, h.ng, d, medium);
+        skip = ray_skip(prim);
+        vec3 next = offset_origin(h, -d, BSDF_TRANSMISSION);
+        t_max = max(t_max - dot(next - o, d), 0.0);
+        o = next;
+    }
+    return vec3(0.0);
+#else
+    rays++;
+    return trace_ray(o, d, t_max, true, skip, t) == NO_LIGHT ? vec3(1.0) : vec3(0.0);
+#endif
+}
+
+// Transmittance from h (leaving toward target, in medium) to target; contract in vcm.rs,
+// visibility.
+vec3 vcm_visibility(Hit h, uint skip, vec3 target, uint medium, uvec3 n, inout uint rays) {
     vec3 origin = offset_origin(h, target - h.p, BSDF_REFLECTION);
     vec3 to = target - origin;
     float dist = length(to);
-    float t;
-    return trace_ray(origin, to / dist, dist * (1.0 - 1e-4) - frame.ray_epsilon, true, skip, t) == NO_LIGHT;
+    return vcm_transmittance(origin, to / dist, dist * (1.0 - 1e-4) - frame.ray_epsilon, medium, skip, n, rays);
 }
 
-Hit light_vertex_hit(LightVertex v) {
-    return shape_hit(v.hit, load3(v.origin), load3(v.direction), v.t);
+// A stored light vertex's point and BSDF; contract in vcm.rs, light_vertex_bsdf.
+void light_vertex_bsdf(LightVertex v, out Hit h, out Bsdf b) {
+    vec3 o = load3(v.origin);
+    vec3 d = load3(v.direction);
+#ifdef VARIANT_MEDIA
+    if ((v.flags & VERTEX_MEDIUM) != 0u) {
+        h = medium_hit(o + d * v.t, -d);
+        b = phase_bsdf(v.hit, -d);
+        return;
+    }
+#endif
+    h = shape_hit(v.hit, o, d, v.t);
+    b = material_bsdf(material_at(h.material), h);
+}
+
+// Where a sub-path's ray ends; contract in vcm.rs, NextVertex and next_vertex.
+struct NextVertex {
+    bool found;      // false: past MEDIUM_CROSSINGS null boundaries
+    uint prim;       // NO_LIGHT: none met, or a scattering point (scattered)
+    bool scattered;
+    vec3 o;          // the last ray's origin; the vertex is o + t d
+    float t;
+    float dist;      // from the first origin
+    uint medium;
+};
+
+NextVertex next_vertex(vec3 o, vec3 d, uint medium, uint skip, uvec2 seq, uint domain, inout uint segment,
+                       inout vec3 throughput, inout vec3 emitted, inout uint rays) {
+    NextVertex nv;
+    nv.found = false;
+    float travelled = 0.0;
+#ifdef VARIANT_MEDIA
+    uint crossings = MEDIUM_CROSSINGS;
+#else
+    uint crossings = 0u;
+#endif
+    for (uint c = 0u; c <= crossings; c++) {
+        rays++;
+        float t;
+        uint prim = trace_ray(o, d, INF, false, skip, t);
+        bool scattered = false;
+#ifdef VARIANT_MEDIA
+        if (medium != NO_MEDIUM) {
+            MediumEvent e = medium_sample(medium, o, d, t, qmc2(seq.x, seq.y, frame.seed, domain + segment));
+            segment++;
+            emitted += throughput * e.emission;
+            throughput *= e.weight;
+            scattered = e.scattered;
+            t = e.t;
+        }
+        if (!scattered && prim != NO_LIGHT) {
+            Hit h = shape_hit(prim, o, d, t);
+            if (material_at(h.material).kind == MATERIAL_NULL) {
+                // An invisible boundary: straight through into the medium beyond, not a vertex.
+                medium = medium_after(prim, h.ng, d, medium);
+                skip = ray_skip(prim);
+                vec3 next = offset_origin(h, -d, BSDF_TRANSMISSION);
+                travelled += dot(next - o, d);
+                o = next;
+                continue;
+            }
+        }
+#endif
+        nv.found = true;
+        nv.prim = scattered ? NO_LIGHT : prim;
+        nv.scattered = scattered;
+        nv.o = o;
+        nv.t = t;
+        nv.dist = travelled + t;
+        nv.medium = medium;
+        return nv;
+    }
+    return nv;
 }

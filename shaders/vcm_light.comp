@@ -4,8 +4,9 @@
 // and, as grid points (position, path, slot), into `points` for merging; each is connected to the
 // camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
 // layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
-// src/cpu/vcm.rs (trace_light_path, connect_to_camera). Bindings: the scene, then the vertex
-// slots, the splats, the points and the point counter.
+// src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
+// flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
+// scene, then the vertex slots, the splats, the points and the point counter.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -17,6 +18,18 @@
 // variant: analytic implicit csg
 // variant: textured analytic implicit csg
 // variant: textured alpha analytic implicit csg
+// variant: media
+// variant: textured media
+// variant: textured alpha media
+// variant: analytic media
+// variant: textured analytic media
+// variant: textured alpha analytic media
+// variant: analytic implicit media
+// variant: textured analytic implicit media
+// variant: textured alpha analytic implicit media
+// variant: analytic implicit csg media
+// variant: textured analytic implicit csg media
+// variant: textured alpha analytic implicit csg media
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 
@@ -41,8 +54,9 @@ void splat_add(uint index, float v) {
     atomicAdd(splats[2u * index + 1u], w.y + carry);
 }
 
-// Light tracing: the light vertex at h seen by the camera; contract in vcm.rs, connect_to_camera.
-void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, vec2 lens_u, uint layer) {
+// Light tracing: the light vertex at h (on primitive prim, NO_LIGHT in a medium, reached in
+// medium) seen by the camera; contract in vcm.rs, connect_to_camera.
+void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, vec2 lens_u, uvec3 n, uint layer) {
     vec3 eye = camera_point(h.p, lens_u);
     uint pixel = camera_pixel(h.p, eye);
     if (pixel == NO_LIGHT) return;
@@ -56,11 +70,14 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, vec2 lens_
     float w_light = 0.0;
     if ((params.techniques & VCM_LIGHT_TRACE_ONLY) == 0u) {
         float toward_light = lobe_pdfs(b, dir, wo).x;
-        w_light = mis(image_to_surface / float(params.light_paths)) * (params.vm_weight + sp.d_vcm + sp.d_vc * mis(toward_light));
+        w_light = mis(image_to_surface / float(params.light_paths)) * (merge_weight(params, b) + sp.d_vcm + sp.d_vc * mis(toward_light));
     }
     float adjoint = shading_adjoint(b, wo, dir);
     vec3 value = sp.throughput * fr * (image_to_surface * adjoint / (float(params.light_paths) * (1.0 + w_light)));
-    if (value == vec3(0.0) || !vcm_visible(h, skip, eye)) return;
+    if (value == vec3(0.0)) return;
+    uint rays = 0u;
+    value *= vcm_visibility(h, skip, eye, medium_toward(h, prim, medium, wo, dir), n, rays);
+    if (value == vec3(0.0)) return;
     uint base = (pixel * LAYER_COUNT + layer) * 3u;
     splat_add(base, value.x);
     splat_add(base + 1u, value.y);
@@ -95,23 +112,40 @@ void main() {
     sp.d_vc = light_is_delta(l) ? 0.0 : mis((finite ? cos_l : 1.0) / (emission * l.pick_probability));
     sp.d_vm = sp.d_vc * params.vc_weight;
     uint skip = NO_LIGHT;
+    uint medium = l.medium;
+    uint segment = 0u;
+    uint rays = 0u;
     uint diffuse = 0u;
     bool specular_first = false;
     uint slot0 = path * params.vertex_slots;
     for (uint k = 1u; k <= params.vertex_slots; k++) {
-        float t;
-        uint prim = trace_ray(o, d, INF, false, skip, t);
-        if (prim == NO_LIGHT) break;
-        Hit h = shape_hit(prim, o, d, t);
-        Bsdf b = material_bsdf(material_at(h.material), h);
+        vec3 unused = vec3(0.0);
+        NextVertex nv = next_vertex(o, d, medium, skip, seq, RNG_VCM_LIGHT_MEDIUM_DOMAIN, segment, sp.throughput, unused, rays);
+        if (!nv.found || (nv.prim == NO_LIGHT && !nv.scattered) || sp.throughput == vec3(0.0)) break;
+        uint prim = nv.prim;
+        o = nv.o;
+        medium = nv.medium;
+        float t = nv.t;
+        vec3 wo = -d;
+        Hit h;
+        Bsdf b;
+#ifdef VARIANT_MEDIA
+        if (nv.scattered) {
+            h = medium_hit(o + d * t, wo);
+            b = phase_bsdf(medium, wo);
+        } else
+#endif
+        {
+            h = shape_hit(prim, o, d, t);
+            b = material_bsdf(material_at(h.material), h);
+        }
         uint flags = bsdf_flags(b);
         if (flags == 0u) break;
-        vec3 wo = -d;
-        sub_arrive(sp, t, abs_cos(b, wo), k > 1u || finite);
+        sub_arrive(sp, nv.dist, abs_cos(b, wo), k > 1u || finite);
         if ((flags & BSDF_ESTIMATE) != 0u) {
             uint slot = slot0 + k - 1u;
             vertices[slot].origin = float[3](o.x, o.y, o.z);
-            vertices[slot].hit = prim;
+            vertices[slot].hit = nv.scattered ? medium : prim;
             vertices[slot].direction = float[3](d.x, d.y, d.z);
             vertices[slot].t = t;
             vertices[slot].throughput = float[3](sp.throughput.x, sp.throughput.y, sp.throughput.z);
@@ -119,8 +153,8 @@ void main() {
             vertices[slot].d_vcm = sp.d_vcm;
             vertices[slot].d_vc = sp.d_vc;
             vertices[slot].d_vm = sp.d_vm;
-            vertices[slot].flags = diffuse | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
-            if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u) {
+            vertices[slot].flags = diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
+            if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u && !nv.scattered) {
                 uint at = atomicAdd(point_count, 1u);
                 points[at].position = float[3](h.p.x, h.p.y, h.p.z);
                 points[at].flux_rg = path;
@@ -129,7 +163,9 @@ void main() {
             if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
                 // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
                 vec2 lens_u = rand2(path, sample_index, frame.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
-                connect_to_camera(h, b, wo, sp, ray_skip(prim), lens_u, path_layer(false, diffuse + 1u, specular_first));
+                uvec3 n = uvec3(path, sample_index, RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1u));
+                connect_to_camera(h, b, wo, sp, nv.scattered ? NO_LIGHT : ray_skip(prim), prim, medium, lens_u, n,
+                                  path_layer(false, diffuse + 1u, specular_first));
             }
         }
         if (k >= params.vertex_slots) break;
@@ -143,13 +179,13 @@ void main() {
         float adjoint = shading_adjoint(b, wo, smp.wi);
         vec3 factor;
         if ((smp.flags & BSDF_SPECULAR) != 0u) {
-            sub_scatter(sp, params, true, cos_out, 0.0, 0.0);
+            sub_scatter(sp, params, true, cos_out, 0.0, 0.0, false);
             specular_first = specular_first || diffuse == 0u;
             factor = smp.weight * (adjoint / q);
         } else {
             vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
             if (pdfs.x <= 0.0) break;
-            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y);
+            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, mergeable(b));
             diffuse++;
             factor = bsdf_eval(b, smp.wi, wo) * (cos_out * adjoint / pdfs.x);
         }
@@ -160,7 +196,14 @@ void main() {
             sp.throughput /= survive;
         }
         if (sp.throughput == vec3(0.0)) break;
-        skip = ray_skip(prim);
+        if (nv.scattered) {
+            skip = NO_LIGHT;
+        } else {
+            skip = ray_skip(prim);
+#ifdef VARIANT_MEDIA
+            if ((smp.flags & BSDF_TRANSMISSION) != 0u) medium = medium_after(prim, h.ng, smp.wi, medium);
+#endif
+        }
         o = offset_origin(h, wo, smp.flags);
         d = smp.wi;
     }

@@ -97,13 +97,23 @@ fn empty_scene_misses_everything() {
 }
 
 /// The wide walk and the binary one find the same hits in the shipped scenes: instances, CSG,
-/// analytic and implicit shapes, alpha-tested and smooth triangles, unbounded planes. Rays start
+/// analytic and implicit shapes, alpha-tested and smooth triangles, unbounded planes, and
+/// coplanar faces (fog.toml's fog box stands on its floor), where only the same order of leaves
+/// finds the same surface. Rays start
 /// anywhere in and around the scene, some ignore a hit name (as rays leaving a smooth triangle
 /// do), some end early.
 #[test]
 fn wide_walk_finds_the_kernels_hits_in_shipped_scenes() {
     use photonix::scene::load_scene;
-    for file in ["scenes/shapes.toml", "scenes/materials.toml", "scenes/cornell-box.toml", "scenes/outdoor.toml"] {
+    for file in [
+        "scenes/shapes.toml",
+        "scenes/materials.toml",
+        "scenes/cornell-box.toml",
+        "scenes/outdoor.toml",
+        "scenes/fog.toml",
+        "scenes/smoke.toml",
+        "scenes/spotlights.toml",
+    ] {
         let scene = load_scene(&common::repo_path(file)).expect("shipped scene loads");
         let buffers = common::buffers(&scene, 16, 16);
         let wide = buffers.view();
@@ -111,7 +121,7 @@ fn wide_walk_finds_the_kernels_hits_in_shipped_scenes() {
         let binary = SceneView { wide: None, ..wide };
         let (lo, hi) =
             buffers.nodes.first().map_or((Vec3::ZERO, Vec3::ZERO), |n| (n.aabb_min.into(), n.aabb_max.into()));
-        let (mut hits, mut ties) = (0, 0);
+        let mut hits = 0;
         for ray in 0..4000u32 {
             let o = lo + (hi - lo) * (random_vec(ray, 200) * 1.2 - 0.1);
             let d = (random_vec(ray, 203) * 2.0 - 1.0).normalize();
@@ -120,18 +130,13 @@ fn wide_walk_finds_the_kernels_hits_in_shipped_scenes() {
             let ignore = if ray % 5 == 0 { first } else { NO_LIGHT };
             let expected = trace_ray(&binary, o, d, t_max, false, ignore);
             let found = trace_ray(&wide, o, d, t_max, false, ignore);
-            if found.0 != expected.0 {
-                // Two surfaces at exactly one distance: the walks' orders may name either.
-                assert_eq!(found.1, expected.1, "{file}, ray {ray}: {found:?} against {expected:?}");
-                ties += 1;
-            }
-            assert_eq!(found.1.to_bits(), expected.1.to_bits(), "{file}, ray {ray}");
+            // The same hit name and the same distance, bit for bit: the leaves in one order.
+            assert_eq!((found.0, found.1.to_bits()), (expected.0, expected.1.to_bits()), "{file}, ray {ray}");
             hits += u32::from(expected.0 != NO_LIGHT);
             let blocked = |v: &SceneView| trace_ray(v, o, d, t_max, true, ignore).0 != NO_LIGHT;
             assert_eq!(blocked(&wide), blocked(&binary), "{file}, ray {ray}: any-hit disagrees");
         }
-        println!("{file}: {hits} of 4000 rays hit, {ties} ties");
+        println!("{file}: {hits} of 4000 rays hit");
         assert!(hits > 1000, "{file}: the test must exercise hits, got {hits}");
-        assert!(ties < 40, "{file}: {ties} ties");
     }
 }

@@ -384,15 +384,90 @@ fn vcm_images_do_not_depend_on_thread_order() {
     }
 }
 
-/// The bidirectional integrators refuse participating media, with the way out.
+/// Participating media through the bidirectional integrators (docs/integrators.md, "Media"):
+/// cornell-fog (a homogeneous fog inside a null box, the area light hanging in it) against the
+/// shared reference. Measured at 64x64 and 32 samples: means within 0.6% at 16 samples and about
+/// 0.2% at 32 (relMSE 0.002; pt's is 0.018 at equal samples: light tracing and connections reach
+/// the lamp's glow in the fog that pt finds by chance).
 #[test]
-fn bidirectional_integrators_refuse_media_clearly() {
-    let scene = shipped("cornell-fog", Integrator::Vcm);
-    let settings = photonix::render::FrameSettings { width: 8, height: 8, max_depth: 8, seed: 1 };
-    let Err(err) = photonix::render::prepare(&scene, &settings) else { panic!("media are refused") };
-    let err = err.to_string();
-    println!("{err}");
-    assert!(err.contains("participating media") && err.contains("\"pt\""), "{err}");
+fn bpt_and_vcm_match_the_fog_reference() {
+    let reference = downsample(&read_exr(&common::reference_path("cornell-fog")).expect("shared reference"), 4);
+    for integrator in [Integrator::Bpt, Integrator::Vcm] {
+        let image = cpu(&common::buffers(&shipped("cornell-fog", integrator), 64, 64), 32).image;
+        let error = rel_mse(&image, &reference);
+        let ratio = mean_ratio(&image, &reference);
+        println!("{} cornell-fog: relMSE {error:.4}, mean ratio {ratio:.4?}", integrator.name());
+        for r in ratio {
+            assert!((r - 1.0).abs() < 0.01, "{} cornell-fog: mean ratio {ratio:?}", integrator.name());
+        }
+        assert!(error < 0.01, "{} cornell-fog: relMSE {error}", integrator.name());
+    }
+}
+
+/// scenes/fog.toml with its glass ball made diffuse: the spot lights' caustic through the ball is
+/// a path pt cannot sample (a point light seen through glass from a diffuse floor), so with the
+/// glass the two rightly differ (bpt reads 6-20% brighter, the warm spot's caustic).
+fn fog_without_glass(integrator: Integrator) -> Scene {
+    let path = common::repo_path("scenes/fog.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let glass = "type = \"dielectric\"\nior = 1.5";
+    assert!(text.contains(glass), "scenes/fog.toml's glass changed; update this test");
+    let mut scene = parse_scene(&text.replace(glass, "type = \"diffuse\"\nreflectance = 0.5"), &path).unwrap();
+    scene.render.integrator = integrator;
+    scene
+}
+
+/// bpt and vcm against pt in media: a homogeneous fog behind null boundaries (cornell-fog), a
+/// chromatic smoke box in a Henyey-Greenstein haze that fills all space, the camera and the spot
+/// lights inside it (fog without its glass), and a heterogeneous smoke lit by a spot and a point
+/// light (smoke). The bound is pt's noise: its light in fog comes in rare bright paths (the
+/// fog's pt at 256 and 4096 samples of 40x30 differ by 1.6-2.8%), while bpt's repeats within
+/// 0.2%.
+#[test]
+fn bpt_and_vcm_agree_with_pt_in_media() {
+    for (name, scene, pt_spp, spp, max_mean) in [
+        ("cornell-fog", shipped as fn(&str, Integrator) -> Scene, 64, 16, 0.03),
+        ("fog without glass", |_: &str, i| fog_without_glass(i), 256, 32, 0.04),
+        ("smoke", shipped, 64, 16, 0.02),
+    ] {
+        let pt = cpu(&common::buffers(&scene(name, Integrator::Pt), 40, 30), pt_spp).image;
+        for integrator in [Integrator::Bpt, Integrator::Vcm] {
+            let image = cpu(&common::buffers(&scene(name, integrator), 40, 30), spp).image;
+            let ratio = mean_ratio(&image, &pt);
+            println!("{} {name}: mean ratio to pt {ratio:.4?}, relMSE {:.4}", integrator.name(), rel_mse(&image, &pt));
+            for r in ratio {
+                assert!((r - 1.0).abs() < max_mean, "{} {name}: mean ratio to pt {ratio:?}", integrator.name());
+            }
+        }
+    }
+}
+
+/// The weights at medium vertices checked: light tracing alone (every path whose first camera
+/// vertex is non-delta, a scattering point in the fog included, weight 1) converges to bpt's
+/// image on cornell-fog, and so does vcm, whose merging is left out at medium vertices; were a
+/// technique's terms wrong there, the weights of a path would not sum to one and bpt or vcm would
+/// drift from light tracing. Measured at 32x32: light tracing's 512 samples within 0.25% of bpt's
+/// and vcm's 128 (at 64 and 32 samples it read 1% low: its noise).
+#[test]
+fn light_tracing_alone_agrees_with_bpt_and_vcm_in_fog() {
+    use photonix::layout::constants::{TECHNIQUES_ALL, VCM_LIGHT_TRACE_ONLY};
+    let image = |integrator, techniques, spp| {
+        let mut buffers = common::buffers(&shipped("cornell-fog", integrator), 32, 32);
+        buffers.frame.techniques = techniques;
+        cpu(&buffers, spp).image
+    };
+    let light_tracing = image(Integrator::Bpt, VCM_LIGHT_TRACE_ONLY, 512);
+    for (label, integrator) in [("bpt", Integrator::Bpt), ("vcm", Integrator::Vcm)] {
+        let all = image(integrator, TECHNIQUES_ALL, 128);
+        let ratio = mean_ratio(&light_tracing, &all);
+        println!(
+            "light tracing alone against {label}: mean ratio {ratio:.4?}, relMSE {:.4}",
+            rel_mse(&light_tracing, &all)
+        );
+        for r in ratio {
+            assert!((r - 1.0).abs() < 0.01, "light tracing alone against {label}: mean ratio {ratio:?}");
+        }
+    }
 }
 
 /// The kernels of bpt and vcm (vcm_light, render_vcm) against their CPU twin: the same random
@@ -405,14 +480,25 @@ fn bpt_and_vcm_gpu_match_cpu() {
     for integrator in [Integrator::Bpt, Integrator::Vcm] {
         // outdoor: sky, sun and an environment light; its glass ball's rim flips a discrete choice
         // under rounding (as with pt), hence the looser bound there.
-        for (name, max_error) in [
-            ("cornell-box", 1e-6),
-            ("cornell-caustics", 1e-6),
-            ("cornell-glossy", 1e-6),
-            ("spotlights", 1e-6),
-            ("outdoor", 1e-3),
+        for (name, max_error, max_mean) in [
+            ("cornell-box", 1e-6, 1e-3),
+            ("cornell-caustics", 1e-6, 1e-3),
+            ("cornell-glossy", 1e-6, 1e-3),
+            ("spotlights", 1e-6, 1e-3),
+            ("outdoor", 1e-3, 1e-3),
+            // Media: a fog behind null boundaries; a haze everywhere with spot lights, a smoke box
+            // and a glass ball (media change through glass), also without the ball;
+            // heterogeneous smoke (delta and ratio tracking). In the haze a few light paths
+            // diverge under rounding (bpt's light tracing alone shows it: relMSE 5.4e-5), as
+            // pt's camera paths do more there (relMSE 3.4e-3 at this size, which is why pt's
+            // check leaves fog out), hence fog's looser bounds.
+            ("cornell-fog", 1e-6, 1e-3),
+            ("fog", 1e-3, 3e-3),
+            ("fog without glass", 1e-3, 3e-3),
+            ("smoke", 1e-6, 1e-3),
         ] {
-            let scene = shipped(name, integrator);
+            let scene =
+                if name == "fog without glass" { fog_without_glass(integrator) } else { shipped(name, integrator) };
             let buffers = common::buffers(&scene, 32, 24);
             let (gpu, cpu) = both_twins(&ctx, &buffers, 2);
             let error = rel_mse(&gpu.image, &cpu.image);
@@ -425,7 +511,7 @@ fn bpt_and_vcm_gpu_match_cpu() {
             );
             assert!(error < max_error, "{} {name}: relMSE {error:.3e}", integrator.name());
             for r in ratio {
-                assert!((r - 1.0).abs() < 1e-3, "{} {name}: mean ratio {ratio:?}", integrator.name());
+                assert!((r - 1.0).abs() < max_mean, "{} {name}: mean ratio {ratio:?}", integrator.name());
             }
         }
     }

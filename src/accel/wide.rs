@@ -2,8 +2,9 @@
 //! one node holds up to four children's boxes in SIMD lanes, tested against a ray at once.
 //!
 //! Only the CPU twin walks it (`cpu::trace`); the kernels keep the binary, stackless walk. Both
-//! find the same closest hit: the leaves are the binary tree's leaves, over the same primitives
-//! in the same order, and the four lanes of a box test compute what the binary test computes.
+//! find the same closest hit: the leaves are the binary tree's leaves, over the same primitives,
+//! a node's lanes keep the binary tree's depth-first order, and the four lanes of a box test
+//! compute what the binary test computes.
 
 use glam::{Vec3, Vec4};
 
@@ -106,8 +107,9 @@ impl WideBvh {
                 .max_by(|(_, &a), (_, &b)| half_area(&nodes[a]).total_cmp(&half_area(&nodes[b])))
                 .map(|(at, _)| at);
             let Some(at) = largest else { break };
-            let open = kids.swap_remove(at);
-            kids.extend(children(open));
+            // In place, so that the lanes keep the binary tree's depth-first order.
+            let open = kids[at];
+            kids.splice(at..=at, children(open));
         }
         let index = self.nodes.len();
         let empty = Vec4::splat(f32::NAN);

@@ -22,6 +22,13 @@
 //! Densities of light sampling and emission use each light's uniform density by area (as `pt`'s
 //! weights do): multiple importance sampling needs only that every technique weighs a path by the
 //! same functions. Russian roulette stays out of the weights (as in pbrt's BDPT).
+//!
+//! In participating media both sub-paths sample free flights (`next_vertex`), pass null
+//! boundaries without a vertex, and scatter at collisions by the phase function; light vertices
+//! in media are stored (`VERTEX_MEDIUM`) and connected to, never merged, so merging's terms leave
+//! the weights at those vertices (`SubPath::scatter`, `merge_weight`). Connections carry the
+//! transmittance of the media they cross (`transmittance`). The weights leave the free-flight
+//! densities out (docs/integrators.md, "Media").
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -36,6 +43,7 @@ use super::grid::for_each_photon_near;
 use super::grid_build::{build_grid, grid_params};
 use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
+use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::render_pt::path_layer;
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2, sequence_point};
 use super::shading::{camera_ray, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
@@ -248,6 +256,21 @@ fn abs_cos(b: &Bsdf, w: Vec3) -> f32 {
     }
 }
 
+/// Whether merging can happen at a vertex with BSDF `b`: not at a medium's scattering points
+/// (they are connected to, never merged; docs/integrators.md, "Media").
+fn mergeable(b: &Bsdf) -> bool {
+    b.kind != MATERIAL_PHASE
+}
+
+/// SmallVCM's misVmWeightFactor for merging at a vertex with BSDF `b`: 0 where it cannot merge.
+fn merge_weight(p: &VcmParams, b: &Bsdf) -> f32 {
+    if mergeable(b) {
+        p.vm_weight
+    } else {
+        0.0
+    }
+}
+
 /// A sub-path's state: its throughput and SmallVCM's partial weights.
 #[derive(Clone, Copy, Debug)]
 struct SubPath {
@@ -272,15 +295,18 @@ impl SubPath {
 
     /// Leaving a vertex along a sampled direction of cosine `cos_out`: through a delta lobe, or a
     /// non-delta one with densities `pdf` (forward, including the lobe choice) and `reverse`.
-    fn scatter(&mut self, p: &VcmParams, delta: bool, cos_out: f32, pdf: f32, reverse: f32) {
+    /// `merge` says whether merging is a technique at this vertex: the terms of merging there
+    /// (misVmWeightFactor in dVC, the 1 in dVM) are left out at a medium's scattering points.
+    fn scatter(&mut self, p: &VcmParams, delta: bool, cos_out: f32, pdf: f32, reverse: f32, merge: bool) {
         if delta {
             self.d_vcm = 0.0;
             self.d_vc *= mis(cos_out);
             self.d_vm *= mis(cos_out);
         } else {
             let g = mis(cos_out / pdf);
-            self.d_vc = g * (self.d_vc * mis(reverse) + self.d_vcm + p.vm_weight);
-            self.d_vm = g * (self.d_vm * mis(reverse) + self.d_vcm * p.vc_weight + 1.0);
+            let (vm, one) = if merge { (p.vm_weight, 1.0) } else { (0.0, 0.0) };
+            self.d_vc = g * (self.d_vc * mis(reverse) + self.d_vcm + vm);
+            self.d_vm = g * (self.d_vm * mis(reverse) + self.d_vcm * p.vc_weight + one);
             self.d_vcm = mis(1.0 / pdf);
         }
     }
@@ -422,7 +448,8 @@ pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
     });
     let mut points = Vec::new();
     if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
-        for (i, (_, at)) in vertices.iter().zip(&positions).enumerate().filter(|(_, (v, _))| v.path_length > 0) {
+        let merged = |v: &LightVertex| v.path_length > 0 && v.flags & VERTEX_MEDIUM == 0;
+        for (i, (_, at)) in vertices.iter().zip(&positions).enumerate().filter(|(_, (v, _))| merged(v)) {
             points.push(Photon { position: (*at).into(), flux_rg: (i / slots) as u32, flux_b_dir: (i % slots) as u32 });
         }
     }
@@ -431,20 +458,176 @@ pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
     LightStage { vertices, grid, points, starts, splats: splats.into_iter().map(AtomicU64::into_inner).collect() }
 }
 
-/// The surface point of a stored light vertex, rebuilt from the ray that met it.
-fn light_vertex_hit(s: &SceneView, v: &LightVertex) -> Hit {
-    shape_hit(s, v.hit, Vec3::from(v.origin), Vec3::from(v.direction), v.t)
+/// The point of a stored light vertex and its BSDF, rebuilt from the ray that met it: a surface
+/// point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
+fn light_vertex_bsdf(s: &SceneView, v: &LightVertex) -> (Hit, Bsdf) {
+    let (o, d) = (Vec3::from(v.origin), Vec3::from(v.direction));
+    if v.flags & VERTEX_MEDIUM != 0 {
+        return (medium_hit(o + d * v.t, -d), phase_bsdf(s, v.hit, -d));
+    }
+    let h = shape_hit(s, v.hit, o, d, v.t);
+    let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+    (h, b)
 }
 
-/// Whether nothing blocks the segment from the surface point `ha` (its ray leaving from the
-/// offset origin on the target's side) to `target`; counts the ray.
-fn visible(s: &SceneView, ha: &Hit, skip: u32, target: Vec3, rays: &mut u32) -> bool {
+/// The medium a segment leaving vertex `h` (at `at`) along `dir` starts in, where the path met
+/// it from `wo`: the medium beyond the surface when `dir` crosses it.
+fn medium_toward(s: &SceneView, h: &Hit, at: VertexMedium, wo: Vec3, dir: Vec3) -> u32 {
+    if at.prim == NO_LIGHT || dir.dot(h.ng) * wo.dot(h.ng) >= 0.0 {
+        at.medium
+    } else {
+        medium_after(s, at.prim, h.ng, dir, at.medium)
+    }
+}
+
+/// Where a sub-path's vertex is: its primitive (`NO_LIGHT` at a medium's scattering point) and
+/// the medium the path reached it in.
+#[derive(Clone, Copy, Debug)]
+struct VertexMedium {
+    prim: u32,
+    medium: u32,
+}
+
+/// Where a connection segment's transmittance draws its random numbers (ratio tracking through
+/// heterogeneous media): stream and sample, and the first dimension of the segment's crossings.
+#[derive(Clone, Copy, Debug)]
+struct SegmentNumbers {
+    stream: u32,
+    sample: u32,
+    dim: u32,
+}
+
+/// Transmittance of the ray from `o` along unit `d` up to `t_max`, starting in `medium` and
+/// leaving `skip` aside: 0 when a surface other than a null boundary blocks it, else 1 times
+/// the transmittance of every medium on the way (through at most `MEDIUM_CROSSINGS` null
+/// boundaries, as `pt`'s shadow rays). Without media in the scene, one any-hit ray. Counts the
+/// rays.
+#[allow(clippy::too_many_arguments)]
+fn transmittance(
+    s: &SceneView,
+    mut o: Vec3,
+    d: Vec3,
+    mut t_max: f32,
+    mut medium: u32,
+    mut skip: u32,
+    n: SegmentNumbers,
+    rays: &mut u32,
+) -> Vec3 {
+    if s.media.is_empty() {
+        *rays += 1;
+        let (prim, _) = trace_ray(s, o, d, t_max, true, skip);
+        return if prim == NO_LIGHT { Vec3::ONE } else { Vec3::ZERO };
+    }
+    let mut tr = Vec3::ONE;
+    for crossing in 0..=MEDIUM_CROSSINGS {
+        *rays += 1;
+        let (prim, t) = trace_ray(s, o, d, t_max, false, skip);
+        if medium != NO_MEDIUM {
+            let seg = if prim == NO_LIGHT { t_max } else { t };
+            tr *= medium_transmittance(s, medium, o, d, seg, rand2(n.stream, n.sample, s.frame.seed, n.dim + crossing));
+        }
+        if prim == NO_LIGHT {
+            return tr;
+        }
+        let h = shape_hit(s, prim, o, d, t);
+        if s.materials[h.material as usize].kind != MATERIAL_NULL || tr == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        medium = medium_after(s, prim, h.ng, d, medium);
+        skip = ray_skip(s, prim);
+        let next = offset_origin(&h, -d, BSDF_TRANSMISSION);
+        t_max = (t_max - (next - o).dot(d)).max(0.0);
+        o = next;
+    }
+    Vec3::ZERO
+}
+
+/// Transmittance of the segment from the point `ha` (its ray leaving from the offset origin on
+/// the target's side, in `medium`) to `target`: 0 when blocked (see `transmittance`).
+fn visibility(
+    s: &SceneView,
+    ha: &Hit,
+    skip: u32,
+    target: Vec3,
+    medium: u32,
+    n: SegmentNumbers,
+    rays: &mut u32,
+) -> Vec3 {
     let origin = offset_origin(ha, target - ha.p, BSDF_REFLECTION);
     let to = target - origin;
     let dist = to.length();
-    *rays += 1;
-    let (prim, _) = trace_ray(s, origin, to / dist, dist * (1.0 - 1e-4) - s.frame.ray_epsilon, true, skip);
-    prim == NO_LIGHT
+    transmittance(s, origin, to / dist, dist * (1.0 - 1e-4) - s.frame.ray_epsilon, medium, skip, n, rays)
+}
+
+/// Where a sub-path's ray ends (`next_vertex`).
+struct NextVertex {
+    /// The primitive met (`NO_LIGHT`: none, or a scattering point in the medium, `scattered`).
+    prim: u32,
+    scattered: bool,
+    /// The last ray's origin and distance (the vertex is `o + t d`), and the whole distance from
+    /// the ray's first origin.
+    o: Vec3,
+    t: f32,
+    dist: f32,
+    /// The medium the vertex is in (the one the ray ended in).
+    medium: u32,
+}
+
+/// The next scattering vertex of a sub-path whose ray leaves `o` along `d` in `medium`: free
+/// flights through the media on the way (numbers from `domain + segment`, stream and sample
+/// `seq`, `segment` counting the flights, as `pt`'s), straight through null boundaries (at most
+/// `MEDIUM_CROSSINGS`; `None` past them). Multiplies `throughput` by the flights' weights and
+/// adds the media's emission on the way (`throughput` times it) to `emitted`.
+#[allow(clippy::too_many_arguments)]
+fn next_vertex(
+    s: &SceneView,
+    mut o: Vec3,
+    d: Vec3,
+    mut medium: u32,
+    mut skip: u32,
+    seq: (u32, u32),
+    domain: u32,
+    segment: &mut u32,
+    throughput: &mut Vec3,
+    emitted: &mut Vec3,
+    rays: &mut u32,
+) -> Option<NextVertex> {
+    let media = !s.media.is_empty();
+    let mut travelled = 0.0f32;
+    for _ in 0..=(if media { MEDIUM_CROSSINGS } else { 0 }) {
+        *rays += 1;
+        let (prim, mut t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
+        let mut scattered = false;
+        if medium != NO_MEDIUM {
+            let e = medium_sample(s, medium, o, d, t, qmc2(seq.0, seq.1, s.frame.seed, domain + *segment));
+            *segment += 1;
+            *emitted += *throughput * e.emission;
+            *throughput *= e.weight;
+            scattered = e.scattered;
+            t = e.t;
+        }
+        if !scattered && prim != NO_LIGHT && media {
+            let h = shape_hit(s, prim, o, d, t);
+            if s.materials[h.material as usize].kind == MATERIAL_NULL {
+                // An invisible boundary: straight through into the medium beyond, not a vertex.
+                medium = medium_after(s, prim, h.ng, d, medium);
+                skip = ray_skip(s, prim);
+                let next = offset_origin(&h, -d, BSDF_TRANSMISSION);
+                travelled += (next - o).dot(d);
+                o = next;
+                continue;
+            }
+        }
+        return Some(NextVertex {
+            prim: if scattered { NO_LIGHT } else { prim },
+            scattered,
+            o,
+            t,
+            dist: travelled + t,
+            medium,
+        });
+    }
+    None
 }
 
 /// Traces light path `path` of the sample into `out` (its vertex slots, with their surface points
@@ -503,27 +686,52 @@ pub fn trace_light_path(
     sub.d_vm = sub.d_vc * p.vc_weight;
     let (mut o, mut d) = (e.origin, e.direction);
     let mut skip = NO_LIGHT;
+    let mut medium = l.medium;
+    let mut segment = 0u32;
     // The sub-path's signature so far: non-delta vertices, and whether a delta vertex came first.
     let (mut diffuse, mut specular_first) = (0u32, false);
     for k in 1..=p.vertex_slots {
-        rays += 1;
-        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
-        if prim == NO_LIGHT {
+        let mut unused = Vec3::ZERO;
+        let Some(next) = next_vertex(
+            s,
+            o,
+            d,
+            medium,
+            skip,
+            seq,
+            RNG_VCM_LIGHT_MEDIUM_DOMAIN,
+            &mut segment,
+            &mut sub.throughput,
+            &mut unused,
+            &mut rays,
+        ) else {
+            break;
+        };
+        if next.prim == NO_LIGHT && !next.scattered || sub.throughput == Vec3::ZERO {
             break;
         }
-        let h = shape_hit(s, prim, o, d, t);
-        let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+        let prim = next.prim;
+        (o, medium) = (next.o, next.medium);
+        let t = next.t;
+        let wo = -d;
+        let (h, b) = if next.scattered {
+            (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))
+        } else {
+            let h = shape_hit(s, prim, o, d, t);
+            let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+            (h, b)
+        };
         let flags = bsdf_flags(&b);
         if flags == 0 {
             break;
         }
-        let wo = -d;
-        sub.arrive(t, abs_cos(&b, wo), k > 1 || finite);
+        sub.arrive(next.dist, abs_cos(&b, wo), k > 1 || finite);
         if flags & BSDF_ESTIMATE != 0 {
             positions[(k - 1) as usize] = h.p;
+            let in_medium = if next.scattered { VERTEX_MEDIUM } else { 0 };
             out[(k - 1) as usize] = LightVertex {
                 origin: o.into(),
-                hit: prim,
+                hit: if next.scattered { medium } else { prim },
                 direction: d.into(),
                 t,
                 throughput: sub.throughput.into(),
@@ -531,13 +739,21 @@ pub fn trace_light_path(
                 d_vcm: sub.d_vcm,
                 d_vc: sub.d_vc,
                 d_vm: sub.d_vm,
-                flags: diffuse | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
+                flags: diffuse | in_medium | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
             };
             if has(p, VCM_CONNECT | VCM_LIGHT_TRACE_ONLY) && camera_connectable(f) {
                 // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
                 let lens_u = rand2(path, sample, f.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
-                let skip = ray_skip(s, prim);
-                if let Some((pixel, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, skip, lens_u, &mut rays) {
+                let skip = if next.scattered { NO_LIGHT } else { ray_skip(s, prim) };
+                let numbers = SegmentNumbers {
+                    stream: path,
+                    sample,
+                    dim: RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1),
+                };
+                let at = VertexMedium { prim, medium };
+                if let Some((pixel, v)) =
+                    connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
+                {
                     let layer = path_layer(false, diffuse + 1, specular_first);
                     splat(pixel, layer, v);
                 }
@@ -557,7 +773,7 @@ pub fn trace_light_path(
         let cos_out = abs_cos(&b, smp.wi);
         let adjoint = shading_adjoint(&b, wo, smp.wi);
         let factor = if smp.flags & BSDF_SPECULAR != 0 {
-            sub.scatter(p, true, cos_out, 0.0, 0.0);
+            sub.scatter(p, true, cos_out, 0.0, 0.0, false);
             specular_first |= diffuse == 0;
             smp.weight * (adjoint / q)
         } else {
@@ -565,7 +781,7 @@ pub fn trace_light_path(
             if pdf <= 0.0 {
                 break;
             }
-            sub.scatter(p, false, cos_out, pdf, reverse);
+            sub.scatter(p, false, cos_out, pdf, reverse, mergeable(&b));
             diffuse += 1;
             // The camera's form of the BSDF: wo toward the camera side.
             bsdf_eval(&b, smp.wi, wo) * (cos_out * adjoint / pdf)
@@ -583,7 +799,14 @@ pub fn trace_light_path(
         if sub.throughput == Vec3::ZERO {
             break;
         }
-        skip = ray_skip(s, prim);
+        if next.scattered {
+            skip = NO_LIGHT;
+        } else {
+            skip = ray_skip(s, prim);
+            if smp.flags & BSDF_TRANSMISSION != 0 {
+                medium = medium_after(s, prim, h.ng, smp.wi, medium);
+            }
+        }
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
     }
@@ -601,7 +824,9 @@ fn connect_to_camera(
     wo: Vec3,
     sub: &SubPath,
     skip: u32,
+    at: VertexMedium,
     lens_u: [f32; 2],
+    numbers: SegmentNumbers,
     rays: &mut u32,
 ) -> Option<(u32, Vec3)> {
     let f = s.frame;
@@ -621,11 +846,15 @@ fn connect_to_camera(
     } else {
         // The density of a camera path arriving from the camera continuing toward the light.
         let (toward_light, _) = lobe_pdfs(b, dir, wo);
-        mis(image_to_surface / p.light_paths as f32) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(toward_light))
+        mis(image_to_surface / p.light_paths as f32) * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(toward_light))
     };
     let adjoint = shading_adjoint(b, wo, dir);
     let value = sub.throughput * fr * (image_to_surface * adjoint / (p.light_paths as f32 * (1.0 + w_light)));
-    if value == Vec3::ZERO || !visible(s, h, skip, eye, rays) {
+    if value == Vec3::ZERO {
+        return None;
+    }
+    let value = value * visibility(s, h, skip, eye, medium_toward(s, h, at, wo, dir), numbers, rays);
+    if value == Vec3::ZERO {
         return None;
     }
     Some((pixel, value))
@@ -660,16 +889,42 @@ pub fn radiance_vcm(
     let mut skip = NO_LIGHT;
     let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
     let mut specular_path = true;
+    let mut medium = f.camera_medium;
+    let mut segment = 0u32;
     for m in 1..=f.max_depth + 1 {
-        *rays += 1;
-        let (prim, t) = trace_ray(s, o, d, f32::INFINITY, false, skip);
+        let mut medium_emission = Vec3::ZERO;
+        let next = next_vertex(
+            s,
+            o,
+            d,
+            medium,
+            skip,
+            (stream, sample),
+            RNG_MEDIUM_DOMAIN,
+            &mut segment,
+            &mut sub.throughput,
+            &mut medium_emission,
+            rays,
+        );
         let layer = path_layer(first_specular, diffuse, specular_after) as usize;
         // Emission the path meets is taken whole when the camera sees it directly; the check
         // techniques take only what they cannot make themselves (emission through delta lobes).
         let single = light_only || merge_only;
         let emission_allowed = !single || specular_path;
         let take_whole = m == 1 || single;
-        if prim == NO_LIGHT {
+        // The media's own emission: only camera paths gather it (no other technique samples it).
+        if emission_allowed {
+            terms[layer] += medium_emission;
+        }
+        let Some(next) = next else {
+            break;
+        };
+        if sub.throughput == Vec3::ZERO {
+            break;
+        }
+        let (prim, t) = (next.prim, next.t);
+        (o, medium) = (next.o, next.medium);
+        if prim == NO_LIGHT && !next.scattered {
             if !emission_allowed {
                 break;
             }
@@ -696,15 +951,19 @@ pub fn radiance_vcm(
             }
             break;
         }
-        let h = shape_hit(s, prim, o, d, t);
-        let mat = &s.materials[h.material as usize];
-        let b = material_bsdf(s, mat, &h);
         let wo = -d;
+        let (h, b) = if next.scattered {
+            (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))
+        } else {
+            let h = shape_hit(s, prim, o, d, t);
+            let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+            (h, b)
+        };
         // An orthographic camera's first density is by area (`camera_d_vcm`).
-        sub.arrive(t, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
+        sub.arrive(next.dist, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
         let cos_l = wo.dot(h.ng);
-        if cos_l > 0.0 && emission_allowed {
-            let emitted = material_emission(s, mat, &h);
+        if !next.scattered && cos_l > 0.0 && emission_allowed {
+            let emitted = material_emission(s, &s.materials[h.material as usize], &h);
             if emitted != Vec3::ZERO {
                 let hp = hit_primitive(s, prim);
                 let light = s.primitives[hp as usize].light;
@@ -725,13 +984,20 @@ pub fn radiance_vcm(
         if flags == 0 {
             break;
         }
-        skip = ray_skip(s, prim);
+        skip = if next.scattered { NO_LIGHT } else { ray_skip(s, prim) };
+        let at = VertexMedium { prim, medium };
         let dim = (m - 1) * RNG_DIMS_PER_BOUNCE;
+        // The transmittance numbers of this vertex's connections: light sampling, then a slot each.
+        let connection = |c: u32| SegmentNumbers {
+            stream,
+            sample,
+            dim: RNG_VCM_TRANSMITTANCE_DOMAIN + ((m - 1) * (slots as u32 + 1) + c) * (MEDIUM_CROSSINGS + 1),
+        };
         if flags & BSDF_ESTIMATE != 0 {
             let cam_diffuse = diffuse + 1;
             if connect {
                 let (v, layer) = (
-                    light_sampling(s, p, &h, &b, wo, &sub, skip, stream, dim, rays),
+                    light_sampling(s, p, &h, &b, wo, &sub, skip, at, stream, dim, connection(0), rays),
                     path_layer(first_specular, cam_diffuse, false),
                 );
                 terms[layer as usize] += sub.throughput * v;
@@ -744,7 +1010,7 @@ pub fn radiance_vcm(
                     if lv.path_length == 0 {
                         continue;
                     }
-                    let v = connect_vertices(s, p, &h, &b, wo, &sub, skip, lv, rays);
+                    let v = connect_vertices(s, p, &h, &b, wo, &sub, skip, at, lv, connection(slot as u32 + 1), rays);
                     let layer = path_layer(
                         first_specular,
                         cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1,
@@ -753,7 +1019,7 @@ pub fn radiance_vcm(
                     terms[layer as usize] += sub.throughput * v;
                 }
             }
-            if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
+            if has(p, VCM_MERGE | VCM_MERGE_ONLY) && mergeable(&b) {
                 let mut merged = [Vec3::ZERO; 4];
                 for_each_photon_near(h.p, &stage.grid, &stage.points, &stage.starts, |pt, _| {
                     let lv = &stage.vertices[(pt.flux_rg as usize) * slots + pt.flux_b_dir as usize];
@@ -801,7 +1067,7 @@ pub fn radiance_vcm(
         }
         let cos_out = abs_cos(&b, smp.wi);
         if smp.flags & BSDF_SPECULAR != 0 {
-            sub.scatter(p, true, cos_out, 0.0, 0.0);
+            sub.scatter(p, true, cos_out, 0.0, 0.0, false);
             first_specular |= m == 1;
             specular_after = diffuse > 0;
             sub.throughput *= smp.weight / q;
@@ -810,7 +1076,7 @@ pub fn radiance_vcm(
             if pdf <= 0.0 {
                 break;
             }
-            sub.scatter(p, false, cos_out, pdf, reverse);
+            sub.scatter(p, false, cos_out, pdf, reverse, mergeable(&b));
             diffuse += 1;
             specular_after = false;
             specular_path = false;
@@ -825,6 +1091,9 @@ pub fn radiance_vcm(
         }
         if sub.throughput == Vec3::ZERO {
             break;
+        }
+        if !next.scattered && smp.flags & BSDF_TRANSMISSION != 0 {
+            medium = medium_after(s, prim, h.ng, smp.wi, medium);
         }
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
@@ -853,8 +1122,10 @@ fn light_sampling(
     wo: Vec3,
     sub: &SubPath,
     skip: u32,
+    at: VertexMedium,
     stream: u32,
     dim: u32,
+    numbers: SegmentNumbers,
     rays: &mut u32,
 ) -> Vec3 {
     let f = s.frame;
@@ -878,19 +1149,19 @@ fn light_sampling(
     let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
     let forward = if light_is_delta(l) { 0.0 } else { forward };
     let w_light = mis(forward / (l.pick_probability * direct));
-    let w_camera =
-        mis(emission * cos_to_light / (direct * cos_at_light)) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(reverse));
+    let w_camera = mis(emission * cos_to_light / (direct * cos_at_light))
+        * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(reverse));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     // The shadow ray runs to the sampled point itself, stopping short by the sample's own offset.
     let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     let to_target = ls.p - origin;
     let length = to_target.length();
-    *rays += 1;
-    let (prim, _) = trace_ray(s, origin, to_target / length, (length - ls.eps).max(0.0), true, skip);
-    if prim != NO_LIGHT {
+    let medium = medium_toward(s, h, at, wo, ls.wi);
+    let tr = transmittance(s, origin, to_target / length, (length - ls.eps).max(0.0), medium, skip, numbers, rays);
+    if tr == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    fr * (w / l.pick_probability)
+    fr * (w / l.pick_probability) * tr
 }
 
 /// A camera vertex joined to light vertex `lv` (SmallVCM's ConnectVertices): the weighed
@@ -904,10 +1175,12 @@ fn connect_vertices(
     wo: Vec3,
     sub: &SubPath,
     skip: u32,
+    at: VertexMedium,
     lv: &LightVertex,
+    numbers: SegmentNumbers,
     rays: &mut u32,
 ) -> Vec3 {
-    let lh = light_vertex_hit(s, lv);
+    let (lh, lb) = light_vertex_bsdf(s, lv);
     let to_light = lh.p - h.p;
     let dist2 = to_light.length_squared();
     if dist2 <= 0.0 {
@@ -919,7 +1192,6 @@ fn connect_vertices(
     if fc == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let lb = material_bsdf(s, &s.materials[lh.material as usize], &lh);
     let l_wo = -Vec3::from(lv.direction);
     let fl = bsdf_eval(&lb, -dir, l_wo);
     if fl == Vec3::ZERO {
@@ -932,14 +1204,15 @@ fn connect_vertices(
     // Densities by area at the other end.
     let cam_to_area = cam_forward * cos_light / dist2;
     let light_to_area = light_forward * cos_cam / dist2;
-    let w_light = mis(cam_to_area) * (p.vm_weight + lv.d_vcm + lv.d_vc * mis(light_reverse));
-    let w_camera = mis(light_to_area) * (p.vm_weight + sub.d_vcm + sub.d_vc * mis(cam_reverse));
+    let w_light = mis(cam_to_area) * (merge_weight(p, &lb) + lv.d_vcm + lv.d_vc * mis(light_reverse));
+    let w_camera = mis(light_to_area) * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(cam_reverse));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     let value = fc * fl * Vec3::from(lv.throughput) * (g * w * shading_adjoint(&lb, l_wo, -dir));
-    if value == Vec3::ZERO || !visible(s, h, skip, lh.p + (h.p - lh.p).normalize() * lh.eps, rays) {
+    if value == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    value
+    let target = lh.p + (h.p - lh.p).normalize() * lh.eps;
+    value * visibility(s, h, skip, target, medium_toward(s, h, at, wo, dir), numbers, rays)
 }
 
 /// Adds the camera stage of `range` (one sample) to `accumulation`, as one dispatch of the

@@ -441,6 +441,19 @@ shared_constants! {
     /// `LightVertex::flags`: the light sub-path met a delta vertex before its first non-delta one.
     VERTEX_SPECULAR_FIRST: u32 = 0x1_0000;
     VERTEX_DIFFUSE_MASK: u32 = 0xffff;
+    /// `LightVertex::flags`: a scattering point in a medium (no surface); its `hit` holds the
+    /// medium's index, and the point is `origin + t direction`. Such vertices are connected to,
+    /// never merged (docs/integrators.md, "Media").
+    VERTEX_MEDIUM: u32 = 0x2_0000;
+    /// Free flights of light sub-paths in media: `RNG_VCM_LIGHT_MEDIUM_DOMAIN + segment`, drawn
+    /// at the light path's sequence point (as its other numbers), `segment` counting its flights.
+    RNG_VCM_LIGHT_MEDIUM_DOMAIN: u32 = 0x7000_0000;
+    /// Ratio tracking along connection segments through heterogeneous media: `domain +
+    /// connection * (MEDIUM_CROSSINGS + 1) + crossing`, the light side's (light tracing, stream
+    /// = light path) under `RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN`, the camera side's (light
+    /// sampling and connections, stream = pixel) under `RNG_VCM_TRANSMITTANCE_DOMAIN`.
+    RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN: u32 = 0x7400_0000;
+    RNG_VCM_TRANSMITTANCE_DOMAIN: u32 = 0x7800_0000;
     /// Random dimensions of light sub-paths: `RNG_VCM_LIGHT_DOMAIN + vertex *
     /// RNG_DIMS_PER_BOUNCE + offset`, with stream = the light path's index.
     RNG_VCM_LIGHT_DOMAIN: u32 = 0x6000_0000;

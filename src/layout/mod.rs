@@ -301,7 +301,9 @@ gpu_structs! {
     /// point for connections), the light sub-path's throughput (flux, before the division by the
     /// path count) and the partial MIS quantities of SmallVCM's recursion (dVCM, dVC, dVM).
     /// `path_length` counts scattering vertices from the light (0: an empty slot); `flags` holds the
-    /// non-delta vertices before this one (low 16 bits) and `VERTEX_SPECULAR_FIRST`.
+    /// non-delta vertices before this one (low 16 bits), `VERTEX_SPECULAR_FIRST` and
+    /// `VERTEX_MEDIUM` (a scattering point in a medium: `hit` is then the medium's index and the
+    /// point `origin + t direction`).
     pub struct LightVertex {
         pub origin: [f32; 3],
         pub hit: u32,

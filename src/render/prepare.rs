@@ -307,11 +307,6 @@ pub enum PrepareError {
          (see docs/limits.md)"
     )]
     Overflow { path: String, what: &'static str, value: String },
-    #[error(
-        "{path}: [render] integrator = \"{integrator}\" does not trace participating media or null surfaces yet; \
-         render this scene with integrator = \"pt\" (or \"ppm\")"
-    )]
-    MediaUnsupported { path: String, integrator: &'static str },
 }
 
 pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, PrepareError> {
@@ -583,9 +578,6 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
     }
     let mut nodes = bvh.nodes;
     nodes.extend(instanced.nodes);
-    if scene.render.integrator.is_bidirectional() && !media.is_empty() {
-        return Err(PrepareError::MediaUnsupported { path: path(), integrator: scene.render.integrator.name() });
-    }
     let mut buffers = SceneBuffers {
         frame,
         nodes,
