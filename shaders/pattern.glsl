@@ -55,6 +55,26 @@ float pattern_cos_turns(float t) {
     return pattern_sin_turns(u);
 }
 
+// atan2(s, c) / 2 pi in (-1/2, 1/2], Cephes' atanf; see atan2_turns in the twin.
+float pattern_atan2_turns(float s, float c) {
+    float a = abs(s);
+    float b = abs(c);
+    precise float t = a > b ? b / a : a / b;
+    precise float base = 0.0;
+    precise float x = t;
+    if (t > 0.41421357) {
+        base = 0.125;
+        x = (t - 1.0) / (t + 1.0);
+    }
+    precise float z = x * x;
+    precise float poly = (((0.080537446 * z - 0.13877685) * z + 0.19977711) * z - 0.3333295) * z * x + x;
+    precise float r = base + poly * 0.15915494;
+    if (a > b) r = 0.25 - r;
+    if (c < 0.0) r = 0.5 - r;
+    if (s < 0.0) r = -r;
+    return r;
+}
+
 // ---- Noise ----------------------------------------------------------------------------------
 
 // Perlin's gradient (Improving Noise, SIGGRAPH 2002) for h in 0..16, dotted with (x, y, z).
@@ -360,6 +380,11 @@ float pattern_raw(uint at, uint kind, vec3 p, vec3 turb, uint octaves, float ome
     }
     case PATTERN_ONION:
         return pattern_fract(pattern_length3(p.x, p.y, p.z));
+    case PATTERN_RADIAL: {
+        if (abs(p.x) < 0.001 && abs(p.z) < 0.001) return 0.25;
+        precise float r = 0.75 + pattern_atan2_turns(p.x, p.z);
+        return r;
+    }
     case PATTERN_RIPPLES:
     case PATTERN_WAVES:
         return pattern_ripples_or_waves(p, pattern_word(at + PATTERN_FREQUENCY), pattern_word(at + PATTERN_PHASE),

@@ -263,7 +263,7 @@ struct Tile {
     desc: PatternDesc,
     /// Half the side of the square shown, in pattern units.
     half_size: f32,
-    /// The plane is x-y unless this is set (x-z, where hexagons lie).
+    /// The plane is x-y unless this is set (x-z, where hexagons lie and radial turns).
     xz: bool,
     /// Shade the pattern's gradient as a bump map instead of showing its colours.
     bumps: bool,
@@ -291,7 +291,7 @@ fn pattern_sheet_shows_every_pattern() {
                 label: name.to_string(),
                 desc: PatternDesc::new(kind),
                 half_size,
-                xz: matches!(*name, "hexagon" | "agate"),
+                xz: matches!(*name, "hexagon" | "agate" | "radial"),
                 bumps: false,
             }
         })

@@ -1244,3 +1244,115 @@ fn smooth_triangles_meshes_lathes_and_height_fields_are_shaded_smooth() {
         }
     }
 }
+
+/// Renders a scene at 40 x 30, 2 passes, on the CPU.
+fn render_small(s: &Scene) -> photonix::io::image::Image {
+    let settings = photonix::render::FrameSettings { width: 40, height: 30, max_depth: 3, seed: 3 };
+    let buffers = photonix::render::prepare(s, &settings).unwrap();
+    photonix::render::render_cpu(&buffers, 2, None, 0, &mut |_, _| {}).image
+}
+
+/// Counts the pixels of the box (columns 10 to 29, rows 9 to 20) that are clearly red and
+/// clearly blue.
+fn red_and_blue(image: &photonix::io::image::Image) -> (usize, usize) {
+    let (mut red, mut blue) = (0, 0);
+    for y in 9..21 {
+        for x in 10..30 {
+            let p = image.pixel(x, y);
+            if p[0] > 3.0 * p[2] && p[0] > 0.05 {
+                red += 1;
+            } else if p[2] > 3.0 * p[0] && p[2] > 0.05 {
+                blue += 1;
+            }
+        }
+    }
+    (red, blue)
+}
+
+/// Writes `image` to $PHOTONIX_TEST_PNGS/`name`.png when that is set, to look at.
+fn look_at(name: &str, image: &photonix::io::image::Image) {
+    if let Some(dir) = std::env::var_os("PHOTONIX_TEST_PNGS") {
+        let path = Path::new(&dir).join(format!("{name}.png"));
+        photonix::io::image::write_image(&path, image, 0.0).unwrap();
+    }
+}
+
+const FLAT_CAMERA: &str = "camera { location <0, 0, -5> look_at <0, 0, 0> }\nlight_source { <0, 3, -6>, rgb 1 }\n";
+
+/// The same camera and light in Photonix's coordinates (POV-Ray's z mirrored; the light's
+/// intensity pi d0^2, d0 the distance from the light to where the camera looks).
+const FLAT_CAMERA_TOML: &str = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov = 53.13010235415598\n\
+    [[lights]]\ntype = \"point\"\nposition = [0, 3, 6]\nintensity = 141.3716694115407\n";
+
+/// POV-Ray's `radial` (the angle around y) turned towards the camera, with frequency 4: eight
+/// wedges, red and blue, as the same pattern written in TOML; and `tiles`, POV-Ray's checker of
+/// two textures, as a checker pattern in TOML.
+#[test]
+fn radial_and_tiles_render_as_the_same_patterns_written_in_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let radial = load(
+        dir.path(),
+        &format!(
+            "{FLAT_CAMERA}box {{ <-2, -1.5, 0>, <2, 1.5, 0.1>
+  pigment {{ radial frequency 4 color_map {{ [0.5 rgb <1, 0.1, 0.1>] [0.5 rgb <0.1, 0.1, 1>] }} rotate -90 * x }}
+  finish {{ diffuse 1 }}
+}}\n"
+        ),
+    );
+    // world_from_pattern = mirror(z) * rotate(-90 x) = rotate(90 x) * mirror(z).
+    let toml = format!(
+        "{FLAT_CAMERA_TOML}[textures.wedges]\ntype = \"pattern\"\npattern = \"radial\"\nfrequency = 4\n\
+        color_map = [[0.5, [1, 0.1, 0.1]], [0.5, [0.1, 0.1, 1]]]\n\
+        transform = {{ scale = [1, 1, -1], rotate = [90, 0, 0] }}\n\
+        [materials.wedges]\ntype = \"diffuse\"\nreflectance = {{ texture = \"wedges\" }}\n\
+        [[shapes]]\ntype = \"box\"\nmaterial = \"wedges\"\nmin = [-2, -1.5, -0.1]\nmax = [2, 1.5, 0]\n"
+    );
+    let by_hand = load_scene(&write(dir.path(), "radial.toml", &toml)).unwrap_or_else(|e| panic!("{e}"));
+    let (a, b) = (render_small(&radial), render_small(&by_hand));
+    let rel_mse = photonix::io::metrics::rel_mse(&a, &b);
+    let (red, blue) = red_and_blue(&a);
+    eprintln!("radial against TOML: relMSE {rel_mse:.3e}; {red} red and {blue} blue pixels");
+    assert!(rel_mse < 1e-6, "relMSE {rel_mse:.3e}");
+    // Eight wedges of equal angle: about as much red as blue.
+    assert!(red > 80 && blue > 80 && red.abs_diff(blue) < 40, "red {red}, blue {blue}");
+    look_at("radial", &a);
+
+    let tiles = load(
+        dir.path(),
+        &format!(
+            "{FLAT_CAMERA}box {{ <-2, -1.5, 0.2>, <2, 1.5, 0.3>
+  texture {{
+    tiles {{
+      texture {{ pigment {{ rgb <1, 0.1, 0.1> }} finish {{ diffuse 1 }} }}
+      tile2
+      texture {{ pigment {{ rgb <0.1, 0.1, 1> }} finish {{ diffuse 1 }} }}
+    }}
+    scale 0.5
+  }}
+}}\n"
+        ),
+    );
+    let toml = format!(
+        "{FLAT_CAMERA_TOML}[textures.tiles]\ntype = \"pattern\"\npattern = \"checker\"\n\
+        colors = [[1, 0.1, 0.1], [0.1, 0.1, 1]]\ntransform = {{ scale = [0.5, 0.5, -0.5] }}\n\
+        [materials.tiles]\ntype = \"diffuse\"\nreflectance = {{ texture = \"tiles\" }}\n\
+        [[shapes]]\ntype = \"box\"\nmaterial = \"tiles\"\nmin = [-2, -1.5, -0.3]\nmax = [2, 1.5, -0.2]\n"
+    );
+    let by_hand = load_scene(&write(dir.path(), "tiles.toml", &toml)).unwrap_or_else(|e| panic!("{e}"));
+    let (a, b) = (render_small(&tiles), render_small(&by_hand));
+    let rel_mse = photonix::io::metrics::rel_mse(&a, &b);
+    let (red, blue) = red_and_blue(&a);
+    eprintln!("tiles against TOML: relMSE {rel_mse:.3e}; {red} red and {blue} blue pixels");
+    assert!(rel_mse < 1e-6, "relMSE {rel_mse:.3e}");
+    assert!(red > 80 && blue > 80 && red.abs_diff(blue) < 40, "red {red}, blue {blue}");
+    look_at("tiles", &a);
+
+    // What stays malformed names its place.
+    let e = error(
+        dir.path(),
+        &format!("{FLAT_CAMERA}box {{ 0, 1 texture {{ tiles {{ texture {{ pigment {{ rgb 1 }} }} }} }} }}"),
+    );
+    assert!(e.contains("scene.pov:3:") && e.contains("tiles needs a texture on each side of `tile2`"), "{e}");
+    let e = error(dir.path(), &format!("{FLAT_CAMERA}box {{ 0, 1 texture {{ tiles {{ pigment {{ rgb 1 }} }} }} }}"));
+    assert!(e.contains("scene.pov:3:") && e.contains("expected `texture { ... }`, `tile2` or `}` in tiles"), "{e}");
+}

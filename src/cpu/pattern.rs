@@ -42,9 +42,9 @@ pub use crate::layout::constants::{
     MAX_COLOR_MAP_ENTRIES, MAX_OCTAVES, PATTERN_AGATE, PATTERN_BOZO, PATTERN_BRICK, PATTERN_BUMPS, PATTERN_CHECKER,
     PATTERN_CRACKLE, PATTERN_DENTS, PATTERN_EXPONENT, PATTERN_FREQUENCY, PATTERN_GRADIENT, PATTERN_GRANITE,
     PATTERN_HEXAGON, PATTERN_KIND, PATTERN_KIND_COUNT, PATTERN_LAMBDA, PATTERN_LEOPARD, PATTERN_MARBLE,
-    PATTERN_OCTAVES, PATTERN_OMEGA, PATTERN_ONION, PATTERN_PARAMS, PATTERN_PHASE, PATTERN_RIPPLES, PATTERN_SPOTTED,
-    PATTERN_TURBULENCE, PATTERN_WAVE, PATTERN_WAVES, PATTERN_WOOD, PATTERN_WORDS, PATTERN_WRINKLES, WAVE_CUBIC,
-    WAVE_POLY, WAVE_RAMP, WAVE_SCALLOP, WAVE_SINE, WAVE_SOURCES, WAVE_TRIANGLE,
+    PATTERN_OCTAVES, PATTERN_OMEGA, PATTERN_ONION, PATTERN_PARAMS, PATTERN_PHASE, PATTERN_RADIAL, PATTERN_RIPPLES,
+    PATTERN_SPOTTED, PATTERN_TURBULENCE, PATTERN_WAVE, PATTERN_WAVES, PATTERN_WOOD, PATTERN_WORDS, PATTERN_WRINKLES,
+    WAVE_CUBIC, WAVE_POLY, WAVE_RAMP, WAVE_SCALLOP, WAVE_SINE, WAVE_SOURCES, WAVE_TRIANGLE,
 };
 use crate::layout::constants::{NOISE_UNIT_SCALE, NOISE_VECTOR_SCALE};
 
@@ -110,6 +110,30 @@ pub fn sin_turns(t: f32) -> f32 {
 /// cos(2 pi t).
 pub fn cos_turns(t: f32) -> f32 {
     sin_turns(t + 0.25)
+}
+
+/// atan2(s, c) / 2 pi, in (-1/2, 1/2]: the angle in turns of (c, s), for (c, s) not (0, 0).
+/// Cephes' atanf (a degree-9 odd polynomial after reducing the ratio below tan(pi/8)), absolute
+/// error below 2e-8 turns; used on both sides, like [`sin_turns`], so that they agree bit for bit.
+pub fn atan2_turns(s: f32, c: f32) -> f32 {
+    let a = s.abs();
+    let b = c.abs();
+    // The ratio of the smaller to the larger leg, in [0, 1].
+    let t = if a > b { b / a } else { a / b };
+    let (base, x) = if t > 0.414_213_57 { (0.125f32, (t - 1.0) / (t + 1.0)) } else { (0.0f32, t) };
+    let z = x * x;
+    let poly = (((0.080_537_446 * z - 0.138_776_85) * z + 0.199_777_11) * z - 0.333_329_5) * z * x + x;
+    let mut r = base + poly * 0.159_154_94;
+    if a > b {
+        r = 0.25 - r;
+    }
+    if c < 0.0 {
+        r = 0.5 - r;
+    }
+    if s < 0.0 {
+        r = -r;
+    }
+    r
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -444,6 +468,15 @@ fn pattern_raw(data: &[u32], at: u32, kind: u32, p: Vec3, t: &Turb) -> f32 {
             }
         }
         PATTERN_ONION => fract(length3(p.x, p.y, p.z)),
+        PATTERN_RADIAL => {
+            // The angle around the y axis from +z towards +x, one turn from 0.25 to 1.25
+            // (POV-Ray's radial: 0.25 + (atan2(x, z) + pi) / 2 pi, 0.25 on the axis).
+            if p.x.abs() < 0.001 && p.z.abs() < 0.001 {
+                0.25
+            } else {
+                0.75 + atan2_turns(p.x, p.z)
+            }
+        }
         PATTERN_RIPPLES | PATTERN_WAVES => ripples_or_waves(
             p,
             word(data, at + PATTERN_FREQUENCY),
@@ -886,5 +919,61 @@ mod tests {
         let fraction = pts.iter().map(|&p| value(&brick, p) as f64).sum::<f64>() / pts.len() as f64;
         println!("brick fraction {fraction:.4}");
         assert!((fraction - 0.6944).abs() < 0.01, "{fraction}");
+    }
+
+    #[test]
+    fn atan2_turns_matches_the_library_atan2() {
+        let mut worst = 0.0f64;
+        for (i, p) in points(20_000, 5.0, 11).into_iter().enumerate() {
+            // Include points on and near the axes and diagonals, where the branches meet.
+            let (s, c) = match i % 5 {
+                0 => (p.x, 0.0),
+                1 => (0.0, p.x),
+                2 => (p.x, p.x.abs() * (1.0 + 1e-6)),
+                _ => (p.x, p.y),
+            };
+            if s == 0.0 && c == 0.0 {
+                continue;
+            }
+            let exact = (s as f64).atan2(c as f64) / std::f64::consts::TAU;
+            worst = worst.max((atan2_turns(s, c) as f64 - exact).abs());
+        }
+        println!("atan2_turns: max error {worst:.2e} turns");
+        assert!(worst < 1e-7, "{worst}");
+    }
+
+    #[test]
+    fn radial_is_povrays_angle_around_y() {
+        // POV-Ray 3.7 pattern.cpp: 0.25 + (atan2(x, z) + pi) / 2 pi, 0.25 within 0.001 of the
+        // y axis, then wrapped by frequency 1 (fmod 1.00001).
+        let radial = PatternDesc::new(kind("radial"));
+        let data = packed(&radial);
+        for p in points(20_000, 4.0, 12) {
+            let raw = if p.x.abs() < 0.001 && p.z.abs() < 0.001 {
+                0.25
+            } else {
+                0.25 + ((p.x as f64).atan2(p.z as f64) + std::f64::consts::PI) / std::f64::consts::TAU
+            };
+            let expected = raw % 1.00001;
+            let got = pattern_value(&data, 5, p) as f64;
+            // A value next to the wrap at 1.00001 may land on either side: skip those.
+            if (raw - 1.00001).abs() > 1e-5 {
+                assert!((got - expected).abs() < 2e-6, "at {p}: {got} against {expected}");
+            }
+        }
+        // Quarter turns: +z is 0.75, +x 1, -x 0.5, -z 1.25 wrapped to 0.25 - 1e-5 (by 1.00001).
+        for (p, expected) in
+            [(Vec3::Z, 0.75), (Vec3::X, 1.0), (Vec3::NEG_Z, 0.249_99), (Vec3::NEG_X, 0.5), (Vec3::Y, 0.25)]
+        {
+            assert!((pattern_value(&data, 5, p) - expected).abs() < 1e-6, "{p}");
+        }
+        // Frequency 8 gives eight sectors: the value repeats every 1/8 turn.
+        let eight = PatternDesc { frequency: 8.0, ..radial };
+        let a = value(&eight, Vec3::new(0.3f32.sin(), 0.2, 0.3f32.cos()));
+        let b = value(
+            &eight,
+            Vec3::new((0.3f32 + std::f32::consts::FRAC_PI_4).sin(), 0.2, (0.3f32 + std::f32::consts::FRAC_PI_4).cos()),
+        );
+        assert!((a - b).abs() < 1e-4, "{a} {b}");
     }
 }

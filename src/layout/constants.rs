@@ -494,13 +494,14 @@ shared_constants! {
     PATTERN_LEOPARD: u32 = 10;
     PATTERN_MARBLE: u32 = 11;
     PATTERN_ONION: u32 = 12;
-    PATTERN_RIPPLES: u32 = 13;
-    PATTERN_SPOTTED: u32 = 14;
-    PATTERN_WAVES: u32 = 15;
-    PATTERN_WOOD: u32 = 16;
-    PATTERN_WRINKLES: u32 = 17;
+    PATTERN_RADIAL: u32 = 13;
+    PATTERN_RIPPLES: u32 = 14;
+    PATTERN_SPOTTED: u32 = 15;
+    PATTERN_WAVES: u32 = 16;
+    PATTERN_WOOD: u32 = 17;
+    PATTERN_WRINKLES: u32 = 18;
     /// Number of pattern kinds; kinds are 0..PATTERN_KIND_COUNT.
-    PATTERN_KIND_COUNT: u32 = 18;
+    PATTERN_KIND_COUNT: u32 = 19;
 
     // Wave shapes (word 1), POV-Ray's ramp_wave, sine_wave, ...
     WAVE_RAMP: u32 = 0;

@@ -16,7 +16,7 @@ use crate::limits::{fmt_number, MAX_SCENE_VALUE};
 /// Every pattern name, in the order of the `PATTERN_*` kind numbers.
 pub const PATTERN_NAMES: &[&str] = &[
     "agate", "bozo", "brick", "bumps", "checker", "crackle", "dents", "gradient", "granite", "hexagon", "leopard",
-    "marble", "onion", "ripples", "spotted", "waves", "wood", "wrinkles",
+    "marble", "onion", "radial", "ripples", "spotted", "waves", "wood", "wrinkles",
 ];
 
 /// Every wave shape name, in the order of the `WAVE_*` numbers.
@@ -77,6 +77,8 @@ pub enum PatternKind {
     Marble,
     /// Concentric spheres of unit spacing.
     Onion,
+    /// The angle around the y axis, from +z towards +x: one turn is one unit of value.
+    Radial,
     /// Concentric sine waves around 10 points of the unit sphere.
     Ripples,
     /// Noise.
@@ -109,6 +111,7 @@ impl PatternKind {
             "leopard" => PatternKind::Leopard,
             "marble" => PatternKind::Marble,
             "onion" => PatternKind::Onion,
+            "radial" => PatternKind::Radial,
             "ripples" => PatternKind::Ripples,
             "spotted" => PatternKind::Spotted,
             "waves" => PatternKind::Waves,
@@ -134,6 +137,7 @@ impl PatternKind {
             PatternKind::Leopard => shader::PATTERN_LEOPARD,
             PatternKind::Marble => shader::PATTERN_MARBLE,
             PatternKind::Onion => shader::PATTERN_ONION,
+            PatternKind::Radial => shader::PATTERN_RADIAL,
             PatternKind::Ripples => shader::PATTERN_RIPPLES,
             PatternKind::Spotted => shader::PATTERN_SPOTTED,
             PatternKind::Waves => shader::PATTERN_WAVES,
@@ -185,6 +189,9 @@ impl PatternKind {
             PatternKind::Hexagon => vec![(0.0, [0.0, 0.0, 1.0]), (0.5, [0.0, 1.0, 0.0]), (1.0, [1.0, 0.0, 0.0])],
             PatternKind::Marble => vec![(0.0, [0.9, 0.8, 0.8]), (0.9, [0.9, 0.08, 0.08]), (0.9, [0.0, 0.0, 0.0])],
             PatternKind::Wood => vec![(0.6, [0.666, 0.312, 0.2]), (0.6, [0.4, 0.1333, 0.066])],
+            PatternKind::Radial => {
+                vec![(0.0, [0.0, 1.0, 1.0]), (0.333, [1.0, 1.0, 0.0]), (0.666, [1.0, 0.0, 1.0]), (1.0, [0.0, 1.0, 1.0])]
+            }
             _ => vec![(0.0, [0.0, 0.0, 0.0]), (1.0, [1.0, 1.0, 1.0])],
         };
         ColorMap { entries }

@@ -51,14 +51,10 @@ const OBJECTS: &[&str] = &[
 ];
 
 /// Patterns Photonix has (docs/patterns.md), by POV-Ray's name.
-const PATTERNS: [&str; 18] = [
-    "agate", "bozo", "brick", "bumps", "checker", "crackle", "dents", "gradient", "granite", "hexagon", "leopard",
-    "marble", "onion", "ripples", "spotted", "waves", "wood", "wrinkles",
-];
+const PATTERNS: &[&str] = crate::scene::pattern::PATTERN_NAMES;
 
 /// POV-Ray patterns this front-end does not have: their mean colour stands in, with a warning.
-const OTHER_PATTERNS: [&str; 24] = [
-    "radial",
+const OTHER_PATTERNS: [&str; 23] = [
     "spiral1",
     "spiral2",
     "cells",
@@ -1390,18 +1386,7 @@ impl Parser {
                             .into(),
                     )
                 }
-                "tiles" => {
-                    // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
-                    self.warnings.push(format!(
-                        "{}: the tiles texture pattern is not supported yet; its first texture is used",
-                        self.loc(pos)
-                    ));
-                    self.expect_sym("{")?;
-                    if self.accept_word("texture")? {
-                        layers = self.texture()?;
-                    }
-                    self.skip_to_brace()?;
-                }
+                "tiles" => layers = vec![self.tiles(pos)?],
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries): the
                     // pattern and its entries, mixed by `emit` (docs/pov-ray.md); the pigment's
@@ -1424,6 +1409,59 @@ impl Parser {
                 },
             }
         }
+    }
+
+    /// `tiles { texture { A } ... tile2 texture { B } ... }` (after `tiles`): POV-Ray 3.7 reads
+    /// it as a checker of the two textures (parstxtr.cpp), A in the cubes where floor(x) +
+    /// floor(y) + floor(z) is even, B in the others; so it becomes a checker texture with the two
+    /// as its listed entries, mixed as a checker's textures are (docs/pov-ray.md).
+    fn tiles(&mut self, pos: Pos) -> Result<Tex> {
+        self.expect_sym("{")?;
+        let mut tiles: [Vec<Tex>; 2] = [Vec::new(), Vec::new()];
+        let mut second = false;
+        loop {
+            let t = self.expect_any("`}`")?;
+            match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) if w == "texture" => {
+                    let layers = self.texture()?;
+                    tiles[second as usize].extend(layers);
+                }
+                Tok::Word(w) if w == "tile2" && !second => second = true,
+                other => {
+                    return self.err(
+                        t.pos,
+                        format!(
+                            "expected `texture {{ ... }}`{} or `}}` in tiles, found {}",
+                            if second { "" } else { ", `tile2`" },
+                            describe(&other)
+                        ),
+                    )
+                }
+            }
+        }
+        let [a, b] = tiles;
+        if a.is_empty() || b.is_empty() {
+            return self.err(
+                pos,
+                "tiles needs a texture on each side of `tile2`: tiles { texture { A } tile2 texture { B } }".into(),
+            );
+        }
+        let (mean_a, mean_b) = (a[0].pigment.mean(), b[0].pigment.mean());
+        let mut t = a[0].clone();
+        t.pigment = Pigment {
+            kind: PigmentKind::Pattern {
+                name: "checker".into(),
+                map: vec![(0.0, mean_a), (1.0, mean_b)],
+                fields: vec![("colors".into(), toml::Value::Boolean(true))],
+            },
+            xform: DMat4::IDENTITY,
+            pos,
+            entries: None,
+        };
+        t.xform = DMat4::IDENTITY;
+        t.map = Some(std::rc::Rc::new(TexMap { entries: vec![(0.0, a), (1.0, b)], listed: true }));
+        Ok(t)
     }
 
     /// Skips to the `]` (or other closing symbol in `close`) that ends the entry we are in,
