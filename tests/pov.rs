@@ -1441,3 +1441,28 @@ fn warps_render_as_the_same_pattern_written_in_toml() {
         assert!(e.contains("scene.pov:3:") && e.contains(message), "{warp}: {e}");
     }
 }
+
+/// `checker pigment { A } pigment { B }` (POV-Ray's pigments as a checker's entries): the two
+/// pigments mixed by the checker's own values, as a checker's textures are.
+#[test]
+fn a_checkers_pigments_are_mixed_by_the_checker() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}box {{ 0, 1 pigment {{ checker pigment {{ rgb <1, 0, 0> }} pigment {{ bozo color_map {{ [0 rgb 0] [1 rgb 1] }} }} }} }}"
+        ),
+    );
+    let ms = t["materials"].as_table().unwrap();
+    let textures = t["textures"].as_table().unwrap();
+    let mix = ms
+        .values()
+        .find(|m| m["type"].as_str() == Some("mix") && m["weight"].is_table())
+        .unwrap_or_else(|| panic!("no mix: {ms:?}"));
+    let weight = &textures[mix["weight"]["texture"].as_str().unwrap()];
+    assert_eq!(weight["pattern"].as_str(), Some("checker"));
+    let [a, b] = [0, 1].map(|i| &ms[mix["materials"][i].as_str().unwrap()]);
+    assert_eq!(floats(&a["reflectance"])[1], 0.0, "{a:?}");
+    let bozo = &textures[b["reflectance"]["texture"].as_str().unwrap()];
+    assert_eq!(bozo["pattern"].as_str(), Some("bozo"));
+}

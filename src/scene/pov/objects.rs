@@ -1515,6 +1515,7 @@ impl Parser {
     ) -> Result<(Pigment, Option<TexMap>)> {
         let mut tex_map: Option<TexMap> = None;
         let mut listed_tex: Vec<Vec<Tex>> = Vec::new();
+        let mut listed_pig: Vec<Pigment> = Vec::new();
         let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
@@ -1634,6 +1635,14 @@ impl Parser {
                     map = entries.iter().map(|(v, l)| (*v, l[0].pigment.mean())).collect();
                     tex_map = Some(TexMap { entries, listed: false });
                 }
+                "pigment" if pattern.is_some() => {
+                    // A checker's, brick's or hexagon's pigments (`checker pigment { A } pigment
+                    // { B }`): listed entries, mixed by the pattern's own values as its
+                    // textures are.
+                    let inner = self.pigment(tpos)?;
+                    list.push(inner.mean());
+                    listed_pig.push(inner);
+                }
                 "texture" if pattern.is_some() => {
                     // A checker's, brick's or hexagon's textures.
                     let layers = self.texture()?;
@@ -1751,6 +1760,9 @@ impl Parser {
                 if listed_tex.len() == n {
                     let entries = listed_tex.into_iter().enumerate().map(|(i, l)| (at(i), l)).collect();
                     tex_map = Some(TexMap { entries, listed: true });
+                } else if listed_pig.len() == n {
+                    let entries = listed_pig.into_iter().enumerate().map(|(i, q)| (at(i), q)).collect();
+                    p.entries = Some(std::rc::Rc::new(entries));
                 }
             }
             if let Some(other) = name.strip_prefix("unsupported:") {
