@@ -55,6 +55,26 @@ float pattern_cos_turns(float t) {
     return pattern_sin_turns(u);
 }
 
+// atan2(s, c) / 2 pi in (-1/2, 1/2], Cephes' atanf; see atan2_turns in the twin.
+float pattern_atan2_turns(float s, float c) {
+    float a = abs(s);
+    float b = abs(c);
+    precise float t = a > b ? b / a : a / b;
+    precise float base = 0.0;
+    precise float x = t;
+    if (t > 0.41421357) {
+        base = 0.125;
+        x = (t - 1.0) / (t + 1.0);
+    }
+    precise float z = x * x;
+    precise float poly = (((0.080537446 * z - 0.13877685) * z + 0.19977711) * z - 0.3333295) * z * x + x;
+    precise float r = base + poly * 0.15915494;
+    if (a > b) r = 0.25 - r;
+    if (c < 0.0) r = 0.5 - r;
+    if (s < 0.0) r = -r;
+    return r;
+}
+
 // ---- Noise ----------------------------------------------------------------------------------
 
 // Perlin's gradient (Improving Noise, SIGGRAPH 2002) for h in 0..16, dotted with (x, y, z).
@@ -360,6 +380,11 @@ float pattern_raw(uint at, uint kind, vec3 p, vec3 turb, uint octaves, float ome
     }
     case PATTERN_ONION:
         return pattern_fract(pattern_length3(p.x, p.y, p.z));
+    case PATTERN_RADIAL: {
+        if (abs(p.x) < 0.001 && abs(p.z) < 0.001) return 0.25;
+        precise float r = 0.75 + pattern_atan2_turns(p.x, p.z);
+        return r;
+    }
     case PATTERN_RIPPLES:
     case PATTERN_WAVES:
         return pattern_ripples_or_waves(p, pattern_word(at + PATTERN_FREQUENCY), pattern_word(at + PATTERN_PHASE),
@@ -392,6 +417,117 @@ float pattern_raw(uint at, uint kind, vec3 p, vec3 turb, uint octaves, float ome
     }
     }
     return 0.0;  // unreachable: the host packs only known kinds (tested)
+}
+
+// ---- Warps (POV-Ray 3.7 warp.cpp); see warp_point in the twin -------------------------------
+
+float pattern_whole_turn(float r) {
+    precise float w = r + 1.0;
+    return r < 0.0 ? w : r;
+}
+
+vec3 pattern_orient(vec3 o, float x, float y, float z) {
+    if (o.x == 0.0 && o.y == 0.0 && o.z == 1.0) return vec3(x, y, z);
+    precise float rx = o.x * z + o.y * x + o.z * x;
+    precise float ry = o.x * y + o.y * -z + o.z * y;
+    precise float rz = o.x * -x + o.y * y + o.z * z;
+    return vec3(rx, ry, rz);
+}
+
+float pattern_dist_scale(float d, float e) {
+    if (e == 1.0) return d;
+    if (e != 0.0) return pow(d, e);
+    return 1.0;
+}
+
+vec3 warp_point(uint w, vec3 p) {
+    uint kind = texture_word(w);
+    uint a = w + WARP_PARAMS;
+    precise vec3 q = p;
+    switch (kind) {
+    case WARP_REPEAT: {
+        uint axis = min(texture_word(a), 2u);
+        float width = pattern_word(a + 1u);
+        vec3 offset = pattern_vec3_at(a + 2u);
+        vec3 flip = pattern_vec3_at(a + 5u);
+        precise float block = floor(q[axis] / width);
+        q[axis] -= block * width;
+        if ((int(block) & 1) != 0) {
+            q = vec3(q.x * flip.x, q.y * flip.y, q.z * flip.z);
+            if (flip[axis] < 0.0) q[axis] += width;
+        }
+        q = vec3(q.x + block * offset.x, q.y + block * offset.y, q.z + block * offset.z);
+        break;
+    }
+    case WARP_BLACK_HOLE: {
+        precise vec3 c = pattern_vec3_at(a);
+        float radius = pattern_word(a + 3u);
+        vec3 repeat_by = pattern_vec3_at(a + 7u);
+        for (uint i = 0u; i < 3u; i++) {
+            if (repeat_by[i] > 0.0) c[i] += repeat_by[i] * floor(q[i] / repeat_by[i]);
+        }
+        precise vec3 d = vec3(q.x - c.x, q.y - c.y, q.z - c.z);
+        float len = pattern_length3(d.x, d.y, d.z);
+        if (len < radius) {
+            precise float from_edge = (radius - len) / radius;
+            precise float strength = min(pow(from_edge, pattern_word(a + 5u)) * pattern_word(a + 4u), 1.0);
+            float s = texture_word(a + 6u) != 0u ? -strength : strength;
+            q = vec3(q.x + d.x * s, q.y + d.y * s, q.z + d.z * s);
+        }
+        break;
+    }
+    case WARP_CYLINDRICAL: {
+        precise float len = sqrt(q.x * q.x + q.z * q.z);
+        if (len != 0.0) {
+            precise float theta = pattern_whole_turn(pattern_atan2_turns(q.z, q.x)) *
+                                  pattern_dist_scale(len, pattern_word(a + 3u));
+            q = pattern_orient(pattern_vec3_at(a), theta, q.y, len);
+        }
+        break;
+    }
+    case WARP_SPHERICAL: {
+        float dist = pattern_length3(q.x, q.y, q.z);
+        if (dist != 0.0) {
+            precise float x = q.x / dist;
+            precise float y = q.y / dist;
+            precise float z = q.z / dist;
+            precise float len = sqrt(x * x + z * z);
+            precise float phi = 0.5 + 2.0 * pattern_atan2_turns(y, len);
+            float theta = len == 0.0 ? 0.0 : pattern_whole_turn(pattern_atan2_turns(z, x));
+            float k = pattern_dist_scale(dist, pattern_word(a + 3u));
+            precise float tk = theta * k;
+            precise float pk = phi * k;
+            q = pattern_orient(pattern_vec3_at(a), tk, pk, dist);
+        }
+        break;
+    }
+    case WARP_TOROIDAL: {
+        precise float len = sqrt(q.x * q.x + q.z * q.z);
+        if (len != 0.0) {
+            float theta = pattern_whole_turn(pattern_atan2_turns(q.z, q.x));
+            precise float x = len - pattern_word(a + 4u);
+            precise float tube = sqrt(x * x + q.y * q.y);
+            float phi = tube == 0.0 ? 0.0 : pattern_whole_turn(pattern_atan2_turns(-q.y, -x));
+            float k = pattern_dist_scale(tube, pattern_word(a + 3u));
+            precise float tk = theta * k;
+            precise float pk = phi * k;
+            q = pattern_orient(pattern_vec3_at(a), tk, pk, tube);
+        }
+        break;
+    }
+    case WARP_PLANAR:
+        q = pattern_orient(pattern_vec3_at(a), q.x, q.y, pattern_word(a + 3u));
+        break;
+    }
+    uint m = w + WARP_MATRIX;
+    vec3 cx = pattern_vec3_at(m);
+    vec3 cy = pattern_vec3_at(m + 3u);
+    vec3 cz = pattern_vec3_at(m + 6u);
+    vec3 t = pattern_vec3_at(m + 9u);
+    precise float rx = cx.x * q.x + cy.x * q.y + cz.x * q.z + t.x;
+    precise float ry = cx.y * q.x + cy.y * q.y + cz.y * q.z + t.y;
+    precise float rz = cx.z * q.x + cy.z * q.y + cz.z * q.z + t.z;
+    return vec3(rx, ry, rz);
 }
 
 // Frequency, phase and wave shape as POV-Ray's ContinuousPattern::Evaluate; see the twin.
@@ -436,9 +572,13 @@ float pattern_value(uint at, vec3 p) {
     uint octaves = texture_word(at + PATTERN_OCTAVES);
     float omega = pattern_word(at + PATTERN_OMEGA);
     float lambda = pattern_word(at + PATTERN_LAMBDA);
-    precise vec3 q = p;
+    // The warps, in the order packed (POV-Ray's last written first), then turbulence.
+    precise vec3 pw = p;
+    uint warps = min(texture_word(at + PATTERN_WARP_COUNT), MAX_WARPS);
+    for (uint i = 0u; i < warps; i++) pw = warp_point(at + PATTERN_WORDS + i * WARP_WORDS, pw);
+    precise vec3 q = pw;
     if (kind != PATTERN_MARBLE && kind != PATTERN_WOOD && turb != vec3(0.0)) {
-        q = p + turbulence_vector(p, octaves, omega, lambda) * turb;
+        q = pw + turbulence_vector(pw, octaves, omega, lambda) * turb;
     }
     float raw = pattern_raw(at, kind, q, turb, octaves, omega, lambda);
     if (kind == PATTERN_CHECKER || kind == PATTERN_BRICK || kind == PATTERN_HEXAGON) return raw;

@@ -408,6 +408,9 @@ fn texture_picker_lists_the_folders_images_and_sets_a_texture_in_one_step() {
     write_png(&f.dir.path().join("textures/wood grain.png"));
     write_png(&f.dir.path().join("rough.png"));
     write_png(&f.dir.path().join(".hidden/x.png"));
+    // TGA and GIF load as textures too, so they are listed.
+    image::RgbImage::new(2, 2).save(f.dir.path().join("decal.tga")).unwrap();
+    image::RgbImage::new(2, 2).save(f.dir.path().join("logo.GIF")).unwrap();
     std::fs::write(f.dir.path().join("notes.txt"), "not an image").unwrap();
     // An image outside the folder, seen through a link inside it, is not listed.
     let outside = tempfile::tempdir().unwrap();
@@ -415,7 +418,7 @@ fn texture_picker_lists_the_folders_images_and_sets_a_texture_in_one_step() {
     std::os::unix::fs::symlink(outside.path().join("secret.png"), f.dir.path().join("link.png")).unwrap();
     let r = f.call("GET", "/api/images", b"");
     assert_eq!(r.status, 200, "{}", r.text());
-    assert_eq!(r.json()["images"], json!(["rough.png", "textures/wood grain.png"]));
+    assert_eq!(r.json()["images"], json!(["decal.tga", "logo.GIF", "rough.png", "textures/wood grain.png"]));
 
     // A colour: sRGB; the texture is named after the file and the field points at it.
     let text = f.text();

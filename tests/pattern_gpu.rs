@@ -16,7 +16,7 @@ use photonix::cpu::pattern::{
 };
 use photonix::gpu::{GpuContext, Kernel};
 use photonix::layout::constants::WORKGROUP_SIZE;
-use photonix::scene::pattern::{ColorMap, PatternDesc, PatternKind, WaveShape, PATTERN_NAMES};
+use photonix::scene::pattern::{ColorMap, PatternDesc, PatternKind, Warp, WarpKind, WaveShape, PATTERN_NAMES};
 
 const MODE_VALUE: u32 = 0;
 const MODE_GRADIENT: u32 = 1;
@@ -131,12 +131,89 @@ fn variants() -> Vec<(String, PatternDesc)> {
         "brick [1, 0.5, 0.7] mortar 0.05".to_string(),
         PatternDesc::new(PatternKind::Brick { brick_size: Vec3::new(1.0, 0.5, 0.7), mortar: 0.05 }),
     ));
+    // Every warp kind, alone and in pairs with transforms between them.
+    let placed = glam::Affine3A::from_scale_rotation_translation(
+        Vec3::new(0.5, 2.0, 1.5),
+        glam::Quat::from_rotation_y(0.7),
+        Vec3::new(0.3, -1.0, 2.0),
+    );
+    let warp = |kind, transform| Some(Warp { kind, transform });
+    let repeat =
+        WarpKind::Repeat { axis: 0, width: 2.0, offset: Vec3::new(0.0, 0.5, 0.25), flip: Vec3::new(1.0, -1.0, 1.0) };
+    let hole = WarpKind::BlackHole {
+        center: Vec3::new(0.5, 0.0, 0.0),
+        radius: 3.0,
+        strength: 1.5,
+        falloff: 2.0,
+        inverse: false,
+        repeat: Vec3::new(7.0, 0.0, 5.0),
+    };
+    let identity = glam::Affine3A::IDENTITY;
+    for (name, kind, warps) in [
+        (
+            "gradient x, repeat x*2 flip y offset",
+            PatternKind::Gradient { direction: Vec3::X },
+            [warp(repeat, identity), None, None, None],
+        ),
+        ("bozo, black_hole repeat", PatternKind::Bozo, [warp(hole, placed), None, None, None]),
+        (
+            "checker, cylindrical",
+            PatternKind::Checker,
+            [warp(WarpKind::Cylindrical { orientation: Vec3::Z, dist_exp: 0.0 }, identity), None, None, None],
+        ),
+        (
+            "onion, cylindrical y dist_exp 1",
+            PatternKind::Onion,
+            [warp(WarpKind::Cylindrical { orientation: Vec3::Y, dist_exp: 1.0 }, placed), None, None, None],
+        ),
+        (
+            "marble, spherical",
+            PatternKind::Marble,
+            [warp(WarpKind::Spherical { orientation: Vec3::Z, dist_exp: 0.0 }, identity), None, None, None],
+        ),
+        (
+            "leopard, toroidal 2",
+            PatternKind::Leopard,
+            [
+                warp(WarpKind::Toroidal { orientation: Vec3::X, dist_exp: 0.0, major_radius: 2.0 }, placed),
+                None,
+                None,
+                None,
+            ],
+        ),
+        (
+            "brick, planar then repeat",
+            PatternKind::from_name("brick").unwrap(),
+            [warp(WarpKind::Planar { orientation: Vec3::Y, offset: 0.3 }, placed), warp(repeat, identity), None, None],
+        ),
+        (
+            "wood, four warps",
+            PatternKind::Wood,
+            [
+                warp(repeat, placed),
+                warp(WarpKind::Spherical { orientation: Vec3::Z, dist_exp: 1.0 }, identity),
+                warp(hole, identity),
+                warp(WarpKind::Planar { orientation: Vec3::Z, offset: 0.0 }, placed),
+            ],
+        ),
+    ] {
+        let desc = PatternDesc { warps, turbulence: Vec3::splat(0.2), ..PatternDesc::new(kind) };
+        all.push((format!("warps: {name}"), desc));
+    }
     all
 }
 
 /// Whether a description's GPU arithmetic includes the driver's `pow`.
 fn uses_pow(desc: &PatternDesc) -> bool {
-    matches!(desc.wave, WaveShape::Poly { .. })
+    let warp_pow = desc.warp_list().any(|w| match w.kind {
+        WarpKind::BlackHole { .. } => true,
+        WarpKind::Cylindrical { dist_exp, .. }
+        | WarpKind::Spherical { dist_exp, .. }
+        | WarpKind::Toroidal { dist_exp, .. } => dist_exp != 0.0 && dist_exp != 1.0,
+        _ => false,
+    });
+    warp_pow
+        || matches!(desc.wave, WaveShape::Poly { .. })
         || matches!(desc.kind, PatternKind::Agate { .. })
         || matches!(desc.kind, PatternKind::Crackle { metric, .. } if metric != 1.0 && metric != 2.0)
 }
@@ -263,7 +340,7 @@ struct Tile {
     desc: PatternDesc,
     /// Half the side of the square shown, in pattern units.
     half_size: f32,
-    /// The plane is x-y unless this is set (x-z, where hexagons lie).
+    /// The plane is x-y unless this is set (x-z, where hexagons lie and radial turns).
     xz: bool,
     /// Shade the pattern's gradient as a bump map instead of showing its colours.
     bumps: bool,
@@ -291,7 +368,7 @@ fn pattern_sheet_shows_every_pattern() {
                 label: name.to_string(),
                 desc: PatternDesc::new(kind),
                 half_size,
-                xz: matches!(*name, "hexagon" | "agate"),
+                xz: matches!(*name, "hexagon" | "agate" | "radial"),
                 bumps: false,
             }
         })

@@ -838,11 +838,11 @@ fn texture_for(doc: &mut DocumentMut, file: &str, linear: bool) -> Result<String
     Ok(name)
 }
 
-/// Image files (what `[textures.*]` reads: PNG, JPEG, OpenEXR, Radiance HDR) in `folder` and
+/// Image files (what `[textures.*]` reads: PNG, JPEG, OpenEXR, Radiance HDR, TGA, GIF) in `folder` and
 /// its subfolders, as paths relative to it with `/`, sorted; hidden entries skipped, symbolic
 /// links followed only while they stay inside the folder, at most `limit` files.
 pub fn image_files(folder: &Path, limit: usize) -> Vec<String> {
-    const EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "exr", "hdr"];
+    const EXTENSIONS: [&str; 7] = ["png", "jpg", "jpeg", "exr", "hdr", "tga", "gif"];
     const MAX_DEPTH: usize = 4;
     let mut out = Vec::new();
     let mut stack = vec![(folder.to_path_buf(), 0usize)];

@@ -507,13 +507,14 @@ shared_constants! {
     PATTERN_LEOPARD: u32 = 10;
     PATTERN_MARBLE: u32 = 11;
     PATTERN_ONION: u32 = 12;
-    PATTERN_RIPPLES: u32 = 13;
-    PATTERN_SPOTTED: u32 = 14;
-    PATTERN_WAVES: u32 = 15;
-    PATTERN_WOOD: u32 = 16;
-    PATTERN_WRINKLES: u32 = 17;
+    PATTERN_RADIAL: u32 = 13;
+    PATTERN_RIPPLES: u32 = 14;
+    PATTERN_SPOTTED: u32 = 15;
+    PATTERN_WAVES: u32 = 16;
+    PATTERN_WOOD: u32 = 17;
+    PATTERN_WRINKLES: u32 = 18;
     /// Number of pattern kinds; kinds are 0..PATTERN_KIND_COUNT.
-    PATTERN_KIND_COUNT: u32 = 18;
+    PATTERN_KIND_COUNT: u32 = 19;
 
     // Wave shapes (word 1), POV-Ray's ramp_wave, sine_wave, ...
     WAVE_RAMP: u32 = 0;
@@ -534,8 +535,27 @@ shared_constants! {
     PATTERN_PHASE: u32 = 9;
     PATTERN_EXPONENT: u32 = 10;
     PATTERN_PARAMS: u32 = 12;
+    /// Word 11: how many warp records follow the block (0..=MAX_WARPS).
+    PATTERN_WARP_COUNT: u32 = 11;
     /// Words of one pattern block.
     PATTERN_WORDS: u32 = 20;
+    /// Most warps of one pattern (besides turbulence); bounds the shader's loop.
+    MAX_WARPS: u32 = 4;
+    /// Words of one warp record: kind, 11 parameters, then the 3x4 matrix (columns x, y, z,
+    /// translation) that undoes the transforms written before the warp.
+    WARP_WORDS: u32 = 24;
+    /// Word offsets in a warp record.
+    WARP_PARAMS: u32 = 1;
+    WARP_MATRIX: u32 = 12;
+    // Warp kinds (POV-Ray's warp { repeat | black_hole | cylindrical | spherical | toroidal | planar }).
+    WARP_REPEAT: u32 = 0;
+    WARP_BLACK_HOLE: u32 = 1;
+    WARP_CYLINDRICAL: u32 = 2;
+    WARP_SPHERICAL: u32 = 3;
+    WARP_TOROIDAL: u32 = 4;
+    WARP_PLANAR: u32 = 5;
+    /// Number of warp kinds.
+    WARP_KIND_COUNT: u32 = 6;
     /// Most octaves of turbulence (POV-Ray 3.7 allows 1 to 10); bounds the shader's loops.
     MAX_OCTAVES: u32 = 10;
     /// Most entries of a colour map (POV-Ray's MAX_BLEND_MAP_ENTRIES).

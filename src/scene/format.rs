@@ -239,6 +239,7 @@ pub(crate) struct TextureDef {
     pub offset: Option<Spanned<toml::Value>>,
     pub solid: Option<Spanned<toml::Value>>,
     pub agate_turb: Option<Spanned<toml::Value>>,
+    pub warp: Option<Spanned<toml::Value>>,
     pub color_map: Option<Spanned<toml::Value>>,
 }
 
@@ -265,6 +266,7 @@ impl TextureDef {
             ("offset", &self.offset),
             ("solid", &self.solid),
             ("agate_turb", &self.agate_turb),
+            ("warp", &self.warp),
             ("color_map", &self.color_map),
         ];
         fields.into_iter().filter_map(|(name, value)| value.as_ref().map(|v| (name, v))).collect()

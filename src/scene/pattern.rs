@@ -8,7 +8,7 @@
 //! Errors are plain strings that name the field and say what to do; the scene parser prefixes
 //! them with `file:line`.
 
-use glam::Vec3;
+use glam::{Affine3A, Mat3, Vec3};
 
 use crate::cpu::pattern as shader;
 use crate::limits::{fmt_number, MAX_SCENE_VALUE};
@@ -16,7 +16,7 @@ use crate::limits::{fmt_number, MAX_SCENE_VALUE};
 /// Every pattern name, in the order of the `PATTERN_*` kind numbers.
 pub const PATTERN_NAMES: &[&str] = &[
     "agate", "bozo", "brick", "bumps", "checker", "crackle", "dents", "gradient", "granite", "hexagon", "leopard",
-    "marble", "onion", "ripples", "spotted", "waves", "wood", "wrinkles",
+    "marble", "onion", "radial", "ripples", "spotted", "waves", "wood", "wrinkles",
 ];
 
 /// Every wave shape name, in the order of the `WAVE_*` numbers.
@@ -42,8 +42,155 @@ pub const PATTERN_FIELDS: &[&str] = &[
     "offset",
     "solid",
     "agate_turb",
+    "warp",
     "color_map",
 ];
+
+/// Every warp name, in the order of the `WARP_*` kind numbers.
+pub const WARP_NAMES: &[&str] = &["repeat", "black_hole", "cylindrical", "spherical", "toroidal", "planar"];
+
+/// Which warp, with its parameters (POV-Ray 3.7's `warp { ... }`, warp.cpp).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WarpKind {
+    /// The slab [0, width) along `axis` (0, 1, 2) repeated; every other copy mirrored where
+    /// `flip` is -1, copy k moved by k `offset`.
+    Repeat { axis: u32, width: f32, offset: Vec3, flip: Vec3 },
+    /// Points within `radius` of `center` pulled towards it (pushed away when `inverse`) by
+    /// min(1, strength ((radius - d) / radius)^falloff) of their distance; `repeat` > 0 on an
+    /// axis repeats the hole with that period.
+    BlackHole { center: Vec3, radius: f32, strength: f32, falloff: f32, inverse: bool, repeat: Vec3 },
+    /// (angle around y in turns, y, distance to the y axis), the angle times distance^dist_exp.
+    Cylindrical { orientation: Vec3, dist_exp: f32 },
+    /// (longitude, latitude in turns, distance to the origin), both angles times distance^dist_exp.
+    Spherical { orientation: Vec3, dist_exp: f32 },
+    /// (angle around y, angle around the ring of `major_radius`, distance to that ring).
+    Toroidal { orientation: Vec3, dist_exp: f32, major_radius: f32 },
+    /// (x, y, offset): the x-y plane's pattern, constant along z.
+    Planar { orientation: Vec3, offset: f32 },
+}
+
+/// A warp and where the pattern sits inside it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Warp {
+    pub kind: WarpKind,
+    /// The transforms written before the warp in POV-Ray, which place the pattern the warp acts
+    /// on: warped_from_pattern (identity for none).
+    pub transform: Affine3A,
+}
+
+impl WarpKind {
+    pub fn code(&self) -> u32 {
+        match self {
+            WarpKind::Repeat { .. } => shader::WARP_REPEAT,
+            WarpKind::BlackHole { .. } => shader::WARP_BLACK_HOLE,
+            WarpKind::Cylindrical { .. } => shader::WARP_CYLINDRICAL,
+            WarpKind::Spherical { .. } => shader::WARP_SPHERICAL,
+            WarpKind::Toroidal { .. } => shader::WARP_TOROIDAL,
+            WarpKind::Planar { .. } => shader::WARP_PLANAR,
+        }
+    }
+
+    pub fn name(&self) -> &'static str {
+        WARP_NAMES[self.code() as usize]
+    }
+}
+
+impl Warp {
+    /// Appends the warp's record of `WARP_WORDS` words (src/cpu/pattern.rs, `warp_point`).
+    fn pack(&self, data: &mut Vec<u32>) {
+        let mut record = [0u32; shader::WARP_WORDS as usize];
+        record[0] = self.kind.code();
+        let mut set = |offset: u32, value: f32| record[offset as usize] = value.to_bits();
+        let a = shader::WARP_PARAMS;
+        let set3 = |set: &mut dyn FnMut(u32, f32), offset: u32, v: Vec3| {
+            for (i, c) in v.to_array().into_iter().enumerate() {
+                set(offset + i as u32, c);
+            }
+        };
+        match self.kind {
+            WarpKind::Repeat { width, offset, flip, .. } => {
+                set(a + 1, width);
+                set3(&mut set, a + 2, offset);
+                set3(&mut set, a + 5, flip);
+            }
+            WarpKind::BlackHole { center, radius, strength, falloff, repeat, .. } => {
+                set3(&mut set, a, center);
+                set(a + 3, radius);
+                set(a + 4, strength);
+                set(a + 5, falloff);
+                set3(&mut set, a + 7, repeat);
+            }
+            WarpKind::Cylindrical { orientation, dist_exp } | WarpKind::Spherical { orientation, dist_exp } => {
+                set3(&mut set, a, orientation);
+                set(a + 3, dist_exp);
+            }
+            WarpKind::Toroidal { orientation, dist_exp, major_radius } => {
+                set3(&mut set, a, orientation);
+                set(a + 3, dist_exp);
+                set(a + 4, major_radius);
+            }
+            WarpKind::Planar { orientation, offset } => {
+                set3(&mut set, a, orientation);
+                set(a + 3, offset);
+            }
+        }
+        let pattern_from_warped = self.transform.inverse();
+        let m = pattern_from_warped.matrix3;
+        let columns =
+            [Vec3::from(m.x_axis), Vec3::from(m.y_axis), Vec3::from(m.z_axis), pattern_from_warped.translation.into()];
+        for (i, c) in columns.into_iter().enumerate() {
+            set3(&mut set, shader::WARP_MATRIX + 3 * i as u32, c);
+        }
+        match self.kind {
+            WarpKind::Repeat { axis, .. } => record[(a) as usize] = axis,
+            WarpKind::BlackHole { inverse, .. } => record[(a + 6) as usize] = inverse as u32,
+            _ => {}
+        }
+        data.extend_from_slice(&record);
+    }
+
+    /// Checks the numbers the way [`parse_warp`] does.
+    fn validate(&self) -> Result<(), String> {
+        match self.kind {
+            WarpKind::Repeat { axis, width, offset, flip } => {
+                if axis > 2 || !(width.is_finite() && width != 0.0) {
+                    return Err("a repeat warp's `direction` must be a non-zero vector along one axis".to_string());
+                }
+                finite_vec("offset", offset)?;
+                if flip.to_array().iter().any(|f| f.abs() != 1.0) {
+                    return Err("a repeat warp's flip factors must be 1 or -1".to_string());
+                }
+            }
+            WarpKind::BlackHole { center, radius, strength, falloff, repeat, .. } => {
+                finite_vec("center", center)?;
+                positive("radius", radius)?;
+                finite("strength", strength)?;
+                finite("falloff", falloff)?;
+                finite_vec("repeat", repeat)?;
+                if repeat.min_element() < 0.0 {
+                    return Err("a black_hole warp's `repeat` must be >= 0 on each axis (0: no repeat)".to_string());
+                }
+            }
+            WarpKind::Cylindrical { orientation, dist_exp } | WarpKind::Spherical { orientation, dist_exp } => {
+                finite_vec("orientation", orientation)?;
+                finite("dist_exp", dist_exp)?;
+            }
+            WarpKind::Toroidal { orientation, dist_exp, major_radius } => {
+                finite_vec("orientation", orientation)?;
+                finite("dist_exp", dist_exp)?;
+                finite("major_radius", major_radius)?;
+            }
+            WarpKind::Planar { orientation, offset } => {
+                finite_vec("orientation", orientation)?;
+                finite("offset", offset)?;
+            }
+        }
+        if !(self.transform.is_finite() && self.transform.matrix3.determinant().abs() > 1e-30) {
+            return Err("a warp's `transform` must be invertible (no zero scale)".to_string());
+        }
+        Ok(())
+    }
+}
 
 /// Which pattern, with the parameters only it has.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,6 +224,8 @@ pub enum PatternKind {
     Marble,
     /// Concentric spheres of unit spacing.
     Onion,
+    /// The angle around the y axis, from +z towards +x: one turn is one unit of value.
+    Radial,
     /// Concentric sine waves around 10 points of the unit sphere.
     Ripples,
     /// Noise.
@@ -109,6 +258,7 @@ impl PatternKind {
             "leopard" => PatternKind::Leopard,
             "marble" => PatternKind::Marble,
             "onion" => PatternKind::Onion,
+            "radial" => PatternKind::Radial,
             "ripples" => PatternKind::Ripples,
             "spotted" => PatternKind::Spotted,
             "waves" => PatternKind::Waves,
@@ -134,6 +284,7 @@ impl PatternKind {
             PatternKind::Leopard => shader::PATTERN_LEOPARD,
             PatternKind::Marble => shader::PATTERN_MARBLE,
             PatternKind::Onion => shader::PATTERN_ONION,
+            PatternKind::Radial => shader::PATTERN_RADIAL,
             PatternKind::Ripples => shader::PATTERN_RIPPLES,
             PatternKind::Spotted => shader::PATTERN_SPOTTED,
             PatternKind::Waves => shader::PATTERN_WAVES,
@@ -185,6 +336,9 @@ impl PatternKind {
             PatternKind::Hexagon => vec![(0.0, [0.0, 0.0, 1.0]), (0.5, [0.0, 1.0, 0.0]), (1.0, [1.0, 0.0, 0.0])],
             PatternKind::Marble => vec![(0.0, [0.9, 0.8, 0.8]), (0.9, [0.9, 0.08, 0.08]), (0.9, [0.0, 0.0, 0.0])],
             PatternKind::Wood => vec![(0.6, [0.666, 0.312, 0.2]), (0.6, [0.4, 0.1333, 0.066])],
+            PatternKind::Radial => {
+                vec![(0.0, [0.0, 1.0, 1.0]), (0.333, [1.0, 1.0, 0.0]), (0.666, [1.0, 0.0, 1.0]), (1.0, [0.0, 1.0, 1.0])]
+            }
             _ => vec![(0.0, [0.0, 0.0, 0.0]), (1.0, [1.0, 1.0, 1.0])],
         };
         ColorMap { entries }
@@ -242,6 +396,9 @@ pub struct PatternDesc {
     /// Added after `frequency`, default 0.
     pub phase: f32,
     pub wave: WaveShape,
+    /// Warps other than turbulence, in the order POV-Ray writes them (at most `MAX_WARPS`); the
+    /// point meets the last one first.
+    pub warps: [Option<Warp>; shader::MAX_WARPS as usize],
 }
 
 impl PatternDesc {
@@ -256,7 +413,13 @@ impl PatternDesc {
             frequency: 1.0,
             phase: 0.0,
             wave: kind.default_wave(),
+            warps: [None; shader::MAX_WARPS as usize],
         }
+    }
+
+    /// The warps, in the order written.
+    pub fn warp_list(&self) -> impl DoubleEndedIterator<Item = &Warp> {
+        self.warps.iter().flatten()
     }
 
     /// Appends the pattern's block of `PATTERN_WORDS` words to `data` and returns its offset,
@@ -300,7 +463,13 @@ impl PatternDesc {
         block[shader::PATTERN_KIND as usize] = self.kind.code();
         block[shader::PATTERN_WAVE as usize] = self.wave.code();
         block[shader::PATTERN_OCTAVES as usize] = self.octaves.clamp(1, shader::MAX_OCTAVES);
+        block[shader::PATTERN_WARP_COUNT as usize] = self.warp_list().count() as u32;
         data.extend_from_slice(&block);
+        // The records follow the block, the last warp written first: POV-Ray applies a pattern's
+        // warps from the last to the first (warp.cpp, Warp_EPoint).
+        for warp in self.warp_list().rev() {
+            warp.pack(data);
+        }
         at
     }
 
@@ -316,6 +485,9 @@ impl PatternDesc {
         finite("phase", self.phase)?;
         if let WaveShape::Poly { exponent } = self.wave {
             positive("exponent", exponent)?;
+        }
+        for warp in self.warp_list() {
+            warp.validate()?;
         }
         match self.kind {
             PatternKind::Agate { agate_turb } => finite("agate_turb", agate_turb)?,
@@ -594,6 +766,24 @@ pub fn parse_pattern_with(
             _ => return Err("`exponent` applies only to wave = \"poly\"; add that or remove `exponent`".to_string()),
         }
     }
+    // Warps
+    match t.get("warp") {
+        None => {}
+        Some(toml::Value::Array(list)) => {
+            if list.len() > shader::MAX_WARPS as usize {
+                return Err(format!("`warp` lists {} warps; a pattern takes at most 4", list.len()));
+            }
+            for (i, w) in list.iter().enumerate() {
+                desc.warps[i] = Some(parse_warp(w).map_err(|e| format!("`warp` entry {}: {e}", i + 1))?);
+            }
+        }
+        Some(other) => {
+            return Err(format!(
+                "`warp` must be a list of tables such as [{{ type = \"repeat\", direction = [1, 0, 0] }}], got {}",
+                describe(other)
+            ))
+        }
+    }
     desc.validate()?;
 
     // Colour map
@@ -602,6 +792,136 @@ pub fn parse_pattern_with(
         Some(value) => Some(parse_color_map(value)?),
     };
     Ok((desc, color_map))
+}
+
+/// Every field of a warp table, by warp (`type` and `transform` are every warp's).
+const WARP_FIELDS: &[(&str, &[&str])] = &[
+    ("repeat", &["direction", "offset", "flip"]),
+    ("black_hole", &["center", "radius", "strength", "falloff", "inverse", "repeat"]),
+    ("cylindrical", &["orientation", "dist_exp"]),
+    ("spherical", &["orientation", "dist_exp"]),
+    ("toroidal", &["orientation", "dist_exp", "major_radius"]),
+    ("planar", &["orientation", "offset"]),
+];
+
+/// Reads one warp table, e.g. `{ type = "repeat", direction = [2, 0, 0], flip = [0, 1, 0] }`
+/// (docs/patterns.md, "Warps").
+fn parse_warp(value: &toml::Value) -> Result<Warp, String> {
+    let Some(t) = value.as_table() else {
+        return Err(format!(
+            "a warp must be a table such as {{ type = \"repeat\", direction = [1, 0, 0] }}, got {}",
+            describe(value)
+        ));
+    };
+    let name = match t.get("type") {
+        None => return Err(format!("missing `type`; name one of {}", WARP_NAMES.join(", "))),
+        Some(toml::Value::String(s)) => s.as_str(),
+        Some(other) => return Err(format!("`type` must be a warp name such as \"repeat\", got {}", describe(other))),
+    };
+    let Some((_, fields)) = WARP_FIELDS.iter().find(|(n, _)| *n == name) else {
+        return Err(match suggest(name, WARP_NAMES) {
+            Some(hit) => format!("unknown warp \"{name}\" (did you mean \"{hit}\"?)"),
+            None => format!(
+                "unknown warp \"{name}\"; warps are {} (turbulence is the pattern's own `turbulence`)",
+                WARP_NAMES.join(", ")
+            ),
+        });
+    };
+    for key in t.keys() {
+        if key != "type" && key != "transform" && !fields.contains(&key.as_str()) {
+            let mut candidates: Vec<&str> = fields.to_vec();
+            candidates.extend(["type", "transform"]);
+            return Err(match suggest(key, &candidates) {
+                Some(hit) => format!("unknown field `{key}` in a {name} warp (did you mean `{hit}`?)"),
+                None => format!(
+                    "unknown field `{key}` in a {name} warp; its fields are type, transform, {}",
+                    fields.join(", ")
+                ),
+            });
+        }
+    }
+    let orientation = vector(t, "orientation")?.unwrap_or(Vec3::Z);
+    let dist_exp = number(t, "dist_exp")?.unwrap_or(0.0);
+    let kind = match name {
+        "repeat" => {
+            let Some(d) = vector(t, "direction")? else {
+                return Err(
+                    "a repeat warp needs `direction`, the axis and width of the slab it repeats, e.g. [2, 0, 0]"
+                        .to_string(),
+                );
+            };
+            let axes: Vec<usize> = (0..3).filter(|&i| d[i] != 0.0).collect();
+            let [axis] = axes[..] else {
+                return Err(format!(
+                    "a repeat warp's `direction` must be along one axis (POV-Ray repeats along one), got [{}, {}, {}]",
+                    d.x, d.y, d.z
+                ));
+            };
+            let flip = vector(t, "flip")?.unwrap_or(Vec3::ZERO);
+            WarpKind::Repeat {
+                axis: axis as u32,
+                width: d[axis],
+                offset: vector(t, "offset")?.unwrap_or(Vec3::ZERO),
+                flip: Vec3::from(flip.to_array().map(|f| if f != 0.0 { -1.0 } else { 1.0 })),
+            }
+        }
+        "black_hole" => {
+            let Some(center) = vector(t, "center")? else {
+                return Err("a black_hole warp needs `center`, e.g. [0, 0, 0]".to_string());
+            };
+            let Some(radius) = number(t, "radius")? else {
+                return Err("a black_hole warp needs `radius`, e.g. 1".to_string());
+            };
+            let inverse = match t.get("inverse") {
+                None => false,
+                Some(toml::Value::Boolean(b)) => *b,
+                Some(other) => return Err(format!("`inverse` must be true or false, got {}", describe(other))),
+            };
+            WarpKind::BlackHole {
+                center,
+                radius,
+                strength: number(t, "strength")?.unwrap_or(1.0),
+                falloff: number(t, "falloff")?.unwrap_or(2.0),
+                inverse,
+                repeat: vector(t, "repeat")?.unwrap_or(Vec3::ZERO),
+            }
+        }
+        "cylindrical" => WarpKind::Cylindrical { orientation, dist_exp },
+        "spherical" => WarpKind::Spherical { orientation, dist_exp },
+        "toroidal" => {
+            WarpKind::Toroidal { orientation, dist_exp, major_radius: number(t, "major_radius")?.unwrap_or(1.0) }
+        }
+        _ => WarpKind::Planar { orientation, offset: number(t, "offset")?.unwrap_or(0.0) },
+    };
+    let transform = match t.get("transform") {
+        None => Affine3A::IDENTITY,
+        Some(value) => parse_transform(value)?,
+    };
+    let warp = Warp { kind, transform };
+    warp.validate()?;
+    Ok(warp)
+}
+
+/// `{ scale = s or [x, y, z], rotate = [x, y, z] degrees, translate = [x, y, z] }`, composed as a
+/// shape's transform is (docs/scene-format.md): scale, then rotate about x, y, z, then translate.
+fn parse_transform(value: &toml::Value) -> Result<Affine3A, String> {
+    let Some(t) = value.as_table() else {
+        return Err(format!(
+            "`transform` must be a table such as {{ scale = 2, translate = [0, 1, 0] }}, got {}",
+            describe(value)
+        ));
+    };
+    if let Some(key) = t.keys().find(|k| !["scale", "rotate", "translate"].contains(&k.as_str())) {
+        return Err(format!("unknown field `{key}` in a warp's `transform`; its fields are scale, rotate, translate"));
+    }
+    let scale = vector_or_number(t, "scale")?.unwrap_or(Vec3::ONE);
+    if scale.abs().min_element() == 0.0 {
+        return Err("a warp's `transform.scale` is 0 along an axis; give non-zero factors".to_string());
+    }
+    let r = vector(t, "rotate")?.unwrap_or(Vec3::ZERO) * (std::f32::consts::PI / 180.0);
+    let rotation = Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
+    let translate = vector(t, "translate")?.unwrap_or(Vec3::ZERO);
+    Ok(Affine3A::from_mat3_translation(rotation * Mat3::from_diagonal(scale), translate))
 }
 
 /// Reads `[[position, colour], ...]` where a colour is [r, g, b] or one number (grey); an entry
@@ -883,5 +1203,46 @@ color_map = [[0.0, [1, 0, 0]], [0.5, 0.25], [1, 0, 0, 1]]
                 0.75f32.to_bits()
             ]
         );
+    }
+
+    #[test]
+    fn warps_are_read_with_their_transforms_and_checked() {
+        let (desc, _) = parse(
+            "pattern = \"bozo\"\nwarp = [{ type = \"repeat\", direction = [0, -2, 0], offset = [1, 0, 0], flip = [1, 0, 1] },\n\
+             { type = \"toroidal\", major_radius = 3, transform = { scale = 2, translate = [0, 1, 0] } }]",
+        )
+        .unwrap();
+        let warps: Vec<&Warp> = desc.warp_list().collect();
+        assert_eq!(
+            warps[0].kind,
+            WarpKind::Repeat { axis: 1, width: -2.0, offset: Vec3::X, flip: Vec3::new(-1.0, 1.0, -1.0) }
+        );
+        assert_eq!(warps[1].kind, WarpKind::Toroidal { orientation: Vec3::Z, dist_exp: 0.0, major_radius: 3.0 });
+        assert_eq!(warps[1].transform.transform_point3(Vec3::ONE), Vec3::new(2.0, 3.0, 2.0));
+        // Packed after the block, the last written first.
+        let mut data = Vec::new();
+        desc.pack(&mut data);
+        assert_eq!(data[shader::PATTERN_WARP_COUNT as usize], 2);
+        assert_eq!(data.len() as u32, shader::PATTERN_WORDS + 2 * shader::WARP_WORDS);
+        assert_eq!(data[shader::PATTERN_WORDS as usize], shader::WARP_TOROIDAL);
+        assert_eq!(data[(shader::PATTERN_WORDS + shader::WARP_WORDS) as usize], shader::WARP_REPEAT);
+
+        for (text, message) in [
+            ("warp = [{ type = \"repaet\" }]", "`warp` entry 1: unknown warp \"repaet\" (did you mean \"repeat\"?)"),
+            ("warp = [{ type = \"repeat\" }]", "a repeat warp needs `direction`"),
+            ("warp = [{ type = \"repeat\", direction = [1, 1, 0] }]", "must be along one axis"),
+            ("warp = [{ type = \"planar\", radius = 1 }]", "unknown field `radius` in a planar warp"),
+            ("warp = [{ type = \"black_hole\", center = [0, 0, 0] }]", "a black_hole warp needs `radius`"),
+            ("warp = [{ type = \"black_hole\", center = [0, 0, 0], radius = -1 }]", "`radius` must be a number > 0"),
+            ("warp = [{ type = \"spherical\", transform = { scale = 0 } }]", "`transform.scale` is 0"),
+            ("warp = { type = \"planar\" }", "`warp` must be a list of tables"),
+            (
+                "warp = [{ type = \"planar\" }, { type = \"planar\" }, { type = \"planar\" }, { type = \"planar\" }, { type = \"planar\" }]",
+                "a pattern takes at most 4",
+            ),
+        ] {
+            let e = parse(&format!("pattern = \"bozo\"\n{text}")).unwrap_err();
+            assert!(e.contains(message), "{text}: {e}");
+        }
     }
 }

@@ -819,7 +819,10 @@ impl Emitter<'_> {
                     (*v, vec![layer])
                 })
                 .collect();
-            if let Some(name) = self.texture_mix(&t, &TexMap { entries, listed: false }, int, pos, glow_ok)? {
+            // A checker's listed pigments weigh by the pattern's own values, a map's by ramps.
+            let listed = matches!(&t.pigment.kind, PigmentKind::Pattern { fields, .. }
+                if fields.iter().any(|(k, _)| k == "colors"));
+            if let Some(name) = self.texture_mix(&t, &TexMap { entries, listed }, int, pos, glow_ok)? {
                 return Ok(name);
             }
         }

@@ -51,14 +51,10 @@ const OBJECTS: &[&str] = &[
 ];
 
 /// Patterns Photonix has (docs/patterns.md), by POV-Ray's name.
-const PATTERNS: [&str; 18] = [
-    "agate", "bozo", "brick", "bumps", "checker", "crackle", "dents", "gradient", "granite", "hexagon", "leopard",
-    "marble", "onion", "ripples", "spotted", "waves", "wood", "wrinkles",
-];
+const PATTERNS: &[&str] = crate::scene::pattern::PATTERN_NAMES;
 
 /// POV-Ray patterns this front-end does not have: their mean colour stands in, with a warning.
-const OTHER_PATTERNS: [&str; 24] = [
-    "radial",
+const OTHER_PATTERNS: [&str; 23] = [
     "spiral1",
     "spiral2",
     "cells",
@@ -1390,18 +1386,7 @@ impl Parser {
                             .into(),
                     )
                 }
-                "tiles" => {
-                    // tiles { texture { A } tile2 texture { B } }: the first texture stands in.
-                    self.warnings.push(format!(
-                        "{}: the tiles texture pattern is not supported yet; its first texture is used",
-                        self.loc(pos)
-                    ));
-                    self.expect_sym("{")?;
-                    if self.accept_word("texture")? {
-                        layers = self.texture()?;
-                    }
-                    self.skip_to_brace()?;
-                }
+                "tiles" => layers = vec![self.tiles(pos)?],
                 _ if PATTERNS.contains(&w.as_str()) || OTHER_PATTERNS.contains(&w.as_str()) => {
                     // A patterned texture (texture_map, or textures as a checker's entries): the
                     // pattern and its entries, mixed by `emit` (docs/pov-ray.md); the pigment's
@@ -1424,6 +1409,59 @@ impl Parser {
                 },
             }
         }
+    }
+
+    /// `tiles { texture { A } ... tile2 texture { B } ... }` (after `tiles`): POV-Ray 3.7 reads
+    /// it as a checker of the two textures (parstxtr.cpp), A in the cubes where floor(x) +
+    /// floor(y) + floor(z) is even, B in the others; so it becomes a checker texture with the two
+    /// as its listed entries, mixed as a checker's textures are (docs/pov-ray.md).
+    fn tiles(&mut self, pos: Pos) -> Result<Tex> {
+        self.expect_sym("{")?;
+        let mut tiles: [Vec<Tex>; 2] = [Vec::new(), Vec::new()];
+        let mut second = false;
+        loop {
+            let t = self.expect_any("`}`")?;
+            match t.tok {
+                Tok::Sym("}") => break,
+                Tok::Word(w) if w == "texture" => {
+                    let layers = self.texture()?;
+                    tiles[second as usize].extend(layers);
+                }
+                Tok::Word(w) if w == "tile2" && !second => second = true,
+                other => {
+                    return self.err(
+                        t.pos,
+                        format!(
+                            "expected `texture {{ ... }}`{} or `}}` in tiles, found {}",
+                            if second { "" } else { ", `tile2`" },
+                            describe(&other)
+                        ),
+                    )
+                }
+            }
+        }
+        let [a, b] = tiles;
+        if a.is_empty() || b.is_empty() {
+            return self.err(
+                pos,
+                "tiles needs a texture on each side of `tile2`: tiles { texture { A } tile2 texture { B } }".into(),
+            );
+        }
+        let (mean_a, mean_b) = (a[0].pigment.mean(), b[0].pigment.mean());
+        let mut t = a[0].clone();
+        t.pigment = Pigment {
+            kind: PigmentKind::Pattern {
+                name: "checker".into(),
+                map: vec![(0.0, mean_a), (1.0, mean_b)],
+                fields: vec![("colors".into(), toml::Value::Boolean(true))],
+            },
+            xform: DMat4::IDENTITY,
+            pos,
+            entries: None,
+        };
+        t.xform = DMat4::IDENTITY;
+        t.map = Some(std::rc::Rc::new(TexMap { entries: vec![(0.0, a), (1.0, b)], listed: true }));
+        Ok(t)
     }
 
     /// Skips to the `]` (or other closing symbol in `close`) that ends the entry we are in,
@@ -1477,6 +1515,7 @@ impl Parser {
     ) -> Result<(Pigment, Option<TexMap>)> {
         let mut tex_map: Option<TexMap> = None;
         let mut listed_tex: Vec<Vec<Tex>> = Vec::new();
+        let mut listed_pig: Vec<Pigment> = Vec::new();
         let mut pending_array = false;
         let mut p = Pigment::solid([0.0; 5], pos);
         let mut fields: Vec<(String, toml::Value)> = Vec::new();
@@ -1571,7 +1610,7 @@ impl Parser {
                 p.xform = m * p.xform;
                 continue;
             }
-            if self.pattern_field(&w, tpos, &mut fields)? {
+            if self.pattern_field(&w, tpos, &mut fields, &mut p.xform)? {
                 continue;
             }
             match w.as_str() {
@@ -1595,6 +1634,14 @@ impl Parser {
                     let entries = self.texture_map(tpos)?;
                     map = entries.iter().map(|(v, l)| (*v, l[0].pigment.mean())).collect();
                     tex_map = Some(TexMap { entries, listed: false });
+                }
+                "pigment" if pattern.is_some() => {
+                    // A checker's, brick's or hexagon's pigments (`checker pigment { A } pigment
+                    // { B }`): listed entries, mixed by the pattern's own values as its
+                    // textures are.
+                    let inner = self.pigment(tpos)?;
+                    list.push(inner.mean());
+                    listed_pig.push(inner);
                 }
                 "texture" if pattern.is_some() => {
                     // A checker's, brick's or hexagon's textures.
@@ -1713,6 +1760,9 @@ impl Parser {
                 if listed_tex.len() == n {
                     let entries = listed_tex.into_iter().enumerate().map(|(i, l)| (at(i), l)).collect();
                     tex_map = Some(TexMap { entries, listed: true });
+                } else if listed_pig.len() == n {
+                    let entries = listed_pig.into_iter().enumerate().map(|(i, q)| (at(i), q)).collect();
+                    p.entries = Some(std::rc::Rc::new(entries));
                 }
             }
             if let Some(other) = name.strip_prefix("unsupported:") {
@@ -1753,7 +1803,14 @@ impl Parser {
 
     /// A pattern's own modifier (turbulence, octaves, wave shape, brick size, a warp, ...) into
     /// `fields` as docs/patterns.md names them; false for another word. The word is consumed.
-    fn pattern_field(&mut self, w: &str, pos: Pos, fields: &mut Vec<(String, toml::Value)>) -> Result<bool> {
+    /// `xform` holds the pattern's transforms read so far: a warp takes them (docs/pov-ray.md).
+    fn pattern_field(
+        &mut self,
+        w: &str,
+        pos: Pos,
+        fields: &mut Vec<(String, toml::Value)>,
+        xform: &mut DMat4,
+    ) -> Result<bool> {
         let vec = |v: DVec3| toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)]);
         match w {
             "turbulence" => {
@@ -1783,7 +1840,7 @@ impl Parser {
                     set_field(fields, "exponent", num(e));
                 }
             }
-            "warp" => self.warp(pos, fields)?,
+            "warp" => self.warp(pos, fields, xform)?,
             "noise_generator" => {
                 // Photonix has one noise (docs/patterns.md); POV-Ray's generators 1 to 3 differ
                 // in detail, not in kind.
@@ -1795,50 +1852,148 @@ impl Parser {
     }
 
     /// `warp { ... }`: a turbulence warp becomes the pattern's own turbulence (docs/pov-ray.md:
-    /// POV-Ray applies it at its place among the pattern's transforms, Photonix before them);
-    /// the other warps are left out with a warning.
-    fn warp(&mut self, pos: Pos, fields: &mut Vec<(String, toml::Value)>) -> Result<()> {
+    /// POV-Ray applies it at its place among the pattern's transforms, Photonix after the other
+    /// warps); repeat, black_hole, cylindrical, spherical, toroidal and planar become an entry
+    /// of the pattern's `warp` list, with the transforms written before it (`xform`, which it
+    /// takes) as its own `transform`. A cubic warp is left out with a warning.
+    fn warp(&mut self, pos: Pos, fields: &mut Vec<(String, toml::Value)>, xform: &mut DMat4) -> Result<()> {
+        let vec = |v: DVec3| toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)]);
         self.expect_sym("{")?;
-        let mut kind: Option<String> = None;
+        let t = self.expect_any("a warp type")?;
+        let kind = match t.tok {
+            Tok::Sym("}") => return Ok(()),
+            Tok::Word(w) => w,
+            other => return self.err(t.pos, format!("expected a warp type or `}}`, found {}", describe(&other))),
+        };
+        let mut w = toml::Table::new();
+        w.insert("type".into(), toml::Value::String(kind.clone()));
+        match kind.as_str() {
+            "turbulence" => {
+                let v = self.vec3()?;
+                set_field(fields, "turbulence", vec(v));
+            }
+            "repeat" => {
+                let v = self.vec3()?;
+                if [v.x, v.y, v.z].iter().filter(|c| **c != 0.0).count() != 1 {
+                    return self.err(t.pos, "a repeat warp repeats along one axis: give a vector such as x * 2".into());
+                }
+                w.insert("direction".into(), vec(v));
+            }
+            "black_hole" => {
+                let c = self.vec3()?;
+                self.accept_sym(",")?;
+                let r = self.float()?;
+                if r <= 0.0 {
+                    return self.err(t.pos, format!("a black_hole's radius must be > 0, got {r}"));
+                }
+                w.insert("center".into(), vec(c));
+                w.insert("radius".into(), num(r));
+            }
+            "planar" => {
+                if !self.peek()?.is_some_and(|t| t.tok == Tok::Sym("}")) {
+                    let o = self.vec3()?;
+                    w.insert("orientation".into(), vec(o));
+                    if self.accept_sym(",")? {
+                        let offset = self.float()?;
+                        w.insert("offset".into(), num(offset));
+                    }
+                }
+            }
+            "cylindrical" | "spherical" | "toroidal" => {}
+            "cubic" => {
+                self.warnings.push(format!("{}: the cubic warp is not supported yet; it is left out", self.loc(pos)));
+                return self.skip_to_brace();
+            }
+            other => return self.err(t.pos, format!("`{other}` is not a warp; warps are turbulence, repeat, black_hole, cylindrical, spherical, toroidal, planar and cubic")),
+        }
+        // The warp's modifiers.
         loop {
-            let t = self.expect_any("`}`")?;
-            let w = match t.tok {
+            let m = self.expect_any("`}`")?;
+            let word = match m.tok {
                 Tok::Sym("}") => break,
-                Tok::Word(w) => w,
-                other => return self.err(t.pos, format!("expected a warp item or `}}`, found {}", describe(&other))),
+                Tok::Word(word) => word,
+                other => {
+                    return self
+                        .err(m.pos, format!("expected a {kind} warp's modifier or `}}`, found {}", describe(&other)))
+                }
             };
-            match w.as_str() {
-                "turbulence" => {
-                    kind.get_or_insert_with(|| "turbulence".into());
+            match (kind.as_str(), word.as_str()) {
+                ("turbulence", "octaves" | "omega" | "lambda") => {
+                    let mut unused = DMat4::IDENTITY;
+                    self.pattern_field(&word, m.pos, fields, &mut unused)?;
+                }
+                ("repeat", "offset" | "flip")
+                | ("black_hole", "repeat")
+                | ("cylindrical" | "spherical" | "toroidal", "orientation") => {
                     let v = self.vec3()?;
-                    set_field(fields, "turbulence", toml::Value::Array(vec![num(v.x), num(v.y), num(v.z)]));
+                    let v = if kind == "black_hole" { v.abs() } else { v };
+                    w.insert(word.clone(), vec(v));
                 }
-                "octaves" | "omega" | "lambda" if kind.as_deref() == Some("turbulence") => {
-                    self.pattern_field(&w, t.pos, fields)?;
+                ("black_hole", "strength" | "falloff")
+                | ("cylindrical" | "spherical" | "toroidal", "dist_exp")
+                | ("toroidal", "major_radius") => {
+                    let v = self.float()?;
+                    w.insert(word.clone(), num(v));
                 }
-                "repeat" | "black_hole" | "cylindrical" | "spherical" | "toroidal" | "planar" | "cubic" => {
-                    kind = Some(w.clone());
-                    // Their arguments (a vector, a radius) are read and left out.
-                    while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}") | Tok::Word(_))) {
-                        self.expect_any("`}`")?;
-                    }
+                ("black_hole", "inverse") => {
+                    w.insert("inverse".into(), toml::Value::Boolean(true));
                 }
-                _ => {
-                    // The modifiers of the other warps (offset, flip, strength, falloff,
-                    // inverse, repeat, turbulence, orientation, dist_exp, major_radius, ...).
-                    while !self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("}") | Tok::Word(_))) {
-                        self.expect_any("`}`")?;
-                    }
+                ("black_hole", "turbulence") => {
+                    // POV-Ray moves each repeated hole by its own random numbers; not reproduced.
+                    self.vec3()?;
+                    self.warnings.push(format!(
+                        "{}: a black_hole's turbulence (random offsets of its copies) is not supported yet; the copies stay in place",
+                        self.loc(m.pos)
+                    ));
                 }
+                ("black_hole", "type") => {
+                    self.float()?;
+                }
+                _ => return self.err(m.pos, format!("`{word}` does not belong in a {kind} warp")),
             }
         }
-        match kind.as_deref() {
-            Some("turbulence") => {}
-            Some(other) => {
-                self.warnings.push(format!("{}: the {other} warp is not supported yet; it is left out", self.loc(pos)))
-            }
-            None => {}
+        if kind == "turbulence" {
+            return Ok(());
         }
+        // The transforms written before the warp place the pattern it acts on.
+        let Some((scale, rotate, translate)) = super::emit::decompose(xform) else {
+            self.warnings.push(format!(
+                "{}: the transforms before this {kind} warp shear the pattern, which a warp's transform cannot take yet; the warp is left out",
+                self.loc(pos)
+            ));
+            return Ok(());
+        };
+        let mut tr = toml::Table::new();
+        if !scale.abs_diff_eq(DVec3::ONE, 1e-12) {
+            tr.insert("scale".into(), vec(scale));
+        }
+        if !rotate.abs_diff_eq(DVec3::ZERO, 1e-12) {
+            tr.insert("rotate".into(), vec(rotate));
+        }
+        if translate != DVec3::ZERO {
+            tr.insert("translate".into(), vec(translate));
+        }
+        if !tr.is_empty() {
+            w.insert("transform".into(), toml::Value::Table(tr));
+        }
+        let mut list = match fields.iter().position(|(k, _)| k == "warp") {
+            Some(i) => match fields.remove(i).1 {
+                toml::Value::Array(a) => a,
+                _ => Vec::new(),
+            },
+            None => Vec::new(),
+        };
+        if list.len() >= crate::cpu::pattern::MAX_WARPS as usize {
+            self.warnings.push(format!(
+                "{}: a pattern takes at most {} warps besides turbulence; this {kind} warp is left out",
+                self.loc(pos),
+                crate::cpu::pattern::MAX_WARPS
+            ));
+        } else {
+            list.push(toml::Value::Table(w));
+            *xform = DMat4::IDENTITY;
+        }
+        fields.push(("warp".into(), toml::Value::Array(list)));
         Ok(())
     }
 
@@ -1871,7 +2026,7 @@ impl Parser {
                 n.xform = m * n.xform;
                 continue;
             }
-            if self.pattern_field(&w, tpos, &mut n.fields)? {
+            if self.pattern_field(&w, tpos, &mut n.fields, &mut n.xform)? {
                 continue;
             }
             match w.as_str() {
