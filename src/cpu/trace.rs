@@ -83,6 +83,19 @@ fn visit(s: &SceneView, i: u32, id: u32, r: &WalkRay, o: Vec3, d: Vec3, ignore: 
     }
 }
 
+/// The unbounded primitives (infinite planes), which both walks test before the BVH's: the
+/// closest hit among them as (hit name, distance), or the first with `any_hit`.
+fn visit_unbounded(s: &SceneView, world: &WalkRay, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
+    let (mut hit, mut t_hit) = (NO_LIGHT, t_max);
+    for i in s.frame.unbounded_first..s.frame.csg_first {
+        visit(s, i, i, world, world.o, world.d, ignore, &mut hit, &mut t_hit);
+        if any_hit && hit != NO_LIGHT {
+            break;
+        }
+    }
+    (hit, t_hit)
+}
+
 /// Closest hit in [0, t_max) as (hit name, distance), or `NO_LIGHT` and t_max on a miss. With
 /// `any_hit` the first hit found is returned (shadow rays). The unbounded primitives (infinite
 /// planes, after the BVH's) come first, then the BVH, stackless: a missed box, or a finished
@@ -112,13 +125,9 @@ pub fn trace_ray(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ign
 fn trace_threaded(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
     let nodes = s.nodes;
     let world = WalkRay::new(o, d, 1.0);
-    let mut t_hit = t_max;
-    let mut hit = NO_LIGHT;
-    for i in s.frame.unbounded_first..s.frame.csg_first {
-        visit(s, i, i, &world, o, d, ignore, &mut hit, &mut t_hit);
-        if any_hit && hit != NO_LIGHT {
-            return (hit, t_hit);
-        }
+    let (mut hit, mut t_hit) = visit_unbounded(s, &world, t_max, any_hit, ignore);
+    if any_hit && hit != NO_LIGHT {
+        return (hit, t_hit);
     }
     let flat_end = nodes.first().map_or(0, |n| n.skip() as usize);
     let world_end = if s.frame.instance_count > 0 { nodes[flat_end].skip() as usize } else { flat_end };
@@ -176,6 +185,13 @@ fn trace_threaded(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ig
     }
     (hit, t_hit)
 }
+
+/// Most nodes and leaves one `trace_wide` takes over both levels; a ray that needs more is
+/// traced again by the kernels' walk under the kernels' bound (`TRACE_STEPS` binary nodes, where
+/// lavapipe's loop limit would otherwise stop them): in scenes that deep (hundreds of
+/// overlapping instances) the backends then find the same hits, or miss the same ones. A wide
+/// turn stands for two to four binary ones, so ordinary rays (tens of turns) never come close.
+const WIDE_TURNS: u32 = TRACE_STEPS / 8;
 
 /// Deferred children of `walk_wide`: three per level of a tree far deeper than any SAH build's.
 const WIDE_STACK: usize = 192;
@@ -254,8 +270,8 @@ fn ray_triangles(b: &TriangleBlock, r: &WideRay, t_max: f32) -> (Vec4, u32) {
 /// the bottom of a fog box on it) the first one found keeps the hit and a box entered a rounding
 /// later is dropped, so only the kernels' order finds the kernels' hit, and which surface a
 /// ray meets there decides which medium it enters. Front to back gained nothing measurable on
-/// the shipped scenes. The kernels' `TRACE_STEPS` bound is not kept: where it cuts their walk
-/// short, this one finishes. `None` when the stack overflows.
+/// the shipped scenes. `None` when the stack overflows or the walk takes more than
+/// `WIDE_TURNS`.
 fn trace_wide(
     s: &SceneView,
     w: &WideBvh,
@@ -266,13 +282,9 @@ fn trace_wide(
     ignore: u32,
 ) -> Option<(u32, f32)> {
     let world = WalkRay::new(o, d, 1.0);
-    let mut t_hit = t_max;
-    let mut hit = NO_LIGHT;
-    for i in s.frame.unbounded_first..s.frame.csg_first {
-        visit(s, i, i, &world, o, d, ignore, &mut hit, &mut t_hit);
-        if any_hit && hit != NO_LIGHT {
-            return Some((hit, t_hit));
-        }
+    let (mut hit, mut t_hit) = visit_unbounded(s, &world, t_max, any_hit, ignore);
+    if any_hit && hit != NO_LIGHT {
+        return Some((hit, t_hit));
     }
     // A leaf's primitives (`base`: the hit names' offset of an instance's), true to stop.
     let primitives = |r: &WalkRay, wr: &WideRay, base: u32, leaf: Leaf, t_hit: &mut f32, hit: &mut u32| {
@@ -312,14 +324,16 @@ fn trace_wide(
         false
     };
     let wide_world = WideRay::new(&world);
-    let leaves = &mut |leaf, t_hit: &mut f32, hit: &mut u32| primitives(&world, &wide_world, 0, leaf, t_hit, hit);
-    if walk_wide(w, w.world, &world, &wide_world, &mut t_hit, &mut hit, leaves)? {
+    let leaves =
+        &mut |leaf, t_hit: &mut f32, hit: &mut u32, _: &mut u32| primitives(&world, &wide_world, 0, leaf, t_hit, hit);
+    let mut turns = 0;
+    if walk_wide(w, w.world, &world, &wide_world, &mut t_hit, &mut hit, &mut turns, leaves)? {
         return Some((hit, t_hit));
     }
     if s.frame.instance_count > 0 {
         // The top level, one instance per leaf, each walked in its object's space.
         let mut overflow = false;
-        let instances = &mut |leaf: Leaf, t_hit: &mut f32, hit: &mut u32| {
+        let instances = &mut |leaf: Leaf, t_hit: &mut f32, hit: &mut u32, turns: &mut u32| {
             let k = leaf.first;
             let rec = record(s, k);
             let (oo, od, len) = object_ray(rec, o, d);
@@ -327,12 +341,13 @@ fn trace_wide(
             let base = (k + 1) * s.frame.primitive_count;
             let root = w.instance_roots[k as usize];
             let wr = WideRay::new(&r);
-            let leaves = &mut |leaf, t_hit: &mut f32, hit: &mut u32| primitives(&r, &wr, base, leaf, t_hit, hit);
-            let stop = walk_wide(w, root, &r, &wr, t_hit, hit, leaves);
+            let leaves =
+                &mut |leaf, t_hit: &mut f32, hit: &mut u32, _: &mut u32| primitives(&r, &wr, base, leaf, t_hit, hit);
+            let stop = walk_wide(w, root, &r, &wr, t_hit, hit, turns, leaves);
             overflow |= stop.is_none();
             stop.unwrap_or(true)
         };
-        let stopped = walk_wide(w, w.top, &world, &wide_world, &mut t_hit, &mut hit, instances);
+        let stopped = walk_wide(w, w.top, &world, &wide_world, &mut t_hit, &mut hit, &mut turns, instances);
         if overflow {
             return None;
         }
@@ -353,6 +368,7 @@ struct Leaf {
 /// Walks the wide tree at `root` along `r` (`wr` its lanes), calling `leaf` with each leaf
 /// whose box the ray enters before the closest hit so far (`t_hit`, world
 /// distance). Some(true) when `leaf` asked to stop, None when the stack overflowed.
+#[allow(clippy::too_many_arguments)]
 fn walk_wide(
     w: &WideBvh,
     root: u32,
@@ -360,7 +376,8 @@ fn walk_wide(
     wr: &WideRay,
     t_hit: &mut f32,
     hit: &mut u32,
-    leaf: &mut impl FnMut(Leaf, &mut f32, &mut u32) -> bool,
+    turns: &mut u32,
+    leaf: &mut impl FnMut(Leaf, &mut f32, &mut u32, &mut u32) -> bool,
 ) -> Option<bool> {
     // (child, leaf count or 0 for a node, leaf block, entry distance on the walk's ray)
     let mut stack: ArrayVec<(u32, u32, u32, f32), WIDE_STACK> = ArrayVec::new();
@@ -369,8 +386,12 @@ fn walk_wide(
         if t_enter >= *t_hit * r.len {
             continue;
         }
+        *turns += 1;
+        if *turns > WIDE_TURNS {
+            return None;
+        }
         if count > 0 {
-            if leaf(Leaf { first: child, count, block }, t_hit, hit) {
+            if leaf(Leaf { first: child, count, block }, t_hit, hit, turns) {
                 return Some(true);
             }
             continue;

@@ -714,13 +714,7 @@ pub fn trace_light_path(
         (o, medium) = (next.o, next.medium);
         let t = next.t;
         let wo = -d;
-        let (h, b) = if next.scattered {
-            (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))
-        } else {
-            let h = shape_hit(s, prim, o, d, t);
-            let b = material_bsdf(s, &s.materials[h.material as usize], &h);
-            (h, b)
-        };
+        let (h, b) = vertex_at(s, next.scattered, prim, medium, o, d, t);
         let flags = bsdf_flags(&b);
         if flags == 0 {
             break;
@@ -811,6 +805,18 @@ pub fn trace_light_path(
         d = smp.wi;
     }
     rays
+}
+
+/// The scattering vertex a ray (`o`, `d`) reached at distance `t`, with its BSDF: a collision
+/// in `medium` (`scattered`, the phase function) or the surface of hit name `prim`.
+fn vertex_at(s: &SceneView, scattered: bool, prim: u32, medium: u32, o: Vec3, d: Vec3, t: f32) -> (Hit, Bsdf) {
+    if scattered {
+        (medium_hit(o + d * t, -d), phase_bsdf(s, medium, -d))
+    } else {
+        let h = shape_hit(s, prim, o, d, t);
+        let b = material_bsdf(s, &s.materials[h.material as usize], &h);
+        (h, b)
+    }
 }
 
 /// Light tracing: the light vertex at `h` seen by the camera, as (pixel, value) when nothing is
@@ -952,13 +958,7 @@ pub fn radiance_vcm(
             break;
         }
         let wo = -d;
-        let (h, b) = if next.scattered {
-            (medium_hit(o + d * t, wo), phase_bsdf(s, medium, wo))
-        } else {
-            let h = shape_hit(s, prim, o, d, t);
-            let b = material_bsdf(s, &s.materials[h.material as usize], &h);
-            (h, b)
-        };
+        let (h, b) = vertex_at(s, next.scattered, prim, medium, o, d, t);
         // An orthographic camera's first density is by area (`camera_d_vcm`).
         sub.arrive(next.dist, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
         let cos_l = wo.dot(h.ng);
