@@ -176,16 +176,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         vec3 wo = -d;
         Hit h;
         Bsdf b;
-#ifdef VARIANT_MEDIA
-        if (nv.scattered) {
-            h = medium_hit(o + d * t, wo);
-            b = phase_bsdf(medium, wo);
-        } else
-#endif
-        {
-            h = shape_hit(prim, o, d, t);
-            b = material_bsdf(material_at(h.material), h);
-        }
+        vertex_at(nv.scattered, prim, medium, o, d, t, h, b);
         // An orthographic camera's first density is by area (camera_d_vcm).
         sub_arrive(sp, nv.dist, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
         float cos_l = dot(wo, h.ng);

@@ -284,3 +284,17 @@ NextVertex next_vertex(vec3 o, vec3 d, uint medium, uint skip, uvec2 seq, uint d
     }
     return nv;
 }
+
+// The scattering vertex a ray reached at distance t, with its BSDF: a collision in medium
+// (scattered, the phase function) or the surface of hit name prim; contract in vcm.rs, vertex_at.
+void vertex_at(bool scattered, uint prim, uint medium, vec3 o, vec3 d, float t, out Hit h, out Bsdf b) {
+#ifdef VARIANT_MEDIA
+    if (scattered) {
+        h = medium_hit(o + d * t, -d);
+        b = phase_bsdf(medium, -d);
+        return;
+    }
+#endif
+    h = shape_hit(prim, o, d, t);
+    b = material_bsdf(material_at(h.material), h);
+}

@@ -129,16 +129,7 @@ void main() {
         vec3 wo = -d;
         Hit h;
         Bsdf b;
-#ifdef VARIANT_MEDIA
-        if (nv.scattered) {
-            h = medium_hit(o + d * t, wo);
-            b = phase_bsdf(medium, wo);
-        } else
-#endif
-        {
-            h = shape_hit(prim, o, d, t);
-            b = material_bsdf(material_at(h.material), h);
-        }
+        vertex_at(nv.scattered, prim, medium, o, d, t, h, b);
         uint flags = bsdf_flags(b);
         if (flags == 0u) break;
         sub_arrive(sp, nv.dist, abs_cos(b, wo), k > 1u || finite);

@@ -83,6 +83,34 @@ fn visit(s: &SceneView, i: u32, id: u32, r: &WalkRay, o: Vec3, d: Vec3, ignore: 
     }
 }
 
+/// `visit` for a BVH leaf's primitive `i` of the instance whose hit names start at `base` (the
+/// world's: 0). A CSG object reports the leaf primitive it shows (`cpu/csg.rs`), so callers see an
+/// ordinary primitive (an instance's: base + leaf). Either runs on the walk's ray, the world's or
+/// an instance's object-space one.
+#[allow(clippy::too_many_arguments)]
+fn visit_leaf_primitive(
+    s: &SceneView,
+    i: u32,
+    base: u32,
+    r: &WalkRay,
+    o: Vec3,
+    d: Vec3,
+    ignore: u32,
+    hit: &mut u32,
+    t_hit: &mut f32,
+) {
+    if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
+        let (t, leaf) = csg_intersect(s, i, r.o, r.d, *t_hit * r.len);
+        let t = t / r.len;
+        if t < *t_hit {
+            *t_hit = t;
+            *hit = base + leaf;
+        }
+    } else {
+        visit(s, i, base + i, r, o, d, ignore, hit, t_hit);
+    }
+}
+
 /// The unbounded primitives (infinite planes), which both walks test before the BVH's: the
 /// closest hit among them as (hit name, distance), or the first with `any_hit`.
 fn visit_unbounded(s: &SceneView, world: &WalkRay, t_max: f32, any_hit: bool, ignore: u32) -> (u32, f32) {
@@ -164,19 +192,7 @@ fn trace_threaded(s: &SceneView, o: Vec3, d: Vec3, t_max: f32, any_hit: bool, ig
         }
         for i in n.first..n.first + count {
             let before = hit;
-            // A CSG object reports the leaf primitive it shows (`cpu/csg.rs`), so callers see an
-            // ordinary primitive (an instance's: base + leaf). The walk runs on the walk's ray,
-            // the world's or an instance's object-space one, like any primitive's test.
-            if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
-                let (t, leaf) = csg_intersect(s, i, r.o, r.d, t_hit * r.len);
-                let t = t / r.len;
-                if t < t_hit {
-                    t_hit = t;
-                    hit = base + leaf;
-                }
-            } else {
-                visit(s, i, base + i, &r, o, d, ignore, &mut hit, &mut t_hit);
-            }
+            visit_leaf_primitive(s, i, base, &r, o, d, ignore, &mut hit, &mut t_hit);
             if any_hit && hit != before {
                 return (hit, t_hit);
             }
@@ -307,16 +323,7 @@ fn trace_wide(
         }
         for i in first..first + count {
             let before = *hit;
-            if s.primitives[i as usize].kind & PRIMITIVE_KIND_MASK == PRIMITIVE_CSG {
-                let (t, leaf) = csg_intersect(s, i, r.o, r.d, *t_hit * r.len);
-                let t = t / r.len;
-                if t < *t_hit {
-                    *t_hit = t;
-                    *hit = base + leaf;
-                }
-            } else {
-                visit(s, i, base + i, r, o, d, ignore, hit, t_hit);
-            }
+            visit_leaf_primitive(s, i, base, r, o, d, ignore, hit, t_hit);
             if any_hit && *hit != before {
                 return true;
             }
