@@ -11,12 +11,21 @@ For each scene (default: cornell-box and cornell-caustics) this
      warm-up render that compiles its kernels;
   3. measures every image's relMSE against ../shared/reference/<scene>/reference.exr
      (mean over pixels and channels of (t - r)^2 / (r^2 + 0.01), as `photonix diff` prints it);
-  4. fits Mitsuba's error as k / spp and its time as t0 + c * spp (least squares), and prints for
+  4. measures the reference's own noise, the floor under every renderer's error against it: two
+     more Mitsuba renders with other seeds (`--floor-spp`, 1024 by default) give
+     floor = mean of (m1 - r)(m2 - r) / (r^2 + 0.01), whose expectation is the reference's
+     variance in relMSE's units (the two renders' noise is independent of each other and of the
+     reference's, and Mitsuba is unbiased);
+  5. fits Mitsuba's error as k / spp + floor and its time as t0 + c * spp (least squares), and prints for
      each Photonix render the time Mitsuba needs for the same error divided by Photonix's time
      (the equal-error time ratio; above 1 means Photonix is faster), and the same ratio of CPU
      time (user + system of all threads: Mitsuba's process time around mi.render, Photonix's
      child-process usage), which other processes on a shared machine disturb far less than the
      wall clock (both renderers use the same 2 cores; lavapipe's threads count as Photonix's).
+     Equal error against the reference is then equal error against the truth: Mitsuba needs
+     k / (relMSE - floor) samples. The last column gives the ratio without the floor (k / relMSE,
+     the method of the figures before 2026-12-02), which favours Mitsuba wherever the reference
+     is noisy.
 
 Needs: a release build (`cargo build --release`), `pip install mitsuba` (3.9 was used), and for
 the fast variant Debian's `libllvm19` (the script sets DRJIT_LIBLLVM_PATH=libLLVM-19.so unless it
@@ -191,11 +200,12 @@ def mitsuba_scene(scene_json, mesh_dir, max_depth):
     return mi.load_dict(d)
 
 
-def run_mitsuba(scene_name, spps, variant, reference, max_depth):
+def run_mitsuba(scene_name, spps, variant, reference, max_depth, floor_spp):
     import numpy as np
     import mitsuba as mi
 
     rows = []
+    floor = None
     with tempfile.TemporaryDirectory() as tmp:
         scene = mitsuba_scene(REFERENCES / scene_name / "scene.json", tmp, max_depth)
         # Warm-up: compiles the path tracer's kernels (cached afterwards), untimed.
@@ -209,16 +219,35 @@ def run_mitsuba(scene_name, spps, variant, reference, max_depth):
             rows.append({"spp": spp, "seconds": seconds, "cpu_seconds": cpu_seconds,
                          "rel_mse": rel_mse(image[..., :3], reference)})
             print(f"  mitsuba {variant} {scene_name} {spp:5d} spp: {seconds:7.2f} s, relMSE {rows[-1]['rel_mse']:.5f}", flush=True)
-    return rows
+        if floor_spp > 0:
+            # Seeds no row above uses, so the two renders are independent of them and of each other.
+            pair = [np.array(mi.render(scene, spp=floor_spp, seed=100_003 + i), dtype=np.float64)[..., :3] for i in range(2)]
+            floor = reference_floor(pair[0], pair[1], reference)
+            floor["spp"] = floor_spp
+            floor["rel_mse"] = [rel_mse(m, reference) for m in pair]
+            print(f"  mitsuba {variant} {scene_name} reference floor from two {floor_spp}-spp renders: "
+                  f"{floor['floor']:.6f} +- {floor['stderr']:.6f}", flush=True)
+    return rows, floor
 
 
-def fit_mitsuba(rows):
-    """relMSE = k / spp (k: geometric mean of relMSE * spp) and seconds = t0 + c * spp."""
+def reference_floor(m1, m2, reference):
+    """The reference's own variance in relMSE's units, from two independent unbiased renders:
+    E[(m1 - r)(m2 - r)] = Var(r) per pixel, the renders' own noise cancelling out."""
+    import numpy as np
+
+    # Per pixel (the channels' noise is correlated), so the standard error is not understated.
+    products = ((m1 - reference) * (m2 - reference) / (reference**2 + 0.01)).mean(axis=-1)
+    return {"floor": float(products.mean()), "stderr": float(products.std() / np.sqrt(products.size))}
+
+
+def fit_mitsuba(rows, floor=0.0):
+    """relMSE = k / spp + floor (k: geometric mean of (relMSE - floor) * spp) and seconds = t0 + c * spp."""
     import numpy as np
 
     spp = np.array([r["spp"] for r in rows], dtype=np.float64)
     err = np.array([r["rel_mse"] for r in rows])
-    k = float(np.exp(np.mean(np.log(err * spp))))
+    k = float(np.exp(np.mean(np.log(np.maximum(err - floor, 1e-12) * spp))))
+    k_no_floor = float(np.exp(np.mean(np.log(err * spp))))
 
     def line(key):
         sec = np.array([r[key] for r in rows])
@@ -230,11 +259,15 @@ def fit_mitsuba(rows):
 
     c, t0 = line("seconds")
     cpu_c, cpu_t0 = line("cpu_seconds")
-    return {"k": k, "c": c, "t0": t0, "cpu_c": cpu_c, "cpu_t0": cpu_t0}
+    return {"k": k, "floor": floor, "k_no_floor": k_no_floor, "c": c, "t0": t0, "cpu_c": cpu_c, "cpu_t0": cpu_t0}
 
 
-def mitsuba_time_for(fit, error, cpu=False):
-    spp = fit["k"] / error
+def mitsuba_time_for(fit, error, cpu=False, floor=True):
+    """Mitsuba's time to reach `error` against the reference; infinite at or below the floor."""
+    excess = error - fit["floor"] if floor else error
+    if excess <= 0:
+        return float("inf"), float("inf")
+    spp = (fit["k"] if floor else fit["k_no_floor"]) / excess
     if cpu:
         return fit["cpu_t0"] + fit["cpu_c"] * spp, spp
     return fit["t0"] + fit["c"] * spp, spp
@@ -298,6 +331,8 @@ def main():
         help="extra flags for `photonix render`, e.g. '--gather-rays 2'; repeat to measure variants in one run "
         "('' for the defaults)",
     )
+    ap.add_argument("--floor-spp", type=int, default=1024,
+                    help="Mitsuba samples of each of the two renders that measure the reference's noise floor (0: no floor)")
     ap.add_argument("--no-mitsuba", action="store_true", help="Photonix only (no ratios)")
     ap.add_argument("--json", help="also write every measurement to this file")
     args = ap.parse_args()
@@ -330,28 +365,36 @@ def main():
             ]
             if args.no_mitsuba:
                 continue
-            theirs = run_mitsuba(scene, spps, variant, reference, args.max_depth)
-            results[scene] = {"photonix": ours, "mitsuba": theirs, "fit": fit_mitsuba(theirs)}
+            theirs, floor = run_mitsuba(scene, spps, variant, reference, args.max_depth, args.floor_spp)
+            fit = fit_mitsuba(theirs, floor["floor"] if floor else 0.0)
+            results[scene] = {"photonix": ours, "mitsuba": theirs, "floor": floor, "fit": fit}
 
     print()
-    print("| scene | renderer | budget | seconds | CPU seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio | CPU-time ratio |")
-    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    print("| scene | renderer | budget | seconds | CPU seconds | passes / spp | relMSE | mean ratio R, G, B | Mitsuba s for this relMSE (spp) | equal-error ratio | CPU-time ratio | ratio without the floor |")
+    print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for scene, r in results.items():
         fit = r["fit"]
         for m in r["mitsuba"]:
             print(f"| {scene} | mitsuba {variant} | - | {m['seconds']:.2f} | {m['cpu_seconds']:.2f} | {m['spp']} spp | "
-                  f"{m['rel_mse']:.5f} | - | - | - | - |")
+                  f"{m['rel_mse']:.5f} | - | - | - | - | - |")
         for p in r["photonix"]:
             t_mi, spp = mitsuba_time_for(fit, p["rel_mse"])
             p["mitsuba_seconds"], p["ratio"] = t_mi, t_mi / p["seconds"]
             cpu_mi, _ = mitsuba_time_for(fit, p["rel_mse"], cpu=True)
             p["mitsuba_cpu_seconds"], p["cpu_ratio"] = cpu_mi, cpu_mi / p["cpu_seconds"]
+            plain, _ = mitsuba_time_for(fit, p["rel_mse"], floor=False)
+            p["ratio_no_floor"] = plain / p["seconds"]
             ratio = ", ".join(f"{r:.4f}" for r in p["mean_ratio"])
             name = f"photonix {p['backend']} {p['args']}".strip()
             print(f"| {scene} | {name} | {p['budget']} s | {p['seconds']:.2f} | {p['cpu_seconds']:.2f} | {p['passes']} passes | "
-                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** | {p['cpu_ratio']:.2f} |")
+                  f"{p['rel_mse']:.5f} | {ratio} | {t_mi:.1f} ({spp:.0f} spp) | **{p['ratio']:.2f}** | {p['cpu_ratio']:.2f} | "
+                  f"{p['ratio_no_floor']:.2f} |")
         print(f"| {scene} | mitsuba fit | | t = {fit['t0']:.2f} + {fit['c'] * 1000:.2f} ms x spp | "
-              f"CPU t = {fit['cpu_t0']:.2f} + {fit['cpu_c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp | | | | |")
+              f"CPU t = {fit['cpu_t0']:.2f} + {fit['cpu_c'] * 1000:.2f} ms x spp | | relMSE = {fit['k']:.3f} / spp + {fit['floor']:.6f} | | | | | |")
+        if r.get("floor"):
+            f = r["floor"]
+            print(f"| {scene} | reference floor | | | | 2 x {f['spp']} spp | {f['rel_mse'][0]:.5f}, {f['rel_mse'][1]:.5f} | | "
+                  f"floor {f['floor']:.6f} +- {f['stderr']:.6f} | | | |")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
 
