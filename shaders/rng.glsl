@@ -68,19 +68,36 @@ uvec2 sequence_point(uint stream, uint batch, uint size, uint item) {
 // Point sample_index of a two-dimensional Sobol sequence, Owen-scrambled and shuffled by hashes of
 // (stream, seed, dim), after Burley 2020: a pixel's first 2^k samples of one dim form a
 // (0, k, 2)-net. Twin of cpu::rng::qmc2.
-vec2 qmc2(uint stream, uint sample_index, uint seed, uint dim) {
-    uvec4 h = pcg4d(uvec4(stream, seed, dim, QMC_KEY));
+vec2 sobol_pair(uvec4 h, uint sample_index) {
     uint index = bitfieldReverse(laine_karras(bitfieldReverse(sample_index), h.x));
     uint x = bitfieldReverse(laine_karras(index, h.y));
     uint y = bitfieldReverse(laine_karras(sobol_y_reversed(index), h.z));
     return vec2(rand_unit(x), rand_unit(y));
 }
 
-// The four numbers of a BSDF sample at dim: the lobe choices (x, w) hashed from (stream,
-// sample_index), the direction (y, z) point seq.y of qmc2's sequence seq.x; twin of
-// cpu::rng::bsdf_numbers.
+vec2 qmc2(uint stream, uint sample_index, uint seed, uint dim) {
+    return sobol_pair(pcg4d(uvec4(stream, seed, dim, QMC_KEY)), sample_index);
+}
+
+// Scrambles the choice's own copy of the sequence apart from the pair's shuffle.
+const uint CHOICE_KEY = 0x9e3779b9u;
+
+// qmc2's pair (xy) and a number for a choice among lobes (z): the first Sobol dimension again,
+// shuffled and scrambled by the hash's fourth word, so it pairs with neither number of the pair
+// yet is stratified over a pixel's samples. Twin of cpu::rng::qmc2_choice.
+vec3 qmc2_choice(uint stream, uint sample_index, uint seed, uint dim) {
+    uvec4 h = pcg4d(uvec4(stream, seed, dim, QMC_KEY));
+    uint index = bitfieldReverse(laine_karras(bitfieldReverse(sample_index), h.w));
+    uint choice = bitfieldReverse(laine_karras(index, h.w ^ CHOICE_KEY));
+    return vec3(sobol_pair(h, sample_index), rand_unit(choice));
+}
+
+// The four numbers of a BSDF sample at dim: the lobe choice x stratified along seq (qmc2_choice),
+// the delta-or-not choice w hashed from (stream, sample_index), the direction (y, z) point seq.y
+// of qmc2's sequence seq.x; twin of cpu::rng::bsdf_numbers.
 vec4 bsdf_numbers(uint stream, uint sample_index, uvec2 seq, uint seed, uint dim) {
     vec4 u = rand4(stream, sample_index, seed, dim);
-    u.yz = qmc2(seq.x, seq.y, seed, dim);
+    vec3 q = qmc2_choice(seq.x, seq.y, seed, dim);
+    u.xyz = vec3(q.z, q.xy);
     return u;
 }

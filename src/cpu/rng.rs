@@ -79,7 +79,10 @@ pub fn sequence_point(stream: u32, batch: u32, size: u32, item: u32) -> (u32, u3
 /// or BSDF sample) loses its error faster than independent numbers would lose it; other
 /// dimensions and other pixels see unrelated shuffles and scrambles, as independent numbers would.
 pub fn qmc2(stream: u32, sample_index: u32, seed: u32, dim: u32) -> [f32; 2] {
-    let h = pcg4d([stream, seed, dim, QMC_KEY]);
+    sobol_pair(&pcg4d([stream, seed, dim, QMC_KEY]), sample_index)
+}
+
+fn sobol_pair(h: &[u32; 4], sample_index: u32) -> [f32; 2] {
     // Owen scrambling acts on a fraction's bits most significant first: on reversed bits, the
     // Laine-Karras hash. The index is shuffled the same way (on its own bits reversed).
     let index = laine_karras(sample_index.reverse_bits(), h[0]).reverse_bits();
@@ -88,13 +91,28 @@ pub fn qmc2(stream: u32, sample_index: u32, seed: u32, dim: u32) -> [f32; 2] {
     [rand_unit(x), rand_unit(y)]
 }
 
-/// The four numbers of a BSDF sample at dimension `dim`: the choices between lobes (0 and 3)
-/// hashed from (`stream`, `sample`), the direction (1 and 2) point `seq.1` of `qmc2`'s sequence
-/// `seq.0`. Camera paths pass their own stream and sample as `seq`, photon and light paths their
+/// Scrambles the choice's own copy of the sequence apart from the pair's shuffle.
+const CHOICE_KEY: u32 = 0x9e37_79b9;
+
+/// `qmc2`'s pair, and a number for a choice among lobes: the first Sobol dimension again, its
+/// points shuffled and scrambled by the same hash's fourth word. Shuffled apart from the pair, it
+/// pairs with neither of its numbers (pbrt's padded one-dimensional samples), yet over a pixel's
+/// samples it is stratified: the share of samples that take a lobe (glass's reflection, a coat)
+/// is its probability to within one sample, where independent choices add their own noise.
+pub fn qmc2_choice(stream: u32, sample_index: u32, seed: u32, dim: u32) -> ([f32; 2], f32) {
+    let h = pcg4d([stream, seed, dim, QMC_KEY]);
+    let index = laine_karras(sample_index.reverse_bits(), h[3]).reverse_bits();
+    let choice = laine_karras(index, h[3] ^ CHOICE_KEY).reverse_bits();
+    (sobol_pair(&h, sample_index), rand_unit(choice))
+}
+
+/// The four numbers of a BSDF sample at dimension `dim`: the choice among lobes (0) stratified
+/// along `seq` (`qmc2_choice`), the choice between delta and other lobes (3) hashed from
+/// (`stream`, `sample`), the direction (1 and 2) point `seq.1` of `qmc2`'s sequence `seq.0`. Camera paths pass their own stream and sample as `seq`, photon and light paths their
 /// `sequence_point`.
 pub fn bsdf_numbers(stream: u32, sample: u32, seq: (u32, u32), seed: u32, dim: u32) -> [f32; 4] {
     let mut u = rand4(stream, sample, seed, dim);
-    [u[1], u[2]] = qmc2(seq.0, seq.1, seed, dim);
+    ([u[1], u[2]], u[0]) = qmc2_choice(seq.0, seq.1, seed, dim);
     u
 }
 
@@ -182,6 +200,30 @@ mod tests {
         // Unbiased: over the pixels the estimates average to the integral (within 4 sigma).
         let pixels = 2000.0;
         assert!((bias / pixels).abs() < 4.0 * (e_qmc / pixels).sqrt() / pixels.sqrt(), "bias {}", bias / pixels);
+    }
+
+    #[test]
+    fn a_choice_is_stratified_over_a_pixels_samples_and_apart_from_the_pair() {
+        // Glass's reflection at probability 0.07 over 64 samples: taken 4.48 times, so 4 or 5
+        // times in every pixel (independent choices: anywhere from 0 to about 11).
+        for stream in 0..500u32 {
+            let taken = (0..64u32).filter(|&i| qmc2_choice(stream, i, 9, 3).1 < 0.07).count();
+            assert!((4..=5).contains(&taken), "stream {stream}: {taken} of 64");
+            assert_eq!(qmc2_choice(stream, 17, 9, 3).0, qmc2(stream, 17, 9, 3));
+        }
+        // The choice pairs with neither number of the pair: no correlation over many pixels.
+        let n = 40_000u32;
+        for k in 0..2 {
+            let r = (0..n)
+                .map(|i| {
+                    let (pair, choice) = qmc2_choice(i / 16, i % 16, 5, 8);
+                    (pair[k] as f64 - 0.5) * (choice as f64 - 0.5)
+                })
+                .sum::<f64>()
+                / n as f64
+                * 12.0;
+            assert!(r.abs() < 4.0 / (n as f64).sqrt(), "correlation with the pair's number {k}: {r}");
+        }
     }
 
     #[test]
