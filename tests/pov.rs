@@ -1466,3 +1466,87 @@ fn a_checkers_pigments_are_mixed_by_the_checker() {
     let bozo = &textures[b["reflectance"]["texture"].as_str().unwrap()];
     assert_eq!(bozo["pattern"].as_str(), Some("bozo"));
 }
+
+/// `looks_like`: the object, moved to the light, becomes the light: a diffuse emitter of the
+/// object's colour whose radiance L = 4 I / A gives the point light's power 4 pi I over its area
+/// A (a uniform sphere then lights everything outside it as the point at its centre does).
+#[test]
+fn looks_like_objects_become_their_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let pi = std::f64::consts::PI;
+    // The light ends at <0, 1, 0>, 5 units from where the camera looks: I = pi d^2 = 25 pi.
+    let scene = |shape: &str| {
+        format!(
+            "camera {{ location <0, 1, -6> look_at <0, 1, 5> }}
+light_source {{ <0, 4, 0>, rgb <1, 0.5, 0.25> looks_like {{ {shape} }} translate <0, -3, 0> }}
+plane {{ y, 0 pigment {{ rgb 0.8 }} }}"
+        )
+    };
+    let (t, warnings) = translated(dir.path(), &scene("sphere { 0, 0.5 pigment { rgb <0.9, 0.9, 0.7> } }"));
+    assert!(t.get("lights").is_none(), "{t:?}");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    let ball = shapes.iter().find(|s| s["type"].as_str() == Some("sphere")).unwrap();
+    // Moved to the light's position, then with the light's transforms: <0, 4, 0> -> <0, 1, 0>.
+    let c = floats(&ball["center"]);
+    assert!(c[0].abs() < 1e-9 && (c[1] - 1.0).abs() < 1e-9 && c[2].abs() < 1e-9, "{c:?}");
+    let m = &t["materials"][ball["material"].as_str().unwrap()];
+    assert_eq!(m["type"].as_str(), Some("diffuse"));
+    assert_eq!(floats(&m["reflectance"])[2], 0.7 * 0.6);
+    // L = 4 I / (4 pi r^2) = I / (pi r^2); the area is integrated, within 1e-5.
+    let e = floats(&m["emission"]);
+    let want = 25.0 * pi / (pi * 0.25);
+    for (got, c) in e.iter().zip([1.0, 0.5, 0.25]) {
+        assert!((got / (want * c) - 1.0).abs() < 1e-5, "{e:?} vs {want}");
+    }
+
+    // A box's, a torus's and a closed cylinder's areas, and a union's (the sum).
+    let emission = |shape: &str| {
+        let (t, _) = translated(dir.path(), &scene(shape));
+        let ms = t["materials"].as_table().unwrap();
+        let m = ms.values().find(|m| m.get("emission").is_some()).unwrap();
+        floats(&m["emission"])[0]
+    };
+    let area = |shape: &str| 4.0 * 25.0 * pi / emission(shape);
+    let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-5;
+    assert!(close(area("box { -1, <1, 0.5, 2> scale <1, 2, 1> }"), 2.0 * (2.0 * 3.0 + 3.0 * 3.0 + 2.0 * 3.0)));
+    assert!(close(area("torus { 1, 0.25 }"), 4.0 * pi * pi * 0.25));
+    let cyl = 2.0 * pi * 0.5 * 2.0 + 2.0 * pi * 0.25;
+    assert!(close(area("cylinder { <0, -1, 0>, <0, 1, 0>, 0.5 scale 2 }"), 4.0 * cyl));
+    assert!(close(area("union { sphere { 0, 1 } sphere { x, 1 } }"), 8.0 * pi));
+
+    // Lit as by the plain point light: the floor below the light is as bright (within the
+    // noise of a small render) with the sphere as without it.
+    let floor = |text: &str| {
+        let s = load(dir.path(), text);
+        let image = render_small(&s);
+        let mut sum = 0.0;
+        for y in 22..30 {
+            for x in 0..40 {
+                sum += image.pixel(x, y)[0] as f64;
+            }
+        }
+        (sum / 320.0, image)
+    };
+    let (with, image) = floor(&scene("sphere { 0, 0.5 pigment { rgb 1 } }"));
+    look_at("looks_like", &image);
+    let (without, _) = floor(&scene("sphere { 0, 0 }").replace("looks_like { sphere { 0, 0 } }", ""));
+    println!("floor: {with:.4} with the looks_like sphere, {without:.4} with the point light");
+    assert!(with > 0.0 && (with / without - 1.0).abs() < 0.1, "{with} vs {without}");
+
+    // Where it cannot be the light: left out with a warning naming it; errors with positions.
+    let (t, w) = translated(dir.path(), &scene("superellipsoid { <0.5, 0.5> }"));
+    assert!(
+        t.get("lights").is_some() && w.iter().any(|w| w.contains("scene.pov:2:") && w.contains("area cannot")),
+        "{w:?}"
+    );
+    let (_, w) = translated(
+        dir.path(),
+        "camera { location <0, 1, -6> look_at <0, 1, 0> }\nlight_source { <0, 3, 0>, 1 spotlight looks_like { sphere { 0, 0.1 } } }",
+    );
+    assert!(w.iter().any(|w| w.contains("spotlight")), "{w:?}");
+    let e = error(dir.path(), "light_source { 0, 1 looks_like { sphere { 0, 1 } } looks_like { sphere { 0, 1 } } }");
+    assert!(e.contains("scene.pov:1:52") && e.contains("only one looks_like"), "{e}");
+    let e = error(dir.path(), "light_source { 0, 1 looks_like { sphere { 0, 1 } bogus } }");
+    assert!(e.contains("scene.pov:1:") && e.contains("bogus"), "{e}");
+}

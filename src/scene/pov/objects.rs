@@ -2640,6 +2640,7 @@ impl Parser {
             fade_distance: 0.0,
             fade_power: 0.0,
             shadowless: false,
+            looks_like: None,
             pos,
         };
         let (mut point_at, mut radius, mut falloff, mut tightness) = (DVec3::ZERO, 30.0, 45.0, 0.0);
@@ -2658,6 +2659,9 @@ impl Parser {
                 if let Some(a) = &mut l.area {
                     a.axis1 = m.transform_vector3(a.axis1);
                     a.axis2 = m.transform_vector3(a.axis2);
+                }
+                if let Some(o) = &mut l.looks_like {
+                    transform_obj(o, &m);
                 }
                 continue;
             }
@@ -2703,15 +2707,20 @@ impl Parser {
                 }
                 "fade_distance" => l.fade_distance = self.float()?,
                 "fade_power" => l.fade_power = self.float()?,
-                "looks_like" | "projected_through" | "photons" => {
-                    self.skip_block()?;
-                    if w == "looks_like" {
-                        self.warnings.push(format!(
-                            "{}: looks_like is not supported yet; the light is invisible",
-                            self.loc(tpos)
-                        ));
+                "looks_like" => {
+                    if l.looks_like.is_some() {
+                        return self.err(tpos, "only one looks_like is allowed in a light_source".into());
                     }
+                    // `looks_like { OBJECT modifiers }` reads as `object { ... }` does; POV-Ray
+                    // then moves the object to where the light is (parse.cpp, Parse_Light_Source).
+                    let mut o = self.object("object", tpos)?;
+                    if matches!(o.kind, ObjKind::Light(_)) {
+                        return self.err(tpos, "a light_source cannot look like another light_source".into());
+                    }
+                    transform_obj(&mut o, &DMat4::from_translation(l.position));
+                    l.looks_like = Some(Box::new(o));
                 }
+                "projected_through" | "photons" => self.skip_block()?,
                 "color" | "colour" | "rgb" => {
                     let c = self.word_colour(&w, tpos)?;
                     l.colour = [c[0], c[1], c[2]];
@@ -3059,6 +3068,9 @@ pub fn transform_obj(o: &mut Obj, m: &DMat4) {
             if let Some(a) = &mut l.area {
                 a.axis1 = m.transform_vector3(a.axis1);
                 a.axis2 = m.transform_vector3(a.axis2);
+            }
+            if let Some(shape) = &mut l.looks_like {
+                transform_obj(shape, m);
             }
         }
         _ => o.xform = *m * o.xform,
