@@ -1550,3 +1550,69 @@ plane {{ y, 0 pigment {{ rgb 0.8 }} }}"
     let e = error(dir.path(), "light_source { 0, 1 looks_like { sphere { 0, 1 } bogus } }");
     assert!(e.contains("scene.pov:1:") && e.contains("bogus"), "{e}");
 }
+
+/// Media in an invisible CSG container (`pigment { rgbt 1 } interior { media { ... } }` on a
+/// merge or difference): written as media boundaries, since a CSG object holds no media. A
+/// difference's holes take the container's medium as their exterior, so a shell of absorption
+/// 0.5 between radii 1 and 2 lets exp(-0.5 x 2) through its centre (the sphere it came from
+/// would let exp(-0.5 x 4) through).
+#[test]
+fn media_in_csg_containers_are_bounded_by_their_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let shell = "camera { location <0, 0, -10> look_at <0, 0, 0> angle 8 }
+background { rgb 1 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbt 1 } hollow interior { media { absorption 0.5 } } }";
+    let (t, warnings) = translated(dir.path(), shell);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 2, "{shapes:?}");
+    let md = shapes[0]["interior"].as_str().unwrap();
+    assert_eq!(floats(&t["media"][md]["sigma_a"]), [0.5; 3]);
+    assert_eq!(shapes[1]["interior"].as_str(), Some("vacuum"));
+    assert_eq!(shapes[1]["exterior"].as_str(), Some(md));
+    for s in shapes {
+        assert_eq!(t["materials"][s["material"].as_str().unwrap()]["type"].as_str(), Some("null"));
+    }
+    let s = load(dir.path(), shell);
+    let image = render_small(&s);
+    look_at("media_shell", &image);
+    let mut sum = 0.0;
+    for y in 9..21 {
+        for x in 14..26 {
+            sum += image.pixel(x, y).iter().sum::<f32>() as f64 / 3.0;
+        }
+    }
+    let centre = sum / 144.0;
+    // Free-flight sampling makes each sample 0 or 1: 144 pixels of a few samples each; the
+    // chords of the outer pixels are up to 1% longer than the centre's.
+    println!("through the shell's centre: {centre:.3} (exact {:.3})", (-1f64).exp());
+    assert!((centre - (-1f64).exp()).abs() < 0.1, "{centre}");
+
+    // A merge's parts and a union's each hold the medium; with an atmosphere, a hole holds it.
+    let (t, w) = translated(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> }
+background { rgb 1 }
+media { absorption 0.01 }
+merge { sphere { -x, 0.5 } sphere { x, 0.5 } pigment { rgbt 1 } hollow interior { media { scattering { 1, 0.2 } } } }
+union { sphere { -3*x, 0.5 } box { 3*x - 0.5, 3*x + 0.5 } pigment { rgbt 1 } hollow interior { media { scattering { 1, 0.2 } } } }
+difference { box { -1, 1 } sphere { 0, 0.5 } pigment { rgbt 1 } hollow interior { media { absorption 1 } } translate 5*y }",
+    );
+    assert!(w.is_empty(), "{w:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 6);
+    let atmosphere = t["atmosphere"]["medium"].as_str().unwrap();
+    let fog = shapes[0]["interior"].as_str().unwrap();
+    assert_ne!(fog, atmosphere);
+    assert!(shapes[..4].iter().all(|s| s["interior"].as_str() == Some(fog)), "{shapes:?}");
+    assert_eq!(shapes[5]["interior"].as_str(), Some(atmosphere));
+    assert_eq!(shapes[5]["exterior"].as_str(), shapes[4]["interior"].as_str());
+
+    // A visible container (glass) stays a CSG object, its media left out with a warning.
+    let (_, w) = translated(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> }\nlight_source { <0, 5, -5>, 1 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbf 0.9 } interior { ior 1.5 media { absorption 0.5 } } }",
+    );
+    assert!(w.iter().any(|w| w.contains("scene.pov:3:") && w.contains("media in this shape is left out")), "{w:?}");
+}

@@ -360,6 +360,10 @@ struct Emitter<'a> {
     plane_box: Option<f64>,
     /// The emission (radiance) of the `looks_like` object being written in its light's place.
     light_emission: Option<[f64; 3]>,
+    /// The atmosphere's medium, the medium outside every shape.
+    atmosphere: Option<String>,
+    /// Writing a hole of a media container (`media_csg`): its media are set there.
+    hole: bool,
 }
 
 /// The pattern that weighs a texture map's mixes, and its entries' values (sorted).
@@ -408,6 +412,8 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         newlines: 0,
         plane_box: None,
         light_emission: None,
+        atmosphere: None,
+        hole: false,
     };
     e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
     e.newlines = 1;
@@ -450,6 +456,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
             e.warnings
                 .push(format!("{at}: atmospheric media beside a fog is left out (the fog is Photonix's atmosphere)"));
         } else if let Some(name) = e.media(md, 1.0)? {
+            e.atmosphere = Some(name.clone());
             let mut t = Table::new();
             t.insert("medium".into(), T::String(name));
             e.entry("atmosphere", T::Table(t), md.pos)?;
@@ -578,6 +585,11 @@ impl Emitter<'_> {
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }
                 Ok(())
+            }
+            ObjKind::Csg { op: op @ (CsgOp::Merge | CsgOp::Difference), children }
+                if self.media_container(children, tex, int)? =>
+            {
+                self.media_csg(*op, children, tex, int.expect("media_container checked the interior"))
             }
             ObjKind::Patch { points } => {
                 // A Bezier patch maps to one under any affine map: its control points are baked.
@@ -742,7 +754,7 @@ impl Emitter<'_> {
         let glow_ok = !matches!(o.kind, ObjKind::Plane { .. });
         let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
-        if let Some(md) = int.and_then(|i| i.media.first()) {
+        if let Some(md) = int.and_then(|i| i.media.first()).filter(|_| !self.hole) {
             self.interior_media(o, md, int.map_or(0, |i| i.media.len()), &mut s)?;
         }
         Ok(s)
@@ -773,6 +785,72 @@ impl Emitter<'_> {
         let size = if lo.x <= hi.x { (hi - lo).length() } else { 1.0 };
         if let Some(name) = self.media(md, size)? {
             s.insert("interior".into(), T::String(name));
+        }
+        Ok(())
+    }
+
+    /// Whether a merge or difference is an invisible container of media (`pigment { rgbt 1 }`,
+    /// ior 1, `interior { media { ... } }`) whose parts are closed primitives: then
+    /// `media_csg` writes it as nested media boundaries instead of a CSG object, which cannot
+    /// hold media (docs/limits.md).
+    fn media_container(&mut self, children: &[Obj], tex: Option<&Vec<Tex>>, int: Option<&Interior>) -> Result<bool> {
+        if int.is_none_or(|i| i.media.is_empty()) || children.is_empty() {
+            return Ok(false);
+        }
+        for c in children {
+            let closed = match &c.kind {
+                ObjKind::Sphere { .. }
+                | ObjKind::Box { .. }
+                | ObjKind::Torus { .. }
+                | ObjKind::Superellipsoid { .. }
+                | ObjKind::Plane { .. } => true,
+                ObjKind::Cylinder { open, .. } | ObjKind::Cone { open, .. } => !open,
+                _ => false,
+            };
+            if !closed || c.inverse {
+                return Ok(false);
+            }
+            let ctex = c.tex.as_ref().or(tex);
+            let cint = c.interior.as_ref().or(int);
+            let m = self.material(ctex, cint, c.pos, false)?;
+            if !self.material_info.get(&m).is_some_and(|i| i.1) {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// An invisible container of media made by CSG, as media boundaries (docs/pov-ray.md,
+    /// "Media in CSG"): a merge's parts each hold the medium; a difference's first part holds
+    /// it and each part taken away is a hole in it, its inside the medium outside (the
+    /// atmosphere or vacuum) and its outside the container's medium. Exact where the parts of
+    /// a merge do not overlap and the holes lie inside the first part without overlapping.
+    fn media_csg(&mut self, op: CsgOp, children: &[Obj], tex: Option<&Vec<Tex>>, int: &Interior) -> Result<()> {
+        let mut medium: Option<T> = None;
+        for (i, c) in children.iter().enumerate() {
+            let ctex = c.tex.as_ref().or(tex);
+            let cint = c.interior.as_ref().or(Some(int));
+            let hole = op == CsgOp::Difference && i > 0;
+            if hole {
+                let Some(inside) = medium.clone() else {
+                    // The container's medium was left out (it does nothing): so are the holes.
+                    break;
+                };
+                self.hole = true;
+                let s = self.shape(c, ctex, cint);
+                self.hole = false;
+                let mut s = s?;
+                let outside = self.atmosphere.clone().unwrap_or_else(|| "vacuum".into());
+                s.insert("interior".into(), T::String(outside));
+                s.insert("exterior".into(), inside);
+                self.entry("shapes", T::Array(vec![T::Table(s)]), c.pos)?;
+            } else {
+                let s = self.shape(c, ctex, cint)?;
+                if i == 0 {
+                    medium = s.get("interior").cloned();
+                }
+                self.entry("shapes", T::Array(vec![T::Table(s)]), c.pos)?;
+            }
         }
         Ok(())
     }
