@@ -1616,3 +1616,71 @@ difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbf 0.9 } interior { ior
     );
     assert!(w.iter().any(|w| w.contains("scene.pov:3:") && w.contains("media in this shape is left out")), "{w:?}");
 }
+
+/// Per-triangle textures: a mesh's `triangle { ... texture { T } }` and a mesh2's
+/// `texture_list` with texture indices after `face_indices` give each triangle its texture;
+/// triangles without one take the mesh's.
+#[test]
+fn mesh_triangles_keep_their_own_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let red = "texture { pigment { rgb <1, 0, 0> } }";
+    let blue = "texture { pigment { rgb <0, 0, 1> } }";
+    let mesh = format!(
+        "{CAMERA}mesh {{
+  triangle {{ <0, 0, 0>, <1, 0, 0>, <0, 1, 0> {red} }}
+  triangle {{ <1, 0, 0>, <1, 1, 0>, <0, 1, 0> {blue} }}
+  triangle {{ <2, 0, 0>, <3, 0, 0>, <2, 1, 0> }}
+  smooth_triangle {{ <0, 2, 0>, y, <1, 2, 0>, y, <0, 3, 0>, y {red} }}
+  pigment {{ rgb <0, 1, 0> }}
+}}"
+    );
+    let mesh2 = format!(
+        "{CAMERA}mesh2 {{
+  vertex_vectors {{ 4, <0, 0, 0>, <1, 0, 0>, <1, 1, 0>, <0, 1, 0> }}
+  texture_list {{ 2, {red} {blue} }}
+  face_indices {{ 3, <0, 1, 3>, 0, <1, 2, 3>, 1, 1, 0, <0, 2, 3> }}
+  pigment {{ rgb <0, 1, 0> }}
+}}"
+    );
+    // Each triangle's reflectance (green, blue and red shares of the diffuse 0.6), in order of
+    // the triangles' lowest corner.
+    let colours = |text: &str| {
+        let s = load(dir.path(), text);
+        let mut out: Vec<(Vec3, Vec3)> = s
+            .shapes
+            .iter()
+            .map(|sh| {
+                let m = &s.materials[sh.material as usize];
+                let c = match &m.kind {
+                    photonix::scene::MaterialKind::Diffuse { reflectance } => reflectance.value,
+                    other => panic!("{other:?}"),
+                };
+                (sh.geometry.bounds().0, c / 0.6)
+            })
+            .collect();
+        out.sort_by(|a, b| (a.0.y, a.0.x).partial_cmp(&(b.0.y, b.0.x)).unwrap());
+        out.into_iter().map(|(_, c)| c).collect::<Vec<_>>()
+    };
+    let (r, g, b) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let got = colours(&mesh);
+    let want = [r, b, g, r];
+    assert!(got.iter().zip(want).all(|(a, w)| a.abs_diff_eq(w, 1e-6)) && got.len() == 4, "{got:?}");
+    // mesh2: the second face's indices 1, 1, 0 take the first (POV-Ray blends the three);
+    // the third face has none.
+    let got = colours(&mesh2);
+    assert_eq!(got.len(), 3);
+    let sorted: Vec<Vec3> = got.clone();
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(r, 1e-6)).count() == 1, "{got:?}");
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(b, 1e-6)).count() == 1, "{got:?}");
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(g, 1e-6)).count() == 1, "{got:?}");
+    // The same mesh moved and given a texture afterwards: the triangles' textures stay theirs.
+    let moved = mesh.replace("pigment { rgb <0, 1, 0> }\n}", "pigment { rgb <0, 1, 0> }\ntranslate <0, 0, 1> }");
+    assert_eq!(colours(&moved), colours(&mesh));
+
+    // A texture index past the list: an error at the index.
+    let e = error(
+        dir.path(),
+        &format!("mesh2 {{ vertex_vectors {{ 3, 0, x, y }} texture_list {{ 1, {red} }} face_indices {{ 1, <0, 1, 2>, 3 }} }}"),
+    );
+    assert!(e.contains("scene.pov:1:") && e.contains("texture index 3 is out of range"), "{e}");
+}
