@@ -1684,3 +1684,36 @@ fn mesh_triangles_keep_their_own_textures() {
     );
     assert!(e.contains("scene.pov:1:") && e.contains("texture index 3 is out of range"), "{e}");
 }
+
+/// Directives inside a declared value (`advanced/whiltile`): `#declare X = #ifdef (A) value
+/// #else value #end`, with either branch taken, `#if` and `#switch`, objects and floats.
+#[test]
+fn declared_values_may_be_chosen_by_directives() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |flag: &str| {
+        format!(
+            "{CAMERA}{flag}
+#declare Shape =
+#ifdef (SIMPLE)
+  sphere {{ 0, 1 }}
+#else
+  box {{ -1, 1 }}
+#end
+#declare R = #if (1 > 2) 5 #else 0.25 #end;
+#declare K = 2;
+#declare H = #switch (K) #case (1) 10 #break #case (2) 20 #break #else 30 #end
+object {{ Shape scale R translate H * y pigment {{ rgb 1 }} }}
+"
+        )
+    };
+    for (flag, spheres) in [("#declare SIMPLE = 1;", 1), ("", 0)] {
+        let s = load(dir.path(), &scene(flag));
+        // (The box is held as 12 triangles.)
+        let b = total_bounds(&s);
+        assert!(b.0.abs_diff_eq(Vec3::new(-0.25, 19.75, -0.25), 1e-5), "{b:?}");
+        assert_eq!(s.spheres().count(), spheres, "{flag}");
+    }
+    // A condition that is not a number is an error at its place.
+    let e = error(dir.path(), "#declare X = #if (\"a\") 1 #else 2 #end");
+    assert!(e.contains("scene.pov:1:18") && e.contains("expected a float"), "{e}");
+}
