@@ -1717,3 +1717,39 @@ object {{ Shape scale R translate H * y pigment {{ rgb 1 }} }}
     let e = error(dir.path(), "#declare X = #if (\"a\") 1 #else 2 #end");
     assert!(e.contains("scene.pov:1:18") && e.contains("expected a float"), "{e}");
 }
+
+/// A disc inside intersection, difference or merge cuts as its plane (POV-Ray's disc is inside
+/// on the side opposite its normal, whatever its radius): `desk.pov`'s paperweight.
+#[test]
+fn discs_in_csg_cut_as_their_planes() {
+    let dir = tempfile::tempdir().unwrap();
+    let with = |cut: &str| {
+        let (t, _) = translated(
+            dir.path(),
+            &format!(
+                "{CAMERA}intersection {{ sphere {{ <0, -5, 0>, 10 }} {cut} translate <0, -1, 0> pigment {{ rgb 1 }} }}"
+            ),
+        );
+        t["shapes"].clone()
+    };
+    assert_eq!(with("disc { <0, 0.5, 0>, -2*y, 10.1 }"), with("plane { -y, -0.5 }"));
+    assert_eq!(with("disc { <3, 0.5, 1>, -y, 10.1, 2 }"), with("plane { -y, -0.5 }"));
+}
+
+/// A medium in a scene with no light (a glowing media shell lit by nothing, as
+/// `camera/mesh_camera/baking_demo` holds once its CSG media are kept): the light shafts'
+/// sampling has no light to pick and is skipped; the glow is still seen.
+#[test]
+fn glowing_media_render_without_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> angle 30 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbt 1 } hollow interior { media { emission 1 } } }",
+    );
+    let image = render_small(&s);
+    // Few of the camera rays collide in this thin glow (its emission is estimated at
+    // collisions): the image's sum, not one pixel.
+    let sum: f32 = (0..30).flat_map(|y| (0..40).map(move |x| (x, y))).map(|(x, y)| image.pixel(x, y)[0]).sum();
+    assert!(sum > 0.0, "{sum}");
+}

@@ -136,6 +136,33 @@ pub fn surface_area(o: &Obj) -> Option<f64> {
     })
 }
 
+/// Whether a CSG object's parts hold a disc.
+fn holds_disc(o: &Obj) -> bool {
+    match &o.kind {
+        ObjKind::Disc { .. } => true,
+        ObjKind::Csg { children, .. } => children.iter().any(holds_disc),
+        _ => false,
+    }
+}
+
+/// The parts of an intersection, difference or merge with each disc as its plane: POV-Ray's
+/// disc is inside on the side opposite its normal, its radius bounding only its surface
+/// (disc.cpp, `Disc::Inside`), so within CSG it cuts as `plane { normal, normal . center }`
+/// does wherever the disc covers the cut (docs/pov-ray.md).
+fn discs_as_planes(o: &Obj) -> Obj {
+    let kind = match &o.kind {
+        ObjKind::Disc { center, normal, .. } => {
+            let n = normal.normalize_or_zero();
+            ObjKind::Plane { normal: n, offset: n.dot(*center) }
+        }
+        ObjKind::Csg { op, children } => {
+            ObjKind::Csg { op: *op, children: children.iter().map(discs_as_planes).collect() }
+        }
+        other => other.clone(),
+    };
+    Obj { kind, ..o.clone() }
+}
+
 /// The first texture in an object's parts.
 fn first_tex(o: &Obj) -> Option<&Vec<Tex>> {
     if o.tex.is_some() {
@@ -534,6 +561,9 @@ impl Emitter<'_> {
     }
 
     fn object(&mut self, o: &Obj, inherited: Option<&Vec<Tex>>, interior: Option<&Interior>) -> Result<()> {
+        if matches!(&o.kind, ObjKind::Csg { op, .. } if *op != CsgOp::Union) && holds_disc(o) {
+            return self.object(&discs_as_planes(o), inherited, interior);
+        }
         let tex = o.tex.as_ref().or(inherited);
         let int = o.interior.as_ref().or(interior);
         if super::implicit::needs_mesher(o) {
