@@ -153,7 +153,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                 // samples ignore the density, and in sparse smoke most would land in clear
                 // air while the rest carry all the light (speckles); there the free flight's
                 // scattering point, placed by the density, samples these lights too.
-                if (ray == RAY_CAMERA && part == 0u && !shaft_done && medium_at(medium).density == NO_TEXTURE) {
+                // (A scene of no lights, or whose lights all give no power, has nothing to pick.)
+                if (ray == RAY_CAMERA && part == 0u && !shaft_done && frame.light_count > 0u && medium_at(medium).density == NO_TEXTURE) {
                     vec4 ue = rand4(stream, sample_index, frame.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     Light l = light_at(pick_light(ue.x, false));
                     // A spot's samples stay in its cone, where its light is.

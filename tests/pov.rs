@@ -1466,3 +1466,290 @@ fn a_checkers_pigments_are_mixed_by_the_checker() {
     let bozo = &textures[b["reflectance"]["texture"].as_str().unwrap()];
     assert_eq!(bozo["pattern"].as_str(), Some("bozo"));
 }
+
+/// `looks_like`: the object, moved to the light, becomes the light: a diffuse emitter of the
+/// object's colour whose radiance L = 4 I / A gives the point light's power 4 pi I over its area
+/// A (a uniform sphere then lights everything outside it as the point at its centre does).
+#[test]
+fn looks_like_objects_become_their_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let pi = std::f64::consts::PI;
+    // The light ends at <0, 1, 0>, 5 units from where the camera looks: I = pi d^2 = 25 pi.
+    let scene = |shape: &str| {
+        format!(
+            "camera {{ location <0, 1, -6> look_at <0, 1, 5> }}
+light_source {{ <0, 4, 0>, rgb <1, 0.5, 0.25> looks_like {{ {shape} }} translate <0, -3, 0> }}
+plane {{ y, 0 pigment {{ rgb 0.8 }} }}"
+        )
+    };
+    let (t, warnings) = translated(dir.path(), &scene("sphere { 0, 0.5 pigment { rgb <0.9, 0.9, 0.7> } }"));
+    assert!(t.get("lights").is_none(), "{t:?}");
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    let ball = shapes.iter().find(|s| s["type"].as_str() == Some("sphere")).unwrap();
+    // Moved to the light's position, then with the light's transforms: <0, 4, 0> -> <0, 1, 0>.
+    let c = floats(&ball["center"]);
+    assert!(c[0].abs() < 1e-9 && (c[1] - 1.0).abs() < 1e-9 && c[2].abs() < 1e-9, "{c:?}");
+    let m = &t["materials"][ball["material"].as_str().unwrap()];
+    assert_eq!(m["type"].as_str(), Some("diffuse"));
+    assert_eq!(floats(&m["reflectance"])[2], 0.7 * 0.6);
+    // L = 4 I / (4 pi r^2) = I / (pi r^2); the area is integrated, within 1e-5.
+    let e = floats(&m["emission"]);
+    let want = 25.0 * pi / (pi * 0.25);
+    for (got, c) in e.iter().zip([1.0, 0.5, 0.25]) {
+        assert!((got / (want * c) - 1.0).abs() < 1e-5, "{e:?} vs {want}");
+    }
+
+    // A box's, a torus's and a closed cylinder's areas, and a union's (the sum).
+    let emission = |shape: &str| {
+        let (t, _) = translated(dir.path(), &scene(shape));
+        let ms = t["materials"].as_table().unwrap();
+        let m = ms.values().find(|m| m.get("emission").is_some()).unwrap();
+        floats(&m["emission"])[0]
+    };
+    let area = |shape: &str| 4.0 * 25.0 * pi / emission(shape);
+    let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-5;
+    assert!(close(area("box { -1, <1, 0.5, 2> scale <1, 2, 1> }"), 2.0 * (2.0 * 3.0 + 3.0 * 3.0 + 2.0 * 3.0)));
+    assert!(close(area("torus { 1, 0.25 }"), 4.0 * pi * pi * 0.25));
+    let cyl = 2.0 * pi * 0.5 * 2.0 + 2.0 * pi * 0.25;
+    assert!(close(area("cylinder { <0, -1, 0>, <0, 1, 0>, 0.5 scale 2 }"), 4.0 * cyl));
+    assert!(close(area("union { sphere { 0, 1 } sphere { x, 1 } }"), 8.0 * pi));
+
+    // Lit as by the plain point light: the floor below the light is as bright (within the
+    // noise of a small render) with the sphere as without it.
+    let floor = |text: &str| {
+        let s = load(dir.path(), text);
+        let image = render_small(&s);
+        let mut sum = 0.0;
+        for y in 22..30 {
+            for x in 0..40 {
+                sum += image.pixel(x, y)[0] as f64;
+            }
+        }
+        (sum / 320.0, image)
+    };
+    let (with, image) = floor(&scene("sphere { 0, 0.5 pigment { rgb 1 } }"));
+    look_at("looks_like", &image);
+    let (without, _) = floor(&scene("sphere { 0, 0 }").replace("looks_like { sphere { 0, 0 } }", ""));
+    println!("floor: {with:.4} with the looks_like sphere, {without:.4} with the point light");
+    assert!(with > 0.0 && (with / without - 1.0).abs() < 0.1, "{with} vs {without}");
+
+    // Where it cannot be the light: left out with a warning naming it; errors with positions.
+    let (t, w) = translated(dir.path(), &scene("superellipsoid { <0.5, 0.5> }"));
+    assert!(
+        t.get("lights").is_some() && w.iter().any(|w| w.contains("scene.pov:2:") && w.contains("area cannot")),
+        "{w:?}"
+    );
+    let (_, w) = translated(
+        dir.path(),
+        "camera { location <0, 1, -6> look_at <0, 1, 0> }\nlight_source { <0, 3, 0>, 1 spotlight looks_like { sphere { 0, 0.1 } } }",
+    );
+    assert!(w.iter().any(|w| w.contains("spotlight")), "{w:?}");
+    let e = error(dir.path(), "light_source { 0, 1 looks_like { sphere { 0, 1 } } looks_like { sphere { 0, 1 } } }");
+    assert!(e.contains("scene.pov:1:52") && e.contains("only one looks_like"), "{e}");
+    let e = error(dir.path(), "light_source { 0, 1 looks_like { sphere { 0, 1 } bogus } }");
+    assert!(e.contains("scene.pov:1:") && e.contains("bogus"), "{e}");
+}
+
+/// Media in an invisible CSG container (`pigment { rgbt 1 } interior { media { ... } }` on a
+/// merge or difference): written as media boundaries, since a CSG object holds no media. A
+/// difference's holes take the container's medium as their exterior, so a shell of absorption
+/// 0.5 between radii 1 and 2 lets exp(-0.5 x 2) through its centre (the sphere it came from
+/// would let exp(-0.5 x 4) through).
+#[test]
+fn media_in_csg_containers_are_bounded_by_their_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let shell = "camera { location <0, 0, -10> look_at <0, 0, 0> angle 8 }
+background { rgb 1 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbt 1 } hollow interior { media { absorption 0.5 } } }";
+    let (t, warnings) = translated(dir.path(), shell);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 2, "{shapes:?}");
+    let md = shapes[0]["interior"].as_str().unwrap();
+    assert_eq!(floats(&t["media"][md]["sigma_a"]), [0.5; 3]);
+    assert_eq!(shapes[1]["interior"].as_str(), Some("vacuum"));
+    assert_eq!(shapes[1]["exterior"].as_str(), Some(md));
+    for s in shapes {
+        assert_eq!(t["materials"][s["material"].as_str().unwrap()]["type"].as_str(), Some("null"));
+    }
+    let s = load(dir.path(), shell);
+    let image = render_small(&s);
+    look_at("media_shell", &image);
+    let mut sum = 0.0;
+    for y in 9..21 {
+        for x in 14..26 {
+            sum += image.pixel(x, y).iter().sum::<f32>() as f64 / 3.0;
+        }
+    }
+    let centre = sum / 144.0;
+    // Free-flight sampling makes each sample 0 or 1: 144 pixels of a few samples each; the
+    // chords of the outer pixels are up to 1% longer than the centre's.
+    println!("through the shell's centre: {centre:.3} (exact {:.3})", (-1f64).exp());
+    assert!((centre - (-1f64).exp()).abs() < 0.1, "{centre}");
+
+    // A merge's parts and a union's each hold the medium; with an atmosphere, a hole holds it.
+    let (t, w) = translated(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> }
+background { rgb 1 }
+media { absorption 0.01 }
+merge { sphere { -x, 0.5 } sphere { x, 0.5 } pigment { rgbt 1 } hollow interior { media { scattering { 1, 0.2 } } } }
+union { sphere { -3*x, 0.5 } box { 3*x - 0.5, 3*x + 0.5 } pigment { rgbt 1 } hollow interior { media { scattering { 1, 0.2 } } } }
+difference { box { -1, 1 } sphere { 0, 0.5 } pigment { rgbt 1 } hollow interior { media { absorption 1 } } translate 5*y }",
+    );
+    assert!(w.is_empty(), "{w:?}");
+    let shapes = t["shapes"].as_array().unwrap();
+    assert_eq!(shapes.len(), 6);
+    let atmosphere = t["atmosphere"]["medium"].as_str().unwrap();
+    let fog = shapes[0]["interior"].as_str().unwrap();
+    assert_ne!(fog, atmosphere);
+    assert!(shapes[..4].iter().all(|s| s["interior"].as_str() == Some(fog)), "{shapes:?}");
+    assert_eq!(shapes[5]["interior"].as_str(), Some(atmosphere));
+    assert_eq!(shapes[5]["exterior"].as_str(), shapes[4]["interior"].as_str());
+
+    // A visible container (glass) stays a CSG object, its media left out with a warning.
+    let (_, w) = translated(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> }\nlight_source { <0, 5, -5>, 1 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbf 0.9 } interior { ior 1.5 media { absorption 0.5 } } }",
+    );
+    assert!(w.iter().any(|w| w.contains("scene.pov:3:") && w.contains("media in this shape is left out")), "{w:?}");
+}
+
+/// Per-triangle textures: a mesh's `triangle { ... texture { T } }` and a mesh2's
+/// `texture_list` with texture indices after `face_indices` give each triangle its texture;
+/// triangles without one take the mesh's.
+#[test]
+fn mesh_triangles_keep_their_own_textures() {
+    let dir = tempfile::tempdir().unwrap();
+    let red = "texture { pigment { rgb <1, 0, 0> } }";
+    let blue = "texture { pigment { rgb <0, 0, 1> } }";
+    let mesh = format!(
+        "{CAMERA}mesh {{
+  triangle {{ <0, 0, 0>, <1, 0, 0>, <0, 1, 0> {red} }}
+  triangle {{ <1, 0, 0>, <1, 1, 0>, <0, 1, 0> {blue} }}
+  triangle {{ <2, 0, 0>, <3, 0, 0>, <2, 1, 0> }}
+  smooth_triangle {{ <0, 2, 0>, y, <1, 2, 0>, y, <0, 3, 0>, y {red} }}
+  pigment {{ rgb <0, 1, 0> }}
+}}"
+    );
+    let mesh2 = format!(
+        "{CAMERA}mesh2 {{
+  vertex_vectors {{ 4, <0, 0, 0>, <1, 0, 0>, <1, 1, 0>, <0, 1, 0> }}
+  texture_list {{ 2, {red} {blue} }}
+  face_indices {{ 3, <0, 1, 3>, 0, <1, 2, 3>, 1, 1, 0, <0, 2, 3> }}
+  pigment {{ rgb <0, 1, 0> }}
+}}"
+    );
+    // Each triangle's reflectance (green, blue and red shares of the diffuse 0.6), in order of
+    // the triangles' lowest corner.
+    let colours = |text: &str| {
+        let s = load(dir.path(), text);
+        let mut out: Vec<(Vec3, Vec3)> = s
+            .shapes
+            .iter()
+            .map(|sh| {
+                let m = &s.materials[sh.material as usize];
+                let c = match &m.kind {
+                    photonix::scene::MaterialKind::Diffuse { reflectance } => reflectance.value,
+                    other => panic!("{other:?}"),
+                };
+                (sh.geometry.bounds().0, c / 0.6)
+            })
+            .collect();
+        out.sort_by(|a, b| (a.0.y, a.0.x).partial_cmp(&(b.0.y, b.0.x)).unwrap());
+        out.into_iter().map(|(_, c)| c).collect::<Vec<_>>()
+    };
+    let (r, g, b) = (Vec3::X, Vec3::Y, Vec3::Z);
+    let got = colours(&mesh);
+    let want = [r, b, g, r];
+    assert!(got.iter().zip(want).all(|(a, w)| a.abs_diff_eq(w, 1e-6)) && got.len() == 4, "{got:?}");
+    // mesh2: the second face's indices 1, 1, 0 take the first (POV-Ray blends the three);
+    // the third face has none.
+    let got = colours(&mesh2);
+    assert_eq!(got.len(), 3);
+    let sorted: Vec<Vec3> = got.clone();
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(r, 1e-6)).count() == 1, "{got:?}");
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(b, 1e-6)).count() == 1, "{got:?}");
+    assert!(sorted.iter().filter(|c| c.abs_diff_eq(g, 1e-6)).count() == 1, "{got:?}");
+    // The same mesh moved and given a texture afterwards: the triangles' textures stay theirs.
+    let moved = mesh.replace("pigment { rgb <0, 1, 0> }\n}", "pigment { rgb <0, 1, 0> }\ntranslate <0, 0, 1> }");
+    assert_eq!(colours(&moved), colours(&mesh));
+
+    // A texture index past the list: an error at the index.
+    let e = error(
+        dir.path(),
+        &format!("mesh2 {{ vertex_vectors {{ 3, 0, x, y }} texture_list {{ 1, {red} }} face_indices {{ 1, <0, 1, 2>, 3 }} }}"),
+    );
+    assert!(e.contains("scene.pov:1:") && e.contains("texture index 3 is out of range"), "{e}");
+}
+
+/// Directives inside a declared value (`advanced/whiltile`): `#declare X = #ifdef (A) value
+/// #else value #end`, with either branch taken, `#if` and `#switch`, objects and floats.
+#[test]
+fn declared_values_may_be_chosen_by_directives() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |flag: &str| {
+        format!(
+            "{CAMERA}{flag}
+#declare Shape =
+#ifdef (SIMPLE)
+  sphere {{ 0, 1 }}
+#else
+  box {{ -1, 1 }}
+#end
+#declare R = #if (1 > 2) 5 #else 0.25 #end;
+#declare K = 2;
+#declare H = #switch (K) #case (1) 10 #break #case (2) 20 #break #else 30 #end
+object {{ Shape scale R translate H * y pigment {{ rgb 1 }} }}
+"
+        )
+    };
+    for (flag, spheres) in [("#declare SIMPLE = 1;", 1), ("", 0)] {
+        let s = load(dir.path(), &scene(flag));
+        // (The box is held as 12 triangles.)
+        let b = total_bounds(&s);
+        assert!(b.0.abs_diff_eq(Vec3::new(-0.25, 19.75, -0.25), 1e-5), "{b:?}");
+        assert_eq!(s.spheres().count(), spheres, "{flag}");
+    }
+    // A condition that is not a number is an error at its place.
+    let e = error(dir.path(), "#declare X = #if (\"a\") 1 #else 2 #end");
+    assert!(e.contains("scene.pov:1:18") && e.contains("expected a float"), "{e}");
+}
+
+/// A disc inside intersection, difference or merge cuts as its plane (POV-Ray's disc is inside
+/// on the side opposite its normal, whatever its radius): `desk.pov`'s paperweight.
+#[test]
+fn discs_in_csg_cut_as_their_planes() {
+    let dir = tempfile::tempdir().unwrap();
+    let with = |cut: &str| {
+        let (t, _) = translated(
+            dir.path(),
+            &format!(
+                "{CAMERA}intersection {{ sphere {{ <0, -5, 0>, 10 }} {cut} translate <0, -1, 0> pigment {{ rgb 1 }} }}"
+            ),
+        );
+        t["shapes"].clone()
+    };
+    assert_eq!(with("disc { <0, 0.5, 0>, -2*y, 10.1 }"), with("plane { -y, -0.5 }"));
+    assert_eq!(with("disc { <3, 0.5, 1>, -y, 10.1, 2 }"), with("plane { -y, -0.5 }"));
+}
+
+/// A medium in a scene with no light (a glowing media shell lit by nothing, as
+/// `camera/mesh_camera/baking_demo` holds once its CSG media are kept): the light shafts'
+/// sampling has no light to pick and is skipped; the glow is still seen.
+#[test]
+fn glowing_media_render_without_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load(
+        dir.path(),
+        "camera { location <0, 0, -10> look_at <0, 0, 0> angle 30 }
+difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbt 1 } hollow interior { media { emission 1 } } }",
+    );
+    let image = render_small(&s);
+    // Few of the camera rays collide in this thin glow (its emission is estimated at
+    // collisions): the image's sum, not one pixel.
+    let sum: f32 = (0..30).flat_map(|y| (0..40).map(move |x| (x, y))).map(|(x, y)| image.pixel(x, y)[0]).sum();
+    assert!(sum > 0.0, "{sum}");
+}

@@ -14,7 +14,7 @@ mkdir -p "$OUT"
 for s in ${SCENES:-interior/caustic2 radiosity/radiosity2 camera/focalblur lights/arealit1 interior/media/media1 \
          interior/fog_std lights/glassthing advanced/woodbox textures/patterns/crackle1 objects/lathe1a \
          objects/quartic/torus objects/blob incdemo/circletext advanced/sunsethf interior/skysph1 \
-         textures/pigments/txtrmap textures/patterns/radial textures/pigments/pigmap}; do
+         textures/pigments/txtrmap textures/patterns/radial textures/pigments/pigmap lights/shadows}; do
     n=$(basename "$s")
     # POV-Ray: its own defaults at this size, antialiasing off, no display.
     (cd "$(dirname "$EX/$s.pov")" && timeout 120 povray +I"$n.pov" +O"$TMP/$n-pov.png" +W160 +H120 -D -GA +FN \

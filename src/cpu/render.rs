@@ -153,7 +153,13 @@ pub fn radiance(
                 // leaves these lights out): the sample's shadow ray runs first, then the segment
                 // is traced again and goes on. Not in heterogeneous media, where the free
                 // flight's scattering point samples these lights (see the kernel).
-                if ray == Ray::Camera && part == 0 && !shaft_done && s.media[medium as usize].density == NO_TEXTURE {
+                // (A scene of no lights, or whose lights all give no power, has nothing to pick.)
+                if ray == Ray::Camera
+                    && part == 0
+                    && !shaft_done
+                    && f.light_count > 0
+                    && s.media[medium as usize].density == NO_TEXTURE
+                {
                     let ue = rand4(stream, sample, f.seed, RNG_EQUIANGULAR_DOMAIN + segment);
                     let l = &s.lights[pick_light(s, ue[0], false) as usize];
                     // A spot's samples stay in its cone, where its light is.

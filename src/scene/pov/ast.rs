@@ -287,6 +287,9 @@ pub struct Light {
     pub fade_distance: f64,
     pub fade_power: f64,
     pub shadowless: bool,
+    /// `looks_like { OBJECT }`: the object, already moved to the light (POV-Ray translates it by
+    /// the light's position when it is read; later transforms of the light move both).
+    pub looks_like: Option<Box<Obj>>,
     pub pos: Pos,
 }
 

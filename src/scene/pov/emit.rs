@@ -39,6 +39,130 @@ fn vec3(v: DVec3) -> T {
 /// keeps the TOML of a shape of thousands of triangles short.
 /// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
 /// out; empty, min > max, when there are none): each part's own box through its transform.
+/// The area of a surface given in parameters (u, v) in [0, 1]^2, through the affine map `m`:
+/// the midpoint rule on a 256 x 256 grid of |dp/du x dp/dv|, the derivatives by central
+/// differences of the mapped points (the integrands here are smooth and periodic or linear,
+/// so the rule is within 1e-5 of the closed forms; tested).
+fn parametric_area(m: &DMat4, f: impl Fn(f64, f64) -> DVec3) -> f64 {
+    const N: usize = 256;
+    const H: f64 = 1e-5;
+    let p = |u: f64, v: f64| m.transform_point3(f(u, v));
+    let mut sum = 0.0;
+    for i in 0..N {
+        for j in 0..N {
+            let (u, v) = ((i as f64 + 0.5) / N as f64, (j as f64 + 0.5) / N as f64);
+            let du = (p(u + H, v) - p(u - H, v)) / (2.0 * H);
+            let dv = (p(u, v + H) - p(u, v - H)) / (2.0 * H);
+            sum += du.cross(dv).length();
+        }
+    }
+    sum / (N * N) as f64
+}
+
+/// Two unit vectors across an axis.
+fn across(axis: DVec3) -> (DVec3, DVec3) {
+    let a = axis.normalize_or_zero();
+    let e1 = a.any_orthonormal_vector();
+    (e1, a.cross(e1))
+}
+
+/// The world area of an object's surface (POV-Ray's coordinates, every transform applied), for
+/// the shapes a `looks_like` emitter can be: sphere, box, cylinder, cone, disc, torus,
+/// triangles, and unions of them (the sum: hidden parts of overlapping children count). `None`
+/// for the rest (superellipsoids, patches, equations, the other CSG operations).
+pub fn surface_area(o: &Obj) -> Option<f64> {
+    let m = &o.xform;
+    let tau = 2.0 * PI;
+    let disc = |c: DVec3, n: DVec3, r0: f64, r1: f64| {
+        let (e1, e2) = across(n);
+        parametric_area(m, move |u, v| {
+            let r = r0 + (r1 - r0) * u;
+            let a = tau * v;
+            c + r * (a.cos() * e1 + a.sin() * e2)
+        })
+    };
+    let side = |a: DVec3, ra: f64, b: DVec3, rb: f64| {
+        let (e1, e2) = across(b - a);
+        parametric_area(m, move |u, v| {
+            let r = ra + (rb - ra) * u;
+            let t = tau * v;
+            a + (b - a) * u + r * (t.cos() * e1 + t.sin() * e2)
+        })
+    };
+    Some(match &o.kind {
+        ObjKind::Sphere { center, radius } => parametric_area(m, |u, v| {
+            let (th, ph) = (PI * u, tau * v);
+            *center + *radius * DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
+        }),
+        ObjKind::Box { a, b } => {
+            // Six parallelograms, exactly.
+            let d = *b - *a;
+            let e = [
+                m.transform_vector3(DVec3::X * d.x),
+                m.transform_vector3(DVec3::Y * d.y),
+                m.transform_vector3(DVec3::Z * d.z),
+            ];
+            2.0 * (e[0].cross(e[1]).length() + e[1].cross(e[2]).length() + e[2].cross(e[0]).length())
+        }
+        ObjKind::Cylinder { a, b, radius, open } => {
+            let caps = if *open { 0.0 } else { disc(*a, *b - *a, 0.0, *radius) + disc(*b, *b - *a, 0.0, *radius) };
+            side(*a, *radius, *b, *radius) + caps
+        }
+        ObjKind::Cone { a, ra, b, rb, open } => {
+            let caps = if *open { 0.0 } else { disc(*a, *b - *a, 0.0, *ra) + disc(*b, *b - *a, 0.0, *rb) };
+            side(*a, *ra, *b, *rb) + caps
+        }
+        ObjKind::Disc { center, normal, radius, hole } => disc(*center, *normal, *hole, *radius),
+        ObjKind::Torus { major, minor } => parametric_area(m, |u, v| {
+            let (a, b) = (tau * u, tau * v);
+            let r = major + minor * b.cos();
+            DVec3::new(r * a.cos(), minor * b.sin(), r * a.sin())
+        }),
+        ObjKind::Triangles { tris, .. } => tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|p| m.transform_point3(p));
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum(),
+        ObjKind::Csg { op: CsgOp::Union, children } => {
+            let mut sum = 0.0;
+            for c in children {
+                sum += surface_area(c)?;
+            }
+            sum
+        }
+        _ => return None,
+    })
+}
+
+/// Whether a CSG object's parts hold a disc.
+fn holds_disc(o: &Obj) -> bool {
+    match &o.kind {
+        ObjKind::Disc { .. } => true,
+        ObjKind::Csg { children, .. } => children.iter().any(holds_disc),
+        _ => false,
+    }
+}
+
+/// The parts of an intersection, difference or merge with each disc as its plane: POV-Ray's
+/// disc is inside on the side opposite its normal, its radius bounding only its surface
+/// (disc.cpp, `Disc::Inside`), so within CSG it cuts as `plane { normal, normal . center }`
+/// does wherever the disc covers the cut (docs/pov-ray.md).
+fn discs_as_planes(o: &Obj) -> Obj {
+    let kind = match &o.kind {
+        ObjKind::Disc { center, normal, .. } => {
+            let n = normal.normalize_or_zero();
+            ObjKind::Plane { normal: n, offset: n.dot(*center) }
+        }
+        ObjKind::Csg { op, children } => {
+            ObjKind::Csg { op: *op, children: children.iter().map(discs_as_planes).collect() }
+        }
+        other => other.clone(),
+    };
+    Obj { kind, ..o.clone() }
+}
+
 /// The first texture in an object's parts.
 fn first_tex(o: &Obj) -> Option<&Vec<Tex>> {
     if o.tex.is_some() {
@@ -261,6 +385,12 @@ struct Emitter<'a> {
     newlines: usize,
     /// Half the side of the boxes that stand for planes in the CSG object being written.
     plane_box: Option<f64>,
+    /// The emission (radiance) of the `looks_like` object being written in its light's place.
+    light_emission: Option<[f64; 3]>,
+    /// The atmosphere's medium, the medium outside every shape.
+    atmosphere: Option<String>,
+    /// Writing a hole of a media container (`media_csg`): its media are set there.
+    hole: bool,
 }
 
 /// The pattern that weighs a texture map's mixes, and its entries' values (sorted).
@@ -308,6 +438,9 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         warnings: Vec::new(),
         newlines: 0,
         plane_box: None,
+        light_emission: None,
+        atmosphere: None,
+        hole: false,
     };
     e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
     e.newlines = 1;
@@ -350,6 +483,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
             e.warnings
                 .push(format!("{at}: atmospheric media beside a fog is left out (the fog is Photonix's atmosphere)"));
         } else if let Some(name) = e.media(md, 1.0)? {
+            e.atmosphere = Some(name.clone());
             let mut t = Table::new();
             t.insert("medium".into(), T::String(name));
             e.entry("atmosphere", T::Table(t), md.pos)?;
@@ -427,6 +561,9 @@ impl Emitter<'_> {
     }
 
     fn object(&mut self, o: &Obj, inherited: Option<&Vec<Tex>>, interior: Option<&Interior>) -> Result<()> {
+        if matches!(&o.kind, ObjKind::Csg { op, .. } if *op != CsgOp::Union) && holds_disc(o) {
+            return self.object(&discs_as_planes(o), inherited, interior);
+        }
         let tex = o.tex.as_ref().or(inherited);
         let int = o.interior.as_ref().or(interior);
         if super::implicit::needs_mesher(o) {
@@ -478,6 +615,11 @@ impl Emitter<'_> {
                     self.entry("shapes", T::Array(vec![T::Table(s)]), o.pos)?;
                 }
                 Ok(())
+            }
+            ObjKind::Csg { op: op @ (CsgOp::Merge | CsgOp::Difference), children }
+                if self.media_container(children, tex, int)? =>
+            {
+                self.media_csg(*op, children, tex, int.expect("media_container checked the interior"))
             }
             ObjKind::Patch { points } => {
                 // A Bezier patch maps to one under any affine map: its control points are baked.
@@ -642,7 +784,7 @@ impl Emitter<'_> {
         let glow_ok = !matches!(o.kind, ObjKind::Plane { .. });
         let material = self.material(tex, int, o.pos, glow_ok)?;
         s.insert("material".into(), T::String(material));
-        if let Some(md) = int.and_then(|i| i.media.first()) {
+        if let Some(md) = int.and_then(|i| i.media.first()).filter(|_| !self.hole) {
             self.interior_media(o, md, int.map_or(0, |i| i.media.len()), &mut s)?;
         }
         Ok(s)
@@ -673,6 +815,72 @@ impl Emitter<'_> {
         let size = if lo.x <= hi.x { (hi - lo).length() } else { 1.0 };
         if let Some(name) = self.media(md, size)? {
             s.insert("interior".into(), T::String(name));
+        }
+        Ok(())
+    }
+
+    /// Whether a merge or difference is an invisible container of media (`pigment { rgbt 1 }`,
+    /// ior 1, `interior { media { ... } }`) whose parts are closed primitives: then
+    /// `media_csg` writes it as nested media boundaries instead of a CSG object, which cannot
+    /// hold media (docs/limits.md).
+    fn media_container(&mut self, children: &[Obj], tex: Option<&Vec<Tex>>, int: Option<&Interior>) -> Result<bool> {
+        if int.is_none_or(|i| i.media.is_empty()) || children.is_empty() {
+            return Ok(false);
+        }
+        for c in children {
+            let closed = match &c.kind {
+                ObjKind::Sphere { .. }
+                | ObjKind::Box { .. }
+                | ObjKind::Torus { .. }
+                | ObjKind::Superellipsoid { .. }
+                | ObjKind::Plane { .. } => true,
+                ObjKind::Cylinder { open, .. } | ObjKind::Cone { open, .. } => !open,
+                _ => false,
+            };
+            if !closed || c.inverse {
+                return Ok(false);
+            }
+            let ctex = c.tex.as_ref().or(tex);
+            let cint = c.interior.as_ref().or(int);
+            let m = self.material(ctex, cint, c.pos, false)?;
+            if !self.material_info.get(&m).is_some_and(|i| i.1) {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// An invisible container of media made by CSG, as media boundaries (docs/pov-ray.md,
+    /// "Media in CSG"): a merge's parts each hold the medium; a difference's first part holds
+    /// it and each part taken away is a hole in it, its inside the medium outside (the
+    /// atmosphere or vacuum) and its outside the container's medium. Exact where the parts of
+    /// a merge do not overlap and the holes lie inside the first part without overlapping.
+    fn media_csg(&mut self, op: CsgOp, children: &[Obj], tex: Option<&Vec<Tex>>, int: &Interior) -> Result<()> {
+        let mut medium: Option<T> = None;
+        for (i, c) in children.iter().enumerate() {
+            let ctex = c.tex.as_ref().or(tex);
+            let cint = c.interior.as_ref().or(Some(int));
+            let hole = op == CsgOp::Difference && i > 0;
+            if hole {
+                let Some(inside) = medium.clone() else {
+                    // The container's medium was left out (it does nothing): so are the holes.
+                    break;
+                };
+                self.hole = true;
+                let s = self.shape(c, ctex, cint);
+                self.hole = false;
+                let mut s = s?;
+                let outside = self.atmosphere.clone().unwrap_or_else(|| "vacuum".into());
+                s.insert("interior".into(), T::String(outside));
+                s.insert("exterior".into(), inside);
+                self.entry("shapes", T::Array(vec![T::Table(s)]), c.pos)?;
+            } else {
+                let s = self.shape(c, ctex, cint)?;
+                if i == 0 {
+                    medium = s.get("interior").cloned();
+                }
+                self.entry("shapes", T::Array(vec![T::Table(s)]), c.pos)?;
+            }
         }
         Ok(())
     }
@@ -792,12 +1000,17 @@ impl Emitter<'_> {
             return Err(PovError::at(pos, "internal: no default texture".into()));
         };
         let t = t.clone();
-        if let Some(map) = &t.map {
+        // A light's looks_like object is one emitter: its maps stand in by their mean colours.
+        let mixes = self.light_emission.is_none();
+        if let Some(map) = t.map.as_ref().filter(|_| mixes) {
             if let Some(name) = self.texture_mix(&t, map, int, pos, glow_ok)? {
                 return Ok(name);
             }
-        } else if let Some(entries) =
-            t.pigment.entries.as_ref().filter(|e| e.iter().any(|(_, p)| !matches!(p.kind, PigmentKind::Solid(_))))
+        } else if let Some(entries) = t
+            .pigment
+            .entries
+            .as_ref()
+            .filter(|e| mixes && e.iter().any(|(_, p)| !matches!(p.kind, PigmentKind::Solid(_))))
         {
             // (Constant colours only: the colour map of the pattern is exact.)
             // A pigment_map: its pigments in the texture's finish and normal, mixed as a
@@ -832,7 +1045,7 @@ impl Emitter<'_> {
         let transparency = (mean[3] + mean[4]).clamp(0.0, 1.0);
         let ior = int.map_or(1.0, |i| i.ior);
         let mut m = Table::new();
-        if transparency >= 0.98 && ior <= 1.0 && int.is_some_and(|i| !i.media.is_empty()) {
+        if mixes && transparency >= 0.98 && ior <= 1.0 && int.is_some_and(|i| !i.media.is_empty()) {
             // POV-Ray's media container (`pigment { rgbt 1 } hollow interior { media ... }`): an
             // invisible boundary.
             m.insert("type".into(), T::String("null".into()));
@@ -857,6 +1070,14 @@ impl Emitter<'_> {
                 T::Table(p)
             }
         };
+        if let Some(e) = self.light_emission {
+            // A looks_like object in its light's place (docs/pov-ray.md, "Light power"): its
+            // colour and bumps, diffuse, glowing with the light's power.
+            m.insert("type".into(), T::String("diffuse".into()));
+            m.insert("reflectance".into(), reflectance);
+            m.insert("emission".into(), rgb(e));
+            return self.write_material(m, pos);
+        }
         if transparency >= 0.5 && ior > 1.0 {
             m.insert("type".into(), T::String("dielectric".into()));
             m.insert("ior".into(), num(ior));
@@ -1378,6 +1599,34 @@ impl Emitter<'_> {
                 l.pos.col,
                 100.0 * limit / most
             ));
+        }
+        if let Some(shape) = &l.looks_like {
+            let at = self.location(shape.pos);
+            let area = surface_area(shape).filter(|a| a.is_finite() && *a > 0.0);
+            match (&l.kind, area) {
+                (LightKind::Point, Some(area)) => {
+                    // The object is the light: a Lambertian surface of area A and radiance L
+                    // emits pi L A, the point light 4 pi I, so L = 4 I / A. A uniform sphere of
+                    // that radiance lights everything outside it exactly as the point at its
+                    // centre does (its intensity is pi r^2 L = I in every direction).
+                    self.light_emission = Some(intensity.map(|i| 4.0 * i / area));
+                    let written = self.object(shape, None, None);
+                    self.light_emission = None;
+                    written?;
+                    if l.area.is_some() {
+                        self.warnings.push(format!(
+                            "{at}: the looks_like object is this area light's emitter; the area_light's array is not used"
+                        ));
+                    }
+                    return Ok(());
+                }
+                (LightKind::Point, None) => self.warnings.push(format!(
+                    "{at}: looks_like is left out: this object's area cannot be computed to make it the light (spheres, boxes, cylinders, cones, discs, tori, meshes and their unions can); the light is invisible"
+                )),
+                _ => self.warnings.push(format!(
+                    "{at}: looks_like on a spotlight or parallel light is left out (an emitting object cannot shine into a cone or along one direction); the light is invisible"
+                )),
+            }
         }
         let mut t = Table::new();
         match &l.kind {

@@ -80,8 +80,49 @@ const OTHER_PATTERNS: [&str; 23] = [
     "function",
 ];
 
-/// A mesh's triangles and, when it is shaded smooth, their corners' normals.
-type MeshTris = (Vec<[DVec3; 3]>, Option<Vec<[DVec3; 3]>>);
+/// A mesh's triangles, their corners' normals when it is shaded smooth, and each triangle's
+/// own texture (an index into `textures`; `None` takes the mesh's texture).
+struct MeshTris {
+    tris: Vec<[DVec3; 3]>,
+    normals: Option<Vec<[DVec3; 3]>>,
+    tex_of: Vec<Option<usize>>,
+    textures: Vec<Vec<Tex>>,
+}
+
+impl MeshTris {
+    /// The mesh as one object kind: its triangles, or, when triangles have textures of their
+    /// own, a union of one set of triangles per texture (in the order first used; those
+    /// without one take the mesh's texture, as the union's parts do).
+    fn into_kind(self, pos: Pos) -> ObjKind {
+        let MeshTris { tris, normals, tex_of, textures } = self;
+        if tex_of.iter().all(Option::is_none) {
+            return ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) };
+        }
+        let mut order: Vec<Option<usize>> = Vec::new();
+        for t in &tex_of {
+            if !order.contains(t) {
+                order.push(*t);
+            }
+        }
+        let children = order
+            .into_iter()
+            .map(|key| {
+                let picked: Vec<usize> = (0..tris.len()).filter(|&k| tex_of[k] == key).collect();
+                let group_tris = picked.iter().map(|&k| tris[k]).collect();
+                let group_normals = normals.as_ref().map(|n| std::rc::Rc::new(picked.iter().map(|&k| n[k]).collect()));
+                Obj {
+                    kind: ObjKind::Triangles { tris: std::rc::Rc::new(group_tris), normals: group_normals },
+                    xform: DMat4::IDENTITY,
+                    tex: key.map(|i| textures[i].clone()),
+                    interior: None,
+                    inverse: false,
+                    pos,
+                }
+            })
+            .collect();
+        ObjKind::Csg { op: CsgOp::Union, children }
+    }
+}
 
 fn num(v: f64) -> toml::Value {
     toml::Value::Float(v)
@@ -397,8 +438,8 @@ impl Parser {
                 ObjKind::Triangles { tris: std::rc::Rc::new(vec![t]), normals: Some(std::rc::Rc::new(vec![n])) }
             }
             "mesh" | "mesh2" => {
-                let (tris, normals) = if kind == "mesh" { self.mesh(pos)? } else { self.mesh2(pos)? };
-                ObjKind::Triangles { tris: std::rc::Rc::new(tris), normals: normals.map(std::rc::Rc::new) }
+                let mesh = if kind == "mesh" { self.mesh(pos)? } else { self.mesh2(pos)? };
+                mesh.into_kind(pos)
             }
             "lathe" | "sor" | "prism" | "polygon" | "text" => {
                 let (tris, smooth) = self.tessellated(kind, pos, &mut open)?;
@@ -487,6 +528,7 @@ impl Parser {
         let mut tris = Vec::new();
         let mut normals: Vec<[DVec3; 3]> = Vec::new();
         let mut smooth = false;
+        let (mut tex_of, mut textures) = (Vec::new(), Vec::new());
         loop {
             match self.peek_word()?.as_deref() {
                 Some("triangle") => {
@@ -497,7 +539,7 @@ impl Parser {
                     let b = self.vec3()?;
                     self.accept_sym(",")?;
                     let c = self.vec3()?;
-                    self.triangle_tail()?;
+                    tex_of.push(self.triangle_tail(&mut textures)?);
                     tris.push([a, b, c]);
                     normals.push([(b - a).cross(c - a); 3]);
                 }
@@ -505,7 +547,7 @@ impl Parser {
                     self.next()?;
                     self.expect_sym("{")?;
                     let (t, n) = self.smooth_triangle()?;
-                    self.triangle_tail()?;
+                    tex_of.push(self.triangle_tail(&mut textures)?);
                     tris.push(t);
                     normals.push(n);
                     smooth = true;
@@ -524,7 +566,7 @@ impl Parser {
         if tris.is_empty() {
             return self.err(pos, "this mesh has no triangles".into());
         }
-        Ok((tris, smooth.then_some(normals)))
+        Ok(MeshTris { tris, normals: smooth.then_some(normals), tex_of, textures })
     }
 
     /// A count before a list of points: a whole number from `min` to `max`.
@@ -887,6 +929,10 @@ impl Parser {
         let mut normal_vectors: Vec<DVec3> = Vec::new();
         let mut normal_indices: Vec<(DVec3, Pos)> = Vec::new();
         let mut faces: Vec<(DVec3, Pos)> = Vec::new();
+        let mut textures: Vec<Vec<Tex>> = Vec::new();
+        // Each face's texture index (the first of three: POV-Ray blends three across the face)
+        // and where it was written.
+        let mut tex_of: Vec<Option<(f64, Pos)>> = Vec::new();
         while let Some(w) = self.peek_word()? {
             match w.as_str() {
                 "vertex_vectors" | "normal_vectors" | "uv_vectors" | "normal_indices" | "uv_indices" => {
@@ -913,7 +959,7 @@ impl Parser {
                     let n = self.count("the number of textures", 0, MAX_ITEMS)?;
                     for _ in 0..n {
                         self.accept_sym(",")?;
-                        self.expect_word_tex()?;
+                        textures.push(self.expect_word_tex()?);
                     }
                     self.accept_sym(",")?;
                     self.expect_sym("}")?;
@@ -927,13 +973,17 @@ impl Parser {
                         let fpos = self.here();
                         faces.push((self.vec3()?, fpos));
                         // Texture indices (one or three) may follow each face.
+                        let mut first = None;
                         while self.peek()?.is_some_and(|t| t.tok == Tok::Sym(",")) {
                             self.next()?;
                             if self.peek()?.is_some_and(|t| matches!(t.tok, Tok::Sym("<") | Tok::Sym("}"))) {
                                 break;
                             }
-                            self.float()?;
+                            let ipos = self.here();
+                            let i = self.float()?;
+                            first.get_or_insert((i, ipos));
                         }
+                        tex_of.push(first);
                     }
                     self.accept_sym(",")?;
                     self.expect_sym("}")?;
@@ -990,16 +1040,27 @@ impl Parser {
                 ),
             );
         };
-        Ok((tris, normals))
+        let tex_of = tex_of
+            .into_iter()
+            .map(|t| match t {
+                None => Ok(None),
+                Some((i, _)) if i >= 0.0 && (i as usize) < textures.len() => Ok(Some(i as usize)),
+                Some((i, ipos)) => self.err(
+                    ipos,
+                    format!(
+                        "texture index {i} is out of range: this mesh2's texture_list has {} textures",
+                        textures.len()
+                    ),
+                ),
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(MeshTris { tris, normals, tex_of, textures })
     }
 
-    fn expect_word_tex(&mut self) -> Result<()> {
+    fn expect_word_tex(&mut self) -> Result<Vec<Tex>> {
         let t = self.expect_any("a texture")?;
         match &t.tok {
-            Tok::Word(w) if w == "texture" => {
-                self.texture()?;
-                Ok(())
-            }
+            Tok::Word(w) if w == "texture" => self.texture(),
             other => self.err(t.pos, format!("expected a texture in texture_list, found {}", describe(other))),
         }
     }
@@ -1027,14 +1088,25 @@ impl Parser {
         Ok(p)
     }
 
-    /// The end of a mesh triangle: an optional texture (not kept per triangle) and `}`.
-    fn triangle_tail(&mut self) -> Result<()> {
+    /// The end of a mesh triangle: an optional texture and `}`; the texture's index in
+    /// `textures` (a texture given twice is kept once; a declared one compares equal only by its
+    /// contents, so identical textures share their triangles).
+    fn triangle_tail(&mut self, textures: &mut Vec<Vec<Tex>>) -> Result<Option<usize>> {
+        let mut index = None;
         loop {
             if self.accept_sym("}")? {
-                return Ok(());
+                return Ok(index);
             }
             if self.accept_word("texture")? {
-                self.texture()?;
+                let t = self.texture()?;
+                let key = format!("{t:?}");
+                index = Some(match textures.iter().position(|u| format!("{u:?}") == key) {
+                    Some(i) => i,
+                    None => {
+                        textures.push(t);
+                        textures.len() - 1
+                    }
+                });
                 continue;
             }
             let t = self.expect_any("`}`")?;
@@ -2640,6 +2712,7 @@ impl Parser {
             fade_distance: 0.0,
             fade_power: 0.0,
             shadowless: false,
+            looks_like: None,
             pos,
         };
         let (mut point_at, mut radius, mut falloff, mut tightness) = (DVec3::ZERO, 30.0, 45.0, 0.0);
@@ -2658,6 +2731,9 @@ impl Parser {
                 if let Some(a) = &mut l.area {
                     a.axis1 = m.transform_vector3(a.axis1);
                     a.axis2 = m.transform_vector3(a.axis2);
+                }
+                if let Some(o) = &mut l.looks_like {
+                    transform_obj(o, &m);
                 }
                 continue;
             }
@@ -2703,15 +2779,20 @@ impl Parser {
                 }
                 "fade_distance" => l.fade_distance = self.float()?,
                 "fade_power" => l.fade_power = self.float()?,
-                "looks_like" | "projected_through" | "photons" => {
-                    self.skip_block()?;
-                    if w == "looks_like" {
-                        self.warnings.push(format!(
-                            "{}: looks_like is not supported yet; the light is invisible",
-                            self.loc(tpos)
-                        ));
+                "looks_like" => {
+                    if l.looks_like.is_some() {
+                        return self.err(tpos, "only one looks_like is allowed in a light_source".into());
                     }
+                    // `looks_like { OBJECT modifiers }` reads as `object { ... }` does; POV-Ray
+                    // then moves the object to where the light is (parse.cpp, Parse_Light_Source).
+                    let mut o = self.object("object", tpos)?;
+                    if matches!(o.kind, ObjKind::Light(_)) {
+                        return self.err(tpos, "a light_source cannot look like another light_source".into());
+                    }
+                    transform_obj(&mut o, &DMat4::from_translation(l.position));
+                    l.looks_like = Some(Box::new(o));
                 }
+                "projected_through" | "photons" => self.skip_block()?,
                 "color" | "colour" | "rgb" => {
                     let c = self.word_colour(&w, tpos)?;
                     l.colour = [c[0], c[1], c[2]];
@@ -3059,6 +3140,9 @@ pub fn transform_obj(o: &mut Obj, m: &DMat4) {
             if let Some(a) = &mut l.area {
                 a.axis1 = m.transform_vector3(a.axis1);
                 a.axis2 = m.transform_vector3(a.axis2);
+            }
+            if let Some(shape) = &mut l.looks_like {
+                transform_obj(shape, m);
             }
         }
         _ => o.xform = *m * o.xform,

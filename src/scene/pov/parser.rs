@@ -133,6 +133,9 @@ pub struct Parser {
     pub max_tokens: u64,
 }
 
+/// Directives that may open a declared value (`#declare X = #if (c) A #else B #end`).
+const VALUE_CONDITIONALS: [&str; 4] = ["if", "ifdef", "ifndef", "switch"];
+
 /// Directives that open a block closed by `#end`.
 const OPENERS: [&str; 7] = ["if", "ifdef", "ifndef", "while", "for", "switch", "macro"];
 
@@ -446,6 +449,17 @@ impl Parser {
                     self.expect_sym("]")?;
                 }
                 self.expect_sym("=")?;
+                // `#declare X = #ifdef (A) value #else value #end`: the conditionals that open
+                // (or, in a skipped branch's place, continue) the value run before it is read;
+                // the `#else` or `#end` after the value then ends it as any directive does and
+                // runs next.
+                while let Some(Token { tok: Tok::Directive(d), pos: dpos }) = self.peek_raw()? {
+                    if !VALUE_CONDITIONALS.contains(&d.as_str()) {
+                        break;
+                    }
+                    self.advance();
+                    self.directive(&d, dpos)?;
+                }
                 self.barriers.push((self.frames.len(), self.nesting));
                 let value = self.rvalue();
                 self.barriers.pop();
