@@ -1753,3 +1753,41 @@ difference { sphere { 0, 2 } sphere { 0, 1 } pigment { rgbt 1 } hollow interior 
     let sum: f32 = (0..30).flat_map(|y| (0..40).map(move |x| (x, y))).map(|(x, y)| image.pixel(x, y)[0]).sum();
     assert!(sum > 0.0, "{sum}");
 }
+
+/// `checker rgb 0.8 rgb 0.6`: two colours without a comma, as POV-Ray reads them (a second colour
+/// vector starts the next colour); the component keywords still amend the colour before them.
+#[test]
+fn inline_colours_need_no_commas() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        &format!(
+            "{CAMERA}plane {{ y, 0 pigment {{ checker rgb 0.8 rgb <0.1, 0.2, 0.3> }} }}
+sphere {{ y, 1 pigment {{ hexagon rgb 1 green 0.5 rgb 0.25 color rgb 0.5 }} }}"
+        ),
+    );
+    let textures = t["textures"].as_table().unwrap();
+    let colours = |pattern: &str| {
+        let tex = textures.values().find(|t| t["pattern"].as_str() == Some(pattern)).unwrap();
+        tex["colors"].as_array().unwrap().iter().map(floats).collect::<Vec<_>>()
+    };
+    assert_eq!(colours("checker"), [vec![0.8; 3], vec![0.1, 0.2, 0.3]]);
+    assert_eq!(colours("hexagon"), [vec![1.0, 0.5, 1.0], vec![0.25; 3], vec![0.5; 3]]);
+}
+
+/// `plane { <0, 2, 0>, 1 }` lies at y = 1 in POV-Ray (the distance runs along the unit normal;
+/// rendered with `povray` to check), inside CSG as outside it.
+#[test]
+fn a_planes_distance_runs_along_its_unit_normal_in_csg_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        &format!("{CAMERA}intersection {{ sphere {{ 0, 3 }} plane {{ <0, 2, 0>, 1 }} pigment {{ rgb 1 }} }}"),
+    );
+    // The half-space behind the plane is a box whose top face the transform moves onto the plane.
+    let csg = &t["shapes"].as_array().unwrap()[0];
+    let cut = &csg["children"].as_array().unwrap()[1];
+    assert_eq!(cut["type"].as_str(), Some("box"));
+    assert_eq!(floats(&cut["max"])[1], 0.0);
+    assert_eq!(floats(&cut["transform"]["translate"]), [0.0, 1.0, 0.0], "{cut:?}");
+}

@@ -914,7 +914,9 @@ impl Emitter<'_> {
                                 u.extend(0.0),
                                 n.extend(0.0),
                                 w.extend(0.0),
-                                (n * (*offset / normal.length())).extend(1.0),
+                                // POV-Ray keeps the distance along the unit normal
+                                // (`plane { 2 * y, 1 }` is y = 1), as the plane outside CSG does.
+                                (n * *offset).extend(1.0),
                             );
                             let b = Obj {
                                 kind: ObjKind::Box {

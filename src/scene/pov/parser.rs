@@ -883,6 +883,9 @@ impl Parser {
                     self.next()?;
                     continue;
                 }
+                // A second colour vector starts the next colour, as POV-Ray reads
+                // `checker rgb 0.8 rgb 0.6`; only the component keywords amend this one.
+                "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" if !first => return Ok(c),
                 "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
                     c = to_colour(self.expr()?, self.here(), self)?;
                 }
