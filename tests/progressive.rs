@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use photonix::io::metrics::{downsample, mean_ratio, rel_mse};
+use photonix::io::metrics::{downsample, mean_ratio, rel_mse, rel_mse_per_pixel};
 use photonix::io::read_exr;
 
 /// Small, fast passes: 64x64, one sample, few photons, a fixed first radius.
@@ -59,16 +59,28 @@ fn error_falls_as_passes_grow() {
     let reference = downsample(&read_exr(&common::reference_path("cornell-caustics")).unwrap(), 4);
     let mut errors = Vec::new();
     for passes in [1, 4, 16] {
-        let name = format!("p{passes}.exr");
-        ok(&render(dir.path(), &name, &["--passes", &passes.to_string()]));
-        let image = read_exr(&dir.path().join(&name)).unwrap();
-        let (error, ratio) = (rel_mse(&image, &reference), mean_ratio(&image, &reference));
-        let bias = ratio.iter().map(|r| (r - 1.0).abs()).fold(0.0, f64::max);
-        println!("{passes:>2} passes: relMSE {error:.5}, mean ratio {ratio:.4?} (largest bias {:.2}%)", 100.0 * bias);
-        errors.push((error, bias));
+        // Three seeds, the median error, each pixel's capped at 1 (wrong by its own brightness):
+        // at 4 samples per pixel a sample that sees the light through the glass ball is a firefly
+        // of 17 in a pixel whose mean is 0.19, which alone made relMSE range 0.022-0.076 over
+        // seeds 1-6 at 4 passes; the cap keeps the test on convergence, not on that draw.
+        let mut runs = Vec::new();
+        for seed in 0..3 {
+            let name = format!("p{passes}-{seed}.exr");
+            ok(&render(dir.path(), &name, &["--passes", &passes.to_string(), "--seed", &seed.to_string()]));
+            let image = read_exr(&dir.path().join(&name)).unwrap();
+            let ratio = mean_ratio(&image, &reference);
+            let capped = rel_mse_per_pixel(&image, &reference).iter().map(|e| e.min(1.0)).sum::<f64>();
+            let error = capped / (image.pixels.len() as f64);
+            let bias = ratio.iter().map(|r| (r - 1.0).abs()).fold(0.0, f64::max);
+            println!("{passes:>2} passes, seed {seed}: relMSE {error:.5} (capped; uncapped {:.5}), mean ratio {ratio:.4?} (largest bias {:.2}%)", rel_mse(&image, &reference), 100.0 * bias);
+            runs.push((error, bias));
+        }
+        runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let worst_bias = runs.iter().map(|r| r.1).fold(0.0, f64::max);
+        errors.push((runs[1].0, worst_bias));
     }
-    // Measured 0.126, 0.020, 0.0083: noise falls as 1/passes and the radius shrinks. Each step
-    // must at least halve the error well beyond the run-to-run spread.
+    // Capped medians measured 0.042, 0.012, 0.0034 (each within 5% over the three seeds): noise
+    // falls as 1/passes and the radius shrinks. Each step must at least halve the error.
     assert!(errors[1].0 < 0.5 * errors[0].0, "{errors:?}");
     assert!(errors[2].0 < 0.6 * errors[1].0, "{errors:?}");
     // One pass of 20,000 photons is one draw of the photon maps, whose mean over the image moves
