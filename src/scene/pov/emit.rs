@@ -35,10 +35,6 @@ fn vec3(v: DVec3) -> T {
     T::Array(vec![num(v.x), num(v.y), num(v.z)])
 }
 
-/// A vertex of a tessellated shape to 7 significant digits (the renderer holds f32), which
-/// keeps the TOML of a shape of thousands of triangles short.
-/// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
-/// out; empty, min > max, when there are none): each part's own box through its transform.
 /// The area of a surface given in parameters (u, v) in [0, 1]^2, through the affine map `m`:
 /// the midpoint rule on a 256 x 256 grid of |dp/du x dp/dv|, the derivatives by central
 /// differences of the mapped points (the integrands here are smooth and periodic or linear,
@@ -174,6 +170,8 @@ fn first_tex(o: &Obj) -> Option<&Vec<Tex>> {
     }
 }
 
+/// The bounds of an object's finite parts in POV-Ray's coordinates (planes and lights left
+/// out; empty, min > max, when there are none): each part's own box through its transform.
 pub fn bounds_of(o: &Obj) -> (DVec3, DVec3) {
     let mut lo = DVec3::splat(f64::MAX);
     let mut hi = DVec3::splat(f64::MIN);
@@ -240,6 +238,8 @@ fn too_thin(v: &[DVec3]) -> bool {
     !(twice_area.is_finite() && twice_area > 2e-7 * longest)
 }
 
+/// A vertex of a tessellated shape to 7 significant digits (the renderer holds f32), which
+/// keeps the TOML of a shape of thousands of triangles short.
 fn short3(v: DVec3) -> DVec3 {
     let short = |x: f64| format!("{x:.6e}").parse::<f64>().unwrap_or(x);
     DVec3::new(short(v.x), short(v.y), short(v.z))

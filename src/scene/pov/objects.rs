@@ -528,7 +528,8 @@ impl Parser {
         let mut tris = Vec::new();
         let mut normals: Vec<[DVec3; 3]> = Vec::new();
         let mut smooth = false;
-        let (mut tex_of, mut textures) = (Vec::new(), Vec::new());
+        // The textures met so far, and each one's Debug text, the key that finds it again.
+        let (mut tex_of, mut textures, mut keys) = (Vec::new(), Vec::new(), Vec::new());
         loop {
             match self.peek_word()?.as_deref() {
                 Some("triangle") => {
@@ -539,7 +540,7 @@ impl Parser {
                     let b = self.vec3()?;
                     self.accept_sym(",")?;
                     let c = self.vec3()?;
-                    tex_of.push(self.triangle_tail(&mut textures)?);
+                    tex_of.push(self.triangle_tail(&mut textures, &mut keys)?);
                     tris.push([a, b, c]);
                     normals.push([(b - a).cross(c - a); 3]);
                 }
@@ -547,7 +548,7 @@ impl Parser {
                     self.next()?;
                     self.expect_sym("{")?;
                     let (t, n) = self.smooth_triangle()?;
-                    tex_of.push(self.triangle_tail(&mut textures)?);
+                    tex_of.push(self.triangle_tail(&mut textures, &mut keys)?);
                     tris.push(t);
                     normals.push(n);
                     smooth = true;
@@ -1091,7 +1092,7 @@ impl Parser {
     /// The end of a mesh triangle: an optional texture and `}`; the texture's index in
     /// `textures` (a texture given twice is kept once; a declared one compares equal only by its
     /// contents, so identical textures share their triangles).
-    fn triangle_tail(&mut self, textures: &mut Vec<Vec<Tex>>) -> Result<Option<usize>> {
+    fn triangle_tail(&mut self, textures: &mut Vec<Vec<Tex>>, keys: &mut Vec<String>) -> Result<Option<usize>> {
         let mut index = None;
         loop {
             if self.accept_sym("}")? {
@@ -1100,9 +1101,10 @@ impl Parser {
             if self.accept_word("texture")? {
                 let t = self.texture()?;
                 let key = format!("{t:?}");
-                index = Some(match textures.iter().position(|u| format!("{u:?}") == key) {
+                index = Some(match keys.iter().position(|k| *k == key) {
                     Some(i) => i,
                     None => {
+                        keys.push(key);
                         textures.push(t);
                         textures.len() - 1
                     }

@@ -883,10 +883,12 @@ impl Parser {
                     self.next()?;
                     continue;
                 }
-                // A second colour vector starts the next colour, as POV-Ray reads
-                // `checker rgb 0.8 rgb 0.6`; only the component keywords amend this one.
-                "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" if !first => return Ok(c),
                 "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
+                    // A second colour vector starts the next colour, as POV-Ray reads
+                    // `checker rgb 0.8 rgb 0.6`; only the component keywords amend this one.
+                    if !first {
+                        return Ok(c);
+                    }
                     c = to_colour(self.expr()?, self.here(), self)?;
                 }
                 "red" | "green" | "blue" | "filter" | "transmit" => {
