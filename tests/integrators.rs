@@ -126,7 +126,14 @@ fn furnace() -> Scene {
             width: 16,
             height: 16,
         },
-        render: RenderSettings { spp: 16, passes: 1, max_depth: 24, seed: 5, integrator: Integrator::Pt },
+        render: RenderSettings {
+            spp: 16,
+            passes: 1,
+            max_depth: 24,
+            seed: 5,
+            integrator: Integrator::Pt,
+            integrator_auto: None,
+        },
         photons: None,
         materials: vec![common::diffuse(rho, emission)],
         material_names: vec!["wall".into()],
@@ -180,6 +187,34 @@ fn pt_layers_split_by_path_signature_and_sum_to_the_image() {
         assert!(*s > 0.005, "layer {i} holds {s} of the light");
     }
     assert!(share[0] > share[3], "direct light outweighs the caustics");
+}
+
+/// `auto` (the default) chooses by the scene's contents, as measured on the shared scenes: bpt
+/// for rough glossy surfaces and for media, ppm for the rest; a named integrator is kept.
+#[test]
+fn auto_integrator_picks_bpt_for_glossy_and_fog_and_ppm_elsewhere() {
+    for (name, chosen) in [
+        ("cornell-box", Integrator::Ppm),
+        ("cornell-caustics", Integrator::Ppm),
+        ("cornell-glossy", Integrator::Bpt),
+        ("cornell-fog", Integrator::Bpt),
+    ] {
+        let scene = load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).expect("shipped scene loads");
+        assert_eq!(scene.render.integrator, chosen, "{name}");
+        println!("{name}: {} ({})", chosen.name(), scene.render.integrator_auto.expect("chosen automatically"));
+    }
+    let camera = "[camera]\nposition = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 40\n";
+    let fog = "[fog]\ndistance = 20\ncolor = [0.7, 0.75, 0.8]\n";
+    for (render, expected, auto) in [
+        ("", Integrator::Bpt, true),
+        ("[render]\nintegrator = \"auto\"\n", Integrator::Bpt, true),
+        ("[render]\nintegrator = \"ppm\"\n", Integrator::Ppm, false),
+        ("[photons]\nenabled = false\n", Integrator::Ppm, true),
+    ] {
+        let dir = common::scene_dir(&format!("{camera}{fog}{render}"));
+        let scene = load_scene(&dir.path().join("scene.toml")).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((scene.render.integrator, scene.render.integrator_auto.is_some()), (expected, auto), "{render}");
+    }
 }
 
 #[test]

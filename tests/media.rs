@@ -284,6 +284,7 @@ fov = 90
 resolution = [24, 24]
 [render]
 max_depth = 8
+integrator = "ppm"   # the volume photon map's furnace (bpt's paths would end at 8 vertices)
 [photons]
 count = 100000
 caustic_count = 1

@@ -129,8 +129,10 @@ def render(
       time          seconds (or a timedelta): stop after the pass that crosses it
       target_error  stop when the estimated relMSE falls below it (needs 4 passes)
       seed, spp, max_depth, resolution=(width, height)
-      integrator    "ppm" (progressive photon mapping) or "pt" (path tracing with MIS; takes no
-                    photon options), see docs/integrators.md
+      integrator    "ppm" (progressive photon mapping), "pt" (path tracing with MIS), "bpt"
+                    (bidirectional), "vcm" (vertex connection and merging) or "auto" (the
+                    default: bpt where there are media or rough glossy surfaces, else ppm; photon
+                    options choose ppm); only ppm takes photon options, see docs/integrators.md
       backend       "auto" (a real GPU if there is one, else the CPU reference), "gpu" (the
                     Vulkan device even when it is lavapipe) or "cpu"
       pass_range    (A, B), range(A, B) or "A..B": exactly passes A..B-1, for farms

@@ -147,11 +147,18 @@ pub fn parse_target_error(s: &str) -> Result<f64, String> {
     parse_real(s, 0.0, true, MAX_TARGET_ERROR, "a relMSE such as 0.01")
 }
 
-/// `--integrator`: one of the names of [`Integrator::NAMES`].
-pub fn parse_integrator(s: &str) -> Result<photonix::scene::Integrator, String> {
-    photonix::scene::Integrator::from_name(s).ok_or_else(|| {
+/// `--integrator`: one of [`Integrator::NAMES`], or `auto` (None: the one
+/// `Scene::choose_integrator` picks).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntegratorArg(pub Option<photonix::scene::Integrator>);
+
+pub fn parse_integrator(s: &str) -> Result<IntegratorArg, String> {
+    if s == "auto" {
+        return Ok(IntegratorArg(None));
+    }
+    photonix::scene::Integrator::from_name(s).map(|i| IntegratorArg(Some(i))).ok_or_else(|| {
         let names: Vec<&str> = photonix::scene::Integrator::NAMES.iter().map(|(n, _)| *n).collect();
-        format!("unknown integrator `{s}`; use one of {}", names.join(", "))
+        format!("unknown integrator `{s}`; use one of {}, auto", names.join(", "))
     })
 }
 

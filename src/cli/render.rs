@@ -24,7 +24,7 @@ use photonix::scene::{load_scene, Integrator};
 
 use super::parse::{
     parse_depth, parse_duration, parse_exposure, parse_gather_rays, parse_integrator, parse_pass_range, parse_passes,
-    parse_photons, parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error,
+    parse_photons, parse_radius, parse_resolution, parse_seed, parse_spp, parse_target_error, IntegratorArg,
 };
 
 #[derive(clap::Args)]
@@ -43,9 +43,10 @@ pub struct RenderArgs {
     spp: Option<u32>,
     /// The estimator: ppm (progressive photon mapping), pt (path tracing with multiple
     /// importance sampling), bpt (bidirectional path tracing) or vcm (vertex connection and
-    /// merging) [default: the scene's, else ppm]
+    /// merging); auto picks by the scene's contents: bpt where there are media or rough glossy
+    /// surfaces, else ppm [default: the scene's, else auto]
     #[arg(long, value_parser = parse_integrator)]
-    integrator: Option<Integrator>,
+    integrator: Option<IntegratorArg>,
     /// Seed of the random streams, 0 to 4294967295 [default: the scene's]
     #[arg(long, value_parser = parse_seed, allow_negative_numbers = true)]
     seed: Option<u32>,
@@ -103,6 +104,17 @@ impl PhotonArgs {
     /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
     /// (Each value was range-checked by its parser.) An integrator without photon maps takes
     /// none, and a photon flag is then an error.
+    /// Whether any photon-map flag was given (`--no-photons` too).
+    fn any_given(&self) -> bool {
+        self.photons.is_some()
+            || self.caustic_photons.is_some()
+            || self.radius.is_some()
+            || self.caustic_radius.is_some()
+            || self.gather_rays.is_some()
+            || self.photon_depth.is_some()
+            || self.no_photons
+    }
+
     fn apply(&self, scene: Option<PhotonSettings>, integrator: Integrator) -> Result<Option<PhotonSettings>> {
         let given: Vec<&str> = [
             ("--photons", self.photons.is_some()),
@@ -189,8 +201,23 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--device picks a Vulkan device, but --backend cpu uses none; leave one of them out");
     }
     let mut scene = load_scene(&args.scene)?;
-    if let Some(integrator) = args.integrator {
-        scene.render.integrator = integrator;
+    match args.integrator {
+        Some(IntegratorArg(Some(integrator))) => {
+            (scene.render.integrator, scene.render.integrator_auto) = (integrator, None)
+        }
+        Some(IntegratorArg(None)) => scene.choose_integrator(),
+        None => {}
+    }
+    if scene.render.integrator_auto.is_some() && args.photons.any_given() {
+        // Photon-map flags ask for photon mapping: the automatic choice yields to them.
+        (scene.render.integrator, scene.render.integrator_auto) =
+            (Integrator::Ppm, Some("photon-map flags were given"));
+    }
+    if let Some(why) = scene.render.integrator_auto {
+        note!(
+            "integrator {} (automatic: {why}; --integrator or [render] integrator picks another)",
+            scene.render.integrator.name()
+        );
     }
     for warning in &scene.warnings {
         note!("warning: {warning}");

@@ -56,7 +56,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         return Err(SceneError::MissingCamera { location: src.path.display().to_string() });
     };
     let (camera, blur_samples) = builder.camera(camera)?;
-    let mut render = builder.render(file.render.as_ref())?;
+    let (mut render, auto_integrator) = builder.render(file.render.as_ref())?;
     // POV-Ray's blur_samples: lens samples per pixel, here over all passes.
     if let Some(samples) = blur_samples {
         render.spp = render.spp.max(samples.div_ceil(render.passes));
@@ -134,7 +134,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
     }
 
     let name = src.path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let scene = Scene {
+    let mut scene = Scene {
         name,
         path: src.path.to_path_buf(),
         camera,
@@ -155,6 +155,9 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         // Filled in by `parse_scene_in`, which saw every file read.
         inputs: Vec::new(),
     };
+    if auto_integrator {
+        scene.choose_integrator();
+    }
     Ok((scene, origins))
 }
 

@@ -11,6 +11,7 @@
 //! (diffuse, reflectance 0, emission = its radiance).
 
 pub mod analytic;
+mod auto_integrator;
 mod convert;
 pub mod csg;
 mod error;
@@ -18,6 +19,7 @@ pub mod files;
 mod format;
 pub mod gltf_scene;
 mod material;
+pub use auto_integrator::auto_integrator;
 mod medium;
 pub mod model;
 pub mod pattern;
@@ -82,6 +84,15 @@ pub struct Scene {
     /// textures, environment maps, models with their MTL files, buffers and images, voxel grids.
     /// No command may write over one of them (`io::image::check_not_input`).
     pub inputs: Vec<PathBuf>,
+}
+
+impl Scene {
+    /// Lets `auto_integrator` choose the integrator, as it does for a scene that names none.
+    pub fn choose_integrator(&mut self) {
+        let threshold = self.photons.as_ref().map(|p| p.glossy_threshold);
+        let (integrator, why) = auto_integrator(&self.materials, self.media.len(), threshold);
+        (self.render.integrator, self.render.integrator_auto) = (integrator, Some(why));
+    }
 }
 
 /// A named object: shapes defined once (object space) and placed by instances. No shape of an
@@ -191,6 +202,9 @@ pub struct RenderSettings {
     pub seed: u32,
     /// The estimator (`[render] integrator`, `--integrator`).
     pub integrator: Integrator,
+    /// Why `integrator` was chosen for the scene when it names none (`auto_integrator`); `None`
+    /// when the scene or the caller named it.
+    pub integrator_auto: Option<&'static str>,
 }
 
 /// How a render estimates light transport: one place that chooses (`render::render_cpu`,

@@ -9,9 +9,15 @@ use crate::scene::{Integrator, PhotonSettings, RenderSettings};
 const DEFAULT_SPP: u32 = 4;
 const DEFAULT_PASSES: u32 = 4;
 const DEFAULT_MAX_DEPTH: u32 = 16;
+/// `[render] integrator` for `auto_integrator`'s choice (the default).
+pub(super) const AUTO: &str = "auto";
 
 impl Builder<'_> {
-    pub(super) fn render(&self, def: Option<&Spanned<crate::scene::format::RenderDef>>) -> Result<RenderSettings> {
+    /// The `[render]` settings, and whether the integrator is `auto_integrator`'s to choose.
+    pub(super) fn render(
+        &self,
+        def: Option<&Spanned<crate::scene::format::RenderDef>>,
+    ) -> Result<(RenderSettings, bool)> {
         let object = "[render]";
         let mut settings = RenderSettings {
             spp: DEFAULT_SPP,
@@ -19,9 +25,11 @@ impl Builder<'_> {
             max_depth: DEFAULT_MAX_DEPTH,
             seed: 0,
             integrator: Integrator::default(),
+            integrator_auto: None,
         };
+        let mut auto = true;
         let Some(def) = def else {
-            return Ok(settings);
+            return Ok((settings, auto));
         };
         let r = def.get_ref();
         if let Some(spp) = &r.spp {
@@ -37,11 +45,14 @@ impl Builder<'_> {
             settings.seed = self.integer(seed, object, "seed", 0, u32::MAX, "", "")?;
         }
         if let Some(name) = &r.integrator {
-            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).collect();
+            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).chain([AUTO]).collect();
             let name = self.one_of(name, object, "integrator", &names)?;
-            settings.integrator = Integrator::from_name(name).expect("one_of returns one of the names");
+            if name != AUTO {
+                settings.integrator = Integrator::from_name(name).expect("one_of returns one of the names");
+                auto = false;
+            }
         }
-        Ok(settings)
+        Ok((settings, auto))
     }
 
     pub(super) fn photons(
