@@ -51,7 +51,7 @@ layout(push_constant) uniform Push { DispatchRange range; };
 #include "vcm.glsl"
 
 float emission_weight(SubPath sp, float direct, float emission) {
-    return 1.0 / (1.0 + mis(direct) * sp.d_vcm + mis(emission) * sp.d_vc);
+    return 1.0 / (1.0 + wmul(mis(direct), sp.d_vcm) + wmul(mis(emission), sp.d_vc));
 }
 
 // Light sampling at a camera vertex; contract in vcm.rs, light_sampling.
@@ -70,12 +70,12 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
     float direct = ls.pdf;
     if (l.kind == LIGHT_DISTANT && l.area <= 0.0) direct = 1.0;
     else if (l.kind != LIGHT_AREA && l.kind != LIGHT_ENVIRONMENT && l.kind != LIGHT_DISTANT) direct = dist * dist;
-    float emission = emission_pdf(l, ls.wi, ls.cos_l);
+    float emission = emission_pdf_at(l, ls.wi, ls.cos_l, h.p);
     float cos_at_light = l.kind == LIGHT_AREA ? ls.cos_l : 1.0;
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
     float forward = light_is_delta(l) ? 0.0 : pdfs.x;
     float w_light = mis(forward / (l.pick_probability * direct));
-    float w_camera = mis(emission * cos_to_light / (direct * cos_at_light)) * (merge_weight(params, b) + sp.d_vcm + sp.d_vc * mis(pdfs.y));
+    float w_camera = wmul(mis(emission * cos_to_light / (direct * cos_at_light)), merge_weight(params, b) + sp.d_vcm + wmul(sp.d_vc, mis(pdfs.y)));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     vec3 to_target = ls.p - origin;
@@ -107,8 +107,8 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, 
     vec2 lig = lobe_pdfs(lb, l_wo, -dir);
     float cam_to_area = cam.x * cos_light / dist2;
     float light_to_area = lig.x * cos_cam / dist2;
-    float w_light = mis(cam_to_area) * (merge_weight(params, lb) + lv.d_vcm + lv.d_vc * mis(lig.y));
-    float w_camera = mis(light_to_area) * (merge_weight(params, b) + sp.d_vcm + sp.d_vc * mis(cam.y));
+    float w_light = wmul(mis(cam_to_area), merge_weight(params, lb) + lv.d_vcm + wmul(lv.d_vc, mis(lig.y)));
+    float w_camera = wmul(mis(light_to_area), merge_weight(params, b) + sp.d_vcm + wmul(sp.d_vc, mis(cam.y)));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 value = fc * fl * load3(lv.throughput) * (g * w * shading_adjoint(lb, l_wo, -dir));
     if (value == vec3(0.0)) return vec3(0.0);
@@ -162,13 +162,13 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                 Light l = light_at(i);
                 if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
                 if (dot(d, load3(l.direction)) <= -l.cos_outer) {
-                    float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, d, 1.0));
+                    float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf_at(l, d, 1.0, o));
                     terms[layer] += sp.throughput * load3(l.intensity) * (w / l.area);
                 }
             }
             WHEN(frame.environment != NO_LIGHT) {
                 Light l = light_at(frame.environment);
-                float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability * environment_pdf(l, d), l.pick_probability * emission_pdf(l, d, 1.0));
+                float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability * environment_pdf(l, d), l.pick_probability * emission_pdf_at(l, d, 1.0, o));
                 terms[layer] += sp.throughput * environment_radiance(l, d) * w;
             }
             break;
@@ -241,8 +241,8 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                         float w = 1.0;
                         if (!merge_only) {
                             vec2 pdfs = lobe_pdfs(b, wo, light_dir);
-                            float w_light = lv.d_vcm * params.vc_weight + lv.d_vm * mis(pdfs.x);
-                            float w_camera = sp.d_vcm * params.vc_weight + sp.d_vm * mis(pdfs.y);
+                            float w_light = wmul(lv.d_vcm, params.vc_weight) + wmul(lv.d_vm, mis(pdfs.x));
+                            float w_camera = wmul(sp.d_vcm, params.vc_weight) + wmul(sp.d_vm, mis(pdfs.y));
                             w = 1.0 / (w_light + 1.0 + w_camera);
                         }
                         uint ml = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),

@@ -4,6 +4,11 @@
 // The heuristic's power of a density (Veach's beta = 2; SmallVCM's Mis).
 float mis(float x) { return x * x; }
 
+// Contracts in vcm.rs, wmul and wdiv: zero factors make zero weights, even against infinity.
+float wmul(float a, float b) { return (a == 0.0 || b == 0.0) ? 0.0 : a * b; }
+
+float wdiv(float a, float c) { return a == 0.0 ? 0.0 : a / c; }
+
 // The layer of a path by its signature; contract in src/cpu/render_pt.rs, path_layer.
 uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
     if (first_specular) return LAYER_SPECULAR;
@@ -119,6 +124,22 @@ float emission_pdf(Light l, vec3 w, float cos_l) {
     return 1.0 / (2.0 * PI * (1.0 - l.cos_outer));
 }
 
+// Contracts in vcm.rs, disc_reaches and emission_pdf_at.
+const float DISC_SLACK = 1e-4;
+
+bool disc_reaches(Light l, vec3 w, vec3 at) {
+    vec3 axis = l.kind == LIGHT_ENVIRONMENT ? -w : load3(l.direction);
+    vec3 centre = load3(l.position) - axis * l.radius;
+    float s = dot(at - centre, axis) / -dot(w, axis);
+    vec3 q = at - centre + w * s;
+    return s >= -DISC_SLACK * l.radius && dot(q, q) <= l.radius * l.radius * (1.0 + DISC_SLACK);
+}
+
+float emission_pdf_at(Light l, vec3 w, float cos_l, vec3 at) {
+    bool infinite = l.kind == LIGHT_DISTANT || l.kind == LIGHT_ENVIRONMENT;
+    return infinite && !disc_reaches(l, w, at) ? 0.0 : emission_pdf(l, w, cos_l);
+}
+
 bool light_is_delta(Light l) {
     if (l.kind == LIGHT_AREA || l.kind == LIGHT_ENVIRONMENT) return false;
     if (l.kind == LIGHT_DISTANT) return l.area <= 0.0;
@@ -139,25 +160,25 @@ struct SubPath {
 };
 
 void sub_arrive(inout SubPath sp, float dist, float cos_in, bool far) {
-    if (far) sp.d_vcm *= mis(dist * dist);
+    if (far) sp.d_vcm = wmul(sp.d_vcm, mis(dist * dist));
     float c = mis(cos_in);
-    sp.d_vcm /= c;
-    sp.d_vc /= c;
-    sp.d_vm /= c;
+    sp.d_vcm = wdiv(sp.d_vcm, c);
+    sp.d_vc = wdiv(sp.d_vc, c);
+    sp.d_vm = wdiv(sp.d_vm, c);
 }
 
 // Contract in vcm.rs, SubPath::scatter (merge: whether merging is a technique at the vertex).
 void sub_scatter(inout SubPath sp, VcmParams p, bool delta, float cos_out, float pdf, float reverse, bool merge) {
     if (delta) {
         sp.d_vcm = 0.0;
-        sp.d_vc *= mis(cos_out);
-        sp.d_vm *= mis(cos_out);
+        sp.d_vc = wmul(sp.d_vc, mis(cos_out));
+        sp.d_vm = wmul(sp.d_vm, mis(cos_out));
     } else {
         float g = mis(cos_out / pdf);
         float vm = merge ? p.vm_weight : 0.0;
         float one = merge ? 1.0 : 0.0;
-        sp.d_vc = g * (sp.d_vc * mis(reverse) + sp.d_vcm + vm);
-        sp.d_vm = g * (sp.d_vm * mis(reverse) + sp.d_vcm * p.vc_weight + one);
+        sp.d_vc = wmul(g, wmul(sp.d_vc, mis(reverse)) + sp.d_vcm + vm);
+        sp.d_vm = wmul(g, wmul(sp.d_vm, mis(reverse)) + wmul(sp.d_vcm, p.vc_weight) + one);
         sp.d_vcm = mis(1.0 / pdf);
     }
 }

@@ -189,6 +189,80 @@ fn pt_layers_split_by_path_signature_and_sum_to_the_image() {
     assert!(share[0] > share[3], "direct light outweighs the caustics");
 }
 
+/// bpt's weights once turned NaN: a camera ray just below the horizon met the outdoor scene's
+/// infinite ground ten million metres away at a grazing angle, its partial weight overflowed to
+/// infinity, and a connection whose density underflowed to zero multiplied it (0 x inf); that
+/// one sample of pass 6 made its pixel NaN for good. Zero densities now weigh nothing (`wmul`).
+#[test]
+fn bidirectional_weights_stay_finite_at_the_horizon() {
+    let mut scene = shipped("outdoor", Integrator::Bpt);
+    scene.render.seed = 1;
+    let buffers = common::buffers(&scene, 480, 270);
+    let out = render_cpu(&buffers, 8, None, 6, &mut |_, _| {});
+    let bad = out.image.pixels.iter().filter(|p| p.iter().any(|c| !c.is_finite())).count();
+    assert_eq!(bad, 0, "pixels that are not finite");
+}
+
+/// Infinite lights start their light sub-paths on a disc of the scene's bounding sphere, which
+/// an infinite ground plane outruns: beyond the disc's shadow no light sub-path meets the ground.
+/// bpt and vcm once weighed light sampling there as if light paths shared the work, and the far
+/// ground came out 30-50% dark under the sky and sun; they must agree with pt there.
+#[test]
+fn bpt_and_vcm_agree_with_pt_on_ground_beyond_the_sky_disc() {
+    let text = r#"
+[camera]
+position = [0, 1.5, 0]
+look_at = [9.4, 1.2, 3.42]
+fov = 60
+resolution = [48, 24]
+[render]
+max_depth = 6
+seed = 2
+[materials.grass]
+type = "diffuse"
+reflectance = [0.16, 0.24, 0.08]
+[materials.white]
+type = "diffuse"
+reflectance = 0.75
+[[shapes]]
+type = "plane"
+normal = [0, 1, 0]
+material = "grass"
+[[shapes]]
+type = "sphere"
+center = [3.085, 0.45, 1.76]
+radius = 0.45
+material = "white"
+[environment]
+type = "sky"
+turbidity = 2.5
+latitude = 48.85
+longitude = 2.35
+date = "2026-06-21"
+time = "17:30"
+utc_offset = 2
+"#;
+    let ground = |integrator: Integrator| {
+        let mut scene = parse_scene(text, std::path::Path::new("ground.toml")).expect("scene parses");
+        scene.render.integrator = integrator;
+        let out = cpu(&common::buffers(&scene, 48, 24), 96);
+        // The lower half of the image: ground, most of it beyond the disc (radius about 2 m).
+        let rows = &out.image.pixels[48 * 12..];
+        [0, 1, 2].map(|c| rows.iter().map(|p| p[c] as f64).sum::<f64>() / rows.len() as f64)
+    };
+    let pt = ground(Integrator::Pt);
+    for integrator in [Integrator::Bpt, Integrator::Vcm] {
+        let other = ground(integrator);
+        let ratio: Vec<f64> = (0..3).map(|c| other[c] / pt[c]).collect();
+        println!("{}: ground mean / pt's {ratio:.4?}", integrator.name());
+        assert!(
+            ratio.iter().all(|r| (r - 1.0).abs() < 0.03),
+            "{} against pt on the ground: {ratio:?}",
+            integrator.name()
+        );
+    }
+}
+
 /// `auto` (the default) chooses by the scene's contents, as measured on the shared scenes: bpt
 /// for rough glossy surfaces and for media, ppm for the rest; a named integrator is kept.
 #[test]

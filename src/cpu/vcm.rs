@@ -58,6 +58,27 @@ pub fn mis(x: f32) -> f32 {
     x * x
 }
 
+/// `a * b` for the weights' products, zero when either is zero: a technique whose density is zero
+/// (or underflows to zero) weighs nothing, even against a partial weight that overflowed to
+/// infinity (a camera vertex on an infinite plane near the horizon, ten million units away and
+/// met at a grazing angle: 0 x inf would be NaN, and one NaN sample blackens its pixel for good).
+pub fn wmul(a: f32, b: f32) -> f32 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        a * b
+    }
+}
+
+/// `a / c` for the partial weights, zero when `a` is (0 / 0 at a grazing cosine of 0).
+pub fn wdiv(a: f32, c: f32) -> f32 {
+    if a == 0.0 {
+        0.0
+    } else {
+        a / c
+    }
+}
+
 /// Whether light sub-paths can reach the camera: a perspective camera (pinhole or thin lens), an
 /// orthographic one without a lens, a latlong one. An orthographic camera's lens would make
 /// every aperture point see a point along its own tilted ray, which light tracing leaves out
@@ -215,10 +236,40 @@ pub fn emission_pdf(s: &SceneView, l: &Light, w: Vec3, cos_l: f32) -> f32 {
     }
 }
 
+/// Rounding slack of `disc_reaches`, so that the points sub-paths start from on the disc's rim
+/// (or meet right behind it) stay inside.
+const DISC_SLACK: f32 = 1e-4;
+
+/// Whether a sub-path of the infinite light `l` can reach point `at` arriving from direction `w`
+/// (toward the light). Its sub-paths start on the disc of the scene's bounding sphere that faces
+/// the light's travel (`light_emission`: `l.radius` upstream of `l.position`), so the point of
+/// that disc behind `at` along `w` must lie on it. Geometry the bounding sphere leaves out (an
+/// infinite plane) is met by no light sub-path outside the disc's shadow: there the light-side
+/// techniques must weigh nothing and the camera's take the whole path, or that ground is dark.
+pub fn disc_reaches(l: &Light, w: Vec3, at: Vec3) -> bool {
+    let axis = if l.kind == LIGHT_ENVIRONMENT { -w } else { Vec3::from(l.direction) };
+    let centre = Vec3::from(l.position) - axis * l.radius;
+    let s = (at - centre).dot(axis) / -w.dot(axis);
+    let q = at - centre + w * s;
+    s >= -DISC_SLACK * l.radius && q.length_squared() <= l.radius * l.radius * (1.0 + DISC_SLACK)
+}
+
+/// `emission_pdf` of a sub-path that meets point `at` first: zero for an infinite light whose
+/// disc does not reach it (`disc_reaches`).
+pub fn emission_pdf_at(s: &SceneView, l: &Light, w: Vec3, cos_l: f32, at: Vec3) -> f32 {
+    let infinite = matches!(l.kind, LIGHT_DISTANT | LIGHT_ENVIRONMENT);
+    if infinite && !disc_reaches(l, w, at) {
+        0.0
+    } else {
+        emission_pdf(s, l, w, cos_l)
+    }
+}
+
 /// The light sample's densities that the weights need, before the pick probability: the
 /// solid-angle density of drawing it from the shading point `dist` away (SmallVCM's directPdfW;
-/// `pdf` is the sample's own, 0 for delta lights), `emission_pdf`, and the cosine at the light.
-fn illumination_pdfs(s: &SceneView, l: &Light, wi: Vec3, dist: f32, pdf: f32, cos_l: f32) -> (f32, f32, f32) {
+/// `pdf` is the sample's own, 0 for delta lights), `emission_pdf_at` the shading point `at`, and
+/// the cosine at the light.
+fn illumination_pdfs(s: &SceneView, l: &Light, at: Vec3, wi: Vec3, dist: f32, pdf: f32, cos_l: f32) -> (f32, f32, f32) {
     let direct = match l.kind {
         LIGHT_AREA | LIGHT_ENVIRONMENT => pdf,
         LIGHT_DISTANT if l.area > 0.0 => pdf,
@@ -227,7 +278,7 @@ fn illumination_pdfs(s: &SceneView, l: &Light, wi: Vec3, dist: f32, pdf: f32, co
         _ => dist * dist,
     };
     let cos_at_light = if l.kind == LIGHT_AREA { cos_l } else { 1.0 };
-    (direct, emission_pdf(s, l, wi, cos_l), cos_at_light)
+    (direct, emission_pdf_at(s, l, wi, cos_l, at), cos_at_light)
 }
 
 /// Whether light `l` is a delta light (no ray meets it: point, spot, distant without a disc).
@@ -285,12 +336,12 @@ impl SubPath {
     /// infinite light's path, whose density is by area of the scene's disc already).
     fn arrive(&mut self, dist: f32, cos_in: f32, far: bool) {
         if far {
-            self.d_vcm *= mis(dist * dist);
+            self.d_vcm = wmul(self.d_vcm, mis(dist * dist));
         }
         let c = mis(cos_in);
-        self.d_vcm /= c;
-        self.d_vc /= c;
-        self.d_vm /= c;
+        self.d_vcm = wdiv(self.d_vcm, c);
+        self.d_vc = wdiv(self.d_vc, c);
+        self.d_vm = wdiv(self.d_vm, c);
     }
 
     /// Leaving a vertex along a sampled direction of cosine `cos_out`: through a delta lobe, or a
@@ -300,13 +351,13 @@ impl SubPath {
     fn scatter(&mut self, p: &VcmParams, delta: bool, cos_out: f32, pdf: f32, reverse: f32, merge: bool) {
         if delta {
             self.d_vcm = 0.0;
-            self.d_vc *= mis(cos_out);
-            self.d_vm *= mis(cos_out);
+            self.d_vc = wmul(self.d_vc, mis(cos_out));
+            self.d_vm = wmul(self.d_vm, mis(cos_out));
         } else {
             let g = mis(cos_out / pdf);
             let (vm, one) = if merge { (p.vm_weight, 1.0) } else { (0.0, 0.0) };
-            self.d_vc = g * (self.d_vc * mis(reverse) + self.d_vcm + vm);
-            self.d_vm = g * (self.d_vm * mis(reverse) + self.d_vcm * p.vc_weight + one);
+            self.d_vc = wmul(g, wmul(self.d_vc, mis(reverse)) + self.d_vcm + vm);
+            self.d_vm = wmul(g, wmul(self.d_vm, mis(reverse)) + wmul(self.d_vcm, p.vc_weight) + one);
             self.d_vcm = mis(1.0 / pdf);
         }
     }
@@ -852,7 +903,10 @@ fn connect_to_camera(
     } else {
         // The density of a camera path arriving from the camera continuing toward the light.
         let (toward_light, _) = lobe_pdfs(b, dir, wo);
-        mis(image_to_surface / p.light_paths as f32) * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(toward_light))
+        wmul(
+            mis(image_to_surface / p.light_paths as f32),
+            merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(toward_light)),
+        )
     };
     let adjoint = shading_adjoint(b, wo, dir);
     let value = sub.throughput * fr * (image_to_surface * adjoint / (p.light_paths as f32 * (1.0 + w_light)));
@@ -939,7 +993,7 @@ pub fn radiance_vcm(
                     let w = if take_whole {
                         1.0
                     } else {
-                        let emission = l.pick_probability * emission_pdf(s, l, d, 1.0);
+                        let emission = l.pick_probability * emission_pdf_at(s, l, d, 1.0, o);
                         emission_weight(&sub, l.pick_probability / l.area, emission)
                     };
                     terms[layer] += sub.throughput * Vec3::from(l.intensity) * (w / l.area);
@@ -950,7 +1004,7 @@ pub fn radiance_vcm(
                 let w = if take_whole {
                     1.0
                 } else {
-                    let emission = l.pick_probability * emission_pdf(s, l, d, 1.0);
+                    let emission = l.pick_probability * emission_pdf_at(s, l, d, 1.0, o);
                     emission_weight(&sub, l.pick_probability * environment_pdf(s, l, d), emission)
                 };
                 terms[layer] += sub.throughput * environment_radiance(s, l, d) * w;
@@ -1035,8 +1089,8 @@ pub fn radiance_vcm(
                         1.0
                     } else {
                         let (forward, reverse) = lobe_pdfs(&b, wo, light_dir);
-                        let w_light = lv.d_vcm * p.vc_weight + lv.d_vm * mis(forward);
-                        let w_camera = sub.d_vcm * p.vc_weight + sub.d_vm * mis(reverse);
+                        let w_light = wmul(lv.d_vcm, p.vc_weight) + wmul(lv.d_vm, mis(forward));
+                        let w_camera = wmul(sub.d_vcm, p.vc_weight) + wmul(sub.d_vm, mis(reverse));
                         1.0 / (w_light + 1.0 + w_camera)
                     };
                     let layer = path_layer(
@@ -1108,7 +1162,7 @@ pub fn radiance_vcm(
 /// sampling: by area for finite lights, by solid angle for infinite ones) and `emission` (a
 /// light sub-path leaving it the same way), pick probability included.
 fn emission_weight(sub: &SubPath, direct: f32, emission: f32) -> f32 {
-    1.0 / (1.0 + mis(direct) * sub.d_vcm + mis(emission) * sub.d_vc)
+    1.0 / (1.0 + wmul(mis(direct), sub.d_vcm) + wmul(mis(emission), sub.d_vc))
 }
 
 /// Light sampling at a camera vertex (SmallVCM's DirectIllumination): the weighed contribution
@@ -1145,12 +1199,14 @@ fn light_sampling(
         return Vec3::ZERO;
     }
     let dist = (ls.p - h.p).length();
-    let (direct, emission, cos_at_light) = illumination_pdfs(s, l, ls.wi, dist, ls.pdf, ls.cos_l);
+    let (direct, emission, cos_at_light) = illumination_pdfs(s, l, h.p, ls.wi, dist, ls.pdf, ls.cos_l);
     let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
     let forward = if light_is_delta(l) { 0.0 } else { forward };
     let w_light = mis(forward / (l.pick_probability * direct));
-    let w_camera = mis(emission * cos_to_light / (direct * cos_at_light))
-        * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(reverse));
+    let w_camera = wmul(
+        mis(emission * cos_to_light / (direct * cos_at_light)),
+        merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(reverse)),
+    );
     let w = 1.0 / (w_light + 1.0 + w_camera);
     // The shadow ray runs to the sampled point itself, stopping short by the sample's own offset.
     let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
@@ -1204,8 +1260,8 @@ fn connect_vertices(
     // Densities by area at the other end.
     let cam_to_area = cam_forward * cos_light / dist2;
     let light_to_area = light_forward * cos_cam / dist2;
-    let w_light = mis(cam_to_area) * (merge_weight(p, &lb) + lv.d_vcm + lv.d_vc * mis(light_reverse));
-    let w_camera = mis(light_to_area) * (merge_weight(p, b) + sub.d_vcm + sub.d_vc * mis(cam_reverse));
+    let w_light = wmul(mis(cam_to_area), merge_weight(p, &lb) + lv.d_vcm + wmul(lv.d_vc, mis(light_reverse)));
+    let w_camera = wmul(mis(light_to_area), merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(cam_reverse)));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     let value = fc * fl * Vec3::from(lv.throughput) * (g * w * shading_adjoint(&lb, l_wo, -dir));
     if value == Vec3::ZERO {
