@@ -70,6 +70,8 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
     float direct = ls.pdf;
     if (l.kind == LIGHT_DISTANT && l.area <= 0.0) direct = 1.0;
     else if (l.kind != LIGHT_AREA && l.kind != LIGHT_ENVIRONMENT && l.kind != LIGHT_DISTANT) direct = dist * dist;
+    // Contract in vcm.rs, light_sampling: no density, no sample.
+    if (direct <= 0.0) return vec3(0.0);
     float emission = emission_pdf_at(l, ls.wi, ls.cos_l, h.p);
     float cos_at_light = l.kind == LIGHT_AREA ? ls.cos_l : 1.0;
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);

@@ -1200,6 +1200,11 @@ fn light_sampling(
     }
     let dist = (ls.p - h.p).length();
     let (direct, emission, cos_at_light) = illumination_pdfs(s, l, h.p, ls.wi, dist, ls.pdf, ls.cos_l);
+    if direct <= 0.0 {
+        // A direction the light's own sampling gives no density (an environment texel of zero
+        // weight met under rounding): light sampling did not make it, and 0 / 0 would be NaN.
+        return Vec3::ZERO;
+    }
     let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
     let forward = if light_is_delta(l) { 0.0 } else { forward };
     let w_light = mis(forward / (l.pick_probability * direct));
