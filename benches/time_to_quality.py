@@ -292,10 +292,13 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra,
     if proc.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{proc.stderr}")
     passes = re.search(r"^(\d+) pass", proc.stderr, re.M)
+    # The integrator `auto` chose (the default), named in the row.
+    chosen = re.search(r"^integrator (\w+) \(automatic", proc.stderr, re.M)
+    args = " ".join(extra + ([f"(auto: {chosen.group(1)})"] if chosen else []))
     image = read_exr(out)
     row = {
         "backend": label,
-        "args": " ".join(extra),
+        "args": args,
         "budget": budget,
         "seconds": seconds,
         "cpu_seconds": cpu_seconds,
@@ -304,7 +307,7 @@ def run_photonix(binary, scene_name, backend, budget, reference, out_dir, extra,
         "mean_ratio": mean_ratio(image, reference),
         "summary": proc.stderr.strip().splitlines()[-3:],
     }
-    print(f"  photonix {label} {' '.join(extra)} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
+    print(f"  photonix {label} {args} {scene_name} budget {budget} s: {seconds:6.2f} s, {row['passes']} passes, relMSE {row['rel_mse']:.5f}", flush=True)
     return row
 
 
