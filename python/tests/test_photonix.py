@@ -251,3 +251,16 @@ def test_the_path_tracer_is_chosen_by_name_and_refuses_photon_options():
         photonix.render(BOX, passes=1, integrator="pt", photons=1000)
     with pytest.raises(ValueError, match="ppm, pt"):
         photonix.render(BOX, passes=1, integrator="vcmx")
+
+
+def test_auto_is_the_default_and_photon_options_choose_photon_mapping():
+    # cornell-fog has a medium, so auto picks bpt there; photon options ask for ppm instead of
+    # being refused, and "auto" can be named too.
+    fog = ROOT / "scenes" / "cornell-fog.toml"
+    small = dict(passes=1, backend="cpu", resolution=(16, 16), spp=1)
+    for options in ({}, {"integrator": "auto"}, {"photons": 1000, "caustic_photons": 1000}):
+        image = photonix.render(fog, **small, **options)
+        assert image.shape == (16, 16, 3) and np.isfinite(image).all(), options
+        assert (image.mean(axis=(0, 1)) > 0.0).all(), options
+    with pytest.raises(ValueError, match="photons"):
+        photonix.render(fog, integrator="bpt", photons=1000, **small)
