@@ -125,7 +125,6 @@ float emission_pdf(Light l, vec3 w, float cos_l) {
 }
 
 // Contracts in vcm.rs, disc_reaches and emission_pdf_at.
-const float DISC_SLACK = 1e-4;
 
 bool disc_reaches(Light l, vec3 w, vec3 at) {
     vec3 axis = l.kind == LIGHT_ENVIRONMENT ? -w : load3(l.direction);

@@ -761,20 +761,18 @@ fn render<'py>(
     ];
     let given: Vec<&str> = photon_flags.iter().filter_map(|(n, on)| on.then_some(*n)).collect();
     let mut s = scene.scene.clone();
-    match integrator {
-        Some("auto") => s.choose_integrator(),
-        Some(name) => {
-            s.render.integrator = Integrator::from_name(name).ok_or_else(|| {
+    if let Some(name) = integrator {
+        let named = match name {
+            Integrator::AUTO => None,
+            _ => Some(Integrator::from_name(name).ok_or_else(|| {
                 let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).collect();
                 PyValueError::new_err(format!("integrator={name:?} is not one of {}, auto", names.join(", ")))
-            })?;
-            s.render.integrator_auto = None;
-        }
-        None => {}
+            })?),
+        };
+        s.set_integrator(named);
     }
-    if s.render.integrator_auto.is_some() && (!given.is_empty() || no_photons) {
-        // Photon-map arguments ask for photon mapping: the automatic choice yields to them.
-        s.render.integrator = Integrator::Ppm;
+    if !given.is_empty() || no_photons {
+        s.photon_options_given();
     }
     let s = &s;
     let photon_settings = if !s.render.integrator.uses_photons() {

@@ -148,12 +148,12 @@ pub fn parse_target_error(s: &str) -> Result<f64, String> {
 }
 
 /// `--integrator`: one of [`Integrator::NAMES`], or `auto` (None: the one
-/// `Scene::choose_integrator` picks).
+/// `Scene::set_integrator` lets `auto_integrator` pick).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntegratorArg(pub Option<photonix::scene::Integrator>);
 
 pub fn parse_integrator(s: &str) -> Result<IntegratorArg, String> {
-    if s == "auto" {
+    if s == photonix::scene::Integrator::AUTO {
         return Ok(IntegratorArg(None));
     }
     photonix::scene::Integrator::from_name(s).map(|i| IntegratorArg(Some(i))).ok_or_else(|| {

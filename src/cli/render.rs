@@ -100,23 +100,9 @@ struct PhotonArgs {
 }
 
 impl PhotonArgs {
-    /// The scene's settings with the command line's overrides. Any photon flag turns photon
-    /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
-    /// (Each value was range-checked by its parser.) An integrator without photon maps takes
-    /// none, and a photon flag is then an error.
-    /// Whether any photon-map flag was given (`--no-photons` too).
-    fn any_given(&self) -> bool {
-        self.photons.is_some()
-            || self.caustic_photons.is_some()
-            || self.radius.is_some()
-            || self.caustic_radius.is_some()
-            || self.gather_rays.is_some()
-            || self.photon_depth.is_some()
-            || self.no_photons
-    }
-
-    fn apply(&self, scene: Option<PhotonSettings>, integrator: Integrator) -> Result<Option<PhotonSettings>> {
-        let given: Vec<&str> = [
+    /// The photon-map flags given, `--no-photons` aside.
+    fn given(&self) -> Vec<&'static str> {
+        [
             ("--photons", self.photons.is_some()),
             ("--caustic-photons", self.caustic_photons.is_some()),
             ("--radius", self.radius.is_some()),
@@ -126,7 +112,15 @@ impl PhotonArgs {
         ]
         .into_iter()
         .filter_map(|(name, on)| on.then_some(name))
-        .collect();
+        .collect()
+    }
+
+    /// The scene's settings with the command line's overrides. Any photon flag turns photon
+    /// mapping on where the scene has it off; with --no-photons it is an error, not ignored.
+    /// (Each value was range-checked by its parser.) An integrator without photon maps takes
+    /// none, and a photon flag is then an error.
+    fn apply(&self, scene: Option<PhotonSettings>, integrator: Integrator) -> Result<Option<PhotonSettings>> {
+        let given = self.given();
         if !integrator.uses_photons() {
             if let Some(flag) = given.first().copied().or(self.no_photons.then_some("--no-photons")) {
                 bail!(
@@ -201,17 +195,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--device picks a Vulkan device, but --backend cpu uses none; leave one of them out");
     }
     let mut scene = load_scene(&args.scene)?;
-    match args.integrator {
-        Some(IntegratorArg(Some(integrator))) => {
-            (scene.render.integrator, scene.render.integrator_auto) = (integrator, None)
-        }
-        Some(IntegratorArg(None)) => scene.choose_integrator(),
-        None => {}
+    if let Some(IntegratorArg(named)) = args.integrator {
+        scene.set_integrator(named);
     }
-    if scene.render.integrator_auto.is_some() && args.photons.any_given() {
-        // Photon-map flags ask for photon mapping: the automatic choice yields to them.
-        (scene.render.integrator, scene.render.integrator_auto) =
-            (Integrator::Ppm, Some("photon-map flags were given"));
+    if !args.photons.given().is_empty() || args.photons.no_photons {
+        scene.photon_options_given();
     }
     if let Some(why) = scene.render.integrator_auto {
         note!(

@@ -236,10 +236,6 @@ pub fn emission_pdf(s: &SceneView, l: &Light, w: Vec3, cos_l: f32) -> f32 {
     }
 }
 
-/// Rounding slack of `disc_reaches`, so that the points sub-paths start from on the disc's rim
-/// (or meet right behind it) stay inside.
-const DISC_SLACK: f32 = 1e-4;
-
 /// Whether a sub-path of the infinite light `l` can reach point `at` arriving from direction `w`
 /// (toward the light). Its sub-paths start on the disc of the scene's bounding sphere that faces
 /// the light's travel (`light_emission`: `l.radius` upstream of `l.position`), so the point of

@@ -45,6 +45,9 @@ shared_constants! {
     /// by paths (sharp reflections and caustics through them); rougher ones end camera paths and
     /// read the photon maps with the BSDF's value (docs/materials.md).
     GLOSSY_THRESHOLD: f32 = 0.25;
+    /// Rounding slack of `disc_reaches` (cpu/vcm.rs), relative to the bounding radius, so that
+    /// the points infinite lights' sub-paths start from on the disc's rim stay inside.
+    DISC_SLACK: f32 = 1e-4;
 
     /// Lobe flags of a BSDF (`bsdf_flags`), in the spirit of Mitsuba 3's `BSDFFlags`.
     BSDF_DIFFUSE: u32 = 1;

@@ -156,7 +156,7 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
         inputs: Vec::new(),
     };
     if auto_integrator {
-        scene.choose_integrator();
+        scene.set_integrator(None);
     }
     Ok((scene, origins))
 }

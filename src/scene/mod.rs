@@ -87,11 +87,26 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Lets `auto_integrator` choose the integrator, as it does for a scene that names none.
-    pub fn choose_integrator(&mut self) {
-        let threshold = self.photons.as_ref().map(|p| p.glossy_threshold);
-        let (integrator, why) = auto_integrator(&self.materials, self.media.len(), threshold);
-        (self.render.integrator, self.render.integrator_auto) = (integrator, Some(why));
+    /// Names the integrator (`Some`), or lets `auto_integrator` choose (`None`), as it does for a
+    /// scene that names none.
+    pub fn set_integrator(&mut self, named: Option<Integrator>) {
+        (self.render.integrator, self.render.integrator_auto) = match named {
+            Some(integrator) => (integrator, None),
+            None => {
+                let threshold = self.photons.as_ref().map(|p| p.glossy_threshold);
+                let (integrator, why) = auto_integrator(&self.materials, self.media.len(), threshold);
+                (integrator, Some(why))
+            }
+        };
+    }
+
+    /// The caller gave photon-map options (command-line flags, Python arguments): they ask for
+    /// photon mapping, so an automatic choice yields to them; a named integrator stays.
+    pub fn photon_options_given(&mut self) {
+        if self.render.integrator_auto.is_some() {
+            (self.render.integrator, self.render.integrator_auto) =
+                (Integrator::Ppm, Some("photon-map options were given"));
+        }
     }
 }
 
@@ -228,6 +243,10 @@ impl Integrator {
     /// Every integrator by its name in scene files and on the command line.
     pub const NAMES: &'static [(&'static str, Integrator)] =
         &[("ppm", Integrator::Ppm), ("pt", Integrator::Pt), ("bpt", Integrator::Bpt), ("vcm", Integrator::Vcm)];
+
+    /// The name (`[render] integrator`, `--integrator`, Python's `integrator=`) that lets
+    /// `auto_integrator` choose.
+    pub const AUTO: &'static str = "auto";
 
     pub fn from_name(name: &str) -> Option<Integrator> {
         Self::NAMES.iter().find(|(n, _)| *n == name).map(|&(_, i)| i)

@@ -9,8 +9,6 @@ use crate::scene::{Integrator, PhotonSettings, RenderSettings};
 const DEFAULT_SPP: u32 = 4;
 const DEFAULT_PASSES: u32 = 4;
 const DEFAULT_MAX_DEPTH: u32 = 16;
-/// `[render] integrator` for `auto_integrator`'s choice (the default).
-pub(super) const AUTO: &str = "auto";
 
 impl Builder<'_> {
     /// The `[render]` settings, and whether the integrator is `auto_integrator`'s to choose.
@@ -45,9 +43,9 @@ impl Builder<'_> {
             settings.seed = self.integer(seed, object, "seed", 0, u32::MAX, "", "")?;
         }
         if let Some(name) = &r.integrator {
-            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).chain([AUTO]).collect();
+            let names: Vec<&str> = Integrator::NAMES.iter().map(|(n, _)| *n).chain([Integrator::AUTO]).collect();
             let name = self.one_of(name, object, "integrator", &names)?;
-            if name != AUTO {
+            if name != Integrator::AUTO {
                 settings.integrator = Integrator::from_name(name).expect("one_of returns one of the names");
                 auto = false;
             }
