@@ -277,7 +277,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
             specular_path = false;
             sp.throughput *= smp.weight / (1.0 - q);
         }
-        if (m >= PT_ROULETTE_DEPTH) {
+        if (m >= BPT_ROULETTE_DEPTH) {
             float survive = min(max(sp.throughput.x, max(sp.throughput.y, sp.throughput.z)), PT_ROULETTE_MAX);
             if (rand1(stream, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
             sp.throughput /= survive;

@@ -181,7 +181,7 @@ void main() {
             factor = bsdf_eval(b, smp.wi, wo) * (cos_out * adjoint / pdfs.x);
         }
         sp.throughput *= factor;
-        if (k >= PT_ROULETTE_DEPTH) {
+        if (k >= BPT_ROULETTE_DEPTH) {
             float survive = min(max(factor.x, max(factor.y, factor.z)), PT_ROULETTE_MAX);
             if (rand1(path, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
             sp.throughput /= survive;

@@ -830,7 +830,7 @@ pub fn trace_light_path(
         sub.throughput *= factor;
         // Russian roulette on this vertex's own factor (the throughput holds flux, whose scale
         // says nothing about the path's odds).
-        if k >= PT_ROULETTE_DEPTH {
+        if k >= BPT_ROULETTE_DEPTH {
             let survive = factor.max_element().min(PT_ROULETTE_MAX);
             if rand1(path, sample, f.seed, dim + RNG_ROULETTE) >= survive {
                 break;
@@ -1132,7 +1132,7 @@ pub fn radiance_vcm(
             specular_path = false;
             sub.throughput *= smp.weight / (1.0 - q);
         }
-        if m >= PT_ROULETTE_DEPTH {
+        if m >= BPT_ROULETTE_DEPTH {
             let survive = sub.throughput.max_element().min(PT_ROULETTE_MAX);
             if rand1(stream, sample, f.seed, dim + RNG_ROULETTE) >= survive {
                 break;

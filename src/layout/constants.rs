@@ -366,6 +366,12 @@ shared_constants! {
     /// from being cut).
     PT_ROULETTE_DEPTH: u32 = 5;
     PT_ROULETTE_MAX: f32 = 0.95;
+    /// bpt's and vcm's sub-paths, camera and light alike, play it from this vertex on: their
+    /// later vertices add connections (a shadow ray each) rather than one light sample, so a
+    /// vertex costs more there and early roulette buys more samples than it adds noise (at 30 s
+    /// on cornell-glossy, 1.3x lower error than from vertex 5; pt loses 1.7x with it on the box:
+    /// BENCHMARKS.md, "Russian roulette from the first vertex").
+    BPT_ROULETTE_DEPTH: u32 = 1;
 
     /// Photon paths draw from dimensions above this, so they never share numbers with camera paths.
     RNG_PHOTON_DOMAIN: u32 = 0x8000_0000;
