@@ -445,14 +445,18 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
 
 /// The light stage's results on the CPU: vertex slots (`vertex_slots` per path, unused ones with
 /// `path_length` 0), their grid for merging, and the light-tracing image (per pixel and layer,
-/// r g b, each a 64-bit fixed-point sum).
+/// r g b, each a 64-bit fixed-point sum). A render keeps one across its samples: reallocating
+/// and clearing its tens of megabytes every sample was a serial fifth of a bpt render on two
+/// cores (BENCHMARKS.md, "The light stage's buffers").
+#[derive(Default)]
 pub struct LightStage {
     pub vertices: Vec<LightVertex>,
+    positions: Vec<Vec3>,
     pub grid: GridParams,
     /// Light vertices as grid points: position, then (path, slot) in the two other words.
     pub points: Vec<Photon>,
     pub starts: Vec<u32>,
-    pub splats: Vec<u64>,
+    splats: Vec<AtomicU64>,
 }
 
 impl LightStage {
@@ -462,7 +466,7 @@ impl LightStage {
         let base = (pixel * LAYER_COUNT * 3) as usize;
         for (layer, t) in terms.iter_mut().enumerate() {
             let c = |k: usize| {
-                let v = self.splats[base + layer * 3 + k];
+                let v = self.splats[base + layer * 3 + k].load(Ordering::Relaxed);
                 splat_value(v as u32, (v >> 32) as u32)
             };
             *t = Vec3::new(c(0), c(1), c(2));
@@ -476,15 +480,21 @@ pub fn vertex_grid(p: &VcmParams, points: u32) -> GridParams {
     grid_params(p.radius, points, 1.0)
 }
 
-/// Runs the light stage of a sample: every light path, its vertices, its splats.
-pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
+/// Runs the light stage of a sample into `stage`: every light path, its vertices, its splats.
+pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     let f = s.frame;
     let slots = p.vertex_slots as usize;
-    let splats: Vec<AtomicU64> = (0..(f.width * f.height * LAYER_COUNT * 3)).map(|_| AtomicU64::new(0)).collect();
-    let mut vertices = vec![LightVertex::default(); p.light_paths as usize * slots];
-    let mut positions = vec![Vec3::ZERO; vertices.len()];
-    let runs = vertices.par_chunks_mut(slots).zip(positions.par_chunks_mut(slots));
+    let slot_count = p.light_paths as usize * slots;
+    let splat_count = (f.width * f.height * LAYER_COUNT * 3) as usize;
+    stage.vertices.resize(slot_count, LightVertex::default());
+    stage.positions.resize(slot_count, Vec3::ZERO);
+    stage.splats.resize_with(splat_count, || AtomicU64::new(0));
+    stage.splats.par_iter().with_min_len(4096).for_each(|a| a.store(0, Ordering::Relaxed));
+    let splats = &stage.splats;
+    let runs = stage.vertices.par_chunks_mut(slots).zip(stage.positions.par_chunks_mut(slots));
     runs.enumerate().for_each(|(path, (out, at))| {
+        // The previous sample's vertices: a path writes only the slots it reaches.
+        out.iter_mut().for_each(|v| v.path_length = 0);
         trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
             let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
             for (k, c) in [v.x, v.y, v.z].into_iter().enumerate() {
@@ -496,13 +506,13 @@ pub fn light_stage(s: &SceneView, p: &VcmParams) -> LightStage {
     let mut points = Vec::new();
     if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
         let merged = |v: &LightVertex| v.path_length > 0 && v.flags & VERTEX_MEDIUM == 0;
-        for (i, (_, at)) in vertices.iter().zip(&positions).enumerate().filter(|(_, (v, _))| merged(v)) {
+        let stored = stage.vertices.iter().zip(&stage.positions).enumerate();
+        for (i, (_, at)) in stored.filter(|(_, (v, _))| merged(v)) {
             points.push(Photon { position: (*at).into(), flux_rg: (i / slots) as u32, flux_b_dir: (i % slots) as u32 });
         }
     }
-    let grid = vertex_grid(p, points.len() as u32);
-    let (points, starts) = build_grid(&points, &grid);
-    LightStage { vertices, grid, points, starts, splats: splats.into_iter().map(AtomicU64::into_inner).collect() }
+    stage.grid = vertex_grid(p, points.len() as u32);
+    (stage.points, stage.starts) = build_grid(&points, &stage.grid);
 }
 
 /// The point of a stored light vertex and its BSDF, rebuilt from the ray that met it: a surface

@@ -347,6 +347,19 @@ pub fn render_cpu(
     pass: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> RenderOutput {
+    render_cpu_keeping(buffers, spp, photons, pass, &mut Default::default(), progress)
+}
+
+/// `render_cpu` keeping the bidirectional integrators' light-stage buffers in `stage` between
+/// passes (a `Renderer` holds one).
+pub fn render_cpu_keeping(
+    buffers: &SceneBuffers,
+    spp: u32,
+    photons: Option<&PhotonSettings>,
+    pass: u32,
+    stage: &mut crate::cpu::vcm::LightStage,
+    progress: &mut dyn FnMut(u64, u64),
+) -> RenderOutput {
     let mut stages = Vec::new();
     let t = Instant::now();
     let photons = effective_photons(buffers, photons);
@@ -362,7 +375,7 @@ pub fn render_cpu(
     }
 
     if frame.integrator == INTEGRATOR_BPT || frame.integrator == INTEGRATOR_VCM {
-        return render_vcm_cpu(buffers, &view, spp, pass, stages, progress);
+        return render_vcm_cpu(buffers, &view, spp, pass, stage, stages, progress);
     }
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
@@ -399,6 +412,7 @@ fn render_vcm_cpu(
     view: &crate::cpu::SceneView,
     spp: u32,
     pass: u32,
+    stage: &mut crate::cpu::vcm::LightStage,
     mut stages: Vec<(String, Duration)>,
     progress: &mut dyn FnMut(u64, u64),
 ) -> RenderOutput {
@@ -416,7 +430,7 @@ fn render_vcm_cpu(
         let sample_index = pass * spp + sample;
         let t = Instant::now();
         let params = crate::cpu::vcm::vcm_params(&frame, base_radius, sample_index);
-        let stage = crate::cpu::vcm::light_stage(view, &params);
+        crate::cpu::vcm::light_stage(view, &params, stage);
         light_time += t.elapsed();
         let t = Instant::now();
         for unit in work_units(frame.height, 1, 1, band_rows, sample_index) {
@@ -425,7 +439,7 @@ fn render_vcm_cpu(
                 break 'samples;
             }
             let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
-            crate::cpu::vcm::render_vcm(view, &params, &stage, &unit, band);
+            crate::cpu::vcm::render_vcm(view, &params, stage, &unit, band);
             done += unit_paths(&unit);
             progress(done, total);
         }

@@ -7,7 +7,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use super::gpu::GpuRenderer;
-use super::{effective_photons, render_cpu, set_thread_stop_flag, PhotonSettings, RenderOutput, SceneBuffers};
+use super::{effective_photons, render_cpu_keeping, set_thread_stop_flag, PhotonSettings, RenderOutput, SceneBuffers};
+use crate::cpu::vcm::LightStage;
 use crate::gpu::{GpuContext, GpuError};
 
 /// A render in progress on one backend: the GPU kernels when made with a device context, else
@@ -17,6 +18,8 @@ pub struct Renderer<'a> {
     buffers: SceneBuffers,
     photons: Option<PhotonSettings>,
     gpu: Option<GpuRenderer<'a>>,
+    /// The CPU backend's light-stage buffers (bpt and vcm), kept across passes.
+    light_stage: LightStage,
     stop: Option<Arc<AtomicBool>>,
 }
 
@@ -30,7 +33,7 @@ impl<'a> Renderer<'a> {
     ) -> Result<Renderer<'a>, GpuError> {
         let photons = effective_photons(buffers, photons).copied();
         let gpu = ctx.map(|ctx| GpuRenderer::new(ctx, buffers, photons.as_ref())).transpose()?;
-        Ok(Renderer { buffers: buffers.clone(), photons, gpu, stop: None })
+        Ok(Renderer { buffers: buffers.clone(), photons, gpu, light_stage: LightStage::default(), stop: None })
     }
 
     /// Makes passes stop (returning an incomplete output after the dispatch under way) when
@@ -52,7 +55,9 @@ impl<'a> Renderer<'a> {
         }
         let out = match &mut self.gpu {
             Some(gpu) => gpu.render_pass(spp, pass, progress),
-            None => Ok(render_cpu(&self.buffers, spp, self.photons.as_ref(), pass, progress)),
+            None => {
+                Ok(render_cpu_keeping(&self.buffers, spp, self.photons.as_ref(), pass, &mut self.light_stage, progress))
+            }
         };
         if self.stop.is_some() {
             set_thread_stop_flag(None);
