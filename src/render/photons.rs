@@ -194,11 +194,17 @@ pub fn build_maps_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u
 pub fn build_indices_cpu(buffers: &SceneBuffers, settings: &PhotonSettings, pass: u32) -> IndexedMaps {
     let Emitted { grids, global, caustic, volume } = emit_maps(buffers, settings, pass);
     let dropped = excluded_by_every_lookup(settings.gather_rays);
-    let indices = [
-        PhotonIndex::build(&global, &grids[0], dropped[0]),
-        PhotonIndex::build(&caustic, &grids[1], dropped[1]),
-        PhotonIndex::build(&volume, &grids[2], dropped[2]),
-    ];
+    // Each build is mostly serial (a counting sort): the maps are built side by side.
+    let (global, (caustic, volume)) = rayon::join(
+        || PhotonIndex::build(&global, &grids[0], dropped[0]),
+        || {
+            rayon::join(
+                || PhotonIndex::build(&caustic, &grids[1], dropped[1]),
+                || PhotonIndex::build(&volume, &grids[2], dropped[2]),
+            )
+        },
+    );
+    let indices = [global, caustic, volume];
     IndexedMaps { grids, indices }
 }
 
