@@ -452,6 +452,10 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
 pub struct LightStage {
     pub vertices: Vec<LightVertex>,
     positions: Vec<Vec3>,
+    /// Each path's slots up to its last vertex: a camera vertex's connections read no further
+    /// (most slots are empty under roulette, and their reads were a tenth of the camera stage's
+    /// own time).
+    path_ends: Vec<u32>,
     pub grid: GridParams,
     /// Light vertices as grid points: position, then (path, slot) in the two other words.
     pub points: Vec<Photon>,
@@ -488,14 +492,17 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     let splat_count = (f.width * f.height * LAYER_COUNT * 3) as usize;
     stage.vertices.resize(slot_count, LightVertex::default());
     stage.positions.resize(slot_count, Vec3::ZERO);
+    stage.path_ends.resize(p.light_paths as usize, 0);
     stage.splats.resize_with(splat_count, || AtomicU64::new(0));
     stage.splats.par_iter().with_min_len(4096).for_each(|a| a.store(0, Ordering::Relaxed));
     let splats = &stage.splats;
     let runs = stage.vertices.par_chunks_mut(slots).zip(stage.positions.par_chunks_mut(slots));
-    runs.enumerate().for_each(|(path, (out, at))| {
-        // The previous sample's vertices: a path writes only the slots it reaches.
-        out.iter_mut().for_each(|v| v.path_length = 0);
-        trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
+    let runs = runs.zip(stage.path_ends.par_iter_mut());
+    runs.enumerate().for_each(|(path, ((out, at), end))| {
+        // The previous sample's vertices, up to its end (the slots beyond are still empty): a
+        // path writes only the slots it reaches.
+        out[..*end as usize].iter_mut().for_each(|v| v.path_length = 0);
+        (_, *end) = trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
             let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
             for (k, c) in [v.x, v.y, v.z].into_iter().enumerate() {
                 let (low, high) = splat_words(c);
@@ -688,7 +695,8 @@ fn next_vertex(
 }
 
 /// Traces light path `path` of the sample into `out` (its vertex slots, with their surface points
-/// in `positions`) and hands each light-tracing splat to `splat(pixel, layer, value)`.
+/// in `positions`) and hands each light-tracing splat to `splat(pixel, layer, value)`. Returns
+/// the rays cast and the slots up to the path's last vertex.
 pub fn trace_light_path(
     s: &SceneView,
     p: &VcmParams,
@@ -696,17 +704,18 @@ pub fn trace_light_path(
     out: &mut [LightVertex],
     positions: &mut [Vec3],
     splat: &mut dyn FnMut(u32, u32, Vec3),
-) -> u32 {
+) -> (u32, u32) {
     let f = s.frame;
     let mut rays = 0;
+    let mut end = 0;
     if f.light_count == 0 {
-        return rays;
+        return (rays, end);
     }
     let sample = p.sample_index;
     let dim0 = RNG_VCM_LIGHT_DOMAIN;
     let l = &s.lights[pick_light(s, rand1(path, sample, f.seed, dim0 + RNG_LIGHT_PICK), false) as usize];
     if l.pick_probability <= 0.0 {
-        return rays;
+        return (rays, end);
     }
     // The render's light paths are one low-discrepancy sequence (sample k's paths are its points
     // k x light_paths + path) in the numbers that spread them: start, direction, bounces.
@@ -727,7 +736,7 @@ pub fn trace_light_path(
     };
     let emission = emission_pdf(s, l, -e.direction, e.cos_l);
     if emission <= 0.0 || e.power == Vec3::ZERO {
-        return rays;
+        return (rays, end);
     }
     let finite = !matches!(l.kind, LIGHT_DISTANT | LIGHT_ENVIRONMENT);
     let mut sub = SubPath {
@@ -779,6 +788,7 @@ pub fn trace_light_path(
         sub.arrive(next.dist, abs_cos(&b, wo), k > 1 || finite);
         if flags & BSDF_ESTIMATE != 0 {
             positions[(k - 1) as usize] = h.p;
+            end = k;
             let in_medium = if next.scattered { VERTEX_MEDIUM } else { 0 };
             out[(k - 1) as usize] = LightVertex {
                 origin: o.into(),
@@ -861,7 +871,7 @@ pub fn trace_light_path(
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
     }
-    rays
+    (rays, end)
 }
 
 /// The scattering vertex a ray (`o`, `d`) reached at distance `t`, with its BSDF: a collision
@@ -951,7 +961,8 @@ pub fn radiance_vcm(
     let mut sub = SubPath { throughput: Vec3::ONE, d_vcm: camera_d_vcm(f, p.light_paths, d), d_vc: 0.0, d_vm: 0.0 };
     let path = stream % p.light_paths;
     let slots = p.vertex_slots as usize;
-    let light_vertices = &stage.vertices[path as usize * slots..(path as usize + 1) * slots];
+    let first = path as usize * slots;
+    let light_vertices = &stage.vertices[first..first + stage.path_ends[path as usize] as usize];
     let mut skip = NO_LIGHT;
     let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
     let mut specular_path = true;
