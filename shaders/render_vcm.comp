@@ -55,7 +55,7 @@ float emission_weight(SubPath sp, float direct, float emission) {
 }
 
 // Light sampling at a camera vertex; contract in vcm.rs, light_sampling.
-vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, uint stream, uint dim, uvec3 n, inout uint rays) {
+vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, uint stream, uint dim, uvec3 n, float vm, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
     uint sample_index = params.sample_index;
     Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
@@ -77,7 +77,7 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
     float forward = light_is_delta(l) ? 0.0 : pdfs.x;
     float w_light = mis(forward / (l.pick_probability * direct));
-    float w_camera = wmul(mis(emission * cos_to_light / (direct * cos_at_light)), merge_weight(params, b) + sp.d_vcm + wmul(sp.d_vc, mis(pdfs.y)));
+    float w_camera = wmul(mis(emission * cos_to_light / (direct * cos_at_light)), vm + sp.d_vcm + wmul(sp.d_vc, mis(pdfs.y)));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     vec3 to_target = ls.p - origin;
@@ -88,7 +88,7 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
 }
 
 // A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.
-vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, LightVertex lv, uvec3 n, inout uint rays) {
+vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, LightVertex lv, uvec3 n, float vm, inout uint rays) {
     Hit lh;
     Bsdf lb;
     light_vertex_bsdf(lv, lh, lb);
@@ -110,7 +110,7 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, 
     float cam_to_area = cam.x * cos_light / dist2;
     float light_to_area = lig.x * cos_cam / dist2;
     float w_light = wmul(mis(cam_to_area), merge_weight(params, lb) + lv.d_vcm + wmul(lv.d_vc, mis(lig.y)));
-    float w_camera = wmul(mis(light_to_area), merge_weight(params, b) + sp.d_vcm + wmul(sp.d_vc, mis(cam.y)));
+    float w_camera = wmul(mis(light_to_area), vm + sp.d_vcm + wmul(sp.d_vc, mis(cam.y)));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 value = fc * fl * load3(lv.throughput) * (g * w * shading_adjoint(lb, l_wo, -dir));
     if (value == vec3(0.0)) return vec3(0.0);
@@ -199,13 +199,16 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         uint flags = bsdf_flags(b);
         if (flags == 0u) break;
         skip = nv.scattered ? NO_LIGHT : ray_skip(prim);
+        // Whether this vertex merges, and merging's factor in its weights (vcm.rs, radiance_vcm).
+        bool merges = mergeable(b) && (m > 1u || merges_at_first_vertex(params));
+        float vm = merges ? params.vm_weight : 0.0;
         uint dim = (m - 1u) * RNG_DIMS_PER_BOUNCE;
         // The transmittance numbers of this vertex's connections (vcm.rs, radiance_vcm).
         uint connection0 = RNG_VCM_TRANSMITTANCE_DOMAIN + (m - 1u) * (params.vertex_slots + 1u) * (MEDIUM_CROSSINGS + 1u);
         if ((flags & BSDF_ESTIMATE) != 0u) {
             uint cam_diffuse = diffuse + 1u;
             if (connect) {
-                vec3 v = light_sampling(h, b, wo, sp, skip, prim, medium, stream, dim, uvec3(stream, sample_index, connection0), rays);
+                vec3 v = light_sampling(h, b, wo, sp, skip, prim, medium, stream, dim, uvec3(stream, sample_index, connection0), vm, rays);
                 terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
                 // Slot k holds the light vertex k + 1 scattering vertices from the light, or
                 // nothing (a delta vertex, or the path ended): skip the gaps.
@@ -214,13 +217,13 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                     LightVertex lv = vertices[slot0 + k];
                     if (lv.path_length == 0u) continue;
                     uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
-                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, n, rays);
+                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, n, vm, rays);
                     uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
                                          (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
                     terms[cl] += sp.throughput * c;
                 }
             }
-            if (merge && vgrid.photon_count > 0u && mergeable(b)) {
+            if (merge && vgrid.photon_count > 0u && merges) {
                 vec3 merged[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
                 float r2 = vgrid.radius * vgrid.radius;
                 ivec3 c = grid_cell(h.p, vgrid.cell_size);
@@ -271,7 +274,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         } else {
             vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
             if (pdfs.x <= 0.0) break;
-            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, mergeable(b));
+            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, merges);
             diffuse++;
             specular_after = false;
             specular_path = false;

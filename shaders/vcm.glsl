@@ -151,6 +151,9 @@ bool mergeable(Bsdf b) { return b.kind != MATERIAL_PHASE; }
 
 float merge_weight(VcmParams p, Bsdf b) { return mergeable(b) ? p.vm_weight : 0.0; }
 
+// Whether camera paths merge at their first vertex; contract in vcm.rs, merges_at_first_vertex.
+bool merges_at_first_vertex(VcmParams p) { return (p.techniques & VCM_CONNECT) == 0u || !camera_connectable(); }
+
 struct SubPath {
     vec3 throughput;
     float d_vcm;

@@ -70,7 +70,7 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim,
     float w_light = 0.0;
     if ((params.techniques & VCM_LIGHT_TRACE_ONLY) == 0u) {
         float toward_light = lobe_pdfs(b, dir, wo).x;
-        w_light = wmul(mis(image_to_surface / float(params.light_paths)), merge_weight(params, b) + sp.d_vcm + wmul(sp.d_vc, mis(toward_light)));
+        w_light = wmul(mis(image_to_surface / float(params.light_paths)), (merges_at_first_vertex(params) ? merge_weight(params, b) : 0.0) + sp.d_vcm + wmul(sp.d_vc, mis(toward_light)));
     }
     float adjoint = shading_adjoint(b, wo, dir);
     vec3 value = sp.throughput * fr * (image_to_surface * adjoint / (float(params.light_paths) * (1.0 + w_light)));

@@ -309,6 +309,15 @@ fn mergeable(b: &Bsdf) -> bool {
     b.kind != MATERIAL_PHASE
 }
 
+/// Whether camera paths merge at their first vertex. Not where light tracing reaches the
+/// camera: with a radius of about a pixel, merging there is light tracing again with a box
+/// filter, so the two halved each other's weight while the lookups cost a tenth of a vcm render
+/// (at equal samples the error moved by 1%, the time fell 10-24%; BENCHMARKS.md). The check
+/// technique `VCM_MERGE_ONLY` merges there, as SmallVCM's ppm mode.
+fn merges_at_first_vertex(p: &VcmParams, f: &FrameParams) -> bool {
+    !has(p, VCM_CONNECT) || !camera_connectable(f)
+}
+
 /// SmallVCM's misVmWeightFactor for merging at a vertex with BSDF `b`: 0 where it cannot merge.
 fn merge_weight(p: &VcmParams, b: &Bsdf) -> f32 {
     if mergeable(b) {
@@ -479,9 +488,12 @@ impl LightStage {
     }
 }
 
-/// The grid a sample's light vertices merge through.
+/// The grid a sample's light vertices merge through. Its cells are twice the radius wide, as
+/// SmallVCM's: a lookup then reads at most 8 buckets (about 7 on average) instead of about 21,
+/// and with a radius of about a pixel most lookups find no vertex at all, so the buckets' cache
+/// misses were the cost (vcm's camera stage 10% faster on cornell-glossy, BENCHMARKS.md).
 pub fn vertex_grid(p: &VcmParams, points: u32) -> GridParams {
-    grid_params(p.radius, points, 1.0)
+    GridParams { cell_size: 2.0 * p.radius, ..grid_params(p.radius, points, 1.0) }
 }
 
 /// Runs the light stage of a sample into `stage`: every light path, its vertices, its splats.
@@ -921,7 +933,9 @@ fn connect_to_camera(
         let (toward_light, _) = lobe_pdfs(b, dir, wo);
         wmul(
             mis(image_to_surface / p.light_paths as f32),
-            merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(toward_light)),
+            (if merges_at_first_vertex(p, f) { merge_weight(p, b) } else { 0.0 })
+                + sub.d_vcm
+                + wmul(sub.d_vc, mis(toward_light)),
         )
     };
     let adjoint = shading_adjoint(b, wo, dir);
@@ -1057,6 +1071,8 @@ pub fn radiance_vcm(
         }
         skip = if next.scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let at = VertexMedium { prim, medium };
+        let merges = mergeable(&b) && (m > 1 || merges_at_first_vertex(p, f));
+        let vm = if merges { p.vm_weight } else { 0.0 };
         let dim = (m - 1) * RNG_DIMS_PER_BOUNCE;
         // The transmittance numbers of this vertex's connections: light sampling, then a slot each.
         let connection = |c: u32| SegmentNumbers {
@@ -1068,7 +1084,7 @@ pub fn radiance_vcm(
             let cam_diffuse = diffuse + 1;
             if connect {
                 let (v, layer) = (
-                    light_sampling(s, p, &h, &b, wo, &sub, skip, at, stream, dim, connection(0), rays),
+                    light_sampling(s, p, &h, &b, wo, &sub, skip, at, stream, dim, connection(0), vm, rays),
                     path_layer(first_specular, cam_diffuse, false),
                 );
                 terms[layer as usize] += sub.throughput * v;
@@ -1081,7 +1097,8 @@ pub fn radiance_vcm(
                     if lv.path_length == 0 {
                         continue;
                     }
-                    let v = connect_vertices(s, p, &h, &b, wo, &sub, skip, at, lv, connection(slot as u32 + 1), rays);
+                    let v =
+                        connect_vertices(s, p, &h, &b, wo, &sub, skip, at, lv, connection(slot as u32 + 1), vm, rays);
                     let layer = path_layer(
                         first_specular,
                         cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1,
@@ -1090,7 +1107,7 @@ pub fn radiance_vcm(
                     terms[layer as usize] += sub.throughput * v;
                 }
             }
-            if has(p, VCM_MERGE | VCM_MERGE_ONLY) && mergeable(&b) {
+            if has(p, VCM_MERGE | VCM_MERGE_ONLY) && merges {
                 let mut merged = [Vec3::ZERO; 4];
                 for_each_photon_near(h.p, &stage.grid, &stage.points, &stage.starts, |pt, _| {
                     let lv = &stage.vertices[(pt.flux_rg as usize) * slots + pt.flux_b_dir as usize];
@@ -1147,7 +1164,7 @@ pub fn radiance_vcm(
             if pdf <= 0.0 {
                 break;
             }
-            sub.scatter(p, false, cos_out, pdf, reverse, mergeable(&b));
+            sub.scatter(p, false, cos_out, pdf, reverse, merges);
             diffuse += 1;
             specular_after = false;
             specular_path = false;
@@ -1197,6 +1214,7 @@ fn light_sampling(
     stream: u32,
     dim: u32,
     numbers: SegmentNumbers,
+    vm: f32,
     rays: &mut u32,
 ) -> Vec3 {
     let f = s.frame;
@@ -1225,10 +1243,8 @@ fn light_sampling(
     let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
     let forward = if light_is_delta(l) { 0.0 } else { forward };
     let w_light = mis(forward / (l.pick_probability * direct));
-    let w_camera = wmul(
-        mis(emission * cos_to_light / (direct * cos_at_light)),
-        merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(reverse)),
-    );
+    let w_camera =
+        wmul(mis(emission * cos_to_light / (direct * cos_at_light)), vm + sub.d_vcm + wmul(sub.d_vc, mis(reverse)));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     // The shadow ray runs to the sampled point itself, stopping short by the sample's own offset.
     let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
@@ -1256,6 +1272,7 @@ fn connect_vertices(
     at: VertexMedium,
     lv: &LightVertex,
     numbers: SegmentNumbers,
+    vm: f32,
     rays: &mut u32,
 ) -> Vec3 {
     let (lh, lb) = light_vertex_bsdf(s, lv);
@@ -1283,7 +1300,7 @@ fn connect_vertices(
     let cam_to_area = cam_forward * cos_light / dist2;
     let light_to_area = light_forward * cos_cam / dist2;
     let w_light = wmul(mis(cam_to_area), merge_weight(p, &lb) + lv.d_vcm + wmul(lv.d_vc, mis(light_reverse)));
-    let w_camera = wmul(mis(light_to_area), merge_weight(p, b) + sub.d_vcm + wmul(sub.d_vc, mis(cam_reverse)));
+    let w_camera = wmul(mis(light_to_area), vm + sub.d_vcm + wmul(sub.d_vc, mis(cam_reverse)));
     let w = 1.0 / (w_light + 1.0 + w_camera);
     let value = fc * fl * Vec3::from(lv.throughput) * (g * w * shading_adjoint(&lb, l_wo, -dir));
     if value == Vec3::ZERO {

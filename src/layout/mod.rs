@@ -233,10 +233,12 @@ gpu_structs! {
         pub flux_b_dir: u32,
     }
 
-    /// A hashed spatial grid over one photon map, 32 bytes. Cells are cubes of `cell_size` =
-    /// `radius`, so a lookup of that radius touches the 3x3x3 cells around its point (27 r^3 of
-    /// candidates, against 64 r^3 for 2x2x2 cells of 2r: fewer photons read); cell coordinates are hashed
-    /// into `table_mask + 1` buckets (a power of two about twice the photon count).
+    /// A hashed spatial grid over one photon map, 32 bytes. A lookup of `radius` reads the
+    /// 3x3x3 cells around its point that it reaches, so `cell_size` is at least `radius`. Photon
+    /// maps take `cell_size` = `radius` (27 r^3 of candidates, against 64 r^3 for 2x2x2 cells of
+    /// 2r: fewer photons read, dense maps); vcm's light vertices take 2r (sparse: the buckets'
+    /// misses cost more than the candidates, `cpu::vcm::vertex_grid`). Cell coordinates are
+    /// hashed into `table_mask + 1` buckets (a power of two about twice the photon count).
     pub struct GridParams {
         pub cell_size: f32,
         pub radius: f32,
