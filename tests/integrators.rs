@@ -267,15 +267,18 @@ utc_offset = 2
     }
 }
 
-/// `auto` (the default) chooses by the scene's contents, as measured on the shared scenes: bpt
-/// for rough glossy surfaces and for media, ppm for the rest; a named integrator is kept.
+/// `auto` (the default) chooses by the scene's contents, as measured on the shared scenes: vcm
+/// for rough glossy surfaces under area lights, bpt for them under spot lights and for media,
+/// ppm for the rest; a named integrator is kept.
 #[test]
-fn auto_integrator_picks_bpt_for_glossy_and_fog_and_ppm_elsewhere() {
+fn auto_integrator_picks_vcm_or_bpt_for_glossy_bpt_for_fog_and_ppm_elsewhere() {
     for (name, chosen) in [
         ("cornell-box", Integrator::Ppm),
         ("cornell-caustics", Integrator::Ppm),
-        ("cornell-glossy", Integrator::Bpt),
+        ("cornell-glossy", Integrator::Vcm),
         ("cornell-fog", Integrator::Bpt),
+        ("materials", Integrator::Vcm),
+        ("spotlights", Integrator::Bpt),
     ] {
         let scene = load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).expect("shipped scene loads");
         assert_eq!(scene.render.integrator, chosen, "{name}");

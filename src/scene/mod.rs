@@ -94,7 +94,7 @@ impl Scene {
             Some(integrator) => (integrator, None),
             None => {
                 let threshold = self.photons.as_ref().map(|p| p.glossy_threshold);
-                let (integrator, why) = auto_integrator(&self.materials, self.media.len(), threshold);
+                let (integrator, why) = auto_integrator(&self.materials, &self.lights, self.media.len(), threshold);
                 (integrator, Some(why))
             }
         };
