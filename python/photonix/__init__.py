@@ -131,8 +131,9 @@ def render(
       seed, spp, max_depth, resolution=(width, height)
       integrator    "ppm" (progressive photon mapping), "pt" (path tracing with MIS), "bpt"
                     (bidirectional), "vcm" (vertex connection and merging) or "auto" (the
-                    default: bpt where there are media or rough glossy surfaces, else ppm; photon
-                    options choose ppm); only ppm takes photon options, see docs/integrators.md
+                    default: vcm for rough glossy surfaces under area lights or a sky, bpt
+                    under point or spot lights and in media, else ppm; photon options choose
+                    ppm); only ppm takes photon options, see docs/integrators.md
       backend       "auto" (a real GPU if there is one, else the CPU reference), "gpu" (the
                     Vulkan device even when it is lavapipe) or "cpu"
       pass_range    (A, B), range(A, B) or "A..B": exactly passes A..B-1, for farms
