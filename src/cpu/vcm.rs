@@ -536,14 +536,47 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
 
 /// The point of a stored light vertex and its BSDF, rebuilt from the ray that met it: a surface
 /// point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
-fn light_vertex_bsdf(s: &SceneView, v: &LightVertex) -> (Hit, Bsdf) {
+fn light_vertex_bsdf(s: &SceneView, v: &LightVertex) -> LightSurface {
     let (o, d) = (Vec3::from(v.origin), Vec3::from(v.direction));
     if v.flags & VERTEX_MEDIUM != 0 {
-        return (medium_hit(o + d * v.t, -d), phase_bsdf(s, v.hit, -d));
+        let h = medium_hit(o + d * v.t, -d);
+        return LightSurface { p: h.p, eps: h.eps, bsdf: phase_bsdf(s, v.hit, -d) };
     }
     let h = shape_hit(s, v.hit, o, d, v.t);
-    let b = material_bsdf(s, &s.materials[h.material as usize], &h);
-    (h, b)
+    LightSurface { p: h.p, eps: h.eps, bsdf: material_bsdf(s, &s.materials[h.material as usize], &h) }
+}
+
+/// What a connection needs of a light vertex: its point, ray offset and BSDF.
+#[derive(Clone, Copy)]
+struct LightSurface {
+    p: Vec3,
+    eps: f32,
+    bsdf: Bsdf,
+}
+
+/// The light vertices' surfaces one camera path has evaluated. Every camera vertex connects to
+/// the same light path; evaluated once per connection, a light vertex's textures and frame were
+/// a sixteenth of a glossy vcm render's CPU time. The kernel evaluates them per connection: a
+/// cache would cost it registers, its scarcer resource.
+struct LightSurfaces {
+    cached: [Option<LightSurface>; LIGHT_SURFACES_CACHED],
+}
+
+/// Light vertices a camera path keeps evaluated; deeper ones are evaluated per connection.
+const LIGHT_SURFACES_CACHED: usize = 16;
+
+impl LightSurfaces {
+    fn new() -> Self {
+        LightSurfaces { cached: [None; LIGHT_SURFACES_CACHED] }
+    }
+
+    fn get(&mut self, s: &SceneView, slot: usize, v: &LightVertex) -> LightSurface {
+        match self.cached.get_mut(slot) {
+            Some(Some(surface)) => *surface,
+            Some(entry) => *entry.insert(light_vertex_bsdf(s, v)),
+            None => light_vertex_bsdf(s, v),
+        }
+    }
 }
 
 /// The medium a segment leaving vertex `h` (at `at`) along `dir` starts in, where the path met
@@ -977,6 +1010,7 @@ pub fn radiance_vcm(
     let slots = p.vertex_slots as usize;
     let first = path as usize * slots;
     let light_vertices = &stage.vertices[first..first + stage.path_ends[path as usize] as usize];
+    let mut light_surfaces = LightSurfaces::new();
     let mut skip = NO_LIGHT;
     let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
     let mut specular_path = true;
@@ -1097,8 +1131,21 @@ pub fn radiance_vcm(
                     if lv.path_length == 0 {
                         continue;
                     }
-                    let v =
-                        connect_vertices(s, p, &h, &b, wo, &sub, skip, at, lv, connection(slot as u32 + 1), vm, rays);
+                    let light = light_surfaces.get(s, slot, lv);
+                    let v = connect_vertices(
+                        s,
+                        p,
+                        &h,
+                        &b,
+                        wo,
+                        &sub,
+                        skip,
+                        at,
+                        (lv, &light),
+                        connection(slot as u32 + 1),
+                        vm,
+                        rays,
+                    );
                     let layer = path_layer(
                         first_specular,
                         cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1,
@@ -1270,13 +1317,13 @@ fn connect_vertices(
     sub: &SubPath,
     skip: u32,
     at: VertexMedium,
-    lv: &LightVertex,
+    (lv, light): (&LightVertex, &LightSurface),
     numbers: SegmentNumbers,
     vm: f32,
     rays: &mut u32,
 ) -> Vec3 {
-    let (lh, lb) = light_vertex_bsdf(s, lv);
-    let to_light = lh.p - h.p;
+    let lb = light.bsdf;
+    let to_light = light.p - h.p;
     let dist2 = to_light.length_squared();
     if dist2 <= 0.0 {
         return Vec3::ZERO;
@@ -1306,7 +1353,7 @@ fn connect_vertices(
     if value == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    let target = lh.p + (h.p - lh.p).normalize() * lh.eps;
+    let target = light.p + (h.p - light.p).normalize() * light.eps;
     value * visibility(s, h, skip, target, medium_toward(s, h, at, wo, dir), numbers, rays)
 }
 
