@@ -534,9 +534,9 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     (stage.points, stage.starts) = build_grid(&points, &stage.grid);
 }
 
-/// The point of a stored light vertex and its BSDF, rebuilt from the ray that met it: a surface
+/// The point, ray offset and BSDF of a stored light vertex, rebuilt from the ray that met it: a surface
 /// point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
-fn light_vertex_bsdf(s: &SceneView, v: &LightVertex) -> LightSurface {
+fn light_surface(s: &SceneView, v: &LightVertex) -> LightSurface {
     let (o, d) = (Vec3::from(v.origin), Vec3::from(v.direction));
     if v.flags & VERTEX_MEDIUM != 0 {
         let h = medium_hit(o + d * v.t, -d);
@@ -573,8 +573,8 @@ impl LightSurfaces {
     fn get(&mut self, s: &SceneView, slot: usize, v: &LightVertex) -> LightSurface {
         match self.cached.get_mut(slot) {
             Some(Some(surface)) => *surface,
-            Some(entry) => *entry.insert(light_vertex_bsdf(s, v)),
-            None => light_vertex_bsdf(s, v),
+            Some(entry) => *entry.insert(light_surface(s, v)),
+            None => light_surface(s, v),
         }
     }
 }
