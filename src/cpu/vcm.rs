@@ -534,8 +534,8 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     (stage.points, stage.starts) = build_grid(&points, &stage.grid);
 }
 
-/// The point, ray offset and BSDF of a stored light vertex, rebuilt from the ray that met it: a surface
-/// point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
+/// The point, ray offset and BSDF of a stored light vertex, rebuilt from the ray that met it: a
+/// surface point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
 fn light_surface(s: &SceneView, v: &LightVertex) -> LightSurface {
     let (o, d) = (Vec3::from(v.origin), Vec3::from(v.direction));
     if v.flags & VERTEX_MEDIUM != 0 {
