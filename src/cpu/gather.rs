@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use super::bsdf::{bsdf_estimate_is_constant, bsdf_eval, bsdf_flags, facing, Bsdf};
 use super::photon_index::PhotonIndex;
+use super::sampling::onb;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
@@ -29,22 +30,79 @@ fn map_index<'a>(s: &SceneView<'a>, map: usize, exclude: u32) -> (&'a PhotonInde
 /// `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
 /// whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
 /// photons that arrived from behind the surface or lie off its tangent plane.
-pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u32) -> Vec3 {
+pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u32) -> Gathered {
     let (index, g) = map_index(s, map, exclude);
+    let mut found = Gathered::default();
     if g.photon_count == 0 {
-        return Vec3::ZERO;
+        return found;
     }
     let r2 = g.radius * g.radius;
     let thickness = PHOTON_DISC_THICKNESS * g.radius;
-    let mut sum = Vec3::ZERO;
+    let thin = PHOTON_EDGE_THICKNESS * g.radius;
     index.for_each_near(x, g, |pos, flags, p, d2| {
-        let d = pos - x;
-        if d.dot(n).abs() > thickness || (flags & exclude) != 0 || p.wi.dot(n) <= 0.0 {
+        let off = (pos - x).dot(n).abs();
+        if (flags & exclude) != 0 {
             return;
         }
-        sum += p.flux * (1.0 - d2 / r2);
+        if off > thickness {
+            found.off_disc = true;
+            return;
+        }
+        if p.wi.dot(n) <= 0.0 {
+            return;
+        }
+        let c = p.flux * (1.0 - d2 / r2);
+        found.disc += c;
+        if off <= thin {
+            found.thin += c;
+        }
     });
-    sum * (2.0 / (PI * r2))
+    found.scale(Vec3::splat(2.0 / (PI * r2)))
+}
+
+/// Probe ray `k` (`0..2 * EDGE_PROBES`) of a lookup at `x` (facing normal `n`) whose largest
+/// radius is `reach`, the directions turned by `turn` (a number in [0, 1)): even probes leave a
+/// point just above the surface along direction k / 2 and meet a wall that rises from it (a
+/// concave edge); odd probes run back toward `x` just below the surface from `reach` away and
+/// meet the side of a solid whose face ends (a convex edge). Returns the origin and direction.
+pub fn edge_probe_ray(x: Vec3, n: Vec3, reach: f32, turn: f32, k: u32) -> (Vec3, Vec3) {
+    let (t1, t2) = onb(n);
+    let phi = 2.0 * PI * ((k / 2) as f32 + turn) / EDGE_PROBES as f32;
+    let dir = t1 * phi.cos() + t2 * phi.sin();
+    let lift = n * (PHOTON_DISC_THICKNESS * reach);
+    if k % 2 == 0 {
+        (x + lift, dir)
+    } else {
+        (x + dir * reach - lift, -dir)
+    }
+}
+
+/// The share of a disc of radius `r` that the surface covers, as the probes found it: in each
+/// direction the surface reaches `reach[i]` (the Epanechnikov kernel's mass within s r of the
+/// centre along a ray is 2 s^2 - s^4 of the ray's share).
+pub fn edge_mass(reach: &[f32; EDGE_PROBES as usize], r: f32) -> f32 {
+    let mut mass = 0.0;
+    for &rho in reach {
+        let s2 = (rho.min(r) / r) * (rho.min(r) / r);
+        mass += 2.0 * s2 - s2 * s2;
+    }
+    mass / EDGE_PROBES as f32
+}
+
+/// A surface lookup's sums: over the disc (the estimate), over its thin core (what the estimate
+/// becomes where probes found an edge: photons of a surface across the edge lie in the disc but
+/// not in the core), and whether photons lay in reach off the disc (another surface nearby).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Gathered {
+    pub disc: Vec3,
+    pub thin: Vec3,
+    pub off_disc: bool,
+}
+
+impl Gathered {
+    fn scale(self, k: Vec3) -> Gathered {
+        Gathered { disc: self.disc * k, thin: self.thin * k, off_disc: self.off_disc }
+    }
 }
 
 /// Radiance toward `wo` at `h` through the estimate lobes of `b`, from the photons of `map`
@@ -53,31 +111,40 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
 /// with the 3D Epanechnikov kernel 15/(8 pi r^3) (1 - d^2/r^2): the sum of flux times phase
 /// over the collisions near the point, which estimates sigma_t times the in-scattered radiance
 /// (Jensen and Christensen 1998); the caller divides by sigma_t.
-pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, exclude: u32) -> Vec3 {
+pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, exclude: u32) -> Gathered {
     let volume = map == MAP_VOLUME;
     let nf = facing(b, wo);
     // A Lambertian BSDF has one value for every photon: sum the irradiance, apply it once.
     if !volume && bsdf_estimate_is_constant(b) {
-        return bsdf_eval(b, wo, nf) * photon_irradiance(s, map, h.p, nf, exclude);
+        return photon_irradiance(s, map, h.p, nf, exclude).scale(bsdf_eval(b, wo, nf));
     }
     let (index, g) = map_index(s, map, exclude);
+    let mut found = Gathered::default();
     if g.photon_count == 0 {
-        return Vec3::ZERO;
+        return found;
     }
     let r2 = g.radius * g.radius;
     let thickness = if volume { f32::INFINITY } else { PHOTON_DISC_THICKNESS * g.radius };
     // Photons arriving from behind count only where the BSDF transmits.
+    let thin = if volume { f32::INFINITY } else { PHOTON_EDGE_THICKNESS * g.radius };
     let both_sides = volume || bsdf_flags(b) & BSDF_TRANSMISSION != 0;
-    let mut sum = Vec3::ZERO;
     index.for_each_near(h.p, g, |pos, flags, p, d2| {
-        let d = pos - h.p;
-        if d.dot(nf).abs() > thickness || (flags & exclude) != 0 {
+        let off = (pos - h.p).dot(nf).abs();
+        if (flags & exclude) != 0 {
+            return;
+        }
+        if off > thickness {
+            found.off_disc = true;
             return;
         }
         if !both_sides && p.wi.dot(nf) <= 0.0 {
             return;
         }
-        sum += bsdf_eval(b, wo, p.wi) * p.flux * (1.0 - d2 / r2);
+        let c = bsdf_eval(b, wo, p.wi) * p.flux * (1.0 - d2 / r2);
+        found.disc += c;
+        if off <= thin {
+            found.thin += c;
+        }
     });
-    sum * if volume { 15.0 / (8.0 * PI * r2 * g.radius) } else { 2.0 / (PI * r2) }
+    found.scale(Vec3::splat(if volume { 15.0 / (8.0 * PI * r2 * g.radius) } else { 2.0 / (PI * r2) }))
 }

@@ -5,15 +5,15 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bsdf::Bsdf;
-use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, material_bsdf, material_emission};
-use super::gather::{photon_radiance, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
+use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, facing, material_bsdf, material_emission};
+use super::gather::{edge_mass, edge_probe_ray, photon_radiance, Gathered, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
 use super::light::{distant_discs_radiance, environment_radiance, pick_light, spot_falloff};
 use super::medium::{
     equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
     spot_span,
 };
 use super::phase::phase_hg;
-use super::rng::{bsdf_numbers, qmc2, rand2, rand4};
+use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4};
 use super::shading::{camera_ray, direct_light_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -32,6 +32,10 @@ enum Ray {
     Gather,
     /// The shadow ray of an equiangular sample of a camera segment (media).
     Shaft,
+    /// No ray (`NO_RAY`): the photon lookups at the estimate vertex.
+    Lookup,
+    /// An edge probe of the lookups' discs (`edge_probe_ray`).
+    Probe,
 }
 
 /// A photon-map lookup at the estimate vertex: which map, which photons skipped, into which
@@ -112,17 +116,27 @@ pub fn radiance(
     let mut gather_weight = Vec3::ZERO;
     let mut gdim = 0;
     let mut lookups: [Option<Lookup>; 2] = [None; 2];
+    let mut found = [Gathered::default(); 2];
+    // The lookups are the camera path's own, on a surface: their discs are probed for edges
+    // where they find photons of another surface in reach. The probes' frame (facing normal,
+    // largest radius, turn), the next probe, and how far the surface reaches in each direction.
+    let mut probe_edges = false;
+    let (mut probe_n, mut probe_reach, mut probe_turn) = (Vec3::ZERO, 0.0, 0.0);
+    let mut probe = 0;
+    let mut surface_reach = [0.0; EDGE_PROBES as usize];
 
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     let mut skip = NO_LIGHT;
     // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries;
     // with media each camera segment may take three (its equiangular shadow ray, then its retrace).
     // And the extra shadow rays of an adaptive light (each with its crossings).
+    // Then the lookups and their edge probes.
     let steps = if s.media.is_empty() {
         2 * f.max_depth + 1 + ADAPTIVE_MAX_RAYS - 1
     } else {
         3 * (2 * f.max_depth + 1 + MEDIUM_CROSSINGS) + (ADAPTIVE_MAX_RAYS - 1) * (1 + MEDIUM_CROSSINGS)
-    };
+    } + 1
+        + 2 * EDGE_PROBES;
     for step in 0..steps {
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if t_max != NO_RAY {
@@ -131,13 +145,15 @@ pub fn radiance(
         // Shadow rays take the closest hit where there are media: they pass null boundaries and
         // sum the media between (the kernel's `media` variant).
         let any_hit = (ray == Ray::Shadow || ray == Ray::Shaft) && s.media.is_empty();
-        // A shaft ray leaves a point in a medium, which has no triangle to skip.
-        let ignore = if ray == Ray::Shaft { NO_LIGHT } else { skip };
+        // A shaft ray leaves a point in a medium, which has no triangle to skip; a probe leaves
+        // the surface's plane.
+        let ignore = if ray == Ray::Shaft || ray == Ray::Probe { NO_LIGHT } else { skip };
         let (prim, mut t) = trace_ray(s, o, d, t_max, any_hit, ignore);
         let mut scattered = false;
         // The medium up to the hit (or to the light, or to infinity): shadow rays take its
         // transmittance, camera and gather rays sample a free flight through it.
-        if medium != NO_MEDIUM && t_max != NO_RAY {
+        // A probe looks for the surface's edges, not through the medium.
+        if medium != NO_MEDIUM && t_max != NO_RAY && ray != Ray::Probe {
             if ray == Ray::Shadow || ray == Ray::Shaft {
                 unoccluded *= medium_transmittance(
                     s,
@@ -210,6 +226,25 @@ pub fn radiance(
                 }
             }
         }
+        if ray == Ray::Lookup {
+            let (h, b, wo) = estimate.as_ref().expect("lookups read at an estimate vertex");
+            for (k, l) in lookups.iter().enumerate() {
+                if let Some(l) = l {
+                    found[k] = photon_radiance(s, l.map, h, b, *wo, l.exclude);
+                }
+            }
+            if !probe_edges || !found.iter().any(|g| g.off_disc) {
+                break;
+            }
+            probe_n = facing(b, *wo);
+            probe_reach = lookups.iter().flatten().map(|l| s.maps.grids[l.map].radius).fold(0.0, f32::max);
+            probe_turn = rand1(stream, sample, f.seed, RNG_EDGE_PROBE);
+            surface_reach = [probe_reach; EDGE_PROBES as usize];
+            (o, d) = edge_probe_ray(h.p, probe_n, probe_reach, probe_turn, 0);
+            t_max = probe_reach;
+            ray = Ray::Probe;
+            continue;
+        }
         let h = if scattered {
             Some(medium_hit(o + d * t, -d))
         } else if prim != NO_LIGHT && (ray != Ray::Shadow || !s.media.is_empty()) {
@@ -217,6 +252,23 @@ pub fn radiance(
         } else {
             None
         };
+        if ray == Ray::Probe {
+            // A wall across the probe's way (an invisible boundary is none) ends the surface there.
+            let wall = h.filter(|h| s.materials[h.material as usize].kind != MATERIAL_NULL);
+            if wall.is_some_and(|h| h.ng.dot(probe_n).abs() < EDGE_PROBE_COS) {
+                let to_edge = if probe % 2 == 0 { t } else { probe_reach - t };
+                let i = (probe / 2) as usize;
+                surface_reach[i] = surface_reach[i].min(to_edge);
+            }
+            probe += 1;
+            if probe == 2 * EDGE_PROBES {
+                break;
+            }
+            let (x, _, _) = estimate.as_ref().expect("probes leave an estimate vertex");
+            (o, d) = edge_probe_ray(x.p, probe_n, probe_reach, probe_turn, probe);
+            t_max = probe_reach;
+            continue;
+        }
         if let Some(h) = h.filter(|h| !scattered && s.materials[h.material as usize].kind == MATERIAL_NULL) {
             // An invisible boundary: straight through into the medium beyond, not a bounce.
             medium = medium_after(s, prim, h.ng, d, medium);
@@ -271,14 +323,17 @@ pub fn radiance(
                     layer: layer(LAYER_INDIRECT),
                     weight: w,
                 });
-                break;
+                (ray, t_max) = (Ray::Lookup, NO_RAY);
+                continue;
             }
             lookups[0] = Some(Lookup { map: MAP_CAUSTIC, exclude: 0, layer: layer(LAYER_CAUSTICS), weight });
             if f.gather_rays == 0 {
                 let exclude = PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC;
                 lookups[1] = Some(Lookup { map: MAP_GLOBAL, exclude, layer: layer(LAYER_INDIRECT), weight });
             }
-            break;
+            probe_edges = true;
+            (ray, t_max) = (Ray::Lookup, NO_RAY);
+            continue;
         }
         let Some(h) = h else {
             // A camera path that leaves the scene sees the environment and the discs of distant
@@ -346,7 +401,8 @@ pub fn radiance(
             let map = if scattered { MAP_VOLUME } else { MAP_GLOBAL };
             lookups[0] = Some(Lookup { map, exclude: 0, layer, weight: w });
             estimate = Some((h, b, wo));
-            break;
+            (ray, t_max) = (Ray::Lookup, NO_RAY);
+            continue;
         }
         weight = throughput / (1.0 - q);
         via_specular = depth > 0;
@@ -383,9 +439,14 @@ pub fn radiance(
         depth = 0;
         ray = Ray::Gather;
     }
-    if let Some((h, b, wo)) = &estimate {
-        for l in lookups.iter().flatten() {
-            terms[l.layer as usize] += l.weight * photon_radiance(s, l.map, h, b, *wo, l.exclude);
+    // Where the probes found an edge, the thin core's photons over the kernel's share on the
+    // surface; elsewhere the disc's.
+    for (l, g) in lookups.iter().zip(found) {
+        if let Some(l) = l {
+            let mass =
+                if probe == 2 * EDGE_PROBES { edge_mass(&surface_reach, s.maps.grids[l.map].radius) } else { 1.0 };
+            let v = if mass < 1.0 { g.thin / mass.max(EDGE_MIN_MASS) } else { g.disc };
+            terms[l.layer as usize] += l.weight * v;
         }
     }
 }

@@ -404,6 +404,8 @@ shared_constants! {
     /// The light sample of an adaptive light's shadow ray j >= 1 at the estimate vertex:
     /// `RNG_ADAPTIVE_DOMAIN + j` (ray 0 takes the vertex's own `RNG_LIGHT_U`).
     RNG_ADAPTIVE_DOMAIN: u32 = 0x5000_0000;
+    /// The rotation of a photon lookup's edge probes.
+    RNG_EDGE_PROBE: u32 = 0x5800_0000;
 
     /// Photon flag: stored at the first surface its path met (direct light).
     PHOTON_FLAG_DIRECT: u32 = 1;
@@ -494,6 +496,18 @@ shared_constants! {
     /// Photons farther than this fraction of the radius off the lookup's tangent plane are
     /// ignored: the disc-shaped filter of Jensen keeps photons on a nearby wall out of a corner.
     PHOTON_DISC_THICKNESS: f32 = 0.25;
+    /// Where a camera path's lookup finds photons off its disc (another surface within reach),
+    /// rays probe `EDGE_PROBES` directions of the tangent plane for the surface's edges, and the
+    /// estimate divides by the share of the kernel that lies on the surface (BENCHMARKS.md,
+    /// "Edges"). There it counts only photons within `PHOTON_EDGE_THICKNESS` of the tangent plane:
+    /// the disc's slab would also take in photons of the wall across a concave edge.
+    EDGE_PROBES: u32 = 4;
+    PHOTON_EDGE_THICKNESS: f32 = 0.02;
+    /// A surface met by a probe at less than 60 degrees to the tangent plane is not an edge (the
+    /// surface's own curve, or a surface above or below it).
+    EDGE_PROBE_COS: f32 = 0.5;
+    /// The least kernel share divided by: a point in a sliver of surface keeps a bounded weight.
+    EDGE_MIN_MASS: f32 = 0.1;
     /// Slack, relative to the point's largest coordinate plus the cell size, by which a lookup
     /// shortens its distances to the faces of the point's cell before skipping neighbour cells
     /// out of reach (2^-20, eight ulps: more than the rounding of the cells' division).
