@@ -61,14 +61,17 @@ const uint RAY_CAMERA = 0u; // camera path: through path lobes to the first esti
 const uint RAY_SHADOW = 1u; // the shadow ray of the direct light at the estimate vertex
 const uint RAY_GATHER = 2u; // a final-gather ray: through path lobes to an estimate lobe
 const uint RAY_SHAFT = 3u;  // the shadow ray of an equiangular sample of a camera segment (media)
+const uint RAY_LOOKUP = 4u; // no ray (NO_RAY): the photon lookups at the estimate vertex
+const uint RAY_PROBE = 5u;  // an edge probe of the lookups' discs (edge_probe_ray)
 
 // Steps of the loop: a path of max_depth bounces and its crossings of medium boundaries; with
 // media each camera segment may take three (its equiangular shadow ray, then its retrace); and
-// the extra shadow rays of an adaptive light (each with its crossings).
+// the extra shadow rays of an adaptive light (each with its crossings). Then the lookups and
+// their edge probes.
 #ifdef VARIANT_MEDIA
-#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS) + (ADAPTIVE_MAX_RAYS - 1u) * (1u + MEDIUM_CROSSINGS))
+#define LOOP_STEPS (3u * (2u * frame.max_depth + 1u + MEDIUM_CROSSINGS) + (ADAPTIVE_MAX_RAYS - 1u) * (1u + MEDIUM_CROSSINGS) + 1u + 2u * EDGE_PROBES)
 #else
-#define LOOP_STEPS (2u * frame.max_depth + 1u + ADAPTIVE_MAX_RAYS - 1u)
+#define LOOP_STEPS (2u * frame.max_depth + 1u + ADAPTIVE_MAX_RAYS - 1u + 1u + 2u * EDGE_PROBES)
 #endif
 
 // Adds part `part` of the sample's terms to `terms` and the rays it casts to `rays` (see
@@ -124,6 +127,18 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
     uint lookup_exclude[2];
     uint lookup_layer[2];
     vec3 lookup_weight[2];
+    Gathered found[2];
+    found[0] = Gathered(vec3(0.0), vec3(0.0), false);
+    found[1] = found[0];
+    // The lookups are the camera path's own, on a surface: their discs are probed for edges
+    // where they find photons of another surface in reach. The probes' frame (facing normal,
+    // largest radius, turn), the next probe, and how far the surface reaches in each direction.
+    bool probe_edges = false;
+    vec3 probe_n = vec3(0.0);
+    float probe_reach = 0.0;
+    float probe_turn = 0.0;
+    uint probe = 0u;
+    float surface_reach[EDGE_PROBES];
 
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
     uint skip = NO_LIGHT;
@@ -131,18 +146,20 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
         float t;
         // A shadow ray of length NO_RAY was not needed: trace_ray returns at once, uncounted.
         if (t_max != NO_RAY) rays++;
-        bool any_hit = ray != RAY_CAMERA && ray != RAY_GATHER;
+        bool any_hit = ray == RAY_SHADOW || ray == RAY_SHAFT;
 #ifdef VARIANT_MEDIA
         // Shadow rays take the closest hit: they pass null boundaries and sum the media between.
         any_hit = false;
 #endif
-        // A shaft ray leaves a point in a medium, which has no triangle to skip.
-        uint prim = trace_ray(o, d, t_max, any_hit, ray == RAY_SHAFT ? NO_LIGHT : skip, t);
+        // A shaft ray leaves a point in a medium, which has no triangle to skip; a probe leaves
+        // the surface's plane.
+        uint prim = trace_ray(o, d, t_max, any_hit, ray == RAY_SHAFT || ray == RAY_PROBE ? NO_LIGHT : skip, t);
         bool scattered = false;
 #ifdef VARIANT_MEDIA
         // The medium up to the hit (or to the light, or to infinity): shadow rays take its
         // transmittance, camera and gather rays sample a free flight through it.
-        if (medium != NO_MEDIUM && t_max != NO_RAY) {
+        // A probe looks for the surface's edges, not through the medium.
+        if (medium != NO_MEDIUM && t_max != NO_RAY && ray != RAY_PROBE) {
             if (ray == RAY_SHADOW || ray == RAY_SHAFT) {
                 unoccluded *= medium_transmittance(medium, o, d, t, rand2(stream, sample_index, frame.seed, RNG_TRANSMITTANCE_DOMAIN + step));
             } else {
@@ -197,6 +214,23 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             }
         }
 #endif
+        if (ray == RAY_LOOKUP) {
+            bool off_disc = false;
+            for (uint k = 0u; k < lookups; k++) {
+                found[k] = photon_radiance(lookup_map[k], he, be, wo_e, lookup_exclude[k]);
+                off_disc = off_disc || found[k].off_disc;
+            }
+            if (!probe_edges || !off_disc) break;
+            probe_n = facing(be, wo_e);
+            probe_reach = grids[lookup_map[0]].radius;
+            if (lookups > 1u) probe_reach = max(probe_reach, grids[lookup_map[1]].radius);
+            probe_turn = rand1(stream, sample_index, frame.seed, RNG_EDGE_PROBE);
+            for (uint i = 0u; i < EDGE_PROBES; i++) surface_reach[i] = probe_reach;
+            edge_probe_ray(he.p, probe_n, probe_reach, probe_turn, 0u, o, d);
+            t_max = probe_reach;
+            ray = RAY_PROBE;
+            continue;
+        }
         Hit h;
         bool null_hit = false;
 #ifdef VARIANT_MEDIA
@@ -206,6 +240,22 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             h = shape_hit(prim, o, d, t);
             null_hit = material_at(h.material).kind == MATERIAL_NULL;
         }
+#else
+        if (prim != NO_LIGHT && ray != RAY_SHADOW) h = shape_hit(prim, o, d, t);
+#endif
+        if (ray == RAY_PROBE) {
+            // A wall across the probe's way (an invisible boundary is none) ends the surface there.
+            if (prim != NO_LIGHT && !null_hit && abs(dot(h.ng, probe_n)) < EDGE_PROBE_COS) {
+                uint i = probe / 2u;
+                surface_reach[i] = min(surface_reach[i], (probe % 2u) == 0u ? t : probe_reach - t);
+            }
+            probe++;
+            if (probe == 2u * EDGE_PROBES) break;
+            edge_probe_ray(he.p, probe_n, probe_reach, probe_turn, probe, o, d);
+            t_max = probe_reach;
+            continue;
+        }
+#ifdef VARIANT_MEDIA
         if (null_hit) {
             // An invisible boundary: straight through into the medium beyond, not a bounce.
             medium = medium_after(prim, h.ng, d, medium);
@@ -227,8 +277,6 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             shaft_done = true;
             continue;
         }
-#else
-        if (prim != NO_LIGHT && ray != RAY_SHADOW) h = shape_hit(prim, o, d, t);
 #endif
         if (ray == RAY_SHADOW) {
             if (prim == NO_LIGHT) terms[via_specular ? LAYER_SPECULAR : LAYER_DIRECT] += weight * unoccluded;
@@ -254,7 +302,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                 lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
                 lookup_weight[0] = weight * inv_sigma_t_e;
                 lookups = 1u;
-                break;
+                ray = RAY_LOOKUP;
+                t_max = NO_RAY;
+                continue;
             }
             lookup_map[0] = MAP_CAUSTIC;
             lookup_exclude[0] = 0u;
@@ -265,7 +315,10 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             lookup_layer[1] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
             lookup_weight[1] = weight;
             lookups = frame.gather_rays == 0u ? 2u : 1u;
-            break;
+            probe_edges = true;
+            ray = RAY_LOOKUP;
+            t_max = NO_RAY;
+            continue;
         }
         if (prim == NO_LIGHT && !scattered) {
             // A camera path that leaves the scene sees the environment and the discs of distant
@@ -331,7 +384,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             lookup_layer[0] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
             lookup_weight[0] = weight * (gather_weight * (throughput / (1.0 - q)) / float(frame.gather_rays)) * inv_sigma_t;
             lookups = 1u;
-            break;
+            ray = RAY_LOOKUP;
+            t_max = NO_RAY;
+            continue;
         }
         he = h;
         be = b;
@@ -368,8 +423,12 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
         depth = 0u;
         ray = RAY_GATHER;
     }
+    // Where the probes found an edge, the thin core's photons over the kernel's share on the
+    // surface; elsewhere the disc's.
     for (uint k = 0u; k < lookups; k++) {
-        terms[lookup_layer[k]] += lookup_weight[k] * photon_radiance(lookup_map[k], he, be, wo_e, lookup_exclude[k]);
+        float mass = probe == 2u * EDGE_PROBES ? edge_mass(surface_reach, grids[lookup_map[k]].radius) : 1.0;
+        vec3 v = mass < 1.0 ? found[k].thin / max(mass, EDGE_MIN_MASS) : found[k].disc;
+        terms[lookup_layer[k]] += lookup_weight[k] * v;
     }
 }
 

@@ -70,7 +70,7 @@ pub fn edge_probe_ray(x: Vec3, n: Vec3, reach: f32, turn: f32, k: u32) -> (Vec3,
     let phi = 2.0 * PI * ((k / 2) as f32 + turn) / EDGE_PROBES as f32;
     let dir = t1 * phi.cos() + t2 * phi.sin();
     let lift = n * (PHOTON_DISC_THICKNESS * reach);
-    if k % 2 == 0 {
+    if k.is_multiple_of(2) {
         (x + lift, dir)
     } else {
         (x + dir * reach - lift, -dir)

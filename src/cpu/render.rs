@@ -122,7 +122,7 @@ pub fn radiance(
     // largest radius, turn), the next probe, and how far the surface reaches in each direction.
     let mut probe_edges = false;
     let (mut probe_n, mut probe_reach, mut probe_turn) = (Vec3::ZERO, 0.0, 0.0);
-    let mut probe = 0;
+    let mut probe = 0u32;
     let mut surface_reach = [0.0; EDGE_PROBES as usize];
 
     // The smooth triangle the current ray leaves, which it must not meet again (see trace_ray).
@@ -256,7 +256,7 @@ pub fn radiance(
             // A wall across the probe's way (an invisible boundary is none) ends the surface there.
             let wall = h.filter(|h| s.materials[h.material as usize].kind != MATERIAL_NULL);
             if wall.is_some_and(|h| h.ng.dot(probe_n).abs() < EDGE_PROBE_COS) {
-                let to_edge = if probe % 2 == 0 { t } else { probe_reach - t };
+                let to_edge = if probe.is_multiple_of(2) { t } else { probe_reach - t };
                 let i = (probe / 2) as usize;
                 surface_reach[i] = surface_reach[i].min(to_edge);
             }
