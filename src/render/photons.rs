@@ -12,8 +12,11 @@ use super::SceneBuffers;
 
 pub use crate::scene::PhotonSettings;
 
-/// Average photons inside a lookup disc the automatic global radius aims at.
-pub const GLOBAL_NEIGHBOURS: f32 = 64.0;
+/// Average photons inside a lookup disc the automatic global radius aims at. 64 while the discs
+/// darkened every edge; with the edge probes a wider disc pays: 160 lowered ppm's error at 30 s
+/// by 23% on cornell-box and 11% on cornell-caustics on the CPU, 23% on the box through lavapipe
+/// (BENCHMARKS.md, "Edges").
+pub const GLOBAL_NEIGHBOURS: f32 = 160.0;
 /// The automatic caustic radius is this fraction of the global one: caustic photons crowd
 /// into small bright areas, so they afford a sharper filter.
 pub const CAUSTIC_RADIUS_FRACTION: f32 = 0.5;
