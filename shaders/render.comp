@@ -315,7 +315,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             lookup_layer[1] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
             lookup_weight[1] = weight;
             lookups = frame.gather_rays == 0u ? 2u : 1u;
-            // Not in scenes with instances: there the twins' probes disagree (see the twin).
+            // Not in scenes with instances: lavapipe's loop limit (see the twin).
             probe_edges = frame.instance_count == 0u;
             ray = RAY_LOOKUP;
             t_max = NO_RAY;

@@ -331,8 +331,9 @@ pub fn radiance(
                 let exclude = PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC;
                 lookups[1] = Some(Lookup { map: MAP_GLOBAL, exclude, layer: layer(LAYER_INDIRECT), weight });
             }
-            // Not in scenes with instances: there the twins' probes disagree (tests/hardening3.rs's
-            // frames scene: relMSE 2.2 at 8x6), a cause not yet found.
+            // Not in scenes with instances: probes through many overlapping instances can take the
+            // kernel past lavapipe's 65535 loop iterations an invocation, which ends them early
+            // there and not here (tests/hardening3.rs's frames scene; docs/integrators.md).
             probe_edges = f.instance_count == 0;
             (ray, t_max) = (Ray::Lookup, NO_RAY);
             continue;
