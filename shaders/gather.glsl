@@ -33,15 +33,46 @@ Gathered gathered_scaled(Gathered g, vec3 k) {
     return Gathered(g.disc * k, g.thin * k, g.off_disc);
 }
 
+// Direction i of the probes around n, turned by `turn` (see the twin).
+vec3 probe_direction(vec3 n, float turn, uint i) {
+    vec3 t1, t2;
+    onb(n, t1, t2);
+    float phi = 2.0 * PI * (float(i) + turn) / float(EDGE_PROBES);
+    return t1 * cos(phi) + t2 * sin(phi);
+}
+
+// How far the surface of primitive i reaches from x in each probe direction before one of its
+// open edges, at most `reach` (see the twin).
+void open_edge_reach(uint i, vec3 x, vec3 n, float reach, float turn, out float surface_reach[EDGE_PROBES]) {
+    for (uint k = 0u; k < EDGE_PROBES; k++) surface_reach[k] = reach;
+    uint kind = primitive_kind(i);
+    if ((kind & PRIMITIVE_KIND_MASK) != PRIMITIVE_TRIANGLE || (kind & (7u * PRIMITIVE_FLAG_OPEN_EDGE)) == 0u) return;
+    Primitive p = primitive_at(i);
+    vec3 v[3] = vec3[3](load3(p.p0), load3(p.p1), load3(p.p2));
+    for (uint e = 0u; e < 3u; e++) {
+        if ((kind & (PRIMITIVE_FLAG_OPEN_EDGE << e)) == 0u) continue;
+        vec3 a = v[e];
+        vec3 b = v[(e + 1u) % 3u];
+        vec3 c = v[(e + 2u) % 3u];
+        // The edge's normal in the plane, toward the triangle's inside.
+        vec3 m = cross(n, b - a);
+        float len = length(m);
+        m = len > 0.0 ? m / len : vec3(0.0);
+        if (dot(m, c - a) < 0.0) m = -m;
+        float inside = max(dot(x - a, m), 0.0);
+        for (uint k = 0u; k < EDGE_PROBES; k++) {
+            float toward = -dot(probe_direction(n, turn, k), m);
+            if (toward > 0.0) surface_reach[k] = min(surface_reach[k], inside / toward);
+        }
+    }
+}
+
 // Probe ray k (0..2 EDGE_PROBES) of a lookup at x (facing normal n) whose largest radius is
 // `reach`, its directions turned by `turn`: even probes leave a point just above the surface and
 // meet a wall that rises from it (a concave edge); odd probes run back toward x just below the
 // surface from `reach` away and meet the side of a solid whose face ends (a convex edge).
 void edge_probe_ray(vec3 x, vec3 n, float reach, float turn, uint k, out vec3 o, out vec3 d) {
-    vec3 t1, t2;
-    onb(n, t1, t2);
-    float phi = 2.0 * PI * (float(k / 2u) + turn) / float(EDGE_PROBES);
-    vec3 dir = t1 * cos(phi) + t2 * sin(phi);
+    vec3 dir = probe_direction(n, turn, k / 2u);
     vec3 lift = n * (PHOTON_DISC_THICKNESS * reach);
     if ((k % 2u) == 0u) {
         o = x + lift;

@@ -71,9 +71,9 @@ void trace_photon_path(uint path, EmitParams params) {
             b = material_bsdf(material_at(h.material), h);
         }
         uint lobes = bsdf_flags(b);
-        if (lobes == 0u) return;  // a black surface keeps nothing and reflects nothing
         uint bdim = dim + (depth + 1u) * RNG_DIMS_PER_BOUNCE;
-        if ((lobes & BSDF_ESTIMATE) != 0u) {
+        // A black surface reflects nothing but keeps its photons (see the twin).
+        if (lobes == 0u || (lobes & BSDF_ESTIMATE) != 0u) {
             uint flags = depth == 0u ? PHOTON_FLAG_DIRECT : (specular_only ? PHOTON_FLAG_CAUSTIC : 0u);
             // A collision in a medium stores a volume photon carrying its sigma_t-weighted flux,
             // in the global pass only: the caustic map is of surfaces.
@@ -83,7 +83,7 @@ void trace_photon_path(uint path, EmitParams params) {
                 store_photon(h.p, flux, wo, flags, false);
             }
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
-            if (params.caustics_only != 0u) return;
+            if (params.caustics_only != 0u || lobes == 0u) return;
         }
         BsdfSample s = bsdf_sample(b, wo, bsdf_numbers(path, params.pass, seq, seed, bdim + RNG_PHOTON_BOUNCE).xyz, LOBES_ALL);
         if (s.flags == 0u) return;

@@ -220,12 +220,13 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
                 found[k] = photon_radiance(lookup_map[k], he, be, wo_e, lookup_exclude[k]);
                 off_disc = off_disc || found[k].off_disc;
             }
-            if (!probe_edges || !off_disc) break;
+            if (!probe_edges) break;
             probe_n = facing(be, wo_e);
             probe_reach = grids[lookup_map[0]].radius;
             if (lookups > 1u) probe_reach = max(probe_reach, grids[lookup_map[1]].radius);
             probe_turn = rand1(stream, sample_index, frame.seed, RNG_EDGE_PROBE);
-            for (uint i = 0u; i < EDGE_PROBES; i++) surface_reach[i] = probe_reach;
+            open_edge_reach(he.prim, he.p, probe_n, probe_reach, probe_turn, surface_reach);
+            if (!off_disc) break;
             edge_probe_ray(he.p, probe_n, probe_reach, probe_turn, 0u, o, d);
             t_max = probe_reach;
             ray = RAY_PROBE;
@@ -427,8 +428,10 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
     // Where the probes found an edge, the thin core's photons over the kernel's share on the
     // surface; elsewhere the disc's.
     for (uint k = 0u; k < lookups; k++) {
-        float mass = probe == 2u * EDGE_PROBES ? edge_mass(surface_reach, grids[lookup_map[k]].radius) : 1.0;
-        vec3 v = mass < 1.0 ? found[k].thin / max(mass, EDGE_MIN_MASS) : found[k].disc;
+        // Without probes the surface's reach is its open edges' alone, and the disc's photons are
+        // all the surface's.
+        float mass = probe_edges ? edge_mass(surface_reach, grids[lookup_map[k]].radius) : 1.0;
+        vec3 v = mass < 1.0 ? (probe == 2u * EDGE_PROBES ? found[k].thin : found[k].disc) / max(mass, EDGE_MIN_MASS) : found[k].disc;
         terms[lookup_layer[k]] += lookup_weight[k] * v;
     }
 }

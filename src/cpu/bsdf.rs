@@ -367,7 +367,8 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
 /// sampling, the volume photon map) like a diffuse surface.
 pub const PHASE_FLAGS: u32 = BSDF_GLOSSY | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_ESTIMATE;
 
-/// The lobes of `b` (`BSDF_*` flags); 0 for a black surface, which ends paths and stores nothing.
+/// The lobes of `b` (`BSDF_*` flags); 0 for a black surface, which ends paths (its photons are
+/// stored for its neighbours' lookups, see `emit_photons`).
 pub fn bsdf_flags(b: &Bsdf) -> u32 {
     match b.kind {
         MATERIAL_DIFFUSE if b.color0 == Vec3::ZERO => 0,

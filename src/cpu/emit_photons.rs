@@ -100,11 +100,12 @@ pub fn trace_photon_path(
             (h, b)
         };
         let lobes = bsdf_flags(&b);
-        if lobes == 0 {
-            return; // a black surface keeps nothing and reflects nothing
-        }
         let bdim = dim + (depth + 1) * RNG_DIMS_PER_BOUNCE;
-        if lobes & BSDF_ESTIMATE != 0 {
+        // A black surface reflects nothing but keeps the photons that reach it: no lookup of its
+        // own reads them (its BSDF is zero), but a neighbour's disc that reaches over it does,
+        // where the neighbour's surface lies hidden behind it (the box's light, 0.1 mm below the
+        // ceiling: without them the ceiling around the light reads a third too dark).
+        if lobes == 0 || lobes & BSDF_ESTIMATE != 0 {
             let flags = if depth == 0 {
                 PHOTON_FLAG_DIRECT
             } else if specular_only {
@@ -122,7 +123,7 @@ pub fn trace_photon_path(
                 store(h.p, flux, wo, flags, false);
             }
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
-            if params.caustics_only != 0 {
+            if params.caustics_only != 0 || lobes == 0 {
                 return;
             }
         }

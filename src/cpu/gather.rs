@@ -12,7 +12,7 @@ use super::sampling::onb;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
-use crate::layout::GridParams;
+use crate::layout::{GridParams, Primitive};
 
 pub const MAP_GLOBAL: usize = crate::layout::constants::MAP_GLOBAL as usize;
 pub const MAP_CAUSTIC: usize = crate::layout::constants::MAP_CAUSTIC as usize;
@@ -66,15 +66,48 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
 /// concave edge); odd probes run back toward `x` just below the surface from `reach` away and
 /// meet the side of a solid whose face ends (a convex edge). Returns the origin and direction.
 pub fn edge_probe_ray(x: Vec3, n: Vec3, reach: f32, turn: f32, k: u32) -> (Vec3, Vec3) {
-    let (t1, t2) = onb(n);
-    let phi = 2.0 * PI * ((k / 2) as f32 + turn) / EDGE_PROBES as f32;
-    let dir = t1 * phi.cos() + t2 * phi.sin();
+    let dir = probe_direction(n, turn, k / 2);
     let lift = n * (PHOTON_DISC_THICKNESS * reach);
     if k.is_multiple_of(2) {
         (x + lift, dir)
     } else {
         (x + dir * reach - lift, -dir)
     }
+}
+
+/// Direction i of the probes around `n`, turned by `turn` (a quarter of a turn at most).
+pub fn probe_direction(n: Vec3, turn: f32, i: u32) -> Vec3 {
+    let (t1, t2) = onb(n);
+    let phi = 2.0 * PI * (i as f32 + turn) / EDGE_PROBES as f32;
+    t1 * phi.cos() + t2 * phi.sin()
+}
+
+/// How far the surface of triangle `p` reaches from `x` in each probe direction before one of its
+/// open edges (`PRIMITIVE_FLAG_OPEN_EDGE`), at most `reach`: the distance along the direction to
+/// the edge's line, in the plane of the facing normal `n`.
+pub fn open_edge_reach(p: &Primitive, x: Vec3, n: Vec3, reach: f32, turn: f32) -> [f32; EDGE_PROBES as usize] {
+    let mut out = [reach; EDGE_PROBES as usize];
+    if p.kind & PRIMITIVE_KIND_MASK != PRIMITIVE_TRIANGLE {
+        return out;
+    }
+    let v = [Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2)];
+    for e in 0..3 {
+        if p.kind & (PRIMITIVE_FLAG_OPEN_EDGE << e) == 0 {
+            continue;
+        }
+        let (a, b, c) = (v[e], v[(e + 1) % 3], v[(e + 2) % 3]);
+        // The edge's normal in the plane, toward the triangle's inside.
+        let m = n.cross(b - a).normalize_or_zero();
+        let m = if m.dot(c - a) < 0.0 { -m } else { m };
+        let inside = (x - a).dot(m).max(0.0);
+        for (i, r) in out.iter_mut().enumerate() {
+            let toward = -probe_direction(n, turn, i as u32).dot(m);
+            if toward > 0.0 {
+                *r = r.min(inside / toward);
+            }
+        }
+    }
+    out
 }
 
 /// The share of a disc of radius `r` that the surface covers, as the probes found it: in each

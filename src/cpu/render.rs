@@ -6,7 +6,9 @@ use rayon::prelude::*;
 
 use super::bsdf::Bsdf;
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, facing, material_bsdf, material_emission};
-use super::gather::{edge_mass, edge_probe_ray, photon_radiance, Gathered, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME};
+use super::gather::{
+    edge_mass, edge_probe_ray, open_edge_reach, photon_radiance, Gathered, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME,
+};
 use super::light::{distant_discs_radiance, environment_radiance, pick_light, spot_falloff};
 use super::medium::{
     equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
@@ -233,13 +235,16 @@ pub fn radiance(
                     found[k] = photon_radiance(s, l.map, h, b, *wo, l.exclude);
                 }
             }
-            if !probe_edges || !found.iter().any(|g| g.off_disc) {
+            if !probe_edges {
                 break;
             }
             probe_n = facing(b, *wo);
             probe_reach = lookups.iter().flatten().map(|l| s.maps.grids[l.map].radius).fold(0.0, f32::max);
             probe_turn = rand1(stream, sample, f.seed, RNG_EDGE_PROBE);
-            surface_reach = [probe_reach; EDGE_PROBES as usize];
+            surface_reach = open_edge_reach(&s.primitives[h.prim as usize], h.p, probe_n, probe_reach, probe_turn);
+            if !found.iter().any(|g| g.off_disc) {
+                break;
+            }
             (o, d) = edge_probe_ray(h.p, probe_n, probe_reach, probe_turn, 0);
             t_max = probe_reach;
             ray = Ray::Probe;
@@ -446,9 +451,11 @@ pub fn radiance(
     // surface; elsewhere the disc's.
     for (l, g) in lookups.iter().zip(found) {
         if let Some(l) = l {
-            let mass =
-                if probe == 2 * EDGE_PROBES { edge_mass(&surface_reach, s.maps.grids[l.map].radius) } else { 1.0 };
-            let v = if mass < 1.0 { g.thin / mass.max(EDGE_MIN_MASS) } else { g.disc };
+            // Without probes the surface's reach is its open edges' alone, and the disc's
+            // photons are all the surface's.
+            let probed = probe == 2 * EDGE_PROBES;
+            let mass = if probe_edges { edge_mass(&surface_reach, s.maps.grids[l.map].radius) } else { 1.0 };
+            let v = if mass < 1.0 { (if probed { g.thin } else { g.disc }) / mass.max(EDGE_MIN_MASS) } else { g.disc };
             terms[l.layer as usize] += l.weight * v;
         }
     }

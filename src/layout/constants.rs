@@ -167,6 +167,9 @@ shared_constants! {
     /// Flag of a CSG leaf's `Primitive::kind`: the leaf lies on the subtracted side of an odd
     /// number of differences, so the solid's outward normal is the leaf's inward one.
     PRIMITIVE_FLAG_CSG_FLIP: u32 = 0x1000;
+    /// Flags of a triangle's `Primitive::kind`, this one shifted by e: no other triangle has its
+    /// side e (from vertex e to the next), so the surface ends there (`render/open_edges.rs`).
+    PRIMITIVE_FLAG_OPEN_EDGE: u32 = 0x2000;
     /// Words of a CSG block (u32 bits stored in the f32 shape data): the count of its leaf
     /// primitives, the length of its postfix program, the index of its first leaf primitive
     /// counted from `FrameParams::primitive_count`, then the leaf index of each leaf primitive

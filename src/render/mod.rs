@@ -8,6 +8,7 @@ pub mod gpu;
 pub mod instances;
 pub mod media_bounds;
 pub mod memory;
+pub mod open_edges;
 pub mod pack;
 pub mod pack_csg;
 pub mod photons;

@@ -78,6 +78,7 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         }
     }
     packed.analytic = scene.shapes.iter().any(|s| s.geometry.is_analytic());
+    super::open_edges::mark_open_edges(&mut packed.primitives);
     packed.implicit = scene.shapes.iter().any(|s| s.geometry.is_implicit());
     packed.implicit_csg = scene.shapes.iter().any(|s| s.geometry.is_implicit_csg());
     packed.alpha = packed.primitives.iter().any(|p| p.kind & PRIMITIVE_FLAG_ALPHA != 0);
