@@ -41,10 +41,11 @@ vec3 probe_direction(vec3 n, float turn, uint i) {
     return t1 * cos(phi) + t2 * sin(phi);
 }
 
-// How far the surface of primitive i reaches from x in each probe direction before one of its
-// open edges, at most `reach` (see the twin).
+// How far the surface of primitive i (NO_LIGHT: none) reaches from x in each probe direction
+// before one of its open edges, at most `reach` (see the twin).
 void open_edge_reach(uint i, vec3 x, vec3 n, float reach, float turn, out float surface_reach[EDGE_PROBES]) {
     for (uint k = 0u; k < EDGE_PROBES; k++) surface_reach[k] = reach;
+    if (i == NO_LIGHT) return;
     uint kind = primitive_kind(i);
     if ((kind & PRIMITIVE_KIND_MASK) != PRIMITIVE_TRIANGLE || (kind & (7u * PRIMITIVE_FLAG_OPEN_EDGE)) == 0u) return;
     Primitive p = primitive_at(i);

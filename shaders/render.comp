@@ -225,8 +225,9 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             probe_reach = grids[lookup_map[0]].radius;
             if (lookups > 1u) probe_reach = max(probe_reach, grids[lookup_map[1]].radius);
             probe_turn = rand1(stream, sample_index, frame.seed, RNG_EDGE_PROBE);
-            open_edge_reach(he.prim, he.p, probe_n, probe_reach, probe_turn, surface_reach);
-            if (!off_disc) break;
+            // An instance's triangle carries no open-edge flags; no probes with instances (see the twin).
+            open_edge_reach(he.prim < frame.primitive_count ? he.prim : NO_LIGHT, he.p, probe_n, probe_reach, probe_turn, surface_reach);
+            if (frame.instance_count > 0u || !off_disc) break;
             edge_probe_ray(he.p, probe_n, probe_reach, probe_turn, 0u, o, d);
             t_max = probe_reach;
             ray = RAY_PROBE;
@@ -316,8 +317,7 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
             lookup_layer[1] = via_specular ? LAYER_SPECULAR : LAYER_INDIRECT;
             lookup_weight[1] = weight;
             lookups = frame.gather_rays == 0u ? 2u : 1u;
-            // Not in scenes with instances: lavapipe's loop limit (see the twin).
-            probe_edges = frame.instance_count == 0u;
+            probe_edges = true;
             ray = RAY_LOOKUP;
             t_max = NO_RAY;
             continue;

@@ -241,8 +241,16 @@ pub fn radiance(
             probe_n = facing(b, *wo);
             probe_reach = lookups.iter().flatten().map(|l| s.maps.grids[l.map].radius).fold(0.0, f32::max);
             probe_turn = rand1(stream, sample, f.seed, RNG_EDGE_PROBE);
-            surface_reach = open_edge_reach(&s.primitives[h.prim as usize], h.p, probe_n, probe_reach, probe_turn);
-            if !found.iter().any(|g| g.off_disc) {
+            // An instance's triangle (a hit name past the primitives) carries no open-edge flags.
+            surface_reach = if h.prim < f.primitive_count {
+                open_edge_reach(&s.primitives[h.prim as usize], h.p, probe_n, probe_reach, probe_turn)
+            } else {
+                [probe_reach; EDGE_PROBES as usize]
+            };
+            // No probes in scenes with instances: probes through many overlapping instances can
+            // take the kernel past lavapipe's 65535 loop iterations an invocation, which ends them
+            // early there and not here (tests/hardening3.rs's frames scene; docs/integrators.md).
+            if f.instance_count > 0 || !found.iter().any(|g| g.off_disc) {
                 break;
             }
             (o, d) = edge_probe_ray(h.p, probe_n, probe_reach, probe_turn, 0);
@@ -336,10 +344,7 @@ pub fn radiance(
                 let exclude = PHOTON_FLAG_DIRECT | PHOTON_FLAG_CAUSTIC;
                 lookups[1] = Some(Lookup { map: MAP_GLOBAL, exclude, layer: layer(LAYER_INDIRECT), weight });
             }
-            // Not in scenes with instances: probes through many overlapping instances can take the
-            // kernel past lavapipe's 65535 loop iterations an invocation, which ends them early
-            // there and not here (tests/hardening3.rs's frames scene; docs/integrators.md).
-            probe_edges = f.instance_count == 0;
+            probe_edges = true;
             (ray, t_max) = (Ray::Lookup, NO_RAY);
             continue;
         }
