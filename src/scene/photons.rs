@@ -28,8 +28,8 @@ pub struct PhotonSettings {
 
 /// The default `alpha`: Knaus and Zwicker's 2/3 balances noise and a bias that falls as r^2;
 /// with the edges' bias gone (the probes, open edges) a slower shrink pays: 0.8 lowered
-/// cornell-box's error at 30 s by 11% and at 240 s by 2% on the CPU (BENCHMARKS.md, "Open edges
-/// and black surfaces").
+/// cornell-box's error at 30 s by 11% and at 240 s by 2% on the CPU (BENCHMARKS.md, "Open edges,
+/// black surfaces and alpha 0.8").
 pub const DEFAULT_ALPHA: f32 = 0.8;
 
 impl Default for PhotonSettings {
