@@ -50,19 +50,22 @@ void open_edge_reach(uint i, vec3 x, vec3 n, float reach, float turn, out float 
     if ((kind & PRIMITIVE_KIND_MASK) != PRIMITIVE_TRIANGLE || (kind & (7u * PRIMITIVE_FLAG_OPEN_EDGE)) == 0u) return;
     Primitive p = primitive_at(i);
     vec3 v[3] = vec3[3](load3(p.p0), load3(p.p1), load3(p.p2));
+    vec3 dirs[EDGE_PROBES];
+    for (uint k = 0u; k < EDGE_PROBES; k++) dirs[k] = probe_direction(n, turn, k);
     for (uint e = 0u; e < 3u; e++) {
         if ((kind & (PRIMITIVE_FLAG_OPEN_EDGE << e)) == 0u) continue;
         vec3 a = v[e];
         vec3 b = v[(e + 1u) % 3u];
         vec3 c = v[(e + 2u) % 3u];
         // The edge's normal in the plane, toward the triangle's inside.
+        // glam's normalize_or_zero, as the twin.
         vec3 m = cross(n, b - a);
-        float len = length(m);
-        m = len > 0.0 ? m / len : vec3(0.0);
+        float rcp = 1.0 / length(m);
+        m = (isinf(rcp) || isnan(rcp)) ? vec3(0.0) : m * rcp;
         if (dot(m, c - a) < 0.0) m = -m;
         float inside = max(dot(x - a, m), 0.0);
         for (uint k = 0u; k < EDGE_PROBES; k++) {
-            float toward = -dot(probe_direction(n, turn, k), m);
+            float toward = -dot(dirs[k], m);
             if (toward > 0.0) surface_reach[k] = min(surface_reach[k], inside / toward);
         }
     }

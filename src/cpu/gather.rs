@@ -91,6 +91,7 @@ pub fn open_edge_reach(p: &Primitive, x: Vec3, n: Vec3, reach: f32, turn: f32) -
         return out;
     }
     let v = [Vec3::from(p.p0), Vec3::from(p.p1), Vec3::from(p.p2)];
+    let dirs: [Vec3; EDGE_PROBES as usize] = std::array::from_fn(|i| probe_direction(n, turn, i as u32));
     for e in 0..3 {
         if p.kind & (PRIMITIVE_FLAG_OPEN_EDGE << e) == 0 {
             continue;
@@ -100,8 +101,8 @@ pub fn open_edge_reach(p: &Primitive, x: Vec3, n: Vec3, reach: f32, turn: f32) -
         let m = n.cross(b - a).normalize_or_zero();
         let m = if m.dot(c - a) < 0.0 { -m } else { m };
         let inside = (x - a).dot(m).max(0.0);
-        for (i, r) in out.iter_mut().enumerate() {
-            let toward = -probe_direction(n, turn, i as u32).dot(m);
+        for (r, dir) in out.iter_mut().zip(dirs) {
+            let toward = -dir.dot(m);
             if toward > 0.0 {
                 *r = r.min(inside / toward);
             }
