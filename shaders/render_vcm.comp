@@ -7,7 +7,7 @@
 // vertices that connect but do not merge, transmittance on every connection). CPU twin:
 // src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
 // LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
-// the sorted points, the bucket starts and the splats.
+// the sorted points, the bucket starts, the splats and the light paths' ends.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -38,12 +38,18 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
-layout(std430, binding = SCENE_BINDINGS + 1) readonly buffer Params { VcmParams params; };
-layout(std430, binding = SCENE_BINDINGS + 2) readonly buffer Grid { GridParams vgrid; };
-layout(std430, binding = SCENE_BINDINGS + 3) readonly buffer LightVertices { LightVertex vertices[]; };
-layout(std430, binding = SCENE_BINDINGS + 4) readonly buffer Points { Photon points[]; };
-layout(std430, binding = SCENE_BINDINGS + 5) readonly buffer Starts { uint starts[]; };
-layout(std430, binding = SCENE_BINDINGS + 6) readonly buffer Splats { uint splats[]; };
+// What every lane reads alike as uniform buffers, what it reads at random as texel buffers
+// (scene_bindings.glsl says why): storage-buffer reads of the params in the loops' tests, of
+// 16-word light vertices and of the splats made this kernel about 5x slower on lavapipe,
+// against the CPU twin, than the ppm kernel that reads its maps this way (BENCHMARKS.md,
+// "render_vcm's reads on lavapipe").
+layout(scalar, binding = SCENE_BINDINGS + 1) uniform Params { VcmParams params; };
+layout(scalar, binding = SCENE_BINDINGS + 2) uniform Grid { GridParams vgrid; };
+layout(binding = SCENE_BINDINGS + 3) uniform usamplerBuffer vertex_texels;
+layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer point_texels;
+layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer start_words;
+layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
+layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_end_words;
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -135,7 +141,11 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
     sp.d_vcm = camera_d_vcm(params.light_paths, d);
     sp.d_vc = 0.0;
     sp.d_vm = 0.0;
-    uint slot0 = (stream % params.light_paths) * params.vertex_slots;
+    uint path = stream % params.light_paths;
+    uint slot0 = path * params.vertex_slots;
+    // The light path's slots up to its last vertex: lavapipe runs a loop's body, under masks,
+    // as long as any lane goes on, so the empty slots beyond the ends cost what full ones do.
+    uint path_end = texelFetch(path_end_words, int(path)).x;
     uint skip = NO_LIGHT;
     bool first_specular = false;
     uint diffuse = 0u;
@@ -212,9 +222,9 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                 terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
                 // Slot k holds the light vertex k + 1 scattering vertices from the light, or
                 // nothing (a delta vertex, or the path ended): skip the gaps.
-                for (uint k = 0u; k < params.vertex_slots; k++) {
+                for (uint k = 0u; k < path_end; k++) {
                     if (k + 1u + m > frame.max_depth) break;
-                    LightVertex lv = vertices[slot0 + k];
+                    LightVertex lv = fetch_light_vertex(vertex_texels, slot0 + k);
                     if (lv.path_length == 0u) continue;
                     uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
                     vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, n, vm, rays);
@@ -233,12 +243,12 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                     if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
                     ivec3 cell = grid_neighbour(c, kc);
                     uint bucket = grid_hash(cell, vgrid.table_mask);
-                    for (uint i = starts[bucket]; i < starts[bucket + 1u]; i++) {
-                        Photon pt = points[i];
+                    for (uint i = texelFetch(start_words, int(bucket)).x; i < texelFetch(start_words, int(bucket + 1u)).x; i++) {
+                        Photon pt = fetch_photon(point_texels, i);
                         vec3 pos = load3(pt.position);
                         vec3 dd = pos - h.p;
                         if (dot(dd, dd) > r2 || grid_cell(pos, vgrid.cell_size) != cell) continue;
-                        LightVertex lv = vertices[pt.flux_rg * params.vertex_slots + pt.flux_b_dir];
+                        LightVertex lv = fetch_light_vertex(vertex_texels, pt.flux_rg * params.vertex_slots + pt.flux_b_dir);
                         if (lv.path_length + m - 1u > frame.max_depth) continue;
                         vec3 light_dir = -load3(lv.direction);
                         vec3 fr = bsdf_eval(b, wo, light_dir);
@@ -293,11 +303,14 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
         d = smp.wi;
     }
     // The light tracing that landed on this pixel.
-    uint base = stream * LAYER_COUNT * 3u;
-    for (uint i = 0u; i < 4u; i++) {
-        uint w = 2u * (base + i * 3u);
-        terms[i] += vec3(splat_value(splats[w], splats[w + 1u]), splat_value(splats[w + 2u], splats[w + 3u]),
-                         splat_value(splats[w + 4u], splats[w + 5u]));
+    // The pixel's splats: LAYER_COUNT layers of three (low, high) word pairs, six words a layer,
+    // so a layer starts at texel 3i/2 of the pixel's, in its first or its third word.
+    int base = int(stream * LAYER_COUNT * 3u / 2u);
+    for (int i = 0; i < 4; i++) {
+        uvec4 a = texelFetch(splat_texels, base + 3 * i / 2);
+        uvec4 b = texelFetch(splat_texels, base + 3 * i / 2 + 1);
+        terms[i] += i % 2 == 0 ? vec3(splat_value(a.x, a.y), splat_value(a.z, a.w), splat_value(b.x, b.y))
+                               : vec3(splat_value(a.z, a.w), splat_value(b.x, b.y), splat_value(b.z, b.w));
     }
 }
 

@@ -6,7 +6,10 @@
 // layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
 // src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
 // flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
-// scene, then the vertex slots, the splats, the points and the point counter.
+// scene, then the vertex slots, the splats, the points, the point counter and each path's end
+// (its last vertex's slot + 1; render_vcm reads no further). A path writes its end and every
+// slot up to it, the gaps (delta vertices) as empty, so the slots need no clearing between
+// samples.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -40,6 +43,7 @@ layout(std430, binding = SCENE_BINDINGS + 0) buffer LightVertices { LightVertex 
 layout(std430, binding = SCENE_BINDINGS + 1) buffer Splats { uint splats[]; };
 layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon points[]; };
 layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; };
+layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathEnds { uint path_ends[]; };
 layout(push_constant) uniform Push { VcmParams params; };
 
 #include "scene.glsl"
@@ -88,6 +92,7 @@ void main() {
     uint index = GLOBAL_INDEX;
     if (index >= params.path_count) return;
     uint path = params.path_begin + index;
+    path_ends[path] = 0u;
     if (frame.light_count == 0u) return;
     uint sample_index = params.sample_index;
     uint dim0 = RNG_VCM_LIGHT_DOMAIN;
@@ -145,6 +150,7 @@ void main() {
             vertices[slot].d_vc = sp.d_vc;
             vertices[slot].d_vm = sp.d_vm;
             vertices[slot].flags = diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
+            path_ends[path] = k;
             if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u && !nv.scattered) {
                 uint at = atomicAdd(point_count, 1u);
                 points[at].position = float[3](h.p.x, h.p.y, h.p.z);
@@ -158,6 +164,8 @@ void main() {
                 connect_to_camera(h, b, wo, sp, nv.scattered ? NO_LIGHT : ray_skip(prim), prim, medium, lens_u, n,
                                   path_layer(false, diffuse + 1u, specular_first));
             }
+        } else {
+            vertices[slot0 + k - 1u].path_length = 0u;
         }
         if (k >= params.vertex_slots) break;
         uint dim = dim0 + k * RNG_DIMS_PER_BOUNCE;

@@ -1,7 +1,8 @@
 //! The scene's texel buffers read back as structs: `texel_probe.comp` reads element 1 of every
 //! scene struct through its loader in shaders/scene_fetch.glsl (RGBA32UI texels, field by field)
 //! and stores it to a storage buffer of that struct, and photons 0..3 through `fetch_photon`
-//! (20-byte photons in RGBA32UI texels: each starts at a different word of its texel). A loader
+//! (20-byte photons in RGBA32UI texels: each starts at a different word of its texel), and
+//! light vertex 1 through `fetch_light_vertex` (render_vcm's vertex slots). A loader
 //! that took a field from the wrong word, or a wrong texel stride, would bring back a different
 //! element.
 
@@ -53,15 +54,22 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     let photon_words: Vec<u32> = (0..20).map(|k| 0x4090_0000 | (k << 8) | (k ^ 0xa5)).collect();
     let photons_in = gpu.upload("photons", &photon_words).unwrap();
     let photons_out = gpu.upload("photons out", &[0u32; 20]).unwrap();
+    let vertex_words = pattern(9, size("LightVertex"));
+    let vertices_in = gpu.upload("light vertices", &vertex_words).unwrap();
+    let vertices_out = gpu.upload("light vertex out", &vec![0u32; size("LightVertex") as usize]).unwrap();
     let outputs: Vec<_> = structs
         .iter()
         .map(|name| gpu.upload(name, &vec![0u32; size(name) as usize]).unwrap())
         .chain(std::iter::once(gpu.upload("words", &[0u32; 4]).unwrap()))
         .collect();
-    let bound: Vec<_> =
-        std::iter::once(&frame).chain(&scene).chain(&outputs).chain([&photons_in, &photons_out]).collect();
-    assert_eq!(bound.len() as u32, SCENE_BINDINGS + 9);
-    let types = BindingTypes { rgba: SCENE_BINDING_TYPES.rgba | 1 << (SCENE_BINDINGS + 7), ..SCENE_BINDING_TYPES };
+    let bound: Vec<_> = std::iter::once(&frame)
+        .chain(&scene)
+        .chain(&outputs)
+        .chain([&photons_in, &photons_out, &vertices_in, &vertices_out])
+        .collect();
+    assert_eq!(bound.len() as u32, SCENE_BINDINGS + 11);
+    let rgba = SCENE_BINDING_TYPES.rgba | 1 << (SCENE_BINDINGS + 7) | 1 << (SCENE_BINDINGS + 9);
+    let types = BindingTypes { rgba, ..SCENE_BINDING_TYPES };
     let probe = gpu
         .create_specialized_kernel("texel_probe", &spirv, bound.len() as u32, types, 0, &[])
         .expect("the probe matches its layout");
@@ -79,4 +87,6 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     assert_eq!(words, expected, "texture word, shape word, node skip/count, primitive kind");
     let photons: Vec<u32> = gpu.download(&photons_out).unwrap();
     assert_eq!(photons, photon_words, "fetch_photon of photons 0..3 (each at another word of its texel)");
+    let vertex: Vec<u32> = gpu.download(&vertices_out).unwrap();
+    assert_eq!(vertex, vertex_words[vertex_words.len() / 2..], "fetch_light_vertex of vertex 1");
 }

@@ -50,6 +50,9 @@ pub(super) fn render_pass_bidirectional(
     let counter = ctx.create_buffer("vcm_point_count", 16)?;
     let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
     let vertices = ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?;
+    // Each path's end (vcm_light writes every path's end and its slots up to it each sample, so
+    // neither buffer is cleared between samples).
+    let path_ends = ctx.create_buffer("light_path_ends", light_path_count(&f) as u64 * 4)?;
     let band_rows = stop_band_rows(f.width, f.height);
     let total = f.height as u64 * spp as u64;
     let mut done = 0;
@@ -63,7 +66,6 @@ pub(super) fn render_pass_bidirectional(
         let mut params = vcm_params(&f, base_radius, sample_index);
         // The grid build takes the points' buffer; the vertex slots stay for the pass.
         let points = ctx.create_buffer("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
-        ctx.fill_zero(&vertices)?;
         ctx.fill_zero(&splats)?;
         ctx.fill_zero(&counter)?;
         let mut begin = 0;
@@ -77,7 +79,7 @@ pub(super) fn render_pass_bidirectional(
             ctx.run("vcm_light", |rec| {
                 rec.dispatch(
                     light_kernel,
-                    &scene.bindings(&[&vertices, &splats, &points, &counter]),
+                    &scene.bindings(&[&vertices, &splats, &points, &counter, &path_ends]),
                     bytemuck::bytes_of(&params),
                     groups(params.path_count),
                 )
@@ -113,6 +115,7 @@ pub(super) fn render_pass_bidirectional(
                         &map.photons,
                         &map.starts,
                         &splats,
+                        &path_ends,
                     ]),
                     bytemuck::bytes_of(&unit),
                     groups(unit.row_count * f.width),

@@ -64,6 +64,15 @@ const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
     uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
 };
 
+/// render_vcm's: its params and grid (SCENE_BINDINGS + 1, + 2) as uniform buffers, the light
+/// vertices, grid points and splats (+ 3, + 4, + 6) as RGBA32UI texels, the bucket starts and the
+/// paths' ends (+ 5, + 7) as words, for the reasons SCENE_BINDING_TYPES gives.
+const RENDER_VCM_BINDING_TYPES: BindingTypes = BindingTypes {
+    rgba: SCENE_BINDING_TYPES.rgba | 0b101_1000 << SCENE_BINDINGS,
+    words: SCENE_BINDING_TYPES.words | 0b1010_0000 << SCENE_BINDINGS,
+    uniform: SCENE_BINDING_TYPES.uniform | 0b110 << SCENE_BINDINGS,
+};
+
 /// grid_rank's (shaders/grid_rank.comp): bucket starts (binding 1) as words, the scattered photons
 /// (binding 2) as RGBA32UI texels, since every invocation reads its whole bucket.
 const GRID_RANK_BINDING_TYPES: BindingTypes = BindingTypes { rgba: 1 << 2, words: 1 << 1, uniform: 0 };
@@ -152,7 +161,7 @@ impl GpuKernels {
                 &self.vcm_light,
                 Spec {
                     name: scene("vcm_light"),
-                    bindings: SCENE_BINDINGS + 4,
+                    bindings: SCENE_BINDINGS + 5,
                     types: SCENE_BINDING_TYPES,
                     push: size_of::<VcmParams>(),
                     constants,
@@ -163,8 +172,8 @@ impl GpuKernels {
                 &self.render_vcm,
                 Spec {
                     name: scene("render_vcm"),
-                    bindings: SCENE_BINDINGS + 7,
-                    types: SCENE_BINDING_TYPES,
+                    bindings: SCENE_BINDINGS + 8,
+                    types: RENDER_VCM_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,
                 },
