@@ -42,6 +42,24 @@ LightVertex fetch_light_vertex(usamplerBuffer texels, uint i) {
     return v;
 }
 
+// Light surface i (beside vertex slot i) as RGBA32UI texels: four texels, layout.glsl's order.
+LightSurface fetch_light_surface(usamplerBuffer texels, uint i) {
+    uvec4 a = texelFetch(texels, int(4u * i));
+    uvec4 b = texelFetch(texels, int(4u * i + 1u));
+    uvec4 c = texelFetch(texels, int(4u * i + 2u));
+    uvec4 e = texelFetch(texels, int(4u * i + 3u));
+    LightSurface s;
+    s.color0 = float[3](uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z));
+    s.kind = a.w;
+    s.color1 = float[3](uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z));
+    s.ior = uintBitsToFloat(b.w);
+    s.ns = float[3](uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z));
+    s.alpha_u = uintBitsToFloat(c.w);
+    s.alpha_v = uintBitsToFloat(e.x);
+    s._pad = uint[3](e.y, e.z, e.w);
+    return s;
+}
+
 ivec3 grid_cell(vec3 p, float cell_size) { return ivec3(floor(p / cell_size)); }
 
 // Spatial hash of Teschner et al. 2003; the three primes are theirs.

@@ -188,6 +188,17 @@ struct VcmParams {
     uint _pad[2];
 };
 
+struct LightSurface {
+    float color0[3];
+    uint kind;
+    float color1[3];
+    float ior;
+    float ns[3];
+    float alpha_u;
+    float alpha_v;
+    uint _pad[3];
+};
+
 // Stores a Photon field by field: glslang emits an invalid whole-struct OpStore when the value
 // comes from a block of another layout (the validation layer rejects the module).
 #define STORE_PHOTON(array, index, value) { Photon v_ = value; uint i_ = index; \

@@ -7,7 +7,8 @@
 // vertices that connect but do not merge, transmittance on every connection). CPU twin:
 // src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
 // LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
-// the sorted points, the bucket starts, the splats and the light paths' ends.
+// the sorted points, the bucket starts, the splats, the light paths' ends and the light
+// vertices' surfaces.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -50,6 +51,7 @@ layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer point_texels;
 layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer start_words;
 layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
 layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_end_words;
+layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer surface_texels;
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -93,11 +95,37 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
     return fr * (w / l.pick_probability) * tr;
 }
 
+// Light vertex lv (in slot `slot`): its point and BSDF, the surface's material as vcm_light
+// looked it up (LightSurface) on the hit shape_hit rebuilds; contract in vcm.rs,
+// light_surface (which evaluates the material again: the same values).
+void light_vertex_bsdf(LightVertex v, uint slot, out Hit h, out Bsdf b) {
+    vec3 o = load3(v.origin);
+    vec3 d = load3(v.direction);
+#ifdef VARIANT_MEDIA
+    if ((v.flags & VERTEX_MEDIUM) != 0u) {
+        h = medium_hit(o + d * v.t, -d);
+        b = phase_bsdf(v.hit, -d);
+        return;
+    }
+#endif
+    h = shape_hit(v.hit, o, d, v.t);
+    LightSurface s = fetch_light_surface(surface_texels, slot);
+    b.kind = s.kind;
+    b.color0 = load3(s.color0);
+    b.color1 = load3(s.color1);
+    b.alpha = vec2(s.alpha_u, s.alpha_v);
+    b.ior = s.ior;
+    b.ng = h.ns;
+    b.ns = load3(s.ns);
+    b.ts = h.dpdu;
+    b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;
+}
+
 // A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.
-vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, LightVertex lv, uvec3 n, float vm, inout uint rays) {
+vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, LightVertex lv, uint slot, uvec3 n, float vm, inout uint rays) {
     Hit lh;
     Bsdf lb;
-    light_vertex_bsdf(lv, lh, lb);
+    light_vertex_bsdf(lv, slot, lh, lb);
     vec3 to_light = lh.p - h.p;
     float dist2 = dot(to_light, to_light);
     if (dist2 <= 0.0) return vec3(0.0);
@@ -227,7 +255,7 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                     LightVertex lv = fetch_light_vertex(vertex_texels, slot0 + k);
                     if (lv.path_length == 0u) continue;
                     uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
-                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, n, vm, rays);
+                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, slot0 + k, n, vm, rays);
                     uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
                                          (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
                     terms[cl] += sp.throughput * c;

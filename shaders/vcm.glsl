@@ -233,21 +233,6 @@ vec3 vcm_visibility(Hit h, uint skip, vec3 target, uint medium, uvec3 n, inout u
     return vcm_transmittance(origin, to / dist, dist * (1.0 - 1e-4) - frame.ray_epsilon, medium, skip, n, rays);
 }
 
-// A stored light vertex's point and BSDF; contract in vcm.rs, light_vertex_bsdf.
-void light_vertex_bsdf(LightVertex v, out Hit h, out Bsdf b) {
-    vec3 o = load3(v.origin);
-    vec3 d = load3(v.direction);
-#ifdef VARIANT_MEDIA
-    if ((v.flags & VERTEX_MEDIUM) != 0u) {
-        h = medium_hit(o + d * v.t, -d);
-        b = phase_bsdf(v.hit, -d);
-        return;
-    }
-#endif
-    h = shape_hit(v.hit, o, d, v.t);
-    b = material_bsdf(material_at(h.material), h);
-}
-
 // Where a sub-path's ray ends; contract in vcm.rs, NextVertex and next_vertex.
 struct NextVertex {
     bool found;      // false: past MEDIUM_CROSSINGS null boundaries

@@ -342,6 +342,23 @@ gpu_structs! {
         pub path_count: u32,
         pub _pad: [u32; 2],
     }
+
+    /// A surface light vertex's material as its point looked it up, 64 bytes: the kind (after a
+    /// mix's choice), the colours and GGX widths (after textures), the index and the shading
+    /// normal (after bump and normal maps). vcm_light writes it beside the vertex's slot, and
+    /// render_vcm rebuilds the vertex's BSDF from it and `shape_hit`: evaluating the material's
+    /// textures again at every connection was about a third of the camera stage on lavapipe.
+    /// The CPU twin rebuilds the BSDF (`material_bsdf`) and keeps it per camera path instead.
+    pub struct LightSurface {
+        pub color0: [f32; 3],
+        pub kind: u32,
+        pub color1: [f32; 3],
+        pub ior: f32,
+        pub ns: [f32; 3],
+        pub alpha_u: f32,
+        pub alpha_v: f32,
+        pub _pad: [u32; 3],
+    }
 }
 
 impl BvhNode {

@@ -65,10 +65,11 @@ const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
 };
 
 /// render_vcm's: its params and grid (SCENE_BINDINGS + 1, + 2) as uniform buffers, the light
-/// vertices, grid points and splats (+ 3, + 4, + 6) as RGBA32UI texels, the bucket starts and the
-/// paths' ends (+ 5, + 7) as words, for the reasons SCENE_BINDING_TYPES gives.
+/// vertices, grid points, splats and light surfaces (+ 3, + 4, + 6, + 8) as RGBA32UI texels, the
+/// bucket starts and the paths' ends (+ 5, + 7) as words, for the reasons SCENE_BINDING_TYPES
+/// gives.
 const RENDER_VCM_BINDING_TYPES: BindingTypes = BindingTypes {
-    rgba: SCENE_BINDING_TYPES.rgba | 0b101_1000 << SCENE_BINDINGS,
+    rgba: SCENE_BINDING_TYPES.rgba | 0b1_0101_1000 << SCENE_BINDINGS,
     words: SCENE_BINDING_TYPES.words | 0b1010_0000 << SCENE_BINDINGS,
     uniform: SCENE_BINDING_TYPES.uniform | 0b110 << SCENE_BINDINGS,
 };
@@ -161,7 +162,7 @@ impl GpuKernels {
                 &self.vcm_light,
                 Spec {
                     name: scene("vcm_light"),
-                    bindings: SCENE_BINDINGS + 5,
+                    bindings: SCENE_BINDINGS + 6,
                     types: SCENE_BINDING_TYPES,
                     push: size_of::<VcmParams>(),
                     constants,
@@ -172,7 +173,7 @@ impl GpuKernels {
                 &self.render_vcm,
                 Spec {
                     name: scene("render_vcm"),
-                    bindings: SCENE_BINDINGS + 8,
+                    bindings: SCENE_BINDINGS + 9,
                     types: RENDER_VCM_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,
