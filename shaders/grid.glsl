@@ -103,3 +103,19 @@ bool grid_neighbour_in_reach(vec3 lower, vec3 upper, float r2, uint k) {
     vec3 gap = mix(mix(vec3(0.0), upper, equal(o, uvec3(2u))), lower, equal(o, uvec3(0u)));
     return dot(gap, gap) <= r2;
 }
+
+// The neighbours a lookup can reach, as a box of offsets from lo, n cells along each axis: an
+// axis's lower (upper) neighbour only where the point's gap to that face is within the radius.
+// Where cells are twice the radius wide (vcm's grid) that is at most 8 cells; a loop over the
+// box in grid_neighbour's order (x fastest) then visits the 27-loop's cells in its order, and
+// lavapipe, which runs a loop's body under masks while any lane goes on, pays 8 turns, not 27.
+void grid_reach_box(vec3 lower, vec3 upper, float r2, out ivec3 lo, out ivec3 n) {
+    lo = -ivec3(lessThanEqual(lower * lower, vec3(r2)));
+    n = ivec3(lessThanEqual(upper * upper, vec3(r2))) - lo + 1;
+}
+
+// The grid_neighbour index (0..26) of cell j of the box.
+uint grid_box_neighbour(ivec3 lo, ivec3 n, uint j) {
+    ivec3 o = lo + ivec3(int(j) % n.x, (int(j) / n.x) % n.y, int(j) / (n.x * n.y)) + 1;
+    return uint(o.x + 3 * o.y + 9 * o.z);
+}

@@ -267,7 +267,10 @@ void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
                 ivec3 c = grid_cell(h.p, vgrid.cell_size);
                 vec3 lower, upper;
                 grid_face_gaps(h.p, vgrid.cell_size, lower, upper);
-                for (uint kc = 0u; kc < 27u; kc++) {
+                ivec3 box_lo, box_n;
+                grid_reach_box(lower, upper, r2, box_lo, box_n);
+                for (uint j = 0u; j < uint(box_n.x * box_n.y * box_n.z); j++) {
+                    uint kc = grid_box_neighbour(box_lo, box_n, j);
                     if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
                     ivec3 cell = grid_neighbour(c, kc);
                     uint bucket = grid_hash(cell, vgrid.table_mask);
