@@ -42,13 +42,13 @@ LightVertex fetch_light_vertex(usamplerBuffer texels, uint i) {
     return v;
 }
 
-// Light surface i (beside vertex slot i) as RGBA32UI texels: four texels, layout.glsl's order.
-LightSurface fetch_light_surface(usamplerBuffer texels, uint i) {
+// Light material i (beside vertex slot i) as RGBA32UI texels: four texels, layout.glsl's order.
+LightMaterial fetch_light_material(usamplerBuffer texels, uint i) {
     uvec4 a = texelFetch(texels, int(4u * i));
     uvec4 b = texelFetch(texels, int(4u * i + 1u));
     uvec4 c = texelFetch(texels, int(4u * i + 2u));
     uvec4 e = texelFetch(texels, int(4u * i + 3u));
-    LightSurface s;
+    LightMaterial s;
     s.color0 = float[3](uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z));
     s.kind = a.w;
     s.color1 = float[3](uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z));

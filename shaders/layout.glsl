@@ -188,7 +188,7 @@ struct VcmParams {
     uint _pad[2];
 };
 
-struct LightSurface {
+struct LightMaterial {
     float color0[3];
     uint kind;
     float color1[3];

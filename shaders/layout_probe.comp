@@ -23,7 +23,7 @@ layout(std430, binding = 10) buffer Media { Medium media[]; };
 layout(std430, binding = 11) buffer Shadings { TriangleShading shadings[]; };
 layout(std430, binding = 12) buffer LightVertices { LightVertex light_vertices[]; };
 layout(std430, binding = 13) buffer VcmParamsArray { VcmParams vcm_params[]; };
-layout(std430, binding = 14) buffer LightSurfaces { LightSurface light_surfaces[]; };
+layout(std430, binding = 14) buffer LightMaterials { LightMaterial light_materials[]; };
 
 void main() {
     // Element 1 of each buffer becomes a field-by-field copy of element 0.
@@ -41,5 +41,5 @@ void main() {
     media[1] = media[0];
     light_vertices[1] = light_vertices[0];
     vcm_params[1] = vcm_params[0];
-    light_surfaces[1] = light_surfaces[0];
+    light_materials[1] = light_materials[0];
 }

@@ -8,7 +8,7 @@
 // src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
 // LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
 // the sorted points, the bucket starts, the splats, the light paths' ends and the light
-// vertices' surfaces.
+// vertices' materials.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -51,7 +51,7 @@ layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer point_texels;
 layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer start_words;
 layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
 layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_end_words;
-layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer surface_texels;
+layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer light_material_texels;
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -96,7 +96,7 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
 }
 
 // Light vertex lv (in slot `slot`): its point and BSDF, the surface's material as vcm_light
-// looked it up (LightSurface) on the hit shape_hit rebuilds; contract in vcm.rs,
+// looked it up (LightMaterial) on the hit shape_hit rebuilds; contract in vcm.rs,
 // light_surface (which evaluates the material again: the same values).
 void light_vertex_bsdf(LightVertex v, uint slot, out Hit h, out Bsdf b) {
     vec3 o = load3(v.origin);
@@ -109,7 +109,7 @@ void light_vertex_bsdf(LightVertex v, uint slot, out Hit h, out Bsdf b) {
     }
 #endif
     h = shape_hit(v.hit, o, d, v.t);
-    LightSurface s = fetch_light_surface(surface_texels, slot);
+    LightMaterial s = fetch_light_material(light_material_texels, slot);
     b.kind = s.kind;
     b.color0 = load3(s.color0);
     b.color1 = load3(s.color1);

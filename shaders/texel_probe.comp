@@ -2,8 +2,8 @@
 // Reads element 1 of every scene struct through its texel-buffer loader (scene_fetch.glsl) and
 // stores it, field by field, to element 0 of a storage buffer of that struct; word 5 of the
 // texture and shape words; photons 0..3 through fetch_photon (grid.glsl), which start at
-// each of the four words of a texel; and light vertex 1 and light surface 1 through
-// fetch_light_vertex and fetch_light_surface. tests/texel_fetch.rs compares what comes back with what
+// each of the four words of a texel; and light vertex 1 and light material 1 through
+// fetch_light_vertex and fetch_light_material. tests/texel_fetch.rs compares what comes back with what
 // was sent.
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
@@ -22,8 +22,8 @@ layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer photon_texels;
 layout(std430, binding = SCENE_BINDINGS + 8) writeonly buffer OutPhotons { Photon out_photons[]; };
 layout(binding = SCENE_BINDINGS + 9) uniform usamplerBuffer vertex_texels;
 layout(std430, binding = SCENE_BINDINGS + 10) writeonly buffer OutVertices { LightVertex out_vertices[]; };
-layout(binding = SCENE_BINDINGS + 11) uniform usamplerBuffer surface_texels;
-layout(std430, binding = SCENE_BINDINGS + 12) writeonly buffer OutSurfaces { LightSurface out_surfaces[]; };
+layout(binding = SCENE_BINDINGS + 11) uniform usamplerBuffer light_material_texels;
+layout(std430, binding = SCENE_BINDINGS + 12) writeonly buffer OutLightMaterials { LightMaterial out_light_materials[]; };
 
 #include "grid.glsl"
 
@@ -40,5 +40,5 @@ void main() {
     out_words[3] = primitive_kind(1u);
     for (uint i = 0u; i < 4u; i++) out_photons[i] = fetch_photon(photon_texels, i);
     out_vertices[0] = fetch_light_vertex(vertex_texels, 1u);
-    out_surfaces[0] = fetch_light_surface(surface_texels, 1u);
+    out_light_materials[0] = fetch_light_material(light_material_texels, 1u);
 }

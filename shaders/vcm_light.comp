@@ -8,7 +8,7 @@
 // flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
 // scene, then the vertex slots, the splats, the points, the point counter and each path's end
 // (its last vertex's slot + 1; render_vcm reads no further), then each surface vertex's
-// material as looked up (LightSurface, beside its slot). A path writes its end and every slot up
+// material as looked up (LightMaterial, beside its slot). A path writes its end and every slot up
 // to it, the gaps (delta vertices) as empty, so the slots need no clearing between samples.
 // variant: textured
 // variant: textured alpha
@@ -44,7 +44,7 @@ layout(std430, binding = SCENE_BINDINGS + 1) buffer Splats { uint splats[]; };
 layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon points[]; };
 layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; };
 layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathEnds { uint path_ends[]; };
-layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer LightSurfaces { LightSurface surfaces[]; };
+layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer LightMaterials { LightMaterial light_materials[]; };
 layout(push_constant) uniform Push { VcmParams params; };
 
 #include "scene.glsl"
@@ -153,13 +153,13 @@ void main() {
             vertices[slot].flags = diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
             path_ends[path] = k;
             if (!nv.scattered) {
-                surfaces[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
-                surfaces[slot].kind = b.kind;
-                surfaces[slot].color1 = float[3](b.color1.x, b.color1.y, b.color1.z);
-                surfaces[slot].ior = b.ior;
-                surfaces[slot].ns = float[3](b.ns.x, b.ns.y, b.ns.z);
-                surfaces[slot].alpha_u = b.alpha.x;
-                surfaces[slot].alpha_v = b.alpha.y;
+                light_materials[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
+                light_materials[slot].kind = b.kind;
+                light_materials[slot].color1 = float[3](b.color1.x, b.color1.y, b.color1.z);
+                light_materials[slot].ior = b.ior;
+                light_materials[slot].ns = float[3](b.ns.x, b.ns.y, b.ns.z);
+                light_materials[slot].alpha_u = b.alpha.x;
+                light_materials[slot].alpha_v = b.alpha.y;
             }
             if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u && !nv.scattered) {
                 uint at = atomicAdd(point_count, 1u);

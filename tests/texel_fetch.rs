@@ -2,7 +2,7 @@
 //! scene struct through its loader in shaders/scene_fetch.glsl (RGBA32UI texels, field by field)
 //! and stores it to a storage buffer of that struct, and photons 0..3 through `fetch_photon`
 //! (20-byte photons in RGBA32UI texels: each starts at a different word of its texel), and
-//! light vertex 1 and light surface 1 through `fetch_light_vertex` and `fetch_light_surface`
+//! light vertex 1 and light material 1 through `fetch_light_vertex` and `fetch_light_material`
 //! (render_vcm's vertex slots). A loader
 //! that took a field from the wrong word, or a wrong texel stride, would bring back a different
 //! element.
@@ -58,9 +58,9 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     let vertex_words = pattern(9, size("LightVertex"));
     let vertices_in = gpu.upload("light vertices", &vertex_words).unwrap();
     let vertices_out = gpu.upload("light vertex out", &vec![0u32; size("LightVertex") as usize]).unwrap();
-    let surface_words = pattern(10, size("LightSurface"));
-    let surfaces_in = gpu.upload("light surfaces", &surface_words).unwrap();
-    let surfaces_out = gpu.upload("light surface out", &vec![0u32; size("LightSurface") as usize]).unwrap();
+    let material_words = pattern(10, size("LightMaterial"));
+    let light_materials_in = gpu.upload("light materials", &material_words).unwrap();
+    let light_materials_out = gpu.upload("light material out", &vec![0u32; size("LightMaterial") as usize]).unwrap();
     let outputs: Vec<_> = structs
         .iter()
         .map(|name| gpu.upload(name, &vec![0u32; size(name) as usize]).unwrap())
@@ -69,10 +69,10 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     let bound: Vec<_> = std::iter::once(&frame)
         .chain(&scene)
         .chain(&outputs)
-        .chain([&photons_in, &photons_out, &vertices_in, &vertices_out, &surfaces_in, &surfaces_out])
+        .chain([&photons_in, &photons_out, &vertices_in, &vertices_out, &light_materials_in, &light_materials_out])
         .collect();
     assert_eq!(bound.len() as u32, SCENE_BINDINGS + 13);
-    // The input texels: photons, light vertices, light surfaces.
+    // The input texels: photons, light vertices, light materials.
     let rgba = SCENE_BINDING_TYPES.rgba | 0b1010_1000_0000 << SCENE_BINDINGS;
     let types = BindingTypes { rgba, ..SCENE_BINDING_TYPES };
     let probe = gpu
@@ -94,6 +94,6 @@ fn every_scene_struct_round_trips_through_its_texel_loader() {
     assert_eq!(photons, photon_words, "fetch_photon of photons 0..3 (each at another word of its texel)");
     let vertex: Vec<u32> = gpu.download(&vertices_out).unwrap();
     assert_eq!(vertex, vertex_words[vertex_words.len() / 2..], "fetch_light_vertex of vertex 1");
-    let surface: Vec<u32> = gpu.download(&surfaces_out).unwrap();
-    assert_eq!(surface, surface_words[surface_words.len() / 2..], "fetch_light_surface of surface 1");
+    let light_material: Vec<u32> = gpu.download(&light_materials_out).unwrap();
+    assert_eq!(light_material, material_words[material_words.len() / 2..], "fetch_light_material of material 1");
 }

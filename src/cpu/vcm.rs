@@ -556,8 +556,9 @@ struct LightSurface {
 
 /// The light vertices' surfaces one camera path has evaluated. Every camera vertex connects to
 /// the same light path; evaluated once per connection, a light vertex's textures and frame were
-/// a sixteenth of a glossy vcm render's CPU time. The kernel evaluates them per connection: a
-/// cache would cost it registers, its scarcer resource.
+/// a sixteenth of a glossy vcm render's CPU time. The kernel keeps no such cache (it would cost
+/// registers); the light stage stores each vertex's looked-up material instead (`LightMaterial`),
+/// which gives it the same BSDF without the textures.
 struct LightSurfaces {
     cached: [Option<LightSurface>; LIGHT_SURFACES_CACHED],
 }

@@ -349,7 +349,7 @@ gpu_structs! {
     /// render_vcm rebuilds the vertex's BSDF from it and `shape_hit`: evaluating the material's
     /// textures again at every connection was about a third of the camera stage on lavapipe.
     /// The CPU twin rebuilds the BSDF (`material_bsdf`) and keeps it per camera path instead.
-    pub struct LightSurface {
+    pub struct LightMaterial {
         pub color0: [f32; 3],
         pub kind: u32,
         pub color1: [f32; 3],

@@ -11,7 +11,7 @@ use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
-use crate::layout::{DispatchRange, LightSurface, LightVertex, Photon};
+use crate::layout::{DispatchRange, LightMaterial, LightVertex, Photon};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
 
@@ -53,7 +53,7 @@ pub(super) fn render_pass_bidirectional(
     // Each path's end (vcm_light writes every path's end and its slots up to it each sample, so
     // neither buffer is cleared between samples).
     let path_ends = ctx.create_buffer("light_path_ends", light_path_count(&f) as u64 * 4)?;
-    let surfaces = ctx.create_buffer("light_surfaces", slots * size_of::<LightSurface>() as u64)?;
+    let materials = ctx.create_buffer("light_materials", slots * size_of::<LightMaterial>() as u64)?;
     let band_rows = stop_band_rows(f.width, f.height);
     let total = f.height as u64 * spp as u64;
     let mut done = 0;
@@ -80,7 +80,7 @@ pub(super) fn render_pass_bidirectional(
             ctx.run("vcm_light", |rec| {
                 rec.dispatch(
                     light_kernel,
-                    &scene.bindings(&[&vertices, &splats, &points, &counter, &path_ends, &surfaces]),
+                    &scene.bindings(&[&vertices, &splats, &points, &counter, &path_ends, &materials]),
                     bytemuck::bytes_of(&params),
                     groups(params.path_count),
                 )
@@ -117,7 +117,7 @@ pub(super) fn render_pass_bidirectional(
                         &map.starts,
                         &splats,
                         &path_ends,
-                        &surfaces,
+                        &materials,
                     ]),
                     bytemuck::bytes_of(&unit),
                     groups(unit.row_count * f.width),
