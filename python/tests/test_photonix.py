@@ -186,11 +186,18 @@ def test_keyboard_interrupt_returns_the_passes_so_far():
         done.wait(60)
         os.kill(os.getpid(), signal.SIGINT)
 
+    # A shell that starts a job in the background without job control (`cmd &` in a script,
+    # nohup) leaves SIGINT ignored, and Python then installs no handler: the signal would be
+    # dropped and the render run on. Ctrl-C's handler, for this test only.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     threading.Thread(target=interrupt, daemon=True).start()
     start = time.monotonic()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        image = photonix.render(BOX, passes=photonix.MAX_PASSES, progress=progress, info=info, **SMALL)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            image = photonix.render(BOX, passes=photonix.MAX_PASSES, progress=progress, info=info, **SMALL)
+    finally:
+        signal.signal(signal.SIGINT, previous)
     assert info["stop_reason"] == "interrupted" and 1 <= info["passes"] < 1000, info
     assert image.shape == (24, 24, 3) and np.isfinite(image).all()
     assert any(issubclass(w.category, RuntimeWarning) and "interrupted" in str(w.message) for w in caught)
