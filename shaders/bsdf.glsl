@@ -74,6 +74,24 @@ uint lookup_texture(Material m, uint k) {
     return m.bump_tex;
 }
 
+// The BSDF at hit h of a material whose values are looked up (textures, a mix's choice, bump and
+// normal maps done): material_bsdf's, and render_vcm's light vertices' from what vcm_light stored.
+Bsdf bsdf_at(Hit h, uint kind, vec3 color0, vec3 color1, vec2 alpha, float ior, vec3 ns) {
+    Bsdf b;
+    b.kind = kind;
+    b.color0 = color0;
+    b.color1 = color1;
+    b.alpha = alpha;
+    b.ior = ior;
+    // The normal that decides sides: the geometric one, or a smooth triangle's interpolated one
+    // (its BSDF sees the curved surface the normals describe; see the twin).
+    b.ng = h.ns;
+    b.ns = ns;
+    b.ts = h.dpdu;
+    b.glossy_path = max(alpha.x, alpha.y) <= frame.glossy_threshold;
+    return b;
+}
+
 // The mix's choices, then every texture of the chosen material, go through the one texture_eval
 // in this loop: lavapipe inlines a function at each call site, and one call per parameter (nine,
 // with the bump map's four) made the textured kernels several times larger and slower.
@@ -98,29 +116,21 @@ Bsdf material_bsdf(Material m, Hit h) {
         }
     }
     uint lookups = material_lookups(m);
-    Bsdf b;
-    b.kind = m.kind;
-    b.color0 = load3(m.color0);
-    if ((lookups & (1u << LOOKUP_COLOR0)) != 0u) b.color0 *= looked[LOOKUP_COLOR0];
-    b.color1 = load3(m.color1);
-    if ((lookups & (1u << LOOKUP_COLOR1)) != 0u) b.color1 *= looked[LOOKUP_COLOR1];
-    b.alpha = vec2(m.roughness[0], m.roughness[1]);
-    if ((lookups & (1u << LOOKUP_ROUGHNESS)) != 0u) b.alpha *= looked[LOOKUP_ROUGHNESS].x;
-    b.ior = m.ior;
-    // The normal that decides sides: the geometric one, or a smooth triangle's interpolated one
-    // (its BSDF sees the curved surface the normals describe; see the twin).
-    b.ng = h.ns;
-    b.ns = h.ns;
-    b.ts = h.dpdu;
-    b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;
+    vec3 color0 = load3(m.color0);
+    if ((lookups & (1u << LOOKUP_COLOR0)) != 0u) color0 *= looked[LOOKUP_COLOR0];
+    vec3 color1 = load3(m.color1);
+    if ((lookups & (1u << LOOKUP_COLOR1)) != 0u) color1 *= looked[LOOKUP_COLOR1];
+    vec2 alpha = vec2(m.roughness[0], m.roughness[1]);
+    if ((lookups & (1u << LOOKUP_ROUGHNESS)) != 0u) alpha *= looked[LOOKUP_ROUGHNESS].x;
     // Bump and normal maps change the shading normal only: the geometric normal keeps deciding
     // sides, offsets and leaks. A bump map wins over a normal map.
-    WHEN((lookups & (1u << LOOKUP_NORMAL)) != 0u) b.ns = normal_map_normal_from_texel(looked[LOOKUP_NORMAL], h);
+    vec3 ns = h.ns;
+    WHEN((lookups & (1u << LOOKUP_NORMAL)) != 0u) ns = normal_map_normal_from_texel(looked[LOOKUP_NORMAL], h);
     WHEN((lookups & (15u << LOOKUP_BUMP)) != 0u) {
-        b.ns = bump_normal_from_heights(looked[LOOKUP_BUMP].x, looked[LOOKUP_BUMP + 1u].x, looked[LOOKUP_BUMP + 2u].x,
-                                        looked[LOOKUP_BUMP + 3u].x, m.bump_strength, h);
+        ns = bump_normal_from_heights(looked[LOOKUP_BUMP].x, looked[LOOKUP_BUMP + 1u].x, looked[LOOKUP_BUMP + 2u].x,
+                                      looked[LOOKUP_BUMP + 3u].x, m.bump_strength, h);
     }
-    return b;
+    return bsdf_at(h, m.kind, color0, color1, alpha, m.ior, ns);
 }
 
 // The shading normal turned to the side of w.

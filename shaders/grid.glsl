@@ -21,45 +21,6 @@ Photon fetch_photon(usamplerBuffer texels, uint i) {
     return p;
 }
 
-// Light vertex i of vcm's vertex slots bound as RGBA32UI texels (render_vcm reads them at
-// random): sixteen words, four texels, in the order of layout.glsl.
-LightVertex fetch_light_vertex(usamplerBuffer texels, uint i) {
-    uvec4 a = texelFetch(texels, int(4u * i));
-    uvec4 b = texelFetch(texels, int(4u * i + 1u));
-    uvec4 c = texelFetch(texels, int(4u * i + 2u));
-    uvec4 e = texelFetch(texels, int(4u * i + 3u));
-    LightVertex v;
-    v.origin = float[3](uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z));
-    v.hit = a.w;
-    v.direction = float[3](uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z));
-    v.t = uintBitsToFloat(b.w);
-    v.throughput = float[3](uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z));
-    v.path_length = c.w;
-    v.d_vcm = uintBitsToFloat(e.x);
-    v.d_vc = uintBitsToFloat(e.y);
-    v.d_vm = uintBitsToFloat(e.z);
-    v.flags = e.w;
-    return v;
-}
-
-// Light material i (beside vertex slot i) as RGBA32UI texels: four texels, layout.glsl's order.
-LightMaterial fetch_light_material(usamplerBuffer texels, uint i) {
-    uvec4 a = texelFetch(texels, int(4u * i));
-    uvec4 b = texelFetch(texels, int(4u * i + 1u));
-    uvec4 c = texelFetch(texels, int(4u * i + 2u));
-    uvec4 e = texelFetch(texels, int(4u * i + 3u));
-    LightMaterial s;
-    s.color0 = float[3](uintBitsToFloat(a.x), uintBitsToFloat(a.y), uintBitsToFloat(a.z));
-    s.kind = a.w;
-    s.color1 = float[3](uintBitsToFloat(b.x), uintBitsToFloat(b.y), uintBitsToFloat(b.z));
-    s.ior = uintBitsToFloat(b.w);
-    s.ns = float[3](uintBitsToFloat(c.x), uintBitsToFloat(c.y), uintBitsToFloat(c.z));
-    s.alpha_u = uintBitsToFloat(c.w);
-    s.alpha_v = uintBitsToFloat(e.x);
-    s._pad = uint[3](e.y, e.z, e.w);
-    return s;
-}
-
 ivec3 grid_cell(vec3 p, float cell_size) { return ivec3(floor(p / cell_size)); }
 
 // Spatial hash of Teschner et al. 2003; the three primes are theirs.

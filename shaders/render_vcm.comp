@@ -56,6 +56,7 @@ layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
 #include "grid.glsl"
+#include "vcm_fetch.glsl"
 #include "vcm.glsl"
 
 float emission_weight(SubPath sp, float direct, float emission) {
@@ -109,16 +110,8 @@ void light_vertex_bsdf(LightVertex v, uint slot, out Hit h, out Bsdf b) {
     }
 #endif
     h = shape_hit(v.hit, o, d, v.t);
-    LightMaterial s = fetch_light_material(light_material_texels, slot);
-    b.kind = s.kind;
-    b.color0 = load3(s.color0);
-    b.color1 = load3(s.color1);
-    b.alpha = vec2(s.alpha_u, s.alpha_v);
-    b.ior = s.ior;
-    b.ng = h.ns;
-    b.ns = load3(s.ns);
-    b.ts = h.dpdu;
-    b.glossy_path = max(b.alpha.x, b.alpha.y) <= frame.glossy_threshold;
+    LightMaterial m = fetch_light_material(light_material_texels, slot);
+    b = bsdf_at(h, m.kind, load3(m.color0), load3(m.color1), vec2(m.alpha_u, m.alpha_v), m.ior, load3(m.ns));
 }
 
 // A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.

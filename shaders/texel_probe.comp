@@ -26,6 +26,7 @@ layout(binding = SCENE_BINDINGS + 11) uniform usamplerBuffer light_material_texe
 layout(std430, binding = SCENE_BINDINGS + 12) writeonly buffer OutLightMaterials { LightMaterial out_light_materials[]; };
 
 #include "grid.glsl"
+#include "vcm_fetch.glsl"
 
 void main() {
     out_nodes[0] = bvh_node(1u);
