@@ -17,7 +17,11 @@ enum Command<'a> {
     Dispatch { kernel: &'a Kernel, buffers: Vec<&'a Buffer>, push_constants: Vec<u8>, groups: [u32; 3] },
     FillZero(&'a Buffer),
     Copy { src: &'a Buffer, dst: &'a Buffer },
+    Update { dst: &'a Buffer, bytes: Vec<u8> },
 }
+
+/// The most bytes one [`Recorder::update`] writes (Vulkan's limit for vkCmdUpdateBuffer).
+pub const MAX_UPDATE_BYTES: usize = 65536;
 
 /// Collects the commands of one [`GpuContext::run`](super::GpuContext::run). Commands execute
 /// in order, each after the previous one's writes are visible.
@@ -83,6 +87,23 @@ impl<'a> Recorder<'a> {
             return Err(GpuError::WriteTooLarge { name: dst.name().to_string(), len: src.size(), size: dst.size() });
         }
         self.commands.push(Command::Copy { src, dst });
+        Ok(())
+    }
+
+    /// Writes `data` (at most [`MAX_UPDATE_BYTES`], a multiple of 4 bytes) to the start of
+    /// `dst` at this point of the batch, from the command buffer itself: small parameter blocks
+    /// need no staging buffer and no submission of their own.
+    pub fn update<T: bytemuck::Pod>(&mut self, dst: &'a Buffer, data: &[T]) -> Result<(), GpuError> {
+        check_same_device(self.shared, &dst.shared, dst.name())?;
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() as u64 > dst.size() || bytes.len() > MAX_UPDATE_BYTES || !bytes.len().is_multiple_of(4) {
+            return Err(GpuError::WriteTooLarge {
+                name: dst.name().to_string(),
+                len: bytes.len() as u64,
+                size: dst.size().min(MAX_UPDATE_BYTES as u64),
+            });
+        }
+        self.commands.push(Command::Update { dst, bytes: bytes.to_vec() });
         Ok(())
     }
 
@@ -249,6 +270,14 @@ impl<'a> Recorder<'a> {
                     // SAFETY: `cb` is recording; the buffer is live with TRANSFER_DST usage and
                     // a size that is a multiple of 4.
                     unsafe { device.cmd_fill_buffer(cb, buffer.handle, 0, vk::WHOLE_SIZE, 0) };
+                }
+                Command::Update { dst, bytes } => {
+                    if !bytes.is_empty() {
+                        // SAFETY: `cb` is recording; the buffer is live with TRANSFER_DST usage,
+                        // and `update` checked the size (a multiple of 4, within the buffer and
+                        // Vulkan's 65536 bytes).
+                        unsafe { device.cmd_update_buffer(cb, dst.handle, 0, bytes) };
+                    }
                 }
                 Command::Copy { src, dst } => {
                     if src.size() > 0 {

@@ -60,6 +60,38 @@ pub struct GpuContext {
     timings: Mutex<Vec<(String, f64, u32)>>,
     /// Always go through staging buffers, even where device memory is host-visible.
     force_staging: AtomicBool,
+    /// The staging and the readback buffer of the last copies, kept for the next ones (up to
+    /// [`KEPT_TRANSFER_BYTES`]): a render's per-pass uploads and readbacks then allocate nothing.
+    staging: Mutex<Option<Buffer>>,
+    readback: Mutex<Option<Buffer>>,
+}
+
+/// The largest staging or readback buffer kept between copies; larger ones (scene uploads) are
+/// made for their copy and freed after it.
+const KEPT_TRANSFER_BYTES: u64 = 64 << 20;
+
+/// A transfer buffer of at least `size` bytes: the kept one when it is large enough, else a new
+/// one (rounded up to a power of two when it may be kept, so growing images reuse it).
+fn transfer_buffer(
+    shared: &Arc<Shared>,
+    kept: &mut Option<Buffer>,
+    name: &str,
+    size: u64,
+    usage: vk::BufferUsageFlags,
+    location: MemoryLocation,
+) -> Result<Buffer, GpuError> {
+    if let Some(buffer) = kept.take_if(|b| b.size() >= size) {
+        return Ok(buffer);
+    }
+    let size = if size <= KEPT_TRANSFER_BYTES { size.next_power_of_two().min(KEPT_TRANSFER_BYTES) } else { size };
+    Buffer::create(shared, name, size, usage, location)
+}
+
+/// Keeps `buffer` for the next copy when it is small enough.
+fn keep_transfer(kept: &mut Option<Buffer>, buffer: Buffer) {
+    if buffer.size() <= KEPT_TRANSFER_BYTES {
+        *kept = Some(buffer);
+    }
 }
 
 impl GpuContext {
@@ -75,6 +107,8 @@ impl GpuContext {
             submitter: Mutex::new(submitter),
             timings: Mutex::new(Vec::new()),
             force_staging: AtomicBool::new(false),
+            staging: Mutex::new(None),
+            readback: Mutex::new(None),
         };
         context.shared.check_validation()?;
         Ok(context)
@@ -133,6 +167,15 @@ impl GpuContext {
         Ok(buffer)
     }
 
+    /// Device-local storage buffer of `size` bytes whose contents are undefined until a kernel,
+    /// fill or copy writes them: for scratch space the next command overwrites, where zeroing
+    /// would cost a submission.
+    pub fn create_scratch(&self, name: &str, size: u64) -> Result<Buffer, GpuError> {
+        let buffer = Buffer::create_storage(&self.shared, name, size)?;
+        self.shared.check_validation()?;
+        Ok(buffer)
+    }
+
     /// Overwrites the start of `buffer` with `data`; the rest keeps its contents.
     pub fn write<T: Pod>(&self, buffer: &Buffer, data: &[T]) -> Result<(), GpuError> {
         self.check_same_context(&buffer.shared, buffer.name())?;
@@ -172,9 +215,11 @@ impl GpuContext {
             let _submitter = self.lock_submitter();
             buffer.read_mapped(ptr, dst);
         } else {
-            let readback = Buffer::create(
+            let mut kept = self.readback.lock().unwrap_or_else(|e| e.into_inner());
+            let readback = transfer_buffer(
                 &self.shared,
-                &format!("{} readback", buffer.name()),
+                &mut kept,
+                "readback",
                 buffer.size(),
                 vk::BufferUsageFlags::TRANSFER_DST,
                 MemoryLocation::GpuToCpu,
@@ -187,6 +232,7 @@ impl GpuContext {
             })?;
             let ptr = readback.host_ptr().expect("GpuToCpu memory is host-visible, coherent and mapped");
             readback.read_mapped(ptr, dst);
+            keep_transfer(&mut kept, readback);
         }
         self.shared.check_validation()?;
         Ok(out)
@@ -223,9 +269,11 @@ impl GpuContext {
         if copy_size == 0 {
             return Ok(());
         }
-        let staging = Buffer::create(
+        let mut kept = self.staging.lock().unwrap_or_else(|e| e.into_inner());
+        let staging = transfer_buffer(
             &self.shared,
-            &format!("{} staging", buffer.name()),
+            &mut kept,
+            "staging",
             copy_size,
             vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::CpuToGpu,
@@ -235,9 +283,12 @@ impl GpuContext {
         let region = [vk::BufferCopy::default().size(copy_size)];
         self.one_shot(label, |device, cb| {
             // SAFETY: both buffers are live, the region lies inside both (`copy_size` is at most
-            // the target's `vk_size`), and the command buffer is recording.
+            // the target's `vk_size` and the staging buffer's size), and the command buffer is
+            // recording.
             unsafe { device.cmd_copy_buffer(cb, staging.handle, buffer.handle, &region) };
-        })
+        })?;
+        keep_transfer(&mut kept, staging);
+        Ok(())
     }
 
     // Kernels

@@ -11,19 +11,58 @@ use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
-use crate::layout::{DispatchRange, LightMaterial, LightVertex, Photon};
+use crate::gpu::Buffer;
+use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
 
 /// Light paths per vcm_light dispatch.
 const PATHS_PER_DISPATCH: u32 = 1 << 16;
 
-/// Renders pass `pass` (`spp` samples) of a bidirectional integrator on the device.
+/// The device buffers of a bidirectional render, kept from pass to pass while the frame's sizes
+/// stay: allocating and clearing them each pass cost more than the pass's kernels on a real GPU.
+pub(super) struct BidirectionalBuffers {
+    /// (pixels, light paths, vertex slots) they were made for.
+    sizes: (u64, u64, u64),
+    accumulation: Buffer,
+    splats: Buffer,
+    counter: Buffer,
+    vertices: Buffer,
+    path_ends: Buffer,
+    materials: Buffer,
+    params: Buffer,
+    grid: Buffer,
+}
+
+impl BidirectionalBuffers {
+    fn new(ctx: &GpuContext, sizes: (u64, u64, u64)) -> Result<BidirectionalBuffers, GpuError> {
+        let (pixels, paths, slots) = sizes;
+        Ok(BidirectionalBuffers {
+            sizes,
+            // Cleared by each pass's first batch, as the splats and the counter by each sample's.
+            accumulation: ctx.create_scratch("vcm_accumulation", pixels * 16 * LAYER_COUNT as u64)?,
+            splats: ctx.create_scratch("vcm_splats", pixels * LAYER_COUNT as u64 * 3 * 8)?,
+            counter: ctx.create_scratch("vcm_point_count", 16)?,
+            // vcm_light writes every path's end and its slots up to it each sample, so these
+            // are cleared once, here, and never between samples.
+            vertices: ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?,
+            path_ends: ctx.create_buffer("light_path_ends", paths * 4)?,
+            materials: ctx.create_buffer("light_materials", slots * size_of::<LightMaterial>() as u64)?,
+            params: ctx.create_scratch("vcm_params", size_of::<VcmParams>() as u64)?,
+            grid: ctx.create_scratch("vcm_grid", size_of::<GridParams>() as u64)?,
+        })
+    }
+}
+
+/// Renders pass `pass` (`spp` samples) of a bidirectional integrator on the device, with the
+/// buffers in `kept` (made or remade there when the frame's sizes changed).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
     ctx: &GpuContext,
     kernels: &GpuKernels,
     scene: &DeviceScene,
     buffers: &SceneBuffers,
+    kept: &mut Option<BidirectionalBuffers>,
     spp: u32,
     pass: u32,
     progress: &mut dyn FnMut(u64, u64),
@@ -44,16 +83,13 @@ pub(super) fn render_pass_bidirectional(
     }
     let light_kernel = kernels.vcm_light(ctx)?;
     let camera_kernel = kernels.render_vcm(ctx)?;
-    let accumulation = ctx.create_buffer("vcm_accumulation", accumulation_bytes)?;
-    ctx.fill_zero(&accumulation)?;
-    let splats = ctx.create_buffer("vcm_splats", splat_bytes)?;
-    let counter = ctx.create_buffer("vcm_point_count", 16)?;
     let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
-    let vertices = ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?;
-    // Each path's end (vcm_light writes every path's end and its slots up to it each sample, so
-    // neither buffer is cleared between samples).
-    let path_ends = ctx.create_buffer("light_path_ends", light_path_count(&f) as u64 * 4)?;
-    let materials = ctx.create_buffer("light_materials", slots * size_of::<LightMaterial>() as u64)?;
+    let sizes = (pixels, light_path_count(&f) as u64, slots);
+    if kept.as_ref().is_none_or(|k| k.sizes != sizes) {
+        *kept = None;
+        *kept = Some(BidirectionalBuffers::new(ctx, sizes)?);
+    }
+    let b = kept.as_ref().expect("made just above");
     let band_rows = stop_band_rows(f.width, f.height);
     let total = f.height as u64 * spp as u64;
     let mut done = 0;
@@ -65,10 +101,9 @@ pub(super) fn render_pass_bidirectional(
         let sample_index = pass * spp + sample;
         let t = Instant::now();
         let mut params = vcm_params(&f, base_radius, sample_index);
-        // The grid build takes the points' buffer; the vertex slots stay for the pass.
-        let points = ctx.create_buffer("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
-        ctx.fill_zero(&splats)?;
-        ctx.fill_zero(&counter)?;
+        // The grid build takes the points' buffer; vcm_light writes the points below the count
+        // it returns, and nothing reads past them.
+        let points = ctx.create_scratch("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
         let mut begin = 0;
         while begin < params.light_paths {
             if stop_requested() {
@@ -78,9 +113,17 @@ pub(super) fn render_pass_bidirectional(
             params.path_begin = begin;
             params.path_count = PATHS_PER_DISPATCH.min(params.light_paths - begin);
             ctx.run("vcm_light", |rec| {
+                // The clears go into the sample's first batch rather than submissions of their own.
+                if begin == 0 {
+                    if sample == 0 {
+                        rec.fill_zero(&b.accumulation)?;
+                    }
+                    rec.fill_zero(&b.splats)?;
+                    rec.fill_zero(&b.counter)?;
+                }
                 rec.dispatch(
                     light_kernel,
-                    &scene.bindings(&[&vertices, &splats, &points, &counter, &path_ends, &materials]),
+                    &scene.bindings(&[&b.vertices, &b.splats, &points, &b.counter, &b.path_ends, &b.materials]),
                     bytemuck::bytes_of(&params),
                     groups(params.path_count),
                 )
@@ -89,16 +132,15 @@ pub(super) fn render_pass_bidirectional(
         }
         params.path_begin = 0;
         params.path_count = params.light_paths;
-        let count = ctx.download::<u32>(&counter)?[0];
+        let count = ctx.download::<u32>(&b.counter)?[0];
         let grid = vertex_grid(&params, count);
         let Some(map) = build_map(ctx, kernels, points, grid, "vcm")? else {
             complete = false;
             break;
         };
-        let params_buffer = ctx.upload("vcm_params", std::slice::from_ref(&params))?;
-        let grid_buffer = ctx.upload("vcm_grid", std::slice::from_ref(&grid))?;
         light_time += t.elapsed();
         let t = Instant::now();
+        let mut first = true;
         for unit in work_units(f.height, 1, 1, band_rows, sample_index) {
             if stop_requested() {
                 complete = false;
@@ -106,23 +148,28 @@ pub(super) fn render_pass_bidirectional(
             }
             let unit = DispatchRange { part: 0, ..unit };
             ctx.run("render_vcm", |rec| {
+                if first {
+                    rec.update(&b.params, std::slice::from_ref(&params))?;
+                    rec.update(&b.grid, std::slice::from_ref(&grid))?;
+                }
                 rec.dispatch(
                     camera_kernel,
                     &scene.bindings(&[
-                        &accumulation,
-                        &params_buffer,
-                        &grid_buffer,
-                        &vertices,
+                        &b.accumulation,
+                        &b.params,
+                        &b.grid,
+                        &b.vertices,
                         &map.photons,
                         &map.starts,
-                        &splats,
-                        &path_ends,
-                        &materials,
+                        &b.splats,
+                        &b.path_ends,
+                        &b.materials,
                     ]),
                     bytemuck::bytes_of(&unit),
                     groups(unit.row_count * f.width),
                 )
             })?;
+            first = false;
             done += unit_paths(&unit);
             progress(done, total);
         }
@@ -130,7 +177,7 @@ pub(super) fn render_pass_bidirectional(
     }
     let t = Instant::now();
     let mut layers = Layers::new(f.width, f.height);
-    let sums: Vec<[f32; 4]> = ctx.download(&accumulation)?;
+    let sums: Vec<[f32; 4]> = ctx.download(&b.accumulation)?;
     let rays = resolve_band(&mut layers, 0, &sums[..(pixels * LAYER_COUNT as u64) as usize], spp);
     let stages = vec![
         ("light paths".to_string(), light_time),

@@ -32,6 +32,8 @@ pub struct GpuRenderer<'a> {
     scene: DeviceScene,
     /// Created by the first pass, then reused while the image size stays.
     accumulation: Option<(Buffer, u32)>,
+    /// The bidirectional integrators' buffers, likewise.
+    bidirectional: Option<super::bidirectional::BidirectionalBuffers>,
     /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
     photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
@@ -69,6 +71,7 @@ impl<'a> GpuRenderer<'a> {
             photons: photons.copied(),
             scene,
             accumulation: None,
+            bidirectional: None,
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
             last_written: Vec::new(),
@@ -145,7 +148,10 @@ impl<'a> GpuRenderer<'a> {
         let ctx = self.ctx;
         if self.kernels.variant().bidirectional {
             let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
-            return super::bidirectional::render_pass_bidirectional(ctx, kernels, scene, buffers, spp, pass, progress);
+            let kept = &mut self.bidirectional;
+            return super::bidirectional::render_pass_bidirectional(
+                ctx, kernels, scene, buffers, kept, spp, pass, progress,
+            );
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();

@@ -2,7 +2,7 @@
 
 use super::kernels::{groups, GpuKernels};
 use super::scene::DeviceScene;
-use crate::gpu::{Buffer, GpuContext, GpuError};
+use crate::gpu::{Buffer, GpuContext, GpuError, Kernel, Recorder};
 use crate::layout::constants::SCAN_BLOCK;
 use crate::layout::{EmitParams, GridParams, Photon};
 use crate::render::photons::{
@@ -81,10 +81,12 @@ fn emit(
     let volume = !caustic && scene.variant.media;
     let mut volume_capacity = if volume { volume_capacity.clamp(1, limit / photon_bytes) } else { 1 };
     loop {
-        let photons = ctx.create_buffer(name, capacity * photon_bytes)?;
-        let volume_photons = ctx.create_buffer("volume_photons", volume_capacity * photon_bytes)?;
-        let unused = ctx.create_buffer("unused_photons", photon_bytes)?;
-        let counters = ctx.create_buffer("photon_counters", 16)?;
+        // The kernel writes the photons below the counts it returns, and nothing reads past them.
+        let photons = ctx.create_scratch(name, capacity * photon_bytes)?;
+        let volume_photons = ctx.create_scratch("volume_photons", volume_capacity * photon_bytes)?;
+        let unused = ctx.create_scratch("unused_photons", photon_bytes)?;
+        let counters = ctx.create_scratch("photon_counters", 16)?;
+        let mut cleared = false;
         let mut begin = 0;
         let per_dispatch =
             crate::render::thread_stop_paths().map_or(PATHS_PER_DISPATCH, |p| p.min(PATHS_PER_DISPATCH as u64) as u32);
@@ -99,6 +101,9 @@ fn emit(
             p.volume_capacity = if volume { volume_capacity as u32 } else { 0 };
             let (global_buffer, caustic_buffer) = if caustic { (&unused, &photons) } else { (&photons, &unused) };
             ctx.run("emit_photons", |rec| {
+                if !cleared {
+                    rec.fill_zero(&counters)?;
+                }
                 rec.dispatch(
                     emit_kernel,
                     &scene.bindings(&[global_buffer, caustic_buffer, &counters, &volume_photons]),
@@ -106,7 +111,11 @@ fn emit(
                     groups(p.path_count),
                 )
             })?;
+            cleared = true;
             begin += p.path_count;
+        }
+        if !cleared {
+            ctx.fill_zero(&counters)?;
         }
         let counts: Vec<u32> = ctx.download(&counters)?;
         // Paths the driver broke off mid-loop (lavapipe's limit of 65535 loop iterations per
@@ -140,38 +149,54 @@ fn emit(
     }
 }
 
-/// Exclusive prefix sum of `values` (`count` entries) in place, by blocks of SCAN_BLOCK and a
-/// recursive scan of the block sums.
-fn scan(ctx: &GpuContext, kernels: &GpuKernels, values: &Buffer, count: u32) -> Result<(), GpuError> {
-    let scan_kernel = kernels.grid_scan(ctx)?;
-    let add_kernel = kernels.grid_scan_add(ctx)?;
-    let mut levels = Vec::new(); // (buffer of block sums, its length)
+/// Records the exclusive prefix sum of `values` (`count` entries) in place, by blocks of
+/// SCAN_BLOCK and a recursive scan of the block sums; `levels` holds the block sums' buffers,
+/// made by [`scan_levels`] (every entry of them is written before it is read).
+fn record_scan<'a>(
+    rec: &mut Recorder<'a>,
+    kernels: &'a ScanKernels<'a>,
+    values: &'a Buffer,
+    levels: &'a [(Buffer, u32, u32)],
+) -> Result<(), GpuError> {
+    let mut input = values;
+    for (sums, blocks, n) in levels {
+        rec.dispatch(kernels.scan, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
+        input = sums;
+    }
+    for i in (0..levels.len()).rev() {
+        let (sums, _, n) = &levels[i];
+        let target = if i == 0 { values } else { &levels[i - 1].0 };
+        if levels[i].1 > 1 {
+            rec.dispatch(kernels.add, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
+        }
+    }
+    Ok(())
+}
+
+/// The scan's kernels, made before a batch borrows them.
+struct ScanKernels<'a> {
+    scan: &'a Kernel,
+    add: &'a Kernel,
+}
+
+/// The block sums' buffers of a scan of `count` entries: (buffer, blocks, entries scanned).
+fn scan_levels(ctx: &GpuContext, count: u32) -> Result<Vec<(Buffer, u32, u32)>, GpuError> {
+    let mut levels = Vec::new();
     let mut n = count;
     while n > 1 {
         let blocks = n.div_ceil(SCAN_BLOCK);
-        levels.push((ctx.create_buffer("scan_block_sums", blocks as u64 * 4)?, blocks, n));
+        levels.push((ctx.create_scratch("scan_block_sums", blocks as u64 * 4)?, blocks, n));
         n = blocks;
     }
-    ctx.run("grid_scan", |rec| {
-        let mut input = values;
-        for (sums, blocks, n) in &levels {
-            rec.dispatch(scan_kernel, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
-            input = sums;
-        }
-        for i in (0..levels.len()).rev() {
-            let (sums, _, n) = &levels[i];
-            let target = if i == 0 { values } else { &levels[i - 1].0 };
-            if levels[i].1 > 1 {
-                rec.dispatch(add_kernel, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
-            }
-        }
-        Ok(())
-    })
+    Ok(levels)
 }
 
-/// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets;
-/// `None` when the thread's render was stopped between two of them (a stale pass uses no map,
-/// and an edit in the editor waits for one submission, not for the whole build).
+/// Builds the hashed grid over `count` photons: count, scan, scatter, rank inside buckets, in
+/// two submissions (count and scan, then scatter and rank) whose small parameter blocks and
+/// clears are recorded into them: on a real GPU each submission waited for costs about what
+/// the stages themselves do. `None` when the thread's render was stopped before one of them (a
+/// stale pass uses no map, and an edit in the editor waits for one submission, not for the
+/// whole build).
 pub(super) fn build_map(
     ctx: &GpuContext,
     kernels: &GpuKernels,
@@ -180,32 +205,31 @@ pub(super) fn build_map(
     name: &str,
 ) -> Result<Option<DeviceMap>, GpuError> {
     let buckets = grid.table_mask + 1;
-    let grid_buffer = ctx.upload("grid_params", std::slice::from_ref(&grid))?;
-    let starts = ctx.create_buffer(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
+    let grid_buffer = ctx.create_scratch("grid_params", size_of::<GridParams>() as u64)?;
+    let starts = ctx.create_scratch(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
     let count = grid.photon_count;
     let count_kernel = kernels.grid_count(ctx)?;
-    ctx.run("grid_count", |rec| rec.dispatch(count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count)))?;
+    let scan_kernels = ScanKernels { scan: kernels.grid_scan(ctx)?, add: kernels.grid_scan_add(ctx)? };
+    let levels = scan_levels(ctx, buckets + 1)?;
+    ctx.run("grid_count", |rec| {
+        rec.update(&grid_buffer, std::slice::from_ref(&grid))?;
+        rec.fill_zero(&starts)?;
+        rec.dispatch(count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count))?;
+        record_scan(rec, &scan_kernels, &starts, &levels)
+    })?;
+    drop(levels);
     if crate::render::stop_requested() {
         return Ok(None);
     }
-    scan(ctx, kernels, &starts, buckets + 1)?;
-    if crate::render::stop_requested() {
-        return Ok(None);
-    }
-    let fill = ctx.create_buffer("grid_fill", buckets as u64 * 4)?;
+    let fill = ctx.create_scratch("grid_fill", buckets as u64 * 4)?;
     let photon_bytes = (count.max(1) as u64) * size_of::<Photon>() as u64;
-    let scattered = ctx.create_buffer(&format!("{name}_scattered"), photon_bytes)?;
+    let scattered = ctx.create_scratch(&format!("{name}_scattered"), photon_bytes)?;
+    let ranked = ctx.create_scratch(&format!("{name}_photons"), photon_bytes)?;
     let scatter_kernel = kernels.grid_scatter(ctx)?;
     let rank_kernel = kernels.grid_rank(ctx)?;
     ctx.run("grid_scatter", |rec| {
-        rec.dispatch(scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))
-    })?;
-    drop(photons);
-    if crate::render::stop_requested() {
-        return Ok(None);
-    }
-    let ranked = ctx.create_buffer(&format!("{name}_photons"), photon_bytes)?;
-    ctx.run("grid_rank", |rec| {
+        rec.fill_zero(&fill)?;
+        rec.dispatch(scatter_kernel, &[&grid_buffer, &photons, &starts, &fill, &scattered], &[], groups(count))?;
         rec.dispatch(rank_kernel, &[&grid_buffer, &starts, &scattered, &ranked], &[], groups(count))
     })?;
     Ok(Some(DeviceMap { grid, photons: ranked, starts }))
