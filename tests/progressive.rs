@@ -220,3 +220,139 @@ fn switching_variants_keeps_the_earlier_kernels() {
     let fresh = render_gpu(&ctx, &a, 1, Some(&photons), 0, &mut |_, _| {}).unwrap();
     assert!(kept.layers == fresh.layers, "the kept kernels render differently from fresh ones");
 }
+
+/// Several passes rendered into one accumulation on the device (what a real GPU does to save
+/// a readback per pass) are the mean of the same passes rendered one by one, to float rounding,
+/// for the photon mapper and for vcm; the output says how many passes it holds.
+#[test]
+fn a_group_of_passes_is_the_mean_of_its_passes() {
+    use photonix::render::gpu::GpuRenderer;
+    use photonix::render::{Layers, RenderOutput};
+    let ctx = common::gpu();
+    let photons = common::test_photons();
+    use photonix::scene::Integrator;
+    for (name, integrator) in [("cornell-caustics", Integrator::Ppm), ("cornell-glossy", Integrator::Vcm)] {
+        let mut scene = photonix::scene::load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).unwrap();
+        scene.render.integrator = integrator;
+        let buffers = common::buffers(&scene, 24, 16);
+        let mut renderer = GpuRenderer::new(&ctx, &buffers, Some(&photons)).unwrap();
+        let (first, passes) = (5, 3);
+        let group: RenderOutput = renderer.render_passes(1, first, passes, &mut |_, _| {}).unwrap();
+        assert_eq!(group.passes, passes, "{name}");
+        assert!(group.complete);
+        let mut mean = Layers::new(24, 16);
+        for pass in first..first + passes {
+            let one = renderer.render_pass(1, pass, &mut |_, _| {}).unwrap();
+            assert_eq!(one.passes, 1);
+            for ((_, m), (_, o)) in mean.named_mut().into_iter().zip(one.layers.named()) {
+                for (a, b) in m.pixels.iter_mut().zip(&o.pixels) {
+                    for c in 0..3 {
+                        a[c] += b[c] / passes as f32;
+                    }
+                }
+            }
+        }
+        let error = rel_mse(&group.image, &mean.combined());
+        println!("{name} ({integrator:?}): group of {passes} against the mean of its passes: relMSE {error:.3e}");
+        assert!(error < 1e-10, "{name}: {error}");
+        // Not the same as one pass: the group really holds three.
+        let one = renderer.render_pass(1, first, &mut |_, _| {}).unwrap();
+        assert!(rel_mse(&group.image, &one.image) > 1e-6, "{name}");
+    }
+}
+
+/// The progressive driver asks for 1, 2, 4, ... passes up to the group limit, whatever the
+/// timing (so reruns group alike), sums outputs by the passes they hold, and splits the error
+/// estimate's halves by passes when outputs hold different counts.
+#[test]
+fn the_driver_doubles_groups_up_to_the_limit() {
+    use photonix::render::progressive::{render_progressive, Budget, StopReason};
+    use photonix::render::{Layers, RenderOutput, RenderStats};
+    let budget = Budget { first: 3, end: 40, time: None, target_error: None };
+    let mut asked = Vec::new();
+    let constant = |value: f32, passes: u32| {
+        let mut layers = Layers::new(2, 2);
+        layers.direct.pixels.iter_mut().for_each(|p| *p = [value; 3]);
+        RenderOutput { image: layers.combined(), layers, stats: RenderStats::default(), complete: true, passes }
+    };
+    let (acc, reason) = render_progressive(
+        2,
+        2,
+        &budget,
+        8,
+        |first, most| {
+            asked.push((first, most));
+            Ok::<_, ()>(constant(first as f32, most))
+        },
+        |_, _| Ok(()),
+    )
+    .unwrap();
+    assert_eq!(reason, StopReason::Passes);
+    assert_eq!(asked, [(3, 1), (4, 2), (6, 4), (10, 8), (18, 8), (26, 8), (34, 6)]);
+    assert_eq!((acc.passes, acc.ranges.clone()), (37, vec![(3, 40)]));
+    // The mean weighs each output by its passes: sum of first * passes over 37 passes.
+    let expected: f32 = asked.iter().map(|&(f, n)| f as f32 * n as f32).sum::<f32>() / 37.0;
+    assert!((acc.mean().direct.pixels[0][0] - expected).abs() < 1e-4);
+    // A renderer that renders fewer than asked (one at a time) is followed pass by pass.
+    let mut firsts = Vec::new();
+    let budget = Budget { first: 0, end: 5, time: None, target_error: None };
+    let (acc, _) = render_progressive(
+        2,
+        2,
+        &budget,
+        64,
+        |first, _| {
+            firsts.push(first);
+            Ok::<_, ()>(constant(1.0, 1))
+        },
+        |_, _| Ok(()),
+    )
+    .unwrap();
+    assert_eq!((firsts, acc.passes), (vec![0, 1, 2, 3, 4], 5));
+}
+
+/// The error estimate with halves of different pass counts: two outputs of constant images a
+/// and b holding n_a and n_b passes give relMSE(a, b) n_a n_b / (n_a + n_b)^2.
+#[test]
+fn the_error_estimate_weighs_unequal_halves() {
+    use photonix::render::progressive::Accumulator;
+    use photonix::render::{Layers, RenderOutput, RenderStats};
+    let output = |value: f32, passes: u32| {
+        let mut layers = Layers::new(2, 2);
+        layers.direct.pixels.iter_mut().for_each(|p| *p = [value; 3]);
+        RenderOutput { image: layers.combined(), layers, stats: RenderStats::default(), complete: true, passes }
+    };
+    let mut acc = Accumulator::new(2, 2);
+    acc.add(0, &output(1.0, 1));
+    assert_eq!(acc.error_estimate(), None, "one half is empty");
+    acc.add(1, &output(2.0, 3));
+    // Halves: 1 pass of 1.0, 3 passes of 2.0; relMSE(1, 2) = 1 / (4 + 0.01).
+    let expected = (1.0 / 4.01) * 3.0 / 16.0;
+    let estimate = acc.error_estimate().unwrap();
+    assert!((estimate - expected).abs() < 1e-6 * expected, "{estimate} against {expected}");
+    assert_eq!(acc.ranges, [(0, 4)]);
+}
+
+/// A discrete GPU's path (staging and readback buffers, kept between copies, instead of
+/// lavapipe's mapped device memory) renders the same bytes, for groups of passes too.
+#[test]
+fn the_staging_path_renders_the_same() {
+    use photonix::render::gpu::GpuRenderer;
+    use photonix::scene::Integrator;
+    let photons = common::test_photons();
+    for (name, integrator) in [("cornell-caustics", Integrator::Ppm), ("cornell-glossy", Integrator::Vcm)] {
+        let mut scene = photonix::scene::load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).unwrap();
+        scene.render.integrator = integrator;
+        let buffers = common::buffers(&scene, 16, 16);
+        let mut images = Vec::new();
+        for staging in [false, true] {
+            let ctx = common::gpu();
+            ctx.set_force_staging(staging);
+            let mut renderer = GpuRenderer::new(&ctx, &buffers, Some(&photons)).unwrap();
+            let group = renderer.render_passes(1, 0, 2, &mut |_, _| {}).unwrap();
+            let one = renderer.render_pass(1, 2, &mut |_, _| {}).unwrap();
+            images.push((group.layers, one.layers));
+        }
+        assert!(images[0] == images[1], "{name}: staging changed the image");
+    }
+}

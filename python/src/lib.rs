@@ -579,17 +579,19 @@ fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Res
     let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons).map_err(render_failure)?;
     let mut device = String::new();
     let passes_done = std::cell::Cell::new(0u32);
+    let max_group = renderer.max_pass_group(job.spp);
     let (acc, reason) = render_progressive(
         job.width,
         job.height,
         &job.budget,
-        |pass| {
+        max_group,
+        |pass, most| {
             let mut progress = |done: u64, total: u64| {
                 // The waiting thread may be gone (an exception there); the render then stops
                 // by its flag.
                 let _ = events.send(Event::Progress(pass, passes_done.get(), done, total));
             };
-            let out = renderer.render_pass(job.spp, pass, &mut progress).map_err(render_failure)?;
+            let out = renderer.render_passes(job.spp, pass, most, &mut progress).map_err(render_failure)?;
             device.clone_from(&out.stats.device);
             Ok(out)
         },

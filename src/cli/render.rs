@@ -332,11 +332,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut last_checkpoint = std::time::Instant::now();
     let passes_done = std::cell::Cell::new(0u32);
     let paths_per_pass = photons.map_or(0, |p| p.photons as u64 + p.caustic_photons as u64);
+    let max_group = renderer.max_pass_group(spp);
     let result = render_progressive(
         width,
         height,
         &budget,
-        |pass| -> Result<RenderOutput> {
+        max_group,
+        |first, most| -> Result<RenderOutput> {
             let mut progress = |done: u64, total: u64| {
                 if let Some(bar) = &bar {
                     let (length, position) = match budget.time {
@@ -350,7 +352,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 }
             };
             let out = renderer
-                .render_pass(spp, pass, &mut progress)
+                .render_passes(spp, first, most, &mut progress)
                 .with_context(|| failure_message(&args, passes_done.get(), &output))?;
             add_stats(&mut stats, &out.stats);
             Ok(out)

@@ -678,7 +678,9 @@ fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, 
         settings.width,
         settings.height,
         &budget,
-        |pass| {
+        // One pass per output: the editor shows each as it lands.
+        1,
+        |pass, _| {
             backend.render(scene, None, &settings, scene.photons.as_ref(), scene.render.spp, pass).map(|(out, _)| out)
         },
         |acc, _| {

@@ -196,6 +196,9 @@ pub struct RenderOutput {
     pub stats: RenderStats,
     /// False when a stop request cut the render short: the image is then not to be used.
     pub complete: bool,
+    /// The consecutive passes the layers are the mean of (1 but where a device rendered several
+    /// into one accumulation: see [`Renderer::render_passes`](renderer::Renderer::render_passes)).
+    pub passes: u32,
 }
 
 /// The dispatches of pass `pass`, in the order both backends accumulate them: per band of rows,
@@ -403,7 +406,7 @@ pub fn render_cpu_keeping(
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, stats, complete }
+    RenderOutput { image: layers.combined(), layers, stats, complete, passes: 1 }
 }
 
 /// A pass of the bidirectional integrators on the CPU: per sample, the light stage, then the
@@ -450,7 +453,7 @@ fn render_vcm_cpu(
     stages.push(("light paths".to_string(), light_time));
     stages.push(("render".to_string(), camera_time));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, stats, complete }
+    RenderOutput { image: layers.combined(), layers, stats, complete, passes: 1 }
 }
 
 fn unit_paths(unit: &DispatchRange) -> u64 {

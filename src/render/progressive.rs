@@ -36,9 +36,12 @@ pub enum StopReason {
 pub struct Accumulator {
     /// Sum over passes of each pass's mean image, per layer.
     pub sum: Layers,
-    /// Sums of the combined image over even and odd passes, for the error estimate.
+    /// Sums of the combined image over two halves of the passes (alternate outputs), for the
+    /// error estimate, and the passes in each.
     even: Image,
     odd: Image,
+    even_passes: u32,
+    odd_passes: u32,
     /// Passes summed, and the ranges they came from.
     pub passes: u32,
     pub ranges: Vec<(u32, u32)>,
@@ -50,20 +53,32 @@ impl Accumulator {
             sum: Layers::new(width, height),
             even: Image::new(width, height),
             odd: Image::new(width, height),
+            even_passes: 0,
+            odd_passes: 0,
             passes: 0,
             ranges: Vec::new(),
         }
     }
 
+    /// Adds `out`, the mean of `out.passes` passes from `pass` on, weighted by its passes.
     pub fn add(&mut self, pass: u32, out: &RenderOutput) {
+        let n = out.passes.max(1);
         for ((_, dst), (_, src)) in self.sum.named_mut().into_iter().zip(out.layers.named()) {
-            add_into(dst, src);
+            add_into(dst, src, n);
         }
-        add_into(if pass.is_multiple_of(2) { &mut self.even } else { &mut self.odd }, &out.image);
-        self.passes += 1;
+        // The half with fewer passes takes it, so the halves stay even when outputs hold
+        // different pass counts (one pass each: even and odd passes from an even first pass).
+        if self.even_passes <= self.odd_passes {
+            add_into(&mut self.even, &out.image, n);
+            self.even_passes += n;
+        } else {
+            add_into(&mut self.odd, &out.image, n);
+            self.odd_passes += n;
+        }
+        self.passes += n;
         match self.ranges.last_mut() {
-            Some(r) if r.1 == pass => r.1 = pass + 1,
-            _ => self.ranges.push((pass, pass + 1)),
+            Some(r) if r.1 == pass => r.1 = pass + n,
+            _ => self.ranges.push((pass, pass + n)),
         }
     }
 
@@ -79,51 +94,76 @@ impl Accumulator {
         mean
     }
 
-    /// An estimate of the mean image's relMSE against the converged image: the relMSE between
-    /// the means of the even and of the odd passes, divided by 4 (two independent halves differ
-    /// by twice the variance of one half, which is twice that of the whole). Needs four passes.
+    /// An estimate of the mean image's relMSE against the converged image, from the relMSE
+    /// between the means of the two halves: their difference has the variance of one pass
+    /// times (1/n_a + 1/n_b), the whole mean that times 1/(n_a + n_b), so the estimate is
+    /// relMSE x n_a n_b / (n_a + n_b)^2 (a quarter for equal halves). Needs four passes.
     pub fn error_estimate(&self) -> Option<f64> {
-        if self.passes < 4 {
+        let (n_even, n_odd) = (self.even_passes, self.odd_passes);
+        if self.passes < 4 || n_even == 0 || n_odd == 0 {
             return None;
         }
-        let (n_even, n_odd) = (self.passes.div_ceil(2), self.passes / 2);
         let scale = |image: &Image, n: u32| Image {
             pixels: image.pixels.iter().map(|p| p.map(|c| c / n as f32)).collect(),
             ..image.clone()
         };
-        Some(rel_mse(&scale(&self.even, n_even), &scale(&self.odd, n_odd)) / 4.0)
+        let (a, b) = (n_even as f64, n_odd as f64);
+        Some(rel_mse(&scale(&self.even, n_even), &scale(&self.odd, n_odd)) * a * b / ((a + b) * (a + b)))
     }
 }
 
-fn add_into(dst: &mut Image, src: &Image) {
+/// `dst += n * src` (exactly `dst += src` for one pass).
+fn add_into(dst: &mut Image, src: &Image, n: u32) {
+    if n == 1 {
+        for (d, s) in dst.pixels.iter_mut().zip(&src.pixels) {
+            for c in 0..3 {
+                d[c] += s[c];
+            }
+        }
+        return;
+    }
+    let n = n as f32;
     for (d, s) in dst.pixels.iter_mut().zip(&src.pixels) {
         for c in 0..3 {
-            d[c] += s[c];
+            d[c] += s[c] * n;
         }
     }
 }
 
-/// Renders passes with `render_pass(pass)` until the budget is spent or a stop is requested,
-/// calling `after_pass(accumulator, elapsed)` after each finished pass (for progress and
-/// checkpoints). An interrupted pass is dropped; passes already summed are kept.
+/// Renders passes with `render_passes(first, most)` (up to `most` consecutive passes from
+/// `first`, returning their mean and how many it rendered) until the budget is spent or a stop
+/// is requested, calling `after_pass(accumulator, elapsed)` after each output (for progress and
+/// checkpoints). An interrupted output is dropped; outputs already summed are kept.
+///
+/// `most` starts at 1 and doubles after each output up to `max_group` (1 where grouping gains
+/// nothing: the CPU backend, lavapipe). The sequence depends on nothing but the budget, so a
+/// rerun of the same passes groups them the same way and writes the same bytes; with a time
+/// budget it is also capped by the passes the time left allows at the rate measured.
 pub fn render_progressive<E>(
     width: u32,
     height: u32,
     budget: &Budget,
-    mut render_pass: impl FnMut(u32) -> Result<RenderOutput, E>,
+    max_group: u32,
+    mut render_passes: impl FnMut(u32, u32) -> Result<RenderOutput, E>,
     mut after_pass: impl FnMut(&Accumulator, Duration) -> Result<(), E>,
 ) -> Result<(Accumulator, StopReason), E> {
     let start = Instant::now();
     let mut acc = Accumulator::new(width, height);
-    for pass in budget.first..budget.end {
+    let mut pass = budget.first;
+    let mut most = 1;
+    while pass < budget.end {
         if stop_requested() {
             return Ok((acc, StopReason::Interrupted));
         }
-        let out = render_pass(pass)?;
+        let t = Instant::now();
+        let out = render_passes(pass, most.min(budget.end - pass))?;
         if !out.complete {
             return Ok((acc, StopReason::Interrupted));
         }
+        let rendered = out.passes.max(1);
+        let per_pass = t.elapsed().as_secs_f64() / rendered as f64;
         acc.add(pass, &out);
+        pass += rendered;
         after_pass(&acc, start.elapsed())?;
         if budget.time.is_some_and(|t| start.elapsed() >= t) {
             return Ok((acc, StopReason::Time));
@@ -132,6 +172,11 @@ pub fn render_progressive<E>(
             if estimate < target {
                 return Ok((acc, StopReason::TargetError));
             }
+        }
+        most = (most * 2).min(max_group.max(1));
+        if let Some(t) = budget.time {
+            let left = t.saturating_sub(start.elapsed()).as_secs_f64();
+            most = most.min(((left / per_pass.max(1e-9)) as u32).max(1));
         }
     }
     Ok((acc, StopReason::Passes))

@@ -11,6 +11,9 @@ use super::{effective_photons, render_cpu_keeping, set_thread_stop_flag, PhotonS
 use crate::cpu::vcm::LightStage;
 use crate::gpu::{GpuContext, GpuError};
 
+/// The most passes a GPU renders into one output (see [`Renderer::max_pass_group`]).
+pub const MAX_PASS_GROUP: u32 = 64;
+
 /// A render in progress on one backend: the GPU kernels when made with a device context, else
 /// the CPU backend. Passes may come in any order (pass ranges); each is the same image whichever
 /// renderer draws it.
@@ -50,19 +53,53 @@ impl<'a> Renderer<'a> {
         pass: u32,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<RenderOutput, GpuError> {
+        self.render_passes(spp, pass, 1, progress)
+    }
+
+    /// Renders up to `passes` consecutive passes from `first` (`spp` samples each) and returns
+    /// their mean; its `passes` says how many it holds. A device renders several into one
+    /// accumulation and reads it back once; the CPU backend renders one, so its sums over passes
+    /// stay the same bits whichever way passes are grouped (pass ranges, `merge`).
+    pub fn render_passes(
+        &mut self,
+        spp: u32,
+        first: u32,
+        passes: u32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<RenderOutput, GpuError> {
         if self.stop.is_some() {
             set_thread_stop_flag(self.stop.clone());
         }
         let out = match &mut self.gpu {
-            Some(gpu) => gpu.render_pass(spp, pass, progress),
-            None => {
-                Ok(render_cpu_keeping(&self.buffers, spp, self.photons.as_ref(), pass, &mut self.light_stage, progress))
-            }
+            Some(gpu) => gpu.render_passes(spp, first, passes, progress),
+            None => Ok(render_cpu_keeping(
+                &self.buffers,
+                spp,
+                self.photons.as_ref(),
+                first,
+                &mut self.light_stage,
+                progress,
+            )),
         };
         if self.stop.is_some() {
             set_thread_stop_flag(None);
         }
         out
+    }
+
+    /// The most passes one output of [`Renderer::render_passes`] should hold at `spp` samples per
+    /// pass: 1 on the CPU backend and on a CPU device (lavapipe), where a pass's host work is
+    /// small beside its kernels; on a GPU as many as make up about 2^24 camera samples, up to
+    /// [`MAX_PASS_GROUP`]: a small pass there spends more time in its readback and on the host
+    /// than in its kernels.
+    pub fn max_pass_group(&self, spp: u32) -> u32 {
+        match &self.gpu {
+            Some(gpu) if gpu.context().info().device_type != "CPU" => {
+                let samples = self.buffers.frame.width as u64 * self.buffers.frame.height as u64 * spp.max(1) as u64;
+                ((1u64 << 24) / samples.max(1)).clamp(1, MAX_PASS_GROUP as u64) as u32
+            }
+            _ => 1,
+        }
     }
 
     /// Replaces the scene and the photon settings, keeping the backend's state: on a device the

@@ -9,9 +9,9 @@ use super::kernels::{groups, GpuKernels};
 use super::maps::build_map;
 use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
+use crate::gpu::Buffer;
 use crate::gpu::{GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
-use crate::gpu::Buffer;
 use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
@@ -54,8 +54,9 @@ impl BidirectionalBuffers {
     }
 }
 
-/// Renders pass `pass` (`spp` samples) of a bidirectional integrator on the device, with the
-/// buffers in `kept` (made or remade there when the frame's sizes changed).
+/// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
+/// the device into one accumulation, read back once: the output is their mean. The buffers are
+/// those in `kept` (made or remade there when the frame's sizes changed).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
     ctx: &GpuContext,
@@ -64,7 +65,8 @@ pub(super) fn render_pass_bidirectional(
     buffers: &SceneBuffers,
     kept: &mut Option<BidirectionalBuffers>,
     spp: u32,
-    pass: u32,
+    first: u32,
+    passes: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<RenderOutput, GpuError> {
     let f = buffers.frame;
@@ -91,14 +93,14 @@ pub(super) fn render_pass_bidirectional(
     }
     let b = kept.as_ref().expect("made just above");
     let band_rows = stop_band_rows(f.width, f.height);
-    let total = f.height as u64 * spp as u64;
+    let total = f.height as u64 * spp as u64 * passes as u64;
     let mut done = 0;
     let mut complete = true;
     let (mut light_time, mut camera_time) = (Duration::ZERO, Duration::ZERO);
     let view_distance = crate::cpu::vcm::view_distance(&buffers.view(), buffers.bounding_radius);
     let base_radius = crate::cpu::vcm::vcm_base_radius(&f, buffers.surface_area, view_distance);
-    'samples: for sample in 0..spp {
-        let sample_index = pass * spp + sample;
+    let samples = (first * spp..(first + passes) * spp).enumerate();
+    'samples: for (sample, sample_index) in samples {
         let t = Instant::now();
         let mut params = vcm_params(&f, base_radius, sample_index);
         // The grid build takes the points' buffer; vcm_light writes the points below the count
@@ -178,12 +180,12 @@ pub(super) fn render_pass_bidirectional(
     let t = Instant::now();
     let mut layers = Layers::new(f.width, f.height);
     let sums: Vec<[f32; 4]> = ctx.download(&b.accumulation)?;
-    let rays = resolve_band(&mut layers, 0, &sums[..(pixels * LAYER_COUNT as u64) as usize], spp);
+    let rays = resolve_band(&mut layers, 0, &sums[..(pixels * LAYER_COUNT as u64) as usize], spp * passes);
     let stages = vec![
         ("light paths".to_string(), light_time),
         ("render".to_string(), camera_time),
         ("download".to_string(), t.elapsed()),
     ];
-    let stats = RenderStats::device(ctx, stages, rays, spp);
-    Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
+    let stats = RenderStats::device(ctx, stages, rays, spp * passes);
+    Ok(RenderOutput { image: layers.combined(), layers, stats, complete, passes })
 }

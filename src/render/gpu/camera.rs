@@ -145,28 +145,32 @@ impl<'a> GpuRenderer<'a> {
         pass: u32,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<RenderOutput, GpuError> {
+        self.render_passes(spp, pass, 1, progress)
+    }
+
+    /// Renders up to `passes` consecutive passes from `first` into one accumulation on the
+    /// device and reads it back once; the output is their mean and says how many it holds
+    /// (`passes`, or 1 where the image is rendered band by band: the accumulation then holds
+    /// one band at a time). On a real GPU a small pass's readback and the host's work on it cost
+    /// more than its kernels; several passes share them.
+    pub fn render_passes(
+        &mut self,
+        spp: u32,
+        first: u32,
+        passes: u32,
+        progress: &mut dyn FnMut(u64, u64),
+    ) -> Result<RenderOutput, GpuError> {
         let ctx = self.ctx;
+        let passes = passes.max(1);
         if self.kernels.variant().bidirectional {
             let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
             let kept = &mut self.bidirectional;
             return super::bidirectional::render_pass_bidirectional(
-                ctx, kernels, scene, buffers, kept, spp, pass, progress,
+                ctx, kernels, scene, buffers, kept, spp, first, passes, progress,
             );
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();
-
-        // Trace photons and build the grids
-        let t = Instant::now();
-        let maps = match &self.photons {
-            Some(settings) => {
-                build_maps(ctx, &self.kernels, &self.scene, &self.buffers, settings, pass, &mut self.photon_capacity)?
-            }
-            None => no_maps(ctx)?,
-        };
-        if self.photons.is_some() {
-            stages.push(("photons".to_string(), t.elapsed()));
-        }
 
         // The accumulation buffer holds as many rows as one storage binding may address.
         let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
@@ -179,78 +183,105 @@ impl<'a> GpuRenderer<'a> {
             )));
         }
         let max_rows = crate::render::stop_band_rows(f.width, max_rows);
+        let passes = if max_rows >= f.height { passes } else { 1 };
         let bytes = max_rows as u64 * row_bytes;
         if self.accumulation.as_ref().is_none_or(|(b, w)| b.size() != bytes || *w != f.width) {
             self.accumulation = Some((ctx.create_buffer("accumulation", bytes)?, f.width));
         }
-        let accumulation = &self.accumulation.as_ref().expect("created just above").0;
         let render_kernel = self.kernels.render(ctx)?;
-
-        // Gather, band by band
-        let t = Instant::now();
         let mut layers = Layers::new(f.width, f.height);
-        let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
-        let total = units.total_rows();
-        let mut units = units.peekable();
-        let mut done = 0;
         let mut rays = 0;
         let mut download_time = Duration::ZERO;
-        // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT paths: few
-        // submissions, yet none long enough to trip a GPU watchdog.
+        let (mut photon_time, mut render_time) = (Duration::ZERO, Duration::ZERO);
+        let mut done = 0;
         let mut complete = true;
-        let mut batch: Vec<DispatchRange> = Vec::new();
-        while let Some(first) = units.next() {
-            let band = first.row_begin;
-            let mut paths = first.row_count as u64 * f.width as u64;
-            batch.clear();
-            batch.push(first);
-            while paths < crate::render::thread_stop_paths().unwrap_or(PATHS_PER_SUBMIT) {
-                let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
-                paths += unit.row_count as u64 * f.width as u64;
-                batch.push(unit);
-            }
-            if crate::render::stop_requested() {
-                complete = false;
-                break;
-            }
-            if batch[0].sample_index == pass * spp && batch[0].part == 0 {
-                ctx.fill_zero(accumulation)?;
-            }
-            let invocations = batch[0].row_count * f.width;
-            ctx.run("render", |rec| {
-                for unit in &batch {
-                    rec.dispatch(
-                        render_kernel,
-                        &self.scene.bindings(&[
-                            accumulation,
-                            &maps.grids,
-                            &maps.global.photons,
-                            &maps.global.starts,
-                            &maps.caustic.photons,
-                            &maps.caustic.starts,
-                            &maps.volume.photons,
-                            &maps.volume.starts,
-                        ]),
-                        bytemuck::bytes_of(unit),
-                        groups(invocations),
-                    )?;
+        'passes: for pass in first..first + passes {
+            // Trace photons and build the grids
+            let t = Instant::now();
+            let maps = match &self.photons {
+                Some(settings) => build_maps(
+                    ctx,
+                    &self.kernels,
+                    &self.scene,
+                    &self.buffers,
+                    settings,
+                    pass,
+                    &mut self.photon_capacity,
+                )?,
+                None => no_maps(ctx)?,
+            };
+            photon_time += t.elapsed();
+            let accumulation = &self.accumulation.as_ref().expect("created just above").0;
+
+            // Gather, band by band
+            let t = Instant::now();
+            let download_before = download_time;
+            let units = work_units(f.height, spp, parts_per_sample(&f), max_rows, pass);
+            let total = units.total_rows() * passes as u64;
+            let mut units = units.peekable();
+            // Consecutive units of one band go into one submission of up to PATHS_PER_SUBMIT
+            // paths: few submissions, yet none long enough to trip a GPU watchdog.
+            let mut batch: Vec<DispatchRange> = Vec::new();
+            while let Some(first_unit) = units.next() {
+                let band = first_unit.row_begin;
+                let mut paths = first_unit.row_count as u64 * f.width as u64;
+                batch.clear();
+                batch.push(first_unit);
+                while paths < crate::render::thread_stop_paths().unwrap_or(PATHS_PER_SUBMIT) {
+                    let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
+                    paths += unit.row_count as u64 * f.width as u64;
+                    batch.push(unit);
                 }
-                Ok(())
-            })?;
-            done += batch.iter().map(unit_paths).sum::<u64>();
-            progress(done, total);
-            if units.peek().is_none_or(|next| next.row_begin != band) {
-                let td = Instant::now();
-                let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
-                let len = (invocations * LAYER_COUNT) as usize;
-                rays += resolve_band(&mut layers, band, &sums[..len], spp);
-                download_time += td.elapsed();
+                if crate::render::stop_requested() {
+                    complete = false;
+                    break 'passes;
+                }
+                // A band's accumulation is cleared at its first unit of the first pass and read
+                // back after its last unit of the last pass (with one band when passes > 1).
+                let clear = pass == first && batch[0].sample_index == pass * spp && batch[0].part == 0;
+                let invocations = batch[0].row_count * f.width;
+                ctx.run("render", |rec| {
+                    if clear {
+                        rec.fill_zero(accumulation)?;
+                    }
+                    for unit in &batch {
+                        rec.dispatch(
+                            render_kernel,
+                            &self.scene.bindings(&[
+                                accumulation,
+                                &maps.grids,
+                                &maps.global.photons,
+                                &maps.global.starts,
+                                &maps.caustic.photons,
+                                &maps.caustic.starts,
+                                &maps.volume.photons,
+                                &maps.volume.starts,
+                            ]),
+                            bytemuck::bytes_of(unit),
+                            groups(invocations),
+                        )?;
+                    }
+                    Ok(())
+                })?;
+                done += batch.iter().map(unit_paths).sum::<u64>();
+                progress(done, total);
+                if pass + 1 == first + passes && units.peek().is_none_or(|next| next.row_begin != band) {
+                    let td = Instant::now();
+                    let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
+                    let len = (invocations * LAYER_COUNT) as usize;
+                    rays += resolve_band(&mut layers, band, &sums[..len], spp * passes);
+                    download_time += td.elapsed();
+                }
             }
+            render_time += t.elapsed() - (download_time - download_before);
         }
-        stages.push(("render".to_string(), t.elapsed() - download_time));
+        if self.photons.is_some() {
+            stages.push(("photons".to_string(), photon_time));
+        }
+        stages.push(("render".to_string(), render_time));
         stages.push(("download".to_string(), download_time));
-        let stats = RenderStats::device(ctx, stages, rays, spp);
-        Ok(RenderOutput { image: layers.combined(), layers, stats, complete })
+        let stats = RenderStats::device(ctx, stages, rays, spp * passes);
+        Ok(RenderOutput { image: layers.combined(), layers, stats, complete, passes })
     }
 }
 
