@@ -29,7 +29,10 @@ For each scene (default: cornell-box and cornell-caustics) this
 
 Needs: a release build (`cargo build --release`), `pip install mitsuba` (3.9 was used), and for
 the fast variant Debian's `libllvm19` (the script sets DRJIT_LIBLLVM_PATH=libLLVM-19.so unless it
-is set); without LLVM it falls back to `scalar_rgb`. Slow by design (minutes): never run in CI.
+is set); without LLVM it falls back to `scalar_rgb`. `ci/setup --bench` installs both (Mitsuba into
+target/bench-tools: run this script with target/bench-tools/bin/python). On a lent GPU machine,
+benches/device/ packs and runs it against Mitsuba's CUDA variant. Slow by design (minutes): never
+run in CI.
 
     python3 benches/time_to_quality.py                     # 30 s budgets, both backends
     python3 benches/time_to_quality.py --budgets 10,30 --backends cpu --scenes cornell-box
