@@ -612,9 +612,10 @@ pub struct Progress {
     passes_done: u32,
     /// Passes the budget allows at most (the time or error budget may stop sooner).
     passes_total: u32,
-    /// The pass under way (its index, from 0 or the start of the pass range).
+    /// The pass under way (its index, from 0 or the start of the pass range); on a GPU, the first
+    /// of the group of consecutive passes under way (passes there come in groups read back once).
     current_pass: u32,
-    /// How much of the pass under way is done, 0 to 1.
+    /// How much of the pass (or group of passes) under way is done, 0 to 1.
     pass_fraction: f64,
     /// Seconds since the render started.
     elapsed: f64,
