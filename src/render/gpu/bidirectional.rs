@@ -5,12 +5,12 @@
 
 use std::time::{Duration, Instant};
 
+use super::camera::ACCUMULATION_BYTES_PER_PIXEL;
 use super::kernels::{groups, GpuKernels};
 use super::maps::build_map;
 use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
-use crate::gpu::Buffer;
-use crate::gpu::{GpuContext, GpuError};
+use crate::gpu::{Buffer, GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
 use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
@@ -18,6 +18,8 @@ use crate::render::{stop_requested, SceneBuffers};
 
 /// Light paths per vcm_light dispatch.
 const PATHS_PER_DISPATCH: u32 = 1 << 16;
+/// Bytes of light-tracing splats per pixel: per layer, three 64-bit fixed-point channels.
+const SPLAT_BYTES_PER_PIXEL: u64 = LAYER_COUNT as u64 * 3 * 8;
 
 /// The device buffers of a bidirectional render, kept from pass to pass while the frame's sizes
 /// stay: allocating and clearing them each pass cost more than the pass's kernels on a real GPU.
@@ -40,8 +42,8 @@ impl BidirectionalBuffers {
         Ok(BidirectionalBuffers {
             sizes,
             // Cleared by each pass's first batch, as the splats and the counter by each sample's.
-            accumulation: ctx.create_scratch("vcm_accumulation", pixels * 16 * LAYER_COUNT as u64)?,
-            splats: ctx.create_scratch("vcm_splats", pixels * LAYER_COUNT as u64 * 3 * 8)?,
+            accumulation: ctx.create_scratch("vcm_accumulation", pixels * ACCUMULATION_BYTES_PER_PIXEL)?,
+            splats: ctx.create_scratch("vcm_splats", pixels * SPLAT_BYTES_PER_PIXEL)?,
             counter: ctx.create_scratch("vcm_point_count", 16)?,
             // vcm_light writes every path's end and its slots up to it each sample, so these
             // are cleared once, here, and never between samples.
@@ -72,8 +74,8 @@ pub(super) fn render_pass_bidirectional(
     let f = buffers.frame;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let pixels = f.width as u64 * f.height as u64;
-    let accumulation_bytes = pixels * 16 * LAYER_COUNT as u64;
-    let splat_bytes = pixels * LAYER_COUNT as u64 * 3 * 8;
+    let accumulation_bytes = pixels * ACCUMULATION_BYTES_PER_PIXEL;
+    let splat_bytes = pixels * SPLAT_BYTES_PER_PIXEL;
     if accumulation_bytes > limit || splat_bytes > limit {
         return Err(GpuError::Unsupported(format!(
             "the {} integrator keeps the whole image on the device ({} MiB), more than one storage buffer holds \

@@ -16,7 +16,7 @@ use crate::render::{
 };
 
 /// Bytes of accumulation per pixel: one vec4 per layer.
-const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
+pub(super) const ACCUMULATION_BYTES_PER_PIXEL: u64 = 16 * LAYER_COUNT as u64;
 /// Camera-path parts per submission of the camera kernel.
 const PATHS_PER_SUBMIT: u64 = 1 << 18;
 

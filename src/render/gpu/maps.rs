@@ -154,29 +154,23 @@ fn emit(
 /// made by [`scan_levels`] (every entry of them is written before it is read).
 fn record_scan<'a>(
     rec: &mut Recorder<'a>,
-    kernels: &'a ScanKernels<'a>,
+    (scan, add): (&'a Kernel, &'a Kernel),
     values: &'a Buffer,
     levels: &'a [(Buffer, u32, u32)],
 ) -> Result<(), GpuError> {
     let mut input = values;
     for (sums, blocks, n) in levels {
-        rec.dispatch(kernels.scan, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
+        rec.dispatch(scan, &[input, sums], bytemuck::bytes_of(n), [*blocks, 1, 1])?;
         input = sums;
     }
     for i in (0..levels.len()).rev() {
         let (sums, _, n) = &levels[i];
         let target = if i == 0 { values } else { &levels[i - 1].0 };
         if levels[i].1 > 1 {
-            rec.dispatch(kernels.add, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
+            rec.dispatch(add, &[target, sums], bytemuck::bytes_of(n), groups(*n))?;
         }
     }
     Ok(())
-}
-
-/// The scan's kernels, made before a batch borrows them.
-struct ScanKernels<'a> {
-    scan: &'a Kernel,
-    add: &'a Kernel,
 }
 
 /// The block sums' buffers of a scan of `count` entries: (buffer, blocks, entries scanned).
@@ -209,13 +203,13 @@ pub(super) fn build_map(
     let starts = ctx.create_scratch(&format!("{name}_starts"), (buckets as u64 + 1) * 4)?;
     let count = grid.photon_count;
     let count_kernel = kernels.grid_count(ctx)?;
-    let scan_kernels = ScanKernels { scan: kernels.grid_scan(ctx)?, add: kernels.grid_scan_add(ctx)? };
+    let scan_kernels = (kernels.grid_scan(ctx)?, kernels.grid_scan_add(ctx)?);
     let levels = scan_levels(ctx, buckets + 1)?;
     ctx.run("grid_count", |rec| {
         rec.update(&grid_buffer, std::slice::from_ref(&grid))?;
         rec.fill_zero(&starts)?;
         rec.dispatch(count_kernel, &[&grid_buffer, &photons, &starts], &[], groups(count))?;
-        record_scan(rec, &scan_kernels, &starts, &levels)
+        record_scan(rec, scan_kernels, &starts, &levels)
     })?;
     drop(levels);
     if crate::render::stop_requested() {
