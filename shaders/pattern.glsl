@@ -101,6 +101,9 @@ float pattern_fade(float t) {
 
 // Perlin's improved gradient noise of stream `seed`: signed, about [-1, 1], mean 0.
 float noise_signed(vec3 p, uint seed) {
+    // Never taken where it is false: the host sets it from the scene's patterns (pack.rs,
+    // texture_uses_noise), and the driver drops the rest of the function.
+    if (!SCENE_HAS_NOISE) return 0.0;
     vec3 fl = floor(p);
     ivec3 c = ivec3(fl);
     precise float x = p.x - fl.x;

@@ -15,6 +15,9 @@ uint texture_word(uint i) { return texture_data[i]; }
 layout(std430, binding = 1) readonly buffer Inputs { vec4 inputs[]; };
 layout(std430, binding = 2) writeonly buffer Outputs { vec4 outputs[]; };
 
+// The scene kernels' specialization constant (scene_bindings.glsl), so that the tests can check
+// which patterns may lose their noise.
+layout(constant_id = 2) const bool SCENE_HAS_NOISE = true;
 #include "pattern.glsl"
 
 layout(push_constant) uniform Params {

@@ -31,9 +31,18 @@ struct Probe {
 
 impl Probe {
     fn new() -> Probe {
+        Probe::with_noise(true)
+    }
+
+    /// The probe with Perlin noise compiled in or out (the scene kernels' specialization
+    /// constant SCENE_HAS_NOISE).
+    fn with_noise(noise: bool) -> Probe {
         let gpu = common::gpu();
         let spirv = photonix::shaders::spirv("pattern_probe").expect("build.rs compiles shaders/pattern_probe.comp");
-        let kernel = gpu.create_kernel("pattern_probe", &spirv, 3, 20).expect("pattern_probe matches its layout");
+        let constants = [1, 1, noise as u32];
+        let kernel = gpu
+            .create_specialized_kernel("pattern_probe", &spirv, 3, Default::default(), 20, &constants)
+            .expect("pattern_probe matches its layout");
         Probe { gpu, kernel }
     }
 
@@ -249,6 +258,37 @@ fn gpu_patterns_equal_the_cpu_twin() {
         }
     }
     assert!(failures.is_empty(), "GPU and CPU disagree:\n{}", failures.join("\n"));
+}
+
+/// The kernels compile Perlin noise out of scenes whose textures `texture_uses_noise` says do
+/// not read it: every such pattern gives the same bits without noise, and the others do read it
+/// (the constant takes effect).
+#[test]
+fn noise_is_compiled_out_only_where_no_pattern_reads_it() {
+    use photonix::layout::{constants::TEXTURE_PATTERN, Texture};
+    let (with, without) = (Probe::with_noise(true), Probe::with_noise(false));
+    let pts = points(1000, 30.0, 3);
+    let mut data = Vec::new();
+    let blocks: Vec<(String, u32)> = variants().into_iter().map(|(name, desc)| (name, desc.pack(&mut data))).collect();
+    let (mut free, mut differ) = (0, Vec::new());
+    for (name, at) in &blocks {
+        let texture = Texture { kind: TEXTURE_PATTERN, data: *at, ..Default::default() };
+        let noise = photonix::render::pack::texture_uses_noise(&texture, &data);
+        let a = with.run(&data, MODE_VALUE, *at, 0, 0.0, &pts);
+        let b = without.run(&data, MODE_VALUE, *at, 0, 0.0, &pts);
+        let same = a.iter().zip(&b).all(|(x, y)| x[0].to_bits() == y[0].to_bits());
+        if !noise {
+            assert!(same, "{name}: texture_uses_noise says no noise, but it reads noise");
+            free += 1;
+        } else if !same {
+            differ.push(name.clone());
+        }
+    }
+    println!("{free} of {} pattern variants lose their noise; reads it: {}", blocks.len(), differ.join(", "));
+    assert!(free >= 9, "only {free} pattern variants are free of noise");
+    for name in ["bozo", "granite", "marble turbulence", "checker turbulence"] {
+        assert!(differ.iter().any(|d| d == name), "{name} reads noise but the probe without it gave the same values");
+    }
 }
 
 #[test]

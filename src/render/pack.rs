@@ -96,6 +96,35 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
     packed
 }
 
+/// Whether evaluating texture `t` may call Perlin noise (shaders/pattern.glsl, noise_signed):
+/// a pattern of a noise kind, any turbulence, or ground fog with turbulence. Read from the
+/// packed words, as the kernels read them; the kernels compile noise out of scenes where no
+/// texture needs it (`KernelVariant::noise`).
+pub fn texture_uses_noise(t: &Texture, data: &[u32]) -> bool {
+    let word = |i: u32| data.get(i as usize).copied().unwrap_or(0);
+    match t.kind {
+        TEXTURE_PATTERN => {
+            let kind = word(t.data + PATTERN_KIND);
+            let turbulence = (0..3).any(|i| f32::from_bits(word(t.data + PATTERN_TURBULENCE + i)) != 0.0);
+            let noise_free = matches!(
+                kind,
+                PATTERN_BRICK
+                    | PATTERN_CHECKER
+                    | PATTERN_GRADIENT
+                    | PATTERN_HEXAGON
+                    | PATTERN_LEOPARD
+                    | PATTERN_ONION
+                    | PATTERN_RADIAL
+                    | PATTERN_RIPPLES
+                    | PATTERN_WAVES
+            );
+            turbulence || !noise_free
+        }
+        TEXTURE_GROUND_FOG => t.data != NO_DATA,
+        _ => false,
+    }
+}
+
 /// Whether material `id` (or any material a mix of it may pick) has alpha, and whether it reads
 /// uv or the surface derivatives.
 pub(super) fn material_needs(scene: &Scene, id: u32, depth: u32) -> (bool, bool) {

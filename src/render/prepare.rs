@@ -72,6 +72,9 @@ pub struct KernelVariant {
     pub instances: bool,
     /// CSG objects (their walk, in the analytic builds). A specialization constant.
     pub csg: bool,
+    /// Textures that read Perlin noise (`pack::texture_uses_noise`). A specialization constant:
+    /// without it the textured kernels lose most of their code.
+    pub noise: bool,
     /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
     pub path_traced: bool,
     /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
@@ -107,8 +110,8 @@ impl KernelVariant {
 
     /// The values of the scene kernels' specialization constants (`constant_id` 0, 1, ...: see
     /// shaders/scene_bindings.glsl).
-    pub fn specialization(self) -> [u32; 2] {
-        [self.instances as u32, self.csg as u32]
+    pub fn specialization(self) -> [u32; 3] {
+        [self.instances as u32, self.csg as u32, self.noise as u32]
     }
 }
 
@@ -124,6 +127,7 @@ impl SceneBuffers {
             media: !self.media.is_empty(),
             instances: self.frame.instance_count > 0,
             csg: self.frame.csg_first < self.frame.primitive_count,
+            noise: self.textures.iter().any(|t| super::pack::texture_uses_noise(t, &self.texture_data)),
             path_traced: self.frame.integrator == INTEGRATOR_PT,
             bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
         }
