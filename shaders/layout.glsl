@@ -185,7 +185,8 @@ struct VcmParams {
     float vm_normalization;
     uint path_begin;
     uint path_count;
-    uint _pad[2];
+    uint paths_per_invocation;
+    uint _pad;
 };
 
 struct LightMaterial {

@@ -8,7 +8,7 @@
 // src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
 // LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
 // the sorted points, the bucket starts, the splats, the light paths' ends and the light
-// vertices' materials.
+// vertices' materials, and the count of invocations the driver broke off.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -52,6 +52,7 @@ layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer start_words;
 layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
 layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_end_words;
 layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer light_material_texels;
+layout(std430, binding = SCENE_BINDINGS + 9) buffer BrokenOff { uint broken_off; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -145,211 +146,264 @@ vec3 connect_vertices(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, 
     return value * vcm_visibility(h, skip, target, medium_toward(h, prim, medium, wo, dir), n, rays);
 }
 
-void radiance_vcm(uint px, uint py, inout vec3 terms[4], inout uint rays) {
-    uint stream = py * frame.width + px;
+// A pixel's camera sub-path, carried from vertex to vertex (and from loop turn to loop turn of
+// main, which runs several pixels' paths one after another in each invocation).
+struct CameraPath {
+    uint stream;  // the pixel's index in the image: its random stream
+    vec3 o;
+    vec3 d;
+    SubPath sp;
+    uint m;  // the vertex the next turn reaches (1: the camera ray's)
+    uint path;
+    uint slot0;
+    uint path_end;
+    uint skip;
+    bool first_specular;
+    uint diffuse;
+    bool specular_after;
+    bool specular_path;
+    uint medium;
+    uint segment;
+    vec3 terms[4];
+    uint rays;
+};
+
+CameraPath camera_path_start(uint px, uint py) {
+    CameraPath c;
+    c.stream = py * frame.width + px;
     uint sample_index = params.sample_index;
-    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = qmc2(c.stream, sample_index, frame.seed, RNG_PIXEL_X);
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
-    vec3 o, d;
-    camera_ray(sx, sy, lens_sample(stream, sample_index), o, d);
+    camera_ray(sx, sy, lens_sample(c.stream, sample_index), c.o, c.d);
+    c.sp.throughput = vec3(1.0);
+    c.sp.d_vcm = camera_d_vcm(params.light_paths, c.d);
+    c.sp.d_vc = 0.0;
+    c.sp.d_vm = 0.0;
+    c.m = 1u;
+    c.path = c.stream % params.light_paths;
+    c.slot0 = c.path * params.vertex_slots;
+    // The light path's slots up to its last vertex: lavapipe runs a loop's body, under masks,
+    // as long as any lane goes on, so the empty slots beyond the ends cost what full ones do.
+    c.path_end = texelFetch(path_end_words, int(c.path)).x;
+    c.skip = NO_LIGHT;
+    c.first_specular = false;
+    c.diffuse = 0u;
+    c.specular_after = false;
+    c.specular_path = true;
+    c.medium = frame.camera_medium;
+    c.segment = 0u;
+    c.terms = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    c.rays = 0u;
+    return c;
+}
+
+// One vertex of the camera sub-path: returns false when the path ends there.
+bool camera_path_step(inout CameraPath c) {
+    uint stream = c.stream;
+    uint sample_index = params.sample_index;
+    uint m = c.m;
     bool light_only = (params.techniques & VCM_LIGHT_TRACE_ONLY) != 0u;
     bool merge_only = (params.techniques & VCM_MERGE_ONLY) != 0u;
     bool connect = (params.techniques & VCM_CONNECT) != 0u;
     bool merge = (params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u;
-    SubPath sp;
-    sp.throughput = vec3(1.0);
-    sp.d_vcm = camera_d_vcm(params.light_paths, d);
-    sp.d_vc = 0.0;
-    sp.d_vm = 0.0;
-    uint path = stream % params.light_paths;
-    uint slot0 = path * params.vertex_slots;
-    // The light path's slots up to its last vertex: lavapipe runs a loop's body, under masks,
-    // as long as any lane goes on, so the empty slots beyond the ends cost what full ones do.
-    uint path_end = texelFetch(path_end_words, int(path)).x;
-    uint skip = NO_LIGHT;
-    bool first_specular = false;
-    uint diffuse = 0u;
-    bool specular_after = false;
-    bool specular_path = true;
-    uint medium = frame.camera_medium;
-    uint segment = 0u;
-    for (uint m = 1u; m <= frame.max_depth + 1u; m++) {
-        vec3 medium_emission = vec3(0.0);
-        NextVertex nv = next_vertex(o, d, medium, skip, uvec2(stream, sample_index), RNG_MEDIUM_DOMAIN, segment,
-                                    sp.throughput, medium_emission, rays);
-        uint layer = path_layer(first_specular, diffuse, specular_after);
-        bool single = light_only || merge_only;
-        bool emission_allowed = !single || specular_path;
-        bool take_whole = m == 1u || single;
-        // The media's own emission: only camera paths gather it (vcm.rs).
-        if (emission_allowed) terms[layer] += medium_emission;
-        if (!nv.found || sp.throughput == vec3(0.0)) break;
-        uint prim = nv.prim;
-        float t = nv.t;
-        o = nv.o;
-        medium = nv.medium;
-        if (prim == NO_LIGHT && !nv.scattered) {
-            if (!emission_allowed) break;
-            for (uint i = 0u; i < frame.light_count; i++) {
-                Light l = light_at(i);
-                if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
-                if (dot(d, load3(l.direction)) <= -l.cos_outer) {
-                    float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf_at(l, d, 1.0, o));
-                    terms[layer] += sp.throughput * load3(l.intensity) * (w / l.area);
-                }
-            }
-            WHEN(frame.environment != NO_LIGHT) {
-                Light l = light_at(frame.environment);
-                float w = take_whole ? 1.0 : emission_weight(sp, l.pick_probability * environment_pdf(l, d), l.pick_probability * emission_pdf_at(l, d, 1.0, o));
-                terms[layer] += sp.throughput * environment_radiance(l, d) * w;
-            }
-            break;
-        }
-        vec3 wo = -d;
-        Hit h;
-        Bsdf b;
-        vertex_at(nv.scattered, prim, medium, o, d, t, h, b);
-        // An orthographic camera's first density is by area (camera_d_vcm).
-        sub_arrive(sp, nv.dist, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
-        float cos_l = dot(wo, h.ng);
-        if (!nv.scattered && cos_l > 0.0 && emission_allowed) {
-            vec3 emitted = material_emission(material_at(h.material), h);
-            if (emitted != vec3(0.0)) {
-                uint hp = hit_primitive(prim);
-                uint light = primitive_at(hp).light;
-                float w = 1.0;
-                if (!(take_whole || light == NO_LIGHT || hp != prim)) {
-                    Light l = light_at(light);
-                    w = emission_weight(sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, d, cos_l));
-                }
-                terms[layer] += sp.throughput * emitted * w;
+    vec3 medium_emission = vec3(0.0);
+    NextVertex nv = next_vertex(c.o, c.d, c.medium, c.skip, uvec2(stream, sample_index), RNG_MEDIUM_DOMAIN, c.segment,
+                                c.sp.throughput, medium_emission, c.rays);
+    uint layer = path_layer(c.first_specular, c.diffuse, c.specular_after);
+    bool single = light_only || merge_only;
+    bool emission_allowed = !single || c.specular_path;
+    bool take_whole = m == 1u || single;
+    // The media's own emission: only camera paths gather it (vcm.rs).
+    if (emission_allowed) c.terms[layer] += medium_emission;
+    if (!nv.found || c.sp.throughput == vec3(0.0)) return false;
+    uint prim = nv.prim;
+    float t = nv.t;
+    c.o = nv.o;
+    c.medium = nv.medium;
+    if (prim == NO_LIGHT && !nv.scattered) {
+        if (!emission_allowed) return false;
+        for (uint i = 0u; i < frame.light_count; i++) {
+            Light l = light_at(i);
+            if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
+            if (dot(c.d, load3(l.direction)) <= -l.cos_outer) {
+                float w = take_whole ? 1.0 : emission_weight(c.sp, l.pick_probability / l.area, l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
+                c.terms[layer] += c.sp.throughput * load3(l.intensity) * (w / l.area);
             }
         }
-        if (m > frame.max_depth) break;
-        uint flags = bsdf_flags(b);
-        if (flags == 0u) break;
-        skip = nv.scattered ? NO_LIGHT : ray_skip(prim);
-        // Whether this vertex merges, and merging's factor in its weights (vcm.rs, radiance_vcm).
-        bool merges = mergeable(b) && (m > 1u || merges_at_first_vertex(params));
-        float vm = merges ? params.vm_weight : 0.0;
-        uint dim = (m - 1u) * RNG_DIMS_PER_BOUNCE;
-        // The transmittance numbers of this vertex's connections (vcm.rs, radiance_vcm).
-        uint connection0 = RNG_VCM_TRANSMITTANCE_DOMAIN + (m - 1u) * (params.vertex_slots + 1u) * (MEDIUM_CROSSINGS + 1u);
-        if ((flags & BSDF_ESTIMATE) != 0u) {
-            uint cam_diffuse = diffuse + 1u;
-            if (connect) {
-                vec3 v = light_sampling(h, b, wo, sp, skip, prim, medium, stream, dim, uvec3(stream, sample_index, connection0), vm, rays);
-                terms[path_layer(first_specular, cam_diffuse, false)] += sp.throughput * v;
-                // Slot k holds the light vertex k + 1 scattering vertices from the light, or
-                // nothing (a delta vertex, or the path ended): skip the gaps.
-                for (uint k = 0u; k < path_end; k++) {
-                    if (k + 1u + m > frame.max_depth) break;
-                    LightVertex lv = fetch_light_vertex(vertex_texels, slot0 + k);
-                    if (lv.path_length == 0u) continue;
-                    uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
-                    vec3 c = connect_vertices(h, b, wo, sp, skip, prim, medium, lv, slot0 + k, n, vm, rays);
-                    uint cl = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
-                                         (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
-                    terms[cl] += sp.throughput * c;
-                }
-            }
-            if (merge && vgrid.photon_count > 0u && merges) {
-                vec3 merged[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-                float r2 = vgrid.radius * vgrid.radius;
-                ivec3 c = grid_cell(h.p, vgrid.cell_size);
-                vec3 lower, upper;
-                grid_face_gaps(h.p, vgrid.cell_size, lower, upper);
-                ivec3 box_lo, box_n;
-                grid_reach_box(lower, upper, r2, box_lo, box_n);
-                for (uint j = 0u; j < uint(box_n.x * box_n.y * box_n.z); j++) {
-                    uint kc = grid_box_neighbour(box_lo, box_n, j);
-                    if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
-                    ivec3 cell = grid_neighbour(c, kc);
-                    uint bucket = grid_hash(cell, vgrid.table_mask);
-                    for (uint i = texelFetch(start_words, int(bucket)).x; i < texelFetch(start_words, int(bucket + 1u)).x; i++) {
-                        Photon pt = fetch_photon(point_texels, i);
-                        vec3 pos = load3(pt.position);
-                        vec3 dd = pos - h.p;
-                        if (dot(dd, dd) > r2 || grid_cell(pos, vgrid.cell_size) != cell) continue;
-                        LightVertex lv = fetch_light_vertex(vertex_texels, pt.flux_rg * params.vertex_slots + pt.flux_b_dir);
-                        if (lv.path_length + m - 1u > frame.max_depth) continue;
-                        vec3 light_dir = -load3(lv.direction);
-                        vec3 fr = bsdf_eval(b, wo, light_dir);
-                        if (fr == vec3(0.0)) continue;
-                        float w = 1.0;
-                        if (!merge_only) {
-                            vec2 pdfs = lobe_pdfs(b, wo, light_dir);
-                            float w_light = wmul(lv.d_vcm, params.vc_weight) + wmul(lv.d_vm, mis(pdfs.x));
-                            float w_camera = wmul(sp.d_vcm, params.vc_weight) + wmul(sp.d_vm, mis(pdfs.y));
-                            w = 1.0 / (w_light + 1.0 + w_camera);
-                        }
-                        uint ml = path_layer(first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
-                                             (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
-                        merged[ml] += fr * load3(lv.throughput) * w;
-                    }
-                }
-                for (uint i = 0u; i < 4u; i++) terms[i] += sp.throughput * merged[i] * params.vm_normalization;
-                if (merge_only) break;
-            }
+        WHEN(frame.environment != NO_LIGHT) {
+            Light l = light_at(frame.environment);
+            float w = take_whole ? 1.0 : emission_weight(c.sp, l.pick_probability * environment_pdf(l, c.d), l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
+            c.terms[layer] += c.sp.throughput * environment_radiance(l, c.d) * w;
         }
-        if (light_only && (flags & BSDF_ESTIMATE) != 0u) break;
-        float q = bsdf_path_probability(b, wo);
-        vec4 u = bsdf_numbers(stream, sample_index, uvec2(stream, sample_index), frame.seed, dim + RNG_FRESNEL);
-        bool delta = u.w < q;
-        BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
-        if (smp.flags == 0u) break;
-        float cos_out = abs_cos(b, smp.wi);
-        if ((smp.flags & BSDF_SPECULAR) != 0u) {
-            sub_scatter(sp, params, true, cos_out, 0.0, 0.0, false);
-            first_specular = first_specular || m == 1u;
-            specular_after = diffuse > 0u;
-            sp.throughput *= smp.weight / q;
-        } else {
-            vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
-            if (pdfs.x <= 0.0) break;
-            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, merges);
-            diffuse++;
-            specular_after = false;
-            specular_path = false;
-            sp.throughput *= smp.weight / (1.0 - q);
-        }
-        if (m >= BPT_ROULETTE_DEPTH) {
-            float survive = min(max(sp.throughput.x, max(sp.throughput.y, sp.throughput.z)), PT_ROULETTE_MAX);
-            if (rand1(stream, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
-            sp.throughput /= survive;
-        }
-        if (sp.throughput == vec3(0.0)) break;
-#ifdef VARIANT_MEDIA
-        if (!nv.scattered && (smp.flags & BSDF_TRANSMISSION) != 0u) medium = medium_after(prim, h.ng, smp.wi, medium);
-#endif
-        o = offset_origin(h, wo, smp.flags);
-        d = smp.wi;
+        return false;
     }
-    // The light tracing that landed on this pixel.
+    vec3 wo = -c.d;
+    Hit h;
+    Bsdf b;
+    vertex_at(nv.scattered, prim, c.medium, c.o, c.d, t, h, b);
+    // An orthographic camera's first density is by area (camera_d_vcm).
+    sub_arrive(c.sp, nv.dist, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
+    float cos_l = dot(wo, h.ng);
+    if (!nv.scattered && cos_l > 0.0 && emission_allowed) {
+        vec3 emitted = material_emission(material_at(h.material), h);
+        if (emitted != vec3(0.0)) {
+            uint hp = hit_primitive(prim);
+            uint light = primitive_at(hp).light;
+            float w = 1.0;
+            if (!(take_whole || light == NO_LIGHT || hp != prim)) {
+                Light l = light_at(light);
+                w = emission_weight(c.sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, c.d, cos_l));
+            }
+            c.terms[layer] += c.sp.throughput * emitted * w;
+        }
+    }
+    if (m > frame.max_depth) return false;
+    uint flags = bsdf_flags(b);
+    if (flags == 0u) return false;
+    c.skip = nv.scattered ? NO_LIGHT : ray_skip(prim);
+    // Whether this vertex merges, and merging's factor in its weights (vcm.rs, radiance_vcm).
+    bool merges = mergeable(b) && (m > 1u || merges_at_first_vertex(params));
+    float vm = merges ? params.vm_weight : 0.0;
+    uint dim = (m - 1u) * RNG_DIMS_PER_BOUNCE;
+    // The transmittance numbers of this vertex's connections (vcm.rs, radiance_vcm).
+    uint connection0 = RNG_VCM_TRANSMITTANCE_DOMAIN + (m - 1u) * (params.vertex_slots + 1u) * (MEDIUM_CROSSINGS + 1u);
+    if ((flags & BSDF_ESTIMATE) != 0u) {
+        uint cam_diffuse = c.diffuse + 1u;
+        if (connect) {
+            vec3 v = light_sampling(h, b, wo, c.sp, c.skip, prim, c.medium, stream, dim, uvec3(stream, sample_index, connection0), vm, c.rays);
+            c.terms[path_layer(c.first_specular, cam_diffuse, false)] += c.sp.throughput * v;
+            // Slot k holds the light vertex k + 1 scattering vertices from the light, or
+            // nothing (a delta vertex, or the path ended): skip the gaps.
+            for (uint k = 0u; k < c.path_end; k++) {
+                if (k + 1u + m > frame.max_depth) break;
+                LightVertex lv = fetch_light_vertex(vertex_texels, c.slot0 + k);
+                if (lv.path_length == 0u) continue;
+                uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
+                vec3 joined = connect_vertices(h, b, wo, c.sp, c.skip, prim, c.medium, lv, c.slot0 + k, n, vm, c.rays);
+                uint cl = path_layer(c.first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
+                                     (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
+                c.terms[cl] += c.sp.throughput * joined;
+            }
+        }
+        if (merge && vgrid.photon_count > 0u && merges) {
+            vec3 merged[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+            float r2 = vgrid.radius * vgrid.radius;
+            ivec3 home = grid_cell(h.p, vgrid.cell_size);
+            vec3 lower, upper;
+            grid_face_gaps(h.p, vgrid.cell_size, lower, upper);
+            ivec3 box_lo, box_n;
+            grid_reach_box(lower, upper, r2, box_lo, box_n);
+            for (uint j = 0u; j < uint(box_n.x * box_n.y * box_n.z); j++) {
+                uint kc = grid_box_neighbour(box_lo, box_n, j);
+                if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
+                ivec3 cell = grid_neighbour(home, kc);
+                uint bucket = grid_hash(cell, vgrid.table_mask);
+                for (uint i = texelFetch(start_words, int(bucket)).x; i < texelFetch(start_words, int(bucket + 1u)).x; i++) {
+                    Photon pt = fetch_photon(point_texels, i);
+                    vec3 pos = load3(pt.position);
+                    vec3 dd = pos - h.p;
+                    if (dot(dd, dd) > r2 || grid_cell(pos, vgrid.cell_size) != cell) continue;
+                    LightVertex lv = fetch_light_vertex(vertex_texels, pt.flux_rg * params.vertex_slots + pt.flux_b_dir);
+                    if (lv.path_length + m - 1u > frame.max_depth) continue;
+                    vec3 light_dir = -load3(lv.direction);
+                    vec3 fr = bsdf_eval(b, wo, light_dir);
+                    if (fr == vec3(0.0)) continue;
+                    float w = 1.0;
+                    if (!merge_only) {
+                        vec2 pdfs = lobe_pdfs(b, wo, light_dir);
+                        float w_light = wmul(lv.d_vcm, params.vc_weight) + wmul(lv.d_vm, mis(pdfs.x));
+                        float w_camera = wmul(c.sp.d_vcm, params.vc_weight) + wmul(c.sp.d_vm, mis(pdfs.y));
+                        w = 1.0 / (w_light + 1.0 + w_camera);
+                    }
+                    uint ml = path_layer(c.first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
+                                         (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
+                    merged[ml] += fr * load3(lv.throughput) * w;
+                }
+            }
+            for (uint i = 0u; i < 4u; i++) c.terms[i] += c.sp.throughput * merged[i] * params.vm_normalization;
+            if (merge_only) return false;
+        }
+    }
+    if (light_only && (flags & BSDF_ESTIMATE) != 0u) return false;
+    float q = bsdf_path_probability(b, wo);
+    vec4 u = bsdf_numbers(stream, sample_index, uvec2(stream, sample_index), frame.seed, dim + RNG_FRESNEL);
+    bool delta = u.w < q;
+    BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
+    if (smp.flags == 0u) return false;
+    float cos_out = abs_cos(b, smp.wi);
+    if ((smp.flags & BSDF_SPECULAR) != 0u) {
+        sub_scatter(c.sp, params, true, cos_out, 0.0, 0.0, false);
+        c.first_specular = c.first_specular || m == 1u;
+        c.specular_after = c.diffuse > 0u;
+        c.sp.throughput *= smp.weight / q;
+    } else {
+        vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
+        if (pdfs.x <= 0.0) return false;
+        sub_scatter(c.sp, params, false, cos_out, pdfs.x, pdfs.y, merges);
+        c.diffuse++;
+        c.specular_after = false;
+        c.specular_path = false;
+        c.sp.throughput *= smp.weight / (1.0 - q);
+    }
+    if (m >= BPT_ROULETTE_DEPTH) {
+        float survive = min(max(c.sp.throughput.x, max(c.sp.throughput.y, c.sp.throughput.z)), PT_ROULETTE_MAX);
+        if (rand1(stream, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) return false;
+        c.sp.throughput /= survive;
+    }
+    if (c.sp.throughput == vec3(0.0)) return false;
+#ifdef VARIANT_MEDIA
+    if (!nv.scattered && (smp.flags & BSDF_TRANSMISSION) != 0u) c.medium = medium_after(prim, h.ng, smp.wi, c.medium);
+#endif
+    c.o = offset_origin(h, wo, smp.flags);
+    c.d = smp.wi;
+    c.m++;
+    return true;
+}
+
+// The light tracing that landed on the path's pixel, and the pixel's sums into the accumulation.
+void camera_path_finish(CameraPath c) {
     // The pixel's splats: LAYER_COUNT layers of three (low, high) word pairs, six words a layer,
     // so a layer starts at texel 3i/2 of the pixel's, in its first or its third word.
-    int base = int(stream * LAYER_COUNT * 3u / 2u);
+    int base = int(c.stream * LAYER_COUNT * 3u / 2u);
     for (int i = 0; i < 4; i++) {
         uvec4 a = texelFetch(splat_texels, base + 3 * i / 2);
         uvec4 b = texelFetch(splat_texels, base + 3 * i / 2 + 1);
-        terms[i] += i % 2 == 0 ? vec3(splat_value(a.x, a.y), splat_value(a.z, a.w), splat_value(b.x, b.y))
-                               : vec3(splat_value(a.z, a.w), splat_value(b.x, b.y), splat_value(b.z, b.w));
+        c.terms[i] += i % 2 == 0 ? vec3(splat_value(a.x, a.y), splat_value(a.z, a.w), splat_value(b.x, b.y))
+                                 : vec3(splat_value(a.z, a.w), splat_value(b.x, b.y), splat_value(b.z, b.w));
     }
+    uint at = c.stream * LAYER_COUNT;
+    accumulation[at + LAYER_DIRECT] += vec4(c.terms[LAYER_DIRECT], float(c.rays));
+    accumulation[at + LAYER_SPECULAR] += vec4(c.terms[LAYER_SPECULAR], 0.0);
+    accumulation[at + LAYER_INDIRECT] += vec4(c.terms[LAYER_INDIRECT], 0.0);
+    accumulation[at + LAYER_CAUSTICS] += vec4(c.terms[LAYER_CAUSTICS], 0.0);
 }
 
+// Each invocation renders the paths of pixels i, i + n, i + 2n, ... of the band (n invocations,
+// params.paths_per_invocation pixels each), a vertex per loop turn, starting the next pixel's
+// path as soon as one ends. Lavapipe runs a loop turn for all 8 lanes of a SIMD group while any
+// goes on, so with one path per invocation a group cost its longest path's vertices (twice the
+// mean on cornell-glossy); a run of paths evens the lanes out. A real GPU wants the invocations
+// instead: there it is 1.
 void main() {
     uint band_pixels = range.row_count * frame.width;
+    uint per = max(params.paths_per_invocation, 1u);
+    uint lanes = (band_pixels + per - 1u) / per;
     uint i = GLOBAL_INDEX;
-    if (i >= band_pixels) return;
-    uint px = i % frame.width;
-    uint py = range.row_begin + i / frame.width;
-    vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    uint rays = 0u;
-    radiance_vcm(px, py, terms, rays);
-    uint base = (py * frame.width + px) * LAYER_COUNT;
-    accumulation[base + LAYER_DIRECT] += vec4(terms[LAYER_DIRECT], float(rays));
-    accumulation[base + LAYER_SPECULAR] += vec4(terms[LAYER_SPECULAR], 0.0);
-    accumulation[base + LAYER_INDIRECT] += vec4(terms[LAYER_INDIRECT], 0.0);
-    accumulation[base + LAYER_CAUSTICS] += vec4(terms[LAYER_CAUSTICS], 0.0);
+    if (i >= lanes) return;
+    uint jobs = (band_pixels - i + lanes - 1u) / lanes;  // pixels i + k lanes below band_pixels
+    CameraPath c = camera_path_start(i % frame.width, range.row_begin + i / frame.width);
+    uint job = 0u;
+    // Bounded: each turn is a vertex of one of `jobs` paths of at most max_depth + 1 vertices.
+    for (;;) {
+        if (camera_path_step(c)) continue;
+        camera_path_finish(c);
+        job++;
+        if (job >= jobs) break;
+        uint p = i + job * lanes;
+        c = camera_path_start(p % frame.width, range.row_begin + p / frame.width);
+    }
+    // Ended by the driver's loop limit (lavapipe's 65535 iterations per invocation) with paths
+    // left: say so, and the host renders the sample again a path per invocation.
+    if (job < jobs) atomicAdd(broken_off, 1u);
 }

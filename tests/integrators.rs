@@ -792,3 +792,67 @@ fn light_tracing_reaches_orthographic_and_latlong_cameras() {
         }
     }
 }
+
+/// render_vcm renders several camera paths per invocation on lavapipe (one after another, to keep
+/// its SIMD lanes busy) and one on GPUs: each pixel's path is the same computation whichever
+/// invocation runs it, so the images are equal bit for bit, with counts that divide the band's
+/// pixels and counts that do not.
+#[test]
+fn camera_paths_per_invocation_leave_the_image_alone() {
+    use photonix::render::gpu::GpuRenderer;
+    let ctx = common::gpu();
+    for (name, integrator) in [("cornell-glossy", Integrator::Vcm), ("fog", Integrator::Bpt)] {
+        let buffers = common::buffers(&shipped(name, integrator), 30, 23);
+        let render = |per: u32| {
+            let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
+            renderer.set_camera_paths_per_invocation(per);
+            renderer.render_pass(2, 0, &mut |_, _| {}).unwrap()
+        };
+        let one = render(1);
+        for per in [3, 8, 64] {
+            let other = render(per);
+            assert!(other.layers == one.layers, "{name}: {per} paths per invocation change the image");
+            assert_eq!(other.stats.rays, one.stats.rays, "{name}: {per} paths per invocation");
+        }
+    }
+}
+
+/// Camera paths through 1500 overlapping frames run past lavapipe's 65535 loop iterations per
+/// invocation, sooner with many paths per invocation: the renderer then renders the samples again
+/// a path per invocation (paths of 2 vertices: 64 to an invocation break off, 1 does not), or
+/// refuses the pass with a message when even that is broken off (12 vertices). Never a partial
+/// image. A real GPU has no such limit and renders both.
+#[test]
+fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
+    use photonix::render::gpu::GpuRenderer;
+    let mut scene = load_scene(&common::repo_path("benches/instancing/frames-1500.toml")).unwrap();
+    scene.render.integrator = Integrator::Bpt;
+    let ctx = common::gpu();
+    let lavapipe = ctx.info().name.contains("llvmpipe");
+    for depth in [2, 12] {
+        scene.render.max_depth = depth;
+        let buffers = common::buffers(&scene, 8, 6);
+        let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
+        renderer.set_camera_paths_per_invocation(64);
+        match renderer.render_pass(1, 0, &mut |_, _| {}) {
+            Ok(gpu) => {
+                let cpu = cpu(&buffers, 1);
+                let error = rel_mse(&gpu.image, &cpu.image);
+                println!(
+                    "max_depth {depth}: rendered {} paths per invocation, GPU vs CPU relMSE {error:.3e}",
+                    renderer.camera_paths_per_invocation()
+                );
+                assert!(error < 1e-4, "max_depth {depth}: relMSE {error:.3e} against the CPU twin");
+                assert!(!lavapipe || depth == 2, "lavapipe rendered paths it broke off");
+                let per = renderer.camera_paths_per_invocation();
+                assert_eq!(per, if lavapipe { 1 } else { 64 }, "no fallback, or one without cause");
+            }
+            Err(e) => {
+                let e = e.to_string();
+                println!("max_depth {depth}: {e}");
+                assert!(e.contains("broke off") && e.contains("--backend cpu"), "{e}");
+                assert!(depth > 2, "short paths stay within the limit a path per invocation");
+            }
+        }
+    }
+}

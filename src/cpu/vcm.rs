@@ -448,7 +448,8 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
         vm_normalization: 1.0 / eta,
         path_begin: 0,
         path_count: light_paths,
-        _pad: [0; 2],
+        paths_per_invocation: 1,
+        _pad: 0,
     }
 }
 

@@ -340,7 +340,10 @@ gpu_structs! {
         /// First light path of this dispatch and how many it traces.
         pub path_begin: u32,
         pub path_count: u32,
-        pub _pad: [u32; 2],
+        /// Camera paths each invocation of render_vcm renders one after another (1 on real
+        /// GPUs; see render/gpu/bidirectional.rs). The CPU twin ignores it.
+        pub paths_per_invocation: u32,
+        pub _pad: u32,
     }
 
     /// A surface light vertex's material as its point looked it up, 64 bytes: the kind (after a

@@ -20,6 +20,11 @@ use crate::render::{stop_requested, SceneBuffers};
 const PATHS_PER_DISPATCH: u32 = 1 << 16;
 /// Bytes of light-tracing splats per pixel: per layer, three 64-bit fixed-point channels.
 const SPLAT_BYTES_PER_PIXEL: u64 = LAYER_COUNT as u64 * 3 * 8;
+/// Camera paths per render_vcm invocation on CPU devices (lavapipe), one after another: its SIMD
+/// groups of 8 lanes run a loop turn while any lane goes on, and a run of paths per lane evens
+/// out their lengths (BENCHMARKS.md, "Camera paths in runs"). Real GPUs take one each: they
+/// want the invocations.
+const CPU_PATHS_PER_INVOCATION: u32 = 8;
 
 /// The device buffers of a bidirectional render, kept from pass to pass while the frame's sizes
 /// stay: allocating and clearing them each pass cost more than the pass's kernels on a real GPU.
@@ -34,6 +39,18 @@ pub(super) struct BidirectionalBuffers {
     materials: Buffer,
     params: Buffer,
     grid: Buffer,
+    /// render_vcm's count of invocations the driver broke off (lavapipe's loop limit).
+    broken_off: Buffer,
+}
+
+/// Camera paths per render_vcm invocation on this device: `CPU_PATHS_PER_INVOCATION` on CPU
+/// devices, 1 on GPUs.
+pub(super) fn default_paths_per_invocation(ctx: &GpuContext) -> u32 {
+    if ctx.info().device_type == "CPU" {
+        CPU_PATHS_PER_INVOCATION
+    } else {
+        1
+    }
 }
 
 impl BidirectionalBuffers {
@@ -52,13 +69,15 @@ impl BidirectionalBuffers {
             materials: ctx.create_buffer("light_materials", slots * size_of::<LightMaterial>() as u64)?,
             params: ctx.create_scratch("vcm_params", size_of::<VcmParams>() as u64)?,
             grid: ctx.create_scratch("vcm_grid", size_of::<GridParams>() as u64)?,
+            broken_off: ctx.create_scratch("vcm_broken_off", 16)?,
         })
     }
 }
 
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
 /// the device into one accumulation, read back once: the output is their mean. The buffers are
-/// those in `kept` (made or remade there when the frame's sizes changed).
+/// those in `kept` (made or remade there when the frame's sizes changed); `per` camera paths to
+/// an invocation, lowered to 1 for good when the driver's loop limit breaks some off.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
     ctx: &GpuContext,
@@ -66,6 +85,7 @@ pub(super) fn render_pass_bidirectional(
     scene: &DeviceScene,
     buffers: &SceneBuffers,
     kept: &mut Option<BidirectionalBuffers>,
+    per: &mut u32,
     spp: u32,
     first: u32,
     passes: u32,
@@ -85,8 +105,6 @@ pub(super) fn render_pass_bidirectional(
             limit >> 20
         )));
     }
-    let light_kernel = kernels.vcm_light(ctx)?;
-    let camera_kernel = kernels.render_vcm(ctx)?;
     let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
     let sizes = (pixels, light_path_count(&f) as u64, slots);
     if kept.as_ref().is_none_or(|k| k.sizes != sizes) {
@@ -94,6 +112,45 @@ pub(super) fn render_pass_bidirectional(
         *kept = Some(BidirectionalBuffers::new(ctx, sizes)?);
     }
     let b = kept.as_ref().expect("made just above");
+    loop {
+        let (output, broken_off) = render_samples(ctx, kernels, scene, buffers, b, *per, spp, first, passes, progress)?;
+        if broken_off == 0 {
+            return Ok(output);
+        }
+        // The passes are deterministic: rendered again a path per invocation, they are what
+        // the first try would have been without the limit.
+        if *per > 1 {
+            *per = 1;
+            continue;
+        }
+        return Err(GpuError::Unsupported(format!(
+            "the device broke off {broken_off} camera paths at its loop limit (lavapipe stops an invocation after \
+             65535 loop iterations): their rays cross too many overlapping objects or instances, and the image \
+             would miss their light; render with --backend cpu, or lower max_depth"
+        )));
+    }
+}
+
+/// The samples of `render_pass_bidirectional` with its buffers `b`; also returns how many
+/// render_vcm invocations the driver broke off (their pixels are missing from the output).
+#[allow(clippy::too_many_arguments)]
+fn render_samples(
+    ctx: &GpuContext,
+    kernels: &GpuKernels,
+    scene: &DeviceScene,
+    buffers: &SceneBuffers,
+    b: &BidirectionalBuffers,
+    per: u32,
+    spp: u32,
+    first: u32,
+    passes: u32,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(RenderOutput, u32), GpuError> {
+    let f = buffers.frame;
+    let pixels = f.width as u64 * f.height as u64;
+    let light_kernel = kernels.vcm_light(ctx)?;
+    let camera_kernel = kernels.render_vcm(ctx)?;
+    let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
     let band_rows = stop_band_rows(f.width, f.height);
     let total = f.height as u64 * spp as u64 * passes as u64;
     let mut done = 0;
@@ -105,6 +162,7 @@ pub(super) fn render_pass_bidirectional(
     'samples: for (sample, sample_index) in samples {
         let t = Instant::now();
         let mut params = vcm_params(&f, base_radius, sample_index);
+        params.paths_per_invocation = per;
         // The grid build takes the points' buffer; vcm_light writes the points below the count
         // it returns, and nothing reads past them.
         let points = ctx.create_scratch("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
@@ -121,6 +179,7 @@ pub(super) fn render_pass_bidirectional(
                 if begin == 0 {
                     if sample == 0 {
                         rec.fill_zero(&b.accumulation)?;
+                        rec.fill_zero(&b.broken_off)?;
                     }
                     rec.fill_zero(&b.splats)?;
                     rec.fill_zero(&b.counter)?;
@@ -168,9 +227,10 @@ pub(super) fn render_pass_bidirectional(
                         &b.splats,
                         &b.path_ends,
                         &b.materials,
+                        &b.broken_off,
                     ]),
                     bytemuck::bytes_of(&unit),
-                    groups(unit.row_count * f.width),
+                    groups((unit.row_count * f.width).div_ceil(params.paths_per_invocation)),
                 )
             })?;
             first = false;
@@ -189,5 +249,6 @@ pub(super) fn render_pass_bidirectional(
         ("download".to_string(), t.elapsed()),
     ];
     let stats = RenderStats::device(ctx, stages, rays, spp * passes);
-    Ok(RenderOutput { image: layers.combined(), layers, stats, complete, passes })
+    let broken_off = ctx.download::<u32>(&b.broken_off)?[0];
+    Ok((RenderOutput { image: layers.combined(), layers, stats, complete, passes }, broken_off))
 }

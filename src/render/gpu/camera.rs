@@ -34,6 +34,8 @@ pub struct GpuRenderer<'a> {
     accumulation: Option<(Buffer, u32)>,
     /// The bidirectional integrators' buffers, likewise.
     bidirectional: Option<super::bidirectional::BidirectionalBuffers>,
+    /// Camera paths per render_vcm invocation (`set_camera_paths_per_invocation`).
+    camera_paths_per_invocation: u32,
     /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
     photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
@@ -72,6 +74,7 @@ impl<'a> GpuRenderer<'a> {
             scene,
             accumulation: None,
             bidirectional: None,
+            camera_paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
             last_written: Vec::new(),
@@ -94,6 +97,19 @@ impl<'a> GpuRenderer<'a> {
     /// it keeps from earlier scenes (the most recent last).
     pub fn kernel_variants(&self) -> Vec<KernelVariant> {
         std::iter::once(&self.kernels).chain(self.spare_kernels.iter().rev()).map(GpuKernels::variant).collect()
+    }
+
+    /// How many camera paths each invocation of the bidirectional integrators' camera kernel
+    /// renders one after another (at least 1): by default 8 on CPU devices such as lavapipe,
+    /// whose SIMD lanes this keeps busy, and 1 on GPUs. The images are the same whatever the
+    /// number; a render that runs into lavapipe's loop limit falls back to 1.
+    pub fn set_camera_paths_per_invocation(&mut self, paths: u32) {
+        self.camera_paths_per_invocation = paths.max(1);
+    }
+
+    /// Camera paths per invocation of the bidirectional integrators' camera kernel now.
+    pub fn camera_paths_per_invocation(&self) -> u32 {
+        self.camera_paths_per_invocation
     }
 
     /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
@@ -164,9 +180,9 @@ impl<'a> GpuRenderer<'a> {
         let passes = passes.max(1);
         if self.kernels.variant().bidirectional {
             let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
-            let kept = &mut self.bidirectional;
+            let (kept, per) = (&mut self.bidirectional, &mut self.camera_paths_per_invocation);
             return super::bidirectional::render_pass_bidirectional(
-                ctx, kernels, scene, buffers, kept, spp, first, passes, progress,
+                ctx, kernels, scene, buffers, kept, per, spp, first, passes, progress,
             );
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());

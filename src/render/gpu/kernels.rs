@@ -173,7 +173,7 @@ impl GpuKernels {
                 &self.render_vcm,
                 Spec {
                     name: scene("render_vcm"),
-                    bindings: SCENE_BINDINGS + 9,
+                    bindings: SCENE_BINDINGS + 10,
                     types: RENDER_VCM_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,
