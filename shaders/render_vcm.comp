@@ -294,32 +294,54 @@ bool camera_path_step(inout CameraPath c) {
             grid_face_gaps(h.p, vgrid.cell_size, lower, upper);
             ivec3 box_lo, box_n;
             grid_reach_box(lower, upper, r2, box_lo, box_n);
-            for (uint j = 0u; j < uint(box_n.x * box_n.y * box_n.z); j++) {
-                uint kc = grid_box_neighbour(box_lo, box_n, j);
-                if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
-                ivec3 cell = grid_neighbour(home, kc);
-                uint bucket = grid_hash(cell, vgrid.table_mask);
-                for (uint i = texelFetch(start_words, int(bucket)).x; i < texelFetch(start_words, int(bucket + 1u)).x; i++) {
-                    Photon pt = fetch_photon(point_texels, i);
+            // The points within the radius, in the order of the cells in reach and of their
+            // buckets (the twin's), the far ones skipped in a loop of their own. Lavapipe runs a
+            // loop's body, under masks, while any lane of 8 goes on: in one loop over all the
+            // points, every point of every lane cost the merge's whole body whenever any lane had
+            // a near one; here the body runs as often as the busiest lane has near points.
+            uint cells = uint(box_n.x * box_n.y * box_n.z);
+            uint j = 0u;
+            uint i = 0u;
+            uint end = 0u;
+            ivec3 cell = home;
+            for (;;) {
+                bool near = false;
+                Photon pt;
+                for (;;) {
+                    if (i >= end) {
+                        if (j >= cells) break;
+                        uint kc = grid_box_neighbour(box_lo, box_n, j);
+                        j++;
+                        if (!grid_neighbour_in_reach(lower, upper, r2, kc)) continue;
+                        cell = grid_neighbour(home, kc);
+                        uint bucket = grid_hash(cell, vgrid.table_mask);
+                        i = texelFetch(start_words, int(bucket)).x;
+                        end = texelFetch(start_words, int(bucket + 1u)).x;
+                        continue;
+                    }
+                    pt = fetch_photon(point_texels, i);
+                    i++;
                     vec3 pos = load3(pt.position);
                     vec3 dd = pos - h.p;
-                    if (dot(dd, dd) > r2 || grid_cell(pos, vgrid.cell_size) != cell) continue;
-                    LightVertex lv = fetch_light_vertex(vertex_texels, pt.flux_rg * params.vertex_slots + pt.flux_b_dir);
-                    if (lv.path_length + m - 1u > frame.max_depth) continue;
-                    vec3 light_dir = -load3(lv.direction);
-                    vec3 fr = bsdf_eval(b, wo, light_dir);
-                    if (fr == vec3(0.0)) continue;
-                    float w = 1.0;
-                    if (!merge_only) {
-                        vec2 pdfs = lobe_pdfs(b, wo, light_dir);
-                        float w_light = wmul(lv.d_vcm, params.vc_weight) + wmul(lv.d_vm, mis(pdfs.x));
-                        float w_camera = wmul(c.sp.d_vcm, params.vc_weight) + wmul(c.sp.d_vm, mis(pdfs.y));
-                        w = 1.0 / (w_light + 1.0 + w_camera);
-                    }
-                    uint ml = path_layer(c.first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
-                                         (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
-                    merged[ml] += fr * load3(lv.throughput) * w;
+                    near = dot(dd, dd) <= r2 && grid_cell(pos, vgrid.cell_size) == cell;
+                    if (near) break;
                 }
+                if (!near) break;
+                LightVertex lv = fetch_light_vertex(vertex_texels, pt.flux_rg * params.vertex_slots + pt.flux_b_dir);
+                if (lv.path_length + m - 1u > frame.max_depth) continue;
+                vec3 light_dir = -load3(lv.direction);
+                vec3 fr = bsdf_eval(b, wo, light_dir);
+                if (fr == vec3(0.0)) continue;
+                float w = 1.0;
+                if (!merge_only) {
+                    vec2 pdfs = lobe_pdfs(b, wo, light_dir);
+                    float w_light = wmul(lv.d_vcm, params.vc_weight) + wmul(lv.d_vm, mis(pdfs.x));
+                    float w_camera = wmul(c.sp.d_vcm, params.vc_weight) + wmul(c.sp.d_vm, mis(pdfs.y));
+                    w = 1.0 / (w_light + 1.0 + w_camera);
+                }
+                uint ml = path_layer(c.first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK),
+                                     (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
+                merged[ml] += fr * load3(lv.throughput) * w;
             }
             for (uint i = 0u; i < 4u; i++) c.terms[i] += c.sp.throughput * merged[i] * params.vm_normalization;
             if (merge_only) return false;
