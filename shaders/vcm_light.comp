@@ -1,13 +1,14 @@
 #version 450
-// vcm_light: the light stage of vertex connection and merging (integrators vcm and bpt): one
-// light sub-path per invocation. Its non-delta vertices go into the path's run of vertex slots
-// and, as grid points (position, path, slot), into `points` for merging; each is connected to the
-// camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
+// vcm_light: the light stage of vertex connection and merging (integrators vcm and bpt): light
+// sub-paths, params.paths_per_invocation of them per invocation. Their non-delta vertices go
+// into the path's run of vertex slots and, as grid points (position, path, slot), into `points`
+// for merging; each is connected to the camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
 // layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
 // src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
 // flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
 // scene, then the vertex slots, the splats, the points, the point counter and each path's end
-// (its last vertex's slot + 1; render_vcm reads no further), then each surface vertex's
+// (its last vertex's slot + 1; render_vcm reads no further; the counter's second word counts
+// invocations the driver broke off), then each surface vertex's
 // material as looked up (LightMaterial, beside its slot). A path writes its end and every slot up
 // to it, the gaps (delta vertices) as empty, so the slots need no clearing between samples.
 // variant: textured
@@ -42,7 +43,7 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 layout(std430, binding = SCENE_BINDINGS + 0) buffer LightVertices { LightVertex vertices[]; };
 layout(std430, binding = SCENE_BINDINGS + 1) buffer Splats { uint splats[]; };
 layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon points[]; };
-layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; };
+layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; uint broken_off; };
 layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathEnds { uint path_ends[]; };
 layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer LightMaterials { LightMaterial light_materials[]; };
 layout(push_constant) uniform Push { VcmParams params; };
@@ -89,131 +90,182 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim,
     splat_add(base + 2u, value.z);
 }
 
-void main() {
-    uint index = GLOBAL_INDEX;
-    if (index >= params.path_count) return;
-    uint path = params.path_begin + index;
+// A light sub-path, carried from vertex to vertex (and from loop turn to loop turn of main, which
+// traces several paths one after another in each invocation).
+struct LightPath {
+    uint path;
+    vec3 o;
+    vec3 d;
+    SubPath sp;
+    uvec2 seq;
+    bool finite;
+    uint k;  // the vertex the next turn reaches (1: the emitted ray's)
+    uint skip;
+    uint medium;
+    uint segment;
+    uint rays;
+    uint diffuse;
+    bool specular_first;
+    uint slot0;
+};
+
+// Emits light path `path`: false when it has no ray to follow (no light, no power, no density).
+bool light_path_start(uint path, out LightPath lp) {
+    lp.path = path;
     path_ends[path] = 0u;
-    if (frame.light_count == 0u) return;
+    if (frame.light_count == 0u) return false;
     uint sample_index = params.sample_index;
     uint dim0 = RNG_VCM_LIGHT_DOMAIN;
     Light l = light_at(pick_light(rand1(path, sample_index, frame.seed, dim0 + RNG_LIGHT_PICK), false));
-    if (l.pick_probability <= 0.0) return;
-    vec3 o, d, power;
+    if (l.pick_probability <= 0.0) return false;
+    vec3 power;
     float cos_l;
     // The render's light paths are one low-discrepancy sequence (vcm.rs, trace_light_path).
-    uvec2 seq = sequence_point(0u, sample_index, params.light_paths, path);
-    light_emit(l, qmc2(seq.x, seq.y, frame.seed, dim0 + RNG_LIGHT_U), qmc2(seq.x, seq.y, frame.seed, dim0 + RNG_LIGHT_V), o, d, power, cos_l);
+    lp.seq = sequence_point(0u, sample_index, params.light_paths, path);
+    light_emit(l, qmc2(lp.seq.x, lp.seq.y, frame.seed, dim0 + RNG_LIGHT_U), qmc2(lp.seq.x, lp.seq.y, frame.seed, dim0 + RNG_LIGHT_V),
+               lp.o, lp.d, power, cos_l);
     // Light sampling's density of the start point; contract in vcm.rs, trace_light_path.
     float direct_pdf = 1.0;
     if (l.kind == LIGHT_AREA) direct_pdf = 1.0 / l.area;
-    else if (l.kind == LIGHT_ENVIRONMENT) direct_pdf = environment_pdf(l, -d);
+    else if (l.kind == LIGHT_ENVIRONMENT) direct_pdf = environment_pdf(l, -lp.d);
     else if (l.kind == LIGHT_DISTANT && l.area > 0.0) direct_pdf = 1.0 / l.area;
-    float emission = emission_pdf(l, -d, cos_l);
-    if (emission <= 0.0 || power == vec3(0.0)) return;
-    bool finite = l.kind != LIGHT_DISTANT && l.kind != LIGHT_ENVIRONMENT;
-    SubPath sp;
-    sp.throughput = power / l.pick_probability;
-    sp.d_vcm = mis(direct_pdf / emission);
-    sp.d_vc = light_is_delta(l) ? 0.0 : mis((finite ? cos_l : 1.0) / (emission * l.pick_probability));
-    sp.d_vm = sp.d_vc * params.vc_weight;
-    uint skip = NO_LIGHT;
-    uint medium = l.medium;
-    uint segment = 0u;
-    uint rays = 0u;
-    uint diffuse = 0u;
-    bool specular_first = false;
-    uint slot0 = path * params.vertex_slots;
-    for (uint k = 1u; k <= params.vertex_slots; k++) {
-        vec3 unused = vec3(0.0);
-        NextVertex nv = next_vertex(o, d, medium, skip, seq, RNG_VCM_LIGHT_MEDIUM_DOMAIN, segment, sp.throughput, unused, rays);
-        if (!nv.found || (nv.prim == NO_LIGHT && !nv.scattered) || sp.throughput == vec3(0.0)) break;
-        uint prim = nv.prim;
-        o = nv.o;
-        medium = nv.medium;
-        float t = nv.t;
-        vec3 wo = -d;
-        Hit h;
-        Bsdf b;
-        vertex_at(nv.scattered, prim, medium, o, d, t, h, b);
-        uint flags = bsdf_flags(b);
-        if (flags == 0u) break;
-        sub_arrive(sp, nv.dist, abs_cos(b, wo), k > 1u || finite);
-        if ((flags & BSDF_ESTIMATE) != 0u) {
-            uint slot = slot0 + k - 1u;
-            vertices[slot].origin = float[3](o.x, o.y, o.z);
-            vertices[slot].hit = nv.scattered ? medium : prim;
-            vertices[slot].direction = float[3](d.x, d.y, d.z);
-            vertices[slot].t = t;
-            vertices[slot].throughput = float[3](sp.throughput.x, sp.throughput.y, sp.throughput.z);
-            vertices[slot].path_length = k;
-            vertices[slot].d_vcm = sp.d_vcm;
-            vertices[slot].d_vc = sp.d_vc;
-            vertices[slot].d_vm = sp.d_vm;
-            vertices[slot].flags = diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (specular_first ? VERTEX_SPECULAR_FIRST : 0u);
-            path_ends[path] = k;
-            if (!nv.scattered) {
-                light_materials[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
-                light_materials[slot].kind = b.kind;
-                light_materials[slot].color1 = float[3](b.color1.x, b.color1.y, b.color1.z);
-                light_materials[slot].ior = b.ior;
-                light_materials[slot].ns = float[3](b.ns.x, b.ns.y, b.ns.z);
-                light_materials[slot].alpha_u = b.alpha.x;
-                light_materials[slot].alpha_v = b.alpha.y;
-            }
-            if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u && !nv.scattered) {
-                uint at = atomicAdd(point_count, 1u);
-                points[at].position = float[3](h.p.x, h.p.y, h.p.z);
-                points[at].flux_rg = path;
-                points[at].flux_b_dir = k - 1u;
-            }
-            if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
-                // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
-                vec2 lens_u = rand2(path, sample_index, frame.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
-                uvec3 n = uvec3(path, sample_index, RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1u));
-                connect_to_camera(h, b, wo, sp, nv.scattered ? NO_LIGHT : ray_skip(prim), prim, medium, lens_u, n,
-                                  path_layer(false, diffuse + 1u, specular_first));
-            }
-        } else {
-            vertices[slot0 + k - 1u].path_length = 0u;
+    float emission = emission_pdf(l, -lp.d, cos_l);
+    if (emission <= 0.0 || power == vec3(0.0)) return false;
+    lp.finite = l.kind != LIGHT_DISTANT && l.kind != LIGHT_ENVIRONMENT;
+    lp.sp.throughput = power / l.pick_probability;
+    lp.sp.d_vcm = mis(direct_pdf / emission);
+    lp.sp.d_vc = light_is_delta(l) ? 0.0 : mis((lp.finite ? cos_l : 1.0) / (emission * l.pick_probability));
+    lp.sp.d_vm = lp.sp.d_vc * params.vc_weight;
+    lp.k = 1u;
+    lp.skip = NO_LIGHT;
+    lp.medium = l.medium;
+    lp.segment = 0u;
+    lp.rays = 0u;
+    lp.diffuse = 0u;
+    lp.specular_first = false;
+    lp.slot0 = path * params.vertex_slots;
+    return true;
+}
+
+// One vertex of the light sub-path: returns false when the path ends there.
+bool light_path_step(inout LightPath lp) {
+    uint sample_index = params.sample_index;
+    uint dim0 = RNG_VCM_LIGHT_DOMAIN;
+    vec3 unused = vec3(0.0);
+    NextVertex nv = next_vertex(lp.o, lp.d, lp.medium, lp.skip, lp.seq, RNG_VCM_LIGHT_MEDIUM_DOMAIN, lp.segment, lp.sp.throughput, unused, lp.rays);
+    if (!nv.found || (nv.prim == NO_LIGHT && !nv.scattered) || lp.sp.throughput == vec3(0.0)) return false;
+    uint prim = nv.prim;
+    lp.o = nv.o;
+    lp.medium = nv.medium;
+    float t = nv.t;
+    vec3 wo = -lp.d;
+    Hit h;
+    Bsdf b;
+    vertex_at(nv.scattered, prim, lp.medium, lp.o, lp.d, t, h, b);
+    uint flags = bsdf_flags(b);
+    if (flags == 0u) return false;
+    sub_arrive(lp.sp, nv.dist, abs_cos(b, wo), lp.k > 1u || lp.finite);
+    if ((flags & BSDF_ESTIMATE) != 0u) {
+        uint slot = lp.slot0 + lp.k - 1u;
+        vertices[slot].origin = float[3](lp.o.x, lp.o.y, lp.o.z);
+        vertices[slot].hit = nv.scattered ? lp.medium : prim;
+        vertices[slot].direction = float[3](lp.d.x, lp.d.y, lp.d.z);
+        vertices[slot].t = t;
+        vertices[slot].throughput = float[3](lp.sp.throughput.x, lp.sp.throughput.y, lp.sp.throughput.z);
+        vertices[slot].path_length = lp.k;
+        vertices[slot].d_vcm = lp.sp.d_vcm;
+        vertices[slot].d_vc = lp.sp.d_vc;
+        vertices[slot].d_vm = lp.sp.d_vm;
+        vertices[slot].flags = lp.diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (lp.specular_first ? VERTEX_SPECULAR_FIRST : 0u);
+        path_ends[lp.path] = lp.k;
+        if (!nv.scattered) {
+            light_materials[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
+            light_materials[slot].kind = b.kind;
+            light_materials[slot].color1 = float[3](b.color1.x, b.color1.y, b.color1.z);
+            light_materials[slot].ior = b.ior;
+            light_materials[slot].ns = float[3](b.ns.x, b.ns.y, b.ns.z);
+            light_materials[slot].alpha_u = b.alpha.x;
+            light_materials[slot].alpha_v = b.alpha.y;
         }
-        if (k >= params.vertex_slots) break;
-        uint dim = dim0 + k * RNG_DIMS_PER_BOUNCE;
-        float q = bsdf_path_probability(b, wo);
-        vec4 u = bsdf_numbers(path, sample_index, seq, frame.seed, dim + RNG_FRESNEL);
-        bool delta = u.w < q;
-        BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
-        if (smp.flags == 0u) break;
-        float cos_out = abs_cos(b, smp.wi);
-        float adjoint = shading_adjoint(b, wo, smp.wi);
-        vec3 factor;
-        if ((smp.flags & BSDF_SPECULAR) != 0u) {
-            sub_scatter(sp, params, true, cos_out, 0.0, 0.0, false);
-            specular_first = specular_first || diffuse == 0u;
-            factor = smp.weight * (adjoint / q);
-        } else {
-            vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
-            if (pdfs.x <= 0.0) break;
-            sub_scatter(sp, params, false, cos_out, pdfs.x, pdfs.y, mergeable(b));
-            diffuse++;
-            factor = bsdf_eval(b, smp.wi, wo) * (cos_out * adjoint / pdfs.x);
+        if ((params.techniques & (VCM_MERGE | VCM_MERGE_ONLY)) != 0u && !nv.scattered) {
+            uint at = atomicAdd(point_count, 1u);
+            points[at].position = float[3](h.p.x, h.p.y, h.p.z);
+            points[at].flux_rg = lp.path;
+            points[at].flux_b_dir = lp.k - 1u;
         }
-        sp.throughput *= factor;
-        if (k >= BPT_ROULETTE_DEPTH) {
-            float survive = min(max(factor.x, max(factor.y, factor.z)), PT_ROULETTE_MAX);
-            if (rand1(path, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) break;
-            sp.throughput /= survive;
+        if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
+            // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
+            vec2 lens_u = rand2(lp.path, sample_index, frame.seed, dim0 + lp.k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
+            uvec3 n = uvec3(lp.path, sample_index, RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + lp.k * (MEDIUM_CROSSINGS + 1u));
+            connect_to_camera(h, b, wo, lp.sp, nv.scattered ? NO_LIGHT : ray_skip(prim), prim, lp.medium, lens_u, n,
+                              path_layer(false, lp.diffuse + 1u, lp.specular_first));
         }
-        if (sp.throughput == vec3(0.0)) break;
-        if (nv.scattered) {
-            skip = NO_LIGHT;
-        } else {
-            skip = ray_skip(prim);
-#ifdef VARIANT_MEDIA
-            if ((smp.flags & BSDF_TRANSMISSION) != 0u) medium = medium_after(prim, h.ng, smp.wi, medium);
-#endif
-        }
-        o = offset_origin(h, wo, smp.flags);
-        d = smp.wi;
+    } else {
+        vertices[lp.slot0 + lp.k - 1u].path_length = 0u;
     }
+    if (lp.k >= params.vertex_slots) return false;
+    uint dim = dim0 + lp.k * RNG_DIMS_PER_BOUNCE;
+    float q = bsdf_path_probability(b, wo);
+    vec4 u = bsdf_numbers(lp.path, sample_index, lp.seq, frame.seed, dim + RNG_FRESNEL);
+    bool delta = u.w < q;
+    BsdfSample smp = bsdf_sample(b, wo, u.xyz, delta ? LOBES_PATH : LOBES_ESTIMATE);
+    if (smp.flags == 0u) return false;
+    float cos_out = abs_cos(b, smp.wi);
+    float adjoint = shading_adjoint(b, wo, smp.wi);
+    vec3 factor;
+    if ((smp.flags & BSDF_SPECULAR) != 0u) {
+        sub_scatter(lp.sp, params, true, cos_out, 0.0, 0.0, false);
+        lp.specular_first = lp.specular_first || lp.diffuse == 0u;
+        factor = smp.weight * (adjoint / q);
+    } else {
+        vec2 pdfs = lobe_pdfs(b, wo, smp.wi);
+        if (pdfs.x <= 0.0) return false;
+        sub_scatter(lp.sp, params, false, cos_out, pdfs.x, pdfs.y, mergeable(b));
+        lp.diffuse++;
+        factor = bsdf_eval(b, smp.wi, wo) * (cos_out * adjoint / pdfs.x);
+    }
+    lp.sp.throughput *= factor;
+    if (lp.k >= BPT_ROULETTE_DEPTH) {
+        float survive = min(max(factor.x, max(factor.y, factor.z)), PT_ROULETTE_MAX);
+        if (rand1(lp.path, sample_index, frame.seed, dim + RNG_ROULETTE) >= survive) return false;
+        lp.sp.throughput /= survive;
+    }
+    if (lp.sp.throughput == vec3(0.0)) return false;
+    if (nv.scattered) {
+        lp.skip = NO_LIGHT;
+    } else {
+        lp.skip = ray_skip(prim);
+#ifdef VARIANT_MEDIA
+        if ((smp.flags & BSDF_TRANSMISSION) != 0u) lp.medium = medium_after(prim, h.ng, smp.wi, lp.medium);
+#endif
+    }
+    lp.o = offset_origin(h, wo, smp.flags);
+    lp.d = smp.wi;
+    lp.k++;
+    return lp.k <= params.vertex_slots;
+}
+
+// Each invocation traces light paths i, i + n, i + 2n, ... of the dispatch (n invocations,
+// params.paths_per_invocation paths each), a vertex per loop turn, starting the next path as soon
+// as one ends: on lavapipe a SIMD group of 8 lanes runs a loop turn while any lane goes on, and a
+// run of paths evens their lengths out (render_vcm does the same with camera paths).
+void main() {
+    uint per = max(params.paths_per_invocation, 1u);
+    uint lanes = (params.path_count + per - 1u) / per;
+    uint i = GLOBAL_INDEX;
+    if (i >= lanes) return;
+    uint jobs = (params.path_count - i + lanes - 1u) / lanes;  // paths i + j lanes below path_count
+    LightPath lp;
+    bool alive = light_path_start(params.path_begin + i, lp);
+    uint job = 0u;
+    // Bounded: each turn is a vertex of one of `jobs` paths of at most vertex_slots vertices.
+    for (;;) {
+        if (alive && light_path_step(lp)) continue;
+        job++;
+        if (job >= jobs) break;
+        alive = light_path_start(params.path_begin + i + job * lanes, lp);
+    }
+    // Ended by the driver's loop limit (lavapipe's 65535 iterations per invocation) with paths
+    // left: say so, and the host renders the sample again a path per invocation.
+    if (job < jobs) atomicAdd(broken_off, 1u);
 }

@@ -798,14 +798,14 @@ fn light_tracing_reaches_orthographic_and_latlong_cameras() {
 /// invocation runs it, so the images are equal bit for bit, with counts that divide the band's
 /// pixels and counts that do not.
 #[test]
-fn camera_paths_per_invocation_leave_the_image_alone() {
+fn paths_per_invocation_leave_the_image_alone() {
     use photonix::render::gpu::GpuRenderer;
     let ctx = common::gpu();
     for (name, integrator) in [("cornell-glossy", Integrator::Vcm), ("fog", Integrator::Bpt)] {
         let buffers = common::buffers(&shipped(name, integrator), 30, 23);
         let render = |per: u32| {
             let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
-            renderer.set_camera_paths_per_invocation(per);
+            renderer.set_paths_per_invocation(per);
             renderer.render_pass(2, 0, &mut |_, _| {}).unwrap()
         };
         let one = render(1);
@@ -833,18 +833,18 @@ fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
         scene.render.max_depth = depth;
         let buffers = common::buffers(&scene, 8, 6);
         let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
-        renderer.set_camera_paths_per_invocation(64);
+        renderer.set_paths_per_invocation(64);
         match renderer.render_pass(1, 0, &mut |_, _| {}) {
             Ok(gpu) => {
                 let cpu = cpu(&buffers, 1);
                 let error = rel_mse(&gpu.image, &cpu.image);
                 println!(
                     "max_depth {depth}: rendered {} paths per invocation, GPU vs CPU relMSE {error:.3e}",
-                    renderer.camera_paths_per_invocation()
+                    renderer.paths_per_invocation()
                 );
                 assert!(error < 1e-4, "max_depth {depth}: relMSE {error:.3e} against the CPU twin");
                 assert!(!lavapipe || depth == 2, "lavapipe rendered paths it broke off");
-                let per = renderer.camera_paths_per_invocation();
+                let per = renderer.paths_per_invocation();
                 assert_eq!(per, if lavapipe { 1 } else { 64 }, "no fallback, or one without cause");
             }
             Err(e) => {

@@ -340,8 +340,8 @@ gpu_structs! {
         /// First light path of this dispatch and how many it traces.
         pub path_begin: u32,
         pub path_count: u32,
-        /// Camera paths each invocation of render_vcm renders one after another (1 on real
-        /// GPUs; see render/gpu/bidirectional.rs). The CPU twin ignores it.
+        /// Light or camera paths each invocation of vcm_light and render_vcm traces one after
+        /// another (1 on real GPUs; see render/gpu/bidirectional.rs). The CPU twin ignores it.
         pub paths_per_invocation: u32,
         pub _pad: u32,
     }

@@ -20,11 +20,11 @@ use crate::render::{stop_requested, SceneBuffers};
 const PATHS_PER_DISPATCH: u32 = 1 << 16;
 /// Bytes of light-tracing splats per pixel: per layer, three 64-bit fixed-point channels.
 const SPLAT_BYTES_PER_PIXEL: u64 = LAYER_COUNT as u64 * 3 * 8;
-/// Camera paths per render_vcm invocation on CPU devices (lavapipe), one after another: its SIMD
-/// groups of 8 lanes run a loop turn while any lane goes on, and a run of paths per lane evens
-/// out their lengths (BENCHMARKS.md, "Camera paths in runs"). Real GPUs take one each: they
-/// want the invocations.
-const CPU_PATHS_PER_INVOCATION: u32 = 8;
+/// Light and camera paths per invocation of vcm_light and render_vcm on CPU devices (lavapipe),
+/// one after another: its SIMD groups of 8 lanes run a loop turn while any lane goes on, and a
+/// run of paths per lane evens out their lengths (BENCHMARKS.md, "Paths in runs"). Real GPUs
+/// take one each: they want the invocations.
+const CPU_PATHS_PER_INVOCATION: u32 = 16;
 
 /// The device buffers of a bidirectional render, kept from pass to pass while the frame's sizes
 /// stay: allocating and clearing them each pass cost more than the pass's kernels on a real GPU.
@@ -43,8 +43,8 @@ pub(super) struct BidirectionalBuffers {
     broken_off: Buffer,
 }
 
-/// Camera paths per render_vcm invocation on this device: `CPU_PATHS_PER_INVOCATION` on CPU
-/// devices, 1 on GPUs.
+/// Paths per invocation of vcm_light and render_vcm on this device: `CPU_PATHS_PER_INVOCATION`
+/// on CPU devices, 1 on GPUs.
 pub(super) fn default_paths_per_invocation(ctx: &GpuContext) -> u32 {
     if ctx.info().device_type == "CPU" {
         CPU_PATHS_PER_INVOCATION
@@ -76,7 +76,7 @@ impl BidirectionalBuffers {
 
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
 /// the device into one accumulation, read back once: the output is their mean. The buffers are
-/// those in `kept` (made or remade there when the frame's sizes changed); `per` camera paths to
+/// those in `kept` (made or remade there when the frame's sizes changed); `per` light and camera paths to
 /// an invocation, lowered to 1 for good when the driver's loop limit breaks some off.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
@@ -113,10 +113,10 @@ pub(super) fn render_pass_bidirectional(
     }
     let b = kept.as_ref().expect("made just above");
     loop {
-        let (output, broken_off) = render_samples(ctx, kernels, scene, buffers, b, *per, spp, first, passes, progress)?;
-        if broken_off == 0 {
-            return Ok(output);
-        }
+        let broken_off = match render_samples(ctx, kernels, scene, buffers, b, *per, spp, first, passes, progress)? {
+            Samples::Rendered(output) => return Ok(*output),
+            Samples::BrokenOff(n) => n,
+        };
         // The passes are deterministic: rendered again a path per invocation, they are what
         // the first try would have been without the limit.
         if *per > 1 {
@@ -124,15 +124,22 @@ pub(super) fn render_pass_bidirectional(
             continue;
         }
         return Err(GpuError::Unsupported(format!(
-            "the device broke off {broken_off} camera paths at its loop limit (lavapipe stops an invocation after \
+            "the device broke off {broken_off} runs of light or camera paths at its loop limit (lavapipe stops an invocation after \
              65535 loop iterations): their rays cross too many overlapping objects or instances, and the image \
              would miss their light; render with --backend cpu, or lower max_depth"
         )));
     }
 }
 
-/// The samples of `render_pass_bidirectional` with its buffers `b`; also returns how many
-/// render_vcm invocations the driver broke off (their pixels are missing from the output).
+/// What `render_samples` made: the passes, or how many invocations of a stage the driver broke
+/// off (the stage's results are then incomplete, and the passes were given up).
+enum Samples {
+    Rendered(Box<RenderOutput>),
+    BrokenOff(u32),
+}
+
+/// The samples of `render_pass_bidirectional` with its buffers `b`, `per` paths to an invocation
+/// of either stage.
 #[allow(clippy::too_many_arguments)]
 fn render_samples(
     ctx: &GpuContext,
@@ -145,7 +152,7 @@ fn render_samples(
     first: u32,
     passes: u32,
     progress: &mut dyn FnMut(u64, u64),
-) -> Result<(RenderOutput, u32), GpuError> {
+) -> Result<Samples, GpuError> {
     let f = buffers.frame;
     let pixels = f.width as u64 * f.height as u64;
     let light_kernel = kernels.vcm_light(ctx)?;
@@ -188,14 +195,19 @@ fn render_samples(
                     light_kernel,
                     &scene.bindings(&[&b.vertices, &b.splats, &points, &b.counter, &b.path_ends, &b.materials]),
                     bytemuck::bytes_of(&params),
-                    groups(params.path_count),
+                    groups(params.path_count.div_ceil(per)),
                 )
             })?;
             begin += params.path_count;
         }
         params.path_begin = 0;
         params.path_count = params.light_paths;
-        let count = ctx.download::<u32>(&b.counter)?[0];
+        let [count, light_broken_off] = ctx.download::<u32>(&b.counter)?[..2] else {
+            unreachable!("the counter holds four words")
+        };
+        if light_broken_off > 0 {
+            return Ok(Samples::BrokenOff(light_broken_off));
+        }
         let grid = vertex_grid(&params, count);
         let Some(map) = build_map(ctx, kernels, points, grid, "vcm")? else {
             complete = false;
@@ -249,6 +261,10 @@ fn render_samples(
         ("download".to_string(), t.elapsed()),
     ];
     let stats = RenderStats::device(ctx, stages, rays, spp * passes);
-    let broken_off = ctx.download::<u32>(&b.broken_off)?[0];
-    Ok((RenderOutput { image: layers.combined(), layers, stats, complete, passes }, broken_off))
+    match ctx.download::<u32>(&b.broken_off)?[0] {
+        0 => {
+            Ok(Samples::Rendered(Box::new(RenderOutput { image: layers.combined(), layers, stats, complete, passes })))
+        }
+        broken_off => Ok(Samples::BrokenOff(broken_off)),
+    }
 }

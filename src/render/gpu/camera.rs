@@ -34,8 +34,9 @@ pub struct GpuRenderer<'a> {
     accumulation: Option<(Buffer, u32)>,
     /// The bidirectional integrators' buffers, likewise.
     bidirectional: Option<super::bidirectional::BidirectionalBuffers>,
-    /// Camera paths per render_vcm invocation (`set_camera_paths_per_invocation`).
-    camera_paths_per_invocation: u32,
+    /// Light and camera paths per invocation of vcm_light and render_vcm
+    /// (`set_paths_per_invocation`).
+    paths_per_invocation: u32,
     /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
     photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
@@ -74,7 +75,7 @@ impl<'a> GpuRenderer<'a> {
             scene,
             accumulation: None,
             bidirectional: None,
-            camera_paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
+            paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
             last_written: Vec::new(),
@@ -99,17 +100,17 @@ impl<'a> GpuRenderer<'a> {
         std::iter::once(&self.kernels).chain(self.spare_kernels.iter().rev()).map(GpuKernels::variant).collect()
     }
 
-    /// How many camera paths each invocation of the bidirectional integrators' camera kernel
-    /// renders one after another (at least 1): by default 8 on CPU devices such as lavapipe,
+    /// How many paths each invocation of the bidirectional integrators' light and camera kernels
+    /// traces one after another (at least 1): by default 16 on CPU devices such as lavapipe,
     /// whose SIMD lanes this keeps busy, and 1 on GPUs. The images are the same whatever the
     /// number; a render that runs into lavapipe's loop limit falls back to 1.
-    pub fn set_camera_paths_per_invocation(&mut self, paths: u32) {
-        self.camera_paths_per_invocation = paths.max(1);
+    pub fn set_paths_per_invocation(&mut self, paths: u32) {
+        self.paths_per_invocation = paths.max(1);
     }
 
-    /// Camera paths per invocation of the bidirectional integrators' camera kernel now.
-    pub fn camera_paths_per_invocation(&self) -> u32 {
-        self.camera_paths_per_invocation
+    /// Paths per invocation of the bidirectional integrators' light and camera kernels now.
+    pub fn paths_per_invocation(&self) -> u32 {
+        self.paths_per_invocation
     }
 
     /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
@@ -180,7 +181,7 @@ impl<'a> GpuRenderer<'a> {
         let passes = passes.max(1);
         if self.kernels.variant().bidirectional {
             let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
-            let (kept, per) = (&mut self.bidirectional, &mut self.camera_paths_per_invocation);
+            let (kept, per) = (&mut self.bidirectional, &mut self.paths_per_invocation);
             return super::bidirectional::render_pass_bidirectional(
                 ctx, kernels, scene, buffers, kept, per, spp, first, passes, progress,
             );
