@@ -793,10 +793,10 @@ fn light_tracing_reaches_orthographic_and_latlong_cameras() {
     }
 }
 
-/// render_vcm renders several camera paths per invocation on lavapipe (one after another, to keep
-/// its SIMD lanes busy) and one on GPUs: each pixel's path is the same computation whichever
-/// invocation runs it, so the images are equal bit for bit, with counts that divide the band's
-/// pixels and counts that do not.
+/// vcm_light and render_vcm trace several light and camera paths per invocation on lavapipe (one
+/// after another, to keep its SIMD lanes busy) and one on GPUs: each path is the same computation
+/// whichever invocation runs it, so the images are equal bit for bit, with counts that divide the
+/// paths and pixels and counts that do not.
 #[test]
 fn paths_per_invocation_leave_the_image_alone() {
     use photonix::render::gpu::GpuRenderer;
@@ -819,9 +819,9 @@ fn paths_per_invocation_leave_the_image_alone() {
 
 /// Camera paths through 1500 overlapping frames run past lavapipe's 65535 loop iterations per
 /// invocation, sooner with many paths per invocation: the renderer then renders the samples again
-/// a path per invocation (paths of 2 vertices: 64 to an invocation break off, 1 does not), or
-/// refuses the pass with a message when even that is broken off (12 vertices). Never a partial
-/// image. A real GPU has no such limit and renders both.
+/// with fewer paths per invocation (paths of 2 vertices: 64 to an invocation break off, 1 does
+/// not), or refuses the pass with a message when even one is broken off (12 vertices). Never a
+/// partial image. A real GPU has no such limit and renders both.
 #[test]
 fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
     use photonix::render::gpu::GpuRenderer;
@@ -845,7 +845,7 @@ fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
                 assert!(error < 1e-4, "max_depth {depth}: relMSE {error:.3e} against the CPU twin");
                 assert!(!lavapipe || depth == 2, "lavapipe rendered paths it broke off");
                 let per = renderer.paths_per_invocation();
-                assert_eq!(per, if lavapipe { 1 } else { 64 }, "no fallback, or one without cause");
+                assert!(if lavapipe { per < 64 } else { per == 64 }, "{per}: no fallback, or one without cause");
             }
             Err(e) => {
                 let e = e.to_string();

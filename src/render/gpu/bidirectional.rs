@@ -24,7 +24,7 @@ const SPLAT_BYTES_PER_PIXEL: u64 = LAYER_COUNT as u64 * 3 * 8;
 /// one after another: its SIMD groups of 8 lanes run a loop turn while any lane goes on, and a
 /// run of paths per lane evens out their lengths (BENCHMARKS.md, "Paths in runs"). Real GPUs
 /// take one each: they want the invocations.
-const CPU_PATHS_PER_INVOCATION: u32 = 16;
+const CPU_PATHS_PER_INVOCATION: u32 = 32;
 
 /// The device buffers of a bidirectional render, kept from pass to pass while the frame's sizes
 /// stay: allocating and clearing them each pass cost more than the pass's kernels on a real GPU.
@@ -76,8 +76,9 @@ impl BidirectionalBuffers {
 
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
 /// the device into one accumulation, read back once: the output is their mean. The buffers are
-/// those in `kept` (made or remade there when the frame's sizes changed); `per` light and camera paths to
-/// an invocation, lowered to 1 for good when the driver's loop limit breaks some off.
+/// those in `kept` (made or remade there when the frame's sizes changed); `per` light and camera
+/// paths to an invocation, lowered for good (a quarter at a time, down to 1) when the driver's
+/// loop limit breaks some off.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
     ctx: &GpuContext,
@@ -117,10 +118,10 @@ pub(super) fn render_pass_bidirectional(
             Samples::Rendered(output) => return Ok(*output),
             Samples::BrokenOff(n) => n,
         };
-        // The passes are deterministic: rendered again a path per invocation, they are what
-        // the first try would have been without the limit.
+        // The passes are deterministic: rendered again with fewer paths per invocation, they
+        // are what the first try would have been without the limit.
         if *per > 1 {
-            *per = 1;
+            *per = (*per / 4).max(1);
             continue;
         }
         return Err(GpuError::Unsupported(format!(

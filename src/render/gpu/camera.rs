@@ -101,9 +101,9 @@ impl<'a> GpuRenderer<'a> {
     }
 
     /// How many paths each invocation of the bidirectional integrators' light and camera kernels
-    /// traces one after another (at least 1): by default 16 on CPU devices such as lavapipe,
+    /// traces one after another (at least 1): by default 32 on CPU devices such as lavapipe,
     /// whose SIMD lanes this keeps busy, and 1 on GPUs. The images are the same whatever the
-    /// number; a render that runs into lavapipe's loop limit falls back to 1.
+    /// number; a render that runs into lavapipe's loop limit lowers it (a quarter at a time).
     pub fn set_paths_per_invocation(&mut self, paths: u32) {
         self.paths_per_invocation = paths.max(1);
     }
