@@ -27,6 +27,14 @@ for binary in "$@"; do
     xz -T2 -6 -c "$tmp" > "$out/bin/$name.xz"
     rm -f "$tmp"
 done
+# The bidirectional twins' tests (GPU = CPU, runs of paths per invocation), when built
+# (`cargo test --release --test integrators --no-run`): run.sh runs them on the device's GPU.
+# They add about 8 MB: with them, pack one Photonix binary, or the call may pass its 64 MiB.
+rm -f "$out/integrators.xz"
+tests=$(ls -t target/release/deps/integrators-* 2>/dev/null | grep -v '\.d$' | head -1 || true)
+if [ -n "$tests" ]; then
+    tmp=$(mktemp) && cp "$tests" "$tmp" && strip "$tmp" && xz -T2 -6 -c "$tmp" > "$out/integrators.xz" && rm -f "$tmp"
+fi
 rm -rf "$out/reference" && cp -r ../shared/reference "$out/reference" && chmod -R u+w "$out/reference"
 if [ ! -f "$out/mitsuba.tar.xz" ]; then
     wheels=$(mktemp -d) dest=$(pwd)/$out

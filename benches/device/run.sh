@@ -4,7 +4,8 @@
 #   1. benches/gpu_check.sh with the newest binary (its default target, relMSE 0.001; cap 30 s);
 #   2. cornell-glossy and cornell-box at 256 passes with each binary (stage times, GPU time);
 #   3. benches/time_to_quality.py with every binary against Mitsuba's cuda_ad_rgb (2 s and 10 s
-#      budgets, the four shared scenes).
+#      budgets, the four shared scenes);
+#   4. when packed, the bidirectional twins' tests (tests/integrators.rs) on the device's GPU.
 # About 4 minutes for two binaries on an H200; outputs under $OUT (logs, ttq.json, table.md).
 set -u
 export PYTHONUNBUFFERED=1 TIMEFORMAT='wall %R s, cpu %U+%S s'
@@ -45,3 +46,8 @@ $py -c "import mitsuba as mi; mi.set_variant('cuda_ad_rgb')" 2>/dev/null || vari
 timeout 300 $py benches/time_to_quality.py "${args[@]}" --backends gpu --budgets 2,10 \
     --scenes cornell-box,cornell-caustics,cornell-glossy,cornell-fog --variant $variant \
     --spp 64,256,1024,4096 --floor-spp 2048 --json "$out/ttq.json" 2>&1 | tee "$out/ttq.log"
+if [ -f .device/integrators.xz ]; then
+    xz -d -c .device/integrators.xz > /tmp/photonix-bin/integrators && chmod +x /tmp/photonix-bin/integrators
+    timeout 240 /tmp/photonix-bin/integrators --test-threads 4 bpt_and_vcm_gpu_match_cpu paths_per_invocation \
+        loop_limit 2>&1 | tail -15 | tee "$out/tests.log"
+fi
