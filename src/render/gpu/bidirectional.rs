@@ -74,17 +74,22 @@ impl BidirectionalBuffers {
     }
 }
 
+/// What a bidirectional render runs on: the device, the kernels, the scene there and here.
+#[derive(Clone, Copy)]
+pub(super) struct On<'a> {
+    pub ctx: &'a GpuContext,
+    pub kernels: &'a GpuKernels,
+    pub scene: &'a DeviceScene,
+    pub buffers: &'a SceneBuffers,
+}
+
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
 /// the device into one accumulation, read back once: the output is their mean. The buffers are
 /// those in `kept` (made or remade there when the frame's sizes changed); `per` light and camera
 /// paths to an invocation, lowered for good (a quarter at a time, down to 1) when the driver's
 /// loop limit breaks some off.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn render_pass_bidirectional(
-    ctx: &GpuContext,
-    kernels: &GpuKernels,
-    scene: &DeviceScene,
-    buffers: &SceneBuffers,
+    on: On,
     kept: &mut Option<BidirectionalBuffers>,
     per: &mut u32,
     spp: u32,
@@ -92,6 +97,7 @@ pub(super) fn render_pass_bidirectional(
     passes: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<RenderOutput, GpuError> {
+    let On { ctx, buffers, .. } = on;
     let f = buffers.frame;
     let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
     let pixels = f.width as u64 * f.height as u64;
@@ -114,7 +120,7 @@ pub(super) fn render_pass_bidirectional(
     }
     let b = kept.as_ref().expect("made just above");
     loop {
-        let broken_off = match render_samples(ctx, kernels, scene, buffers, b, *per, spp, first, passes, progress)? {
+        let broken_off = match render_samples(on, b, *per, spp, first, passes, progress)? {
             Samples::Rendered(output) => return Ok(*output),
             Samples::BrokenOff(n) => n,
         };
@@ -141,12 +147,8 @@ enum Samples {
 
 /// The samples of `render_pass_bidirectional` with its buffers `b`, `per` paths to an invocation
 /// of either stage.
-#[allow(clippy::too_many_arguments)]
 fn render_samples(
-    ctx: &GpuContext,
-    kernels: &GpuKernels,
-    scene: &DeviceScene,
-    buffers: &SceneBuffers,
+    on: On,
     b: &BidirectionalBuffers,
     per: u32,
     spp: u32,
@@ -154,6 +156,7 @@ fn render_samples(
     passes: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Samples, GpuError> {
+    let On { ctx, kernels, scene, buffers } = on;
     let f = buffers.frame;
     let pixels = f.width as u64 * f.height as u64;
     let light_kernel = kernels.vcm_light(ctx)?;

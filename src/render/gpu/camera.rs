@@ -180,11 +180,10 @@ impl<'a> GpuRenderer<'a> {
         let ctx = self.ctx;
         let passes = passes.max(1);
         if self.kernels.variant().bidirectional {
-            let (kernels, scene, buffers) = (&self.kernels, &self.scene, &self.buffers);
+            let on =
+                super::bidirectional::On { ctx, kernels: &self.kernels, scene: &self.scene, buffers: &self.buffers };
             let (kept, per) = (&mut self.bidirectional, &mut self.paths_per_invocation);
-            return super::bidirectional::render_pass_bidirectional(
-                ctx, kernels, scene, buffers, kept, per, spp, first, passes, progress,
-            );
+            return super::bidirectional::render_pass_bidirectional(on, kept, per, spp, first, passes, progress);
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();
