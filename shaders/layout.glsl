@@ -186,7 +186,7 @@ struct VcmParams {
     uint path_begin;
     uint path_count;
     uint paths_per_invocation;
-    uint _pad;
+    uint connections;
 };
 
 struct LightMaterial {

@@ -50,7 +50,8 @@ layout(binding = SCENE_BINDINGS + 3) uniform usamplerBuffer vertex_texels;
 layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer point_texels;
 layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer start_words;
 layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
-layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_end_words;
+// Each light path's count of vertices, in its first slots (vcm_light.comp), four to a texel.
+layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_count_texels;
 layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer light_material_texels;
 layout(std430, binding = SCENE_BINDINGS + 9) buffer BrokenOff { uint broken_off; };
 layout(push_constant) uniform Push { DispatchRange range; };
@@ -154,9 +155,6 @@ struct CameraPath {
     vec3 d;
     SubPath sp;
     uint m;  // the vertex the next turn reaches (1: the camera ray's)
-    uint path;
-    uint slot0;
-    uint path_end;
     uint skip;
     bool first_specular;
     uint diffuse;
@@ -181,11 +179,6 @@ CameraPath camera_path_start(uint px, uint py) {
     c.sp.d_vc = 0.0;
     c.sp.d_vm = 0.0;
     c.m = 1u;
-    c.path = c.stream % params.light_paths;
-    c.slot0 = c.path * params.vertex_slots;
-    // The light path's slots up to its last vertex: lavapipe runs a loop's body, under masks,
-    // as long as any lane goes on, so the empty slots beyond the ends cost what full ones do.
-    c.path_end = texelFetch(path_end_words, int(c.path)).x;
     c.skip = NO_LIGHT;
     c.first_specular = false;
     c.diffuse = 0u;
@@ -273,17 +266,31 @@ bool camera_path_step(inout CameraPath c) {
         if (connect) {
             vec3 v = light_sampling(h, b, wo, c.sp, c.skip, prim, c.medium, stream, dim, uvec3(stream, sample_index, connection0), vm, c.rays);
             c.terms[path_layer(c.first_specular, cam_diffuse, false)] += c.sp.throughput * v;
-            // Slot k holds the light vertex k + 1 scattering vertices from the light, or
-            // nothing (a delta vertex, or the path ended): skip the gaps.
-            for (uint k = 0u; k < c.path_end; k++) {
-                if (k + 1u + m > frame.max_depth) break;
-                LightVertex lv = fetch_light_vertex(vertex_texels, c.slot0 + k);
-                if (lv.path_length == 0u) continue;
+            // Light vertices drawn by block of light paths; contract in vcm.rs, pick_light_vertex.
+            uint picks = min(params.connections, 2u);
+            uint blocks = (params.light_paths + VCM_PICK_BLOCK - 1u) / VCM_PICK_BLOCK;
+            vec4 pick = rand4(stream, sample_index, frame.seed, dim + RNG_CONNECT_PICK);
+            for (uint k = 0u; k < picks; k++) {
+                uint block = min(uint(pick[2u * k] * float(blocks)), blocks - 1u);
+                // VCM_PICK_BLOCK paths' counts: one texel.
+                uvec4 counts = texelFetch(path_count_texels, int(block));
+                uint total = counts.x + counts.y + counts.z + counts.w;
+                if (total == 0u) continue;
+                uint j = min(uint(pick[2u * k + 1u] * float(total)), total - 1u);
+                uint path = block * VCM_PICK_BLOCK;
+                for (uint q = 0u; q < VCM_PICK_BLOCK - 1u && j >= counts[q]; q++) {
+                    j -= counts[q];
+                    path++;
+                }
+                uint slot = path * params.vertex_slots + j;
+                float share = float(total) * float(blocks) / float(params.light_paths) / float(picks);
+                LightVertex lv = fetch_light_vertex(vertex_texels, slot);
+                if (lv.path_length + m > frame.max_depth) continue;
                 uvec3 n = uvec3(stream, sample_index, connection0 + (k + 1u) * (MEDIUM_CROSSINGS + 1u));
-                vec3 joined = connect_vertices(h, b, wo, c.sp, c.skip, prim, c.medium, lv, c.slot0 + k, n, vm, c.rays);
+                vec3 joined = connect_vertices(h, b, wo, c.sp, c.skip, prim, c.medium, lv, slot, n, vm, c.rays);
                 uint cl = path_layer(c.first_specular, cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1u,
                                      (lv.flags & VERTEX_SPECULAR_FIRST) != 0u);
-                c.terms[cl] += c.sp.throughput * joined;
+                c.terms[cl] += c.sp.throughput * joined * share;
             }
         }
         if (merge && vgrid.photon_count > 0u && merges) {

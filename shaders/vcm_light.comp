@@ -1,16 +1,16 @@
 #version 450
 // vcm_light: the light stage of vertex connection and merging (integrators vcm and bpt): light
 // sub-paths, params.paths_per_invocation of them per invocation. Their non-delta vertices go
-// into the path's run of vertex slots and, as grid points (position, path, slot), into `points`
-// for merging; each is connected to the camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
+// into the path's run of vertex slots, one after another, and, as grid points (position, path,
+// slot), into `points` for merging; each is connected to the camera (light tracing) and splatted into a 64-bit fixed-point image (two words per pixel,
 // layer and channel: integer sums do not depend on the order atomics land in). CPU twin:
 // src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
 // flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
-// scene, then the vertex slots, the splats, the points, the point counter and each path's end
-// (its last vertex's slot + 1; render_vcm reads no further; the counter's second word counts
-// invocations the driver broke off), then each surface vertex's
-// material as looked up (LightMaterial, beside its slot). A path writes its end and every slot up
-// to it, the gaps (delta vertices) as empty, so the slots need no clearing between samples.
+// scene, then the vertex slots, the splats, the points, the point counter (its second word counts
+// invocations the driver broke off) and each path's count of vertices (which the host scans
+// into the offsets render_vcm draws its connections by), then each surface vertex's material as
+// looked up (LightMaterial, beside its slot). A path writes its count and the slots below it, so
+// the slots need no clearing between samples.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -44,7 +44,7 @@ layout(std430, binding = SCENE_BINDINGS + 0) buffer LightVertices { LightVertex 
 layout(std430, binding = SCENE_BINDINGS + 1) buffer Splats { uint splats[]; };
 layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon points[]; };
 layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; uint broken_off; };
-layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathEnds { uint path_ends[]; };
+layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathCounts { uint path_counts[]; };
 layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer LightMaterials { LightMaterial light_materials[]; };
 layout(push_constant) uniform Push { VcmParams params; };
 
@@ -107,12 +107,13 @@ struct LightPath {
     uint diffuse;
     bool specular_first;
     uint slot0;
+    uint stored;  // vertices in its slots so far
 };
 
 // Emits light path `path`: false when it has no ray to follow (no light, no power, no density).
 bool light_path_start(uint path, out LightPath lp) {
     lp.path = path;
-    path_ends[path] = 0u;
+    path_counts[path] = 0u;
     if (frame.light_count == 0u) return false;
     uint sample_index = params.sample_index;
     uint dim0 = RNG_VCM_LIGHT_DOMAIN;
@@ -144,6 +145,7 @@ bool light_path_start(uint path, out LightPath lp) {
     lp.diffuse = 0u;
     lp.specular_first = false;
     lp.slot0 = path * params.vertex_slots;
+    lp.stored = 0u;
     return true;
 }
 
@@ -166,7 +168,8 @@ bool light_path_step(inout LightPath lp) {
     if (flags == 0u) return false;
     sub_arrive(lp.sp, nv.dist, abs_cos(b, wo), lp.k > 1u || lp.finite);
     if ((flags & BSDF_ESTIMATE) != 0u) {
-        uint slot = lp.slot0 + lp.k - 1u;
+        uint slot = lp.slot0 + lp.stored;
+        lp.stored++;
         vertices[slot].origin = float[3](lp.o.x, lp.o.y, lp.o.z);
         vertices[slot].hit = nv.scattered ? lp.medium : prim;
         vertices[slot].direction = float[3](lp.d.x, lp.d.y, lp.d.z);
@@ -177,7 +180,7 @@ bool light_path_step(inout LightPath lp) {
         vertices[slot].d_vc = lp.sp.d_vc;
         vertices[slot].d_vm = lp.sp.d_vm;
         vertices[slot].flags = lp.diffuse | (nv.scattered ? VERTEX_MEDIUM : 0u) | (lp.specular_first ? VERTEX_SPECULAR_FIRST : 0u);
-        path_ends[lp.path] = lp.k;
+        path_counts[lp.path] = lp.stored;
         if (!nv.scattered) {
             light_materials[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
             light_materials[slot].kind = b.kind;
@@ -191,7 +194,7 @@ bool light_path_step(inout LightPath lp) {
             uint at = atomicAdd(point_count, 1u);
             points[at].position = float[3](h.p.x, h.p.y, h.p.z);
             points[at].flux_rg = lp.path;
-            points[at].flux_b_dir = lp.k - 1u;
+            points[at].flux_b_dir = slot - lp.slot0;
         }
         if ((params.techniques & (VCM_CONNECT | VCM_LIGHT_TRACE_ONLY)) != 0u && camera_connectable()) {
             // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
@@ -200,8 +203,6 @@ bool light_path_step(inout LightPath lp) {
             connect_to_camera(h, b, wo, lp.sp, nv.scattered ? NO_LIGHT : ray_skip(prim), prim, lp.medium, lens_u, n,
                               path_layer(false, lp.diffuse + 1u, lp.specular_first));
         }
-    } else {
-        vertices[lp.slot0 + lp.k - 1u].path_length = 0u;
     }
     if (lp.k >= params.vertex_slots) return false;
     uint dim = dim0 + lp.k * RNG_DIMS_PER_BOUNCE;

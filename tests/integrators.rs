@@ -607,10 +607,13 @@ fn bpt_and_vcm_gpu_match_cpu() {
             // heterogeneous smoke (delta and ratio tracking). In the haze a few light paths
             // diverge under rounding (bpt's light tracing alone shows it: relMSE 5.4e-5), as
             // pt's camera paths do more there (relMSE 3.4e-3 at this size, which is why pt's
-            // check leaves fog out), hence fog's looser bounds.
+            // check leaves fog out), hence fog's looser bounds. A diverged light path reaches
+            // the connections drawn from its block (VCM_PICK_BLOCK) anywhere in the image, so
+            // at 2 samples of 32 x 24 pixels the means part by up to 0.8% (0.1% at 16 samples
+            // of 64 x 48, BENCHMARKS.md, "A light vertex cache").
             ("cornell-fog", 1e-6, 1e-3),
-            ("fog", 1e-3, 3e-3),
-            ("fog without glass", 1e-3, 3e-3),
+            ("fog", 1e-3, 1e-2),
+            ("fog without glass", 1e-3, 1e-2),
             ("smoke", 1e-6, 1e-3),
         ] {
             let scene =

@@ -45,7 +45,7 @@ use super::instance::hit_primitive;
 use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::render_pt::path_layer;
-use super::rng::{bsdf_numbers, qmc2, rand1, rand2, sequence_point};
+use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4, sequence_point};
 use super::shading::{camera_ray, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
@@ -449,7 +449,7 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
         path_begin: 0,
         path_count: light_paths,
         paths_per_invocation: 1,
-        _pad: 0,
+        connections: VCM_CONNECTIONS,
     }
 }
 
@@ -462,10 +462,9 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
 pub struct LightStage {
     pub vertices: Vec<LightVertex>,
     positions: Vec<Vec3>,
-    /// Each path's slots up to its last vertex: a camera vertex's connections read no further
-    /// (most slots are empty under roulette, and their reads were a tenth of the camera stage's
-    /// own time).
-    path_ends: Vec<u32>,
+    /// Each path's count of vertices (in its first slots): what connections draw by
+    /// (`pick_light_vertex`).
+    path_counts: Vec<u32>,
     pub grid: GridParams,
     /// Light vertices as grid points: position, then (path, slot) in the two other words.
     pub points: Vec<Photon>,
@@ -505,15 +504,15 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     let splat_count = (f.width * f.height * LAYER_COUNT * 3) as usize;
     stage.vertices.resize(slot_count, LightVertex::default());
     stage.positions.resize(slot_count, Vec3::ZERO);
-    stage.path_ends.resize(p.light_paths as usize, 0);
+    stage.path_counts.resize(p.light_paths as usize, 0);
     stage.splats.resize_with(splat_count, || AtomicU64::new(0));
     stage.splats.par_iter().with_min_len(4096).for_each(|a| a.store(0, Ordering::Relaxed));
     let splats = &stage.splats;
     let runs = stage.vertices.par_chunks_mut(slots).zip(stage.positions.par_chunks_mut(slots));
-    let runs = runs.zip(stage.path_ends.par_iter_mut());
+    let runs = runs.zip(stage.path_counts.par_iter_mut());
     runs.enumerate().for_each(|(path, ((out, at), end))| {
-        // The previous sample's vertices, up to its end (the slots beyond are still empty): a
-        // path writes only the slots it reaches.
+        // The previous sample's vertices (the slots beyond are still empty): a path writes only
+        // the slots it fills.
         out[..*end as usize].iter_mut().for_each(|v| v.path_length = 0);
         (_, *end) = trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
             let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
@@ -535,6 +534,37 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     (stage.points, stage.starts) = build_grid(&points, &stage.grid);
 }
 
+/// The light vertex a connection draws with numbers `u`: a block of `VCM_PICK_BLOCK` light
+/// paths uniformly (`u[0]`), then one of the block's vertices uniformly (`u[1]`; a path's are
+/// its first `counts[path]` slots). Returns the slot and the weight that makes the draw's mean
+/// the sum over all the sample's vertices over the light paths (1 / (the vertex's probability x
+/// light paths)), or `None` for a block without vertices. Nearly a uniform draw from all the
+/// sample's vertices (the weight stays near their mean count), which at equal samples gave
+/// lower error than one light path's every vertex (SmallVCM) or one path's one vertex; a block
+/// rather than the whole sample keeps a light path the device traces otherwise under rounding
+/// (haze, bump maps) out of all but its block's draws, so the GPU = CPU checks stay tight.
+pub fn pick_light_vertex(counts: &[u32], slots: u32, u: [f32; 2]) -> Option<(usize, f32)> {
+    let paths = counts.len() as u32;
+    let blocks = paths.div_ceil(VCM_PICK_BLOCK);
+    let block = ((u[0] * blocks as f32) as u32).min(blocks - 1);
+    let first = (block * VCM_PICK_BLOCK) as usize;
+    let counts = &counts[first..(first + VCM_PICK_BLOCK as usize).min(paths as usize)];
+    let total: u32 = counts.iter().sum();
+    if total == 0 {
+        return None;
+    }
+    let mut j = ((u[1] * total as f32) as u32).min(total - 1);
+    let mut path = first;
+    for &c in &counts[..counts.len() - 1] {
+        if j < c {
+            break;
+        }
+        j -= c;
+        path += 1;
+    }
+    Some((path * slots as usize + j as usize, total as f32 * blocks as f32 / paths as f32))
+}
+
 /// The point, ray offset and BSDF of a stored light vertex, rebuilt from the ray that met it: a
 /// surface point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
 fn light_surface(s: &SceneView, v: &LightVertex) -> LightSurface {
@@ -553,32 +583,6 @@ struct LightSurface {
     p: Vec3,
     eps: f32,
     bsdf: Bsdf,
-}
-
-/// The light vertices' surfaces one camera path has evaluated. Every camera vertex connects to
-/// the same light path; evaluated once per connection, a light vertex's textures and frame were
-/// a sixteenth of a glossy vcm render's CPU time. The kernel keeps no such cache (it would cost
-/// registers); the light stage stores each vertex's looked-up material instead (`LightMaterial`),
-/// which gives it the same BSDF without the textures.
-struct LightSurfaces {
-    cached: [Option<LightSurface>; LIGHT_SURFACES_CACHED],
-}
-
-/// Light vertices a camera path keeps evaluated; deeper ones are evaluated per connection.
-const LIGHT_SURFACES_CACHED: usize = 16;
-
-impl LightSurfaces {
-    fn new() -> Self {
-        LightSurfaces { cached: [None; LIGHT_SURFACES_CACHED] }
-    }
-
-    fn get(&mut self, s: &SceneView, slot: usize, v: &LightVertex) -> LightSurface {
-        match self.cached.get_mut(slot) {
-            Some(Some(surface)) => *surface,
-            Some(entry) => *entry.insert(light_surface(s, v)),
-            None => light_surface(s, v),
-        }
-    }
 }
 
 /// The medium a segment leaving vertex `h` (at `at`) along `dir` starts in, where the path met
@@ -741,9 +745,9 @@ fn next_vertex(
     None
 }
 
-/// Traces light path `path` of the sample into `out` (its vertex slots, with their surface points
-/// in `positions`) and hands each light-tracing splat to `splat(pixel, layer, value)`. Returns
-/// the rays cast and the slots up to the path's last vertex.
+/// Traces light path `path` of the sample into `out` (its vertex slots, one after another, with
+/// their points in `positions`) and hands each light-tracing splat to `splat(pixel, layer,
+/// value)`. Returns the rays cast and the count of vertices stored.
 pub fn trace_light_path(
     s: &SceneView,
     p: &VcmParams,
@@ -834,10 +838,9 @@ pub fn trace_light_path(
         }
         sub.arrive(next.dist, abs_cos(&b, wo), k > 1 || finite);
         if flags & BSDF_ESTIMATE != 0 {
-            positions[(k - 1) as usize] = h.p;
-            end = k;
+            positions[end as usize] = h.p;
             let in_medium = if next.scattered { VERTEX_MEDIUM } else { 0 };
-            out[(k - 1) as usize] = LightVertex {
+            out[end as usize] = LightVertex {
                 origin: o.into(),
                 hit: if next.scattered { medium } else { prim },
                 direction: d.into(),
@@ -849,6 +852,7 @@ pub fn trace_light_path(
                 d_vm: sub.d_vm,
                 flags: diffuse | in_medium | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
             };
+            end += 1;
             if has(p, VCM_CONNECT | VCM_LIGHT_TRACE_ONLY) && camera_connectable(f) {
                 // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
                 let lens_u = rand2(path, sample, f.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
@@ -1008,11 +1012,7 @@ pub fn radiance_vcm(
     let merge_only = has(p, VCM_MERGE_ONLY);
     let connect = has(p, VCM_CONNECT);
     let mut sub = SubPath { throughput: Vec3::ONE, d_vcm: camera_d_vcm(f, p.light_paths, d), d_vc: 0.0, d_vm: 0.0 };
-    let path = stream % p.light_paths;
     let slots = p.vertex_slots as usize;
-    let first = path as usize * slots;
-    let light_vertices = &stage.vertices[first..first + stage.path_ends[path as usize] as usize];
-    let mut light_surfaces = LightSurfaces::new();
     let mut skip = NO_LIGHT;
     let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
     let mut specular_path = true;
@@ -1124,16 +1124,20 @@ pub fn radiance_vcm(
                     path_layer(first_specular, cam_diffuse, false),
                 );
                 terms[layer as usize] += sub.throughput * v;
-                // Slot k - 1 holds the light vertex k scattering vertices from the light, or
-                // nothing (a delta vertex, or the path ended): skip the gaps.
-                for (slot, lv) in light_vertices.iter().enumerate() {
-                    if slot as u32 + 1 + m > f.max_depth {
-                        break;
-                    }
-                    if lv.path_length == 0 {
+                // Light vertices drawn by light path (VCM_CONNECTIONS, `pick_light_vertex`).
+                let picks = p.connections.min(2);
+                let pick = rand4(stream, sample, f.seed, dim + RNG_CONNECT_PICK);
+                for k in 0..picks as usize {
+                    let u = [pick[2 * k], pick[2 * k + 1]];
+                    let Some((slot, weight)) = pick_light_vertex(&stage.path_counts, p.vertex_slots, u) else {
+                        continue;
+                    };
+                    let share = weight / picks as f32;
+                    let lv = &stage.vertices[slot];
+                    if lv.path_length + m > f.max_depth {
                         continue;
                     }
-                    let light = light_surfaces.get(s, slot, lv);
+                    let light = light_surface(s, lv);
                     let v = connect_vertices(
                         s,
                         p,
@@ -1144,7 +1148,7 @@ pub fn radiance_vcm(
                         skip,
                         at,
                         (lv, &light),
-                        connection(slot as u32 + 1),
+                        connection(k as u32 + 1),
                         vm,
                         rays,
                     );
@@ -1153,7 +1157,7 @@ pub fn radiance_vcm(
                         cam_diffuse + (lv.flags & VERTEX_DIFFUSE_MASK) + 1,
                         lv.flags & VERTEX_SPECULAR_FIRST != 0,
                     );
-                    terms[layer as usize] += sub.throughput * v;
+                    terms[layer as usize] += sub.throughput * v * share;
                 }
             }
             if has(p, VCM_MERGE | VCM_MERGE_ONLY) && merges {

@@ -363,6 +363,9 @@ shared_constants! {
     RNG_FRESNEL: u32 = 5;
     /// Russian roulette of a path-traced camera path (`integrator = "pt"`).
     RNG_ROULETTE: u32 = 6;
+    /// bpt's and vcm's choice of the light vertices a camera vertex connects to (one hash: up
+    /// to four choices, `VCM_CONNECTIONS`).
+    RNG_CONNECT_PICK: u32 = 7;
     /// A path-traced camera path plays Russian roulette from this many vertices on, surviving
     /// with its throughput's largest channel, at most `PT_ROULETTE_MAX` (Mitsuba 3's rr_depth 5
     /// and 0.95: a path's first bounces carry most of the light, and a cap keeps bright paths
@@ -486,8 +489,20 @@ shared_constants! {
     /// Most light vertices stored per sample (64 bytes each): a larger image draws fewer light
     /// paths than it has pixels.
     VCM_MAX_LIGHT_VERTICES: u32 = 1 << 21;
-    /// Pixels per light sub-path: two camera paths share each light path's connections. Half
-    /// the light stage and half the light-tracing rays for a little more correlation: error x
+    /// Light vertices a camera vertex connects to (at most 2), each drawn from a block of
+    /// `VCM_PICK_BLOCK` light paths drawn uniformly, uniformly among the block's vertices, and
+    /// weighted by 1 / its probability (`cpu::vcm::pick_light_vertex`; nearly a light vertex
+    /// cache, Davidovic et al. 2014): the same mean as SmallVCM's connections to every vertex of
+    /// one light path, with a loop of the same length on every lane (lavapipe ran the old loop
+    /// as long as the longest light path of its 8 lanes) and neighbouring pixels' connections
+    /// spread over all light paths. cornell-glossy: a little lower error at equal samples, the
+    /// camera stage about a fifth faster through lavapipe (BENCHMARKS.md, "A light vertex cache").
+    VCM_CONNECTIONS: u32 = 1;
+    /// Light paths a connection's draw spans: one texel of their counts.
+    VCM_PICK_BLOCK: u32 = 4;
+    /// Pixels per light sub-path (measured when each camera path connected to the vertices of
+    /// light path pixel mod light_paths). Half the light stage and half the light-tracing rays
+    /// for a little more correlation: error x
     /// CPU time 12-17% lower for bpt on cornell-box and cornell-glossy (BENCHMARKS.md).
     VCM_PIXELS_PER_LIGHT_PATH: u32 = 2;
     /// Photon maps of the camera kernel's lookups (`grids[]` index).

@@ -323,7 +323,7 @@ gpu_structs! {
     /// the light-path kernel; the camera kernel reads them from its own buffer). See `cpu::vcm`.
     pub struct VcmParams {
         pub sample_index: u32,
-        /// Light sub-paths of the sample; camera path p connects to light path p mod this.
+        /// Light sub-paths of the sample.
         pub light_paths: u32,
         /// Vertex slots per light path (the frame's `max_depth`).
         pub vertex_slots: u32,
@@ -343,7 +343,8 @@ gpu_structs! {
         /// Light or camera paths each invocation of vcm_light and render_vcm traces one after
         /// another (1 on real GPUs; see render/gpu/bidirectional.rs). The CPU twin ignores it.
         pub paths_per_invocation: u32,
-        pub _pad: u32,
+        /// Light vertices each camera vertex connects to (`VCM_CONNECTIONS`; at most 2).
+        pub connections: u32,
     }
 
     /// A surface light vertex's material as its point looked it up, 64 bytes: the kind (after a

@@ -11,7 +11,7 @@ use super::maps::build_map;
 use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{Buffer, GpuContext, GpuError};
-use crate::layout::constants::LAYER_COUNT;
+use crate::layout::constants::{LAYER_COUNT, VCM_PICK_BLOCK};
 use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
@@ -35,7 +35,8 @@ pub(super) struct BidirectionalBuffers {
     splats: Buffer,
     counter: Buffer,
     vertices: Buffer,
-    path_ends: Buffer,
+    /// Each light path's count of vertices (in its first slots): what connections draw by.
+    path_counts: Buffer,
     materials: Buffer,
     params: Buffer,
     grid: Buffer,
@@ -62,10 +63,11 @@ impl BidirectionalBuffers {
             accumulation: ctx.create_scratch("vcm_accumulation", pixels * ACCUMULATION_BYTES_PER_PIXEL)?,
             splats: ctx.create_scratch("vcm_splats", pixels * SPLAT_BYTES_PER_PIXEL)?,
             counter: ctx.create_scratch("vcm_point_count", 16)?,
-            // vcm_light writes every path's end and its slots up to it each sample, so these
-            // are cleared once, here, and never between samples.
+            // vcm_light writes every path's count and its slots below it each sample, and
+            // nothing reads a slot beyond a count, so these are never cleared.
             vertices: ctx.create_buffer("light_vertices", slots * size_of::<LightVertex>() as u64)?,
-            path_ends: ctx.create_buffer("light_path_ends", paths * 4)?,
+            // Whole blocks of VCM_PICK_BLOCK: the paths beyond the last stay at count 0.
+            path_counts: ctx.create_buffer("light_path_counts", paths.next_multiple_of(VCM_PICK_BLOCK as u64) * 4)?,
             materials: ctx.create_buffer("light_materials", slots * size_of::<LightMaterial>() as u64)?,
             params: ctx.create_scratch("vcm_params", size_of::<VcmParams>() as u64)?,
             grid: ctx.create_scratch("vcm_grid", size_of::<GridParams>() as u64)?,
@@ -197,7 +199,7 @@ fn render_samples(
                 }
                 rec.dispatch(
                     light_kernel,
-                    &scene.bindings(&[&b.vertices, &b.splats, &points, &b.counter, &b.path_ends, &b.materials]),
+                    &scene.bindings(&[&b.vertices, &b.splats, &points, &b.counter, &b.path_counts, &b.materials]),
                     bytemuck::bytes_of(&params),
                     groups(params.path_count.div_ceil(per)),
                 )
@@ -241,7 +243,7 @@ fn render_samples(
                         &map.photons,
                         &map.starts,
                         &b.splats,
-                        &b.path_ends,
+                        &b.path_counts,
                         &b.materials,
                         &b.broken_off,
                     ]),

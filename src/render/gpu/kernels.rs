@@ -65,12 +65,12 @@ const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
 };
 
 /// render_vcm's: its params and grid (SCENE_BINDINGS + 1, + 2) as uniform buffers, the light
-/// vertices, grid points, splats and light surfaces (+ 3, + 4, + 6, + 8) as RGBA32UI texels, the
-/// bucket starts and the paths' ends (+ 5, + 7) as words, for the reasons SCENE_BINDING_TYPES
-/// gives.
+/// vertices, grid points, splats, light paths' vertex counts (four to a texel) and light surfaces
+/// (+ 3, + 4, + 6, + 7, + 8) as RGBA32UI texels, the bucket starts (+ 5) as words, for the
+/// reasons SCENE_BINDING_TYPES gives.
 const RENDER_VCM_BINDING_TYPES: BindingTypes = BindingTypes {
-    rgba: SCENE_BINDING_TYPES.rgba | 0b1_0101_1000 << SCENE_BINDINGS,
-    words: SCENE_BINDING_TYPES.words | 0b1010_0000 << SCENE_BINDINGS,
+    rgba: SCENE_BINDING_TYPES.rgba | 0b1_1101_1000 << SCENE_BINDINGS,
+    words: SCENE_BINDING_TYPES.words | 0b10_0000 << SCENE_BINDINGS,
     uniform: SCENE_BINDING_TYPES.uniform | 0b110 << SCENE_BINDINGS,
 };
 
