@@ -27,6 +27,7 @@ struct BsdfSample {
 
 // Radiance the material emits at h toward its front side.
 vec3 material_emission(Material m, Hit h) {
+    if (!SCENE_HAS_EMISSION_TEXTURES) return vec3(m.emission[0], m.emission[1], m.emission[2]);
     return param_color(m.emission, m.emission_tex, h);
 }
 

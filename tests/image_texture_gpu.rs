@@ -241,3 +241,37 @@ fn world_space_image_projections_gpu_equals_cpu() {
     let mean: f32 = cpu.image.pixels.iter().map(|p| p[0] + p[1] + p[2]).sum::<f32>() / cpu.image.pixels.len() as f32;
     assert!(mean > 0.05, "mean {mean}");
 }
+
+/// Textured emission is a specialization constant (`KernelVariant::emission_textures`): set only
+/// where a material's emission reads a texture, and the kernels built with it light a textured
+/// screen as the CPU twin does, with photon mapping and with vcm (light sampling, emission met and
+/// light paths all read it).
+#[test]
+fn textured_emission_is_compiled_in_only_where_a_material_has_it() {
+    let dir = tempfile::tempdir().unwrap();
+    write_quadrant_png(&dir.path().join("quadrants.png"));
+    for integrator in ["ppm", "vcm"] {
+        let scene = format!(
+            "[camera]\nposition = [0, 0, 6]\nlook_at = [0, 0, 0]\nfov = 30\n\
+             [render]\nintegrator = \"{integrator}\"\n\
+             [textures.q]\ntype = \"image\"\nfile = \"quadrants.png\"\nspace = \"world\"\nprojection = \"planar\"\n\
+             transform = {{ scale = [2, 2, 1], translate = [-1, -1, 0] }}\n\
+             [materials.screen]\ntype = \"diffuse\"\nreflectance = 0\nemission = {{ texture = \"q\" }}\n\
+             [materials.wall]\ntype = \"diffuse\"\nreflectance = 0.8\n\
+             [[shapes]]\ntype = \"quad\"\nmaterial = \"screen\"\nvertices = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]\n\
+             [[shapes]]\ntype = \"quad\"\nmaterial = \"wall\"\nvertices = [[-3, -1.5, 2], [-3, -1.5, -2], [3, -1.5, -2], [3, -1.5, 2]]\n"
+        );
+        let path = dir.path().join("scene.toml");
+        std::fs::write(&path, scene).unwrap();
+        let scene = photonix::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        let buffers = common::buffers(&scene, 32, 32);
+        assert!(buffers.variant().emission_textures, "{integrator}: the screen's emission is textured");
+        let out = common::assert_twins_agree(&format!("textured emission, {integrator}"), &buffers);
+        // The screen's top-left quadrant is the image's red texel (a little of the others
+        // bleeds in through the pixel's jitter).
+        let red = out.image.pixel(12, 12);
+        assert!(red[0] > 0.5 && red[0] > 3.0 * red[1].max(red[2]), "{integrator}: top-left quadrant {red:?}");
+    }
+    let glossy = photonix::scene::load_scene(&common::repo_path("scenes/cornell-glossy.toml")).unwrap();
+    assert!(!common::buffers(&glossy, 8, 8).variant().emission_textures, "cornell-glossy's light is a plain colour");
+}

@@ -75,6 +75,9 @@ pub struct KernelVariant {
     /// Textures that read Perlin noise (`pack::texture_uses_noise`). A specialization constant:
     /// without it the textured kernels lose most of their code.
     pub noise: bool,
+    /// Materials whose emission is textured. A specialization constant: without it every call
+    /// of `material_emission` is a colour read rather than a texture lookup's code.
+    pub emission_textures: bool,
     /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
     pub path_traced: bool,
     /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
@@ -110,8 +113,8 @@ impl KernelVariant {
 
     /// The values of the scene kernels' specialization constants (`constant_id` 0, 1, ...: see
     /// shaders/scene_bindings.glsl).
-    pub fn specialization(self) -> [u32; 3] {
-        [self.instances as u32, self.csg as u32, self.noise as u32]
+    pub fn specialization(self) -> [u32; 4] {
+        [self.instances as u32, self.csg as u32, self.noise as u32, self.emission_textures as u32]
     }
 }
 
@@ -128,6 +131,7 @@ impl SceneBuffers {
             instances: self.frame.instance_count > 0,
             csg: self.frame.csg_first < self.frame.primitive_count,
             noise: self.textures.iter().any(|t| super::pack::texture_uses_noise(t, &self.texture_data)),
+            emission_textures: self.materials.iter().any(|m| m.emission_tex != NO_TEXTURE),
             path_traced: self.frame.integrator == INTEGRATOR_PT,
             bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
         }
