@@ -7,8 +7,8 @@
 // src/cpu/vcm.rs (trace_light_path, connect_to_camera); media in the `media` variants (free
 // flights, light vertices in media stored with VERTEX_MEDIUM, never merged). Bindings: the
 // scene, then the vertex slots, the splats, the points, the point counter (its second word counts
-// invocations the driver broke off) and each path's count of vertices (which the host scans
-// into the offsets render_vcm draws its connections by), then each surface vertex's material as
+// invocations the driver broke off) and each path's count of vertices (by which render_vcm
+// draws its connections, cpu::vcm::pick_light_vertex), then each surface vertex's material as
 // looked up (LightMaterial, beside its slot). A path writes its count and the slots below it, so
 // the slots need no clearing between samples.
 // variant: textured

@@ -1124,7 +1124,7 @@ pub fn radiance_vcm(
                     path_layer(first_specular, cam_diffuse, false),
                 );
                 terms[layer as usize] += sub.throughput * v;
-                // Light vertices drawn by light path (VCM_CONNECTIONS, `pick_light_vertex`).
+                // Light vertices drawn by block of light paths (VCM_CONNECTIONS, `pick_light_vertex`).
                 let picks = p.connections.min(2);
                 let pick = rand4(stream, sample, f.seed, dim + RNG_CONNECT_PICK);
                 for k in 0..picks as usize {

@@ -16,6 +16,9 @@ use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photo
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
 
+// render_vcm reads a block's counts as one RGBA32UI texel.
+const _: () = assert!(VCM_PICK_BLOCK == 4, "render_vcm.comp reads VCM_PICK_BLOCK counts as one texel");
+
 /// Light paths per vcm_light dispatch.
 const PATHS_PER_DISPATCH: u32 = 1 << 16;
 /// Bytes of light-tracing splats per pixel: per layer, three 64-bit fixed-point channels.
