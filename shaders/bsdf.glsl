@@ -349,7 +349,7 @@ float bsdf_path_probability(Bsdf b, vec3 wo) {
     if ((flags & BSDF_PATH) == 0u) return 0.0;
     if ((flags & BSDF_ESTIMATE) == 0u) return 1.0;
     // Both: a smooth plastic; its coat is chosen as the plastic's own sampling chooses it.
-    return plastic_coat_probability(b, wo);
+    return SCENE_HAS_PLASTIC ? plastic_coat_probability(b, wo) : 0.0;
 }
 
 // True when the estimate lobes have the same value for every wi on wo's side (Lambertian), so a
@@ -369,17 +369,23 @@ float shading_adjoint(Bsdf b, vec3 wo, vec3 wi) {
 // f(wo, wi) of the estimate lobes, without the cosine; 0 for path lobes (they are sampled).
 vec3 bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) return vec3(0.0);
+    // Each case only where the scene has the kind (SCENE_MATERIAL_KINDS): the others compile out.
     switch (b.kind) {
     case MATERIAL_DIFFUSE:
-        return diffuse_eval(b, wo, wi);
+        if (SCENE_HAS_DIFFUSE) return diffuse_eval(b, wo, wi);
+        break;
     case MATERIAL_DIELECTRIC:
-        return b.color0 * rough_dielectric_eval(b, wo, wi);
+        if (SCENE_HAS_DIELECTRIC) return b.color0 * rough_dielectric_eval(b, wo, wi);
+        break;
     case MATERIAL_CONDUCTOR:
-        return conductor_bsdf_eval(b, wo, wi);
+        if (SCENE_HAS_CONDUCTOR) return conductor_bsdf_eval(b, wo, wi);
+        break;
     case MATERIAL_PLASTIC:
-        return plastic_bsdf_eval(b, wo, wi);
+        if (SCENE_HAS_PLASTIC) return plastic_bsdf_eval(b, wo, wi);
+        break;
     case MATERIAL_PHASE:
-        return vec3(phase_hg(dot(wo, wi), b.ior));
+        if (SCENE_HAS_PHASE) return vec3(phase_hg(dot(wo, wi), b.ior));
+        break;
     }
     return vec3(0.0);
 }
@@ -389,15 +395,20 @@ float bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
     if ((bsdf_flags(b) & BSDF_ESTIMATE) == 0u) return 0.0;
     switch (b.kind) {
     case MATERIAL_DIFFUSE:
-        return diffuse_pdf(b, wo, wi);
+        if (SCENE_HAS_DIFFUSE) return diffuse_pdf(b, wo, wi);
+        break;
     case MATERIAL_DIELECTRIC:
-        return rough_dielectric_pdf(b, wo, wi);
+        if (SCENE_HAS_DIELECTRIC) return rough_dielectric_pdf(b, wo, wi);
+        break;
     case MATERIAL_CONDUCTOR:
-        return conductor_bsdf_pdf(b, wo, wi);
+        if (SCENE_HAS_CONDUCTOR) return conductor_bsdf_pdf(b, wo, wi);
+        break;
     case MATERIAL_PLASTIC:
-        return plastic_bsdf_pdf(b, wo, wi);
+        if (SCENE_HAS_PLASTIC) return plastic_bsdf_pdf(b, wo, wi);
+        break;
     case MATERIAL_PHASE:
-        return phase_hg(dot(wo, wi), b.ior);
+        if (SCENE_HAS_PHASE) return phase_hg(dot(wo, wi), b.ior);
+        break;
     }
     return 0.0;
 }
@@ -409,20 +420,27 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
     if ((bsdf_flags(b) & lobes) == 0u) return no_sample();
     switch (b.kind) {
     case MATERIAL_DIFFUSE:
-        return diffuse_sample(b, wo, u);
+        if (SCENE_HAS_DIFFUSE) return diffuse_sample(b, wo, u);
+        break;
     case MATERIAL_MIRROR:
-        return mirror_sample(b, wo);
+        if (SCENE_HAS_MIRROR) return mirror_sample(b, wo);
+        break;
     case MATERIAL_DIELECTRIC:
-        return is_smooth(b) ? smooth_dielectric_sample(b, wo, u) : rough_dielectric_sample(b, wo, u);
+        if (SCENE_HAS_DIELECTRIC) return is_smooth(b) ? smooth_dielectric_sample(b, wo, u) : rough_dielectric_sample(b, wo, u);
+        break;
     case MATERIAL_CONDUCTOR:
-        return conductor_bsdf_sample(b, wo, u);
+        if (SCENE_HAS_CONDUCTOR) return conductor_bsdf_sample(b, wo, u);
+        break;
     case MATERIAL_PLASTIC:
-        return plastic_bsdf_sample(b, wo, u, lobes);
-    case MATERIAL_PHASE: {
-        // Sampled exactly by its own pdf: the weight is 1.
-        vec3 wi = phase_hg_sample(wo, b.ior, u.yz);
-        return BsdfSample(wi, vec3(1.0), phase_hg(dot(wo, wi), b.ior), PHASE_FLAGS);
-    }
+        if (SCENE_HAS_PLASTIC) return plastic_bsdf_sample(b, wo, u, lobes);
+        break;
+    case MATERIAL_PHASE:
+        if (SCENE_HAS_PHASE) {
+            // Sampled exactly by its own pdf: the weight is 1.
+            vec3 wi = phase_hg_sample(wo, b.ior, u.yz);
+            return BsdfSample(wi, vec3(1.0), phase_hg(dot(wo, wi), b.ior), PHASE_FLAGS);
+        }
+        break;
     }
     return no_sample();
 }

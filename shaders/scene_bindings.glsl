@@ -36,5 +36,15 @@ layout(constant_id = 2) const bool SCENE_HAS_NOISE = true;
 // (emission met, light sampling) and in the light kernels; without it cornell-glossy's camera
 // kernel took 2.2-2.5 s to create on lavapipe instead of 3.0.
 layout(constant_id = 3) const bool SCENE_HAS_EMISSION_TEXTURES = true;
+// The material kinds a scene's BSDFs can have (bit MATERIAL_* set; MATERIAL_PHASE with media):
+// each kind's evaluation, pdf and sampling are inlined at every call of bsdf.glsl's switches (the
+// camera kernel of render_vcm has ten), and lavapipe compiles, and runs under masks, every case.
+layout(constant_id = 4) const uint SCENE_MATERIAL_KINDS = 0xffffffffu;
+const bool SCENE_HAS_DIFFUSE = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_DIFFUSE)) != 0u;
+const bool SCENE_HAS_MIRROR = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_MIRROR)) != 0u;
+const bool SCENE_HAS_DIELECTRIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_DIELECTRIC)) != 0u;
+const bool SCENE_HAS_CONDUCTOR = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_CONDUCTOR)) != 0u;
+const bool SCENE_HAS_PLASTIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PLASTIC)) != 0u;
+const bool SCENE_HAS_PHASE = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PHASE)) != 0u;
 
 #include "scene_fetch.glsl"

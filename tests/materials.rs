@@ -365,3 +365,78 @@ intensity = 1
     assert!(shape_surface(&view, mesh, Vec3::new(0.0, 0.0, 559.2)).uv.abs_diff_eq(Vec2::ONE, 1e-5));
     let _ = Path::new("");
 }
+
+/// The material kinds are a specialization constant (`KernelVariant::material_kinds`): each
+/// kind's code is compiled only into the kernels of scenes that have it. A kind met only through a
+/// mix counts, media bring the phase function, and the kernels built for a mix of plastic and a
+/// mirror (no dielectric, conductor or phase) render it as the CPU twin does with vcm and ppm.
+#[test]
+fn material_kinds_are_compiled_in_only_where_a_scene_has_them() {
+    use photonix::layout::constants::*;
+    let bits = |kinds: &[u32]| kinds.iter().fold(0u32, |b, k| b | 1 << k);
+    for integrator in ["vcm", "ppm"] {
+        let scene = parse(&format!(
+            r#"
+[camera]
+position = [0, 1, 4]
+look_at = [0, 0.5, 0]
+fov = 40
+
+[render]
+integrator = "{integrator}"
+
+[materials.floor]
+type = "diffuse"
+reflectance = 0.7
+
+[materials.coat]
+type = "plastic"
+reflectance = [0.7, 0.2, 0.1]
+roughness = 0.2
+
+[materials.mirror]
+type = "mirror"
+
+[materials.blend]
+type = "mix"
+materials = ["coat", "mirror"]
+weight = 0.5
+
+[[shapes]]
+type = "quad"
+material = "floor"
+vertices = [[-3, 0, 3], [3, 0, 3], [3, 0, -3], [-3, 0, -3]]
+
+[[shapes]]
+type = "sphere"
+material = "blend"
+center = [0, 0.6, 0]
+radius = 0.6
+
+[[lights]]
+type = "area"
+shape = "quad"
+vertices = [[-0.5, 2.5, -0.5], [0.5, 2.5, -0.5], [0.5, 2.5, 0.5], [-0.5, 2.5, 0.5]]
+radiance = 10
+"#
+        ));
+        let buffers = common::buffers(&scene, 24, 24);
+        let kinds = buffers.variant().material_kinds;
+        let want = bits(&[MATERIAL_DIFFUSE, MATERIAL_PLASTIC, MATERIAL_MIRROR, MATERIAL_MIX]);
+        // The area light's own material is diffuse too (black, emitting).
+        assert_eq!(kinds & !want, 0, "{integrator}: kinds {kinds:#b}");
+        assert_eq!(kinds & want, want, "{integrator}: kinds {kinds:#b}");
+        let out = common::assert_twins_agree(&format!("a mix of plastic and a mirror, {integrator}"), &buffers);
+        assert!(out.image.pixels.iter().any(|p| p[0] > 0.0), "{integrator}: the image is not black");
+    }
+    let kinds_of =
+        |path: &str| common::buffers(&load_scene(&common::repo_path(path)).unwrap(), 8, 8).variant().material_kinds;
+    let glossy = kinds_of("scenes/cornell-glossy.toml");
+    assert_eq!(
+        glossy,
+        bits(&[MATERIAL_DIFFUSE, MATERIAL_DIELECTRIC, MATERIAL_CONDUCTOR]),
+        "cornell-glossy: {glossy:#b}"
+    );
+    let fog = kinds_of("scenes/cornell-fog.toml");
+    assert_ne!(fog & bits(&[MATERIAL_PHASE]), 0, "cornell-fog's medium scatters: {fog:#b}");
+}

@@ -78,6 +78,9 @@ pub struct KernelVariant {
     /// Materials whose emission is textured. A specialization constant: without it every call
     /// of `material_emission` is a colour read rather than a texture lookup's code.
     pub emission_textures: bool,
+    /// The material kinds the kernels' BSDFs can meet, bit `MATERIAL_*` (`MATERIAL_PHASE` with
+    /// media). A specialization constant: each kind's code is inlined at every BSDF call.
+    pub material_kinds: u32,
     /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
     pub path_traced: bool,
     /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
@@ -113,8 +116,8 @@ impl KernelVariant {
 
     /// The values of the scene kernels' specialization constants (`constant_id` 0, 1, ...: see
     /// shaders/scene_bindings.glsl).
-    pub fn specialization(self) -> [u32; 4] {
-        [self.instances as u32, self.csg as u32, self.noise as u32, self.emission_textures as u32]
+    pub fn specialization(self) -> [u32; 5] {
+        [self.instances as u32, self.csg as u32, self.noise as u32, self.emission_textures as u32, self.material_kinds]
     }
 }
 
@@ -132,6 +135,10 @@ impl SceneBuffers {
             csg: self.frame.csg_first < self.frame.primitive_count,
             noise: self.textures.iter().any(|t| super::pack::texture_uses_noise(t, &self.texture_data)),
             emission_textures: self.materials.iter().any(|m| m.emission_tex != NO_TEXTURE),
+            material_kinds: self
+                .materials
+                .iter()
+                .fold(if self.media.is_empty() { 0 } else { 1 << MATERIAL_PHASE }, |kinds, m| kinds | 1 << m.kind),
             path_traced: self.frame.integrator == INTEGRATOR_PT,
             bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
         }
