@@ -106,10 +106,25 @@ uvec2 splat_words(float v) {
 
 float splat_value(uint low, uint high) { return float(high) + float(low) * (1.0 / 4294967296.0); }
 
-// The densities of a non-delta lobe choice: x = sampling wi from wo, y = the reverse.
+// The densities of a non-delta lobe choice: x = sampling wi from wo, y = the reverse. Both go
+// through one call of bsdf_pdf, in a loop whose exit is a flag rather than a counter so that the
+// driver cannot count its turns and unroll it: lavapipe inlines every call, lobe_pdfs has five
+// callers in render_vcm, and a second call was five more copies of every kind's pdf to compile.
 vec2 lobe_pdfs(Bsdf b, vec3 wo, vec3 wi) {
-    return vec2((1.0 - bsdf_path_probability(b, wo)) * bsdf_pdf(b, wo, wi),
-                (1.0 - bsdf_path_probability(b, wi)) * bsdf_pdf(b, wi, wo));
+    vec2 pdfs;
+    bool reverse = false;
+    for (;;) {
+        vec3 from = reverse ? wi : wo;
+        vec3 to = reverse ? wo : wi;
+        float pdf = (1.0 - bsdf_path_probability(b, from)) * bsdf_pdf(b, from, to);
+        if (reverse) {
+            pdfs.y = pdf;
+            break;
+        }
+        pdfs.x = pdf;
+        reverse = true;
+    }
+    return pdfs;
 }
 
 float abs_cos(Bsdf b, vec3 w) { return b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, w)); }
