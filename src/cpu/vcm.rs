@@ -510,11 +510,9 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     let splats = &stage.splats;
     let runs = stage.vertices.par_chunks_mut(slots).zip(stage.positions.par_chunks_mut(slots));
     let runs = runs.zip(stage.path_counts.par_iter_mut());
-    runs.enumerate().for_each(|(path, ((out, at), end))| {
-        // The previous sample's vertices (the slots beyond are still empty): a path writes only
-        // the slots it fills.
-        out[..*end as usize].iter_mut().for_each(|v| v.path_length = 0);
-        (_, *end) = trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
+    // A path's slots beyond its count keep an earlier sample's vertices: nothing reads them.
+    runs.enumerate().for_each(|(path, ((out, at), count))| {
+        (_, *count) = trace_light_path(s, p, path as u32, out, at, &mut |pixel, layer, v| {
             let base = ((pixel * LAYER_COUNT + layer) * 3) as usize;
             for (k, c) in [v.x, v.y, v.z].into_iter().enumerate() {
                 let (low, high) = splat_words(c);
@@ -524,10 +522,14 @@ pub fn light_stage(s: &SceneView, p: &VcmParams, stage: &mut LightStage) {
     });
     let mut points = Vec::new();
     if has(p, VCM_MERGE | VCM_MERGE_ONLY) {
-        let merged = |v: &LightVertex| v.path_length > 0 && v.flags & VERTEX_MEDIUM == 0;
-        let stored = stage.vertices.iter().zip(&stage.positions).enumerate();
-        for (i, (_, at)) in stored.filter(|(_, (v, _))| merged(v)) {
-            points.push(Photon { position: (*at).into(), flux_rg: (i / slots) as u32, flux_b_dir: (i % slots) as u32 });
+        for (path, &count) in stage.path_counts.iter().enumerate() {
+            for j in 0..count as usize {
+                let i = path * slots + j;
+                if stage.vertices[i].flags & VERTEX_MEDIUM == 0 {
+                    let position = stage.positions[i].into();
+                    points.push(Photon { position, flux_rg: path as u32, flux_b_dir: j as u32 });
+                }
+            }
         }
     }
     stage.grid = vertex_grid(p, points.len() as u32);
@@ -758,15 +760,15 @@ pub fn trace_light_path(
 ) -> (u32, u32) {
     let f = s.frame;
     let mut rays = 0;
-    let mut end = 0;
+    let mut stored = 0;
     if f.light_count == 0 {
-        return (rays, end);
+        return (rays, stored);
     }
     let sample = p.sample_index;
     let dim0 = RNG_VCM_LIGHT_DOMAIN;
     let l = &s.lights[pick_light(s, rand1(path, sample, f.seed, dim0 + RNG_LIGHT_PICK), false) as usize];
     if l.pick_probability <= 0.0 {
-        return (rays, end);
+        return (rays, stored);
     }
     // The render's light paths are one low-discrepancy sequence (sample k's paths are its points
     // k x light_paths + path) in the numbers that spread them: start, direction, bounces.
@@ -787,7 +789,7 @@ pub fn trace_light_path(
     };
     let emission = emission_pdf(s, l, -e.direction, e.cos_l);
     if emission <= 0.0 || e.power == Vec3::ZERO {
-        return (rays, end);
+        return (rays, stored);
     }
     let finite = !matches!(l.kind, LIGHT_DISTANT | LIGHT_ENVIRONMENT);
     let mut sub = SubPath {
@@ -838,9 +840,9 @@ pub fn trace_light_path(
         }
         sub.arrive(next.dist, abs_cos(&b, wo), k > 1 || finite);
         if flags & BSDF_ESTIMATE != 0 {
-            positions[end as usize] = h.p;
+            positions[stored as usize] = h.p;
             let in_medium = if next.scattered { VERTEX_MEDIUM } else { 0 };
-            out[end as usize] = LightVertex {
+            out[stored as usize] = LightVertex {
                 origin: o.into(),
                 hit: if next.scattered { medium } else { prim },
                 direction: d.into(),
@@ -852,7 +854,7 @@ pub fn trace_light_path(
                 d_vm: sub.d_vm,
                 flags: diffuse | in_medium | if specular_first { VERTEX_SPECULAR_FIRST } else { 0 },
             };
-            end += 1;
+            stored += 1;
             if has(p, VCM_CONNECT | VCM_LIGHT_TRACE_ONLY) && camera_connectable(f) {
                 // The lens sample: dimensions of the vertex that sampling its BSDF leaves free.
                 let lens_u = rand2(path, sample, f.seed, dim0 + k * RNG_DIMS_PER_BOUNCE + RNG_PIXEL_X);
@@ -922,7 +924,7 @@ pub fn trace_light_path(
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
     }
-    (rays, end)
+    (rays, stored)
 }
 
 /// The scattering vertex a ray (`o`, `d`) reached at distance `t`, with its BSDF: a collision

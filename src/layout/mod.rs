@@ -302,7 +302,7 @@ gpu_structs! {
     /// (origin, direction, distance and the hit name, from which `shape_hit` rebuilds the surface
     /// point for connections), the light sub-path's throughput (flux, before the division by the
     /// path count) and the partial MIS quantities of SmallVCM's recursion (dVCM, dVC, dVM).
-    /// `path_length` counts scattering vertices from the light (0: an empty slot); `flags` holds the
+    /// `path_length` counts scattering vertices from the light (at least 1); `flags` holds the
     /// non-delta vertices before this one (low 16 bits), `VERTEX_SPECULAR_FIRST` and
     /// `VERTEX_MEDIUM` (a scattering point in a medium: `hit` is then the medium's index and the
     /// point `origin + t direction`).
