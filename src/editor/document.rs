@@ -240,6 +240,13 @@ impl SceneDocument {
             doc.saved = String::new();
             return Ok(doc);
         }
+        // A Mitsuba scene likewise (scene::mitsuba): its TOML names the files beside it.
+        if crate::scene::mitsuba::is_mitsuba_path(path) {
+            let t = crate::scene::mitsuba::translate_file(path).map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
+            doc.saved = String::new();
+            return Ok(doc);
+        }
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
             EditError::Invalid(match e {
                 Some(cause) => format!("cannot read {}: {cause}", path.display()),

@@ -358,6 +358,8 @@ pub(crate) struct LightDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct TransformDef {
+    /// A 4x4 matrix, row by row (the last row 0 0 0 1); exclusive with the other three.
+    pub matrix: Option<Spanned<Vec<f64>>>,
     pub scale: Option<Spanned<Vec3Def>>,
     pub rotate: Option<Spanned<Vec3Def>>,
     pub translate: Option<Spanned<Vec3Def>>,

@@ -21,6 +21,7 @@ pub mod gltf_scene;
 mod material;
 pub use auto_integrator::auto_integrator;
 mod medium;
+pub mod mitsuba;
 pub mod model;
 pub mod pattern;
 mod photons;
@@ -445,13 +446,17 @@ pub struct SceneOrigins {
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
 /// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
 /// A `.pov` file is read by the POV-Ray front-end (`pov`), with its default options, and a
-/// `.gltf` or `.glb` file as a whole glTF scene (`gltf_scene`).
+/// `.gltf` or `.glb` file as a whole glTF scene (`gltf_scene`), a `.xml` file as a Mitsuba scene
+/// (`mitsuba`).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     if pov::is_pov_path(path) {
         return pov::load_pov(path, &pov::PovOptions::default());
     }
     if gltf_scene::is_gltf_path(path) {
         return gltf_scene::load_gltf(path);
+    }
+    if mitsuba::is_mitsuba_path(path) {
+        return mitsuba::load_mitsuba(path);
     }
     let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
         Some(cause) => SceneError::Read { path: path.to_path_buf(), cause },

@@ -147,15 +147,14 @@ impl Builder<'_> {
                 media: None,
             });
         }
+        // Exported scenes hold meshes that are all slivers (Mitsuba loads them, as no surface):
+        // such a file adds nothing, with a warning.
         if skipped == total {
-            return Err(SceneError::Obj {
-                obj_location: printable_message(&model_path.display().to_string()),
-                message: format!("all {total} triangles have zero area"),
-                object: object.to_string(),
-                location,
-            });
-        }
-        if skipped > 0 {
+            self.warnings.push(format!(
+                "{location}: {object}: all {total} triangles of {} have zero area; the mesh is left out",
+                printable_message(&model_path.display().to_string())
+            ));
+        } else if skipped > 0 {
             self.warnings.push(format!(
                 "{location}: {object}: skipped {skipped} of {total} triangles of {} with zero area",
                 printable_message(&model_path.display().to_string())
