@@ -98,8 +98,8 @@ pub fn translate_file(path: &Path) -> std::result::Result<Translation, SceneErro
 pub fn load_mitsuba(path: &Path) -> std::result::Result<super::Scene, SceneError> {
     let t = translate_file(path)?;
     let mut scene = super::parse_scene(&t.toml, path).map_err(|e| relocate(e, &t, path))?;
-    let mut warnings = t.warnings;
-    warnings.append(&mut scene.warnings);
+    let mut warnings = t.warnings.clone();
+    warnings.extend(scene.warnings.drain(..).map(|w| relocate_warning(w, &t, path)));
     scene.warnings = warnings;
     Ok(scene)
 }
@@ -116,12 +116,31 @@ fn location_of(pos: Option<Pos>, files: &[PathBuf], main: &Path) -> String {
 
 /// Replaces the `path:line` of a TOML error with the XML position of the entry at that line.
 fn relocate(e: SceneError, t: &Translation, path: &Path) -> SceneError {
+    match relocate_message(&e.to_string(), t, path) {
+        Some((location, tail)) => SceneError::Syntax {
+            location,
+            message: format!("{tail} (in the scene as translated; `photonix convert` shows it)"),
+        },
+        None => e,
+    }
+}
+
+/// A TOML loader's warning, placed at the XML position of its entry.
+fn relocate_warning(w: String, t: &Translation, path: &Path) -> String {
+    match relocate_message(&w, t, path) {
+        Some((location, tail)) => format!("{location}: {tail}"),
+        None => w,
+    }
+}
+
+/// (`file:line:column` of the XML entry, the rest) of a message that starts `path:line[:col]:`.
+fn relocate_message(message: &str, t: &Translation, path: &Path) -> Option<(String, String)> {
     let prefix = format!("{}:", crate::limits::printable_message(&path.display().to_string()));
-    let message = e.to_string();
-    let Some(rest) = message.strip_prefix(&prefix) else { return e };
+    let rest = message.strip_prefix(&prefix)?;
     let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
-    let Ok(line) = digits.parse::<usize>() else { return e };
+    let line = digits.parse::<usize>().ok()?;
     let mut tail = &rest[digits.len()..];
+    // A column counts in the TOML text, not in the XML.
     if let Some(after) = tail.strip_prefix(':') {
         let col: String = after.chars().take_while(char::is_ascii_digit).collect();
         if !col.is_empty() {
@@ -129,11 +148,7 @@ fn relocate(e: SceneError, t: &Translation, path: &Path) -> SceneError {
         }
     }
     let origin = t.origins.iter().take_while(|(l, _)| *l <= line).last().map(|(_, p)| *p);
-    let tail = tail.trim_start_matches(':').trim_start();
-    SceneError::Syntax {
-        location: location_of(origin, &t.files, path),
-        message: format!("{tail} (in the scene as translated; `photonix convert` shows it)"),
-    }
+    Some((location_of(origin, &t.files, path), tail.trim_start_matches(':').trim_start().to_string()))
 }
 
 /// How a shape's uv relates to Mitsuba's: OBJ files have their v flipped by Mitsuba
