@@ -212,6 +212,31 @@ fn a_mesh_whose_faces_all_have_zero_area_is_left_out_with_a_warning() {
 }
 
 #[test]
+fn serialized_meshes_are_read_by_shape_index() {
+    use photonix::scene::model::serialized::write_serialized;
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let quad = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+    let bytes = write_serialized(&[(&tri, &[[0, 1, 2]]), (&quad, &[[0, 1, 2], [0, 2, 3]])]);
+    let (dir, path) = write(
+        &scene3(r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="1"/></shape>
+    <shape type="serialized"><string name="filename" value="m.serialized"/></shape>"#),
+        &[("m.serialized", &bytes)],
+    );
+    let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    // Shape 1 (two triangles), then shape 0 (one).
+    assert_eq!(triangles(&scene).len(), 3);
+    let e = error_of(&scene3(r#"<shape type="serialized"><string name="filename" value="missing.serialized"/></shape>"#));
+    assert!(e.contains("missing.serialized"), "{e}");
+    let (dir2, path2) = write(
+        &scene3(r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="2"/></shape>"#),
+        &[("m.serialized", &bytes)],
+    );
+    let e = load_scene(&path2).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("scene.xml:10:1:") && e.contains("`shape_index` is 2"), "{e}");
+    drop((dir, dir2));
+}
+
+#[test]
 fn the_toml_matrix_transform_is_checked() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("m.toml");

@@ -311,6 +311,7 @@ pub(crate) struct ShapeDef {
     pub crease_angle: Option<Spanned<f64>>,
     pub flatness: Option<Spanned<f64>>,
     pub lights: Option<Spanned<bool>>,
+    pub shape_index: Option<Spanned<i64>>,
     pub points: Option<Spanned<Vec<Vec3Def>>>,
     // media
     pub interior: Option<Spanned<String>>,

@@ -348,6 +348,8 @@ pub const CREASE_ANGLE: Field = field("crease_angle", T::Number, Unset);
 /// Bezier patches (`.bpt` and `bicubic_patch`): largest distance to their triangles.
 pub const FLATNESS: Field = field("flatness", T::Number, Number(0.01));
 pub const MODEL_LIGHTS: Field = field("lights", T::Bool, Bool(true));
+/// One mesh of a file that holds several (a Mitsuba `.serialized` file's shape); unset: all.
+pub const SHAPE_INDEX: Field = field("shape_index", T::Integer, Unset);
 pub const OPERATION: Field = field("operation", T::Choice(&["union", "intersection", "difference", "merge"]), Required);
 pub const CHILDREN: Field = field("children", T::Table, Required);
 
@@ -365,7 +367,7 @@ pub const SHAPES: Family = Family {
             name: "mesh",
             what: "a mesh",
             common: SHAPE,
-            fields: &[FILE, SMOOTH_ANGLE, FILE_NORMALS, SUBDIVISION, LEVELS, CREASE_ANGLE, FLATNESS, MODEL_LIGHTS],
+            fields: &[FILE, SMOOTH_ANGLE, FILE_NORMALS, SUBDIVISION, LEVELS, CREASE_ANGLE, FLATNESS, MODEL_LIGHTS, SHAPE_INDEX],
         },
         Kind {
             name: "bicubic_patch",

@@ -81,8 +81,23 @@ impl Builder<'_> {
         let mut scene_material: Vec<Option<u32>> = vec![None; model.materials.len()];
         let mut default_material = None;
         let stem = model_path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+        let only = match &s.shape_index {
+            Some(i) => {
+                let n = model.meshes.len();
+                let index = *i.get_ref();
+                if index < 0 || index as usize >= n {
+                    let message = format!("`shape_index` is {index}; the file holds {n} mesh(es), numbered from 0");
+                    return Err(self.invalid(&i.span(), object, message));
+                }
+                Some(index as usize)
+            }
+            None => None,
+        };
         let mut triangles = Vec::new();
         for (m, mesh) in model.meshes.iter().enumerate() {
+            if only.is_some_and(|k| k != m) {
+                continue;
+            }
             let subdivided;
             let mesh = match subdivision {
                 Some((scheme, levels, crease)) => {

@@ -77,6 +77,7 @@ impl Builder<'_> {
             ("crease_angle", span_of(&s.crease_angle)),
             ("flatness", span_of(&s.flatness)),
             ("lights", span_of(&s.lights)),
+            ("shape_index", span_of(&s.shape_index)),
             ("points", span_of(&s.points)),
             ("interior", span_of(&s.interior)),
             ("exterior", span_of(&s.exterior)),

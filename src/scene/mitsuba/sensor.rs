@@ -20,11 +20,11 @@ impl<'a> Translator<'a> {
         let pos = sensor.map_or(scene_pos, |s| s.pos);
         let (mut width, mut height) = DEFAULT_SIZE;
         let mut world_from_camera = DMat4::IDENTITY;
-        let mut fov_x = 45.0;
-        let mut fov_axis = "x".to_string();
+        let mut fov_x = 2.0 * (FILM_DIAGONAL_MM / 100.0).atan().to_degrees();
+        let mut fov_axis = "diagonal".to_string();
         let mut lens: Option<(f64, f64)> = None;
         match sensor {
-            None => self.warn(scene_pos, "the scene has no <sensor>; Mitsuba's default camera is used (at the origin, looking down +z, 45 degrees wide)".into()),
+            None => self.warn(scene_pos, "the scene has no <sensor>; Mitsuba's default camera is used (at the origin, looking down +z, a 50 mm lens)".into()),
             Some(s) => {
                 let p = Plugin::new(s);
                 if !matches!(p.kind.as_str(), "perspective" | "thinlens") {
@@ -74,7 +74,11 @@ impl<'a> Translator<'a> {
                         fov_axis = "diagonal".into();
                         2.0 * (FILM_DIAGONAL_MM / (2.0 * f)).atan().to_degrees()
                     }
-                    (None, None) => 45.0,
+                    // Mitsuba's default lens: 50 mm on 35 mm film, along the diagonal.
+                    (None, None) => {
+                        fov_axis = "diagonal".into();
+                        2.0 * (FILM_DIAGONAL_MM / 100.0).atan().to_degrees()
+                    }
                 };
                 if !(fov_x > 0.0 && fov_x < 180.0) {
                     return Err(p.error(s.pos, format!("`fov` is {fov_x}; it must be in (0, 180) degrees")));

@@ -1,4 +1,4 @@
-//! `<shape>`: `obj`, `ply`, `rectangle`, `disk`, `cube`, `sphere`, `cylinder`, each a
+//! `<shape>`: `obj`, `ply`, `serialized`, `rectangle`, `disk`, `cube`, `sphere`, `cylinder`, each a
 //! `[[shapes]]` entry with its `to_world` as a `transform.matrix`, its BSDF as a material, an area
 //! emitter as that material's emission, and media as `interior`/`exterior`.
 
@@ -23,7 +23,7 @@ impl<'a> Translator<'a> {
         let mut uv = Uv::AsIs;
         let mut matrix = true;
         match p.kind.as_str() {
-            "obj" | "ply" => {
+            "obj" | "ply" | "serialized" => {
                 let Some((file, at)) = p.string("filename")? else {
                     return Err(p.error(el.pos, "needs a `filename`".into()));
                 };
@@ -38,7 +38,10 @@ impl<'a> Translator<'a> {
                 if p.boolean("flip_normals")?.unwrap_or(false) {
                     self.warn(el.pos, "`flip_normals` is not supported; the faces keep their winding".into());
                 }
-                let _ = p.integer("shape_index")?;
+                if p.kind == "serialized" {
+                    let index = p.integer("shape_index")?.unwrap_or(0);
+                    fields.push(("shape_index".into(), index.to_string()));
+                }
                 let _ = p.boolean("collapse")?;
             }
             "rectangle" => {
@@ -78,12 +81,11 @@ impl<'a> Translator<'a> {
                 fields.push(("radius".into(), num(r * s)));
                 matrix = false;
             }
-            "serialized" => return Err(p.error(el.pos, "Mitsuba's `serialized` meshes are not read yet; convert the mesh to PLY or OBJ".into())),
             other => {
                 return Err(p.error(
                     el.pos,
                     format!(
-                        "the `{}` shape is not supported; Photonix reads obj, ply, rectangle, disk, cube, sphere and cylinder",
+                        "the `{}` shape is not supported; Photonix reads obj, ply, serialized, rectangle, disk, cube, sphere and cylinder",
                         crate::limits::printable(other)
                     ),
                 ))
