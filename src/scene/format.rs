@@ -169,6 +169,7 @@ pub(crate) struct RenderDef {
     pub max_depth: Option<Spanned<i64>>,
     pub seed: Option<Spanned<i64>>,
     pub integrator: Option<Spanned<String>>,
+    pub filter: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -203,6 +204,7 @@ pub(crate) struct MaterialDef {
     pub preset: Option<Spanned<String>>,
     pub materials: Option<Spanned<Vec<String>>>,
     pub weight: Option<Spanned<ParamDef>>,
+    pub nonlinear: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

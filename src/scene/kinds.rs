@@ -214,6 +214,8 @@ pub const REFLECTANCE: Field = field("reflectance", T::ColorOrTexture, Triple([0
 pub const TINT: Field = field("tint", T::ColorOrTexture, Triple([1.0; 3]));
 pub const IOR: Field = field("ior", T::Number, Number(1.5));
 pub const ROUGHNESS: Field = field("roughness", T::Roughness, Number(0.0));
+/// Mitsuba's plastic `nonlinear`: the base tints the light bouncing under the coat.
+pub const NONLINEAR: Field = field("nonlinear", T::Bool, Bool(false));
 /// Names of `METAL_PRESETS` (convert/materials.rs), which holds their optical constants.
 pub const METAL_PRESET_NAMES: &[&str] =
     &["gold", "silver", "copper", "aluminium", "aluminum", "chrome", "iron", "platinum", "titanium"];
@@ -232,8 +234,9 @@ pub const MATERIALS: Family = Family {
         Kind { name: "diffuse", what: "a diffuse material", common: SURFACE, fields: &[REFLECTANCE] },
         Kind { name: "mirror", what: "a mirror material", common: SURFACE, fields: &[TINT] },
         Kind { name: "dielectric", what: "a dielectric material", common: SURFACE, fields: &[IOR, ROUGHNESS] },
-        Kind { name: "conductor", what: "a conductor material", common: SURFACE, fields: &[ETA, K, PRESET, ROUGHNESS] },
-        Kind { name: "plastic", what: "a plastic material", common: SURFACE, fields: &[REFLECTANCE, IOR, ROUGHNESS] },
+        Kind { name: "conductor", what: "a conductor material", common: SURFACE, fields: &[ETA, K, PRESET, ROUGHNESS, TINT] },
+        Kind { name: "plastic", what: "a plastic material", common: SURFACE, fields: &[REFLECTANCE, IOR, ROUGHNESS, NONLINEAR] },
+        Kind { name: "thin_dielectric", what: "a thin dielectric material", common: SURFACE, fields: &[IOR] },
         Kind { name: "mix", what: "a mix material", common: &[TYPE], fields: &[MIXED, WEIGHT] },
         Kind { name: "null", what: "a null material (an invisible medium boundary)", common: &[TYPE], fields: &[] },
     ],

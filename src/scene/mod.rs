@@ -221,6 +221,35 @@ pub struct RenderSettings {
     /// Why `integrator` was chosen for the scene when it names none (`auto_integrator`); `None`
     /// when the scene or the caller named it.
     pub integrator_auto: Option<&'static str>,
+    /// The reconstruction filter (`[render] filter`).
+    pub filter: Filter,
+}
+
+/// The pixel reconstruction filter, with Mitsuba 3's radii: how much a film point counts toward
+/// each pixel near it (see `FILTER_*`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Each pixel the mean of its own square (the default, Photonix's before filters).
+    #[default]
+    Box,
+    /// 1 - |x| per axis over a radius of 1 pixel.
+    Tent,
+    /// Standard deviation 0.5 pixel, truncated at 2 pixels.
+    Gaussian,
+}
+
+impl Filter {
+    pub const NAMES: [(&'static str, Filter); 3] =
+        [("box", Filter::Box), ("tent", Filter::Tent), ("gaussian", Filter::Gaussian)];
+
+    /// `FrameParams::filter`.
+    pub fn code(self) -> u32 {
+        match self {
+            Filter::Box => crate::layout::constants::FILTER_BOX,
+            Filter::Tent => crate::layout::constants::FILTER_TENT,
+            Filter::Gaussian => crate::layout::constants::FILTER_GAUSSIAN,
+        }
+    }
 }
 
 /// How a render estimates light transport: one place that chooses (`render::render_cpu`,

@@ -421,7 +421,7 @@ impl Builder<'_> {
         let roughness = m.roughness.map(|alpha| Roughness { alpha: [alpha; 2], texture: rough_tex });
         let base_kind = match roughness {
             None => MaterialKind::Diffuse { reflectance },
-            Some(r) => MaterialKind::Plastic { reflectance, ior: m.ior, roughness: r },
+            Some(r) => MaterialKind::Plastic { reflectance, ior: m.ior, roughness: r, nonlinear: false },
         };
         let emission = ColorParam {
             value: m.emission,
@@ -451,7 +451,12 @@ impl Builder<'_> {
             Some(roughness) if metallic => {
                 let (eta, k) = metal_eta_k(m.base_color);
                 let conductor =
-                    MaterialKind::Conductor { eta: ColorParam::constant(eta), k: ColorParam::constant(k), roughness };
+                    MaterialKind::Conductor {
+                        eta: ColorParam::constant(eta),
+                        k: ColorParam::constant(k),
+                        roughness,
+                        tint: ColorParam::constant(Vec3::ONE),
+                    };
                 if m.metallic >= 1.0 && metal_tex.is_none() {
                     self.add_material(name_opaque, finish(conductor))
                 } else {
