@@ -6,7 +6,7 @@ use super::out::{field, num, string, Fields};
 use super::props::Plugin;
 use super::textures::Param;
 use super::xml::Element;
-use super::{Pos, Result, Translator, Uv, RENDERER_HAS_MITSUBA_MATERIALS};
+use super::{Pos, Result, Translator, Uv, RENDERER_HAS_BECKMANN};
 
 /// Mitsuba's named indices of refraction (its `ior.h`).
 const IOR_NAMES: &[(&str, f64)] = &[
@@ -240,7 +240,7 @@ impl<'a> Translator<'a> {
         let (dist, at) = p.string("distribution")?.map_or((default_distribution.to_string(), p.pos()), |(d, at)| (d.to_string(), at));
         match dist.as_str() {
             "ggx" => {}
-            "beckmann" | "phong" | "as" if RENDERER_HAS_MITSUBA_MATERIALS => m.fields.push(("distribution".into(), string("beckmann"))),
+            "beckmann" | "phong" | "as" if RENDERER_HAS_BECKMANN => m.fields.push(("distribution".into(), string("beckmann"))),
             "beckmann" | "phong" | "as" => self.warn(at, format!("the `{dist}` microfacet distribution is rendered as GGX of the same alpha")),
             other => return Err(p.error(at, format!("`distribution` \"{}\": give ggx or beckmann", crate::limits::printable(other)))),
         }
@@ -286,10 +286,8 @@ impl<'a> Translator<'a> {
             self.roughness(p, uv, m, "beckmann")?;
         }
         match tint {
-            Some(t) if m.kind == "mirror" => m.fields.push(("tint".into(), t.toml())),
-            Some(t) if RENDERER_HAS_MITSUBA_MATERIALS => m.fields.push(("tint".into(), t.toml())),
             Some(Param::Constant([1.0, 1.0, 1.0])) | None => {}
-            Some(_) => self.warn(p.pos(), "`specular_reflectance` of a conductor is not rendered yet (Photonix has no conductor tint); it is taken as 1".into()),
+            Some(t) => m.fields.push(("tint".into(), t.toml())),
         }
         Ok(())
     }
@@ -310,11 +308,7 @@ impl<'a> Translator<'a> {
         m.two_sided = true;
         let ior = self.ior(p, "int_ior", 1.5046)? / self.ior(p, "ext_ior", 1.000277)?;
         if p.kind == "thindielectric" {
-            if RENDERER_HAS_MITSUBA_MATERIALS {
-                m.kind = "thin_dielectric";
-            } else {
-                self.warn(p.pos(), "`thindielectric` is rendered as a solid `dielectric` (Photonix has no thin dielectric yet)".into());
-            }
+            m.kind = "thin_dielectric";
         }
         m.fields.push(("ior".into(), num(ior)));
         if p.kind == "roughdielectric" {
@@ -340,11 +334,7 @@ impl<'a> Translator<'a> {
             self.roughness(p, uv, m, "beckmann")?;
         }
         if p.boolean("nonlinear")?.unwrap_or(false) {
-            if RENDERER_HAS_MITSUBA_MATERIALS {
-                m.fields.push(("nonlinear".into(), "true".into()));
-            } else {
-                self.warn(p.pos(), "`nonlinear` plastic is rendered linear (Photonix has no nonlinear plastic yet): brighter".into());
-            }
+            m.fields.push(("nonlinear".into(), "true".into()));
         }
         if let Some(c) = self.color(p, "specular_reflectance", uv)? {
             if !matches!(c, Param::Constant([1.0, 1.0, 1.0])) {

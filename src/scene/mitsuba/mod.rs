@@ -332,7 +332,7 @@ fn collect_ids<'a>(e: &'a Element, ids: &mut HashMap<&'a str, &'a Element>) {
     }
 }
 
-/// Whether the renderer reads the fields Mitsuba's materials need (`nonlinear` plastic,
-/// conductor `tint`, `thin_dielectric`, `distribution`, `[render] filter`), which branch
-/// `materials` adds; until then they are approximated, each with a warning.
-pub(crate) const RENDERER_HAS_MITSUBA_MATERIALS: bool = false;
+/// Whether the renderer has Beckmann microfacets (`distribution = "beckmann"`, promised by
+/// branch `materials`); until then Mitsuba's Beckmann surfaces are GGX of the same alpha, with a
+/// warning.
+pub(crate) const RENDERER_HAS_BECKMANN: bool = false;

@@ -173,8 +173,11 @@ impl<'a> Translator<'a> {
                 let f = self.resolve(f, "rfilter")?;
                 let p = Plugin::new(f);
                 let kind = p.kind.clone();
-                let _ = p.float("radius")?;
-                let _ = p.float("stddev")?;
+                for name in ["radius", "stddev"] {
+                    if p.float(name)?.is_some() {
+                        self.warn(f.pos, format!("the filter's `{name}` is not read; Photonix uses Mitsuba's default size"));
+                    }
+                }
                 self.finish(&p);
                 (kind, f.pos)
             }
@@ -187,11 +190,7 @@ impl<'a> Translator<'a> {
                 "gaussian".into()
             }
         };
-        if super::RENDERER_HAS_MITSUBA_MATERIALS {
-            render.push(("filter".into(), string(&ours)));
-        } else if ours != "box" {
-            self.warn(pos, format!("Photonix has no `{ours}` reconstruction filter yet; the image is box-filtered"));
-        }
+        render.push(("filter".into(), string(&ours)));
         Ok(())
     }
 }
