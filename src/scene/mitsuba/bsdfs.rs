@@ -122,7 +122,7 @@ impl<'a> Translator<'a> {
             "diffuse" | "roughdiffuse" => {
                 if p.kind == "roughdiffuse" {
                     self.warn(el.pos, "`roughdiffuse` (Oren-Nayar) is rendered as `diffuse` (Lambertian)".into());
-                    let _ = p.scalar_prop_quiet(&["alpha", "use_fast_approx"]);
+                    p.scalar_prop_quiet(&["alpha", "use_fast_approx"]);
                 }
                 let r = self.color(&p, "reflectance", uv)?.unwrap_or(Param::Constant([0.5; 3]));
                 m.fields.push(("reflectance".into(), r.toml()));

@@ -133,7 +133,7 @@ impl<'a> Translator<'a> {
         let base = p.id().map(str::to_string).unwrap_or_else(|| format!("{} line {}", p.kind, t.pos.line));
         let name = self.out.unique("textures", &base);
         let mut fields = Fields::new();
-        let to_uv = self.to_uv(&p)?;
+        let to_uv = self.uv_transform(&p)?;
         let from_uv = match uv {
             Uv::Flipped => flip_v(),
             Uv::AsIs => DMat4::IDENTITY,
@@ -217,7 +217,7 @@ impl<'a> Translator<'a> {
 
     /// `to_uv` (Mitsuba 3) or `uscale`, `vscale`, `uoffset`, `voffset` (0.5), as a matrix on
     /// (u, v, 0): Mitsuba keeps its 2D part (rows and columns x, y and the translation).
-    fn to_uv(&mut self, p: &Plugin<'a>) -> Result<DMat4> {
+    fn uv_transform(&mut self, p: &Plugin<'a>) -> Result<DMat4> {
         let mut m = match p.prop("to_uv") {
             Some(t) => {
                 let m = super::transform::parse(t)?;
