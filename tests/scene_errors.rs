@@ -436,6 +436,7 @@ fn new_material_and_filter_fields_are_checked() {
     assert_mentions(&message, &["bad.toml:7:13:", "material \"p\"", "`nonlinear`", "boolean"]);
     let message = error_of(&format!("{CAMERA}[materials.pane]\ntype = \"thin_dielectric\"\nnonlinear = true\n"));
     assert_mentions(&message, &["bad.toml:7:", "`nonlinear` does not apply to a thin dielectric material"]);
-    let message = error_of(&format!("{CAMERA}[materials.m]\ntype = \"conductor\"\npreset = \"gold\"\ntint = [2, 1, 1]\n"));
+    let message =
+        error_of(&format!("{CAMERA}[materials.m]\ntype = \"conductor\"\npreset = \"gold\"\ntint = [2, 1, 1]\n"));
     assert_mentions(&message, &["bad.toml:8:", "material \"m\"", "`tint`"]);
 }
