@@ -624,7 +624,9 @@ fn thin_dielectric_and_tinted_conductor_twins_agree_on_every_integrator() {
 fn thin_dielectric_in_a_white_furnace_is_invisible() {
     // A pane absorbs nothing: under a uniform sky of radiance 1 every path that leaves through
     // it or off it sees 1, so a ball of thin glass (seen through twice, reflecting inside)
-    // renders 1 everywhere, exactly: the weights are 1 and only the choices are random.
+    // renders 1: every weight is 1, and only Russian roulette (from a path's fifth vertex, a
+    // path reflected inside the ball) moves a sample off 1, in expectation not at all. Measured
+    // at 16 spp: mean 1.0003 over 64 spp, half the pixels exactly 1.
     let scene = parse(
         r#"
 [camera]
@@ -652,8 +654,11 @@ radiance = [1, 1, 1]
 "#,
     );
     let buffers = common::buffers(&scene, 12, 12);
-    let out = common::cpu_render(&buffers, 4, &common::test_photons());
-    let worst = out.image.pixels.iter().flat_map(|p| p.iter().take(3)).map(|&v| (v - 1.0).abs()).fold(0.0f32, f32::max);
-    println!("thin dielectric furnace: worst pixel off 1 by {worst:e}");
-    assert!(worst < 1e-4, "a pane absorbed or added light: {worst}");
+    let out = common::cpu_render(&buffers, 16, &common::test_photons());
+    let values: Vec<f32> = out.image.pixels.iter().flat_map(|p| p.iter().take(3).copied()).collect();
+    let mean = values.iter().map(|&v| v as f64).sum::<f64>() / values.len() as f64;
+    let exact = values.iter().filter(|&&v| v == 1.0).count();
+    println!("thin dielectric furnace: mean {mean:.5}, {exact} of {} values exactly 1", values.len());
+    assert!((mean - 1.0).abs() < 5e-3, "a pane absorbed or added light: mean {mean}");
+    assert!(exact * 2 > values.len(), "most pixels should be exactly 1: {exact} of {}", values.len());
 }
