@@ -40,13 +40,14 @@ Primitive primitive_at(uint i) {
 uint primitive_kind(uint i) { return FETCH_TEXEL(primitive_texels, 4u * i).w; }
 
 Material material_at(uint i) {
-    uvec4 a = FETCH_TEXEL(material_texels, 7u * i);
-    uvec4 b = FETCH_TEXEL(material_texels, 7u * i + 1u);
-    uvec4 c = FETCH_TEXEL(material_texels, 7u * i + 2u);
-    uvec4 d = FETCH_TEXEL(material_texels, 7u * i + 3u);
-    uvec4 e = FETCH_TEXEL(material_texels, 7u * i + 4u);
-    uvec4 f = FETCH_TEXEL(material_texels, 7u * i + 5u);
-    uvec4 g = FETCH_TEXEL(material_texels, 7u * i + 6u);
+    uvec4 a = FETCH_TEXEL(material_texels, 8u * i);
+    uvec4 b = FETCH_TEXEL(material_texels, 8u * i + 1u);
+    uvec4 c = FETCH_TEXEL(material_texels, 8u * i + 2u);
+    uvec4 d = FETCH_TEXEL(material_texels, 8u * i + 3u);
+    uvec4 c2 = FETCH_TEXEL(material_texels, 8u * i + 4u);
+    uvec4 e = FETCH_TEXEL(material_texels, 8u * i + 5u);
+    uvec4 f = FETCH_TEXEL(material_texels, 8u * i + 6u);
+    uvec4 g = FETCH_TEXEL(material_texels, 8u * i + 7u);
     Material m;
     m.kind = a.x;
     m.flags = a.y;
@@ -58,6 +59,8 @@ Material material_at(uint i) {
     m.color0_tex = c.w;
     m.color1 = F3(d);
     m.color1_tex = d.w;
+    m.color2 = F3(c2);
+    m.color2_tex = c2.w;
     m.roughness = float[2](uintBitsToFloat(e.x), uintBitsToFloat(e.y));
     m.roughness_tex = e.z;
     m.ior = uintBitsToFloat(e.w);
@@ -68,7 +71,7 @@ Material material_at(uint i) {
     m.weight = uintBitsToFloat(g.x);
     m.mix_a = g.y;
     m.mix_b = g.z;
-    m._pad = g.w;
+    m.data = g.w;
     return m;
 }
 

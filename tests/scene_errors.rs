@@ -427,3 +427,16 @@ fn image_projection_errors_name_the_field_and_suggest() {
     }
     load("space = \"world\"\n").unwrap();
 }
+
+#[test]
+fn new_material_and_filter_fields_are_checked() {
+    let message = error_of(&format!("{CAMERA}[render]\nfilter = \"lanczos\"\n"));
+    assert_mentions(&message, &["bad.toml:6:", "[render]", "unknown filter \"lanczos\"", "\"tent\""]);
+    let message = error_of(&format!("{CAMERA}[materials.p]\ntype = \"plastic\"\nnonlinear = \"yes\"\n"));
+    assert_mentions(&message, &["bad.toml:7:13:", "material \"p\"", "`nonlinear`", "boolean"]);
+    let message = error_of(&format!("{CAMERA}[materials.pane]\ntype = \"thin_dielectric\"\nnonlinear = true\n"));
+    assert_mentions(&message, &["bad.toml:7:", "`nonlinear` does not apply to a thin dielectric material"]);
+    let message =
+        error_of(&format!("{CAMERA}[materials.m]\ntype = \"conductor\"\npreset = \"gold\"\ntint = [2, 1, 1]\n"));
+    assert_mentions(&message, &["bad.toml:8:", "material \"m\"", "`tint`"]);
+}

@@ -103,6 +103,7 @@ fn materials_showroom_has_every_material_kind_on_its_spheres() {
             MaterialKind::Dielectric { .. } => "dielectric",
             MaterialKind::Conductor { .. } => "conductor",
             MaterialKind::Plastic { .. } => "plastic",
+            MaterialKind::ThinDielectric { .. } => "thin_dielectric",
             MaterialKind::Mix { .. } => "mix",
             MaterialKind::Null => "null",
         })
