@@ -12,6 +12,7 @@ mod emit;
 mod image;
 mod implicit;
 mod lexer;
+mod measure;
 mod objects;
 mod parser;
 mod tessellate;
@@ -123,9 +124,17 @@ fn to_scene_error(e: &PovError, files: &[PathBuf], main: &Path) -> SceneError {
 
 /// Loads a `.pov` scene: translates it and loads the TOML as `load_scene` loads a file. An error
 /// the TOML checks find is reported at the `.pov` position its entry came from.
+/// Every file the translation read (includes, height fields, fonts) is one of the scene's
+/// inputs, which no command may write over, as are the files the TOML names.
 pub fn load_pov(path: &Path, options: &PovOptions) -> Result<super::Scene, SceneError> {
-    let t = translate_file(path, options)?;
+    let (t, read) = super::files::collect(None, || translate_file(path, options));
+    let t = t?;
     let mut scene = super::parse_scene(&t.toml, path).map_err(|e| relocate(e, &t, path))?;
+    for file in read {
+        if !scene.inputs.contains(&file) {
+            scene.inputs.push(file);
+        }
+    }
     scene.warnings.extend(t.warnings);
     Ok(scene)
 }
