@@ -112,6 +112,19 @@ pub fn collect_allowing<T>(confine: Option<&Path>, also: &[&Path], load: impl Fn
     (result, pop())
 }
 
+/// The current scope's folder and extra folders (`collect_allowing`), to carry a load onto
+/// another thread: run it there under `collect_allowing` with these, then `record` what it read.
+pub fn current_rules() -> (Option<PathBuf>, Vec<PathBuf>) {
+    SCOPE.with(|s| s.borrow().last().map(|scope| (scope.confine.clone(), scope.also.clone())).unwrap_or_default())
+}
+
+/// Records files read on another thread in the current scope (canonical paths).
+pub fn record(paths: &[PathBuf]) {
+    for path in paths {
+        note_read(path.clone());
+    }
+}
+
 /// Pops the innermost scope, adds its files to the scope around it, and returns them.
 fn pop() -> Vec<PathBuf> {
     let read = SCOPE.with(|s| s.borrow_mut().pop()).map(|scope| scope.read).unwrap_or_default();

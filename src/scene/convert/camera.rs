@@ -86,9 +86,9 @@ impl Builder<'_> {
                 "`look_at` equals `position`; the camera needs a direction to look in".to_string()
             } else {
                 format!(
-                    "`look_at` is too close to `position` for 32-bit floats to give a direction this far from the \
-                     origin ({} units): move `look_at` farther away along the view",
-                    crate::limits::fmt_f32(position.abs().max_element().max(look_at.abs().max_element()))
+                    "`look_at` is too close to `position` for 32-bit floats to give a direction (the camera is {} \
+                     units from the origin): move `look_at` farther away along the view",
+                    crate::limits::fmt_f32(position.abs().max_element())
                 )
             };
             return Err(self.invalid(&look_at_def.span(), object, message));

@@ -21,9 +21,10 @@ pub const MAX_DEPTH: usize = 128;
 pub const MAX_TOKENS: u64 = 50_000_000;
 /// Most elements of one array.
 pub const MAX_ARRAY: usize = 1 << 22;
-/// Most `{` and `(` open at once. The evaluator recurses once or a few times per level; 256
-/// levels take well under 1 MiB of stack in a release build (tests/hardening4.rs runs the limit
-/// on a 1 MiB thread), so the limit holds on every thread a parser runs on (2 MiB and more).
+/// Most `{` and `(` open at once. The evaluator recurses a few times per level, about 8 KiB of
+/// stack per level in a release build; the front-end runs on a thread of its own with 64 MiB of
+/// stack (`pov::translate_file`), so 256 levels of braces with 256 of expressions inside fit
+/// whatever thread asked for the translation (tests/hardening4.rs asks from a 1 MiB thread).
 pub const MAX_NESTING: i64 = 256;
 /// Most nested sub-expressions without a bracket (`- - - 1`, `<<1, 2>.x, 3>`, `a ? b : c ? ...`).
 pub const MAX_EXPRESSION_DEPTH: usize = 256;
@@ -32,7 +33,7 @@ pub const MAX_STRING_BYTES: usize = 1 << 20;
 /// Most nodes (objects, textures, pigments, array elements) one value may hold as the
 /// translation expands it: an object declared from itself (`#declare U = union { object { U }
 /// object { U } }` in a loop) doubles (`measure`).
-pub const MAX_VALUE_NODES: usize = 1 << 22;
+pub const MAX_VALUE_NODES: usize = 1 << 20;
 /// Deepest value: objects in objects, textures in texture maps, arrays in arrays (`measure`).
 pub const MAX_VALUE_DEPTH: usize = 256;
 /// The language's memory as a whole: an estimate of every declared value (strings, arrays,
@@ -164,6 +165,9 @@ pub struct Parser {
     declared_bytes: usize,
     /// The estimated bytes of the scene's objects so far.
     scene_bytes: usize,
+    /// `MAX_LANGUAGE_BYTES`, or half the memory available when that is less (the memory budget,
+    /// docs/limits.md): the translation and the scene it loads need the rest.
+    memory_budget: usize,
 }
 
 /// Directives that may open a declared value (`#declare X = #if (c) A #else B #end`).
@@ -197,6 +201,8 @@ impl Parser {
             read: HashMap::new(),
             declared_bytes: 0,
             scene_bytes: 0,
+            memory_budget: crate::render::memory::available_host_memory()
+                .map_or(MAX_LANGUAGE_BYTES, |a| MAX_LANGUAGE_BYTES.min((a / 2) as usize)),
         }
     }
 
@@ -458,12 +464,12 @@ impl Parser {
     /// Refuses a scene whose values and objects together pass `MAX_LANGUAGE_BYTES`.
     fn check_memory(&self) -> Result<()> {
         let total = self.declared_bytes.saturating_add(self.scene_bytes);
-        if total > MAX_LANGUAGE_BYTES {
+        if total > self.memory_budget {
             return self.err(
                 self.here(),
                 format!(
                     "the scene's declared values and objects take more than {} of memory; see docs/limits.md",
-                    crate::limits::fmt_bytes(MAX_LANGUAGE_BYTES as u64)
+                    crate::limits::fmt_bytes(self.memory_budget as u64)
                 ),
             );
         }
@@ -865,17 +871,29 @@ impl Parser {
         // Each candidate passes the scene's file gate: in the editor a name that leads out of
         // the scene's folder (and the standard include folder) is refused whether or not a file
         // is there, and the message names neither the file nor the folders searched.
-        let mut outside = None;
+        let (mut outside, mut not_regular) = (None, None);
         for dir in &dirs {
             let p = dir.join(name);
             match crate::scene::files::probe(&p) {
                 Ok(_) if p.is_file() => return Ok(p),
+                // There, but a device, a pipe or a folder: say what it is, not "no such file".
+                Ok(r) => {
+                    if let Err(e) = crate::limits::regular_file_size(&r) {
+                        not_regular = not_regular.or(Some(e));
+                    }
+                }
                 Err(e @ crate::scene::files::FileError::Outside { .. }) => outside = outside.or(Some(e)),
                 _ => {}
             }
         }
         if let Some(e) = outside {
             return self.err(pos, format!("#include: {e}"));
+        }
+        if let Some(e) = not_regular {
+            return self.err(
+                pos,
+                format!("#include \"{}\": {e}", crate::limits::printable(name)),
+            );
         }
         let hint = if Path::new(super::STANDARD_INCLUDE_DIR).is_dir() {
             String::new()
