@@ -1459,7 +1459,20 @@ fn check_pov_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
     }
     let names: Vec<PathBuf> = POV_FILES.iter().map(|n| dir.join(n)).chain([fifo.clone()]).collect();
     let refs: Vec<&Path> = names.iter().map(PathBuf::as_path).collect();
-    check_scene(|| load_scene(&scene), &refs)
+    // The front-end runs on a thread of its own, whose CPU time `fuzz` does not see: a hang is
+    // caught here by the wall clock instead (a case takes well under a second when it does not).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let path = scene.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(load_scene(&path));
+    });
+    match rx.recv_timeout(Duration::from_secs(120)) {
+        Ok(loaded) => check_scene(|| loaded, &refs),
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            Err(Failure { key: "hang".into(), message: "the load took more than 120 s of wall time".into() })
+        }
+        Err(_) => Err(Failure { key: "panic".into(), message: "the load panicked (on its own thread)".into() }),
+    }
 }
 
 #[test]
@@ -1474,9 +1487,21 @@ fn fuzz_pov_front_end() {
 fn grammar_gltf(r: &mut Rng) -> Vec<u8> {
     let uri = |r: &mut Rng| -> serde_json::Value {
         serde_json::json!(r.pick(&[
-            "tri.bin", "tri.bin", "/dev/zero", "fifo.bin", "huge.bin", "missing.bin", "file:///dev/zero",
-            "file://tri.bin", "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA",
-            "data:,", "%ZZ", "..", "/", "http://example.com/x.bin", "tri.png",
+            "tri.bin",
+            "tri.bin",
+            "/dev/zero",
+            "fifo.bin",
+            "huge.bin",
+            "missing.bin",
+            "file:///dev/zero",
+            "file://tri.bin",
+            "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA",
+            "data:,",
+            "%ZZ",
+            "..",
+            "/",
+            "http://example.com/x.bin",
+            "tri.png",
         ]))
     };
     let f = |r: &mut Rng| -> serde_json::Value {
@@ -1529,7 +1554,8 @@ fn check_gltf_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
     let dir = dir.join("gltf");
     if !dir.exists() {
         std::fs::create_dir_all(&dir).unwrap();
-        let tri: Vec<u8> = [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+        let tri: Vec<u8> =
+            [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
         std::fs::write(dir.join("tri.bin"), tri).unwrap();
         std::fs::copy(repo("tests/models/assimp/BoxTextured-glTF/CesiumLogoFlat.png"), dir.join("tri.png")).unwrap();
         let _ = std::process::Command::new("mkfifo").arg(dir.join("fifo.bin")).status();

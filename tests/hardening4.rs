@@ -222,7 +222,11 @@ fn tail_includes_stop_at_the_include_depth() {
     std::fs::write(p.join("b.inc"), "#declare B = 1;\n#include \"a.pov\"").unwrap();
     std::fs::write(p.join("m.pov"), format!("{POV_BASE}#macro M()\n#include \"m.inc\"\n#end\nM()")).unwrap();
     std::fs::write(p.join("m.inc"), "M()").unwrap();
-    for (file, reason) in [("self.pov", "includes nest deeper than 128"), ("a.pov", "includes nest deeper than 128"), ("m.pov", "nest deeper than 128")] {
+    for (file, reason) in [
+        ("self.pov", "includes nest deeper than 128"),
+        ("a.pov", "includes nest deeper than 128"),
+        ("m.pov", "nest deeper than 128"),
+    ] {
         let e = load_error(p.join(file));
         assert!(e.contains(reason), "{file}: {e}");
     }
@@ -381,7 +385,11 @@ fn out_of_range_gltf_values_are_refused_or_warned_about() {
         assert!(e.contains("cam.gltf") && e.contains("camera") && e.contains("yfov is"), "{yfov}: {e}");
     }
     let scene = load("spot.gltf", gltf_values(0.8, (0.9, 0.3), 0.5, 0.0)).unwrap();
-    assert!(scene.warnings.iter().any(|w| w.contains("\"lamp\"") && w.contains("outerConeAngle")), "{:?}", scene.warnings);
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("\"lamp\"") && w.contains("outerConeAngle")),
+        "{:?}",
+        scene.warnings
+    );
     let scene = load("base.gltf", gltf_values(0.8, (0.2, 0.6), 1.5, 0.0)).unwrap();
     assert!(
         scene.warnings.iter().any(|w| w.contains("\"paint\"") && w.contains("baseColorFactor [1.5")),
@@ -462,14 +470,18 @@ fn slurm_farm_refuses_bad_submissions_before_submitting() {
         (&["-o", "final.exr", "--passes", "2000000", "--tasks", "2"], "more than 1000000"),
         (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--spp", "0"], "--spp"),
         (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--layers"], "--layers"),
-        (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--pass-range", "0..1"], "sets the output and the passes"),
+        (
+            &["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--pass-range", "0..1"],
+            "sets the output and the passes",
+        ),
     ];
     for (args, reason) in cases {
         let (ok, text) = farm(args);
         assert!(!ok && text.contains(reason), "{args:?}: {text}");
         assert!(text.contains("slurm-farm:"), "{text}");
     }
-    let (ok, text) = farm(&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--backend", "cpu", "--spp", "2"]);
+    let (ok, text) =
+        farm(&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--backend", "cpu", "--spp", "2"]);
     assert!(ok && text.contains("check passed: 8 passes in 2 tasks of 4"), "{text}");
     // Nothing was written: no parts folder, no image.
     assert_eq!(std::fs::read_dir(p).unwrap().count(), 0);

@@ -93,10 +93,9 @@ pub fn collect_allowing<T>(confine: Option<&Path>, also: &[&Path], load: impl Fn
             (Some(inner.to_path_buf()), outer_also)
         }
         (_, Some((Some(outer), outer_also))) => (Some(outer), outer_also),
-        (inner, _) => (
-            inner.map(Path::to_path_buf),
-            also.iter().filter_map(|a| std::fs::canonicalize(a).ok()).collect(),
-        ),
+        (inner, _) => {
+            (inner.map(Path::to_path_buf), also.iter().filter_map(|a| std::fs::canonicalize(a).ok()).collect())
+        }
     };
     SCOPE.with(|s| s.borrow_mut().push(Scope { confine, also, read: Vec::new() }));
     // Pop the scope even when `load` unwinds (the glTF reader's panics are caught above us).

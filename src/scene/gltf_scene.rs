@@ -124,11 +124,9 @@ pub fn translate_file_at(
                     crate::limits::printable(&camera.name)
                 ));
             }
-            camera_entry(&mut toml, camera, lo, hi, resolution_override).map_err(|message| {
-                SceneError::Syntax {
-                    location: format!("{location}: camera \"{}\"", crate::limits::printable(&camera.name)),
-                    message,
-                }
+            camera_entry(&mut toml, camera, lo, hi, resolution_override).map_err(|message| SceneError::Syntax {
+                location: format!("{location}: camera \"{}\"", crate::limits::printable(&camera.name)),
+                message,
             })?;
         }
         None => {

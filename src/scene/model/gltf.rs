@@ -147,9 +147,7 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
                 ))
             }
             // Outside the editor's folder: the message names no file (the page must learn nothing).
-            Err(e @ crate::scene::files::FileError::Outside { .. }) => {
-                return Err(err(at, format!("its {what}: {e}")))
-            }
+            Err(e @ crate::scene::files::FileError::Outside { .. }) => return Err(err(at, format!("its {what}: {e}"))),
             Err(e) => return Err(err(at, format!("its {what} `{}`: {e}", crate::limits::printable(uri)))),
         }
     }
@@ -233,7 +231,9 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         out.emission = Vec3::from(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::ONE) * strength;
         // An emission past the scene range (docs/limits.md) would be refused typed in a scene;
         // so it is here, naming the material (not clamped: the picture would be wrong).
-        if !(strength.is_finite() && strength >= 0.0) || out.emission.max_element() as f64 > crate::limits::MAX_SCENE_VALUE {
+        if !(strength.is_finite() && strength >= 0.0)
+            || out.emission.max_element() as f64 > crate::limits::MAX_SCENE_VALUE
+        {
             return Err(err(
                 format!("material {i}"),
                 format!(
@@ -542,7 +542,8 @@ fn check_image_sizes(
             }
             ::gltf::image::Source::View { view, .. } => {
                 let Some(buffer) = buffers.get(view.buffer().index()) else { continue };
-                let Some(bytes) = view.offset().checked_add(view.length()).and_then(|end| buffer.get(view.offset()..end))
+                let Some(bytes) =
+                    view.offset().checked_add(view.length()).and_then(|end| buffer.get(view.offset()..end))
                 else {
                     continue;
                 };

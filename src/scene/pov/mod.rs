@@ -112,8 +112,10 @@ pub fn translate_file(path: &Path, options: &PovOptions) -> Result<Translation, 
             let also: Vec<&Path> = also.iter().map(PathBuf::as_path).collect();
             super::files::collect_allowing(confine.as_deref(), &also, || translate_here(path, options))
         };
-        let thread =
-            std::thread::Builder::new().name("pov-front-end".into()).stack_size(PARSER_STACK_BYTES).spawn_scoped(s, run);
+        let thread = std::thread::Builder::new()
+            .name("pov-front-end".into())
+            .stack_size(PARSER_STACK_BYTES)
+            .spawn_scoped(s, run);
         let thread = match thread {
             Ok(t) => t,
             Err(cause) => return (Err(SceneError::Read { path: path.to_path_buf(), cause }), Vec::new()),

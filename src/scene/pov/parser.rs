@@ -224,7 +224,14 @@ impl Parser {
         self.files.push(path.to_path_buf());
         let tokens = lex(text, 0)?;
         let start = Pos { file: 0, line: 1, col: 1 };
-        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start, depth: 0 });
+        self.frames.push(Frame {
+            tokens: Rc::new(tokens),
+            pos: 0,
+            is_macro: false,
+            control: Vec::new(),
+            start,
+            depth: 0,
+        });
         while self.peek()?.is_some() {
             self.statement()?;
         }
@@ -339,9 +346,7 @@ impl Parser {
                     if self.nesting > MAX_NESTING {
                         return self.err(
                             t.pos,
-                            format!(
-                                "braces and parentheses nest deeper than {MAX_NESTING} here; see docs/limits.md"
-                            ),
+                            format!("braces and parentheses nest deeper than {MAX_NESTING} here; see docs/limits.md"),
                         );
                     }
                 }
@@ -762,7 +767,9 @@ impl Parser {
                 if depth >= MAX_DEPTH {
                     return self.err(
                         pos,
-                        format!("includes nest deeper than {MAX_DEPTH}; does a file include itself? see docs/limits.md"),
+                        format!(
+                            "includes nest deeper than {MAX_DEPTH}; does a file include itself? see docs/limits.md"
+                        ),
                     );
                 }
                 let tokens = self.read_file(&path, Some(pos))?;
@@ -890,10 +897,7 @@ impl Parser {
             return self.err(pos, format!("#include: {e}"));
         }
         if let Some(e) = not_regular {
-            return self.err(
-                pos,
-                format!("#include \"{}\": {e}", crate::limits::printable(name)),
-            );
+            return self.err(pos, format!("#include \"{}\": {e}", crate::limits::printable(name)));
         }
         let hint = if Path::new(super::STANDARD_INCLUDE_DIR).is_dir() {
             String::new()
