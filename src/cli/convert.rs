@@ -64,7 +64,7 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         note!("warning: {warning}");
     }
     let t = translate_file(&args.scene, &options)?;
-    write_toml(&args.output, &t.toml, &scene)
+    write_toml(&args.output, &t.toml, &scene, &scene.inputs)
 }
 
 /// A glTF scene as TOML; the TOML names the glTF file relative to its own folder when it can
@@ -86,16 +86,17 @@ fn convert_gltf(args: &ConvertArgs, resolution: Option<(u32, u32)>) -> Result<()
     for warning in &warnings {
         note!("warning: {warning}");
     }
-    write_toml(&args.output, &t.toml, &scene)
+    // The translation was loaded as the output itself, which is then among the inputs: not that
+    // one (its buffers and images stay).
+    let own = args.output.canonicalize().ok();
+    let inputs: Vec<PathBuf> = scene.inputs.iter().filter(|p| Some(*p) != own.as_ref()).cloned().collect();
+    write_toml(&args.output, &t.toml, &scene, &inputs)
 }
 
 /// Writes the translation `toml` to `output` (whole or not at all) and says what it holds.
-fn write_toml(output: &std::path::Path, toml: &str, scene: &photonix::scene::Scene) -> Result<()> {
-    // Never over a file the scene reads (an include, a height field, a buffer). A glTF
-    // translation is loaded as the output itself, which is then among the inputs: not that one.
-    let own = output.canonicalize().ok();
-    let inputs: Vec<PathBuf> = scene.inputs.iter().filter(|p| Some(*p) != own.as_ref()).cloned().collect();
-    photonix::io::image::check_not_input(output, &inputs)?;
+/// Never over a file of `inputs` (an include, a height field, a buffer).
+fn write_toml(output: &std::path::Path, toml: &str, scene: &photonix::scene::Scene, inputs: &[PathBuf]) -> Result<()> {
+    photonix::io::image::check_not_input(output, inputs)?;
     write_atomically(output, |tmp| std::fs::write(tmp, toml).map_err(|e| e.to_string()))?;
     note!(
         "wrote {} ({} shapes, {} lights, {} materials)",

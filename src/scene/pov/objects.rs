@@ -2684,7 +2684,7 @@ impl Parser {
                     // different"); the direction would be made up.
                     let apart = (at - c.location).length();
                     let scale = at.abs().max_element().max(c.location.abs().max_element());
-                    if !(apart > scale * 1e-12) {
+                    if apart.is_nan() || apart <= scale * 1e-12 {
                         return self.err(
                             lpos,
                             "the camera's look_at is its location; POV-Ray refuses this too: move one of them".into(),
