@@ -69,16 +69,57 @@ pub const MIN_PATCH_FLATNESS: f64 = 1e-6;
 /// Longest name (material, shape, texture, unknown field) echoed in a message, in characters.
 pub const MAX_ECHOED_CHARS: usize = 64;
 
-/// Reads at most `limit` bytes of `path`: a bigger file, or an endless one such as /dev/zero, is
-/// `Err(None)`; a failure to read is `Err(Some(error))`.
+/// Largest image file (texture, environment map, glTF image, POV-Ray height field) read, in
+/// bytes: a 16384 x 16384 RGBA EXR of half floats, uncompressed, is 2 GiB.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 2 << 30;
+/// Largest voxel file (PXVOL1) read: its largest grid (2^24 floats) and the header, with room.
+pub const MAX_VOXEL_FILE_BYTES: u64 = (64 << 20) + 4096;
+/// Largest TrueType font a POV-Ray `text` object reads (the largest CJK fonts are about 30 MiB).
+pub const MAX_FONT_FILE_BYTES: u64 = 64 << 20;
+
+/// Reads at most `limit` bytes of `path`, which must be a regular file (followed through links):
+/// a device (`/dev/zero`), a pipe or a folder is refused unopened, as `Err(Some(error))`, since
+/// opening a pipe waits for a writer and a device may never end. A file larger than `limit` by
+/// its size is `Err(None)`, unread; one that grows while it is read is cut at `limit + 1` bytes
+/// and refused the same way. A failure to read is `Err(Some(error))`.
 pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, Option<std::io::Error>> {
+    let size = regular_file_size(path).map_err(Some)?;
+    if size > limit {
+        return Err(None);
+    }
     let file = std::fs::File::open(path).map_err(Some)?;
-    let mut bytes = Vec::new();
+    let mut bytes = Vec::with_capacity(size as usize);
     file.take(limit + 1).read_to_end(&mut bytes).map_err(Some)?;
     if bytes.len() as u64 > limit {
         return Err(None);
     }
     Ok(bytes)
+}
+
+/// The size of `path` in bytes when it is a regular file (links followed); an error that says
+/// what it is otherwise.
+pub fn regular_file_size(path: &Path) -> std::io::Result<u64> {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
+        return Ok(meta.len());
+    }
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    let what = if t.is_dir() {
+        "a folder"
+    } else if t.is_fifo() {
+        "a pipe (FIFO)"
+    } else if t.is_socket() {
+        "a socket"
+    } else if t.is_char_device() || t.is_block_device() {
+        "a device"
+    } else {
+        "not a file"
+    };
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("it is {what}, not a regular file; photonix reads only regular files"),
+    ))
 }
 
 /// A number as a message shows it: plain when it reads well (`0.25`, `1500`), else in exponent
@@ -217,10 +258,18 @@ mod tests {
     }
 
     #[test]
-    fn endless_files_are_read_up_to_the_limit() {
+    fn only_regular_files_of_at_most_the_limit_are_read() {
         let limit = 1 << 16;
-        assert!(matches!(read_limited(Path::new("/dev/zero"), limit), Err(None)));
+        for device in ["/dev/zero", "/dev/null", "/tmp"] {
+            let e = read_limited(Path::new(device), limit).unwrap_err().expect("refused as what it is");
+            assert!(e.to_string().contains("not a regular file"), "{device}: {e}");
+        }
         assert!(matches!(read_limited(Path::new("/nonexistent/x"), limit), Err(Some(_))));
-        assert_eq!(read_limited(Path::new("/dev/null"), limit).unwrap(), Vec::<u8>::new());
+        let dir = tempfile::tempdir().unwrap();
+        let sparse = dir.path().join("sparse");
+        std::fs::File::create(&sparse).unwrap().set_len(1 << 40).unwrap();
+        assert!(matches!(read_limited(&sparse, limit), Err(None)));
+        std::fs::write(&sparse, b"abc").unwrap();
+        assert_eq!(read_limited(&sparse, 3).unwrap(), b"abc");
     }
 }

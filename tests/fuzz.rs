@@ -1,9 +1,14 @@
 //! Fuzz targets, run as ordinary tests (there is no nightly toolchain for cargo-fuzz here): the
 //! scene parser (`parse_scene`), the OBJ importer (a `type = "mesh"` shape behind `load_scene`)
 //! and the other model importers (PLY ASCII and binary, glTF `.gltf` and `.glb`, 3DS, IFS and
-//! Bezier patches, fed mutations of real exporters' files), and the editor's HTTP and WebSocket
-//! API (`photonix serve`: requests and page messages against one running server), and the
-//! Mitsuba front-end (`scene.xml`: XML from Mitsuba's plugin vocabulary, and mutations of it). Inputs come from a generator that follows each format's grammar and from
+//! Bezier patches, fed mutations of real exporters' files), the editor's HTTP and WebSocket
+//! API (`photonix serve`: requests and page messages against one running server), the POV-Ray
+//! front-end (`fuzz_pov_front_end`: include graphs with cycles and tail includes, deep nesting,
+//! values that double, devices and FIFOs named as includes and height fields), whole glTF
+//! scenes (`fuzz_gltf_scene`: buffer and image URIs naming devices, FIFOs, huge sparse files and
+//! data URIs, wrong sizes and accessors, cameras, lights and factors out of range) and the
+//! Mitsuba front-end (`scene.xml`: XML from Mitsuba's plugin vocabulary, and mutations of it).
+//! Inputs come from a generator that follows each format's grammar and from
 //! byte-level mutations of the shipped files, drawn from the crate's counter-based hash, so a
 //! (seed, case) pair replays exactly. Every case must give a scene that keeps the documented
 //! invariants (finite geometry, a usable camera, finite light power) or an error that names the
@@ -1516,4 +1521,226 @@ fn fuzz_corpus_replays_cleanly() {
         }
     }
     println!("replayed {replayed} corpus inputs");
+}
+
+// The POV-Ray front-end: include graphs, nesting, values that grow
+
+/// Names of the files a POV-Ray case may include: each case writes some of them, and an include
+/// of one it did not write (or of a device) must be an error naming the file it stands in.
+const POV_FILES: [&str; 4] = ["a.inc", "b.inc", "scene.pov", "c.inc"];
+
+/// One POV-Ray statement or directive from the grammar's risky corners.
+fn pov_statement(r: &mut Rng, depth: usize) -> String {
+    let n = |r: &mut Rng| number(r);
+    match r.below(if depth > 3 { 12 } else { 16 }) {
+        0 => format!("#include \"{}\"\n", r.pick(&[POV_FILES[0], POV_FILES[1], POV_FILES[2], POV_FILES[3], "/dev/zero", "fifo.inc", "missing.inc", "..", "/tmp"])),
+        1 => {
+            let k = [1, 10, 100, 255, 256, 257, 1300][r.below(7)];
+            format!("#declare X = {}{}{};\n", "(".repeat(k), n(r), ")".repeat(k))
+        }
+        2 => {
+            let k = [1, 10, 120, 257, 2000][r.below(5)];
+            let op = r.pick(&["union", "intersection", "difference", "merge"]).to_string();
+            format!("{}sphere {{ 0, {} }}{}\n", format!("{op} {{ ").repeat(k), n(r), " }".repeat(k))
+        }
+        3 => {
+            let k = [1, 100, 300, 100_000][r.below(4)];
+            format!("#declare X = {}{};\n", r.pick(&["- ", "! ", "+ "]).repeat(k), n(r))
+        }
+        4 => {
+            let turns = [1, 8, 21, 40][r.below(4)];
+            let grow = r.pick(&["concat(S, S)", "S + S", "concat(S, str(I, 0, 3))", "substr(S, 1, 2)"]).to_string();
+            format!("#declare S = \"ab\";\n#for (I, 1, {turns})\n#declare S = {grow};\n#end\n")
+        }
+        5 => {
+            let turns = [1, 10, 30, 300][r.below(4)];
+            let body = r.pick(&[
+                "union { object { U } object { U translate x } }",
+                "union { object { U } }",
+                "intersection { object { U } sphere { 0, 2 } }",
+            ]).to_string();
+            format!("#declare U = sphere {{ 0, 0.1 }}\n#for (I, 1, {turns})\n#declare U = {body}\n#end\nobject {{ U }}\n")
+        }
+        6 => {
+            let turns = [1, 10, 300][r.below(3)];
+            let body = r.pick(&["#declare A = array[2] { A, A }", "#declare A[0] = A;", "#declare A = array[1] { A }"]).to_string();
+            format!("#declare A = array[2] {{ 1, 2 }}\n#for (I, 1, {turns})\n{body}\n#end\n")
+        }
+        7 => format!("#declare A = array[{}];\n", r.pick(&["4", "0", "-1", "1e9", "4194304", "4194305", "nan"])),
+        8 => {
+            let turns = [1, 20, 200][r.below(3)];
+            format!("#macro M(N) #if (N > 0) M(N - 1) #end #end\nM({turns})\n")
+        }
+        9 => format!("#macro T() #include \"{}\" #end\nT()\n", r.pick(&POV_FILES)),
+        10 => format!("sphere {{ <{}, {}, {}>, {} pigment {{ rgb {} }} }}\n", n(r), n(r), n(r), n(r), n(r)),
+        11 => format!("light_source {{ <{}, {}, {}> color rgb {} }}\n", n(r), n(r), n(r), n(r)),
+        12 => format!("camera {{ location <{}, {}, {}> look_at <{}, {}, {}> }}\n", n(r), n(r), n(r), n(r), n(r), n(r)),
+        13 => format!("height_field {{ png \"{}\" }}\n", r.pick(&["/dev/zero", "fifo.inc", "missing.png", "a.inc"])),
+        14 => format!(
+            "#declare T = texture {{ pigment {{ rgb 1 }} }}\n#for (I, 1, {})\n#declare T = texture {{ checker texture {{ T }} texture {{ T }} }}\n#end\n",
+            [1, 5, 30][r.below(3)]
+        ),
+        _ => (0..1 + r.below(3)).map(|_| pov_statement(r, depth + 1)).collect(),
+    }
+}
+
+/// A POV-Ray case: the scene and its include files, one per line of `POV_FILES` order, each
+/// after a line `=== name`, so a finding replays from one file.
+fn grammar_pov(r: &mut Rng) -> Vec<u8> {
+    let mut out = String::new();
+    for name in POV_FILES {
+        if name != "scene.pov" && r.chance(40) {
+            continue;
+        }
+        out.push_str(&format!("=== {name}\n"));
+        if name == "scene.pov" {
+            out.push_str("camera { location <0, 1, -4> look_at 0 }\nlight_source { <2, 4, -3> color rgb 1 }\n");
+        }
+        for _ in 0..1 + r.below(4) {
+            out.push_str(&pov_statement(r, 0));
+        }
+    }
+    let bytes = out.into_bytes();
+    if r.chance(20) {
+        mutate(r, &bytes)
+    } else {
+        bytes
+    }
+}
+
+/// POV-Ray target: the files of the case written, `scene.pov` loaded (on the test's thread, whose
+/// stack is the smallest a parser runs on), with a FIFO beside it that no read may wait on.
+fn check_pov_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
+    let dir = dir.join("pov");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let fifo = dir.join("fifo.inc");
+    let _ = std::process::Command::new("mkfifo").arg(&fifo).status();
+    let text = String::from_utf8_lossy(bytes);
+    let mut current: Option<std::fs::File> = None;
+    for line in text.split_inclusive('\n') {
+        if let Some(name) = line.strip_prefix("=== ").map(str::trim).filter(|n| POV_FILES.contains(n)) {
+            current = Some(std::fs::File::create(dir.join(name)).unwrap());
+            continue;
+        }
+        if let Some(f) = current.as_mut() {
+            std::io::Write::write_all(f, line.as_bytes()).unwrap();
+        }
+    }
+    let scene = dir.join("scene.pov");
+    if !scene.exists() {
+        std::fs::write(&scene, "").unwrap();
+    }
+    let names: Vec<PathBuf> = POV_FILES.iter().map(|n| dir.join(n)).chain([fifo.clone()]).collect();
+    let refs: Vec<&Path> = names.iter().map(PathBuf::as_path).collect();
+    // The front-end runs on a thread of its own, whose CPU time `fuzz` does not see: a hang is
+    // caught here by the wall clock instead (a case takes well under a second when it does not).
+    let (tx, rx) = std::sync::mpsc::channel();
+    let path = scene.clone();
+    std::thread::spawn(move || {
+        let _ = tx.send(load_scene(&path));
+    });
+    match rx.recv_timeout(Duration::from_secs(120)) {
+        Ok(loaded) => check_scene(|| loaded, &refs),
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            Err(Failure { key: "hang".into(), message: "the load took more than 120 s of wall time".into() })
+        }
+        Err(_) => Err(Failure { key: "panic".into(), message: "the load panicked (on its own thread)".into() }),
+    }
+}
+
+#[test]
+fn fuzz_pov_front_end() {
+    fuzz("pov", "povcase", 200, grammar_pov, check_pov_input);
+}
+
+// The glTF reader: URIs, sizes, accessors, out-of-range values
+
+/// A glTF case: JSON with buffers, images, accessors, cameras, lights and materials drawn from
+/// the risky corners.
+fn grammar_gltf(r: &mut Rng) -> Vec<u8> {
+    let uri = |r: &mut Rng| -> serde_json::Value {
+        serde_json::json!(r.pick(&[
+            "tri.bin",
+            "tri.bin",
+            "/dev/zero",
+            "fifo.bin",
+            "huge.bin",
+            "missing.bin",
+            "file:///dev/zero",
+            "file://tri.bin",
+            "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA",
+            "data:,",
+            "%ZZ",
+            "..",
+            "/",
+            "http://example.com/x.bin",
+            "tri.png",
+        ]))
+    };
+    let f = |r: &mut Rng| -> serde_json::Value {
+        serde_json::json!(r.pick(&[0.0, 1.0, 0.5, -1.0, 2.0, 1e30, -1e30, 1e-30, 3.2, 1.6, 90.0]))
+    };
+    let int = |r: &mut Rng| -> serde_json::Value {
+        serde_json::json!(r.pick(&[0u64, 1, 3, 36, 35, 37, 4, 1 << 20, 1 << 31, u32::MAX as u64, 1 << 40]))
+    };
+    let mut g = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "buffers": [{ "uri": uri(r), "byteLength": int(r) }],
+        "bufferViews": [{ "buffer": 0, "byteLength": int(r), "byteOffset": int(r) }],
+        "accessors": [{ "bufferView": 0, "componentType": *r.pick(&[5126, 5125, 5123, 5121, 5120, 1]),
+                        "count": int(r), "byteOffset": int(r), "type": *r.pick(&["VEC3", "SCALAR", "VEC2", "MAT4"]),
+                        "min": [0, 0, 0], "max": [1, 1, 0] }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        "nodes": [{ "mesh": 0 }, { "camera": 0, "translation": [0, 0, 3] }],
+        "scenes": [{ "nodes": [0, 1] }],
+        "cameras": [{ "type": "perspective", "perspective": { "yfov": f(r), "znear": 0.1, "aspectRatio": f(r) } }],
+    });
+    if r.chance(50) {
+        g["images"] = serde_json::json!([{ "uri": uri(r) }]);
+        g["textures"] = serde_json::json!([{ "source": 0 }]);
+        g["materials"] = serde_json::json!([{
+            "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 }, "baseColorFactor": [f(r), f(r), f(r), f(r)],
+                                      "metallicFactor": f(r), "roughnessFactor": f(r) },
+            "emissiveFactor": [f(r), f(r), f(r)],
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": f(r) } },
+        }]);
+        g["meshes"][0]["primitives"][0]["material"] = serde_json::json!(0);
+    }
+    if r.chance(50) {
+        g["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+        g["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "lights": [{
+            "type": *r.pick(&["spot", "point", "directional"]), "intensity": f(r), "color": [f(r), 1, 1],
+            "spot": { "innerConeAngle": f(r), "outerConeAngle": f(r) } }] } });
+        g["nodes"][0]["extensions"] = serde_json::json!({ "KHR_lights_punctual": { "light": 0 } });
+    }
+    let bytes = g.to_string().into_bytes();
+    if r.chance(20) {
+        mutate(r, &bytes)
+    } else {
+        bytes
+    }
+}
+
+/// glTF target: `bytes` as `scene.gltf`, beside a triangle's buffer, a PNG, a FIFO and a huge
+/// sparse file, loaded as a whole scene (the front-end `render x.gltf` uses).
+fn check_gltf_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
+    let dir = dir.join("gltf");
+    if !dir.exists() {
+        std::fs::create_dir_all(&dir).unwrap();
+        let tri: Vec<u8> =
+            [0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|v| v.to_le_bytes()).collect();
+        std::fs::write(dir.join("tri.bin"), tri).unwrap();
+        std::fs::copy(repo("tests/models/assimp/BoxTextured-glTF/CesiumLogoFlat.png"), dir.join("tri.png")).unwrap();
+        let _ = std::process::Command::new("mkfifo").arg(dir.join("fifo.bin")).status();
+        std::fs::File::create(dir.join("huge.bin")).unwrap().set_len(1 << 40).unwrap();
+    }
+    let scene = dir.join("scene.gltf");
+    std::fs::write(&scene, bytes).unwrap();
+    check_scene(|| load_scene(&scene), &[&scene])
+}
+
+#[test]
+fn fuzz_gltf_scene() {
+    fuzz("gltf", "gltf", 200, grammar_gltf, check_gltf_input);
 }

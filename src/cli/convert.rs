@@ -17,9 +17,9 @@ pub struct ConvertArgs {
     /// The TOML scene to write
     #[arg(short, long)]
     output: PathBuf,
-    /// POV-Ray scenes: image size as WIDTHxHEIGHT, as POV-Ray's +W +H (the scene reads it as image_width, image_height); a glTF scene's follows its camera
-    #[arg(long, default_value = "320x240")]
-    resolution: String,
+    /// Image size as WIDTHxHEIGHT: for a POV-Ray scene POV-Ray's +W +H (the scene reads it as image_width, image_height; default 320x240); for a glTF scene the camera's resolution (default: 360 rows, the width by the camera's aspect ratio)
+    #[arg(long)]
+    resolution: Option<String>,
     /// POV-Ray's clock (+K)
     #[arg(long, default_value_t = 0.0)]
     clock: f64,
@@ -41,16 +41,22 @@ pub fn run(args: ConvertArgs) -> Result<()> {
     if same_file(&args.output, &args.scene) {
         bail!("{} is the scene file itself; give another output name", args.output.display());
     }
+    let given = args.resolution.as_deref();
+    let resolution = given.unwrap_or("320x240");
     let Some((w, h)) =
-        args.resolution.split_once('x').and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        resolution.split_once('x').and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
     else {
-        bail!("--resolution {}: give WIDTHxHEIGHT, e.g. 320x240", args.resolution);
+        bail!("--resolution {resolution}: give WIDTHxHEIGHT, e.g. 320x240");
     };
-    if w == 0 || h == 0 || w > 65536 || h > 65536 {
-        bail!("--resolution {}: width and height must be 1 to 65536", args.resolution);
+    let max_side = photonix::limits::MAX_IMAGE_SIDE;
+    if w == 0 || h == 0 || w > max_side || h > max_side || w as u64 * h as u64 > photonix::limits::MAX_PIXELS {
+        bail!(
+            "--resolution {resolution}: width and height must be 1 to {max_side}, at most {} pixels in all (docs/limits.md)",
+            photonix::limits::MAX_PIXELS
+        );
     }
     if gltf {
-        return convert_gltf(&args);
+        return convert_gltf(&args, given.map(|_| (w, h)));
     }
     if xml {
         return convert_mitsuba(&args);
@@ -62,12 +68,12 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         note!("warning: {warning}");
     }
     let t = translate_file(&args.scene, &options)?;
-    write_toml(&args.output, &t.toml, &scene)
+    write_toml(&args.output, &t.toml, &scene, &scene.inputs)
 }
 
 /// A glTF scene as TOML; the TOML names the glTF file relative to its own folder when it can
 /// (the same folder), else by its absolute path.
-fn convert_gltf(args: &ConvertArgs) -> Result<()> {
+fn convert_gltf(args: &ConvertArgs, resolution: Option<(u32, u32)>) -> Result<()> {
     let folder = |p: &std::path::Path| {
         let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
         parent.canonicalize().ok()
@@ -76,7 +82,7 @@ fn convert_gltf(args: &ConvertArgs) -> Result<()> {
         (Some(a), Some(b)) if a == b => None,
         _ => Some(std::path::absolute(&args.scene)?.display().to_string()),
     };
-    let t = gltf_scene::translate_file(&args.scene, model_file.as_deref())?;
+    let t = gltf_scene::translate_file_at(&args.scene, model_file.as_deref(), resolution)?;
     // Load the TOML as it will be read from its own place, so a refusal is reported now.
     let mut scene = photonix::scene::parse_scene(&t.toml, &args.output)?;
     let mut warnings = t.warnings.clone();
@@ -84,7 +90,11 @@ fn convert_gltf(args: &ConvertArgs) -> Result<()> {
     for warning in &warnings {
         note!("warning: {warning}");
     }
-    write_toml(&args.output, &t.toml, &scene)
+    // The translation was loaded as the output itself, which is then among the inputs: not that
+    // one (its buffers and images stay).
+    let own = args.output.canonicalize().ok();
+    let inputs: Vec<PathBuf> = scene.inputs.iter().filter(|p| Some(*p) != own.as_ref()).cloned().collect();
+    write_toml(&args.output, &t.toml, &scene, &inputs)
 }
 
 /// A Mitsuba scene as TOML. Its file names are relative to the scene's folder, so the TOML
@@ -111,7 +121,9 @@ fn convert_mitsuba(args: &ConvertArgs) -> Result<()> {
 }
 
 /// Writes the translation `toml` to `output` (whole or not at all) and says what it holds.
-fn write_toml(output: &std::path::Path, toml: &str, scene: &photonix::scene::Scene) -> Result<()> {
+/// Never over a file of `inputs` (an include, a height field, a buffer).
+fn write_toml(output: &std::path::Path, toml: &str, scene: &photonix::scene::Scene, inputs: &[PathBuf]) -> Result<()> {
+    photonix::io::image::check_not_input(output, inputs)?;
     write_atomically(output, |tmp| std::fs::write(tmp, toml).map_err(|e| e.to_string()))?;
     note!(
         "wrote {} ({} shapes, {} lights, {} materials)",

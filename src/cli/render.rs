@@ -34,6 +34,11 @@ pub struct RenderArgs {
     /// Output image; the extension picks the format [default: <scene name>.png]
     #[arg(short, long)]
     output: Option<PathBuf>,
+    /// Check the scene, every flag, the output path and the memory estimate as a render would,
+    /// then stop: nothing is rendered or written, no device is opened (ci/slurm-farm runs this
+    /// before it submits anything)
+    #[arg(long)]
+    check: bool,
     /// Where the kernels run: a real GPU when there is one, else the CPU reference (auto); the
     /// Vulkan device even when it is a CPU such as lavapipe (gpu); the CPU reference (cpu)
     #[arg(long, value_enum, default_value = "auto")]
@@ -273,6 +278,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let prepare_time = t.elapsed();
     if let Some(p) = &photons {
         check_radii(&buffers, p)?;
+    }
+    if args.check {
+        note!(
+            "check: {} would render {width}x{height}, passes {}..{} of {spp} samples, to {}; nothing was written",
+            args.scene.display(),
+            budget.first,
+            budget.end,
+            output.display()
+        );
+        return Ok(());
     }
     let ctx = match backend {
         Backend::Gpu => match GpuContext::new(&options) {

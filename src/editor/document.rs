@@ -176,6 +176,9 @@ pub struct SceneDocument {
     next_id: u64,
     /// The text last loaded or saved.
     saved: String,
+    /// The POV-Ray or glTF scene this document translates, until its first save: that save
+    /// must not replace a `.toml` of the same name already beside it.
+    translated_from: Option<PathBuf>,
     /// Counts every change of the text (edits, undo, redo).
     revision: u64,
 }
@@ -225,19 +228,25 @@ impl SceneDocument {
     fn open(path: &Path, confined: bool) -> Result<SceneDocument, EditError> {
         // A POV-Ray scene is translated (scene::pov); the editor edits the translation and saves
         // it as the .toml beside the .pov file, never the .pov file itself. Until then it is unsaved.
-        if crate::scene::pov::is_pov_path(path) {
-            let t = crate::scene::pov::translate_file(path, &crate::scene::pov::PovOptions::default())
-                .map_err(|e| EditError::Invalid(e.to_string()))?;
-            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
+        // Both translations read through the scene's file gate, confined like the TOML: includes,
+        // height fields, fonts and glTF buffers inside the scene's folder (POV-Ray's standard
+        // include folder aside).
+        let pov = crate::scene::pov::is_pov_path(path);
+        if pov || crate::scene::gltf_scene::is_gltf_path(path) {
+            let folder = folder_of(path)?;
+            let confine = confined.then_some(folder.as_path());
+            let standard = Path::new(crate::scene::pov::STANDARD_INCLUDE_DIR);
+            let (toml, _) = crate::scene::files::collect_allowing(confine, &[standard], || {
+                if pov {
+                    crate::scene::pov::translate_file(path, &crate::scene::pov::PovOptions::default()).map(|t| t.toml)
+                } else {
+                    crate::scene::gltf_scene::translate_file(path, None).map(|t| t.toml)
+                }
+            });
+            let toml = toml.map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut doc = Self::from_text(&path.with_extension("toml"), toml, confined)?;
             doc.saved = String::new();
-            return Ok(doc);
-        }
-        // A glTF scene likewise (scene::gltf_scene): its TOML names the .glb beside it.
-        if crate::scene::gltf_scene::is_gltf_path(path) {
-            let t =
-                crate::scene::gltf_scene::translate_file(path, None).map_err(|e| EditError::Invalid(e.to_string()))?;
-            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
-            doc.saved = String::new();
+            doc.translated_from = Some(path.to_path_buf());
             return Ok(doc);
         }
         // A Mitsuba scene likewise (scene::mitsuba): its TOML names the files beside it.
@@ -261,18 +270,14 @@ impl SceneDocument {
     /// A document of `text`, to be saved at `path`; with `confined`, reading no file outside
     /// the folder of `path`.
     fn from_text(path: &Path, text: String, confined: bool) -> Result<SceneDocument, EditError> {
-        let folder = path
-            .parent()
-            .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p })
-            .unwrap_or(Path::new("."))
-            .canonicalize()
-            .map_err(|e| EditError::Invalid(format!("cannot open the folder of {}: {e}", path.display())))?;
+        let folder = folder_of(path)?;
         let (scene, origins) = parse(&text, path, confined.then_some(folder.as_path()))?;
         let mut doc = SceneDocument {
             path: path.to_path_buf(),
             folder,
             confined,
             saved: text.clone(),
+            translated_from: None,
             text,
             scene,
             origins,
@@ -514,12 +519,26 @@ impl SceneDocument {
     /// Writes the text to the scene file atomically (a temporary file in the same folder, then
     /// a rename): the file is either the old one or the new one, never a mix.
     pub fn save(&mut self) -> Result<(), String> {
+        // The first save of a translation writes `<name>.toml` beside the .pov or .glb: a file of
+        // that name already there is the user's own scene, not this one's, and is not replaced.
+        if let Some(source) = &self.translated_from {
+            if std::fs::symlink_metadata(&self.path).is_ok() {
+                let name = |p: &Path| p.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+                return Err(format!(
+                    "not saved: {} already exists beside {}, and saving the translation would replace it; move it away (or edit it with `photonix serve {}`)",
+                    crate::limits::printable(&name(&self.path)),
+                    crate::limits::printable(&name(source)),
+                    crate::limits::printable(&name(&self.path)),
+                ));
+            }
+        }
         let text = self.text.clone();
         crate::io::image::write_atomically(&self.path, |tmp| {
             std::fs::write(tmp, text.as_bytes()).map_err(|e| e.to_string())
         })
         .map_err(|e| e.to_string())?;
         self.saved = self.text.clone();
+        self.translated_from = None;
         Ok(())
     }
 
@@ -565,6 +584,15 @@ impl SceneDocument {
             )),
         })
     }
+}
+
+/// The folder of `path`, canonical.
+fn folder_of(path: &Path) -> Result<PathBuf, EditError> {
+    path.parent()
+        .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p })
+        .unwrap_or(Path::new("."))
+        .canonicalize()
+        .map_err(|e| EditError::Invalid(format!("cannot open the folder of {}: {e}", path.display())))
 }
 
 /// Parses `text`; with `folder`, every file the scene or its models name must be inside it.

@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 struct Scope {
     /// The canonical folder reads must stay inside; `None` allows any file.
     confine: Option<PathBuf>,
+    /// Canonical folders readable besides `confine` (POV-Ray's standard include folder).
+    also: Vec<PathBuf>,
     /// Every file read so far, canonical, in first-read order without repeats.
     read: Vec<PathBuf>,
 }
@@ -36,6 +38,8 @@ pub enum FileError {
     Io(std::io::Error),
     /// The file is larger than `limit` bytes (or endless, like /dev/zero).
     TooLarge { limit: u64 },
+    /// Reading the file (`size` bytes) would take more than the memory available.
+    NoMemory { size: u64, available: u64 },
 }
 
 impl std::fmt::Display for FileError {
@@ -51,6 +55,12 @@ impl std::fmt::Display for FileError {
                 f,
                 "the file is larger than {} (the most photonix reads; see docs/limits.md)",
                 crate::limits::fmt_bytes(*limit)
+            ),
+            FileError::NoMemory { size, available } => write!(
+                f,
+                "the file holds {} and only {} of memory is available to read it (docs/limits.md, Memory)",
+                crate::limits::fmt_bytes(*size),
+                crate::limits::fmt_bytes(*available)
             ),
         }
     }
@@ -69,13 +79,25 @@ impl FileError {
 /// first-read order). With `confine`, reads outside that folder fail; `confine` must be canonical.
 /// Scopes nest: an inner load's files are added to the outer one's too.
 pub fn collect<T>(confine: Option<&Path>, load: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
+    collect_allowing(confine, &[], load)
+}
+
+/// `collect`, where a confined load may also read inside the folders `also` (canonical; those
+/// that do not exist are dropped): POV-Ray's standard include folder beside the scene's own.
+/// An inner scope keeps the outer scope's extra folders and adds none of its own to them.
+pub fn collect_allowing<T>(confine: Option<&Path>, also: &[&Path], load: impl FnOnce() -> T) -> (T, Vec<PathBuf>) {
     // An inner scope keeps the outer confinement: it may narrow it, never lift it.
-    let confine = match (confine, current_confinement()) {
-        (Some(inner), Some(outer)) if inner.starts_with(&outer) => Some(inner.to_path_buf()),
-        (_, Some(outer)) => Some(outer),
-        (inner, None) => inner.map(Path::to_path_buf),
+    let outer = SCOPE.with(|s| s.borrow().last().map(|scope| (scope.confine.clone(), scope.also.clone())));
+    let (confine, also) = match (confine, outer) {
+        (Some(inner), Some((Some(outer), outer_also))) if inner.starts_with(&outer) => {
+            (Some(inner.to_path_buf()), outer_also)
+        }
+        (_, Some((Some(outer), outer_also))) => (Some(outer), outer_also),
+        (inner, _) => {
+            (inner.map(Path::to_path_buf), also.iter().filter_map(|a| std::fs::canonicalize(a).ok()).collect())
+        }
     };
-    SCOPE.with(|s| s.borrow_mut().push(Scope { confine, read: Vec::new() }));
+    SCOPE.with(|s| s.borrow_mut().push(Scope { confine, also, read: Vec::new() }));
     // Pop the scope even when `load` unwinds (the glTF reader's panics are caught above us).
     struct PopOnUnwind;
     impl Drop for PopOnUnwind {
@@ -89,6 +111,19 @@ pub fn collect<T>(confine: Option<&Path>, load: impl FnOnce() -> T) -> (T, Vec<P
     (result, pop())
 }
 
+/// The current scope's folder and extra folders (`collect_allowing`), to carry a load onto
+/// another thread: run it there under `collect_allowing` with these, then `record` what it read.
+pub fn current_rules() -> (Option<PathBuf>, Vec<PathBuf>) {
+    SCOPE.with(|s| s.borrow().last().map(|scope| (scope.confine.clone(), scope.also.clone())).unwrap_or_default())
+}
+
+/// Records files read on another thread in the current scope (canonical paths).
+pub fn record(paths: &[PathBuf]) {
+    for path in paths {
+        note_read(path.clone());
+    }
+}
+
 /// Pops the innermost scope, adds its files to the scope around it, and returns them.
 fn pop() -> Vec<PathBuf> {
     let read = SCOPE.with(|s| s.borrow_mut().pop()).map(|scope| scope.read).unwrap_or_default();
@@ -100,6 +135,17 @@ fn pop() -> Vec<PathBuf> {
 
 fn current_confinement() -> Option<PathBuf> {
     SCOPE.with(|s| s.borrow().last().and_then(|scope| scope.confine.clone()))
+}
+
+/// True when the current scope allows the canonical `path`: no confinement, or inside the
+/// folder or one of the extra folders.
+fn allowed(path: &Path) -> bool {
+    SCOPE.with(|s| match s.borrow().last() {
+        Some(Scope { confine: Some(folder), also, .. }) => {
+            path.starts_with(folder) || also.iter().any(|a| path.starts_with(a))
+        }
+        _ => true,
+    })
 }
 
 /// Records `path` (canonical) in the innermost scope, if any.
@@ -116,12 +162,20 @@ fn note_read(path: PathBuf) {
 /// Checks that `path` may be read in the current scope and records it; returns the path to open
 /// (canonical when it exists). Use it where a library opens the file itself (the glTF reader).
 pub fn check(path: &Path) -> Result<PathBuf, FileError> {
+    let resolved = probe(path)?;
+    note_read(resolved.clone());
+    Ok(resolved)
+}
+
+/// `check` without recording the file: whether `path` may be read here (a search along include
+/// folders, `file_exists`), with the same refusal, naming nothing, for a path outside.
+pub fn probe(path: &Path) -> Result<PathBuf, FileError> {
     let resolved = std::fs::canonicalize(path);
     if let Some(folder) = current_confinement() {
         // A missing file is reported as outside too: whether a path exists outside the folder
         // is itself something the page must not learn.
         match &resolved {
-            Ok(r) if r.starts_with(&folder) => {}
+            Ok(r) if allowed(r) => {}
             Ok(_) => return Err(FileError::Outside { folder }),
             Err(e) => {
                 // Missing inside the folder: say so (the page can fix its own typo). Decide by
@@ -140,18 +194,35 @@ pub fn check(path: &Path) -> Result<PathBuf, FileError> {
             }
         }
     }
-    match resolved {
-        Ok(r) => {
-            note_read(r.clone());
-            Ok(r)
-        }
-        Err(e) => Err(FileError::Io(e)),
-    }
+    resolved.map_err(FileError::Io)
 }
 
-/// Reads at most `limit` bytes of `path` after `check`.
+/// `check`, and `path` must be a regular file (not a device, a pipe or a folder) of at most
+/// `limit` bytes: for a library that opens the file itself (the glTF reader's buffers and
+/// images), which would read an endless or huge file to its end.
+pub fn check_file(path: &Path, limit: u64) -> Result<PathBuf, FileError> {
+    let resolved = check(path)?;
+    let size = crate::limits::regular_file_size(&resolved).map_err(FileError::Io)?;
+    if size > limit {
+        return Err(FileError::TooLarge { limit });
+    }
+    if let Some(available) = crate::render::memory::available_host_memory().filter(|a| size > *a) {
+        return Err(FileError::NoMemory { size, available });
+    }
+    Ok(resolved)
+}
+
+/// Reads at most `limit` bytes of `path` after `check`; only a regular file is read, and only
+/// when its size fits the memory available (the memory budget, docs/limits.md).
 pub fn read(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
     let resolved = check(path)?;
+    if let Ok(size) = crate::limits::regular_file_size(&resolved) {
+        if let Some(available) = crate::render::memory::available_host_memory() {
+            if size <= limit && size > available {
+                return Err(FileError::NoMemory { size, available });
+            }
+        }
+    }
     crate::limits::read_limited(&resolved, limit).map_err(|e| match e {
         Some(e) => FileError::Io(e),
         None => FileError::TooLarge { limit },
@@ -161,7 +232,7 @@ pub fn read(path: &Path, limit: u64) -> Result<Vec<u8>, FileError> {
 /// Lists `dir` (for a case-insensitive file lookup) after the same confinement check.
 pub fn read_dir(dir: &Path) -> Option<std::fs::ReadDir> {
     let dir = std::fs::canonicalize(dir).ok()?;
-    if current_confinement().is_some_and(|folder| !dir.starts_with(folder)) {
+    if !allowed(&dir) {
         return None;
     }
     std::fs::read_dir(dir).ok()

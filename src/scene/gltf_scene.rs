@@ -77,6 +77,16 @@ pub fn is_camera_note(warning: &str) -> bool {
 /// Reads a glTF file and writes it as TOML. `model_file` is how the TOML names the glTF file
 /// (relative to the TOML's folder); `None`: its file name, for a TOML beside it.
 pub fn translate_file(path: &Path, model_file: Option<&str>) -> Result<Translation, SceneError> {
+    translate_file_at(path, model_file, None)
+}
+
+/// `translate_file` with the image size `resolution` (`convert --resolution`) in place of the
+/// one the camera's aspect ratio gives.
+pub fn translate_file_at(
+    path: &Path,
+    model_file: Option<&str>,
+    resolution_override: Option<(u32, u32)>,
+) -> Result<Translation, SceneError> {
     let to_error = |e: model::ModelError| {
         if e.not_found {
             SceneError::Read {
@@ -114,14 +124,17 @@ pub fn translate_file(path: &Path, model_file: Option<&str>) -> Result<Translati
                     crate::limits::printable(&camera.name)
                 ));
             }
-            camera_entry(&mut toml, camera, lo, hi);
+            camera_entry(&mut toml, camera, lo, hi, resolution_override).map_err(|message| SceneError::Syntax {
+                location: format!("{location}: camera \"{}\"", crate::limits::printable(&camera.name)),
+                message,
+            })?;
         }
         None => {
             warnings.push(format!(
                 "{location}: the file has no camera; one is placed to frame the scene's bounding box (export the \
                  camera too, e.g. Blender's \"Include > Cameras\")"
             ));
-            framing_camera(&mut toml, lo, hi);
+            framing_camera(&mut toml, lo, hi, resolution_override);
         }
     }
 
@@ -136,6 +149,17 @@ pub fn translate_file(path: &Path, model_file: Option<&str>) -> Result<Translati
     // Lights
     for (i, light) in model.lights.iter().enumerate() {
         let name = model.light_names.get(i).filter(|n| !n.is_empty()).cloned().unwrap_or_else(|| format!("light {i}"));
+        if let ModelLight::Spot { inner_deg, outer_deg, .. } = *light {
+            if !(outer_deg > 0.0 && outer_deg <= 90.0 && inner_deg >= 0.0 && inner_deg < outer_deg) {
+                warnings.push(format!(
+                    "{location}: light \"{}\": innerConeAngle {} and outerConeAngle {} degrees are outside glTF's \
+                     range (0 <= inner < outer <= 90 degrees); the angles are clamped to it",
+                    crate::limits::printable(&name),
+                    crate::limits::fmt_f32(inner_deg),
+                    crate::limits::fmt_f32(outer_deg)
+                ));
+            }
+        }
         light_entry(&mut toml, &name, light);
     }
     for (name, range) in &info.light_ranges {
@@ -188,19 +212,37 @@ fn resolution(aspect: Option<f32>) -> (u32, u32) {
 }
 
 /// The file's camera: glTF cameras look down their node's -z with +y up.
-fn camera_entry(toml: &mut String, camera: &ModelCamera, lo: Vec3, hi: Vec3) {
+fn camera_entry(
+    toml: &mut String,
+    camera: &ModelCamera,
+    lo: Vec3,
+    hi: Vec3,
+    resolution_override: Option<(u32, u32)>,
+) -> Result<(), String> {
     // `look_at` only sets the direction: a point at the scene's distance keeps it well away
     // from the camera in 32-bit floats.
     let reach = ((hi - lo).length() * 0.5).max((0.5 * (lo + hi) - camera.position).length()).max(1e-3);
     let look_at = camera.position + camera.forward * reach;
-    let (w, h) = resolution(camera.aspect);
+    let (w, h) = resolution_override.unwrap_or_else(|| resolution(camera.aspect));
     let _ = writeln!(toml, "[camera]");
     if !camera.name.is_empty() {
         let _ = writeln!(toml, "# glTF camera {}", quoted(&camera.name));
     }
     match camera.projection {
         ModelProjection::Perspective { yfov_deg } => {
-            let _ = writeln!(toml, "fov = {}", num(yfov_deg.clamp(0.01, 179.0)));
+            // glTF requires yfov > 0; Photonix's range is docs/limits.md's. A camera outside it
+            // would render nothing like the file's, so it is refused, not clamped.
+            let min = crate::limits::MIN_FOV_DEGREES as f32;
+            if !(yfov_deg >= min && yfov_deg <= 180.0 - min) {
+                return Err(format!(
+                    "yfov is {} degrees ({} radians); a perspective camera's yfov is {} to {} degrees (docs/limits.md)",
+                    crate::limits::fmt_f32(yfov_deg),
+                    crate::limits::fmt_f32(yfov_deg.to_radians()),
+                    crate::limits::fmt_f32(min),
+                    crate::limits::fmt_f32(180.0 - min)
+                ));
+            }
+            let _ = writeln!(toml, "fov = {}", num(yfov_deg));
         }
         ModelProjection::Orthographic { view_height } => {
             let _ = writeln!(toml, "type = \"orthographic\"\nview_height = {}", num(view_height.abs().max(1e-6)));
@@ -213,18 +255,19 @@ fn camera_entry(toml: &mut String, camera: &ModelCamera, lo: Vec3, hi: Vec3) {
         vec3(look_at),
         vec3(camera.up)
     );
+    Ok(())
 }
 
 /// A perspective camera that sees the whole bounding box: 40 degrees vertically, from above and
 /// to the front right (+x, +y, +z: glTF's front is +z), at the distance where the bounding
 /// sphere fits the vertical field of view.
-fn framing_camera(toml: &mut String, lo: Vec3, hi: Vec3) {
+fn framing_camera(toml: &mut String, lo: Vec3, hi: Vec3, resolution_override: Option<(u32, u32)>) {
     let fov_deg: f32 = 40.0;
     let center = 0.5 * (lo + hi);
     let radius = ((hi - lo).length() * 0.5).max(1e-3);
     let distance = radius / (0.5 * fov_deg.to_radians()).sin() * 1.05;
     let position = center + Vec3::new(0.6, 0.45, 1.0).normalize() * distance;
-    let (w, h) = resolution(None);
+    let (w, h) = resolution_override.unwrap_or_else(|| resolution(None));
     let _ = writeln!(
         toml,
         "[camera]\n# no camera in the file: this one frames the scene's bounding box\nfov = {}\nposition = {}\nlook_at = \

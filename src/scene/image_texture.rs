@@ -96,9 +96,9 @@ pub fn srgb_to_linear(c: f64) -> f64 {
 /// GIF), whatever the extension; TGA, which has no signature, by the extension `.tga`.
 /// `color_space` applies to 8- and 16-bit colour channels only.
 pub fn load_image_texture(path: &Path, color_space: ColorSpace) -> Result<ImageTexture, ImageTextureError> {
-    // Through the scene's file gate: recorded as an input, confined in the editor. The size is
-    // checked on the decoded image (`MAX_IMAGE_SIDE`), not on the file.
-    let bytes = crate::scene::files::read(path, u64::MAX - 1)
+    // Through the scene's file gate: recorded as an input, confined in the editor, a regular
+    // file of at most `MAX_IMAGE_FILE_BYTES`; the decoded image is checked too (`MAX_IMAGE_SIDE`).
+    let bytes = crate::scene::files::read(path, crate::limits::MAX_IMAGE_FILE_BYTES)
         .map_err(|error| ImageTextureError::Read { path: path.to_owned(), error })?;
     decode_image_texture(&bytes, path, color_space)
 }

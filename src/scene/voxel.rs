@@ -52,7 +52,7 @@ impl VoxelGrid {
 /// Reads and checks a PXVOL1 file. The error says what is wrong (not the path: the caller names
 /// the file and the scene line).
 pub fn load_voxel_grid(path: &Path) -> Result<VoxelGrid, String> {
-    let bytes = crate::scene::files::read(path, u64::MAX - 1).map_err(|e| match e {
+    let bytes = crate::scene::files::read(path, crate::limits::MAX_VOXEL_FILE_BYTES).map_err(|e| match e {
         e if e.not_found() => "voxel file not found (paths are relative to the scene file)".to_string(),
         e => format!("cannot read the voxel file: {e}"),
     })?;

@@ -74,20 +74,24 @@ impl Builder<'_> {
             )?,
             _ => self.only_fields(object, "a latlong camera (it has no lens)", &present, &common)?,
         }
-        let position = self.require(&c.position, &table, object, "position", "position = [0, 1, 5]")?;
-        let position = self.point(position, object, "position")?;
+        let position_def = self.require(&c.position, &table, object, "position", "position = [0, 1, 5]")?;
+        let position = self.point(position_def, object, "position")?;
         let look_at_def = self.require(&c.look_at, &table, object, "look_at", "look_at = [0, 1, 0]")?;
         let look_at = self.point(look_at_def, object, "look_at")?;
         // The same test as `Camera::basis`, which the renderer uses: nearly equal points (closer
         // than 32-bit floats can tell apart) are as bad as equal ones.
         if (look_at - position).try_normalize().is_none() {
-            return Err(self.invalid(
-                &look_at_def.span(),
-                object,
-                "`look_at` equals `position` (or is too close to it to give a direction); the camera needs a \
-                 direction to look in"
-                    .to_string(),
-            ));
+            // Apart but too close for their distance from the origin: say that, not "equal".
+            let message = if look_at_def.get_ref().value == position_def.get_ref().value {
+                "`look_at` equals `position`; the camera needs a direction to look in".to_string()
+            } else {
+                format!(
+                    "`look_at` is too close to `position` for 32-bit floats to give a direction (the camera is {} \
+                     units from the origin): move `look_at` farther away along the view",
+                    crate::limits::fmt_f32(position.abs().max_element())
+                )
+            };
+            return Err(self.invalid(&look_at_def.span(), object, message));
         }
         let forward = (look_at - position).normalize();
         let up = match &c.up {

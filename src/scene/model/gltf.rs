@@ -120,16 +120,22 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
     let uris = document
         .buffers()
         .filter_map(|b| match b.source() {
-            ::gltf::buffer::Source::Uri(uri) => Some((format!("buffer {}", b.index()), "data file", uri)),
+            ::gltf::buffer::Source::Uri(uri) => {
+                Some((format!("buffer {}", b.index()), "data file", uri, crate::limits::MAX_MODEL_FILE_BYTES))
+            }
             ::gltf::buffer::Source::Bin => None,
         })
         .chain(document.images().filter_map(|i| match i.source() {
-            ::gltf::image::Source::Uri { uri, .. } => Some((format!("image {}", i.index()), "image file", uri)),
+            ::gltf::image::Source::Uri { uri, .. } => {
+                Some((format!("image {}", i.index()), "image file", uri, crate::limits::MAX_IMAGE_FILE_BYTES))
+            }
             ::gltf::image::Source::View { .. } => None,
         }));
-    for (at, what, uri) in uris {
+    // The crate reads each file to its end: only a regular file of at most the limit may reach it
+    // (a URI naming /dev/zero, a FIFO or a huge sparse file would take all memory or wait forever).
+    for (at, what, uri, limit) in uris {
         let Some(file) = uri_file(base, uri) else { continue };
-        match crate::scene::files::check(&file) {
+        match crate::scene::files::check_file(&file, limit) {
             Ok(_) => {}
             Err(e) if e.not_found() => {
                 return Err(err(
@@ -140,7 +146,9 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
                     ),
                 ))
             }
-            Err(e) => return Err(err(at, format!("its {what}: {e}"))),
+            // Outside the editor's folder: the message names no file (the page must learn nothing).
+            Err(e @ crate::scene::files::FileError::Outside { .. }) => return Err(err(at, format!("its {what}: {e}"))),
+            Err(e) => return Err(err(at, format!("its {what} `{}`: {e}", crate::limits::printable(uri)))),
         }
     }
     let buffers = ::gltf::import_buffers(&document, Some(base), gltf.blob)
@@ -160,6 +168,7 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
     let mut model = Model::default();
 
     // Materials
+    check_image_sizes(&document, base, &buffers, &err)?;
     let images = ::gltf::import_images(&document, Some(base), &buffers)
         .map_err(|e| err(String::new(), format!("cannot load its images: {e}")))?;
     let mut cache: HashMap<(usize, bool), Arc<ImageTexture>> = HashMap::new();
@@ -188,6 +197,21 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         let mut out = ModelMaterial::new(&name);
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, a] = pbr.base_color_factor();
+        // Factors the spec keeps in 0..1: one outside is clamped, and said so.
+        let mut unit = |field: &str, values: &[f32]| {
+            if values.iter().any(|v| !(0.0..=1.0).contains(v)) {
+                let shown: Vec<String> = values.iter().map(|v| crate::limits::fmt_f32(*v)).collect();
+                model.warnings.push(format!(
+                    "material \"{}\": {field} [{}] is outside 0 to 1 (glTF's range); it is clamped to it",
+                    crate::limits::printable(&name),
+                    shown.join(", ")
+                ));
+            }
+        };
+        unit("baseColorFactor", &[r, g, b, a]);
+        unit("metallicFactor", &[pbr.metallic_factor()]);
+        unit("roughnessFactor", &[pbr.roughness_factor()]);
+        unit("emissiveFactor", &m.emissive_factor());
         out.base_color = Vec3::new(r, g, b).clamp(Vec3::ZERO, Vec3::ONE);
         out.metallic = pbr.metallic_factor().clamp(0.0, 1.0);
         // glTF's roughness is perceptual: the GGX alpha is its square.
@@ -203,8 +227,22 @@ fn read(bytes: &[u8], path: &Path) -> Result<Model, ModelError> {
         }
         // KHR_materials_emissive_strength scales the factor past 1 (Blender writes its emission
         // strength there).
-        let strength = m.emissive_strength().filter(|s| s.is_finite() && *s >= 0.0).unwrap_or(1.0);
-        out.emission = (Vec3::from(m.emissive_factor()) * strength).max(Vec3::ZERO);
+        let strength = m.emissive_strength().unwrap_or(1.0);
+        out.emission = Vec3::from(m.emissive_factor()).clamp(Vec3::ZERO, Vec3::ONE) * strength;
+        // An emission past the scene range (docs/limits.md) would be refused typed in a scene;
+        // so it is here, naming the material (not clamped: the picture would be wrong).
+        if !(strength.is_finite() && strength >= 0.0)
+            || out.emission.max_element() as f64 > crate::limits::MAX_SCENE_VALUE
+        {
+            return Err(err(
+                format!("material {i}"),
+                format!(
+                    "\"{}\": its emission (emissiveFactor x emissiveStrength {}) is outside 0 to 1e9 per channel; see docs/limits.md",
+                    crate::limits::printable(&name),
+                    crate::limits::fmt_f32(strength)
+                ),
+            ));
+        }
         if let Some(ior) = m.ior().filter(|i| i.is_finite() && *i >= 1.0) {
             out.ior = ior.min(4.0);
         }
@@ -481,6 +519,63 @@ fn read_mesh(
 
 /// A decoded glTF image as a texture: 8 and 16-bit channels from sRGB (colours) or linear
 /// (data), floats as they are.
+/// The most bytes the `image` crate allocates to decode one image (its default `Limits`), which
+/// the glTF crate decodes with.
+const MAX_DECODED_IMAGE_BYTES: u64 = 512 << 20;
+
+/// Reads each image's header (a file through the gate, or a buffer view) and refuses one larger
+/// than a texture may be, naming the image, its size and the limit, before anything is decoded
+/// (the decoder's own refusal said only "Memory limit exceeded").
+fn check_image_sizes(
+    document: &::gltf::Document,
+    base: &Path,
+    buffers: &[::gltf::buffer::Data],
+    err: &dyn Fn(String, String) -> ModelError,
+) -> Result<(), ModelError> {
+    use image::ImageDecoder;
+    for image in document.images() {
+        let (name, bytes): (String, std::borrow::Cow<[u8]>) = match image.source() {
+            ::gltf::image::Source::Uri { uri, .. } => {
+                let Some(file) = uri_file(base, uri) else { continue };
+                let Ok(bytes) = crate::scene::files::read(&file, crate::limits::MAX_IMAGE_FILE_BYTES) else { continue };
+                (format!("`{}`", crate::limits::printable(uri)), bytes.into())
+            }
+            ::gltf::image::Source::View { view, .. } => {
+                let Some(buffer) = buffers.get(view.buffer().index()) else { continue };
+                let Some(bytes) =
+                    view.offset().checked_add(view.length()).and_then(|end| buffer.get(view.offset()..end))
+                else {
+                    continue;
+                };
+                (format!("in buffer view {}", view.index()), bytes.into())
+            }
+        };
+        let reader = image::ImageReader::new(std::io::Cursor::new(&bytes[..])).with_guessed_format();
+        let Some(decoder) = reader.ok().and_then(|r| r.into_decoder().ok()) else { continue };
+        let (w, h) = decoder.dimensions();
+        let max = crate::limits::MAX_IMAGE_SIDE;
+        let at = format!("image {}", image.index());
+        if w > max || h > max {
+            return Err(err(
+                at,
+                format!("{name} is {w} x {h} texels; an image texture has at most {max} per side (docs/limits.md)"),
+            ));
+        }
+        let decoded = decoder.total_bytes();
+        if decoded > MAX_DECODED_IMAGE_BYTES {
+            return Err(err(
+                at,
+                format!(
+                    "{name} is {w} x {h} texels, {} decoded, more than the {} the glTF reader decodes per image; make it smaller",
+                    crate::limits::fmt_bytes(decoded),
+                    crate::limits::fmt_bytes(MAX_DECODED_IMAGE_BYTES)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn convert_image(data: &::gltf::image::Data, srgb: bool) -> Result<ImageTexture, String> {
     use ::gltf::image::Format as F;
     let (channels, bytes_per) = match data.format {

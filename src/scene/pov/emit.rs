@@ -418,6 +418,10 @@ struct Snapshot {
 /// The TOML text; for each entry, its first line and the `.pov` position it came from; warnings.
 pub type Emitted = (String, Vec<(usize, Pos)>, Vec<String>);
 
+/// Largest translation, in bytes of TOML (about a million triangles): the TOML loader then
+/// holds it and its parsed form at once, within the memory budget (docs/limits.md).
+pub const MAX_TRANSLATION_BYTES: usize = 256 << 20;
+
 /// The TOML text and, for each entry, its first line and the `.pov` position it came from.
 pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result<Emitted> {
     let camera = scene.camera.clone().unwrap_or_default();
@@ -505,6 +509,15 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
 impl Emitter<'_> {
     /// Appends one top-level entry (`key` holding `value`), remembering where it came from.
     fn entry(&mut self, key: &str, value: T, pos: Pos) -> Result<()> {
+        if self.text.len() > MAX_TRANSLATION_BYTES {
+            return Err(PovError::at(
+                pos,
+                format!(
+                    "the scene translates to more than {} of TOML (too many objects or triangles); see docs/limits.md",
+                    crate::limits::fmt_bytes(MAX_TRANSLATION_BYTES as u64)
+                ),
+            ));
+        }
         let mut doc = Table::new();
         doc.insert(key.into(), value);
         let text = toml::to_string(&doc).map_err(|e| PovError::at(pos, format!("cannot write this as TOML: {e}")))?;
@@ -535,7 +548,10 @@ impl Emitter<'_> {
             return Err(PovError::at(c.pos, "the camera's direction, right and up must not be zero".into()));
         }
         t.insert("position".into(), vec3(mirror(c.location)));
-        t.insert("look_at".into(), vec3(mirror(c.location + forward.normalize())));
+        // One unit ahead stops telling a direction in 32-bit floats far from the origin: the step
+        // grows with the distance (to 1% of it), so the direction survives the rounding.
+        let step = (c.location.abs().max_element() * 0.01).max(1.0);
+        t.insert("look_at".into(), vec3(mirror(c.location + forward.normalize() * step)));
         t.insert("up".into(), vec3(mirror(c.up)));
         t.insert(
             "resolution".into(),
@@ -1579,6 +1595,18 @@ impl Emitter<'_> {
     /// colour c lights a white diffuse surface facing it with c; a point light of intensity I at
     /// distance d gives radiance I / (pi d^2) there, so I = pi c d^2 (times POV-Ray's fade).
     fn light(&mut self, l: &Light) -> Result<()> {
+        // POV-Ray's negative lights take light away, which no physical light does: refused here,
+        // at the light, rather than written as a light of intensity 0.
+        if l.colour.iter().any(|c| *c < 0.0) {
+            let shown: Vec<String> = l.colour.iter().map(|c| crate::limits::fmt_number(*c)).collect();
+            return Err(PovError::at(
+                l.pos,
+                format!(
+                    "this light's colour <{}> is negative; a negative light (POV-Ray's way to take light away) has no physical meaning in Photonix: give 0 or more per channel",
+                    shown.join(", ")
+                ),
+            ));
+        }
         let colour = self.linear([l.colour[0], l.colour[1], l.colour[2], 0.0, 0.0]);
         let d = (l.position - self.target).length().max(1e-6);
         let fade = if l.fade_distance > 0.0 && l.fade_power > 0.0 {

@@ -45,10 +45,7 @@ fn kind_of(path: &Path, kind: &str) -> String {
 fn decode(path: &Path, kind: &str) -> Result<Decoded, String> {
     let kind = kind_of(path, kind);
     let shown = crate::limits::printable_message(&path.display().to_string());
-    let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
-        Some(e) => format!("cannot read the image {shown}: {e}"),
-        None => format!("the image {shown} is larger than {} MiB", crate::limits::MAX_SCENE_FILE_BYTES >> 20),
-    })?;
+    let bytes = super::parser::read_gated(path, crate::limits::MAX_IMAGE_FILE_BYTES, "the image")?;
     let d = match kind.as_str() {
         "png" => decode_png(&bytes),
         "jpeg" => decode_jpeg(&bytes),

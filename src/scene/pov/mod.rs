@@ -12,6 +12,7 @@ mod emit;
 mod image;
 mod implicit;
 mod lexer;
+mod measure;
 mod objects;
 mod parser;
 mod tessellate;
@@ -95,8 +96,40 @@ impl Translation {
     }
 }
 
-/// Reads, evaluates and translates a `.pov` file.
+/// Stack of the thread the front-end runs on: the evaluator recurses per nesting level (about
+/// 8 KiB per level of brackets in a release build), and its limits (`parser::MAX_NESTING`,
+/// `MAX_EXPRESSION_DEPTH`, `MAX_VALUE_DEPTH`, 256 each) need a few MiB at most. Run on its own
+/// thread, a scene gets that whatever thread asked (tokio's 2 MiB threads in `serve`); the
+/// stack is reserved, and only what is used is ever touched.
+const PARSER_STACK_BYTES: usize = 64 << 20;
+
+/// Reads, evaluates and translates a `.pov` file, on a thread of its own with a known stack
+/// (`PARSER_STACK_BYTES`); the files it reads pass the caller's file gate and are recorded there.
 pub fn translate_file(path: &Path, options: &PovOptions) -> Result<Translation, SceneError> {
+    let (confine, also) = super::files::current_rules();
+    let (result, read) = std::thread::scope(|s| {
+        let run = || {
+            let also: Vec<&Path> = also.iter().map(PathBuf::as_path).collect();
+            super::files::collect_allowing(confine.as_deref(), &also, || translate_here(path, options))
+        };
+        let thread = std::thread::Builder::new()
+            .name("pov-front-end".into())
+            .stack_size(PARSER_STACK_BYTES)
+            .spawn_scoped(s, run);
+        let thread = match thread {
+            Ok(t) => t,
+            Err(cause) => return (Err(SceneError::Read { path: path.to_path_buf(), cause }), Vec::new()),
+        };
+        match thread.join() {
+            Ok(done) => done,
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    });
+    super::files::record(&read);
+    result
+}
+
+fn translate_here(path: &Path, options: &PovOptions) -> Result<Translation, SceneError> {
     let mut p = parser::Parser::new(path, options.clone());
     let result = p.run_file(path).and_then(|scene| emit::emit(&scene, options, &p.files));
     match result {
@@ -123,9 +156,17 @@ fn to_scene_error(e: &PovError, files: &[PathBuf], main: &Path) -> SceneError {
 
 /// Loads a `.pov` scene: translates it and loads the TOML as `load_scene` loads a file. An error
 /// the TOML checks find is reported at the `.pov` position its entry came from.
+/// Every file the translation read (includes, height fields, fonts) is one of the scene's
+/// inputs, which no command may write over, as are the files the TOML names.
 pub fn load_pov(path: &Path, options: &PovOptions) -> Result<super::Scene, SceneError> {
-    let t = translate_file(path, options)?;
+    let (t, read) = super::files::collect(None, || translate_file(path, options));
+    let t = t?;
     let mut scene = super::parse_scene(&t.toml, path).map_err(|e| relocate(e, &t, path))?;
+    for file in read {
+        if !scene.inputs.contains(&file) {
+            scene.inputs.push(file);
+        }
+    }
     scene.warnings.extend(t.warnings);
     Ok(scene)
 }

@@ -185,6 +185,7 @@ impl Parser {
             }
             w if OBJECTS.contains(&w) || w == "light_source" || UNSUPPORTED_OBJECTS.contains(&w) => {
                 let o = self.object(w, pos)?;
+                self.count_scene_object(&o)?;
                 self.scene.objects.push(o);
             }
             other => {
@@ -351,7 +352,15 @@ impl Parser {
     // -------------------------------------------------------------------------------------------
     // Objects
 
+    /// An object, refused past the limits of `measure` (an object declared from itself in a
+    /// loop doubles or deepens with each turn).
     fn object(&mut self, kind: &str, pos: Pos) -> Result<Obj> {
+        let o = self.object_unchecked(kind, pos)?;
+        self.check_object(&o)?;
+        Ok(o)
+    }
+
+    fn object_unchecked(&mut self, kind: &str, pos: Pos) -> Result<Obj> {
         if UNSUPPORTED_OBJECTS.contains(&kind) {
             // Read past it: the standard includes declare shapes (quadrics, text) that scenes
             // rarely place; placing one is the error (`emit`).
@@ -768,8 +777,8 @@ impl Parser {
         let path = self
             .find_include(&font_name, fpos)
             .map_err(|e| PovError { message: e.message.replacen("#include", "font", 1), ..e })?;
-        let bytes = crate::limits::read_limited(&path, crate::limits::MAX_SCENE_FILE_BYTES)
-            .map_err(|_| PovError::at(fpos, format!("cannot read the font {}", path.display())))?;
+        let bytes = super::parser::read_gated(&path, crate::limits::MAX_FONT_FILE_BYTES, "the font")
+            .map_err(|m| PovError::at(fpos, m))?;
         let Some(font) = ttf::Font::parse(bytes) else {
             return self.err(fpos, format!("{} is not a TrueType font this front-end reads", path.display()));
         };
@@ -2669,7 +2678,18 @@ impl Parser {
                     }
                 }
                 "look_at" => {
+                    let lpos = self.here();
                     let at = self.vec3()?;
+                    // POV-Ray refuses this too ("camera location and look_at point must be
+                    // different"); the direction would be made up.
+                    let apart = (at - c.location).length();
+                    let scale = at.abs().max_element().max(c.location.abs().max_element());
+                    if apart.is_nan() || apart <= scale * 1e-12 {
+                        return self.err(
+                            lpos,
+                            "the camera's look_at is its location; POV-Ray refuses this too: move one of them".into(),
+                        );
+                    }
                     // POV-Ray keeps the lengths of direction, right and up and turns them.
                     let (ld, lr, lu) = (c.direction.length(), c.right.length(), c.up.length());
                     let handed = c.up.cross(c.direction).dot(c.right) >= 0.0;

@@ -13,12 +13,34 @@ use super::ast::{Camera, Colour, Finish, Interior, Obj, Pigment, PovScene, Tex};
 use super::lexer::{lex, Tok, Token};
 use super::{Pos, PovError, PovOptions};
 
-/// Most nested frames (include files and macro calls): deeper is runaway recursion.
+/// Most nested frames (include files and macro calls): deeper is runaway recursion. An include
+/// or call made as a file's or macro's last statement counts one deeper than the frame it was
+/// made in, although that frame has ended by then (a file that includes itself last).
 pub const MAX_DEPTH: usize = 128;
 /// Most tokens one scene may deliver, loops and macros counted out (runaway loops stop here).
 pub const MAX_TOKENS: u64 = 50_000_000;
 /// Most elements of one array.
 pub const MAX_ARRAY: usize = 1 << 22;
+/// Most `{` and `(` open at once. The evaluator recurses a few times per level, about 8 KiB of
+/// stack per level in a release build; the front-end runs on a thread of its own with 64 MiB of
+/// stack (`pov::translate_file`), so 256 levels of braces with 256 of expressions inside fit
+/// whatever thread asked for the translation (tests/hardening4.rs asks from a 1 MiB thread).
+pub const MAX_NESTING: i64 = 256;
+/// Most nested sub-expressions without a bracket (`- - - 1`, `<<1, 2>.x, 3>`, `a ? b : c ? ...`).
+pub const MAX_EXPRESSION_DEPTH: usize = 256;
+/// Longest string value, in bytes (`concat` of a string with itself doubles it).
+pub const MAX_STRING_BYTES: usize = 1 << 20;
+/// Most nodes (objects, textures, pigments, array elements) one value may hold as the
+/// translation expands it: an object declared from itself (`#declare U = union { object { U }
+/// object { U } }` in a loop) doubles (`measure`).
+pub const MAX_VALUE_NODES: usize = 1 << 20;
+/// Deepest value: objects in objects, textures in texture maps, arrays in arrays (`measure`).
+pub const MAX_VALUE_DEPTH: usize = 256;
+/// The language's memory as a whole: an estimate of every declared value (strings, arrays,
+/// objects) and of the scene's objects, in bytes.
+pub const MAX_LANGUAGE_BYTES: usize = 1 << 30;
+/// Most include files read (a file included again is read once; its tokens are kept).
+pub const MAX_INCLUDE_FILES: usize = 4096;
 
 pub type Result<T> = std::result::Result<T, PovError>;
 
@@ -103,6 +125,9 @@ struct Frame {
     control: Vec<(Ctrl, Pos)>,
     /// Where the file or the macro call started, for "never closed" messages.
     start: Pos,
+    /// Includes and macro calls this frame is nested in (the scene file is 0), counted from the
+    /// frame the include or call was made in even when that frame ended first.
+    depth: usize,
 }
 
 pub struct Parser {
@@ -131,6 +156,18 @@ pub struct Parser {
     barriers: Vec<(usize, i64)>,
     /// `MAX_TOKENS`, lowered by tests.
     pub max_tokens: u64,
+    /// Sub-expressions open now (`MAX_EXPRESSION_DEPTH`).
+    expression_depth: usize,
+    /// Every file read, by its path: its number in `files` and its tokens (an include read again
+    /// in a loop is not read, nor held, twice).
+    read: HashMap<PathBuf, (u32, Rc<Vec<Token>>)>,
+    /// The estimated bytes of every declared value by name and scope (`MAX_LANGUAGE_BYTES`).
+    declared_bytes: usize,
+    /// The estimated bytes of the scene's objects so far.
+    scene_bytes: usize,
+    /// `MAX_LANGUAGE_BYTES`, or half the memory available when that is less (the memory budget,
+    /// docs/limits.md): the translation and the scene it loads need the rest.
+    memory_budget: usize,
 }
 
 /// Directives that may open a declared value (`#declare X = #if (c) A #else B #end`).
@@ -160,6 +197,12 @@ impl Parser {
             nesting: 0,
             barriers: Vec::new(),
             max_tokens: MAX_TOKENS,
+            expression_depth: 0,
+            read: HashMap::new(),
+            declared_bytes: 0,
+            scene_bytes: 0,
+            memory_budget: crate::render::memory::available_host_memory()
+                .map_or(MAX_LANGUAGE_BYTES, |a| MAX_LANGUAGE_BYTES.min((a / 2) as usize)),
         }
     }
 
@@ -167,7 +210,7 @@ impl Parser {
     pub fn run_file(&mut self, path: &Path) -> Result<PovScene> {
         let tokens = self.read_file(path, None)?;
         let start = Pos { file: (self.files.len() - 1) as u32, line: 1, col: 1 };
-        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
+        self.frames.push(Frame { tokens, pos: 0, is_macro: false, control: Vec::new(), start, depth: 0 });
         while self.peek()?.is_some() {
             self.statement()?;
         }
@@ -181,7 +224,14 @@ impl Parser {
         self.files.push(path.to_path_buf());
         let tokens = lex(text, 0)?;
         let start = Pos { file: 0, line: 1, col: 1 };
-        self.frames.push(Frame { tokens: Rc::new(tokens), pos: 0, is_macro: false, control: Vec::new(), start });
+        self.frames.push(Frame {
+            tokens: Rc::new(tokens),
+            pos: 0,
+            is_macro: false,
+            control: Vec::new(),
+            start,
+            depth: 0,
+        });
         while self.peek()?.is_some() {
             self.statement()?;
         }
@@ -189,22 +239,31 @@ impl Parser {
         Ok(std::mem::take(&mut self.scene))
     }
 
-    fn read_file(&mut self, path: &Path, at: Option<Pos>) -> Result<Vec<Token>> {
+    fn read_file(&mut self, path: &Path, at: Option<Pos>) -> Result<Rc<Vec<Token>>> {
+        if let Some((_, tokens)) = self.read.get(path) {
+            return Ok(tokens.clone());
+        }
         let fail = |message: String| match at {
             Some(pos) => PovError::at(pos, message),
             None => PovError { pos: None, message },
         };
-        let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
-            Some(cause) => fail(format!("cannot read {}: {cause}", path.display())),
-            None => fail(format!("{} is larger than the most photonix reads", path.display())),
-        })?;
+        if self.files.len() > MAX_INCLUDE_FILES {
+            return Err(fail(format!("the scene includes more than {MAX_INCLUDE_FILES} files; see docs/limits.md")));
+        }
+        // Through the scene's file gate: a regular file of at most the limit, recorded as an
+        // input (no command writes over it), confined to the scene's folder in the editor.
+        let what = if at.is_some() { "the included file" } else { "the scene file" };
+        let bytes = read_gated(path, crate::limits::MAX_SCENE_FILE_BYTES, what).map_err(fail)?;
         // POV-Ray files are often Latin-1: read bytes above 127 as such rather than refusing them.
         let text: String = match String::from_utf8(bytes) {
             Ok(s) => s,
             Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
         };
         self.files.push(path.to_path_buf());
-        lex(&text, (self.files.len() - 1) as u32)
+        let file = (self.files.len() - 1) as u32;
+        let tokens = Rc::new(lex(&text, file)?);
+        self.read.insert(path.to_path_buf(), (file, tokens.clone()));
+        Ok(tokens)
     }
 
     // ---------------------------------------------------------------------------------------
@@ -236,11 +295,11 @@ impl Parser {
                         return Ok(None);
                     }
                     self.frames.pop();
-                    self.scopes.pop();
+                    self.pop_scope();
                 }
                 Some(t) if frame.is_macro && frame.control.is_empty() && t.tok == Tok::Directive("end".into()) => {
                     self.frames.pop();
-                    self.scopes.pop();
+                    self.pop_scope();
                 }
                 Some(t) => return Ok(Some(t.clone())),
             }
@@ -282,7 +341,15 @@ impl Parser {
             self.last_pos = t.pos;
             self.delivered += 1;
             match t.tok {
-                Tok::Sym("{") | Tok::Sym("(") => self.nesting += 1,
+                Tok::Sym("{") | Tok::Sym("(") => {
+                    self.nesting += 1;
+                    if self.nesting > MAX_NESTING {
+                        return self.err(
+                            t.pos,
+                            format!("braces and parentheses nest deeper than {MAX_NESTING} here; see docs/limits.md"),
+                        );
+                    }
+                }
                 Tok::Sym("}") | Tok::Sym(")") => self.nesting -= 1,
                 _ => {}
             }
@@ -361,14 +428,71 @@ impl Parser {
         self.scopes.iter().rev().find_map(|s| s.get(name))
     }
 
-    fn declare(&mut self, name: &str, value: Value, local: bool) {
+    fn declare(&mut self, name: &str, value: Value, local: bool) -> Result<()> {
+        let size = self.measure_value(&value, 0, name)?;
         let depth = if local {
             self.scopes.len() - 1
         } else {
             // #declare changes a local of that name where one is in scope, else the global.
             self.scopes.iter().rposition(|s| s.contains_key(name)).unwrap_or(0)
         };
-        self.scopes[depth].insert(name.to_string(), value);
+        let old = self.scopes[depth].insert(name.to_string(), value);
+        self.forget(old.as_ref());
+        self.declared_bytes += size.bytes;
+        self.check_memory()
+    }
+
+    /// Measures a value about to be stored as `name` (`measure`), refusing it past the limits.
+    fn measure_value(&self, value: &Value, depth: usize, name: &str) -> Result<super::measure::Size> {
+        super::measure::value_at(value, depth).map_err(|e| {
+            PovError::at(
+                self.here(),
+                format!("`{}` {}; see docs/limits.md", crate::limits::printable(name), e.reason()),
+            )
+        })
+    }
+
+    /// Takes a value no longer stored off the language's memory.
+    fn forget(&mut self, old: Option<&Value>) {
+        if let Some(v) = old {
+            let bytes = super::measure::value(v).map_or(0, |s| s.bytes);
+            self.declared_bytes = self.declared_bytes.saturating_sub(bytes);
+        }
+    }
+
+    fn pop_scope(&mut self) {
+        if let Some(scope) = self.scopes.pop() {
+            scope.values().for_each(|v| self.forget(Some(v)));
+        }
+    }
+
+    /// Refuses a scene whose values and objects together pass `MAX_LANGUAGE_BYTES`.
+    fn check_memory(&self) -> Result<()> {
+        let total = self.declared_bytes.saturating_add(self.scene_bytes);
+        if total > self.memory_budget {
+            return self.err(
+                self.here(),
+                format!(
+                    "the scene's declared values and objects take more than {} of memory; see docs/limits.md",
+                    crate::limits::fmt_bytes(self.memory_budget as u64)
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    /// Adds an object placed in the scene to the language's memory.
+    pub fn count_scene_object(&mut self, o: &super::ast::Obj) -> Result<()> {
+        let bytes = super::measure::object(o).map_or(MAX_LANGUAGE_BYTES, |s| s.bytes);
+        self.scene_bytes = self.scene_bytes.saturating_add(bytes);
+        self.check_memory()
+    }
+
+    /// Refuses an object past the limits of `measure` as soon as it is read.
+    pub fn check_object(&self, o: &super::ast::Obj) -> Result<()> {
+        super::measure::object(o)
+            .map(|_| ())
+            .map_err(|e| PovError::at(o.pos, format!("this object {}; see docs/limits.md", e.reason())))
     }
 
     // ---------------------------------------------------------------------------------------
@@ -466,7 +590,7 @@ impl Parser {
                 let value = value?;
                 self.accept_sym_raw(";")?;
                 if index.is_empty() {
-                    self.declare(&name, value, d == "local");
+                    self.declare(&name, value, d == "local")?;
                 } else {
                     self.assign_element(&name, &index, value, npos)?;
                 }
@@ -474,7 +598,8 @@ impl Parser {
             "undef" => {
                 let (name, _) = self.raw_word("an identifier")?;
                 if let Some(s) = self.scopes.iter_mut().rev().find(|s| s.contains_key(&name)) {
-                    s.remove(&name);
+                    let old = s.remove(&name);
+                    self.forget(old.as_ref());
                 }
             }
             "if" => {
@@ -523,7 +648,7 @@ impl Parser {
                 if step == 0.0 {
                     return self.err(pos, "#for with a step of 0 never ends; give a step other than 0".into());
                 }
-                self.declare(&var, Value::Float(start), false);
+                self.declare(&var, Value::Float(start), false)?;
                 if (step > 0.0 && start <= end) || (step < 0.0 && start >= end) {
                     let body = self.frames.last().expect("inside a frame").pos;
                     self.push_ctrl(Ctrl::For { var, end, step, body }, pos);
@@ -603,7 +728,7 @@ impl Parser {
                         Some(Value::Float(v)) => *v + step,
                         _ => return self.err(at, format!("the #for variable `{var}` is no longer a float")),
                     };
-                    self.declare(&var, Value::Float(v), false);
+                    self.declare(&var, Value::Float(v), false)?;
                     if (step > 0.0 && v <= end) || (step < 0.0 && v >= end) {
                         self.frames.last_mut().expect("inside a frame").pos = body;
                         self.push_ctrl(Ctrl::For { var, end, step, body }, at);
@@ -631,24 +756,26 @@ impl Parser {
                 let frame = self.frames.last().expect("inside a frame");
                 let def = MacroDef { tokens: frame.tokens.clone(), body: frame.pos, params };
                 self.skip_to(&["end"], pos)?;
-                self.declare(&name, Value::Macro(Rc::new(def)), false);
+                self.declare(&name, Value::Macro(Rc::new(def)), false)?;
             }
             "include" => {
+                // The including frame, before reading the name: past a file's last statement
+                // reading it ends that frame, and the depth must still grow.
+                let depth = self.frames.last().map_or(0, |f| f.depth) + 1;
                 let name = self.string()?;
                 let path = self.find_include(&name, pos)?;
-                if self.frames.len() >= MAX_DEPTH {
-                    return self
-                        .err(pos, format!("includes nest deeper than {MAX_DEPTH}; does a file include itself?"));
+                if depth >= MAX_DEPTH {
+                    return self.err(
+                        pos,
+                        format!(
+                            "includes nest deeper than {MAX_DEPTH}; does a file include itself? see docs/limits.md"
+                        ),
+                    );
                 }
                 let tokens = self.read_file(&path, Some(pos))?;
-                let start = Pos { file: (self.files.len() - 1) as u32, line: 1, col: 1 };
-                self.frames.push(Frame {
-                    tokens: Rc::new(tokens),
-                    pos: 0,
-                    is_macro: false,
-                    control: Vec::new(),
-                    start,
-                });
+                let file = self.read.get(&path).map_or(0, |(f, _)| *f);
+                let start = Pos { file, line: 1, col: 1 };
+                self.frames.push(Frame { tokens, pos: 0, is_macro: false, control: Vec::new(), start, depth });
                 self.scopes.push(HashMap::new());
             }
             "version" => {
@@ -679,7 +806,7 @@ impl Parser {
                             self.loc(pos),
                             mode.0
                         ));
-                        self.declare(&name, Value::Other("an output file"), false);
+                        self.declare(&name, Value::Other("an output file"), false)?;
                     }
                     "read" => return self.err(pos, "reading files (#fopen ... read) is not supported yet".into()),
                     other => {
@@ -748,11 +875,29 @@ impl Parser {
         let mut dirs: Vec<PathBuf> = here.into_iter().collect();
         dirs.push(self.scene_dir.clone());
         dirs.extend(self.options.include_dirs.iter().cloned());
+        // Each candidate passes the scene's file gate: in the editor a name that leads out of
+        // the scene's folder (and the standard include folder) is refused whether or not a file
+        // is there, and the message names neither the file nor the folders searched.
+        let (mut outside, mut not_regular) = (None, None);
         for dir in &dirs {
             let p = dir.join(name);
-            if p.is_file() {
-                return Ok(p);
+            match crate::scene::files::probe(&p) {
+                Ok(_) if p.is_file() => return Ok(p),
+                // There, but a device, a pipe or a folder: say what it is, not "no such file".
+                Ok(r) => {
+                    if let Err(e) = crate::limits::regular_file_size(&r) {
+                        not_regular = not_regular.or(Some(e));
+                    }
+                }
+                Err(e @ crate::scene::files::FileError::Outside { .. }) => outside = outside.or(Some(e)),
+                _ => {}
             }
+        }
+        if let Some(e) = outside {
+            return self.err(pos, format!("#include: {e}"));
+        }
+        if let Some(e) = not_regular {
+            return self.err(pos, format!("#include \"{}\": {e}", crate::limits::printable(name)));
         }
         let hint = if Path::new(super::STANDARD_INCLUDE_DIR).is_dir() {
             String::new()
@@ -770,6 +915,7 @@ impl Parser {
 
     fn call_macro(&mut self, name: &str, pos: Pos) -> Result<()> {
         let Some(Value::Macro(def)) = self.lookup(name).cloned() else { unreachable!("checked by peek") };
+        let depth = self.frames.last().map_or(0, |f| f.depth) + 1;
         self.expect_sym("(")?;
         let mut args = Vec::new();
         if !self.accept_sym(")")? {
@@ -784,7 +930,7 @@ impl Parser {
         if args.len() != def.params.len() {
             return self.err(pos, format!("macro `{name}` takes {} arguments, not {}", def.params.len(), args.len()));
         }
-        if self.frames.len() >= MAX_DEPTH {
+        if depth >= MAX_DEPTH || self.frames.len() >= MAX_DEPTH {
             return self.err(
                 pos,
                 format!(
@@ -792,6 +938,10 @@ impl Parser {
                 ),
             );
         }
+        for (param, arg) in def.params.iter().zip(&args) {
+            self.declared_bytes += self.measure_value(arg, 0, param)?.bytes;
+        }
+        self.check_memory()?;
         let scope: HashMap<String, Value> = def.params.iter().cloned().zip(args).collect();
         self.scopes.push(scope);
         self.frames.push(Frame {
@@ -800,6 +950,7 @@ impl Parser {
             is_macro: true,
             control: Vec::new(),
             start: pos,
+            depth,
         });
         Ok(())
     }
@@ -807,6 +958,7 @@ impl Parser {
     fn assign_element(&mut self, name: &str, index: &[f64], value: Value, pos: Pos) -> Result<()> {
         let depth = self.scopes.iter().rposition(|s| s.contains_key(name));
         let Some(depth) = depth else { return self.err(pos, format!("`{name}` is not a declared array")) };
+        let size = self.measure_value(&value, 1, name)?;
         let Some(Value::Array(a)) = self.scopes[depth].get_mut(name) else {
             return self.err(pos, format!("`{name}` is not an array"));
         };
@@ -814,8 +966,10 @@ impl Parser {
             let dims = a.dims.clone();
             return self.err(pos, format!("index {index:?} is outside the array `{name}` of size {dims:?}"));
         };
-        a.items[i] = Some(value);
-        Ok(())
+        let old = a.items[i].replace(value);
+        self.forget(old.as_ref());
+        self.declared_bytes += size.bytes;
+        self.check_memory()
     }
 
     // ---------------------------------------------------------------------------------------
@@ -906,6 +1060,26 @@ impl Parser {
     // Expressions, lowest precedence first: ?:, |, &, comparisons, + -, * /, unary, postfix.
 
     pub fn expr(&mut self) -> Result<Value> {
+        self.deeper()?;
+        let v = self.expr_inner();
+        self.expression_depth -= 1;
+        v
+    }
+
+    /// One sub-expression deeper, refused past `MAX_EXPRESSION_DEPTH` (the evaluator recurses).
+    fn deeper(&mut self) -> Result<()> {
+        if self.expression_depth >= MAX_EXPRESSION_DEPTH {
+            let pos = self.peek_raw()?.map_or(self.here(), |t| t.pos);
+            return self.err(
+                pos,
+                format!("the expression nests deeper than {MAX_EXPRESSION_DEPTH} levels; see docs/limits.md"),
+            );
+        }
+        self.expression_depth += 1;
+        Ok(())
+    }
+
+    fn expr_inner(&mut self) -> Result<Value> {
         let c = self.or()?;
         if self.accept_sym_raw("?")? {
             let pos = self.here();
@@ -997,17 +1171,24 @@ impl Parser {
     }
 
     fn unary(&mut self) -> Result<Value> {
+        // A unary operator recurses without a bracket: counted like a sub-expression.
+        let nested = |p: &mut Parser| -> Result<Value> {
+            p.deeper()?;
+            let v = p.unary();
+            p.expression_depth -= 1;
+            v
+        };
         if self.accept_sym("-")? {
             let pos = self.here();
-            let v = self.unary()?;
+            let v = nested(self)?;
             return arith(Value::Float(0.0), v, "-", pos, self);
         }
         if self.accept_sym("+")? {
-            return self.unary();
+            return nested(self);
         }
         if self.accept_sym("!")? {
             let pos = self.here();
-            let v = self.unary()?;
+            let v = nested(self)?;
             return Ok(Value::Float((!truth(&v, pos, self)?) as u8 as f64));
         }
         let v = self.factor()?;
@@ -1386,7 +1567,9 @@ impl Parser {
                 let a = self.args()?;
                 let mut s = String::new();
                 for x in &a {
-                    s += &str_of(Some(x), pos, self)?;
+                    let part = str_of(Some(x), pos, self)?;
+                    check_string_length(s.len() + part.len(), pos)?;
+                    s += &part;
                 }
                 Value::Str(s)
             }
@@ -1416,6 +1599,7 @@ impl Parser {
                 let sep = str_of(a.get(2), pos, self)?;
                 let width = scalar(a.get(3).unwrap_or(&Value::Float(0.0)), pos, self)?;
                 let prec = scalar(a.get(4).unwrap_or(&Value::Float(6.0)), pos, self)?;
+                check_string_length(sep.len().saturating_mul(4), pos)?;
                 Value::Str(v.iter().map(|x| pov_str(*x, width, prec)).collect::<Vec<_>>().join(&sep))
             }
             "file_exists" => {
@@ -1512,6 +1696,36 @@ fn vec3_of(v: Option<&Value>, pos: Pos, p: &Parser) -> Result<DVec3> {
     Ok(DVec3::new(c[0], c[1], c[2]))
 }
 
+/// Refuses a string of more than `MAX_STRING_BYTES` before it is made.
+fn check_string_length(bytes: usize, pos: Pos) -> Result<()> {
+    if bytes > MAX_STRING_BYTES {
+        return Err(PovError::at(
+            pos,
+            format!(
+                "this string would be longer than {} (the longest the language holds); see docs/limits.md",
+                crate::limits::fmt_bytes(MAX_STRING_BYTES as u64)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Reads a file the scene names (`what`: "the included file", "the image", "the font") through
+/// the scene's file gate (`scene::files`): a regular file of at most `limit` bytes, recorded as
+/// an input, confined to the scene's folder in the editor. A refusal for confinement names
+/// neither the file nor what it holds.
+pub fn read_gated(path: &Path, limit: u64, what: &str) -> std::result::Result<Vec<u8>, String> {
+    use crate::scene::files::FileError;
+    crate::scene::files::read(path, limit).map_err(|e| {
+        let shown = crate::limits::printable_message(&path.display().to_string());
+        match e {
+            FileError::Outside { .. } => format!("{what}: {e}"),
+            FileError::TooLarge { .. } | FileError::NoMemory { .. } => format!("{what} {shown}: {e}"),
+            FileError::Io(e) => format!("cannot read {what} {shown}: {e}"),
+        }
+    })
+}
+
 fn str_of(v: Option<&Value>, pos: Pos, p: &Parser) -> Result<String> {
     match v {
         Some(Value::Str(s)) => Ok(s.clone()),
@@ -1534,7 +1748,10 @@ fn arith(a: Value, b: Value, op: &str, pos: Pos, p: &Parser) -> Result<Value> {
     };
     match (&a, &b) {
         (Value::Float(x), Value::Float(y)) => Ok(Value::Float(f(*x, *y))),
-        (Value::Str(x), Value::Str(y)) if op == "+" => Ok(Value::Str(format!("{x}{y}"))),
+        (Value::Str(x), Value::Str(y)) if op == "+" => {
+            check_string_length(x.len() + y.len(), pos)?;
+            Ok(Value::Str(format!("{x}{y}")))
+        }
         (Value::Float(_) | Value::Vector(_), Value::Float(_) | Value::Vector(_)) => {
             let n = match (&a, &b) {
                 (Value::Vector(x), Value::Vector(y)) => x.len().max(y.len()),
