@@ -8,8 +8,11 @@
 // A material evaluated at one surface point: its textures looked up, its frame set.
 struct Bsdf {
     uint kind;
+    uint flags;       // the material's MATERIAL_FLAG_*
+    uint data;        // the material's data: a rough nonlinear plastic's coat table
     vec3 color0;
     vec3 color1;
+    vec3 color2;      // a conductor's tint
     vec2 alpha;
     float ior;
     vec3 ng;          // geometric normal (a triangle's winding side, a sphere's outside)
@@ -42,25 +45,27 @@ float hash_point(vec3 p, uint key) {
 }
 
 // The texture lookups of material_bsdf, one bit each in a mask: colour 0, colour 1, roughness,
-// normal map, and the bump map's four heights (u+, u-, v+, v-).
+// normal map, the bump map's four heights (u+, u-, v+, v-) and colour 2.
 const uint LOOKUP_COLOR0 = 0u;
 const uint LOOKUP_COLOR1 = 1u;
 const uint LOOKUP_ROUGHNESS = 2u;
 const uint LOOKUP_NORMAL = 3u;
 const uint LOOKUP_BUMP = 4u;  // to LOOKUP_BUMP + 3
-const uint LOOKUP_MIX = 8u;   // a mix's weight
+const uint LOOKUP_COLOR2 = 8u;
+const uint LOOKUP_MIX = 9u;   // a mix's weight
 
 uint material_lookups(Material m) {
     return (m.color0_tex != NO_TEXTURE ? 1u << LOOKUP_COLOR0 : 0u)
         | (m.color1_tex != NO_TEXTURE ? 1u << LOOKUP_COLOR1 : 0u)
         | (m.roughness_tex != NO_TEXTURE ? 1u << LOOKUP_ROUGHNESS : 0u)
         | (m.normal_tex != NO_TEXTURE ? 1u << LOOKUP_NORMAL : 0u)
+        | (m.color2_tex != NO_TEXTURE ? 1u << LOOKUP_COLOR2 : 0u)
         | (m.bump_tex != NO_TEXTURE ? 15u << LOOKUP_BUMP : 0u);
 }
 
 // Where lookup `k` reads: a bump height's point moved by BUMP_DELTA along u or v.
 Hit lookup_hit(Hit h, uint k) {
-    if (k < LOOKUP_BUMP || k == LOOKUP_MIX) return h;
+    if (k < LOOKUP_BUMP || k >= LOOKUP_COLOR2) return h;
     uint j = k - LOOKUP_BUMP;
     float d = (j & 1u) == 0u ? BUMP_DELTA : -BUMP_DELTA;
     return j < 2u ? hit_moved(h, d, 0.0) : hit_moved(h, 0.0, d);
@@ -72,16 +77,21 @@ uint lookup_texture(Material m, uint k) {
     if (k == LOOKUP_ROUGHNESS) return m.roughness_tex;
     if (k == LOOKUP_NORMAL) return m.normal_tex;
     if (k == LOOKUP_MIX) return m.weight_tex;
+    if (k == LOOKUP_COLOR2) return m.color2_tex;
     return m.bump_tex;
 }
 
 // The BSDF at hit h of a material whose values are looked up (textures, a mix's choice, bump and
 // normal maps done): material_bsdf's, and render_vcm's light vertices' from what vcm_light stored.
-Bsdf bsdf_at(Hit h, uint kind, vec3 color0, vec3 color1, vec2 alpha, float ior, vec3 ns) {
+Bsdf bsdf_at(Hit h, uint kind, uint flags, uint data, vec3 color0, vec3 color1, vec3 color2, vec2 alpha, float ior,
+             vec3 ns) {
     Bsdf b;
     b.kind = kind;
+    b.flags = flags;
+    b.data = data;
     b.color0 = color0;
     b.color1 = color1;
+    b.color2 = color2;
     b.alpha = alpha;
     b.ior = ior;
     // The normal that decides sides: the geometric one, or a smooth triangle's interpolated one
@@ -97,11 +107,11 @@ Bsdf bsdf_at(Hit h, uint kind, vec3 color0, vec3 color1, vec2 alpha, float ior, 
 // in this loop: lavapipe inlines a function at each call site, and one call per parameter (nine,
 // with the bump map's four) made the textured kernels several times larger and slower.
 Bsdf material_bsdf(Material m, Hit h) {
-    vec3 looked[8];
+    vec3 looked[9];
     uint level = 0u;
     bool mixing = m.kind == MATERIAL_MIX;
     uint pending = mixing ? 0u : material_lookups(m);
-    for (uint step = 0u; step < MIX_MAX_DEPTH + 8u && (mixing || pending != 0u); step++) {
+    for (uint step = 0u; step < MIX_MAX_DEPTH + 9u && (mixing || pending != 0u); step++) {
         uint k = mixing ? LOOKUP_MIX : uint(findLSB(pending));
         uint tex = lookup_texture(m, k);
         vec3 v = vec3(1.0);
@@ -121,6 +131,8 @@ Bsdf material_bsdf(Material m, Hit h) {
     if ((lookups & (1u << LOOKUP_COLOR0)) != 0u) color0 *= looked[LOOKUP_COLOR0];
     vec3 color1 = load3(m.color1);
     if ((lookups & (1u << LOOKUP_COLOR1)) != 0u) color1 *= looked[LOOKUP_COLOR1];
+    vec3 color2 = load3(m.color2);
+    if ((lookups & (1u << LOOKUP_COLOR2)) != 0u) color2 *= looked[LOOKUP_COLOR2];
     vec2 alpha = vec2(m.roughness[0], m.roughness[1]);
     if ((lookups & (1u << LOOKUP_ROUGHNESS)) != 0u) alpha *= looked[LOOKUP_ROUGHNESS].x;
     // Bump and normal maps change the shading normal only: the geometric normal keeps deciding
@@ -131,7 +143,7 @@ Bsdf material_bsdf(Material m, Hit h) {
         ns = bump_normal_from_heights(looked[LOOKUP_BUMP].x, looked[LOOKUP_BUMP + 1u].x, looked[LOOKUP_BUMP + 2u].x,
                                       looked[LOOKUP_BUMP + 3u].x, m.bump_strength, h);
     }
-    return bsdf_at(h, m.kind, color0, color1, alpha, m.ior, ns);
+    return bsdf_at(h, m.kind, m.flags, m.data, color0, color1, color2, alpha, m.ior, ns);
 }
 
 // The shading normal turned to the side of w.
@@ -187,6 +199,18 @@ BsdfSample smooth_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
     return BsdfSample(wi, vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_TRANSMISSION | BSDF_PATH);
 }
 
+// Thin dielectric: a pane of index ior (Mitsuba's thindielectric). Its reflectance sums the
+// light bouncing inside the pane, R' = R + T^2 R / (1 - R^2) with T = 1 - R; the rest passes
+// straight through. Chosen against u.x, weight 1.
+BsdfSample thin_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
+    vec3 n = facing(b, wo);
+    float cos_t;
+    float r = mf_fresnel_dielectric(abs(dot(wo, n)), 1.0, b.ior, cos_t);
+    if (r < 1.0) r += (1.0 - r) * (1.0 - r) * r / (1.0 - r * r);
+    if (u.x < r) return BsdfSample(reflect(-wo, n), vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH);
+    return BsdfSample(-wo, vec3(1.0), 0.0, BSDF_SPECULAR | BSDF_TRANSMISSION | BSDF_PATH);
+}
+
 // The local frame of b around normal n (x along ts where it is known).
 void bsdf_frame(Bsdf b, vec3 n, out vec3 t, out vec3 bt) {
     vec3 tt = b.ts - n * dot(n, b.ts);
@@ -214,13 +238,14 @@ BsdfSample microfacet_result(bool ok, vec3 wi_local, vec3 weight, float pdf, uin
 // The flags of a glossy lobe: followed by paths up to the threshold, an estimate lobe above it.
 uint glossy_flags(Bsdf b) { return BSDF_GLOSSY | (b.glossy_path ? BSDF_PATH : BSDF_ESTIMATE); }
 
-// Conductor: GGX metal with complex index color0 + i color1, reflecting on both sides.
+// Conductor: GGX metal with complex index color0 + i color1, its Fresnel term tinted by color2,
+// reflecting on both sides.
 
 vec3 conductor_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
     vec3 n = facing(b, wo), t, bt;
     bsdf_frame(b, n, t, bt);
-    return conductor_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.color0, b.color1);
+    return b.color2 * conductor_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.color0, b.color1);
 }
 
 float conductor_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
@@ -237,7 +262,7 @@ BsdfSample conductor_bsdf_sample(Bsdf b, vec3 wo, vec3 u) {
     float pdf;
     uint lobe;
     bool ok = conductor_sample(to_local(wo, t, bt, n), b.alpha, b.color0, b.color1, u.yz, wi, weight, pdf, lobe);
-    BsdfSample s = microfacet_result(ok, wi, weight, pdf, lobe, t, bt, n, glossy_flags(b));
+    BsdfSample s = microfacet_result(ok, wi, b.color2 * weight, pdf, lobe, t, bt, n, glossy_flags(b));
     if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
     return s;
 }
@@ -270,11 +295,16 @@ BsdfSample rough_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
 // Plastic: diffuse base color0 under a dielectric coat of index ior, on both sides. A smooth
 // coat is a path lobe (a delta); a rough coat is read with the base as an estimate lobe.
 
+// microfacet.glsl's coat tables live in the texture data.
+float mf_coat_word(uint i) { return uintBitsToFloat(texture_word(i)); }
+
+bool plastic_nonlinear(Bsdf b) { return (b.flags & MATERIAL_FLAG_NONLINEAR) != 0u; }
+
 vec3 plastic_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
     vec3 n = facing(b, wo), t, bt;
     bsdf_frame(b, n, t, bt);
-    return plastic_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.ior, b.color0);
+    return plastic_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data);
 }
 
 float plastic_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
@@ -305,14 +335,14 @@ BsdfSample plastic_bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
     if (is_smooth(b) && lobes == LOBES_ESTIMATE) {
         // The base alone, by cosine: weight f cos / pdf = pi f.
         vec3 wi_l = mf_cosine_direction(u.yz);
-        vec3 f = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0);
+        vec3 f = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data);
         BsdfSample s = BsdfSample(to_world(wi_l, t, bt, n), PI * f, wi_l.z * (1.0 / PI), BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE);
         return dot(s.wi, b.ng) * dot(wo, b.ng) > 0.0 && wi_l.z > 0.0 ? s : no_sample();
     }
     vec3 wi, weight;
     float pdf;
     uint lobe;
-    bool ok = plastic_sample(wo_l, b.alpha, b.ior, b.color0, u, wi, weight, pdf, lobe);
+    bool ok = plastic_sample(wo_l, b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data, u, wi, weight, pdf, lobe);
     BsdfSample s = microfacet_result(ok, wi, weight, pdf, lobe, t, bt, n, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
     if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
     return s;
@@ -338,6 +368,8 @@ uint bsdf_flags(Bsdf b) {
             | (b.color0 == vec3(0.0) ? 0u : BSDF_DIFFUSE | BSDF_ESTIMATE);
     case MATERIAL_PHASE:
         return PHASE_FLAGS;
+    case MATERIAL_THIN_DIELECTRIC:
+        return BSDF_SPECULAR | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_PATH;
     }
     return 0u;  // unreachable: the host packs only known kinds (tested)
 }
@@ -433,6 +465,9 @@ BsdfSample bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
         break;
     case MATERIAL_PLASTIC:
         if (SCENE_HAS_PLASTIC) return plastic_bsdf_sample(b, wo, u, lobes);
+        break;
+    case MATERIAL_THIN_DIELECTRIC:
+        if (SCENE_HAS_THIN_DIELECTRIC) return thin_dielectric_sample(b, wo, u);
         break;
     case MATERIAL_PHASE:
         if (SCENE_HAS_PHASE) {

@@ -32,6 +32,8 @@ struct Material {
     uint color0_tex;
     float color1[3];
     uint color1_tex;
+    float color2[3];
+    uint color2_tex;
     float roughness[2];
     uint roughness_tex;
     float ior;
@@ -42,7 +44,7 @@ struct Material {
     float weight;
     uint mix_a;
     uint mix_b;
-    uint _pad;
+    uint data;
 };
 
 struct Texture {
@@ -118,7 +120,8 @@ struct FrameParams {
     uint csg_first;
     uint integrator;
     uint techniques;
-    uint _pad[3];
+    uint pixel_filter;
+    uint _pad[2];
 };
 
 struct DispatchRange {
@@ -199,7 +202,11 @@ struct LightMaterial {
     float ns[3];
     float alpha_u;
     float alpha_v;
-    uint _pad[3];
+    uint flags;
+    uint data;
+    uint _pad;
+    float color2[3];
+    uint _pad2;
 };
 
 // Stores a Photon field by field: glslang emits an invalid whole-struct OpStore when the value

@@ -180,8 +180,11 @@ Bsdf phase_bsdf(uint medium, vec3 wo) {
     Medium m = medium_at(medium);
     Bsdf b;
     b.kind = MATERIAL_PHASE;
+    b.flags = 0u;
+    b.data = NO_DATA;
     b.color0 = vec3(1.0);
     b.color1 = vec3(float(m.phase), m.density != NO_TEXTURE ? 1.0 : 0.0, 0.0);
+    b.color2 = vec3(1.0);
     b.alpha = vec2(0.0);
     b.ior = m.g;
     b.ng = wo;

@@ -295,15 +295,38 @@ bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out 
 }
 
 // ---------------------------------------------------------------------------------------------
-// Plastic: GGX dielectric coat over a Lambertian base (Mitsuba 3 plastic / roughplastic, linear,
-// with the changes listed at plastic_eval in the twin)
+// Plastic: GGX dielectric coat over a Lambertian base (Mitsuba 3 plastic / roughplastic, linear or
+// nonlinear, with the changes listed at plastic_eval in the twin). `nonlinear` and `table` (a
+// rough nonlinear coat's table, or NO_DATA) are the twin's PlasticCoat; the table's words come
+// from mf_coat_word, which the including kernel defines.
 
-vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse) {
+float mf_coat_word(uint i);
+
+float mf_coat_transmittance(uint table, float mu, float f) {
+    if (table == NO_DATA) return 1.0 - f;
+    float x = clamp(mu, 0.0, 1.0) * float(PLASTIC_COAT_TABLE - 1u);
+    uint i = min(uint(x), PLASTIC_COAT_TABLE - 2u);
+    float v0 = mf_coat_word(table + 1u + i), v1 = mf_coat_word(table + 2u + i);
+    return v0 + (v1 - v0) * (x - float(i));
+}
+
+vec3 mf_plastic_base(float wo_z, float wi_z, float f_o, float f_i, float ior, vec3 diffuse, bool nonlinear, uint table) {
+    float fdr_ext = mf_fresnel_diffuse(ior);
+    if (!nonlinear) return diffuse * ((1.0 - f_o) * (1.0 - f_i) / (MF_PI * (1.0 - fdr_ext)));
+    float t_o = mf_coat_transmittance(table, wo_z, f_o);
+    float t_i = mf_coat_transmittance(table, wi_z, f_i);
+    float eta2 = ior * ior;
+    float r_int = table == NO_DATA ? 1.0 - (1.0 - fdr_ext) / eta2 : mf_coat_word(table);
+    vec3 bounce = max(vec3(1.0) - diffuse * r_int, vec3(1e-6));
+    return diffuse * (t_o * t_i / (MF_PI * eta2)) / bounce;
+}
+
+vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse, bool nonlinear, uint table) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     float cos_t;
     float f_o = mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t);
     float f_i = mf_fresnel_dielectric(wi.z, 1.0, ior, cos_t);
-    vec3 f = diffuse * ((1.0 - f_o) * (1.0 - f_i) / (MF_PI * (1.0 - mf_fresnel_diffuse(ior))));
+    vec3 f = mf_plastic_base(wo.z, wi.z, f_o, f_i, ior, diffuse, nonlinear, table);
     if (mf_is_smooth(alpha)) return f;
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
@@ -326,8 +349,8 @@ float plastic_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse) {
     return pdf;
 }
 
-bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, vec3 u, out vec3 wi, out vec3 weight, out float pdf,
-                    out uint lobe) {
+bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, bool nonlinear, uint table, vec3 u, out vec3 wi,
+                    out vec3 weight, out float pdf, out uint lobe) {
     wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
     if (wo.z <= 0.0) return false;
     float p_coat = mf_plastic_coat_probability(wo, ior, diffuse);
@@ -349,7 +372,7 @@ bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, vec3 u, out ve
     float p = plastic_pdf(wo, w, alpha, ior, diffuse);
     if (!(p > 0.0)) return false;
     wi = w;
-    weight = plastic_eval(wo, w, alpha, ior, diffuse) * (w.z / p);
+    weight = plastic_eval(wo, w, alpha, ior, diffuse, nonlinear, table) * (w.z / p);
     pdf = p;
     return true;
 }

@@ -4,7 +4,8 @@
 // (src/cpu/microfacet.rs). Test-only kernel. Bindings: 0 inputs, 1 outputs. Push constants: count.
 //
 // Plain float arrays (no struct layout to mirror). Input record, PROBE_IN floats:
-//   0 wo[3], 3 wi[3], 6 u[3], 9 alpha[2], 11 ior, 12 eta[3], 15 k[3], 18 diffuse[3], 21 unused[3]
+//   0 wo[3], 3 wi[3], 6 u[3], 9 alpha[2], 11 ior, 12 eta[3], 15 k[3], 18 diffuse[3], 21 nonlinear
+//   (0 or 1), 22 a plastic coat table's index in `inputs` (-1: none), 23 unused
 // Output record, PROBE_OUT floats (a sample is: valid, wi[3], weight[3], pdf, lobe):
 //   0 ggx_d(h), 1 ggx_g1(wo, h), 2 ggx_g1(wi, h), 3 ggx_pdf_visible(wo, h), 4 ggx_sample_visible[3]
 //   7 fresnel_conductor(wo.z)[3]
@@ -29,6 +30,9 @@ layout(std430, binding = 1) writeonly buffer Outputs { float outputs[]; };
 layout(push_constant) uniform Params {
     uint count;
 } params;
+
+// The plastic's coat tables are read from the inputs themselves (the test appends them).
+float mf_coat_word(uint i) { return inputs[i]; }
 
 vec3 in3(uint base, uint at) { return vec3(inputs[base + at], inputs[base + at + 1u], inputs[base + at + 2u]); }
 
@@ -61,6 +65,8 @@ void main() {
     vec3 eta = in3(a, 12u);
     vec3 k = in3(a, 15u);
     vec3 diffuse = in3(a, 18u);
+    bool nonlinear = inputs[a + 21u] != 0.0;
+    uint table = inputs[a + 22u] < 0.0 ? NO_DATA : uint(inputs[a + 22u]);
 
     // GGX
     vec2 ar = max(alpha, vec2(0.01));
@@ -91,9 +97,9 @@ void main() {
     out_sample(o, 25u, valid, s_wi, s_weight, s_pdf, s_lobe);
 
     // Plastic
-    out3(o, 34u, plastic_eval(wo, wi, alpha, ior, diffuse));
+    out3(o, 34u, plastic_eval(wo, wi, alpha, ior, diffuse, nonlinear, table));
     out1(o, 37u, plastic_pdf(wo, wi, alpha, ior, diffuse));
-    valid = plastic_sample(wo, alpha, ior, diffuse, u, s_wi, s_weight, s_pdf, s_lobe);
+    valid = plastic_sample(wo, alpha, ior, diffuse, nonlinear, table, u, s_wi, s_weight, s_pdf, s_lobe);
     out_sample(o, 38u, valid, s_wi, s_weight, s_pdf, s_lobe);
 
     // Lambert

@@ -86,7 +86,7 @@ const uint RAY_PROBE = 5u;  // an edge probe of the lookups' discs (edge_probe_r
 void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_since, inout vec3 terms[4], inout uint rays, inout uint blocked, inout uint lit) {
     uint stream = py * frame.width + px;
     // The film position, then the lens.
-    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = film_offset(qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X));
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;

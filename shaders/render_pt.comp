@@ -75,7 +75,7 @@ uint path_layer(bool first_specular, uint diffuse, bool specular_after) {
 // lavapipe's sake (see render.comp).
 void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout uint rays) {
     uint stream = py * frame.width + px;
-    vec2 film = qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = film_offset(qmc2(stream, sample_index, frame.seed, RNG_PIXEL_X));
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     vec3 o, d;

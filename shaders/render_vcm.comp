@@ -118,7 +118,7 @@ void light_vertex_bsdf(LightVertex v, uint slot, out Hit h, out Bsdf b) {
 #endif
     h = shape_hit(v.hit, o, d, v.t);
     LightMaterial m = fetch_light_material(light_material_texels, slot);
-    b = bsdf_at(h, m.kind, load3(m.color0), load3(m.color1), vec2(m.alpha_u, m.alpha_v), m.ior, load3(m.ns));
+    b = bsdf_at(h, m.kind, m.flags, m.data, load3(m.color0), load3(m.color1), load3(m.color2), vec2(m.alpha_u, m.alpha_v), m.ior, load3(m.ns));
 }
 
 // A camera vertex joined to light vertex lv; contract in vcm.rs, connect_vertices.
@@ -175,7 +175,7 @@ CameraPath camera_path_start(uint px, uint py) {
     CameraPath c;
     c.stream = py * frame.width + px;
     uint sample_index = params.sample_index;
-    vec2 film = qmc2(c.stream, sample_index, frame.seed, RNG_PIXEL_X);
+    vec2 film = film_offset(qmc2(c.stream, sample_index, frame.seed, RNG_PIXEL_X));
     float sx = 2.0 * (float(px) + film.x) / float(frame.width) - 1.0;
     float sy = 1.0 - 2.0 * (float(py) + film.y) / float(frame.height);
     camera_ray(sx, sy, lens_sample(c.stream, sample_index), c.o, c.d);

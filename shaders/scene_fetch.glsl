@@ -72,13 +72,14 @@ Primitive primitive_at(uint i) {
 uint primitive_kind(uint i) { return primitive_texel(4u * i).w; }
 
 Material material_at(uint i) {
-    uvec4 a = material_texel(7u * i);
-    uvec4 b = material_texel(7u * i + 1u);
-    uvec4 c = material_texel(7u * i + 2u);
-    uvec4 d = material_texel(7u * i + 3u);
-    uvec4 e = material_texel(7u * i + 4u);
-    uvec4 f = material_texel(7u * i + 5u);
-    uvec4 g = material_texel(7u * i + 6u);
+    uvec4 a = material_texel(8u * i);
+    uvec4 b = material_texel(8u * i + 1u);
+    uvec4 c = material_texel(8u * i + 2u);
+    uvec4 d = material_texel(8u * i + 3u);
+    uvec4 c2 = material_texel(8u * i + 4u);
+    uvec4 e = material_texel(8u * i + 5u);
+    uvec4 f = material_texel(8u * i + 6u);
+    uvec4 g = material_texel(8u * i + 7u);
     Material m;
     m.kind = a.x;
     m.flags = a.y;
@@ -90,6 +91,8 @@ Material material_at(uint i) {
     m.color0_tex = c.w;
     m.color1 = F3(d);
     m.color1_tex = d.w;
+    m.color2 = F3(c2);
+    m.color2_tex = c2.w;
     m.roughness = float[2](uintBitsToFloat(e.x), uintBitsToFloat(e.y));
     m.roughness_tex = e.z;
     m.ior = uintBitsToFloat(e.w);
@@ -100,7 +103,7 @@ Material material_at(uint i) {
     m.weight = uintBitsToFloat(g.x);
     m.mix_a = g.y;
     m.mix_b = g.z;
-    m._pad = g.w;
+    m.data = g.w;
     return m;
 }
 

@@ -61,9 +61,10 @@ float camera_d_vcm(uint light_paths, vec3 d) {
     return mis(float(light_paths) / camera_pdf_w(d));
 }
 
-// The pixel whose film holds the image of x seen from the aperture point lens, or NO_LIGHT;
-// contract in vcm.rs, camera_pixel.
-uint camera_pixel(vec3 x, vec3 lens) {
+// The film point (pixels) of the image of x seen from the aperture point lens; false behind the
+// camera. Contract in vcm.rs, camera_film.
+bool camera_film(vec3 x, vec3 lens, out vec2 film) {
+    film = vec2(0.0);
     vec3 fw = load3(frame.camera_forward);
     vec3 r = load3(frame.camera_right);
     vec3 u = load3(frame.camera_up);
@@ -74,26 +75,45 @@ uint camera_pixel(vec3 x, vec3 lens) {
         sx = atan(dot(d, r), dot(d, fw)) / PI;
         sy = asin(clamp(dot(d, u), -1.0, 1.0)) / (0.5 * PI);
     } else if (frame.camera_kind == CAMERA_ORTHOGRAPHIC) {
-        if (dot(v, fw) <= 0.0) return NO_LIGHT;
+        if (dot(v, fw) <= 0.0) return false;
         sx = dot(v, r) / dot(r, r);
         sy = dot(v, u) / dot(u, u);
     } else {
         if (frame.lens_radius > 0.0) {
             vec3 d = normalize(x - lens);
             float along = dot(d, fw);
-            if (along <= 0.0) return NO_LIGHT;
+            if (along <= 0.0) return false;
             x = lens + d * (frame.focal_distance / along);
             v = x - load3(frame.camera_position);
         }
         float k = dot(v, fw) / dot(fw, fw);
-        if (k <= 0.0) return NO_LIGHT;
+        if (k <= 0.0) return false;
         sx = dot(v, r) / (k * dot(r, r));
         sy = dot(v, u) / (k * dot(u, u));
     }
-    float fx = 0.5 * (sx + 1.0) * float(frame.width);
-    float fy = 0.5 * (1.0 - sy) * float(frame.height);
-    if (!(fx >= 0.0 && fy >= 0.0 && fx < float(frame.width) && fy < float(frame.height))) return NO_LIGHT;
-    return min(uint(fy), frame.height - 1u) * frame.width + min(uint(fx), frame.width - 1u);
+    film = vec2(0.5 * (sx + 1.0) * float(frame.width), 0.5 * (1.0 - sy) * float(frame.height));
+    return true;
+}
+
+// Whether some pixel's filter reaches film point `film`; contract in vcm.rs.
+bool film_reaches_image(vec2 film) {
+    vec2 size = vec2(float(frame.width), float(frame.height));
+    if (frame.pixel_filter == FILTER_BOX) return film.x >= 0.0 && film.y >= 0.0 && film.x < size.x && film.y < size.y;
+    float r = filter_radius() - 0.5;
+    return film.x > -r && film.y > -r && film.x < size.x + r && film.y < size.y + r;
+}
+
+// The pixels whose filter reaches `film` (a box's: the one it lies in), as an inclusive range
+// of columns and rows; contract in vcm.rs, film_footprint.
+uvec4 film_footprint(vec2 film) {
+    if (frame.pixel_filter == FILTER_BOX) {
+        uvec2 p = min(uvec2(film), uvec2(frame.width - 1u, frame.height - 1u));
+        return uvec4(p, p);
+    }
+    float r = filter_radius();
+    ivec2 lo = max(ivec2(ceil(film - 0.5 - r)), ivec2(0));
+    ivec2 hi = min(ivec2(floor(film - 0.5 + r)), ivec2(int(frame.width) - 1, int(frame.height) - 1));
+    return uvec4(uvec2(lo), uvec2(hi));
 }
 
 // (low, high) words of a splat's 64-bit fixed-point value; contract in vcm.rs, splat_words.

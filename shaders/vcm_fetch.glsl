@@ -23,10 +23,11 @@ LightVertex fetch_light_vertex(usamplerBuffer texels, uint i) {
 }
 
 LightMaterial fetch_light_material(usamplerBuffer texels, uint i) {
-    uvec4 a = FETCH_TEXEL(texels, 4u * i);
-    uvec4 b = FETCH_TEXEL(texels, 4u * i + 1u);
-    uvec4 c = FETCH_TEXEL(texels, 4u * i + 2u);
-    uvec4 e = FETCH_TEXEL(texels, 4u * i + 3u);
+    uvec4 a = FETCH_TEXEL(texels, 5u * i);
+    uvec4 b = FETCH_TEXEL(texels, 5u * i + 1u);
+    uvec4 c = FETCH_TEXEL(texels, 5u * i + 2u);
+    uvec4 e = FETCH_TEXEL(texels, 5u * i + 3u);
+    uvec4 g = FETCH_TEXEL(texels, 5u * i + 4u);
     LightMaterial m;
     m.color0 = F3(a);
     m.kind = a.w;
@@ -35,6 +36,10 @@ LightMaterial fetch_light_material(usamplerBuffer texels, uint i) {
     m.ns = F3(c);
     m.alpha_u = uintBitsToFloat(c.w);
     m.alpha_v = uintBitsToFloat(e.x);
-    m._pad = uint[3](e.y, e.z, e.w);
+    m.flags = e.y;
+    m.data = e.z;
+    m._pad = e.w;
+    m.color2 = F3(g);
+    m._pad2 = g.w;
     return m;
 }

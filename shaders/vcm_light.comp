@@ -68,8 +68,8 @@ void splat_add(uint index, float v) {
 // medium) seen by the camera; contract in vcm.rs, connect_to_camera.
 void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, vec2 lens_u, uvec3 n, uint layer) {
     vec3 eye = camera_point(h.p, lens_u);
-    uint pixel = camera_pixel(h.p, eye);
-    if (pixel == NO_LIGHT) return;
+    vec2 film;
+    if (!camera_film(h.p, eye, film) || !film_reaches_image(film)) return;
     vec3 to_eye = eye - h.p;
     float dist2 = dot(to_eye, to_eye);
     float dist = sqrt(dist2);
@@ -88,10 +88,19 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim,
     uint rays = 0u;
     value *= vcm_visibility(h, skip, eye, medium_toward(h, prim, medium, wo, dir), n, rays);
     if (value == vec3(0.0)) return;
-    uint base = (pixel * LAYER_COUNT + layer) * 3u;
-    splat_add(base, value.x);
-    splat_add(base + 1u, value.y);
-    splat_add(base + 2u, value.z);
+    // Every pixel the filter reaches takes its share (a box's one pixel all of it).
+    uvec4 span = film_footprint(film);
+    for (uint py = span.y; py <= span.w; py++) {
+        for (uint px = span.x; px <= span.z; px++) {
+            float w = frame.pixel_filter == FILTER_BOX ? 1.0
+                : filter_weight(film.x - (float(px) + 0.5)) * filter_weight(film.y - (float(py) + 0.5));
+            if (w <= 0.0) continue;
+            uint base = ((py * frame.width + px) * LAYER_COUNT + layer) * 3u;
+            splat_add(base, w * value.x);
+            splat_add(base + 1u, w * value.y);
+            splat_add(base + 2u, w * value.z);
+        }
+    }
 }
 
 // A light sub-path, carried from vertex to vertex (and from loop turn to loop turn of main, which
@@ -188,7 +197,10 @@ bool light_path_step(inout LightPath lp) {
         if (!nv.scattered) {
             light_materials[slot].color0 = float[3](b.color0.x, b.color0.y, b.color0.z);
             light_materials[slot].kind = b.kind;
+            light_materials[slot].flags = b.flags;
+            light_materials[slot].data = b.data;
             light_materials[slot].color1 = float[3](b.color1.x, b.color1.y, b.color1.z);
+            light_materials[slot].color2 = float[3](b.color2.x, b.color2.y, b.color2.z);
             light_materials[slot].ior = b.ior;
             light_materials[slot].ns = float[3](b.ns.x, b.ns.y, b.ns.z);
             light_materials[slot].alpha_u = b.alpha.x;

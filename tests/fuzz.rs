@@ -2,7 +2,8 @@
 //! scene parser (`parse_scene`), the OBJ importer (a `type = "mesh"` shape behind `load_scene`)
 //! and the other model importers (PLY ASCII and binary, glTF `.gltf` and `.glb`, 3DS, IFS and
 //! Bezier patches, fed mutations of real exporters' files), and the editor's HTTP and WebSocket
-//! API (`photonix serve`: requests and page messages against one running server). Inputs come from a generator that follows each format's grammar and from
+//! API (`photonix serve`: requests and page messages against one running server), and the
+//! Mitsuba front-end (`scene.xml`: XML from Mitsuba's plugin vocabulary, and mutations of it). Inputs come from a generator that follows each format's grammar and from
 //! byte-level mutations of the shipped files, drawn from the crate's counter-based hash, so a
 //! (seed, case) pair replays exactly. Every case must give a scene that keeps the documented
 //! invariants (finite geometry, a usable camera, finite light power) or an error that names the
@@ -17,7 +18,7 @@
 //! ```
 //!
 //! With `PHOTONIX_FUZZ_FINDINGS` set, each new kind of failure is written to that folder and the
-//! run goes on. Every input that once failed is kept in `tests/fuzz_corpus/{scene,obj,model}/`
+//! run goes on. Every input that once failed is kept in `tests/fuzz_corpus/{scene,obj,model,mitsuba}/`
 //! (a model input's extension names its format), and
 //! `fuzz_corpus_replays_cleanly` replays them all.
 
@@ -819,6 +820,131 @@ fn check_obj_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
     check_scene(|| load_scene(&scene), &[&scene, &obj])
 }
 
+// The Mitsuba grammar
+
+/// A value of a Mitsuba property: numbers, colours, names, parameters, nonsense.
+fn mitsuba_value(r: &mut Rng) -> String {
+    let s = match r.below(12) {
+        0..=3 => number(r),
+        4..=5 => format!("{}, {}, {}", number(r), number(r), number(r)),
+        6 => r.pick(&words("true false ggx beckmann none Au Cu bk7 water air x y diagonal smaller repeat mirror clamp nearest bilinear")).to_string(),
+        7 => file(r).replace(".obj", if r.chance(50) { ".obj" } else { ".png" }),
+        8 => format!("${}", r.pick(&words("a b missing r"))),
+        9 => format!("400:{}, 700:{}", number(r), number(r)),
+        10 => "#ff8000".into(),
+        _ => name(r),
+    };
+    s.replace(['"', '<', '&'], "")
+}
+
+/// One property element.
+fn mitsuba_property(r: &mut Rng) -> String {
+    #[rustfmt::skip]
+    const NAMES: &str = "reflectance diffuse_reflectance diffuseReflectance specular_reflectance eta k alpha alpha_u \
+        alpha_v distribution material int_ior intIOR ext_ior nonlinear opacity weight weights radiance intensity \
+        irradiance scale filename radius center p0 p1 fov fov_axis width height sample_count max_depth cutoff_angle \
+        beam_width direction position face_normals flip_tex_coords raw wrap_mode filter_type uscale vscale color0 \
+        color1 sigma_a sigmaS sigma_t albedo g turbidity sun_direction aperture_radius focus_distance \
+        focal_length channel unknown_thing";
+    let tag = *r.pick(&words("float integer boolean string rgb srgb spectrum point vector"));
+    let key = *r.pick(&words(NAMES));
+    if tag == "point" || tag == "vector" {
+        return format!("<{tag} name=\"{key}\" x=\"{}\" y=\"{}\" z=\"{}\"/>", mitsuba_value(r), mitsuba_value(r), mitsuba_value(r));
+    }
+    format!("<{tag} name=\"{key}\" value=\"{}\"/>", mitsuba_value(r))
+}
+
+/// A `<transform>` of a few operations.
+fn mitsuba_transform(r: &mut Rng, name: &str) -> String {
+    let mut s = format!("<transform name=\"{name}\">");
+    for _ in 0..r.below(4) {
+        s.push_str(&match r.below(6) {
+            0 => format!("<translate x=\"{}\" y=\"{}\"/>", mitsuba_value(r), mitsuba_value(r)),
+            1 => format!("<rotate y=\"{}\" angle=\"{}\"/>", mitsuba_value(r), mitsuba_value(r)),
+            2 => format!("<scale value=\"{}\"/>", mitsuba_value(r)),
+            3 => format!("<lookat origin=\"{}\" target=\"0, 0, 0\" up=\"0, 1, 0\"/>", mitsuba_value(r)),
+            4 => {
+                let n: Vec<String> = (0..if r.chance(80) { 16 } else { r.below(20) }).map(|_| number(r)).collect();
+                format!("<matrix value=\"{}\"/>", n.join(" "))
+            }
+            _ => "<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\"/>".into(),
+        });
+    }
+    s.push_str("</transform>");
+    s
+}
+
+/// A plugin of `tag` with properties and, to `depth`, nested plugins.
+fn mitsuba_plugin(r: &mut Rng, tag: &str, depth: usize) -> String {
+    let kinds = match tag {
+        "shape" => "obj ply rectangle disk cube sphere cylinder serialized hair",
+        "bsdf" => "diffuse roughdiffuse conductor roughconductor dielectric thindielectric roughdielectric plastic \
+            roughplastic twosided mask bumpmap normalmap blendbsdf mixturebsdf null principled",
+        "texture" => "bitmap checkerboard scale noise",
+        "emitter" => "area point spot directional envmap constant sunsky projector",
+        "medium" => "homogeneous heterogeneous",
+        _ => "perspective thinlens orthographic",
+    };
+    let kind = *r.pick(&words(kinds));
+    let id = if r.chance(30) { format!(" id=\"{}\"", r.pick(&words("a b c"))) } else { String::new() };
+    let named = if r.chance(30) { format!(" name=\"{}\"", r.pick(&words("reflectance opacity interior exterior weight"))) } else { String::new() };
+    let mut s = format!("<{tag} type=\"{kind}\"{id}{named}>");
+    for _ in 0..r.below(5) {
+        s.push_str(&mitsuba_property(r));
+    }
+    if r.chance(40) {
+        s.push_str(&mitsuba_transform(r, if r.chance(80) { "to_world" } else { "to_uv" }));
+    }
+    if depth > 0 {
+        for _ in 0..r.below(3) {
+            let inner = *r.pick(&words("bsdf bsdf texture emitter medium"));
+            if r.chance(20) {
+                s.push_str(&format!("<ref id=\"{}\"/>", r.pick(&words("a b c d"))));
+            } else {
+                s.push_str(&mitsuba_plugin(r, inner, depth - 1));
+            }
+        }
+    }
+    s.push_str(&format!("</{tag}>"));
+    s
+}
+
+/// A whole Mitsuba scene: a sensor, defaults, plugins and shapes, with wrong turns.
+fn grammar_mitsuba(r: &mut Rng) -> String {
+    let version = *r.pick(&words("3.0.0 0.5.0 0.6.0 2.1.0 x"));
+    let mut s = format!("<scene version=\"{version}\">\n");
+    if r.chance(70) {
+        s.push_str("<default name=\"a\" value=\"1\"/><default name=\"r\" value=\"0.5\"/>\n");
+    }
+    if r.chance(90) {
+        s.push_str(&format!(
+            "<sensor type=\"perspective\"><float name=\"fov\" value=\"{}\"/>{}<film type=\"hdrfilm\"><integer name=\"width\" value=\"{}\"/><integer name=\"height\" value=\"8\"/>{}</film></sensor>\n",
+            if r.chance(80) { "45".to_string() } else { mitsuba_value(r) },
+            mitsuba_transform(r, "to_world"),
+            if r.chance(80) { "8".to_string() } else { integer(r) },
+            if r.chance(50) { "<rfilter type=\"tent\"/>" } else { "" }
+        ));
+    }
+    for _ in 0..r.below(8) {
+        let tag = *r.pick(&words("shape shape shape bsdf emitter texture medium include"));
+        if tag == "include" {
+            s.push_str(&format!("<include filename=\"{}\"/>\n", r.pick(&words("scene.xml missing.xml mesh.obj"))));
+        } else {
+            s.push_str(&mitsuba_plugin(r, tag, 2));
+            s.push('\n');
+        }
+    }
+    s.push_str("</scene>\n");
+    s
+}
+
+/// Mitsuba target: `bytes` as the scene file `dir/scene.xml` (its meshes and includes beside it).
+fn check_mitsuba_input(bytes: &[u8], dir: &Path) -> Result<(), Failure> {
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, bytes).unwrap();
+    check_scene(|| load_scene(&path), &[&path, dir])
+}
+
 /// Runs `cases` cases of one target; returns the failures by kind, with the first input of each.
 fn fuzz(
     target: &str,
@@ -978,6 +1104,35 @@ fn fuzz_scene_parser() {
             }
         },
         check_scene_input,
+    );
+}
+
+#[test]
+fn fuzz_mitsuba_front_end() {
+    let seeds: Vec<Vec<u8>> = std::fs::read_dir(repo("tests/fuzz_corpus/mitsuba"))
+        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "xml")).collect::<Vec<_>>())
+        .unwrap_or_default()
+        .iter()
+        .map(|p| std::fs::read(p).unwrap())
+        .collect();
+    fuzz(
+        "mitsuba",
+        "xml",
+        300,
+        |r| {
+            if seeds.is_empty() || r.chance(60) {
+                let base = grammar_mitsuba(r).into_bytes();
+                if r.chance(20) {
+                    mutate(r, &base)
+                } else {
+                    base
+                }
+            } else {
+                let base = r.pick(&seeds).clone();
+                mutate(r, &base)
+            }
+        },
+        check_mitsuba_input,
     );
 }
 
@@ -1330,6 +1485,7 @@ fn fuzz_corpus_replays_cleanly() {
         ("scene", check_scene_input as fn(&[u8], &Path) -> Result<(), Failure>),
         ("obj", check_obj_input),
         ("model", check_tagged_model_input),
+        ("mitsuba", check_mitsuba_input),
     ] {
         let Ok(entries) = std::fs::read_dir(repo("tests/fuzz_corpus").join(folder)) else { continue };
         let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();

@@ -133,6 +133,7 @@ fn furnace() -> Scene {
             seed: 5,
             integrator: Integrator::Pt,
             integrator_auto: None,
+            filter: Default::default(),
         },
         photons: None,
         materials: vec![common::diffuse(rho, emission)],

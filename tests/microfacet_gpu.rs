@@ -5,7 +5,8 @@ use glam::{Vec2, Vec3};
 use photonix::cpu::microfacet::*;
 use photonix::cpu::rng::{pcg4d, rand_unit};
 use photonix::gpu::{GpuContext, GpuOptions};
-use photonix::layout::constants::WORKGROUP_SIZE;
+use photonix::layout::constants::{NO_DATA, PLASTIC_COAT_WORDS, WORKGROUP_SIZE};
+use photonix::render::plastic_coat::plastic_coat_table;
 
 /// Floats per input and output record; the layouts are listed in microfacet_probe.comp.
 const PROBE_IN: usize = 24;
@@ -51,12 +52,13 @@ fn put_sample(out: &mut [f32], at: usize, s: Option<MfSample>) {
 }
 
 /// The probe kernel's `main`, on the CPU.
-fn probe_cpu(r: &[f32]) -> [f32; PROBE_OUT] {
+fn probe_cpu(r: &[f32], words: &[u32]) -> [f32; PROBE_OUT] {
     let v3 = |at: usize| Vec3::new(r[at], r[at + 1], r[at + 2]);
     let (wo, wi, u) = (v3(0), v3(3), v3(6));
     let alpha = Vec2::new(r[9], r[10]);
     let ior = r[11];
     let (eta, k, diffuse) = (v3(12), v3(15), v3(18));
+    let coat = PlasticCoat { nonlinear: r[21] != 0.0, words, table: if r[22] < 0.0 { NO_DATA } else { r[22] as u32 } };
     let mut out = [0.0f32; PROBE_OUT];
 
     let ar = alpha.max(Vec2::splat(0.01));
@@ -79,9 +81,9 @@ fn probe_cpu(r: &[f32]) -> [f32; PROBE_OUT] {
     out[24] = dielectric_pdf(wo, wi, alpha, ior);
     put_sample(&mut out, 25, dielectric_sample(wo, alpha, ior, u));
 
-    put3(&mut out, 34, plastic_eval(wo, wi, alpha, ior, diffuse));
+    put3(&mut out, 34, plastic_eval(wo, wi, alpha, ior, diffuse, &coat));
     out[37] = plastic_pdf(wo, wi, alpha, ior, diffuse);
-    put_sample(&mut out, 38, plastic_sample(wo, alpha, ior, diffuse, u));
+    put_sample(&mut out, 38, plastic_sample(wo, alpha, ior, diffuse, &coat, u));
 
     put3(&mut out, 47, lambert_eval(wo, wi, diffuse));
     out[50] = lambert_pdf(wo, wi);
@@ -98,8 +100,13 @@ fn sphere(u0: f32, u1: f32) -> Vec3 {
 
 /// Input records covering every model: alphas smooth, fixed and random, both sides, and wi drawn
 /// uniformly (mostly outside narrow lobes), near the mirror direction, or from the CPU's
-/// dielectric sampler (inside both the reflection and the transmission lobe).
+/// dielectric sampler (inside both the reflection and the transmission lobe). Plastics are
+/// linear, nonlinear with a smooth coat's closed forms, or nonlinear with a rough coat's table
+/// for their index (alpha 0.2), the tables appended after the records.
 fn inputs(n: u32) -> Vec<f32> {
+    let iors = [1.5, 1.33, 2.0];
+    let tables: Vec<Vec<u32>> =
+        iors.iter().map(|&ior| plastic_coat_table(0.2, ior).expect("a rough coat has a table")).collect();
     let alphas = [
         Vec2::ZERO,
         Vec2::splat(0.05),
@@ -114,7 +121,7 @@ fn inputs(n: u32) -> Vec<f32> {
         let rand = |d: u32| pcg4d([i, 0xface, 77, d]).map(rand_unit);
         let (r0, r1, r2) = (rand(0), rand(1), rand(2));
         let alpha = if i % 8 == 7 { Vec2::new(0.02 + r0[3], 0.02 + r1[3]) } else { alphas[i as usize % 8 % 7] };
-        let ior = [1.5, 1.33, 2.0][i as usize % 3];
+        let ior = iors[i as usize % 3];
         let wo = sphere(r0[0], r0[1]);
         let u = Vec3::new(r1[0], r1[1], r1[2]);
         let wi = match (i / 8) % 3 {
@@ -130,7 +137,16 @@ fn inputs(n: u32) -> Vec<f32> {
         };
         let diffuse = Vec3::new(r2[1], r2[2], r2[3]);
         out.extend_from_slice(&[wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, u.x, u.y, u.z, alpha.x, alpha.y, ior]);
-        out.extend_from_slice(&[eta.x, eta.y, eta.z, k.x, k.y, k.z, diffuse.x, diffuse.y, diffuse.z, 0.0, 0.0, 0.0]);
+        let table_at = n as usize * PROBE_IN + (i as usize % 3) * PLASTIC_COAT_WORDS as usize;
+        let (nonlinear, table) = match i % 4 {
+            0 => (0.0, -1.0),
+            1 => (1.0, -1.0),
+            _ => (1.0, table_at as f32),
+        };
+        out.extend_from_slice(&[eta.x, eta.y, eta.z, k.x, k.y, k.z, diffuse.x, diffuse.y, diffuse.z, nonlinear, table, 0.0]);
+    }
+    for t in &tables {
+        out.extend(t.iter().map(|&w| f32::from_bits(w)));
     }
     out
 }
@@ -143,6 +159,7 @@ fn gpu_microfacet_functions_equal_cpu_twins() {
     let kernel = gpu.create_kernel("microfacet_probe", &spirv, 2, 4).expect("the probe matches its layout");
     let n = 1u32 << 15;
     let records = inputs(n);
+    let words: Vec<u32> = records.iter().map(|x| x.to_bits()).collect();
     let input = gpu.upload("probe_inputs", &records).unwrap();
     let output = gpu.create_buffer("probe_outputs", (n as usize * PROBE_OUT * 4) as u64).unwrap();
     gpu.run("microfacet probe", |r| {
@@ -169,13 +186,13 @@ fn gpu_microfacet_functions_equal_cpu_twins() {
     let mut conditioned = 0;
     for i in 0..n as usize {
         let record = &records[i * PROBE_IN..(i + 1) * PROBE_IN];
-        let cpu = probe_cpu(record);
+        let cpu = probe_cpu(record, &words);
         let g = &gpu_out[i * PROBE_OUT..(i + 1) * PROBE_OUT];
         let mut spread = [0.0f32; PROBE_OUT];
         for (c, sign) in [(6, 1.0), (6, -1.0), (7, 1.0), (7, -1.0), (8, 1.0), (8, -1.0)] {
             let mut nudged = record.to_vec();
             nudged[c] = (nudged[c] * (1.0 + sign * 4.0 * f32::EPSILON)).min(1.0 - f32::EPSILON);
-            let other = probe_cpu(&nudged);
+            let other = probe_cpu(&nudged, &words);
             for s in [14, 25, 38, 51] {
                 if other[s] != cpu[s] || other[s + 8] != cpu[s + 8] {
                     continue;

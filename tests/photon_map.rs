@@ -108,6 +108,7 @@ fn closed_box(rho: f32) -> Scene {
             seed: 3,
             integrator: Default::default(),
             integrator_auto: None,
+            filter: Default::default(),
         },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],

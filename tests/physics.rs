@@ -56,6 +56,7 @@ fn light_over_plane() -> Scene {
             seed: 7,
             integrator: Default::default(),
             integrator_auto: None,
+            filter: Default::default(),
         },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],

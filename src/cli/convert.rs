@@ -1,18 +1,18 @@
-//! `photonix convert scene.pov -o scene.toml` (or `scene.glb`, `scene.gltf`): the POV-Ray or
-//! glTF scene in Photonix's own format, to inspect and edit (docs/pov-ray.md, docs/gltf.md). The
-//! TOML is checked by loading it before it is written.
+//! `photonix convert scene.pov -o scene.toml` (or `scene.glb`, `scene.gltf`, `scene.xml`): the
+//! POV-Ray, glTF or Mitsuba scene in Photonix's own format, to inspect and edit (docs/pov-ray.md,
+//! docs/gltf.md, docs/mitsuba.md). The TOML is checked by loading it before it is written.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 
 use photonix::io::image::{same_file, write_atomically};
-use photonix::scene::gltf_scene;
+use photonix::scene::{gltf_scene, mitsuba};
 use photonix::scene::pov::{is_pov_path, load_pov, translate_file, PovOptions};
 
 #[derive(clap::Args)]
 pub struct ConvertArgs {
-    /// POV-Ray scene file (.pov) or glTF 2.0 scene (.gltf, .glb)
+    /// POV-Ray scene file (.pov), glTF 2.0 scene (.gltf, .glb) or Mitsuba scene (.xml)
     scene: PathBuf,
     /// The TOML scene to write
     #[arg(short, long)]
@@ -27,9 +27,10 @@ pub struct ConvertArgs {
 
 pub fn run(args: ConvertArgs) -> Result<()> {
     let gltf = gltf_scene::is_gltf_path(&args.scene);
-    if !is_pov_path(&args.scene) && !gltf {
+    let xml = mitsuba::is_mitsuba_path(&args.scene);
+    if !is_pov_path(&args.scene) && !gltf && !xml {
         bail!(
-            "{}: photonix convert reads POV-Ray and glTF scenes; give a file ending in .pov, .gltf or .glb",
+            "{}: photonix convert reads POV-Ray, glTF and Mitsuba scenes; give a file ending in .pov, .gltf, .glb or .xml",
             args.scene.display()
         );
     }
@@ -50,6 +51,9 @@ pub fn run(args: ConvertArgs) -> Result<()> {
     }
     if gltf {
         return convert_gltf(&args);
+    }
+    if xml {
+        return convert_mitsuba(&args);
     }
     let options = PovOptions { width: w, height: h, clock: args.clock, ..PovOptions::default() };
     // Load once so that a scene Photonix would refuse is reported at its .pov line, not later.
@@ -80,6 +84,29 @@ fn convert_gltf(args: &ConvertArgs) -> Result<()> {
     for warning in &warnings {
         note!("warning: {warning}");
     }
+    write_toml(&args.output, &t.toml, &scene)
+}
+
+/// A Mitsuba scene as TOML. Its file names are relative to the scene's folder, so the TOML
+/// must be written there.
+fn convert_mitsuba(args: &ConvertArgs) -> Result<()> {
+    let folder = |p: &std::path::Path| {
+        let parent = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        parent.canonicalize().ok()
+    };
+    if folder(&args.scene) != folder(&args.output) {
+        bail!(
+            "{}: write the TOML into the folder of {} (the meshes and textures it names are relative to it)",
+            args.output.display(),
+            args.scene.display()
+        );
+    }
+    // Load once so that a scene Photonix would refuse is reported at its XML line.
+    let scene = mitsuba::load_mitsuba(&args.scene)?;
+    for warning in &scene.warnings {
+        note!("warning: {warning}");
+    }
+    let t = mitsuba::translate_file(&args.scene)?;
     write_toml(&args.output, &t.toml, &scene)
 }
 

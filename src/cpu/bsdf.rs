@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3};
 use super::microfacet::{
     conductor_eval, conductor_pdf, conductor_sample, dielectric_eval, dielectric_pdf, dielectric_sample,
     mf_cosine_direction, mf_fresnel_dielectric, mf_is_smooth, mf_plastic_coat_probability, plastic_eval, plastic_pdf,
-    plastic_sample, MfSample, MF_TRANSMISSION,
+    plastic_sample, MfSample, PlasticCoat, MF_TRANSMISSION,
 };
 use super::phase::{phase_hg, phase_hg_sample};
 use super::rng::{pcg4d, rand_unit};
@@ -24,10 +24,18 @@ use crate::layout::Material;
 
 /// A material evaluated at one surface point: its textures looked up, its frame set.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Bsdf {
+pub struct Bsdf<'a> {
     pub kind: u32,
+    /// The material's `MATERIAL_FLAG_*`.
+    pub flags: u32,
+    /// The material's `data` (a rough nonlinear plastic's coat table) in `words`, the scene's
+    /// texture data (the GLSL reads it from its binding).
+    pub data: u32,
+    pub words: &'a [u32],
     pub color0: Vec3,
     pub color1: Vec3,
+    /// A conductor's tint.
+    pub color2: Vec3,
     pub alpha: Vec2,
     pub ior: f32,
     /// The normal that decides sides (reflection or transmission, leaks, the dielectric's inside):
@@ -69,7 +77,7 @@ pub fn hash_point(s: &SceneView, p: Vec3, key: u32) -> f32 {
     rand_unit(pcg4d([c.x as u32, c.y as u32, c.z as u32, key])[0])
 }
 
-pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
+pub fn material_bsdf<'a>(s: &SceneView<'a>, m: &Material, h: &Hit) -> Bsdf<'a> {
     let mut m = m;
     let mut level = 0;
     while level < MIX_MAX_DEPTH && m.kind == MATERIAL_MIX {
@@ -84,8 +92,12 @@ pub fn material_bsdf(s: &SceneView, m: &Material, h: &Hit) -> Bsdf {
     }
     Bsdf {
         kind: m.kind,
+        flags: m.flags,
+        data: m.data,
+        words: s.texture_data,
         color0: param_color(s, m.color0, m.color0_tex, h),
         color1: param_color(s, m.color1, m.color1_tex, h),
+        color2: param_color(s, m.color2, m.color2_tex, h),
         alpha,
         ior: m.ior,
         ng: h.ns,
@@ -178,6 +190,28 @@ pub fn mirror_sample(b: &Bsdf, wo: Vec3) -> BsdfSample {
     }
 }
 
+/// Thin dielectric: a pane of index `ior` (Mitsuba's `thindielectric`). Its reflectance sums the
+/// light bouncing inside the pane, R' = R + T² R / (1 - R²) with T = 1 - R (incoherently: the
+/// pane is thick beside the wavelength); the rest passes straight through, as the two parallel
+/// faces of a pane return a ray to its direction (the small sideways shift is neglected).
+/// Chosen against `u[0]`, weight 1: the pane absorbs nothing.
+pub fn thin_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
+    let n = facing(b, wo);
+    let (mut r, _) = mf_fresnel_dielectric(wo.dot(n).abs(), 1.0, b.ior);
+    if r < 1.0 {
+        r += (1.0 - r) * (1.0 - r) * r / (1.0 - r * r);
+    }
+    if u[0] < r {
+        return BsdfSample {
+            wi: reflect(-wo, n),
+            weight: Vec3::ONE,
+            pdf: 0.0,
+            flags: BSDF_SPECULAR | BSDF_REFLECTION | BSDF_PATH,
+        };
+    }
+    BsdfSample { wi: -wo, weight: Vec3::ONE, pdf: 0.0, flags: BSDF_SPECULAR | BSDF_TRANSMISSION | BSDF_PATH }
+}
+
 /// Dielectric: smooth interface of index `ior` inside (the side opposite `ng`), reflection or
 /// refraction chosen with the Fresnel probability against `u[0]`, weight 1.
 pub fn smooth_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
@@ -259,7 +293,7 @@ pub fn conductor_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
         return Vec3::ZERO;
     }
     let f = frame_around(b, facing(b, wo));
-    conductor_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.color0, b.color1)
+    b.color2 * conductor_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.color0, b.color1)
 }
 
 pub fn conductor_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
@@ -272,7 +306,8 @@ pub fn conductor_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
 
 pub fn conductor_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let f = frame_around(b, facing(b, wo));
-    let m = conductor_sample(to_local(wo, f), b.alpha, b.color0, b.color1, Vec2::new(u[1], u[2]));
+    let m = conductor_sample(to_local(wo, f), b.alpha, b.color0, b.color1, Vec2::new(u[1], u[2]))
+        .map(|m| MfSample { weight: b.color2 * m.weight, ..m });
     let smp = microfacet_result(m, f, glossy_flags(b));
     if !same_geometric_side(b, wo, smp.wi) {
         return BsdfSample::default();
@@ -302,12 +337,17 @@ pub fn rough_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
 // Plastic: diffuse base color0 under a dielectric coat of index ior, on both sides. A smooth
 // coat is a path lobe (a delta); a rough coat is read with the base as an estimate lobe.
 
+/// The plastic's coat: `MATERIAL_FLAG_NONLINEAR` and its table (`data`) in the texture data.
+pub fn plastic_coat<'a>(b: &Bsdf<'a>) -> PlasticCoat<'a> {
+    PlasticCoat { nonlinear: b.flags & MATERIAL_FLAG_NONLINEAR != 0, words: b.words, table: b.data }
+}
+
 pub fn plastic_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
     if !same_geometric_side(b, wo, wi) {
         return Vec3::ZERO;
     }
     let f = frame_around(b, facing(b, wo));
-    plastic_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior, b.color0)
+    plastic_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior, b.color0, &plastic_coat(b))
 }
 
 pub fn plastic_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
@@ -346,7 +386,7 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
     if is_smooth(b) && lobes == LOBES_ESTIMATE {
         // The base alone, by cosine: weight f cos / pdf = pi f.
         let wi_l = mf_cosine_direction(Vec2::new(u[1], u[2]));
-        let fr = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0);
+        let fr = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0, &plastic_coat(b));
         let smp = BsdfSample {
             wi: to_world(wi_l, f),
             weight: PI * fr,
@@ -355,7 +395,7 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
         };
         return if same_geometric_side(b, wo, smp.wi) && wi_l.z > 0.0 { smp } else { BsdfSample::default() };
     }
-    let m = plastic_sample(wo_l, b.alpha, b.ior, b.color0, Vec3::from(u));
+    let m = plastic_sample(wo_l, b.alpha, b.ior, b.color0, &plastic_coat(b), Vec3::from(u));
     let smp = microfacet_result(m, f, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
     if !same_geometric_side(b, wo, smp.wi) {
         return BsdfSample::default();
@@ -384,6 +424,7 @@ pub fn bsdf_flags(b: &Bsdf) -> u32 {
             BSDF_REFLECTION | coat | base
         }
         MATERIAL_PHASE => PHASE_FLAGS,
+        MATERIAL_THIN_DIELECTRIC => BSDF_SPECULAR | BSDF_REFLECTION | BSDF_TRANSMISSION | BSDF_PATH,
         _ => 0, // unreachable: the host packs only known kinds (tested)
     }
 }
@@ -452,6 +493,7 @@ pub fn bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfSample {
         MATERIAL_DIELECTRIC => rough_dielectric_sample(b, wo, u),
         MATERIAL_CONDUCTOR => conductor_bsdf_sample(b, wo, u),
         MATERIAL_PLASTIC => plastic_bsdf_sample(b, wo, u, lobes),
+        MATERIAL_THIN_DIELECTRIC => thin_dielectric_sample(b, wo, u),
         MATERIAL_PHASE => {
             // Sampled exactly by its own pdf: the weight is 1.
             let wi = phase_hg_sample(wo, b.ior, [u[1], u[2]]);

@@ -247,12 +247,16 @@ pub fn medium_hit(p: Vec3, wo: Vec3) -> Hit {
 /// The medium's phase function as a `Bsdf` (`MATERIAL_PHASE`, see `bsdf.rs`); `color1.y` is 1
 /// where the scattering point samples point and spot lights itself (heterogeneous media, which
 /// have no equiangular shafts).
-pub fn phase_bsdf(s: &SceneView, medium: u32, wo: Vec3) -> Bsdf {
+pub fn phase_bsdf(s: &SceneView, medium: u32, wo: Vec3) -> Bsdf<'static> {
     let m = &s.media[medium as usize];
     Bsdf {
         kind: MATERIAL_PHASE,
+        flags: 0,
+        data: NO_DATA,
+        words: &[],
         color0: Vec3::ONE,
         color1: Vec3::new(m.phase as f32, if m.density != NO_TEXTURE { 1.0 } else { 0.0 }, 0.0),
+        color2: Vec3::ONE,
         alpha: Vec2::ZERO,
         ior: m.g,
         ng: wo,

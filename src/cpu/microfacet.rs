@@ -20,6 +20,8 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
+use crate::layout::constants::{NO_DATA, PLASTIC_COAT_TABLE};
+
 /// Lobe of a sample: reflection (wi on wo's side of the surface) ...
 pub const MF_REFLECTION: u32 = 0;
 /// ... or transmission (wi on the other side).
@@ -416,34 +418,92 @@ pub fn dielectric_sample(wo: Vec3, alpha: Vec2, ior: f32, u: Vec3) -> Option<MfS
 // -------------------------------------------------------------------------------------------------
 // Plastic: a Lambertian base under a GGX dielectric coat
 
+/// How a plastic's base light leaves through its coat: Mitsuba's `nonlinear` and, for a rough
+/// nonlinear coat, its table of `PLASTIC_COAT_WORDS` words at `table` in `words` (the texture
+/// data; `NO_DATA` for a smooth coat). GLSL: the `nonlinear` and `table` arguments, the words
+/// read through `mf_coat_word`, which the including kernel defines.
+#[derive(Clone, Copy, Debug)]
+pub struct PlasticCoat<'a> {
+    pub nonlinear: bool,
+    pub words: &'a [u32],
+    pub table: u32,
+}
+
+impl PlasticCoat<'static> {
+    /// Mitsuba's default, `nonlinear = false`.
+    pub const LINEAR: PlasticCoat<'static> = PlasticCoat { nonlinear: false, words: &[], table: NO_DATA };
+}
+
+fn mf_coat_word(coat: &PlasticCoat, i: u32) -> f32 {
+    f32::from_bits(coat.words[(coat.table + i) as usize])
+}
+
+/// The coat's transmittance at cosine `mu` from outside: 1 - F(mu) for a smooth coat, else the
+/// table linearly interpolated as Mitsuba's `lerp_gather` does.
+fn mf_coat_transmittance(coat: &PlasticCoat, mu: f32, f: f32) -> f32 {
+    if coat.table == NO_DATA {
+        return 1.0 - f;
+    }
+    let x = mu.clamp(0.0, 1.0) * (PLASTIC_COAT_TABLE - 1) as f32;
+    let i = (x as u32).min(PLASTIC_COAT_TABLE - 2);
+    let (v0, v1) = (mf_coat_word(coat, 1 + i), mf_coat_word(coat, 2 + i));
+    v0 + (v1 - v0) * (x - i as f32)
+}
+
+/// The base term of [`plastic_eval`] (see there), `f_o` and `f_i` the coat's Fresnel
+/// reflectances at wo.z and wi.z.
+fn mf_plastic_base(wo_z: f32, wi_z: f32, f_o: f32, f_i: f32, ior: f32, diffuse: Vec3, coat: &PlasticCoat) -> Vec3 {
+    let fdr_ext = mf_fresnel_diffuse(ior);
+    if !coat.nonlinear {
+        return diffuse * ((1.0 - f_o) * (1.0 - f_i) / (PI * (1.0 - fdr_ext)));
+    }
+    let t_o = mf_coat_transmittance(coat, wo_z, f_o);
+    let t_i = mf_coat_transmittance(coat, wi_z, f_i);
+    let eta2 = ior * ior;
+    let r_int = if coat.table == NO_DATA { 1.0 - (1.0 - fdr_ext) / eta2 } else { mf_coat_word(coat, 0) };
+    let bounce = (Vec3::ONE - diffuse * r_int).max(Vec3::splat(1e-6));
+    diffuse * (t_o * t_i / (PI * eta2)) / bounce
+}
+
 /// Plastic of coat index `ior` (> 1) over a Lambertian base of albedo `diffuse`, one-sided:
 ///
 /// f = min(F(dot(wo, h)), F(wo.z), F(wi.z)) D G1 G1 / (4 wo.z wi.z)          (coat)
-///   + diffuse (1 - F(wo.z)) (1 - F(wi.z)) / (π η² (1 - Fdr_int))            (base)
+///   + diffuse (1 - F(wo.z)) (1 - F(wi.z)) / (π η² (1 - Fdr_int))            (base, linear)
+///   + diffuse T(wo.z) T(wi.z) / (π η² (1 - diffuse Fdr_int))                 (base, nonlinear)
 ///
 /// This is Mitsuba 3's `plastic` (smooth coat: the coat term becomes a delta lobe of weight
-/// F(wo.z)) and `roughplastic` (rough coat) with `nonlinear = false`, with two changes. The base
-/// is seen through the coat's smooth-interface transmittance 1 - F(cos) at both ends, and the
-/// light bouncing between base and coat is summed into 1 / (1 - Fdr_int), Fdr_int the coat's
-/// internal diffuse reflectance; η² (1 - Fdr_int) = 1 - Fdr_ext by reciprocity of the interface,
-/// and Fdr_ext (the cosine-weighted mean of F from outside) has a closed form, so the base's
-/// albedo is exactly diffuse (1 - F(wo.z)) and the term is symmetric.
+/// F(wo.z)) and `roughplastic` (rough coat). The base is seen through the coat at both ends, and
+/// the light bouncing between base and coat is summed into 1 / (1 - Fdr_int), Fdr_int the coat's
+/// internal diffuse reflectance; with `nonlinear` each bounce is tinted by the base again, so
+/// the sum is 1 / (1 - diffuse Fdr_int): saturated, darker colours, as Mitsuba's `nonlinear`.
 ///
-/// Change 1: roughplastic proper replaces 1 - F(cos) by the rough coat's tabulated transmittance;
-/// we keep the smooth one, to stay table-free. Change 2, the price of change 1: with F(dot(wo, h))
-/// alone, the rough coat reflects up to 5e-4 MORE than F(wo.z) (alpha 0.05 to 0.1 near 45
-/// degrees, where the mean of the convex F over the visible normals beats the masking loss), so
-/// a white base reflected up to 1.0005. Clamping the coat's Fresnel by F(wo.z) and F(wi.z) bounds
-/// the coat by F(wo.z), hence albedo <= F(wo.z) + diffuse (1 - F(wo.z)) <= 1 for diffuse <= 1,
-/// keeps f symmetric, and changes nothing at the specular configuration (h = z, where all three
-/// cosines agree) nor for a smooth coat.
-pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> Vec3 {
+/// Linear (the default): η² (1 - Fdr_int) = 1 - Fdr_ext by reciprocity of the interface, and
+/// Fdr_ext (the cosine-weighted mean of F from outside) has a closed form, so the base's albedo
+/// is exactly diffuse (1 - F(wo.z)) and the term is symmetric. This differs from Mitsuba's
+/// roughplastic in one way (change 1): roughplastic proper replaces 1 - F(cos) by the rough
+/// coat's tabulated transmittance and Fdr_int by the rough coat's; the linear plastic keeps the
+/// smooth ones, to stay table-free (its images predate the nonlinear mode).
+///
+/// Nonlinear: exactly Mitsuba's. A smooth coat's T is 1 - F and its Fdr_int the exact
+/// 1 - (1 - Fdr_ext) / η² (Mitsuba's fit of it differs by 5e-4); a rough coat's T and Fdr_int
+/// come from its table (`render::plastic_coat`: the same integrals over visible normals as
+/// Mitsuba's `eval_transmittance` and `eval_reflectance`), whose rough interface lets less light
+/// back down (Fdr_int 0.49 at alpha 0.2 against 0.60 smooth, ior 1.5), so the base is darker
+/// than a smooth-Fresnel model by 4-40% at alpha 0.05-0.4.
+///
+/// Change 2 (both modes): with F(dot(wo, h)) alone, the rough coat reflects up to 5e-4 MORE
+/// than F(wo.z) (alpha 0.05 to 0.1 near 45 degrees, where the mean of the convex F over the
+/// visible normals beats the masking loss), so a white base reflected up to 1.0005. Clamping the
+/// coat's Fresnel by F(wo.z) and F(wi.z) bounds the coat by F(wo.z), hence albedo <= 1 for
+/// diffuse <= 1, keeps f symmetric, and changes nothing at the specular configuration (h = z,
+/// where all three cosines agree) nor for a smooth coat.
+pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &PlasticCoat) -> Vec3 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
     }
     let (f_o, _) = mf_fresnel_dielectric(wo.z, 1.0, ior);
     let (f_i, _) = mf_fresnel_dielectric(wi.z, 1.0, ior);
-    let f = diffuse * ((1.0 - f_o) * (1.0 - f_i) / (PI * (1.0 - mf_fresnel_diffuse(ior))));
+    let f = mf_plastic_base(wo.z, wi.z, f_o, f_i, ior, diffuse, coat);
     if mf_is_smooth(alpha) {
         return f;
     }
@@ -477,7 +537,14 @@ pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> 
 /// `u.x` picks the coat (probability p_coat, see [`plastic_pdf`]) or the base; `u.yz` draws a
 /// visible normal or a cosine direction. The weight counts both lobes (f and pdf of the mixture),
 /// except for a smooth coat's delta, whose weight is F(wo.z) / p_coat.
-pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, u: Vec3) -> Option<MfSample> {
+pub fn plastic_sample(
+    wo: Vec3,
+    alpha: Vec2,
+    ior: f32,
+    diffuse: Vec3,
+    coat: &PlasticCoat,
+    u: Vec3,
+) -> Option<MfSample> {
     if wo.z <= 0.0 {
         return None;
     }
@@ -505,7 +572,12 @@ pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, u: Vec3) -
     if p.is_nan() || p <= 0.0 {
         return None;
     }
-    Some(MfSample { wi: w, weight: plastic_eval(wo, w, alpha, ior, diffuse) * (w.z / p), pdf: p, lobe: MF_REFLECTION })
+    Some(MfSample {
+        wi: w,
+        weight: plastic_eval(wo, w, alpha, ior, diffuse, coat) * (w.z / p),
+        pdf: p,
+        lobe: MF_REFLECTION,
+    })
 }
 
 // -------------------------------------------------------------------------------------------------
@@ -953,6 +1025,14 @@ mod tests {
     const GOLD_K: Vec3 = Vec3::new(3.983, 2.385, 1.603);
     const PLASTIC_DIFFUSE: Vec3 = Vec3::new(0.5, 0.3, 0.2);
 
+    /// A nonlinear coat of width `alpha` (its table leaked: tests keep it to the end).
+    fn nonlinear_coat(alpha: Vec2, ior: f32) -> PlasticCoat<'static> {
+        match crate::render::plastic_coat::plastic_coat_table(0.5 * (alpha.x + alpha.y), ior) {
+            Some(t) => PlasticCoat { nonlinear: true, words: Box::leak(t.into_boxed_slice()), table: 0 },
+            None => PlasticCoat { nonlinear: true, ..PlasticCoat::LINEAR },
+        }
+    }
+
     #[test]
     fn conductor_sampling_matches_its_pdf() {
         let mut cases: Vec<Case> = Vec::new();
@@ -994,7 +1074,7 @@ mod tests {
             for wo in viewers() {
                 cases.push((
                     name(alpha, wo),
-                    Box::new(move |u: Vec3| plastic_sample(wo, alpha, 1.5, PLASTIC_DIFFUSE, u).map(|s| s.wi)),
+                    Box::new(move |u: Vec3| plastic_sample(wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR, u).map(|s| s.wi)),
                     Box::new(move |wi| plastic_pdf(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE)),
                 ));
             }
@@ -1051,9 +1131,19 @@ mod tests {
                 alpha,
                 Model {
                     name: format!("plastic alpha {alpha}"),
-                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, 1.5, diffuse)),
+                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, 1.5, diffuse, &PlasticCoat::LINEAR)),
                     pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, 1.5, diffuse)),
-                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, 1.5, diffuse, u)),
+                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, 1.5, diffuse, &PlasticCoat::LINEAR, u)),
+                },
+            ));
+            let coat = nonlinear_coat(alpha, 1.5);
+            out.push((
+                alpha,
+                Model {
+                    name: format!("nonlinear plastic alpha {alpha}"),
+                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, 1.5, diffuse, &coat)),
+                    pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, 1.5, diffuse)),
+                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, 1.5, diffuse, &coat, u)),
                 },
             ));
         }
@@ -1169,8 +1259,8 @@ mod tests {
                 let pairs = [
                     (conductor_eval(wo, wi, alpha, GOLD_ETA, GOLD_K), conductor_eval(wi, wo, alpha, GOLD_ETA, GOLD_K)),
                     (
-                        plastic_eval(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE),
-                        plastic_eval(wi, wo, alpha, 1.5, PLASTIC_DIFFUSE),
+                        plastic_eval(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
+                        plastic_eval(wi, wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
                     ),
                     (
                         Vec3::splat(dielectric_eval(wo, wi, alpha, 1.5)),
@@ -1311,12 +1401,26 @@ mod tests {
                 }
             }
         }
+        // Nonlinear plastic on a white base: the same bound (a white base bounces as the linear
+        // one does), and the rough coat's table keeps it: Mitsuba's rough interface loses the
+        // light its microfacets shadow, so the albedo falls below 1 as alpha grows.
+        for (w, &wo) in wos.iter().enumerate() {
+            for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
+                let coat = nonlinear_coat(alpha, 1.5);
+                let (a, se) = albedo(75 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &coat, u), 1.0);
+                println!("nonlinear plastic {}: white base {:.4} ± {:.4}", name(alpha, wo), a.x, se.x);
+                assert!(a.max_element() <= tol(se), "{}", name(alpha, wo));
+                if alpha == Vec2::ZERO {
+                    assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(alpha, wo), a.x);
+                }
+            }
+        }
         // Plastic on a white base: coat + base (1 - F(wo.z)) <= 1, = 1 for a smooth coat.
         for (w, &wo) in wos.iter().enumerate() {
             let (f_o, _) = mf_fresnel_dielectric(wo.z, 1.0, 1.5);
             for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
-                let (a, se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, u), 1.0);
-                let (coat, coat_se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ZERO, u), 1.0);
+                let (a, se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &PlasticCoat::LINEAR, u), 1.0);
+                let (coat, coat_se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ZERO, &PlasticCoat::LINEAR, u), 1.0);
                 println!(
                     "plastic {}: white base {:.4} ± {:.4}; coat alone {:.4} ± {:.4} vs F(wo.z) {f_o:.4}",
                     name(alpha, wo),

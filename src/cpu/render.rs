@@ -16,7 +16,7 @@ use super::medium::{
 };
 use super::phase::phase_hg;
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4};
-use super::shading::{camera_ray, direct_light_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
+use super::shading::{camera_ray, direct_light_sample, film_offset, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -86,7 +86,7 @@ pub fn radiance(
     let f = s.frame;
     let stream = py * f.width + px;
     // The film position, then the lens.
-    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
+    let film = film_offset(f, qmc2(stream, sample, f.seed, RNG_PIXEL_X));
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
     let (mut o, mut d) = camera_ray(s, sx, sy, lens_sample(s, stream, sample));

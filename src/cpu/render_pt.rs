@@ -19,7 +19,7 @@ use super::instance::hit_primitive;
 use super::light::{environment_radiance, light_pdf, light_sample, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2};
-use super::shading::{camera_ray, grid_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
+use super::shading::{camera_ray, film_offset, grid_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
 use super::shape::shape_hit;
 use super::trace::trace_ray;
 use super::SceneView;
@@ -83,7 +83,7 @@ pub fn pt_steps(max_depth: u32, media: bool) -> u32 {
 pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Vec3; 4], rays: &mut u32) {
     let f = s.frame;
     let stream = py * f.width + px;
-    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
+    let film = film_offset(f, qmc2(stream, sample, f.seed, RNG_PIXEL_X));
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
     let (mut o, mut d) = camera_ray(s, sx, sy, lens_sample(s, stream, sample));

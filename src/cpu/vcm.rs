@@ -32,7 +32,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::bsdf::{
@@ -46,7 +46,8 @@ use super::light::{environment_pdf, environment_radiance, light_emission, light_
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::render_pt::path_layer;
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4, sequence_point};
-use super::shading::{camera_ray, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
+use super::shading::{
+    camera_ray, film_offset, filter_radius, filter_weight, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -158,10 +159,11 @@ pub fn camera_d_vcm(f: &FrameParams, light_paths: u32, d: Vec3) -> f32 {
     }
 }
 
-/// The pixel (index) whose film holds the image of world point `x` seen from `lens` (a point of
-/// the aperture), if any. Through a thin lens that is the pixel of the point where the ray from
-/// `lens` to `x` crosses the plane in focus (every camera ray aims its pixel's pinhole ray there).
-pub fn camera_pixel(f: &FrameParams, x: Vec3, lens: Vec3) -> Option<u32> {
+/// The film point (in pixels, (0, 0) the image's top-left corner) of world point `x` seen from
+/// `lens` (a point of the aperture), if it is in front of the camera. Through a thin lens that
+/// is the film point of where the ray from `lens` to `x` crosses the plane in focus (every
+/// camera ray aims its pixel's pinhole ray there).
+pub fn camera_film(f: &FrameParams, x: Vec3, lens: Vec3) -> Option<Vec2> {
     let (fw, r, u) = (Vec3::from(f.camera_forward), Vec3::from(f.camera_right), Vec3::from(f.camera_up));
     let v = x - Vec3::from(f.camera_position);
     let (sx, sy) = match f.camera_kind {
@@ -196,12 +198,43 @@ pub fn camera_pixel(f: &FrameParams, x: Vec3, lens: Vec3) -> Option<u32> {
             (v.dot(r) / (k * r.length_squared()), v.dot(u) / (k * u.length_squared()))
         }
     };
-    let fx = 0.5 * (sx + 1.0) * f.width as f32;
-    let fy = 0.5 * (1.0 - sy) * f.height as f32;
-    if !(fx >= 0.0 && fy >= 0.0 && fx < f.width as f32 && fy < f.height as f32) {
-        return None;
+    Some(Vec2::new(0.5 * (sx + 1.0) * f.width as f32, 0.5 * (1.0 - sy) * f.height as f32))
+}
+
+/// Whether some pixel's filter reaches film point `film`: a box's only inside the image, a wider
+/// filter's up to its radius beyond the outer pixels' centres.
+pub fn film_reaches_image(f: &FrameParams, film: Vec2) -> bool {
+    let size = Vec2::new(f.width as f32, f.height as f32);
+    if f.pixel_filter == FILTER_BOX {
+        return film.x >= 0.0 && film.y >= 0.0 && film.x < size.x && film.y < size.y;
     }
-    Some((fy as u32).min(f.height - 1) * f.width + (fx as u32).min(f.width - 1))
+    let r = filter_radius(f) - 0.5;
+    film.x > -r && film.y > -r && film.x < size.x + r && film.y < size.y + r
+}
+
+/// The pixels whose filter reaches `film` (a box's: the one it lies in) and the filter's weight
+/// at each, the splat's share there: with the film point of a camera sample drawn from the filter
+/// around its pixel (`shading::film_offset`), a light-tracing splat must reach the pixels whose
+/// samples could have landed on it, weighted by the same density, so both estimate the same
+/// filtered image. Film points may lie outside the image (up to the radius).
+pub fn film_footprint(f: &FrameParams, film: Vec2) -> Vec<(u32, f32)> {
+    if f.pixel_filter == FILTER_BOX {
+        return vec![((film.y as u32).min(f.height - 1) * f.width + (film.x as u32).min(f.width - 1), 1.0)];
+    }
+    let r = filter_radius(f);
+    let (lo_x, lo_y) = (((film.x - 0.5 - r).ceil() as i32).max(0), ((film.y - 0.5 - r).ceil() as i32).max(0));
+    let hi_x = ((film.x - 0.5 + r).floor() as i32).min(f.width as i32 - 1);
+    let hi_y = ((film.y - 0.5 + r).floor() as i32).min(f.height as i32 - 1);
+    let mut out = Vec::new();
+    for py in lo_y..=hi_y {
+        for px in lo_x..=hi_x {
+            let w = filter_weight(f, film.x - (px as f32 + 0.5)) * filter_weight(f, film.y - (py as f32 + 0.5));
+            if w > 0.0 {
+                out.push((py as u32 * f.width + px as u32, w));
+            }
+        }
+    }
+    out
 }
 
 /// Splat value `v` >= 0 as the (low, high) words of its 64-bit fixed-point sum: 32 bits of
@@ -571,7 +604,7 @@ pub fn pick_light_vertex(counts: &[u32], slots: u32, u: [f32; 2]) -> Option<(usi
 
 /// The point, ray offset and BSDF of a stored light vertex, rebuilt from the ray that met it: a
 /// surface point, or a medium's scattering point (`VERTEX_MEDIUM`) with its phase function.
-fn light_surface(s: &SceneView, v: &LightVertex) -> LightSurface {
+fn light_surface<'a>(s: &SceneView<'a>, v: &LightVertex) -> LightSurface<'a> {
     let (o, d) = (Vec3::from(v.origin), Vec3::from(v.direction));
     if v.flags & VERTEX_MEDIUM != 0 {
         let h = medium_hit(o + d * v.t, -d);
@@ -583,10 +616,10 @@ fn light_surface(s: &SceneView, v: &LightVertex) -> LightSurface {
 
 /// What a connection needs of a light vertex: its point, ray offset and BSDF.
 #[derive(Clone, Copy)]
-struct LightSurface {
+struct LightSurface<'a> {
     p: Vec3,
     eps: f32,
-    bsdf: Bsdf,
+    bsdf: Bsdf<'a>,
 }
 
 /// The medium a segment leaving vertex `h` (at `at`) along `dir` starts in, where the path met
@@ -867,11 +900,14 @@ pub fn trace_light_path(
                     dim: RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1),
                 };
                 let at = VertexMedium { prim, medium };
-                if let Some((pixel, v)) =
+                if let Some((film, v)) =
                     connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
                 {
                     let layer = path_layer(false, diffuse + 1, specular_first);
-                    splat(pixel, layer, v);
+                    for (pixel, w) in film_footprint(f, film) {
+                        // A box's weight is 1: the splat's value unchanged, bit for bit.
+                        splat(pixel, layer, if f.pixel_filter == FILTER_BOX { v } else { w * v });
+                    }
                 }
             }
         }
@@ -931,7 +967,15 @@ pub fn trace_light_path(
 
 /// The scattering vertex a ray (`o`, `d`) reached at distance `t`, with its BSDF: a collision
 /// in `medium` (`scattered`, the phase function) or the surface of hit name `prim`.
-fn vertex_at(s: &SceneView, scattered: bool, prim: u32, medium: u32, o: Vec3, d: Vec3, t: f32) -> (Hit, Bsdf) {
+fn vertex_at<'a>(
+    s: &SceneView<'a>,
+    scattered: bool,
+    prim: u32,
+    medium: u32,
+    o: Vec3,
+    d: Vec3,
+    t: f32,
+) -> (Hit, Bsdf<'a>) {
     if scattered {
         (medium_hit(o + d * t, -d), phase_bsdf(s, medium, -d))
     } else {
@@ -941,8 +985,8 @@ fn vertex_at(s: &SceneView, scattered: bool, prim: u32, medium: u32, o: Vec3, d:
     }
 }
 
-/// Light tracing: the light vertex at `h` seen by the camera, as (pixel, value) when nothing is
-/// in the way (SmallVCM's ConnectToCamera).
+/// Light tracing: the light vertex at `h` seen by the camera, as (film point, value) when nothing
+/// is in the way (SmallVCM's ConnectToCamera); `film_footprint` spreads it.
 #[allow(clippy::too_many_arguments)]
 fn connect_to_camera(
     s: &SceneView,
@@ -956,10 +1000,10 @@ fn connect_to_camera(
     lens_u: [f32; 2],
     numbers: SegmentNumbers,
     rays: &mut u32,
-) -> Option<(u32, Vec3)> {
+) -> Option<(Vec2, Vec3)> {
     let f = s.frame;
     let eye = camera_point(f, h.p, lens_u);
-    let pixel = camera_pixel(f, h.p, eye)?;
+    let film = camera_film(f, h.p, eye).filter(|&film| film_reaches_image(f, film))?;
     let to_eye = eye - h.p;
     let dist2 = to_eye.length_squared();
     let dist = dist2.sqrt();
@@ -990,7 +1034,7 @@ fn connect_to_camera(
     if value == Vec3::ZERO {
         return None;
     }
-    Some((pixel, value))
+    Some((film, value))
 }
 
 /// Adds the terms of the camera path of pixel (`px`, `py`) in the sample to `terms` and the rays
@@ -1008,7 +1052,7 @@ pub fn radiance_vcm(
     let f = s.frame;
     let stream = py * f.width + px;
     let sample = p.sample_index;
-    let film = qmc2(stream, sample, f.seed, RNG_PIXEL_X);
+    let film = film_offset(f, qmc2(stream, sample, f.seed, RNG_PIXEL_X));
     let sx = 2.0 * (px as f32 + film[0]) / f.width as f32 - 1.0;
     let sy = 1.0 - 2.0 * (py as f32 + film[1]) / f.height as f32;
     let (mut o, mut d) = camera_ray(s, sx, sy, lens_sample(s, stream, sample));
@@ -1391,4 +1435,60 @@ pub fn render_vcm(
             acc[LAYER_DIRECT as usize][3] += rays as f32;
         }
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::shading::film_offset;
+
+    fn frame(filter: u32) -> FrameParams {
+        FrameParams { width: 16, height: 12, pixel_filter: filter, ..FrameParams::default() }
+    }
+
+    #[test]
+    fn film_footprint_shares_a_splat_out_exactly() {
+        // Inside the image every film point's shares sum to 1 (the filter integrates to 1 and
+        // the pixel centres tile the plane), so light tracing neither gains nor loses energy.
+        for filter in [FILTER_BOX, FILTER_TENT, FILTER_GAUSSIAN] {
+            let f = frame(filter);
+            for (x, y) in [(5.3, 4.7), (8.0, 6.0), (2.51, 9.49), (7.77, 3.125)] {
+                let sum: f32 = film_footprint(&f, Vec2::new(x, y)).iter().map(|&(_, w)| w).sum();
+                assert!((sum - 1.0).abs() < 2e-4, "filter {filter} at ({x}, {y}): shares sum to {sum}");
+            }
+        }
+    }
+
+    #[test]
+    fn camera_samples_land_where_splats_spread() {
+        // The camera's film points of pixel P, drawn by film_offset, must have the density that
+        // film_footprint gives P at each point: histograms of 2^20 samples in cells of 1/8 pixel
+        // against the filter's weight integrated over each cell.
+        for filter in [FILTER_TENT, FILTER_GAUSSIAN] {
+            let f = frame(filter);
+            let r = crate::cpu::shading::filter_radius(&f);
+            let cells = (2.0 * r * 8.0) as usize;
+            let mut hist = vec![0u32; cells];
+            let n = 1u32 << 20;
+            for i in 0..n {
+                let u = crate::cpu::rng::pcg4d([i, 7, 11, 13]).map(crate::cpu::rng::rand_unit);
+                let x = film_offset(&f, [u[0], u[1]])[0] - 0.5;
+                let c = ((x + r) * 8.0).floor();
+                if c >= 0.0 && (c as usize) < cells {
+                    hist[c as usize] += 1;
+                }
+            }
+            for (c, &count) in hist.iter().enumerate() {
+                let x0 = c as f32 / 8.0 - r;
+                let want: f32 =
+                    (0..64).map(|k| crate::cpu::shading::filter_weight(&f, x0 + (k as f32 + 0.5) / 512.0)).sum::<f32>()
+                        / 512.0;
+                let got = count as f32 / n as f32;
+                assert!(
+                    (got - want).abs() < 4.0 * (want / n as f32).sqrt() + 1e-5,
+                    "filter {filter}, cell at {x0}: sampled {got} against {want}"
+                );
+            }
+        }
+    }
 }

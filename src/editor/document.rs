@@ -240,6 +240,13 @@ impl SceneDocument {
             doc.saved = String::new();
             return Ok(doc);
         }
+        // A Mitsuba scene likewise (scene::mitsuba): its TOML names the files beside it.
+        if crate::scene::mitsuba::is_mitsuba_path(path) {
+            let t = crate::scene::mitsuba::translate_file(path).map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
+            doc.saved = String::new();
+            return Ok(doc);
+        }
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {
             EditError::Invalid(match e {
                 Some(cause) => format!("cannot read {}: {cause}", path.display()),
@@ -618,6 +625,13 @@ fn edit(doc: &mut DocumentMut, command: &Command) -> Result<(), EditError> {
                 .get_mut("transform")
                 .and_then(|t| t.as_table_like_mut())
                 .ok_or_else(|| bad(format!("the `transform` of {} is not a table", target.describe())))?;
+            if transform.contains_key("matrix") {
+                return Err(bad(format!(
+                    "{} is placed by a `transform.matrix` (a Mitsuba import); the editor moves things by scale, \
+                     rotate and translate: edit the matrix in the file, or replace it by those three",
+                    target.describe()
+                )));
+            }
             if let Some(t) = translate {
                 set_key(transform, "translate", vector(t)?, [0.0; 3] == *t);
             }
@@ -917,6 +931,19 @@ fn offset_copy(copy: &mut Table, offset: &[f64; 3], target: &Target) -> Result<(
         Some(_) => return Err(bad(format!("the `transform` of {} is not a table", target.describe()))),
         None => toml_edit::InlineTable::new(),
     };
+    // A matrix carries its translation in its last column.
+    if let Some(m) = transform.get_mut("matrix").and_then(|m| m.as_array_mut()) {
+        for (row, d) in offset.iter().enumerate() {
+            let at = 4 * row + 3;
+            let old = m.get(at).and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)));
+            let Some(old) = old else {
+                return Err(bad(format!("the `transform.matrix` of {} is not 16 numbers", target.describe())));
+            };
+            m.replace(at, old + d);
+        }
+        copy.insert("transform", Item::Value(Value::InlineTable(transform)));
+        return Ok(());
+    }
     let translate = match transform.get("translate") {
         Some(v) => moved(Some(&Item::Value(v.clone())))
             .ok_or_else(|| bad(format!("the `transform.translate` of {} is not three numbers", target.describe())))?,

@@ -243,7 +243,7 @@ fn material_color(scene: &Scene, id: usize) -> ([f32; 3], bool) {
     let color = match &m.kind {
         MaterialKind::Diffuse { reflectance } | MaterialKind::Plastic { reflectance, .. } => reflectance.value,
         MaterialKind::Mirror { tint } => tint.value,
-        MaterialKind::Dielectric { .. } => Vec3::new(0.75, 0.85, 0.95),
+        MaterialKind::Dielectric { .. } | MaterialKind::ThinDielectric { .. } => Vec3::new(0.75, 0.85, 0.95),
         MaterialKind::Conductor { .. } => Vec3::splat(0.75),
         MaterialKind::Mix { a, .. } => return material_color(scene, *a as usize),
         // An invisible medium boundary: drawn pale so it can still be picked in the solid view.

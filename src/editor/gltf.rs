@@ -233,7 +233,7 @@ fn material_json(scene: &Scene, id: usize) -> Json {
             extensions.insert("KHR_materials_emissive_strength".into(), json!({ "emissiveStrength": peak }));
         }
     }
-    if let MaterialKind::Dielectric { ior, .. } = m.kind {
+    if let MaterialKind::Dielectric { ior, .. } | MaterialKind::ThinDielectric { ior } = m.kind {
         extensions.insert("KHR_materials_transmission".into(), json!({ "transmissionFactor": 1.0 }));
         extensions.insert("KHR_materials_ior".into(), json!({ "ior": ior }));
     }
@@ -251,7 +251,8 @@ fn surface(scene: &Scene, m: &MaterialDesc, depth: u32) -> (Vec3, f32, f32) {
         MaterialKind::Plastic { reflectance, roughness, .. } => (reflectance.value, 0.0, perceptual(roughness.alpha)),
         MaterialKind::Mirror { tint } => (tint.value, 1.0, 0.0),
         MaterialKind::Dielectric { roughness, .. } => (Vec3::ONE, 0.0, perceptual(roughness.alpha)),
-        MaterialKind::Conductor { eta, k, roughness } => {
+        MaterialKind::ThinDielectric { .. } => (Vec3::ONE, 0.0, 0.0),
+        MaterialKind::Conductor { eta, k, roughness, .. } => {
             // Reflectance at normal incidence of the complex index eta + i k, per channel.
             let (n, k) = (eta.value, k.value);
             let f0 = ((n - 1.0) * (n - 1.0) + k * k) / ((n + 1.0) * (n + 1.0) + k * k);

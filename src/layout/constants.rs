@@ -39,8 +39,37 @@ shared_constants! {
     /// is the medium's phase function (`PHASE_*` in `color1.x`, asymmetry g in `ior`), so that
     /// light sampling and photon lookups treat it as any estimate vertex.
     MATERIAL_PHASE: u32 = 7;
+    /// A thin pane of index `ior` (Mitsuba's `thindielectric`): it reflects the Fresnel
+    /// reflectance summed over the pane's inner reflections, R + T^2 R / (1 - R^2), and lets
+    /// the rest through with the direction unchanged; no medium inside.
+    MATERIAL_THIN_DIELECTRIC: u32 = 8;
+    /// Reconstruction filters (`FrameParams::filter`, `[render] filter`): a camera sample's film
+    /// point is drawn from the filter around its pixel's centre (filter importance sampling), and
+    /// a light-tracing splat is spread over the pixels whose filter reaches its film point,
+    /// weighted by the filter. The box is one pixel wide (every pixel its own square).
+    FILTER_BOX: u32 = 0;
+    /// 1 - |x| per axis, radius 1 pixel (Mitsuba's `tent`).
+    FILTER_TENT: u32 = 1;
+    /// A Gaussian of standard deviation `FILTER_GAUSSIAN_STDDEV` per axis, truncated at
+    /// `FILTER_GAUSSIAN_RADIUS` pixels (Mitsuba's `gaussian` defaults).
+    FILTER_GAUSSIAN: u32 = 2;
+    FILTER_GAUSSIAN_STDDEV: f32 = 0.5;
+    FILTER_GAUSSIAN_RADIUS: f32 = 2.0;
+    /// erf(radius / (stddev sqrt 2)): the Gaussian's mass inside its radius.
+    FILTER_GAUSSIAN_MASS: f32 = 0.999_936_66;
+    /// 1 / (stddev sqrt(2 pi) mass): the truncated Gaussian's peak, so it integrates to 1.
+    FILTER_GAUSSIAN_NORM: f32 = 0.797_935_1;
     /// Deepest nesting of mixes the kernels resolve (the host refuses deeper ones).
     MIX_MAX_DEPTH: u32 = 4;
+    /// `Material::flags`: a plastic whose base light bounces under the coat tint it again
+    /// (Mitsuba's `nonlinear`; see `cpu::microfacet::plastic_eval`).
+    MATERIAL_FLAG_NONLINEAR: u32 = 1;
+    /// Entries of a rough nonlinear plastic's coat transmittance table, at cosines i / (n - 1)
+    /// (Mitsuba's `MI_ROUGH_TRANSMITTANCE_RES`).
+    PLASTIC_COAT_TABLE: u32 = 64;
+    /// Words of a coat table in the texture data: its internal diffuse reflectance, then the
+    /// `PLASTIC_COAT_TABLE` transmittances (f32 bits).
+    PLASTIC_COAT_WORDS: u32 = 65;
     /// Default of `[photons] glossy_threshold`: glossy lobes with GGX width up to this are followed
     /// by paths (sharp reflections and caustics through them); rougher ones end camera paths and
     /// read the photon maps with the BSDF's value (docs/materials.md).

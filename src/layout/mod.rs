@@ -79,6 +79,9 @@ gpu_structs! {
         pub color0_tex: u32,
         pub color1: [f32; 3],
         pub color1_tex: u32,
+        /// A conductor's tint (Mitsuba's `specular_reflectance`, a factor on its Fresnel term).
+        pub color2: [f32; 3],
+        pub color2_tex: u32,
         /// GGX widths along dpdu and dpdv (not a perceptual roughness).
         pub roughness: [f32; 2],
         pub roughness_tex: u32,
@@ -91,7 +94,9 @@ gpu_structs! {
         pub weight: f32,
         pub mix_a: u32,
         pub mix_b: u32,
-        pub _pad: u32,
+        /// Word offset into the texture data of a nonlinear rough plastic's coat table
+        /// (`PLASTIC_COAT_WORDS` floats, see `cpu::microfacet::plastic_eval`), else `NO_DATA`.
+        pub data: u32,
     }
 
     /// A texture, 80 bytes: `kind` (`TEXTURE_*`) looked up in `space` (`TEXTURE_SPACE_*` in bits
@@ -208,7 +213,9 @@ gpu_structs! {
         pub csg_first: u32,
         pub integrator: u32,
         pub techniques: u32,
-        pub _pad: [u32; 3],
+        /// The reconstruction filter, `FILTER_*`.
+        pub pixel_filter: u32,
+        pub _pad: [u32; 2],
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of
@@ -354,7 +361,7 @@ gpu_structs! {
         pub resume: u32,
     }
 
-    /// A surface light vertex's material as its point looked it up, 64 bytes: the kind (after a
+    /// A surface light vertex's material as its point looked it up, 80 bytes: the kind (after a
     /// mix's choice), the colours and GGX widths (after textures), the index and the shading
     /// normal (after bump and normal maps). vcm_light writes it beside the vertex's slot, and
     /// render_vcm rebuilds the vertex's BSDF from it and `shape_hit`: evaluating the material's
@@ -368,7 +375,12 @@ gpu_structs! {
         pub ns: [f32; 3],
         pub alpha_u: f32,
         pub alpha_v: f32,
-        pub _pad: [u32; 3],
+        /// The material's `MATERIAL_FLAG_*` and its `data` (a plastic's coat table).
+        pub flags: u32,
+        pub data: u32,
+        pub _pad: u32,
+        pub color2: [f32; 3],
+        pub _pad2: u32,
     }
 }
 
@@ -388,7 +400,7 @@ const _: () = assert!(core::mem::offset_of!(TriangleShading, uv) == 4 * constant
 const _: () = assert!(core::mem::offset_of!(TriangleShading, normals) == 4 * constants::TRIANGLE_DATA_NORMALS as usize);
 const _: () = assert!(size_of::<BvhNode>() == 32);
 const _: () = assert!(size_of::<Primitive>() == 64);
-const _: () = assert!(size_of::<Material>() == 112);
+const _: () = assert!(size_of::<Material>() == 128);
 const _: () = assert!(size_of::<Texture>() == 80);
 const _: () = assert!(size_of::<Light>() == 96);
 const _: () = assert!(size_of::<Medium>() == 80);

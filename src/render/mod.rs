@@ -12,6 +12,7 @@ pub mod open_edges;
 pub mod pack;
 pub mod pack_csg;
 pub mod photons;
+pub mod plastic_coat;
 pub mod prepare;
 pub mod progressive;
 pub mod renderer;

@@ -2,9 +2,12 @@
 //! and their shape data, materials, textures and their data. A new kind of shape, material or
 //! texture adds one arm to the matching function here.
 
+use std::collections::HashMap;
+
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use crate::layout::constants::*;
+use super::plastic_coat::plastic_coat_table;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
@@ -47,11 +50,27 @@ pub struct PackedScene {
 }
 
 pub fn pack_scene(scene: &Scene) -> PackedScene {
-    let mut packed =
-        PackedScene { materials: scene.materials.iter().map(pack_material).collect(), ..Default::default() };
+    let mut packed = PackedScene::default();
     for texture in &scene.textures {
         let t = pack_texture(texture, &mut packed.texture_data);
         packed.textures.push(t);
+    }
+    // Plastics that share a coat share its table.
+    let mut coat_tables = HashMap::new();
+    for m in &scene.materials {
+        let mut out = pack_material(m);
+        if let MaterialKind::Plastic { ior, roughness, nonlinear: true, .. } = &m.kind {
+            // A textured roughness scales the widths per point; the table is the constant's.
+            let alpha = 0.5 * (roughness.alpha[0] + roughness.alpha[1]);
+            let data = &mut packed.texture_data;
+            out.data = *coat_tables.entry((alpha.to_bits(), ior.to_bits())).or_insert_with(|| {
+                plastic_coat_table(alpha, *ior).map_or(NO_DATA, |table| {
+                    data.extend(table);
+                    (data.len() as u32) - PLASTIC_COAT_WORDS
+                })
+            });
+        }
+        packed.materials.push(out);
     }
     for shape in &scene.shapes {
         let (alpha, uses_uv) = material_needs(scene, shape.material, 0);
@@ -186,10 +205,13 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
         alpha_tex,
         color0_tex: NO_TEXTURE,
         color1_tex: NO_TEXTURE,
+        color2: [1.0; 3],
+        color2_tex: NO_TEXTURE,
         roughness_tex: NO_TEXTURE,
         bump_tex: NO_TEXTURE,
         normal_tex: NO_TEXTURE,
         weight_tex: NO_TEXTURE,
+        data: NO_DATA,
         ior: 1.0,
         ..Default::default()
     };
@@ -213,17 +235,24 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
             out.ior = *ior;
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
         }
-        MaterialKind::Conductor { eta, k, roughness } => {
+        MaterialKind::Conductor { eta, k, roughness, tint } => {
             out.kind = MATERIAL_CONDUCTOR;
             (out.color0, out.color0_tex) = color(eta);
             (out.color1, out.color1_tex) = color(k);
+            (out.color2, out.color2_tex) = color(tint);
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
         }
-        MaterialKind::Plastic { reflectance, ior, roughness } => {
+        MaterialKind::Plastic { reflectance, ior, roughness, nonlinear } => {
             out.kind = MATERIAL_PLASTIC;
+            // `data`, a rough nonlinear coat's table, is added by `pack_scene`.
+            out.flags = if *nonlinear { MATERIAL_FLAG_NONLINEAR } else { 0 };
             (out.color0, out.color0_tex) = color(reflectance);
             out.ior = *ior;
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+        }
+        MaterialKind::ThinDielectric { ior } => {
+            out.kind = MATERIAL_THIN_DIELECTRIC;
+            out.ior = *ior;
         }
         MaterialKind::Mix { a, b, weight } => {
             out.kind = MATERIAL_MIX;

@@ -179,7 +179,12 @@ impl SceneBuffers {
         self.materials.iter().any(|m| {
             matches!(
                 m.kind,
-                MATERIAL_MIRROR | MATERIAL_DIELECTRIC | MATERIAL_CONDUCTOR | MATERIAL_PLASTIC | MATERIAL_MIX
+                MATERIAL_MIRROR
+                    | MATERIAL_DIELECTRIC
+                    | MATERIAL_THIN_DIELECTRIC
+                    | MATERIAL_CONDUCTOR
+                    | MATERIAL_PLASTIC
+                    | MATERIAL_MIX
             )
         })
     }
@@ -590,7 +595,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         instance_data: instanced.instance_data,
         integrator: scene.render.integrator.code(),
         techniques: TECHNIQUES_ALL,
-        _pad: [0; 3],
+        pixel_filter: scene.render.filter.code(),
+        _pad: [0; 2],
     };
     // Media: the null material needs the media variant's kernels even without a medium.
     let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);

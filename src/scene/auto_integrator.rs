@@ -76,7 +76,11 @@ fn glossy_path_lobe(kind: &MaterialKind, threshold: f32) -> bool {
         MaterialKind::Dielectric { roughness, .. }
         | MaterialKind::Conductor { roughness, .. }
         | MaterialKind::Plastic { roughness, .. } => glossy(roughness),
-        MaterialKind::Diffuse { .. } | MaterialKind::Mirror { .. } | MaterialKind::Mix { .. } | MaterialKind::Null => {
+        MaterialKind::Diffuse { .. }
+        | MaterialKind::Mirror { .. }
+        | MaterialKind::ThinDielectric { .. }
+        | MaterialKind::Mix { .. }
+        | MaterialKind::Null => {
             false
         }
     }
@@ -98,6 +102,7 @@ mod tests {
             eta: c,
             k: c,
             roughness: Roughness { alpha: [alpha; 2], texture: None },
+            tint: c,
         })
     }
 

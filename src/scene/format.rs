@@ -169,6 +169,7 @@ pub(crate) struct RenderDef {
     pub max_depth: Option<Spanned<i64>>,
     pub seed: Option<Spanned<i64>>,
     pub integrator: Option<Spanned<String>>,
+    pub filter: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -203,6 +204,7 @@ pub(crate) struct MaterialDef {
     pub preset: Option<Spanned<String>>,
     pub materials: Option<Spanned<Vec<String>>>,
     pub weight: Option<Spanned<ParamDef>>,
+    pub nonlinear: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -311,6 +313,7 @@ pub(crate) struct ShapeDef {
     pub crease_angle: Option<Spanned<f64>>,
     pub flatness: Option<Spanned<f64>>,
     pub lights: Option<Spanned<bool>>,
+    pub shape_index: Option<Spanned<i64>>,
     pub points: Option<Spanned<Vec<Vec3Def>>>,
     // media
     pub interior: Option<Spanned<String>>,
@@ -358,6 +361,8 @@ pub(crate) struct LightDef {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct TransformDef {
+    /// A 4x4 matrix, row by row (the last row 0 0 0 1); exclusive with the other three.
+    pub matrix: Option<Spanned<Vec<f64>>>,
     pub scale: Option<Spanned<Vec3Def>>,
     pub rotate: Option<Spanned<Vec3Def>>,
     pub translate: Option<Spanned<Vec3Def>>,

@@ -214,6 +214,8 @@ pub const REFLECTANCE: Field = field("reflectance", T::ColorOrTexture, Triple([0
 pub const TINT: Field = field("tint", T::ColorOrTexture, Triple([1.0; 3]));
 pub const IOR: Field = field("ior", T::Number, Number(1.5));
 pub const ROUGHNESS: Field = field("roughness", T::Roughness, Number(0.0));
+/// Mitsuba's plastic `nonlinear`: the base tints the light bouncing under the coat.
+pub const NONLINEAR: Field = field("nonlinear", T::Bool, Bool(false));
 /// Names of `METAL_PRESETS` (convert/materials.rs), which holds their optical constants.
 pub const METAL_PRESET_NAMES: &[&str] =
     &["gold", "silver", "copper", "aluminium", "aluminum", "chrome", "iron", "platinum", "titanium"];
@@ -232,8 +234,9 @@ pub const MATERIALS: Family = Family {
         Kind { name: "diffuse", what: "a diffuse material", common: SURFACE, fields: &[REFLECTANCE] },
         Kind { name: "mirror", what: "a mirror material", common: SURFACE, fields: &[TINT] },
         Kind { name: "dielectric", what: "a dielectric material", common: SURFACE, fields: &[IOR, ROUGHNESS] },
-        Kind { name: "conductor", what: "a conductor material", common: SURFACE, fields: &[ETA, K, PRESET, ROUGHNESS] },
-        Kind { name: "plastic", what: "a plastic material", common: SURFACE, fields: &[REFLECTANCE, IOR, ROUGHNESS] },
+        Kind { name: "conductor", what: "a conductor material", common: SURFACE, fields: &[ETA, K, PRESET, ROUGHNESS, TINT] },
+        Kind { name: "plastic", what: "a plastic material", common: SURFACE, fields: &[REFLECTANCE, IOR, ROUGHNESS, NONLINEAR] },
+        Kind { name: "thin_dielectric", what: "a thin dielectric material", common: SURFACE, fields: &[IOR] },
         Kind { name: "mix", what: "a mix material", common: &[TYPE], fields: &[MIXED, WEIGHT] },
         Kind { name: "null", what: "a null material (an invisible medium boundary)", common: &[TYPE], fields: &[] },
     ],
@@ -348,6 +351,8 @@ pub const CREASE_ANGLE: Field = field("crease_angle", T::Number, Unset);
 /// Bezier patches (`.bpt` and `bicubic_patch`): largest distance to their triangles.
 pub const FLATNESS: Field = field("flatness", T::Number, Number(0.01));
 pub const MODEL_LIGHTS: Field = field("lights", T::Bool, Bool(true));
+/// One mesh of a file that holds several (a Mitsuba `.serialized` file's shape); unset: all.
+pub const SHAPE_INDEX: Field = field("shape_index", T::Integer, Unset);
 pub const OPERATION: Field = field("operation", T::Choice(&["union", "intersection", "difference", "merge"]), Required);
 pub const CHILDREN: Field = field("children", T::Table, Required);
 
@@ -365,7 +370,7 @@ pub const SHAPES: Family = Family {
             name: "mesh",
             what: "a mesh",
             common: SHAPE,
-            fields: &[FILE, SMOOTH_ANGLE, FILE_NORMALS, SUBDIVISION, LEVELS, CREASE_ANGLE, FLATNESS, MODEL_LIGHTS],
+            fields: &[FILE, SMOOTH_ANGLE, FILE_NORMALS, SUBDIVISION, LEVELS, CREASE_ANGLE, FLATNESS, MODEL_LIGHTS, SHAPE_INDEX],
         },
         Kind {
             name: "bicubic_patch",

@@ -56,10 +56,16 @@ pub enum MaterialKind {
     Mirror { tint: ColorParam },
     /// Dielectric interface, index `ior` inside (the side opposite the front face), smooth or GGX.
     Dielectric { ior: f32, roughness: Roughness },
-    /// Metal of complex index of refraction `eta` + i `k` per channel, smooth or GGX, both sides.
-    Conductor { eta: ColorParam, k: ColorParam, roughness: Roughness },
-    /// A diffuse base of albedo `reflectance` under a dielectric coat of index `ior`.
-    Plastic { reflectance: ColorParam, ior: f32, roughness: Roughness },
+    /// Metal of complex index of refraction `eta` + i `k` per channel, smooth or GGX, both sides;
+    /// its Fresnel reflectance times `tint` (Mitsuba's `specular_reflectance`).
+    Conductor { eta: ColorParam, k: ColorParam, roughness: Roughness, tint: ColorParam },
+    /// A diffuse base of albedo `reflectance` under a dielectric coat of index `ior`; with
+    /// `nonlinear`, light bouncing under the coat is tinted by the base at every bounce
+    /// (Mitsuba's `nonlinear`).
+    Plastic { reflectance: ColorParam, ior: f32, roughness: Roughness, nonlinear: bool },
+    /// A thin pane of index `ior`: Fresnel reflection summed over its inner bounces, the rest
+    /// passing straight through (Mitsuba's `thindielectric`).
+    ThinDielectric { ior: f32 },
     /// Material `b` where a hash of the point falls below `weight`, else `a` (material ids).
     Mix { a: u32, b: u32, weight: ScalarParam },
     /// An invisible interface: rays pass straight through; it only bounds a medium.
@@ -118,11 +124,13 @@ impl MaterialDesc {
             MaterialKind::Diffuse { reflectance } => textured(reflectance),
             MaterialKind::Mirror { tint } => textured(tint),
             MaterialKind::Dielectric { roughness, .. } => rough(roughness),
-            MaterialKind::Conductor { eta, k, roughness } => textured(eta) || textured(k) || rough(roughness),
+            MaterialKind::Conductor { eta, k, roughness, tint } => {
+                textured(eta) || textured(k) || textured(tint) || rough(roughness)
+            }
             MaterialKind::Plastic { reflectance, roughness, .. } => textured(reflectance) || rough(roughness),
             // A mix hashes the point; what its materials read is decided by theirs (see `pack`).
             MaterialKind::Mix { weight, .. } => weight.texture.is_some(),
-            MaterialKind::Null => false,
+            MaterialKind::ThinDielectric { .. } | MaterialKind::Null => false,
         };
         kind_textured || textured(&self.emission) || self.opacity.texture.is_some() || self.normal != NormalMod::None
     }

@@ -21,6 +21,7 @@ pub mod gltf_scene;
 mod material;
 pub use auto_integrator::auto_integrator;
 mod medium;
+pub mod mitsuba;
 pub mod model;
 pub mod pattern;
 mod photons;
@@ -220,6 +221,35 @@ pub struct RenderSettings {
     /// Why `integrator` was chosen for the scene when it names none (`auto_integrator`); `None`
     /// when the scene or the caller named it.
     pub integrator_auto: Option<&'static str>,
+    /// The reconstruction filter (`[render] filter`).
+    pub filter: Filter,
+}
+
+/// The pixel reconstruction filter, with Mitsuba 3's radii: how much a film point counts toward
+/// each pixel near it (see `FILTER_*`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Filter {
+    /// Each pixel the mean of its own square (the default, Photonix's before filters).
+    #[default]
+    Box,
+    /// 1 - |x| per axis over a radius of 1 pixel.
+    Tent,
+    /// Standard deviation 0.5 pixel, truncated at 2 pixels.
+    Gaussian,
+}
+
+impl Filter {
+    pub const NAMES: [(&'static str, Filter); 3] =
+        [("box", Filter::Box), ("tent", Filter::Tent), ("gaussian", Filter::Gaussian)];
+
+    /// `FrameParams::filter`.
+    pub fn code(self) -> u32 {
+        match self {
+            Filter::Box => crate::layout::constants::FILTER_BOX,
+            Filter::Tent => crate::layout::constants::FILTER_TENT,
+            Filter::Gaussian => crate::layout::constants::FILTER_GAUSSIAN,
+        }
+    }
 }
 
 /// How a render estimates light transport: one place that chooses (`render::render_cpu`,
@@ -445,13 +475,17 @@ pub struct SceneOrigins {
 /// Reads and parses a scene file; mesh paths in it are relative to the file's folder. Files above
 /// `limits::MAX_SCENE_FILE_BYTES` (and endless ones such as /dev/zero) are refused unread.
 /// A `.pov` file is read by the POV-Ray front-end (`pov`), with its default options, and a
-/// `.gltf` or `.glb` file as a whole glTF scene (`gltf_scene`).
+/// `.gltf` or `.glb` file as a whole glTF scene (`gltf_scene`), a `.xml` file as a Mitsuba scene
+/// (`mitsuba`).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     if pov::is_pov_path(path) {
         return pov::load_pov(path, &pov::PovOptions::default());
     }
     if gltf_scene::is_gltf_path(path) {
         return gltf_scene::load_gltf(path);
+    }
+    if mitsuba::is_mitsuba_path(path) {
+        return mitsuba::load_mitsuba(path);
     }
     let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
         Some(cause) => SceneError::Read { path: path.to_path_buf(), cause },

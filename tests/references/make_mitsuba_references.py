@@ -2,8 +2,9 @@
 """Renders the reference scenes of this folder with Mitsuba 3 into mitsuba/<name>.exr.
 
 Each scene is a Photonix scene file (<name>.toml); this script translates the subset they use
-(perspective and thin-lens cameras, diffuse materials, spheres, an infinite plane, spot lights,
-uniform and Hosek-Wilkie sky environments) into a Mitsuba scene and renders it with the path
+(perspective and thin-lens cameras, diffuse, plastic, conductor (given eta and k) and
+thin dielectric materials, spheres, an infinite plane, spot lights,
+uniform and Hosek-Wilkie sky environments, the box, tent and gaussian filters) into a Mitsuba scene and renders it with the path
 tracer. tests/mitsuba_references.rs renders the same files with Photonix and compares.
 
     pip install mitsuba            # 3.9.1 made the committed files
@@ -53,6 +54,28 @@ def sun_direction(elevation_deg, azimuth_deg):
                  for n, s, u in zip(north, east, [0.0, 1.0, 0.0])])
 
 
+def translate_material(name, m):
+    if m["type"] == "diffuse":
+        return {"type": "diffuse", "reflectance": rgb(m.get("reflectance", 0.8))}
+    if m["type"] == "plastic":
+        # Photonix's outside is vacuum: Mitsuba's default ext_ior is air's 1.000277.
+        out = {"int_ior": float(m.get("ior", 1.5)), "ext_ior": 1.0, "nonlinear": bool(m.get("nonlinear", False)),
+               "diffuse_reflectance": rgb(m.get("reflectance", 0.8))}
+        alpha = float(m.get("roughness", 0.0))
+        if alpha == 0.0:
+            return {"type": "plastic", **out}
+        return {"type": "roughplastic", "distribution": "ggx", "alpha": alpha, **out}
+    if m["type"] == "conductor":
+        out = {"eta": rgb(m["eta"]), "k": rgb(m["k"]), "specular_reflectance": rgb(m.get("tint", 1.0))}
+        alpha = float(m.get("roughness", 0.0))
+        if alpha == 0.0:
+            return {"type": "conductor", **out}
+        return {"type": "roughconductor", "distribution": "ggx", "alpha": alpha, **out}
+    if m["type"] == "thin_dielectric":
+        return {"type": "thindielectric", "int_ior": float(m.get("ior", 1.5)), "ext_ior": 1.0}
+    sys.exit(f"material {name}: type {m['type']} is not translated")
+
+
 def translate(mi, scene, spp):
     T = mi.ScalarTransform4f
     cam = scene["camera"]
@@ -62,7 +85,8 @@ def translate(mi, scene, spp):
         "fov": float(cam["fov"]),
         "fov_axis": "x",
         "to_world": T().look_at(origin=cam["position"], target=cam["look_at"], up=cam.get("up", [0, 1, 0])),
-        "film": {"type": "hdrfilm", "width": w, "height": h, "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+        "film": {"type": "hdrfilm", "width": w, "height": h, "pixel_format": "rgb",
+                 "rfilter": {"type": scene.get("render", {}).get("filter", "box")}},
         "sampler": {"type": "independent", "sample_count": spp},
     }
     if "aperture_radius" in cam:
@@ -71,8 +95,7 @@ def translate(mi, scene, spp):
     out = {"type": "scene", "integrator": {"type": "path", "max_depth": 32, "rr_depth": 8}, "sensor": sensor}
     bsdfs = {}
     for name, m in scene.get("materials", {}).items():
-        assert m["type"] == "diffuse", f"material {name}: only diffuse is translated"
-        bsdfs[name] = {"type": "diffuse", "reflectance": rgb(m.get("reflectance", 0.8))}
+        bsdfs[name] = translate_material(name, m)
     for k, s in enumerate(scene.get("shapes", [])):
         bsdf = bsdfs[s["material"]]
         if s["type"] == "sphere":

@@ -51,6 +51,7 @@ impl Builder<'_> {
             ("preset", span_of(&m.preset)),
             ("materials", span_of(&m.materials)),
             ("weight", span_of(&m.weight)),
+            ("nonlinear", span_of(&m.nonlinear)),
         ];
         let decl = MATERIALS.kind(kind);
         self.only_fields(&object, decl.what, &present, &decl.field_names())?;
@@ -156,7 +157,11 @@ impl Builder<'_> {
                     }
                 }
                 let roughness = self.roughness(m, &object)?;
-                MaterialKind::Conductor { eta, k, roughness }
+                let tint = match &m.tint {
+                    Some(t) => self.color_param(t, &object, "tint", true)?,
+                    None => ColorParam::constant(Vec3::from(kinds::TINT.triple())),
+                };
+                MaterialKind::Conductor { eta, k, roughness, tint }
             }
             "plastic" => {
                 let reflectance = match &m.reflectance {
@@ -165,8 +170,10 @@ impl Builder<'_> {
                 };
                 let ior = self.ior(m, &object)?;
                 let roughness = self.roughness(m, &object)?;
-                MaterialKind::Plastic { reflectance, ior, roughness }
+                let nonlinear = m.nonlinear.as_ref().map_or(kinds::NONLINEAR.flag(), |n| *n.get_ref());
+                MaterialKind::Plastic { reflectance, ior, roughness, nonlinear }
             }
+            "thin_dielectric" => MaterialKind::ThinDielectric { ior: self.ior(m, &object)? },
             "null" => MaterialKind::Null,
             _ => {
                 let example = "materials = [\"rust\", \"paint\"]";

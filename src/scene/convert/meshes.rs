@@ -81,8 +81,23 @@ impl Builder<'_> {
         let mut scene_material: Vec<Option<u32>> = vec![None; model.materials.len()];
         let mut default_material = None;
         let stem = model_path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
+        let only = match &s.shape_index {
+            Some(i) => {
+                let n = model.meshes.len();
+                let index = *i.get_ref();
+                if index < 0 || index as usize >= n {
+                    let message = format!("`shape_index` is {index}; the file holds {n} mesh(es), numbered from 0");
+                    return Err(self.invalid(&i.span(), object, message));
+                }
+                Some(index as usize)
+            }
+            None => None,
+        };
         let mut triangles = Vec::new();
         for (m, mesh) in model.meshes.iter().enumerate() {
+            if only.is_some_and(|k| k != m) {
+                continue;
+            }
             let subdivided;
             let mesh = match subdivision {
                 Some((scheme, levels, crease)) => {
@@ -147,15 +162,14 @@ impl Builder<'_> {
                 media: None,
             });
         }
+        // Exported scenes hold meshes that are all slivers (Mitsuba loads them, as no surface):
+        // such a file adds nothing, with a warning.
         if skipped == total {
-            return Err(SceneError::Obj {
-                obj_location: printable_message(&model_path.display().to_string()),
-                message: format!("all {total} triangles have zero area"),
-                object: object.to_string(),
-                location,
-            });
-        }
-        if skipped > 0 {
+            self.warnings.push(format!(
+                "{location}: {object}: all {total} triangles of {} have zero area; the mesh is left out",
+                printable_message(&model_path.display().to_string())
+            ));
+        } else if skipped > 0 {
             self.warnings.push(format!(
                 "{location}: {object}: skipped {skipped} of {total} triangles of {} with zero area",
                 printable_message(&model_path.display().to_string())
@@ -407,7 +421,7 @@ impl Builder<'_> {
         let roughness = m.roughness.map(|alpha| Roughness { alpha: [alpha; 2], texture: rough_tex });
         let base_kind = match roughness {
             None => MaterialKind::Diffuse { reflectance },
-            Some(r) => MaterialKind::Plastic { reflectance, ior: m.ior, roughness: r },
+            Some(r) => MaterialKind::Plastic { reflectance, ior: m.ior, roughness: r, nonlinear: false },
         };
         let emission = ColorParam {
             value: m.emission,
@@ -437,7 +451,12 @@ impl Builder<'_> {
             Some(roughness) if metallic => {
                 let (eta, k) = metal_eta_k(m.base_color);
                 let conductor =
-                    MaterialKind::Conductor { eta: ColorParam::constant(eta), k: ColorParam::constant(k), roughness };
+                    MaterialKind::Conductor {
+                        eta: ColorParam::constant(eta),
+                        k: ColorParam::constant(k),
+                        roughness,
+                        tint: ColorParam::constant(Vec3::ONE),
+                    };
                 if m.metallic >= 1.0 && metal_tex.is_none() {
                     self.add_material(name_opaque, finish(conductor))
                 } else {

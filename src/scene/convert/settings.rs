@@ -4,7 +4,7 @@ use toml::Spanned;
 
 use super::{Builder, Result};
 use crate::limits::{fmt_f32, MAX_DEPTH, MAX_GATHER_RAYS, MAX_PASSES, MAX_PHOTON_PATHS, MAX_SPP};
-use crate::scene::{Integrator, PhotonSettings, RenderSettings};
+use crate::scene::{Filter, Integrator, PhotonSettings, RenderSettings};
 
 const DEFAULT_SPP: u32 = 4;
 const DEFAULT_PASSES: u32 = 4;
@@ -24,6 +24,7 @@ impl Builder<'_> {
             seed: 0,
             integrator: Integrator::default(),
             integrator_auto: None,
+            filter: Filter::default(),
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -49,6 +50,11 @@ impl Builder<'_> {
                 settings.integrator = Integrator::from_name(name).expect("one_of returns one of the names");
                 auto = false;
             }
+        }
+        if let Some(name) = &r.filter {
+            let names: Vec<&str> = Filter::NAMES.iter().map(|(n, _)| *n).collect();
+            let name = self.one_of(name, object, "filter", &names)?;
+            settings.filter = Filter::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
         }
         Ok((settings, auto))
     }

@@ -77,6 +77,7 @@ impl Builder<'_> {
             ("crease_angle", span_of(&s.crease_angle)),
             ("flatness", span_of(&s.flatness)),
             ("lights", span_of(&s.lights)),
+            ("shape_index", span_of(&s.shape_index)),
             ("points", span_of(&s.points)),
             ("interior", span_of(&s.interior)),
             ("exterior", span_of(&s.exterior)),
@@ -393,6 +394,9 @@ impl Builder<'_> {
             return Ok(None);
         };
         let t = def.get_ref();
+        if let Some(m) = &t.matrix {
+            return self.matrix_transform(m, t, object).map(Some);
+        }
         let scale = match &t.scale {
             Some(s) => {
                 let scale = self.vector(s, object, "transform.scale")?;
@@ -419,6 +423,42 @@ impl Builder<'_> {
         let r = rotate * (std::f32::consts::PI / 180.0);
         let rotation = Mat3::from_rotation_z(r.z) * Mat3::from_rotation_y(r.y) * Mat3::from_rotation_x(r.x);
         Ok(Some(Affine3A::from_mat3_translation(rotation * Mat3::from_diagonal(scale), translate)))
+    }
+}
+
+impl Builder<'_> {
+    /// `transform.matrix`: 16 numbers, row by row, an affine map whose last row is 0 0 0 1.
+    fn matrix_transform(&self, m: &Spanned<Vec<f64>>, t: &TransformDef, object: &str) -> Result<Affine3A> {
+        let others = [("scale", t.scale.is_some()), ("rotate", t.rotate.is_some()), ("translate", t.translate.is_some())];
+        if let Some((name, _)) = others.iter().find(|(_, given)| *given) {
+            let message = format!("`transform.matrix` is the whole transform; drop `{name}` or fold it into the matrix");
+            return Err(self.invalid(&m.span(), object, message));
+        }
+        let v = m.get_ref();
+        if v.len() != 16 {
+            let message = format!("`transform.matrix` has {} numbers; give 16, row by row", v.len());
+            return Err(self.invalid(&m.span(), object, message));
+        }
+        if v.iter().any(|x| !x.is_finite() || x.abs() > 1e30) {
+            return Err(self.invalid(&m.span(), object, "`transform.matrix` holds a number that is not finite".into()));
+        }
+        if v[12..] != [0.0, 0.0, 0.0, 1.0] {
+            let message = "`transform.matrix`: the last row must be [0, 0, 0, 1] (an affine transform)".to_string();
+            return Err(self.invalid(&m.span(), object, message));
+        }
+        let f = |r: usize, c: usize| v[4 * r + c] as f32;
+        let linear = Mat3::from_cols(
+            Vec3::new(f(0, 0), f(1, 0), f(2, 0)),
+            Vec3::new(f(0, 1), f(1, 1), f(2, 1)),
+            Vec3::new(f(0, 2), f(1, 2), f(2, 2)),
+        );
+        let det = linear.determinant();
+        let size = linear.to_cols_array().iter().fold(0f32, |a, x| a.max(x.abs()));
+        if !det.is_finite() || det.abs() <= 1e-12 * size * size * size || size == 0.0 {
+            let message = "`transform.matrix` flattens the shape (its 3x3 part is not invertible)".to_string();
+            return Err(self.invalid(&m.span(), object, message));
+        }
+        Ok(Affine3A::from_mat3_translation(linear, Vec3::new(f(0, 3), f(1, 3), f(2, 3))))
     }
 }
 

@@ -14,6 +14,7 @@ pub mod normals;
 pub mod obj;
 pub mod patch;
 pub mod ply;
+pub mod serialized;
 pub mod subdivide;
 pub mod tds;
 
@@ -228,10 +229,12 @@ pub enum Format {
     Ifs,
     /// Bicubic Bezier patches in the `.bpt` text format (the Utah teapot's).
     Patches,
+    /// Mitsuba's `.serialized` meshes.
+    Serialized,
 }
 
 impl Format {
-    pub const EXTENSIONS: &'static str = ".obj, .ply, .gltf, .glb, .3ds, .ifs or .bpt";
+    pub const EXTENSIONS: &'static str = ".obj, .ply, .gltf, .glb, .3ds, .ifs, .bpt or .serialized";
 
     pub fn from_path(path: &Path) -> Option<Format> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
@@ -242,6 +245,7 @@ impl Format {
             "3ds" => Format::Tds,
             "ifs" => Format::Ifs,
             "bpt" => Format::Patches,
+            "serialized" => Format::Serialized,
             _ => return None,
         })
     }
@@ -277,6 +281,7 @@ pub fn load_model(path: &Path, options: &LoadOptions) -> Result<Model, ModelErro
         Format::Tds => tds::parse_3ds(&bytes, path)?,
         Format::Ifs => ifs::parse_ifs(&bytes, path)?,
         Format::Patches => patch::parse_bpt(&bytes, path, options.flatness)?,
+        Format::Serialized => serialized::parse_serialized(&bytes, path)?,
     };
     check_model(&model, path)?;
     Ok(model)
