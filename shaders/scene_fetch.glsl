@@ -3,21 +3,27 @@
 
 // Texel `i` of a paged array: page i >> log2 (log2 = texels per page), texel i & mask inside it.
 // Lavapipe runs an if-chain's branches under masks, so only the cases of pages in use are
-// compiled (SCENE_PAGES_USED); one page is one fetch. Constant indices only: indexing an array
+// compiled (SCENE_PAGES_USED); one page is one fetch, in a structured if without early returns,
+// which the driver folds before inlining multiplies it. Constant indices only: indexing an array
 // of texel buffers by a variable needs a device feature that is not required.
 #define PAGED_TEXEL(name, pages, log2)                                                              \
     uvec4 name(uint i) {                                                                            \
-        if (SCENE_PAGES_USED == 1u) return texelFetch(pages[0], int(i));                            \
-        uint page = i >> (log2);                                                                    \
-        int j = int(i & ((1u << (log2)) - 1u));                                                     \
-        if (page == 0u) return texelFetch(pages[0], j);                                             \
-        if (SCENE_PAGES_USED == 2u || page == 1u) return texelFetch(pages[1], j);                   \
-        if (SCENE_PAGES_USED == 3u || page == 2u) return texelFetch(pages[2], j);                   \
-        if (SCENE_PAGES_USED == 4u || page == 3u) return texelFetch(pages[3], j);                   \
-        if (SCENE_PAGES_USED == 5u || page == 4u) return texelFetch(pages[4], j);                   \
-        if (SCENE_PAGES_USED == 6u || page == 5u) return texelFetch(pages[5], j);                   \
-        if (SCENE_PAGES_USED == 7u || page == 6u) return texelFetch(pages[6], j);                   \
-        return texelFetch(pages[7], j);                                                             \
+        uvec4 t;                                                                                    \
+        if (SCENE_PAGES_USED <= 1u) {                                                               \
+            t = texelFetch(pages[0], int(i));                                                       \
+        } else {                                                                                    \
+            uint page = i >> (log2);                                                                \
+            int j = int(i & ((1u << (log2)) - 1u));                                                 \
+            if (page == 0u) t = texelFetch(pages[0], j);                                            \
+            else if (SCENE_PAGES_USED == 2u || page == 1u) t = texelFetch(pages[1], j);             \
+            else if (SCENE_PAGES_USED == 3u || page == 2u) t = texelFetch(pages[2], j);             \
+            else if (SCENE_PAGES_USED == 4u || page == 3u) t = texelFetch(pages[3], j);             \
+            else if (SCENE_PAGES_USED == 5u || page == 4u) t = texelFetch(pages[4], j);             \
+            else if (SCENE_PAGES_USED == 6u || page == 5u) t = texelFetch(pages[5], j);             \
+            else if (SCENE_PAGES_USED == 7u || page == 6u) t = texelFetch(pages[6], j);             \
+            else t = texelFetch(pages[7], j);                                                       \
+        }                                                                                           \
+        return t;                                                                                   \
     }
 // The chain above has a case per page: a different SCENE_PAGES makes this array's size negative.
 const uint SCENE_PAGES_CHECK[SCENE_PAGES == 8u ? 1 : -1] = uint[1](0u);

@@ -849,7 +849,12 @@ fn mitsuba_property(r: &mut Rng) -> String {
     let tag = *r.pick(&words("float integer boolean string rgb srgb spectrum point vector"));
     let key = *r.pick(&words(NAMES));
     if tag == "point" || tag == "vector" {
-        return format!("<{tag} name=\"{key}\" x=\"{}\" y=\"{}\" z=\"{}\"/>", mitsuba_value(r), mitsuba_value(r), mitsuba_value(r));
+        return format!(
+            "<{tag} name=\"{key}\" x=\"{}\" y=\"{}\" z=\"{}\"/>",
+            mitsuba_value(r),
+            mitsuba_value(r),
+            mitsuba_value(r)
+        );
     }
     format!("<{tag} name=\"{key}\" value=\"{}\"/>", mitsuba_value(r))
 }
@@ -878,8 +883,10 @@ fn mitsuba_transform(r: &mut Rng, name: &str) -> String {
 fn mitsuba_plugin(r: &mut Rng, tag: &str, depth: usize) -> String {
     let kinds = match tag {
         "shape" => "obj ply rectangle disk cube sphere cylinder serialized hair",
-        "bsdf" => "diffuse roughdiffuse conductor roughconductor dielectric thindielectric roughdielectric plastic \
-            roughplastic twosided mask bumpmap normalmap blendbsdf mixturebsdf null principled",
+        "bsdf" => {
+            "diffuse roughdiffuse conductor roughconductor dielectric thindielectric roughdielectric plastic \
+            roughplastic twosided mask bumpmap normalmap blendbsdf mixturebsdf null principled"
+        }
         "texture" => "bitmap checkerboard scale noise",
         "emitter" => "area point spot directional envmap constant sunsky projector",
         "medium" => "homogeneous heterogeneous",
@@ -887,7 +894,11 @@ fn mitsuba_plugin(r: &mut Rng, tag: &str, depth: usize) -> String {
     };
     let kind = *r.pick(&words(kinds));
     let id = if r.chance(30) { format!(" id=\"{}\"", r.pick(&words("a b c"))) } else { String::new() };
-    let named = if r.chance(30) { format!(" name=\"{}\"", r.pick(&words("reflectance opacity interior exterior weight"))) } else { String::new() };
+    let named = if r.chance(30) {
+        format!(" name=\"{}\"", r.pick(&words("reflectance opacity interior exterior weight")))
+    } else {
+        String::new()
+    };
     let mut s = format!("<{tag} type=\"{kind}\"{id}{named}>");
     for _ in 0..r.below(5) {
         s.push_str(&mitsuba_property(r));
@@ -1110,7 +1121,12 @@ fn fuzz_scene_parser() {
 #[test]
 fn fuzz_mitsuba_front_end() {
     let seeds: Vec<Vec<u8>> = std::fs::read_dir(repo("tests/fuzz_corpus/mitsuba"))
-        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "xml")).collect::<Vec<_>>())
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .map(|e| e.path())
+                .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+                .collect::<Vec<_>>()
+        })
         .unwrap_or_default()
         .iter()
         .map(|p| std::fs::read(p).unwrap())

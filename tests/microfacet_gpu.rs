@@ -143,7 +143,9 @@ fn inputs(n: u32) -> Vec<f32> {
             1 => (1.0, -1.0),
             _ => (1.0, table_at as f32),
         };
-        out.extend_from_slice(&[eta.x, eta.y, eta.z, k.x, k.y, k.z, diffuse.x, diffuse.y, diffuse.z, nonlinear, table, 0.0]);
+        out.extend_from_slice(&[
+            eta.x, eta.y, eta.z, k.x, k.y, k.z, diffuse.x, diffuse.y, diffuse.z, nonlinear, table, 0.0,
+        ]);
     }
     for t in &tables {
         out.extend(t.iter().map(|&w| f32::from_bits(w)));

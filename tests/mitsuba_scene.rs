@@ -199,8 +199,10 @@ fn a_mesh_whose_faces_all_have_zero_area_is_left_out_with_a_warning() {
     let obj = b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
     let good = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
     let (dir, path) = write(
-        &scene3(r#"<shape type="obj"><string name="filename" value="flat.obj"/></shape>
-    <shape type="obj"><string name="filename" value="good.obj"/><boolean name="face_normals" value="true"/></shape>"#),
+        &scene3(
+            r#"<shape type="obj"><string name="filename" value="flat.obj"/></shape>
+    <shape type="obj"><string name="filename" value="good.obj"/><boolean name="face_normals" value="true"/></shape>"#,
+        ),
         &[("flat.obj", obj), ("good.obj", good)],
     );
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -218,17 +220,22 @@ fn serialized_meshes_are_read_by_shape_index() {
     let quad = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
     let bytes = write_serialized(&[(&tri, &[[0, 1, 2]]), (&quad, &[[0, 1, 2], [0, 2, 3]])]);
     let (dir, path) = write(
-        &scene3(r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="1"/></shape>
-    <shape type="serialized"><string name="filename" value="m.serialized"/></shape>"#),
+        &scene3(
+            r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="1"/></shape>
+    <shape type="serialized"><string name="filename" value="m.serialized"/></shape>"#,
+        ),
         &[("m.serialized", &bytes)],
     );
     let scene = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
     // Shape 1 (two triangles), then shape 0 (one).
     assert_eq!(triangles(&scene).len(), 3);
-    let e = error_of(&scene3(r#"<shape type="serialized"><string name="filename" value="missing.serialized"/></shape>"#));
+    let e =
+        error_of(&scene3(r#"<shape type="serialized"><string name="filename" value="missing.serialized"/></shape>"#));
     assert!(e.contains("missing.serialized"), "{e}");
     let (dir2, path2) = write(
-        &scene3(r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="2"/></shape>"#),
+        &scene3(
+            r#"<shape type="serialized"><string name="filename" value="m.serialized"/><integer name="shape_index" value="2"/></shape>"#,
+        ),
         &[("m.serialized", &bytes)],
     );
     let e = load_scene(&path2).map(|_| ()).unwrap_err().to_string();
@@ -390,7 +397,20 @@ fn the_image_is_not_mirrored() {
     let (dir, path) = write(xml, &[]);
     let out = dir.path().join("o.exr");
     let run = common::photonix(
-        &["render", path.to_str().unwrap(), "-o", out.to_str().unwrap(), "--backend", "cpu", "--spp", "4", "--passes", "1", "--integrator", "pt"],
+        &[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--spp",
+            "4",
+            "--passes",
+            "1",
+            "--integrator",
+            "pt",
+        ],
         dir.path(),
     );
     assert!(run.status.success(), "{}", common::stderr(&run));
@@ -439,7 +459,8 @@ fn conventions_scene_matches_mitsubas_render_of_the_same_file() {
     );
     assert!(run.status.success(), "{}", common::stderr(&run));
     let ours = photonix::io::image::read_exr(&out).unwrap();
-    let theirs = photonix::io::image::read_exr(&common::repo_path("tests/references/mitsuba/xml-conventions.exr")).unwrap();
+    let theirs =
+        photonix::io::image::read_exr(&common::repo_path("tests/references/mitsuba/xml-conventions.exr")).unwrap();
     let error = photonix::io::metrics::rel_mse(&ours, &theirs);
     let ratio = photonix::io::metrics::mean_ratio(&ours, &theirs);
     println!("conventions: relMSE {error:.2e}, mean ratio {ratio:.4?}");

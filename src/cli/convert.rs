@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 
 use photonix::io::image::{same_file, write_atomically};
-use photonix::scene::{gltf_scene, mitsuba};
 use photonix::scene::pov::{is_pov_path, load_pov, translate_file, PovOptions};
+use photonix::scene::{gltf_scene, mitsuba};
 
 #[derive(clap::Args)]
 pub struct ConvertArgs {

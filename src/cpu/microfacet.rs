@@ -537,14 +537,7 @@ pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> 
 /// `u.x` picks the coat (probability p_coat, see [`plastic_pdf`]) or the base; `u.yz` draws a
 /// visible normal or a cosine direction. The weight counts both lobes (f and pdf of the mixture),
 /// except for a smooth coat's delta, whose weight is F(wo.z) / p_coat.
-pub fn plastic_sample(
-    wo: Vec3,
-    alpha: Vec2,
-    ior: f32,
-    diffuse: Vec3,
-    coat: &PlasticCoat,
-    u: Vec3,
-) -> Option<MfSample> {
+pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &PlasticCoat, u: Vec3) -> Option<MfSample> {
     if wo.z <= 0.0 {
         return None;
     }
@@ -1074,7 +1067,9 @@ mod tests {
             for wo in viewers() {
                 cases.push((
                     name(alpha, wo),
-                    Box::new(move |u: Vec3| plastic_sample(wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR, u).map(|s| s.wi)),
+                    Box::new(move |u: Vec3| {
+                        plastic_sample(wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR, u).map(|s| s.wi)
+                    }),
                     Box::new(move |wi| plastic_pdf(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE)),
                 ));
             }
@@ -1419,8 +1414,18 @@ mod tests {
         for (w, &wo) in wos.iter().enumerate() {
             let (f_o, _) = mf_fresnel_dielectric(wo.z, 1.0, 1.5);
             for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
-                let (a, se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &PlasticCoat::LINEAR, u), 1.0);
-                let (coat, coat_se) = albedo(70 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ZERO, &PlasticCoat::LINEAR, u), 1.0);
+                let (a, se) = albedo(
+                    70 + w as u32,
+                    N,
+                    &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &PlasticCoat::LINEAR, u),
+                    1.0,
+                );
+                let (coat, coat_se) = albedo(
+                    70 + w as u32,
+                    N,
+                    &|u| plastic_sample(wo, alpha, 1.5, Vec3::ZERO, &PlasticCoat::LINEAR, u),
+                    1.0,
+                );
                 println!(
                     "plastic {}: white base {:.4} ± {:.4}; coat alone {:.4} ± {:.4} vs F(wo.z) {f_o:.4}",
                     name(alpha, wo),

@@ -47,7 +47,9 @@ use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittanc
 use super::render_pt::path_layer;
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4, sequence_point};
 use super::shading::{
-    camera_ray, film_offset, filter_radius, filter_weight, grid_sample, lens_offset, lens_sample, offset_origin, ray_skip};
+    camera_ray, film_offset, filter_radius, filter_weight, grid_sample, lens_offset, lens_sample, offset_origin,
+    ray_skip,
+};
 use super::shape::{shape_hit, Hit};
 use super::trace::trace_ray;
 use super::SceneView;
@@ -900,8 +902,7 @@ pub fn trace_light_path(
                     dim: RNG_VCM_LIGHT_TRANSMITTANCE_DOMAIN + k * (MEDIUM_CROSSINGS + 1),
                 };
                 let at = VertexMedium { prim, medium };
-                if let Some((film, v)) =
-                    connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
+                if let Some((film, v)) = connect_to_camera(s, p, &h, &b, wo, &sub, skip, at, lens_u, numbers, &mut rays)
                 {
                     let layer = path_layer(false, diffuse + 1, specular_first);
                     for (pixel, w) in film_footprint(f, film) {

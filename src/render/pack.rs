@@ -6,8 +6,8 @@ use std::collections::HashMap;
 
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
-use crate::layout::constants::*;
 use super::plastic_coat::plastic_coat_table;
+use crate::layout::constants::*;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{

@@ -24,7 +24,8 @@ pub fn plastic_coat_table(alpha: f32, ior: f32) -> Option<Vec<u32>> {
     // Mitsuba's grid: the cosine 0 moved to 1e-6, so the direction stays above the surface.
     let mu = |i: usize| (i as f32 / (n - 1) as f32).max(1e-6);
     let (outside, inside) = (gauss_legendre(32), gauss_legendre(128));
-    let transmittance: Vec<f32> = (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, ior, &outside, true)).collect();
+    let transmittance: Vec<f32> =
+        (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, ior, &outside, true)).collect();
     // 2 mean(R(mu) mu) over the same grid: Mitsuba's mean, not a quadrature rule in mu.
     let internal: f32 =
         (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, 1.0 / ior, &inside, false) * mu(i)).sum::<f32>()

@@ -131,7 +131,9 @@ impl KernelVariant {
             self.noise as u32,
             self.emission_textures as u32,
             self.material_kinds,
-            self.pages,
+            // A default variant (no scene yet) reads one page, as every kernel made without
+            // constants does.
+            self.pages.max(1),
             self.page_words_log2,
         ]
     }

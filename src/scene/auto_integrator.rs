@@ -80,9 +80,7 @@ fn glossy_path_lobe(kind: &MaterialKind, threshold: f32) -> bool {
         | MaterialKind::Mirror { .. }
         | MaterialKind::ThinDielectric { .. }
         | MaterialKind::Mix { .. }
-        | MaterialKind::Null => {
-            false
-        }
+        | MaterialKind::Null => false,
     }
 }
 

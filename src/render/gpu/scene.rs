@@ -238,7 +238,7 @@ impl DeviceScene {
             kept += 1;
         }
         let old = |f: fn(&SceneBuffers) -> &[u8]| previous.map(|(b, _)| f(b));
-        let arrays: [(&mut PagedArray, &'static str, fn(&SceneBuffers) -> &[u8]); 8] = [
+        let arrays: [(&mut PagedArray, &'static str, ArrayOf); 8] = [
             (&mut self.nodes, "nodes", |b| bytes_of(&b.nodes)),
             (&mut self.primitives, "primitives", |b| bytes_of(&b.primitives)),
             (&mut self.materials, "materials", |b| bytes_of(&b.materials)),
@@ -271,6 +271,9 @@ impl DeviceScene {
             .collect()
     }
 }
+
+/// Where an array's bytes are in a `SceneBuffers`.
+type ArrayOf = fn(&SceneBuffers) -> &[u8];
 
 fn bytes_of<T: bytemuck::Pod>(data: &[T]) -> &[u8] {
     bytemuck::cast_slice(data)

@@ -450,13 +450,12 @@ impl Builder<'_> {
         let id = match roughness {
             Some(roughness) if metallic => {
                 let (eta, k) = metal_eta_k(m.base_color);
-                let conductor =
-                    MaterialKind::Conductor {
-                        eta: ColorParam::constant(eta),
-                        k: ColorParam::constant(k),
-                        roughness,
-                        tint: ColorParam::constant(Vec3::ONE),
-                    };
+                let conductor = MaterialKind::Conductor {
+                    eta: ColorParam::constant(eta),
+                    k: ColorParam::constant(k),
+                    roughness,
+                    tint: ColorParam::constant(Vec3::ONE),
+                };
                 if m.metallic >= 1.0 && metal_tex.is_none() {
                     self.add_material(name_opaque, finish(conductor))
                 } else {

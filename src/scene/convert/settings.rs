@@ -54,7 +54,8 @@ impl Builder<'_> {
         if let Some(name) = &r.filter {
             let names: Vec<&str> = Filter::NAMES.iter().map(|(n, _)| *n).collect();
             let name = self.one_of(name, object, "filter", &names)?;
-            settings.filter = Filter::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
+            settings.filter =
+                Filter::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
         }
         Ok((settings, auto))
     }

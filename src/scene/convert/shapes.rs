@@ -429,9 +429,11 @@ impl Builder<'_> {
 impl Builder<'_> {
     /// `transform.matrix`: 16 numbers, row by row, an affine map whose last row is 0 0 0 1.
     fn matrix_transform(&self, m: &Spanned<Vec<f64>>, t: &TransformDef, object: &str) -> Result<Affine3A> {
-        let others = [("scale", t.scale.is_some()), ("rotate", t.rotate.is_some()), ("translate", t.translate.is_some())];
+        let others =
+            [("scale", t.scale.is_some()), ("rotate", t.rotate.is_some()), ("translate", t.translate.is_some())];
         if let Some((name, _)) = others.iter().find(|(_, given)| *given) {
-            let message = format!("`transform.matrix` is the whole transform; drop `{name}` or fold it into the matrix");
+            let message =
+                format!("`transform.matrix` is the whole transform; drop `{name}` or fold it into the matrix");
             return Err(self.invalid(&m.span(), object, message));
         }
         let v = m.get_ref();

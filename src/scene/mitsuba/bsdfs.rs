@@ -49,7 +49,13 @@ pub(crate) struct Material {
 impl<'a> Translator<'a> {
     /// The name of the material for `bsdf` (an element or a `<ref>`), writing it on first use;
     /// `emission` (TOML text) makes a copy that glows.
-    pub(crate) fn material_name(&mut self, bsdf: Option<&'a Element>, uv: Uv, emission: Option<&str>, at: Pos) -> Result<String> {
+    pub(crate) fn material_name(
+        &mut self,
+        bsdf: Option<&'a Element>,
+        uv: Uv,
+        emission: Option<&str>,
+        at: Pos,
+    ) -> Result<String> {
         let Some(bsdf) = bsdf else {
             return Ok(match emission {
                 None => self.default_material(at),
@@ -71,11 +77,17 @@ impl<'a> Translator<'a> {
             return Ok(name.clone());
         }
         let mut m = self.bsdf(el, uv)?;
-        let base = el.attr("id").map(str::to_string).unwrap_or_else(|| format!("{} line {}", el.attr("type").unwrap_or("bsdf"), el.pos.line));
+        let base = el
+            .attr("id")
+            .map(str::to_string)
+            .unwrap_or_else(|| format!("{} line {}", el.attr("type").unwrap_or("bsdf"), el.pos.line));
         let base = if emission.is_some() { format!("{base} (emitter)") } else { base };
         if let Some(e) = emission {
             if matches!(m.kind, "mix" | "null") {
-                self.warn(el.pos, format!("an area emitter on a `{}` material glows over a black diffuse surface", m.kind));
+                self.warn(
+                    el.pos,
+                    format!("an area emitter on a `{}` material glows over a black diffuse surface", m.kind),
+                );
                 m = Material { kind: "diffuse", fields: vec![("reflectance".into(), "0".into())], two_sided: true };
             }
             field(&mut m.fields, "emission", e.to_string());
@@ -110,7 +122,7 @@ impl<'a> Translator<'a> {
             "diffuse" | "roughdiffuse" => {
                 if p.kind == "roughdiffuse" {
                     self.warn(el.pos, "`roughdiffuse` (Oren-Nayar) is rendered as `diffuse` (Lambertian)".into());
-                    let _ = p.scalar_prop_quiet(&["alpha", "use_fast_approx"]);
+                    p.scalar_prop_quiet(&["alpha", "use_fast_approx"]);
                 }
                 let r = self.color(&p, "reflectance", uv)?.unwrap_or(Param::Constant([0.5; 3]));
                 m.fields.push(("reflectance".into(), r.toml()));
@@ -123,7 +135,10 @@ impl<'a> Translator<'a> {
                 let inner = self.nested_plugins(&p, "bsdf")?;
                 let Some(&first) = inner.first() else { return Err(p.error(el.pos, "needs a nested <bsdf>".into())) };
                 if inner.len() > 1 {
-                    self.warn(inner[1].pos, "a second (back-face) BSDF is not supported; both faces use the first".into());
+                    self.warn(
+                        inner[1].pos,
+                        "a second (back-face) BSDF is not supported; both faces use the first".into(),
+                    );
                 }
                 let first = self.resolve(first, "bsdf")?;
                 m = self.bsdf(first, uv)?;
@@ -150,7 +165,9 @@ impl<'a> Translator<'a> {
             "normalmap" => {
                 let textures = p.plugins("texture", Some("normalmap"));
                 let textures = if textures.is_empty() { self.nested_plugins(&p, "texture")? } else { textures };
-                let Some(&t) = textures.first() else { return Err(p.error(el.pos, "needs a `normalmap` <texture>".into())) };
+                let Some(&t) = textures.first() else {
+                    return Err(p.error(el.pos, "needs a `normalmap` <texture>".into()));
+                };
                 let t = self.resolve(t, "texture")?;
                 let Param::Texture(tex) = self.texture(t, uv, false)? else {
                     return Err(p.error(el.pos, "the normal map must be a bitmap texture".into()));
@@ -167,7 +184,13 @@ impl<'a> Translator<'a> {
             }
             "mixturebsdf" => m = self.mixture(&p, uv)?,
             other => {
-                self.warn(el.pos, format!("the `{}` BSDF is not supported; it is rendered as a grey diffuse (0.5)", crate::limits::printable(other)));
+                self.warn(
+                    el.pos,
+                    format!(
+                        "the `{}` BSDF is not supported; it is rendered as a grey diffuse (0.5)",
+                        crate::limits::printable(other)
+                    ),
+                );
                 m.fields.push(("reflectance".into(), "0.5".into()));
                 return Ok(m);
             }
@@ -237,12 +260,23 @@ impl<'a> Translator<'a> {
             (None, None, None) => num(0.1),
         };
         m.fields.push(("roughness".into(), value));
-        let (dist, at) = p.string("distribution")?.map_or((default_distribution.to_string(), p.pos()), |(d, at)| (d.to_string(), at));
+        let (dist, at) = p
+            .string("distribution")?
+            .map_or((default_distribution.to_string(), p.pos()), |(d, at)| (d.to_string(), at));
         match dist.as_str() {
             "ggx" => {}
-            "beckmann" | "phong" | "as" if RENDERER_HAS_MITSUBA_MATERIALS => m.fields.push(("distribution".into(), string("beckmann"))),
-            "beckmann" | "phong" | "as" => self.warn(at, format!("the `{dist}` microfacet distribution is rendered as GGX of the same alpha")),
-            other => return Err(p.error(at, format!("`distribution` \"{}\": give ggx or beckmann", crate::limits::printable(other)))),
+            "beckmann" | "phong" | "as" if RENDERER_HAS_MITSUBA_MATERIALS => {
+                m.fields.push(("distribution".into(), string("beckmann")))
+            }
+            "beckmann" | "phong" | "as" => {
+                self.warn(at, format!("the `{dist}` microfacet distribution is rendered as GGX of the same alpha"))
+            }
+            other => {
+                return Err(p.error(
+                    at,
+                    format!("`distribution` \"{}\": give ggx or beckmann", crate::limits::printable(other)),
+                ))
+            }
         }
         Ok(())
     }
@@ -259,14 +293,28 @@ impl<'a> Translator<'a> {
                 m.fields.push(("k".into(), k.toml()));
             }
             (eta @ Some(_), None, _) | (eta @ None, Some(_), _) => {
-                return Err(p.error(p.pos(), format!("gives `{}` without `{}`; give both", if eta.is_some() { "eta" } else { "k" }, if eta.is_some() { "k" } else { "eta" })));
+                return Err(p.error(
+                    p.pos(),
+                    format!(
+                        "gives `{}` without `{}`; give both",
+                        if eta.is_some() { "eta" } else { "k" },
+                        if eta.is_some() { "k" } else { "eta" }
+                    ),
+                ));
             }
             (None, None, Some(("none", _))) => {}
             (None, None, Some((name, at))) => match METALS.iter().find(|(n, _)| n.eq_ignore_ascii_case(name)) {
                 Some((_, preset)) => m.fields.push(("preset".into(), string(preset))),
                 None => {
                     let known: Vec<&str> = METALS.iter().map(|(n, _)| *n).collect();
-                    return Err(p.error(at, format!("the metal \"{}\" is not one Photonix knows ({}, none); give its `eta` and `k`", crate::limits::printable(name), known.join(", "))));
+                    return Err(p.error(
+                        at,
+                        format!(
+                            "the metal \"{}\" is not one Photonix knows ({}, none); give its `eta` and `k`",
+                            crate::limits::printable(name),
+                            known.join(", ")
+                        ),
+                    ));
                 }
             },
             // Mitsuba 3's default is a perfect mirror ("none"), Mitsuba 0.5's copper.
@@ -301,7 +349,13 @@ impl<'a> Translator<'a> {
             return Ok(x);
         }
         IOR_NAMES.iter().find(|(n, _)| n.eq_ignore_ascii_case(v.trim())).map(|(_, x)| *x).ok_or_else(|| {
-            p.error(e.pos, format!("`{name}` = \"{}\" is not a positive number or a material Mitsuba names (bk7, water, air, ...)", crate::limits::printable(v)))
+            p.error(
+                e.pos,
+                format!(
+                    "`{name}` = \"{}\" is not a positive number or a material Mitsuba names (bk7, water, air, ...)",
+                    crate::limits::printable(v)
+                ),
+            )
         })
     }
 
@@ -313,7 +367,10 @@ impl<'a> Translator<'a> {
             if RENDERER_HAS_MITSUBA_MATERIALS {
                 m.kind = "thin_dielectric";
             } else {
-                self.warn(p.pos(), "`thindielectric` is rendered as a solid `dielectric` (Photonix has no thin dielectric yet)".into());
+                self.warn(
+                    p.pos(),
+                    "`thindielectric` is rendered as a solid `dielectric` (Photonix has no thin dielectric yet)".into(),
+                );
             }
         }
         m.fields.push(("ior".into(), num(ior)));
@@ -343,7 +400,10 @@ impl<'a> Translator<'a> {
             if RENDERER_HAS_MITSUBA_MATERIALS {
                 m.fields.push(("nonlinear".into(), "true".into()));
             } else {
-                self.warn(p.pos(), "`nonlinear` plastic is rendered linear (Photonix has no nonlinear plastic yet): brighter".into());
+                self.warn(
+                    p.pos(),
+                    "`nonlinear` plastic is rendered linear (Photonix has no nonlinear plastic yet): brighter".into(),
+                );
             }
         }
         if let Some(c) = self.color(p, "specular_reflectance", uv)? {
@@ -363,4 +423,3 @@ impl Plugin<'_> {
         }
     }
 }
-

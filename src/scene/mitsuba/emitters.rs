@@ -149,7 +149,10 @@ impl<'a> Translator<'a> {
         let sky_scale = p.float_or("sky_scale", 1.0)? * scale;
         let sun_scale = p.float_or("sun_scale", 1.0)? * scale;
         if (sky_scale - sun_scale).abs() > 1e-9 * sky_scale.abs().max(1.0) {
-            self.warn(p.pos(), format!("`sun_scale` ({sun_scale}) differs from `sky_scale` ({sky_scale}); both use `sky_scale`"));
+            self.warn(
+                p.pos(),
+                format!("`sun_scale` ({sun_scale}) differs from `sky_scale` ({sky_scale}); both use `sky_scale`"),
+            );
         }
         if sky_scale != 1.0 {
             fields.push(("strength".into(), num(sky_scale)));
@@ -174,7 +177,10 @@ impl<'a> Translator<'a> {
             fields.push(("latitude".into(), num(lat)));
             fields.push(("longitude".into(), num(lon)));
             fields.push(("date".into(), string(&format!("{year:04}-{month:02}-{day:02}"))));
-            fields.push(("time".into(), string(&format!("{:02}:{:02}:{:02}", seconds / 3600, seconds / 60 % 60, seconds % 60))));
+            fields.push((
+                "time".into(),
+                string(&format!("{:02}:{:02}:{:02}", seconds / 3600, seconds / 60 % 60, seconds % 60)),
+            ));
             fields.push(("utc_offset".into(), num(tz)));
         }
         self.finish(p);

@@ -15,7 +15,9 @@ impl<'a> Translator<'a> {
         }
         let p = Plugin::new(el);
         if p.kind != "homogeneous" {
-            return Err(p.error(el.pos, "Photonix reads `homogeneous` media (heterogeneous grids are not translated)".into()));
+            return Err(
+                p.error(el.pos, "Photonix reads `homogeneous` media (heterogeneous grids are not translated)".into())
+            );
         }
         let scale = p.float_or("scale", 1.0)?;
         let constant = |this: &mut Self, name: &str| -> Result<Option<[f64; 3]>> {
@@ -53,7 +55,10 @@ impl<'a> Translator<'a> {
                     fields.push(("phase".into(), string("henyey-greenstein")));
                     fields.push(("g".into(), num(phase.float_or("g", 0.8)?)));
                 }
-                other => self.warn(ph.pos, format!("the `{}` phase function is rendered isotropic", crate::limits::printable(other))),
+                other => self.warn(
+                    ph.pos,
+                    format!("the `{}` phase function is rendered isotropic", crate::limits::printable(other)),
+                ),
             }
             self.finish(&phase);
         }

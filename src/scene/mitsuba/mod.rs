@@ -183,7 +183,8 @@ impl<'a> Translator<'a> {
     fn new(root: &'a Element, files: &'a [PathBuf]) -> Translator<'a> {
         let mut ids = HashMap::new();
         collect_ids(root, &mut ids);
-        let legacy = root.attr("version").and_then(|v| v.split('.').next()?.trim().parse::<u32>().ok()).is_some_and(|m| m < 3);
+        let legacy =
+            root.attr("version").and_then(|v| v.split('.').next()?.trim().parse::<u32>().ok()).is_some_and(|m| m < 3);
         Translator {
             files,
             ids,
@@ -233,12 +234,19 @@ impl<'a> Translator<'a> {
                 .filter(|(d, _)| *d <= 3)
                 .map(|(_, k)| format!(" (did you mean \"{}\"?)", crate::limits::printable(k)))
                 .unwrap_or_default();
-            return Err(MitsubaError::at(e.pos, format!("<ref id=\"{}\">: no element has this id{hint}", crate::limits::printable(id))));
+            return Err(MitsubaError::at(
+                e.pos,
+                format!("<ref id=\"{}\">: no element has this id{hint}", crate::limits::printable(id)),
+            ));
         };
         if target.tag != tag {
             return Err(MitsubaError::at(
                 e.pos,
-                format!("<ref id=\"{}\"> names a <{}>; a <{tag}> is needed here", crate::limits::printable(id), target.tag),
+                format!(
+                    "<ref id=\"{}\"> names a <{}>; a <{tag}> is needed here",
+                    crate::limits::printable(id),
+                    target.tag
+                ),
             ));
         }
         Ok(target)
@@ -283,7 +291,9 @@ impl<'a> Translator<'a> {
             &mut self.out.text,
             format_args!(
                 "{HEADER} {} by Photonix (docs/mitsuba.md).\n\n",
-                crate::limits::printable(&self.files[0].file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default())
+                crate::limits::printable(
+                    &self.files[0].file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default()
+                )
             ),
         );
         // The sensor first: [camera] and [render] lead the file.
@@ -304,7 +314,10 @@ impl<'a> Translator<'a> {
                         self.warn(child.pos, format!("<{}> without an `id` is never used; it is ignored", child.tag));
                     }
                 }
-                other => self.warn(child.pos, format!("<{}> is not read by Photonix and is ignored", crate::limits::printable(other))),
+                other => self.warn(
+                    child.pos,
+                    format!("<{}> is not read by Photonix and is ignored", crate::limits::printable(other)),
+                ),
             }
         }
         if !self.one_sided.is_empty() {

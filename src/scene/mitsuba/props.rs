@@ -10,8 +10,21 @@ use super::{MitsubaError, Pos};
 type Result<T> = std::result::Result<T, MitsubaError>;
 
 /// Tags of nested plugins (the rest of a plugin's children are properties).
-pub const PLUGIN_TAGS: &[&str] =
-    &["bsdf", "texture", "emitter", "medium", "phase", "rfilter", "film", "sampler", "shape", "sensor", "integrator", "ref", "volume"];
+pub const PLUGIN_TAGS: &[&str] = &[
+    "bsdf",
+    "texture",
+    "emitter",
+    "medium",
+    "phase",
+    "rfilter",
+    "film",
+    "sampler",
+    "shape",
+    "sensor",
+    "integrator",
+    "ref",
+    "volume",
+];
 
 /// Properties Mitsuba 0.5 files carry that change nothing Photonix renders (film and output
 /// settings, quality knobs of Mitsuba's own), read quietly.
@@ -59,7 +72,11 @@ pub struct Plugin<'a> {
 
 impl<'a> Plugin<'a> {
     pub fn new(el: &'a Element) -> Plugin<'a> {
-        Plugin { el, kind: el.attr("type").unwrap_or("").to_string(), used: RefCell::new(vec![false; el.children.len()]) }
+        Plugin {
+            el,
+            kind: el.attr("type").unwrap_or("").to_string(),
+            used: RefCell::new(vec![false; el.children.len()]),
+        }
     }
 
     pub fn pos(&self) -> Pos {
@@ -117,7 +134,9 @@ impl<'a> Plugin<'a> {
             return Err(self.error(p.pos, format!("`{name}` is a <{}>; give a <float>", p.tag)));
         }
         let v = value(p)?;
-        parse_number(v).map(Some).ok_or_else(|| self.error(p.pos, format!("`{name}` = \"{}\" is not a finite number", crate::limits::printable(v))))
+        parse_number(v).map(Some).ok_or_else(|| {
+            self.error(p.pos, format!("`{name}` = \"{}\" is not a finite number", crate::limits::printable(v)))
+        })
     }
 
     pub fn float_or(&self, name: &str, default: f64) -> Result<f64> {
@@ -127,7 +146,10 @@ impl<'a> Plugin<'a> {
     pub fn integer(&self, name: &str) -> Result<Option<i64>> {
         let Some(p) = self.prop(name) else { return Ok(None) };
         let v = value(p)?;
-        v.trim().parse::<i64>().map(Some).map_err(|_| self.error(p.pos, format!("`{name}` = \"{}\" is not an integer", crate::limits::printable(v))))
+        v.trim()
+            .parse::<i64>()
+            .map(Some)
+            .map_err(|_| self.error(p.pos, format!("`{name}` = \"{}\" is not an integer", crate::limits::printable(v))))
     }
 
     pub fn boolean(&self, name: &str) -> Result<Option<bool>> {
@@ -160,8 +182,13 @@ impl<'a> Plugin<'a> {
             if QUIET.contains(&name.as_str()) {
                 continue;
             }
-            let what = if name.is_empty() { format!("<{}>", c.tag) } else { format!("`{}`", crate::limits::printable(&name)) };
-            warnings.push(format!("{}: {}: {what} is not read by Photonix and is ignored", location(c.pos), self.what()));
+            let what =
+                if name.is_empty() { format!("<{}>", c.tag) } else { format!("`{}`", crate::limits::printable(&name)) };
+            warnings.push(format!(
+                "{}: {}: {what} is not read by Photonix and is ignored",
+                location(c.pos),
+                self.what()
+            ));
         }
     }
 }
@@ -186,14 +213,20 @@ pub fn xyz(p: &Element, default: f64) -> Result<[f64; 3]> {
         return match numbers(v).as_deref() {
             Some([a]) => Ok([*a; 3]),
             Some([a, b, c]) => Ok([*a, *b, *c]),
-            _ => Err(MitsubaError::at(p.pos, format!("<{}>: `value` = \"{}\": give 3 numbers", p.tag, crate::limits::printable(v)))),
+            _ => Err(MitsubaError::at(
+                p.pos,
+                format!("<{}>: `value` = \"{}\": give 3 numbers", p.tag, crate::limits::printable(v)),
+            )),
         };
     }
     let mut out = [default; 3];
     for (k, axis) in ["x", "y", "z"].iter().enumerate() {
         if let Some(s) = p.attr(axis) {
             out[k] = parse_number(s).ok_or_else(|| {
-                MitsubaError::at(p.pos, format!("<{}>: `{axis}` = \"{}\" is not a finite number", p.tag, crate::limits::printable(s)))
+                MitsubaError::at(
+                    p.pos,
+                    format!("<{}>: `{axis}` = \"{}\" is not a finite number", p.tag, crate::limits::printable(s)),
+                )
             })?;
         }
     }

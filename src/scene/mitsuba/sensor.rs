@@ -14,7 +14,12 @@ const DEFAULT_SIZE: (i64, i64) = (768, 576);
 const FILM_DIAGONAL_MM: f64 = 43.266_615_305_567_87;
 
 impl<'a> Translator<'a> {
-    pub(crate) fn sensor(&mut self, sensor: Option<&'a Element>, integrator: Option<&'a Element>, scene_pos: Pos) -> Result<()> {
+    pub(crate) fn sensor(
+        &mut self,
+        sensor: Option<&'a Element>,
+        integrator: Option<&'a Element>,
+        scene_pos: Pos,
+    ) -> Result<()> {
         let mut camera = Fields::new();
         let mut render = Fields::new();
         let pos = sensor.map_or(scene_pos, |s| s.pos);
@@ -101,7 +106,10 @@ impl<'a> Translator<'a> {
         let dir = world_from_camera.transform_vector3(DVec3::Z).normalize_or_zero();
         let up = world_from_camera.transform_vector3(DVec3::Y).normalize_or_zero();
         if dir == DVec3::ZERO || up == DVec3::ZERO || dir.cross(up).length() < 1e-6 {
-            return Err(MitsubaError::at(pos, "the sensor's `to_world` is degenerate (no view direction or up)".into()));
+            return Err(MitsubaError::at(
+                pos,
+                "the sensor's `to_world` is degenerate (no view direction or up)".into(),
+            ));
         }
         if glam::DMat3::from_mat4(world_from_camera).determinant() < 0.0 {
             self.warn(pos, "the sensor's `to_world` mirrors the image; Photonix renders it unmirrored".into());
@@ -119,7 +127,10 @@ impl<'a> Translator<'a> {
             other => {
                 return Err(MitsubaError::at(
                     pos,
-                    format!("`fov_axis` = \"{}\": give x, y, diagonal, smaller or larger", crate::limits::printable(other)),
+                    format!(
+                        "`fov_axis` = \"{}\": give x, y, diagonal, smaller or larger",
+                        crate::limits::printable(other)
+                    ),
                 ))
             }
         };
@@ -183,7 +194,13 @@ impl<'a> Translator<'a> {
         let ours = match kind.as_str() {
             "box" | "tent" | "gaussian" => kind.clone(),
             other => {
-                self.warn(pos, format!("the `{}` reconstruction filter is rendered as a Gaussian", crate::limits::printable(other)));
+                self.warn(
+                    pos,
+                    format!(
+                        "the `{}` reconstruction filter is rendered as a Gaussian",
+                        crate::limits::printable(other)
+                    ),
+                );
                 "gaussian".into()
             }
         };

@@ -109,7 +109,10 @@ impl<'a> Translator<'a> {
                     let name = self.medium(target)?;
                     match side.as_str() {
                         "interior" | "exterior" => fields.push((side, string(&name))),
-                        _ => self.warn(c.pos, "a medium on a shape needs name=\"interior\" or \"exterior\"; it is ignored".into()),
+                        _ => self.warn(
+                            c.pos,
+                            "a medium on a shape needs name=\"interior\" or \"exterior\"; it is ignored".into(),
+                        ),
                     }
                 }
                 other => self.warn(c.pos, format!("<{other}> inside a shape is not read by Photonix and is ignored")),
@@ -118,7 +121,10 @@ impl<'a> Translator<'a> {
         let material = self.material_name(bsdf, uv, emission.as_deref(), el.pos)?;
         fields.push(("material".into(), string(&material)));
         if matrix && !world_from_object.abs_diff_eq(DMat4::IDENTITY, 0.0) {
-            fields.push(("transform".into(), format!("{{ matrix = {} }}", list(&transform::row_major(&world_from_object)))));
+            fields.push((
+                "transform".into(),
+                format!("{{ matrix = {} }}", list(&transform::row_major(&world_from_object))),
+            ));
         }
         self.finish(&p);
         self.out.entry("[[shapes]]", &fields, el.pos);

@@ -48,7 +48,12 @@ impl<'a> Translator<'a> {
     /// The RGB of a `<rgb>`, `<srgb>`, `<spectrum>` or `<float>` property.
     pub(crate) fn constant(&mut self, e: &Element) -> Result<[f64; 3]> {
         let v = value(e)?;
-        let bad = || MitsubaError::at(e.pos, format!("<{}>: `value` = \"{}\" is not a colour", e.tag, crate::limits::printable(v)));
+        let bad = || {
+            MitsubaError::at(
+                e.pos,
+                format!("<{}>: `value` = \"{}\" is not a colour", e.tag, crate::limits::printable(v)),
+            )
+        };
         match e.tag.as_str() {
             "float" | "integer" => parse_number(v).map(|x| [x; 3]).ok_or_else(bad),
             "rgb" | "color" | "srgb" => {
@@ -113,7 +118,10 @@ impl<'a> Translator<'a> {
             other => {
                 self.warn(
                     t.pos,
-                    format!("the `{}` texture is not supported; it is rendered as a constant 0.5", crate::limits::printable(other)),
+                    format!(
+                        "the `{}` texture is not supported; it is rendered as a constant 0.5",
+                        crate::limits::printable(other)
+                    ),
                 );
                 return Ok(Param::Constant([0.5; 3]));
             }
@@ -149,7 +157,15 @@ impl<'a> Translator<'a> {
                         self.warn(at, format!("`wrap_mode` \"{mode}\" is rendered as \"clamp\""));
                         "clamp"
                     }
-                    other => return Err(p.error(at, format!("`wrap_mode` \"{}\": give repeat, mirror or clamp", crate::limits::printable(other)))),
+                    other => {
+                        return Err(p.error(
+                            at,
+                            format!(
+                                "`wrap_mode` \"{}\": give repeat, mirror or clamp",
+                                crate::limits::printable(other)
+                            ),
+                        ))
+                    }
                 };
                 field(&mut fields, "wrap", string(ours));
             }
@@ -162,7 +178,12 @@ impl<'a> Translator<'a> {
                 let ours = match channel {
                     "r" | "g" | "b" => channel,
                     "a" => "alpha",
-                    other => return Err(p.error(at, format!("`channel` \"{}\": give r, g, b or a", crate::limits::printable(other)))),
+                    other => {
+                        return Err(p.error(
+                            at,
+                            format!("`channel` \"{}\": give r, g, b or a", crate::limits::printable(other)),
+                        ))
+                    }
                 };
                 field(&mut fields, "channel", string(ours));
             } else if scalar && has_alpha(&self.resolved_path(&file)) {
@@ -196,6 +217,7 @@ impl<'a> Translator<'a> {
 
     /// `to_uv` (Mitsuba 3) or `uscale`, `vscale`, `uoffset`, `voffset` (0.5), as a matrix on
     /// (u, v, 0): Mitsuba keeps its 2D part (rows and columns x, y and the translation).
+    #[allow(clippy::wrong_self_convention)] // named after Mitsuba's `to_uv` property
     fn to_uv(&mut self, p: &Plugin<'a>) -> Result<DMat4> {
         let mut m = match p.prop("to_uv") {
             Some(t) => {
@@ -214,7 +236,9 @@ impl<'a> Translator<'a> {
         let uo = p.float_or("uoffset", 0.0)?;
         let vo = p.float_or("voffset", 0.0)?;
         if (us, vs, uo, vo) != (1.0, 1.0, 0.0, 0.0) {
-            m = DMat4::from_translation(glam::DVec3::new(uo, vo, 0.0)) * DMat4::from_scale(glam::DVec3::new(us, vs, 1.0)) * m;
+            m = DMat4::from_translation(glam::DVec3::new(uo, vo, 0.0))
+                * DMat4::from_scale(glam::DVec3::new(us, vs, 1.0))
+                * m;
         }
         Ok(m)
     }

@@ -43,7 +43,15 @@ fn matrix(op: &Element) -> Result<DMat4> {
     let rows: [[f64; 4]; 4] = match n.len() {
         16 => std::array::from_fn(|r| std::array::from_fn(|c| n[4 * r + c])),
         9 => std::array::from_fn(|r| {
-            std::array::from_fn(|c| if r < 3 && c < 3 { n[3 * r + c] } else if r == c { 1.0 } else { 0.0 })
+            std::array::from_fn(|c| {
+                if r < 3 && c < 3 {
+                    n[3 * r + c]
+                } else if r == c {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
         }),
         _ => {
             return Err(MitsubaError::at(
@@ -54,7 +62,10 @@ fn matrix(op: &Element) -> Result<DMat4> {
     };
     let m = DMat4::from_cols_array_2d(&rows).transpose();
     if m.row(3) != glam::DVec4::new(0.0, 0.0, 0.0, 1.0) {
-        return Err(MitsubaError::at(op.pos, "<matrix>: the last row must be 0 0 0 1 (projective matrices are not supported)".into()));
+        return Err(MitsubaError::at(
+            op.pos,
+            "<matrix>: the last row must be 0 0 0 1 (projective matrices are not supported)".into(),
+        ));
     }
     Ok(m)
 }
@@ -85,7 +96,10 @@ fn lookat(op: &Element) -> Result<DMat4> {
         match op.attr(name) {
             Some(s) => match numbers(s).as_deref() {
                 Some([x, y, z]) => Ok(Some(DVec3::new(*x, *y, *z))),
-                _ => Err(MitsubaError::at(op.pos, format!("<lookat>: `{name}` = \"{}\": give 3 numbers", crate::limits::printable(s)))),
+                _ => Err(MitsubaError::at(
+                    op.pos,
+                    format!("<lookat>: `{name}` = \"{}\": give 3 numbers", crate::limits::printable(s)),
+                )),
             },
             None if required => Err(MitsubaError::at(op.pos, format!("<lookat> needs `{name}`"))),
             None => Ok(None),

@@ -74,7 +74,10 @@ impl Reader {
         if root.tag_name().name() != "scene" {
             return Err(MitsubaError {
                 pos: Some(root_pos),
-                message: format!("the root element is <{}>; a Mitsuba scene file starts with <scene>", root.tag_name().name()),
+                message: format!(
+                    "the root element is <{}>; a Mitsuba scene file starts with <scene>",
+                    root.tag_name().name()
+                ),
             });
         }
         self.stack.push(canonical);
@@ -83,7 +86,13 @@ impl Reader {
         result
     }
 
-    fn element(&mut self, node: roxmltree::Node, file: u32, lines: &LineIndex, path: &Path) -> Result<Element, MitsubaError> {
+    fn element(
+        &mut self,
+        node: roxmltree::Node,
+        file: u32,
+        lines: &LineIndex,
+        path: &Path,
+    ) -> Result<Element, MitsubaError> {
         let pos = lines.pos(file, node.range().start);
         let attrs = node.attributes().map(|a| (a.name().to_string(), a.value().to_string())).collect();
         let mut children = Vec::new();
