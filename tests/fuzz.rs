@@ -904,7 +904,8 @@ fn mitsuba_plugin(r: &mut Rng, tag: &str, depth: usize) -> String {
         s.push_str(&mitsuba_property(r));
     }
     if r.chance(40) {
-        s.push_str(&mitsuba_transform(r, if r.chance(80) { "to_world" } else { "to_uv" }));
+        let key = if r.chance(80) { "to_world" } else { "to_uv" };
+        s.push_str(&mitsuba_transform(r, key));
     }
     if depth > 0 {
         for _ in 0..r.below(3) {
