@@ -190,6 +190,8 @@ struct VcmParams {
     uint path_count;
     uint paths_per_invocation;
     uint connections;
+    uint steps_per_dispatch;
+    uint resume;
 };
 
 struct LightMaterial {

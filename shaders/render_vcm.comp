@@ -54,6 +54,11 @@ layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer splat_texels;
 layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer path_count_texels;
 layout(binding = SCENE_BINDINGS + 8) uniform usamplerBuffer light_material_texels;
 layout(std430, binding = SCENE_BINDINGS + 9) buffer BrokenOff { uint broken_off; };
+// Each invocation's run as it stopped after params.steps_per_dispatch vertices
+// (VCM_CAMERA_STATE_WORDS words: store_run), and how many stopped so (the host dispatches again,
+// resuming, until none does).
+layout(std430, binding = SCENE_BINDINGS + 10) buffer RunStates { uint run_states[]; };
+layout(std430, binding = SCENE_BINDINGS + 11) buffer Suspended { uint suspended; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
@@ -408,6 +413,61 @@ void camera_path_finish(CameraPath c) {
     accumulation[at + LAYER_CAUSTICS] += vec4(c.terms[LAYER_CAUSTICS], 0.0);
 }
 
+// A run stopped at a vertex boundary: the next job and the path under way, word for word, so
+// that the resumed path computes exactly what it would have in one go.
+void store_run(uint i, uint job, CameraPath c) {
+    uint at = i * VCM_CAMERA_STATE_WORDS;
+    uint w[VCM_CAMERA_STATE_WORDS];
+    w[0] = job;
+    w[1] = c.stream;
+    w[2] = floatBitsToUint(c.o.x); w[3] = floatBitsToUint(c.o.y); w[4] = floatBitsToUint(c.o.z);
+    w[5] = floatBitsToUint(c.d.x); w[6] = floatBitsToUint(c.d.y); w[7] = floatBitsToUint(c.d.z);
+    w[8] = floatBitsToUint(c.sp.throughput.x); w[9] = floatBitsToUint(c.sp.throughput.y);
+    w[10] = floatBitsToUint(c.sp.throughput.z);
+    w[11] = floatBitsToUint(c.sp.d_vcm); w[12] = floatBitsToUint(c.sp.d_vc); w[13] = floatBitsToUint(c.sp.d_vm);
+    w[14] = c.m;
+    w[15] = c.skip;
+    w[16] = c.first_specular ? 1u : 0u;
+    w[17] = c.diffuse;
+    w[18] = c.specular_after ? 1u : 0u;
+    w[19] = c.specular_path ? 1u : 0u;
+    w[20] = c.medium;
+    w[21] = c.segment;
+    for (int t = 0; t < 4; t++) {
+        w[22 + 3 * t] = floatBitsToUint(c.terms[t].x);
+        w[23 + 3 * t] = floatBitsToUint(c.terms[t].y);
+        w[24 + 3 * t] = floatBitsToUint(c.terms[t].z);
+    }
+    w[34] = c.rays;
+    w[35] = 0u;
+    for (uint k = 0u; k < VCM_CAMERA_STATE_WORDS; k++) run_states[at + k] = w[k];
+}
+
+// `store_run` read back: returns the job.
+uint load_run(uint i, out CameraPath c) {
+    uint at = i * VCM_CAMERA_STATE_WORDS;
+    uint w[VCM_CAMERA_STATE_WORDS];
+    for (uint k = 0u; k < VCM_CAMERA_STATE_WORDS; k++) w[k] = run_states[at + k];
+    c.stream = w[1];
+    c.o = uintBitsToFloat(uvec3(w[2], w[3], w[4]));
+    c.d = uintBitsToFloat(uvec3(w[5], w[6], w[7]));
+    c.sp.throughput = uintBitsToFloat(uvec3(w[8], w[9], w[10]));
+    c.sp.d_vcm = uintBitsToFloat(w[11]);
+    c.sp.d_vc = uintBitsToFloat(w[12]);
+    c.sp.d_vm = uintBitsToFloat(w[13]);
+    c.m = w[14];
+    c.skip = w[15];
+    c.first_specular = w[16] != 0u;
+    c.diffuse = w[17];
+    c.specular_after = w[18] != 0u;
+    c.specular_path = w[19] != 0u;
+    c.medium = w[20];
+    c.segment = w[21];
+    for (int t = 0; t < 4; t++) c.terms[t] = uintBitsToFloat(uvec3(w[22 + 3 * t], w[23 + 3 * t], w[24 + 3 * t]));
+    c.rays = w[34];
+    return w[0];
+}
+
 // Each invocation renders the paths of pixels i, i + n, i + 2n, ... of the band (n invocations,
 // params.paths_per_invocation pixels each), a vertex per loop turn, starting the next pixel's
 // path as soon as one ends. Lavapipe runs a loop turn for all 8 lanes of a SIMD group while any
@@ -421,10 +481,26 @@ void main() {
     uint i = GLOBAL_INDEX;
     if (i >= lanes) return;
     uint jobs = (band_pixels - i + lanes - 1u) / lanes;  // pixels i + k lanes below band_pixels
-    CameraPath c = camera_path_start(i % frame.width, range.row_begin + i / frame.width);
+    CameraPath c;
     uint job = 0u;
-    // Bounded: each turn is a vertex of one of `jobs` paths of at most max_depth + 1 vertices.
+    if (params.resume != 0u) {
+        job = load_run(i, c);
+        if (job >= jobs) return;  // finished in an earlier dispatch
+    } else {
+        c = camera_path_start(i % frame.width, range.row_begin + i / frame.width);
+    }
+    // Bounded: each turn is a vertex of one of `jobs` paths of at most max_depth + 1 vertices,
+    // and at most params.steps_per_dispatch turns (when not 0) before the run is stored for the
+    // next dispatch: lavapipe's loop limit counts every traversal step of every ray, and deep
+    // paths through large scenes pass it even one to an invocation (docs/architecture.md).
+    uint steps = 0u;
     for (;;) {
+        if (steps == params.steps_per_dispatch && steps != 0u) {
+            store_run(i, job, c);
+            atomicAdd(suspended, 1u);
+            return;
+        }
+        steps++;
         if (camera_path_step(c)) continue;
         camera_path_finish(c);
         job++;
@@ -433,6 +509,8 @@ void main() {
         c = camera_path_start(p % frame.width, range.row_begin + p / frame.width);
     }
     // Ended by the driver's loop limit (lavapipe's 65535 iterations per invocation) with paths
-    // left: say so, and the host renders the sample again a path per invocation.
+    // left: say so, and the host renders the sample again with shorter runs.
     if (job < jobs) atomicAdd(broken_off, 1u);
+    // A later dispatch of a stopped run skips this invocation.
+    else if (params.steps_per_dispatch != 0u) run_states[i * VCM_CAMERA_STATE_WORDS] = jobs;
 }

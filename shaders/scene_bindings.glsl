@@ -12,14 +12,17 @@ layout(scalar, binding = BINDING_FRAME) uniform Frame { FrameParams frame; };
 // read costs about 15 scalar instructions per lane and word; the kernels' process CPU time fell
 // by a third (BENCHMARKS.md, "Texel buffers on lavapipe"). Structs are RGBA32UI texels (all
 // are multiples of 16 bytes), word arrays R32UI; scene_fetch.glsl reads them back as structs.
-layout(binding = BINDING_NODES) uniform usamplerBuffer node_texels;
-layout(binding = BINDING_PRIMITIVES) uniform usamplerBuffer primitive_texels;
-layout(binding = BINDING_MATERIALS) uniform usamplerBuffer material_texels;
-layout(binding = BINDING_LIGHTS) uniform usamplerBuffer light_texels;
-layout(binding = BINDING_TEXTURES) uniform usamplerBuffer texture_texels;
-layout(binding = BINDING_TEXTURE_DATA) uniform usamplerBuffer texture_words;
-layout(binding = BINDING_SHAPE_DATA) uniform usamplerBuffer shape_words;
-layout(binding = BINDING_MEDIA) uniform usamplerBuffer medium_texels;
+// Each is an array of SCENE_PAGES pages: an array larger than one texel view (or than one
+// binding's range) is split over several, each of 2^SCENE_PAGE_WORDS_LOG2 words but the last
+// (src/render/gpu/scene.rs); pages it does not need repeat its first.
+layout(binding = BINDING_NODES) uniform usamplerBuffer node_texels[SCENE_PAGES];
+layout(binding = BINDING_PRIMITIVES) uniform usamplerBuffer primitive_texels[SCENE_PAGES];
+layout(binding = BINDING_MATERIALS) uniform usamplerBuffer material_texels[SCENE_PAGES];
+layout(binding = BINDING_LIGHTS) uniform usamplerBuffer light_texels[SCENE_PAGES];
+layout(binding = BINDING_TEXTURES) uniform usamplerBuffer texture_texels[SCENE_PAGES];
+layout(binding = BINDING_TEXTURE_DATA) uniform usamplerBuffer texture_words[SCENE_PAGES];
+layout(binding = BINDING_SHAPE_DATA) uniform usamplerBuffer shape_words[SCENE_PAGES];
+layout(binding = BINDING_MEDIA) uniform usamplerBuffer medium_texels[SCENE_PAGES];
 
 // Features a scene may lack, fixed when the host creates the pipeline (specialization constants,
 // `KernelVariant::specialization`): the driver compiles their code out where they are false, so
@@ -47,5 +50,10 @@ const bool SCENE_HAS_CONDUCTOR = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_CONDUCT
 const bool SCENE_HAS_PLASTIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PLASTIC)) != 0u;
 const bool SCENE_HAS_PHASE = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PHASE)) != 0u;
 const bool SCENE_HAS_THIN_DIELECTRIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_THIN_DIELECTRIC)) != 0u;
+// The most pages any scene array uses (1 when each fits one view, as in every scene of a few
+// million triangles or less: the fetches are then one texelFetch as before, the page selection
+// compiled out) and the size of a page, in words (`KernelVariant::pages`, `page_words_log2`).
+layout(constant_id = 5) const uint SCENE_PAGES_USED = 1u;
+layout(constant_id = 6) const uint SCENE_PAGE_WORDS_LOG2 = 25u;
 
 #include "scene_fetch.glsl"

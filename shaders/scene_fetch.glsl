@@ -1,12 +1,50 @@
 // The scene's structs read back from their texel buffers (scene_bindings.glsl), field by field in
 // the order of layout.glsl; tests/texel_fetch.rs checks every struct round-trips through them.
 
+// Texel `i` of a paged array: page i >> log2 (log2 = texels per page), texel i & mask inside it.
+// Lavapipe runs an if-chain's branches under masks, so only the cases of pages in use are
+// compiled (SCENE_PAGES_USED); one page is one fetch, in a structured if without early returns,
+// which the driver folds before inlining multiplies it. Constant indices only: indexing an array
+// of texel buffers by a variable needs a device feature that is not required.
+#define PAGED_TEXEL(name, pages, log2)                                                              \
+    uvec4 name(uint i) {                                                                            \
+        uvec4 t;                                                                                    \
+        if (SCENE_PAGES_USED <= 1u) {                                                               \
+            t = texelFetch(pages[0], int(i));                                                       \
+        } else {                                                                                    \
+            uint page = i >> (log2);                                                                \
+            int j = int(i & ((1u << (log2)) - 1u));                                                 \
+            if (page == 0u) t = texelFetch(pages[0], j);                                            \
+            else if (SCENE_PAGES_USED == 2u || page == 1u) t = texelFetch(pages[1], j);             \
+            else if (SCENE_PAGES_USED == 3u || page == 2u) t = texelFetch(pages[2], j);             \
+            else if (SCENE_PAGES_USED == 4u || page == 3u) t = texelFetch(pages[3], j);             \
+            else if (SCENE_PAGES_USED == 5u || page == 4u) t = texelFetch(pages[4], j);             \
+            else if (SCENE_PAGES_USED == 6u || page == 5u) t = texelFetch(pages[5], j);             \
+            else if (SCENE_PAGES_USED == 7u || page == 6u) t = texelFetch(pages[6], j);             \
+            else t = texelFetch(pages[7], j);                                                       \
+        }                                                                                           \
+        return t;                                                                                   \
+    }
+// The chain above has a case per page: a different SCENE_PAGES makes this array's size negative.
+const uint SCENE_PAGES_CHECK[SCENE_PAGES == 8u ? 1 : -1] = uint[1](0u);
+
+// Structs are RGBA32UI texels (four words each), word arrays R32UI.
+const uint SCENE_PAGE_TEXELS_LOG2 = SCENE_PAGE_WORDS_LOG2 - 2u;
+PAGED_TEXEL(node_texel, node_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(primitive_texel, primitive_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(material_texel, material_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(light_texel, light_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(texture_texel, texture_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(medium_texel, medium_texels, SCENE_PAGE_TEXELS_LOG2)
+PAGED_TEXEL(texture_word_texel, texture_words, SCENE_PAGE_WORDS_LOG2)
+PAGED_TEXEL(shape_word_texel, shape_words, SCENE_PAGE_WORDS_LOG2)
+
 #define FETCH_TEXEL(texels, i) texelFetch(texels, int(i))
 #define F3(v) float[3](uintBitsToFloat((v).x), uintBitsToFloat((v).y), uintBitsToFloat((v).z))
 
 BvhNode bvh_node(uint i) {
-    uvec4 a = FETCH_TEXEL(node_texels, 2u * i);
-    uvec4 b = FETCH_TEXEL(node_texels, 2u * i + 1u);
+    uvec4 a = node_texel(2u * i);
+    uvec4 b = node_texel(2u * i + 1u);
     BvhNode n;
     n.aabb_min = F3(a);
     n.first = a.w;
@@ -16,13 +54,13 @@ BvhNode bvh_node(uint i) {
 }
 
 // The word holding a node's skip link and leaf count, without the rest of the node.
-uint bvh_node_skip_count(uint i) { return FETCH_TEXEL(node_texels, 2u * i + 1u).w; }
+uint bvh_node_skip_count(uint i) { return node_texel(2u * i + 1u).w; }
 
 Primitive primitive_at(uint i) {
-    uvec4 a = FETCH_TEXEL(primitive_texels, 4u * i);
-    uvec4 b = FETCH_TEXEL(primitive_texels, 4u * i + 1u);
-    uvec4 c = FETCH_TEXEL(primitive_texels, 4u * i + 2u);
-    uvec4 e = FETCH_TEXEL(primitive_texels, 4u * i + 3u);
+    uvec4 a = primitive_texel(4u * i);
+    uvec4 b = primitive_texel(4u * i + 1u);
+    uvec4 c = primitive_texel(4u * i + 2u);
+    uvec4 e = primitive_texel(4u * i + 3u);
     Primitive p;
     p.p0 = F3(a);
     p.kind = a.w;
@@ -37,17 +75,17 @@ Primitive primitive_at(uint i) {
     return p;
 }
 
-uint primitive_kind(uint i) { return FETCH_TEXEL(primitive_texels, 4u * i).w; }
+uint primitive_kind(uint i) { return primitive_texel(4u * i).w; }
 
 Material material_at(uint i) {
-    uvec4 a = FETCH_TEXEL(material_texels, 8u * i);
-    uvec4 b = FETCH_TEXEL(material_texels, 8u * i + 1u);
-    uvec4 c = FETCH_TEXEL(material_texels, 8u * i + 2u);
-    uvec4 d = FETCH_TEXEL(material_texels, 8u * i + 3u);
-    uvec4 c2 = FETCH_TEXEL(material_texels, 8u * i + 4u);
-    uvec4 e = FETCH_TEXEL(material_texels, 8u * i + 5u);
-    uvec4 f = FETCH_TEXEL(material_texels, 8u * i + 6u);
-    uvec4 g = FETCH_TEXEL(material_texels, 8u * i + 7u);
+    uvec4 a = material_texel(8u * i);
+    uvec4 b = material_texel(8u * i + 1u);
+    uvec4 c = material_texel(8u * i + 2u);
+    uvec4 d = material_texel(8u * i + 3u);
+    uvec4 c2 = material_texel(8u * i + 4u);
+    uvec4 e = material_texel(8u * i + 5u);
+    uvec4 f = material_texel(8u * i + 6u);
+    uvec4 g = material_texel(8u * i + 7u);
     Material m;
     m.kind = a.x;
     m.flags = a.y;
@@ -76,12 +114,12 @@ Material material_at(uint i) {
 }
 
 Light light_at(uint i) {
-    uvec4 a = FETCH_TEXEL(light_texels, 6u * i);
-    uvec4 b = FETCH_TEXEL(light_texels, 6u * i + 1u);
-    uvec4 c = FETCH_TEXEL(light_texels, 6u * i + 2u);
-    uvec4 d = FETCH_TEXEL(light_texels, 6u * i + 3u);
-    uvec4 e = FETCH_TEXEL(light_texels, 6u * i + 4u);
-    uvec4 f = FETCH_TEXEL(light_texels, 6u * i + 5u);
+    uvec4 a = light_texel(6u * i);
+    uvec4 b = light_texel(6u * i + 1u);
+    uvec4 c = light_texel(6u * i + 2u);
+    uvec4 d = light_texel(6u * i + 3u);
+    uvec4 e = light_texel(6u * i + 4u);
+    uvec4 f = light_texel(6u * i + 5u);
     Light l;
     l.position = F3(a);
     l.kind = a.w;
@@ -104,11 +142,11 @@ Light light_at(uint i) {
 }
 
 Texture texture_at(uint i) {
-    uvec4 a = FETCH_TEXEL(texture_texels, 5u * i);
-    uvec4 b = FETCH_TEXEL(texture_texels, 5u * i + 1u);
-    uvec4 c = FETCH_TEXEL(texture_texels, 5u * i + 2u);
-    uvec4 d = FETCH_TEXEL(texture_texels, 5u * i + 3u);
-    uvec4 e = FETCH_TEXEL(texture_texels, 5u * i + 4u);
+    uvec4 a = texture_texel(5u * i);
+    uvec4 b = texture_texel(5u * i + 1u);
+    uvec4 c = texture_texel(5u * i + 2u);
+    uvec4 d = texture_texel(5u * i + 3u);
+    uvec4 e = texture_texel(5u * i + 4u);
     Texture t;
     t.kind = a.x;
     t.space = a.y;
@@ -123,11 +161,11 @@ Texture texture_at(uint i) {
 }
 
 Medium medium_at(uint i) {
-    uvec4 a = FETCH_TEXEL(medium_texels, 5u * i);
-    uvec4 b = FETCH_TEXEL(medium_texels, 5u * i + 1u);
-    uvec4 c = FETCH_TEXEL(medium_texels, 5u * i + 2u);
-    uvec4 d = FETCH_TEXEL(medium_texels, 5u * i + 3u);
-    uvec4 e = FETCH_TEXEL(medium_texels, 5u * i + 4u);
+    uvec4 a = medium_texel(5u * i);
+    uvec4 b = medium_texel(5u * i + 1u);
+    uvec4 c = medium_texel(5u * i + 2u);
+    uvec4 d = medium_texel(5u * i + 3u);
+    uvec4 e = medium_texel(5u * i + 4u);
     Medium m;
     m.sigma_a = F3(a);
     m.phase = a.w;
@@ -142,5 +180,5 @@ Medium medium_at(uint i) {
     return m;
 }
 
-uint texture_word(uint i) { return FETCH_TEXEL(texture_words, i).x; }
-float shape_word(uint i) { return uintBitsToFloat(FETCH_TEXEL(shape_words, i).x); }
+uint texture_word(uint i) { return texture_word_texel(i).x; }
+float shape_word(uint i) { return uintBitsToFloat(shape_word_texel(i).x); }

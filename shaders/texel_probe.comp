@@ -1,6 +1,6 @@
 #version 450
 // Reads element 1 of every scene struct through its texel-buffer loader (scene_fetch.glsl) and
-// stores it, field by field, to element 0 of a storage buffer of that struct; word 5 of the
+// stores it, field by field, to element 0 of a storage buffer of that struct; word 21 of the
 // texture and shape words; photons 0..3 through fetch_photon (grid.glsl), which start at
 // each of the four words of a texel; and light vertex 1 and light material 1 through
 // fetch_light_vertex and fetch_light_material. tests/texel_fetch.rs compares what comes back with what
@@ -35,8 +35,8 @@ void main() {
     out_lights[0] = light_at(1u);
     out_textures[0] = texture_at(1u);
     out_media[0] = medium_at(1u);
-    out_words[0] = texture_word(5u);
-    out_words[1] = floatBitsToUint(shape_word(5u));
+    out_words[0] = texture_word(21u);
+    out_words[1] = floatBitsToUint(shape_word(21u));
     out_words[2] = bvh_node_skip_count(1u);
     out_words[3] = primitive_kind(1u);
     for (uint i = 0u; i < 4u; i++) out_photons[i] = fetch_photon(photon_texels, i);

@@ -46,6 +46,10 @@ layout(std430, binding = SCENE_BINDINGS + 2) writeonly buffer Points { Photon po
 layout(std430, binding = SCENE_BINDINGS + 3) buffer Counter { uint point_count; uint broken_off; };
 layout(std430, binding = SCENE_BINDINGS + 4) writeonly buffer PathCounts { uint path_counts[]; };
 layout(std430, binding = SCENE_BINDINGS + 5) writeonly buffer LightMaterials { LightMaterial light_materials[]; };
+// Each invocation's run as it stopped after params.steps_per_dispatch vertices
+// (VCM_LIGHT_STATE_WORDS words: store_run), and how many stopped so (render_vcm does the same).
+layout(std430, binding = SCENE_BINDINGS + 6) buffer RunStates { uint run_states[]; };
+layout(std430, binding = SCENE_BINDINGS + 7) buffer Suspended { uint suspended; };
 layout(push_constant) uniform Push { VcmParams params; };
 
 #include "scene.glsl"
@@ -258,6 +262,62 @@ bool light_path_step(inout LightPath lp) {
     return lp.k <= params.vertex_slots;
 }
 
+// A run stopped at a vertex boundary: the next job, whether its path goes on, and the path,
+// word for word, so that the resumed path computes exactly what it would have in one go.
+void store_run(uint i, uint job, bool alive, LightPath lp) {
+    uint at = i * VCM_LIGHT_STATE_WORDS;
+    uint w[VCM_LIGHT_STATE_WORDS];
+    w[0] = job;
+    w[1] = alive ? 1u : 0u;
+    w[2] = lp.path;
+    w[3] = floatBitsToUint(lp.o.x); w[4] = floatBitsToUint(lp.o.y); w[5] = floatBitsToUint(lp.o.z);
+    w[6] = floatBitsToUint(lp.d.x); w[7] = floatBitsToUint(lp.d.y); w[8] = floatBitsToUint(lp.d.z);
+    w[9] = floatBitsToUint(lp.sp.throughput.x); w[10] = floatBitsToUint(lp.sp.throughput.y);
+    w[11] = floatBitsToUint(lp.sp.throughput.z);
+    w[12] = floatBitsToUint(lp.sp.d_vcm); w[13] = floatBitsToUint(lp.sp.d_vc); w[14] = floatBitsToUint(lp.sp.d_vm);
+    w[15] = lp.seq.x;
+    w[16] = lp.seq.y;
+    w[17] = lp.finite ? 1u : 0u;
+    w[18] = lp.k;
+    w[19] = lp.skip;
+    w[20] = lp.medium;
+    w[21] = lp.segment;
+    w[22] = lp.rays;
+    w[23] = lp.diffuse;
+    w[24] = lp.specular_first ? 1u : 0u;
+    w[25] = lp.slot0;
+    w[26] = lp.stored;
+    w[27] = 0u;
+    for (uint k = 0u; k < VCM_LIGHT_STATE_WORDS; k++) run_states[at + k] = w[k];
+}
+
+// `store_run` read back: returns the job; `alive` whether its path goes on.
+uint load_run(uint i, out bool alive, out LightPath lp) {
+    uint at = i * VCM_LIGHT_STATE_WORDS;
+    uint w[VCM_LIGHT_STATE_WORDS];
+    for (uint k = 0u; k < VCM_LIGHT_STATE_WORDS; k++) w[k] = run_states[at + k];
+    alive = w[1] != 0u;
+    lp.path = w[2];
+    lp.o = uintBitsToFloat(uvec3(w[3], w[4], w[5]));
+    lp.d = uintBitsToFloat(uvec3(w[6], w[7], w[8]));
+    lp.sp.throughput = uintBitsToFloat(uvec3(w[9], w[10], w[11]));
+    lp.sp.d_vcm = uintBitsToFloat(w[12]);
+    lp.sp.d_vc = uintBitsToFloat(w[13]);
+    lp.sp.d_vm = uintBitsToFloat(w[14]);
+    lp.seq = uvec2(w[15], w[16]);
+    lp.finite = w[17] != 0u;
+    lp.k = w[18];
+    lp.skip = w[19];
+    lp.medium = w[20];
+    lp.segment = w[21];
+    lp.rays = w[22];
+    lp.diffuse = w[23];
+    lp.specular_first = w[24] != 0u;
+    lp.slot0 = w[25];
+    lp.stored = w[26];
+    return w[0];
+}
+
 // Each invocation traces light paths i, i + n, i + 2n, ... of the dispatch (n invocations,
 // params.paths_per_invocation paths each), a vertex per loop turn, starting the next path as soon
 // as one ends: on lavapipe a SIMD group of 8 lanes runs a loop turn while any lane goes on, and a
@@ -269,16 +329,33 @@ void main() {
     if (i >= lanes) return;
     uint jobs = (params.path_count - i + lanes - 1u) / lanes;  // paths i + j lanes below path_count
     LightPath lp;
-    bool alive = light_path_start(params.path_begin + i, lp);
+    bool alive;
     uint job = 0u;
-    // Bounded: each turn is a vertex of one of `jobs` paths of at most vertex_slots vertices.
+    if (params.resume != 0u) {
+        job = load_run(i, alive, lp);
+        if (job >= jobs) return;  // finished in an earlier dispatch
+    } else {
+        alive = light_path_start(params.path_begin + i, lp);
+    }
+    // Bounded: each turn is a vertex of one of `jobs` paths of at most vertex_slots vertices,
+    // and at most params.steps_per_dispatch turns (when not 0) before the run is stored for the
+    // next dispatch (render_vcm says why).
+    uint steps = 0u;
     for (;;) {
+        if (steps == params.steps_per_dispatch && steps != 0u) {
+            store_run(i, job, alive, lp);
+            atomicAdd(suspended, 1u);
+            return;
+        }
+        steps++;
         if (alive && light_path_step(lp)) continue;
         job++;
         if (job >= jobs) break;
         alive = light_path_start(params.path_begin + i + job * lanes, lp);
     }
     // Ended by the driver's loop limit (lavapipe's 65535 iterations per invocation) with paths
-    // left: say so, and the host renders the sample again a path per invocation.
+    // left: say so, and the host renders the sample again with shorter runs.
     if (job < jobs) atomicAdd(broken_off, 1u);
+    // A later dispatch of a stopped run skips this invocation.
+    else if (params.steps_per_dispatch != 0u) run_states[i * VCM_LIGHT_STATE_WORDS] = jobs;
 }

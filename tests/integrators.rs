@@ -818,14 +818,24 @@ fn paths_per_invocation_leave_the_image_alone() {
             assert!(other.layers == one.layers, "{name}: {per} paths per invocation change the image");
             assert_eq!(other.stats.rays, one.stats.rays, "{name}: {per} paths per invocation");
         }
+        // Runs stopped after a few vertices and resumed by the next dispatch: the same paths.
+        for (per, steps) in [(1, 1), (8, 3)] {
+            let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
+            renderer.set_paths_per_invocation(per);
+            renderer.set_steps_per_dispatch(steps);
+            let other = renderer.render_pass(2, 0, &mut |_, _| {}).unwrap();
+            assert!(other.layers == one.layers, "{name}: {steps} vertices per dispatch change the image");
+            assert_eq!(other.stats.rays, one.stats.rays, "{name}: {steps} vertices per dispatch");
+        }
     }
 }
 
 /// Camera paths through 1500 overlapping frames run past lavapipe's 65535 loop iterations per
 /// invocation, sooner with many paths per invocation: the renderer then renders the samples again
 /// with fewer paths per invocation (paths of 2 vertices: 64 to an invocation break off, 1 does
-/// not), or refuses the pass with a message when even one is broken off (12 vertices). Never a
-/// partial image. A real GPU has no such limit and renders both.
+/// not), and, where even one path breaks off (12 vertices), with fewer vertices per dispatch,
+/// each invocation storing its path for the next dispatch to resume. Never a partial image. A
+/// real GPU has no such limit and renders both at once.
 #[test]
 fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
     use photonix::render::gpu::GpuRenderer;
@@ -838,25 +848,14 @@ fn camera_paths_the_loop_limit_breaks_off_are_rendered_again_or_refused() {
         let buffers = common::buffers(&scene, 8, 6);
         let mut renderer = GpuRenderer::new(&ctx, &buffers, None).unwrap();
         renderer.set_paths_per_invocation(64);
-        match renderer.render_pass(1, 0, &mut |_, _| {}) {
-            Ok(gpu) => {
-                let cpu = cpu(&buffers, 1);
-                let error = rel_mse(&gpu.image, &cpu.image);
-                println!(
-                    "max_depth {depth}: rendered {} paths per invocation, GPU vs CPU relMSE {error:.3e}",
-                    renderer.paths_per_invocation()
-                );
-                assert!(error < 1e-4, "max_depth {depth}: relMSE {error:.3e} against the CPU twin");
-                assert!(!lavapipe || depth == 2, "lavapipe rendered paths it broke off");
-                let per = renderer.paths_per_invocation();
-                assert!(if lavapipe { per < 64 } else { per == 64 }, "{per}: no fallback, or one without cause");
-            }
-            Err(e) => {
-                let e = e.to_string();
-                println!("max_depth {depth}: {e}");
-                assert!(e.contains("broke off") && e.contains("--backend cpu"), "{e}");
-                assert!(depth > 2, "short paths stay within the limit a path per invocation");
-            }
-        }
+        let gpu = renderer.render_pass(1, 0, &mut |_, _| {}).expect("the runs are split until they fit");
+        let cpu = cpu(&buffers, 1);
+        let error = rel_mse(&gpu.image, &cpu.image);
+        let (per, steps) = (renderer.paths_per_invocation(), renderer.steps_per_dispatch());
+        println!("max_depth {depth}: rendered {per} paths per invocation, {steps} vertices per dispatch (0: all), GPU vs CPU relMSE {error:.3e}");
+        assert!(error < 1e-4, "max_depth {depth}: relMSE {error:.3e} against the CPU twin");
+        assert!(if lavapipe { per < 64 } else { per == 64 }, "{per}: no fallback, or one without cause");
+        // Two vertices fit a path per invocation; twelve need their vertices spread over dispatches.
+        assert_eq!(steps > 0, lavapipe && depth == 12, "{steps} vertices per dispatch at max_depth {depth}");
     }
 }

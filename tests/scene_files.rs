@@ -101,6 +101,7 @@ fn materials_showroom_has_every_material_kind_on_its_spheres() {
             MaterialKind::Diffuse { .. } => "diffuse",
             MaterialKind::Mirror { .. } => "mirror",
             MaterialKind::Dielectric { .. } => "dielectric",
+            MaterialKind::ThinDielectric { .. } => "thin_dielectric",
             MaterialKind::Conductor { .. } => "conductor",
             MaterialKind::Plastic { .. } => "plastic",
             MaterialKind::ThinDielectric { .. } => "thin_dielectric",

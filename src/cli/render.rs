@@ -297,7 +297,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 if let Some(p) = &photons {
                     memory::check_photon_buffer(p, limit)?;
                 }
-                let device_estimate = estimate(Some(limit));
+                let mut device_estimate = estimate(Some(limit));
+                device_estimate.parts.push(memory::scene_part(&buffers));
                 check_fits(
                     &device_estimate,
                     width,

@@ -485,6 +485,8 @@ pub fn vcm_params(f: &FrameParams, base_radius: f32, sample_index: u32) -> VcmPa
         path_count: light_paths,
         paths_per_invocation: 1,
         connections: VCM_CONNECTIONS,
+        steps_per_dispatch: 0,
+        resume: 0,
     }
 }
 

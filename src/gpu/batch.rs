@@ -45,12 +45,9 @@ impl<'a> Recorder<'a> {
         for buffer in buffers {
             check_same_device(self.shared, &buffer.shared, buffer.name())?;
         }
-        if buffers.len() != kernel.binding_count as usize {
-            return Err(GpuError::BindingCount {
-                kernel: kernel.name.clone(),
-                given: buffers.len(),
-                expected: kernel.binding_count,
-            });
+        let expected = kernel.binding_types.buffer_count(kernel.binding_count);
+        if buffers.len() != expected as usize {
+            return Err(GpuError::BindingCount { kernel: kernel.name.clone(), given: buffers.len(), expected });
         }
         if push_constants.len() != kernel.push_constant_size as usize {
             return Err(GpuError::PushConstantSize {
@@ -132,7 +129,7 @@ impl<'a> Recorder<'a> {
                 dispatch_count += 1;
                 if kernel.binding_count > 0 {
                     set_count += 1;
-                    descriptor_count += kernel.binding_count;
+                    descriptor_count += kernel.binding_types.buffer_count(kernel.binding_count);
                 }
             }
         }
@@ -160,14 +157,19 @@ impl<'a> Recorder<'a> {
         for command in &commands {
             if let Command::Dispatch { kernel, buffers, .. } = command {
                 if kernel.binding_count > 0 {
-                    for (binding, b) in buffers.iter().enumerate() {
-                        let binding = binding as u32;
-                        if let Some(format) = kernel.binding_types.format(binding) {
-                            views.push((sets[set_index], binding, b.texel_view(format)?));
-                        } else {
-                            let ty = kernel.binding_types.descriptor_type(binding);
-                            let info = vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size };
-                            buffer_infos.push((sets[set_index], binding, ty, info));
+                    // Buffers in binding order, an array binding taking one per element.
+                    let mut next = buffers.iter();
+                    for binding in 0..kernel.binding_count {
+                        for element in 0..kernel.binding_types.descriptor_count(binding) {
+                            let b = next.next().expect("`dispatch` checked the buffer count");
+                            let at = (sets[set_index], binding, element);
+                            if let Some(format) = kernel.binding_types.format(binding) {
+                                views.push((at, b.texel_view(format)?));
+                            } else {
+                                let ty = kernel.binding_types.descriptor_type(binding);
+                                let info = vk::DescriptorBufferInfo { buffer: b.handle, offset: 0, range: b.vk_size };
+                                buffer_infos.push((at, ty, info));
+                            }
                         }
                     }
                     set_index += 1;
@@ -176,17 +178,19 @@ impl<'a> Recorder<'a> {
         }
         let writes: Vec<vk::WriteDescriptorSet> = buffer_infos
             .iter()
-            .map(|(set, binding, ty, info)| {
+            .map(|((set, binding, element), ty, info)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(*set)
                     .dst_binding(*binding)
+                    .dst_array_element(*element)
                     .descriptor_type(*ty)
                     .buffer_info(std::slice::from_ref(info))
             })
-            .chain(views.iter().map(|(set, binding, view)| {
+            .chain(views.iter().map(|((set, binding, element), view)| {
                 vk::WriteDescriptorSet::default()
                     .dst_set(*set)
                     .dst_binding(*binding)
+                    .dst_array_element(*element)
                     .descriptor_type(vk::DescriptorType::UNIFORM_TEXEL_BUFFER)
                     .texel_buffer_view(std::slice::from_ref(view))
             }))

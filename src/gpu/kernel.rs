@@ -76,7 +76,7 @@ impl Kernel {
                     vk::DescriptorSetLayoutBinding::default()
                         .binding(b)
                         .descriptor_type(binding_types.descriptor_type(b))
-                        .descriptor_count(1)
+                        .descriptor_count(binding_types.descriptor_count(b))
                         .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 })
                 .collect();
@@ -137,12 +137,16 @@ impl Kernel {
 /// The bindings of a kernel that are not storage buffers: uniform texel buffers (`usamplerBuffer`
 /// in GLSL) over the buffer bound there, bit b of `rgba` making binding b a buffer of RGBA32UI
 /// texels (16 bytes each) and bit b of `words` one of R32UI texels (a word each); and uniform
-/// buffers (bit b of `uniform`), which the shader declares with the scalar block layout.
+/// buffers (bit b of `uniform`), which the shader declares with the scalar block layout. A
+/// binding whose bit is set in `arrays` is an array of `array_len` descriptors of its type (a
+/// scene array split into pages, src/render/gpu/scene.rs), bound to as many consecutive buffers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BindingTypes {
     pub rgba: u32,
     pub words: u32,
     pub uniform: u32,
+    pub arrays: u32,
+    pub array_len: u32,
 }
 
 impl BindingTypes {
@@ -156,6 +160,21 @@ impl BindingTypes {
         } else {
             None
         }
+    }
+
+    /// How many descriptors binding `b` holds (buffers it takes).
+    pub fn descriptor_count(self, b: u32) -> u32 {
+        let bit = 1u32.checked_shl(b).unwrap_or(0);
+        if self.arrays & bit != 0 {
+            self.array_len.max(1)
+        } else {
+            1
+        }
+    }
+
+    /// How many buffers bindings 0..`bindings` take together.
+    pub fn buffer_count(self, bindings: u32) -> u32 {
+        (0..bindings).map(|b| self.descriptor_count(b)).sum()
     }
 
     pub(super) fn descriptor_type(self, b: u32) -> vk::DescriptorType {

@@ -369,6 +369,16 @@ shared_constants! {
     BINDING_SHAPE_DATA: u32 = 7;
     BINDING_MEDIA: u32 = 8;
     SCENE_BINDINGS: u32 = 9;
+    /// Pages (texel buffers) each scene array's binding holds: an array larger than one view
+    /// (the device's page, `DeviceScene::page_bytes`) is split over up to this many
+    /// (shaders/scene_fetch.glsl's `PAGED_TEXEL` has a case per page).
+    SCENE_PAGES: u32 = 8;
+
+    /// Words of the state an invocation of render_vcm and of vcm_light stores when it stops
+    /// after `VcmParams::steps_per_dispatch` vertices: the run's next path and the path under
+    /// way (`CameraPath`, `LightPath`, word by word in the kernels' `store_run`).
+    VCM_CAMERA_STATE_WORDS: u32 = 36;
+    VCM_LIGHT_STATE_WORDS: u32 = 28;
 
     /// Threads per workgroup of the one-dimensional kernels.
     WORKGROUP_SIZE: u32 = 64;

@@ -326,7 +326,7 @@ gpu_structs! {
         pub flags: u32,
     }
 
-    /// The constants of one sample of vertex connection and merging, 48 bytes (push constants of
+    /// The constants of one sample of vertex connection and merging, 56 bytes (push constants of
     /// the light-path kernel; the camera kernel reads them from its own buffer). See `cpu::vcm`.
     pub struct VcmParams {
         pub sample_index: u32,
@@ -352,6 +352,13 @@ gpu_structs! {
         pub paths_per_invocation: u32,
         /// Light vertices each camera vertex connects to (`VCM_CONNECTIONS`; at most 2).
         pub connections: u32,
+        /// Path vertices an invocation of vcm_light or render_vcm traces per dispatch before it
+        /// stores its path and run (0: no bound, one dispatch), and whether this dispatch
+        /// resumes the runs the previous one stored (1) or starts them (0): lavapipe's loop
+        /// limit per invocation then bounds one dispatch's vertices, not a whole path's
+        /// (render/gpu/bidirectional.rs). The CPU twin ignores both.
+        pub steps_per_dispatch: u32,
+        pub resume: u32,
     }
 
     /// A surface light vertex's material as its point looked it up, 80 bytes: the kind (after a

@@ -91,6 +91,24 @@ pub fn estimate(
     MemoryEstimate { parts }
 }
 
+/// The scene's arrays as the device holds them: ("scene", 0, bytes), the part a GPU estimate
+/// adds once the scene is prepared (the host's copy is counted by the prepared scene itself,
+/// which exists before the estimate is made). Every array is split into pages of one texel view
+/// (src/render/gpu/scene.rs), so only the device's memory bounds them, not one binding.
+pub fn scene_part(buffers: &super::SceneBuffers) -> (&'static str, u64, u64) {
+    let bytes = [
+        size_of_val(buffers.nodes.as_slice()),
+        size_of_val(buffers.primitives.as_slice()),
+        size_of_val(buffers.materials.as_slice()),
+        size_of_val(buffers.lights.as_slice()),
+        size_of_val(buffers.textures.as_slice()),
+        size_of_val(buffers.texture_data.as_slice()),
+        size_of_val(buffers.shape_data.as_slice()),
+        size_of_val(buffers.media.as_slice()),
+    ];
+    ("scene", 0, bytes.iter().map(|&b| b as u64).sum())
+}
+
 /// Refuses a render whose estimate does not fit the memory there is: `host_available` (see
 /// `available_host_memory`) and, on the GPU, the device's memory (`device_available`). The
 /// message says how much it would need, where, and what fits.

@@ -85,7 +85,15 @@ pub struct KernelVariant {
     pub path_traced: bool,
     /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
     pub bidirectional: bool,
+    /// The most pages a scene array takes on the device (1 unless one exceeds a page), and the
+    /// words in a page, log2 (`DeviceScene::page`). Specialization constants: with one page
+    /// each the kernels' fetches are single texel fetches.
+    pub pages: u32,
+    pub page_words_log2: u32,
 }
+
+/// `SCENE_PAGE_WORDS_LOG2`'s default in shaders/scene_bindings.glsl (128 MiB pages).
+const DEFAULT_PAGE_WORDS_LOG2: u32 = 25;
 
 impl KernelVariant {
     /// The kernel `name` in this variant's build:
@@ -116,8 +124,26 @@ impl KernelVariant {
 
     /// The values of the scene kernels' specialization constants (`constant_id` 0, 1, ...: see
     /// shaders/scene_bindings.glsl).
-    pub fn specialization(self) -> [u32; 5] {
-        [self.instances as u32, self.csg as u32, self.noise as u32, self.emission_textures as u32, self.material_kinds]
+    pub fn specialization(self) -> [u32; 7] {
+        [
+            self.instances as u32,
+            self.csg as u32,
+            self.noise as u32,
+            self.emission_textures as u32,
+            self.material_kinds,
+            // A default variant (no scene yet) reads one page, as every kernel made without
+            // constants does.
+            self.pages.max(1),
+            self.page_words_log2,
+        ]
+    }
+
+    /// This variant for arrays of up to `pages` pages of 2^`page_words_log2` words. With one
+    /// page the size is irrelevant and left at its default, so the variant equals that of any
+    /// device.
+    pub fn with_pages(self, pages: u32, page_words_log2: u32) -> KernelVariant {
+        let page_words_log2 = if pages > 1 { page_words_log2 } else { DEFAULT_PAGE_WORDS_LOG2 };
+        KernelVariant { pages: pages.max(1), page_words_log2, ..self }
     }
 }
 
@@ -141,6 +167,8 @@ impl SceneBuffers {
                 .fold(if self.media.is_empty() { 0 } else { 1 << MATERIAL_PHASE }, |kinds, m| kinds | 1 << m.kind),
             path_traced: self.frame.integrator == INTEGRATOR_PT,
             bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
+            pages: 1,
+            page_words_log2: DEFAULT_PAGE_WORDS_LOG2,
         }
     }
 

@@ -11,7 +11,7 @@ use super::maps::build_map;
 use super::scene::DeviceScene;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{Buffer, GpuContext, GpuError};
-use crate::layout::constants::{LAYER_COUNT, VCM_PICK_BLOCK};
+use crate::layout::constants::{LAYER_COUNT, VCM_CAMERA_STATE_WORDS, VCM_LIGHT_STATE_WORDS, VCM_PICK_BLOCK};
 use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
@@ -45,7 +45,22 @@ pub(super) struct BidirectionalBuffers {
     grid: Buffer,
     /// render_vcm's count of invocations the driver broke off (lavapipe's loop limit).
     broken_off: Buffer,
+    /// Either kernel's count of invocations that stopped after `steps_per_dispatch` vertices.
+    suspended: Buffer,
 }
+
+/// How the bidirectional kernels split their paths: `per` paths to an invocation, and at most
+/// `steps` vertices per invocation and dispatch (0: no bound). Lowered for good when the
+/// driver's loop limit breaks runs off: first the paths, a quarter at a time down to 1; then
+/// the vertices, from `FIRST_STEP_BOUND` a quarter at a time down to 1.
+pub(super) struct Runs<'a> {
+    pub per: &'a mut u32,
+    pub steps: &'a mut u32,
+}
+
+/// The first bound on vertices per dispatch once single paths break off: a whole path of a
+/// room's depth rarely needs more, and every four fewer cost another round of dispatches.
+const FIRST_STEP_BOUND: u32 = 16;
 
 /// Paths per invocation of vcm_light and render_vcm on this device: `CPU_PATHS_PER_INVOCATION`
 /// on CPU devices, 1 on GPUs.
@@ -75,6 +90,7 @@ impl BidirectionalBuffers {
             params: ctx.create_scratch("vcm_params", size_of::<VcmParams>() as u64)?,
             grid: ctx.create_scratch("vcm_grid", size_of::<GridParams>() as u64)?,
             broken_off: ctx.create_scratch("vcm_broken_off", 16)?,
+            suspended: ctx.create_scratch("vcm_suspended", 16)?,
         })
     }
 }
@@ -90,13 +106,12 @@ pub(super) struct On<'a> {
 
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
 /// the device into one accumulation, read back once: the output is their mean. The buffers are
-/// those in `kept` (made or remade there when the frame's sizes changed); `per` light and camera
-/// paths to an invocation, lowered for good (a quarter at a time, down to 1) when the driver's
-/// loop limit breaks some off.
+/// those in `kept` (made or remade there when the frame's sizes changed); `runs` says how the
+/// kernels split their paths, lowered for good when the driver's loop limit breaks some off.
 pub(super) fn render_pass_bidirectional(
     on: On,
     kept: &mut Option<BidirectionalBuffers>,
-    per: &mut u32,
+    runs: Runs,
     spp: u32,
     first: u32,
     passes: u32,
@@ -124,21 +139,28 @@ pub(super) fn render_pass_bidirectional(
         *kept = Some(BidirectionalBuffers::new(ctx, sizes)?);
     }
     let b = kept.as_ref().expect("made just above");
+    let Runs { per, steps } = runs;
     loop {
-        let broken_off = match render_samples(on, b, *per, spp, first, passes, progress)? {
+        let broken_off = match render_samples(on, b, *per, *steps, spp, first, passes, progress)? {
             Samples::Rendered(output) => return Ok(*output),
             Samples::BrokenOff(n) => n,
         };
-        // The passes are deterministic: rendered again with fewer paths per invocation, they
-        // are what the first try would have been without the limit.
+        // The passes are deterministic: rendered again with shorter runs, they are what the
+        // first try would have been without the limit. Fewer paths per invocation first (a
+        // SIMD group's lanes stay busier with more), then fewer vertices per dispatch: a
+        // path's rays through a large BVH can pass the limit alone, a vertex's rarely.
         if *per > 1 {
             *per = (*per / 4).max(1);
             continue;
         }
+        if *steps != 1 {
+            *steps = if *steps == 0 { FIRST_STEP_BOUND } else { (*steps / 4).max(1) };
+            continue;
+        }
         return Err(GpuError::Unsupported(format!(
             "the device broke off {broken_off} runs of light or camera paths at its loop limit (lavapipe stops an invocation after \
-             65535 loop iterations): their rays cross too many overlapping objects or instances, and the image \
-             would miss their light; render with --backend cpu, or lower max_depth"
+             65535 loop iterations) even at one path vertex per invocation: a ray crosses too many overlapping objects \
+             or instances, and the image would miss their light; render with --backend cpu"
         )));
     }
 }
@@ -151,11 +173,13 @@ enum Samples {
 }
 
 /// The samples of `render_pass_bidirectional` with its buffers `b`, `per` paths to an invocation
-/// of either stage.
+/// of either stage and at most `steps` vertices per invocation and dispatch (0: no bound).
+#[allow(clippy::too_many_arguments)]
 fn render_samples(
     on: On,
     b: &BidirectionalBuffers,
     per: u32,
+    steps: u32,
     spp: u32,
     first: u32,
     passes: u32,
@@ -167,18 +191,35 @@ fn render_samples(
     let light_kernel = kernels.vcm_light(ctx)?;
     let camera_kernel = kernels.render_vcm(ctx)?;
     let slots = light_path_count(&f) as u64 * f.max_depth.max(1) as u64;
-    let band_rows = stop_band_rows(f.width, f.height);
+    let mut band_rows = stop_band_rows(f.width, f.height);
+    if steps > 0 {
+        // The camera runs of a band wait in one storage buffer between dispatches.
+        let row_bytes = (f.width as u64 * VCM_CAMERA_STATE_WORDS as u64 * 4).div_ceil(per as u64);
+        band_rows = band_rows.min((ctx.info().max_storage_buffer_range / row_bytes).max(1) as u32);
+    }
     let total = f.height as u64 * spp as u64 * passes as u64;
     let mut done = 0;
     let mut complete = true;
     let (mut light_time, mut camera_time) = (Duration::ZERO, Duration::ZERO);
     let view_distance = crate::cpu::vcm::view_distance(&buffers.view(), buffers.bounding_radius);
     let base_radius = crate::cpu::vcm::vcm_base_radius(&f, buffers.surface_area, view_distance);
+    // Where each invocation's run waits between dispatches, when their vertices are bounded.
+    let run_states = |name: &str, lanes: u64, words: u32| {
+        let bytes = if steps == 0 { 16 } else { lanes * words as u64 * 4 };
+        ctx.create_scratch(name, bytes)
+    };
+    let light_states = run_states("vcm_light_runs", PATHS_PER_DISPATCH.div_ceil(per) as u64, VCM_LIGHT_STATE_WORDS)?;
+    let camera_states = run_states(
+        "vcm_camera_runs",
+        (band_rows as u64 * f.width as u64).div_ceil(per as u64),
+        VCM_CAMERA_STATE_WORDS,
+    )?;
     let samples = (first * spp..(first + passes) * spp).enumerate();
     'samples: for (sample, sample_index) in samples {
         let t = Instant::now();
         let mut params = vcm_params(&f, base_radius, sample_index);
         params.paths_per_invocation = per;
+        params.steps_per_dispatch = steps;
         // The grid build takes the points' buffer; vcm_light writes the points below the count
         // it returns, and nothing reads past them.
         let points = ctx.create_scratch("vcm_points", slots.max(1) * size_of::<Photon>() as u64)?;
@@ -190,23 +231,44 @@ fn render_samples(
             }
             params.path_begin = begin;
             params.path_count = PATHS_PER_DISPATCH.min(params.light_paths - begin);
-            ctx.run("vcm_light", |rec| {
-                // The clears go into the sample's first batch rather than submissions of their own.
-                if begin == 0 {
-                    if sample == 0 {
-                        rec.fill_zero(&b.accumulation)?;
-                        rec.fill_zero(&b.broken_off)?;
+            // Dispatched again, resuming the runs that stopped, until none stops.
+            params.resume = 0;
+            loop {
+                ctx.run("vcm_light", |rec| {
+                    // The clears go into the sample's first batch rather than submissions of their own.
+                    if begin == 0 && params.resume == 0 {
+                        if sample == 0 {
+                            rec.fill_zero(&b.accumulation)?;
+                            rec.fill_zero(&b.broken_off)?;
+                        }
+                        rec.fill_zero(&b.splats)?;
+                        rec.fill_zero(&b.counter)?;
                     }
-                    rec.fill_zero(&b.splats)?;
-                    rec.fill_zero(&b.counter)?;
+                    if steps > 0 {
+                        rec.fill_zero(&b.suspended)?;
+                    }
+                    rec.dispatch(
+                        light_kernel,
+                        &scene.bindings(&[
+                            &b.vertices,
+                            &b.splats,
+                            &points,
+                            &b.counter,
+                            &b.path_counts,
+                            &b.materials,
+                            &light_states,
+                            &b.suspended,
+                        ]),
+                        bytemuck::bytes_of(&params),
+                        groups(params.path_count.div_ceil(per)),
+                    )
+                })?;
+                if steps == 0 || ctx.download::<u32>(&b.suspended)?[0] == 0 {
+                    break;
                 }
-                rec.dispatch(
-                    light_kernel,
-                    &scene.bindings(&[&b.vertices, &b.splats, &points, &b.counter, &b.path_counts, &b.materials]),
-                    bytemuck::bytes_of(&params),
-                    groups(params.path_count.div_ceil(per)),
-                )
-            })?;
+                params.resume = 1;
+            }
+            params.resume = 0;
             begin += params.path_count;
         }
         params.path_begin = 0;
@@ -231,30 +293,45 @@ fn render_samples(
                 break 'samples;
             }
             let unit = DispatchRange { part: 0, ..unit };
-            ctx.run("render_vcm", |rec| {
-                if first {
-                    rec.update(&b.params, std::slice::from_ref(&params))?;
-                    rec.update(&b.grid, std::slice::from_ref(&grid))?;
+            // Dispatched again, resuming the runs that stopped, until none stops.
+            params.resume = 0;
+            loop {
+                ctx.run("render_vcm", |rec| {
+                    if first || steps > 0 {
+                        rec.update(&b.params, std::slice::from_ref(&params))?;
+                    }
+                    if first {
+                        rec.update(&b.grid, std::slice::from_ref(&grid))?;
+                    }
+                    if steps > 0 {
+                        rec.fill_zero(&b.suspended)?;
+                    }
+                    rec.dispatch(
+                        camera_kernel,
+                        &scene.bindings(&[
+                            &b.accumulation,
+                            &b.params,
+                            &b.grid,
+                            &b.vertices,
+                            &map.photons,
+                            &map.starts,
+                            &b.splats,
+                            &b.path_counts,
+                            &b.materials,
+                            &b.broken_off,
+                            &camera_states,
+                            &b.suspended,
+                        ]),
+                        bytemuck::bytes_of(&unit),
+                        groups((unit.row_count * f.width).div_ceil(params.paths_per_invocation)),
+                    )
+                })?;
+                first = false;
+                if steps == 0 || ctx.download::<u32>(&b.suspended)?[0] == 0 {
+                    break;
                 }
-                rec.dispatch(
-                    camera_kernel,
-                    &scene.bindings(&[
-                        &b.accumulation,
-                        &b.params,
-                        &b.grid,
-                        &b.vertices,
-                        &map.photons,
-                        &map.starts,
-                        &b.splats,
-                        &b.path_counts,
-                        &b.materials,
-                        &b.broken_off,
-                    ]),
-                    bytemuck::bytes_of(&unit),
-                    groups((unit.row_count * f.width).div_ceil(params.paths_per_invocation)),
-                )
-            })?;
-            first = false;
+                params.resume = 1;
+            }
             done += unit_paths(&unit);
             progress(done, total);
         }

@@ -37,6 +37,9 @@ pub struct GpuRenderer<'a> {
     /// Light and camera paths per invocation of vcm_light and render_vcm
     /// (`set_paths_per_invocation`).
     paths_per_invocation: u32,
+    /// Vertices per invocation and dispatch of vcm_light and render_vcm, 0 for no bound
+    /// (`set_steps_per_dispatch`).
+    steps_per_dispatch: u32,
     /// Photons stored by the last pass (global, caustic, volume): the next pass's buffer sizes.
     photon_capacity: [u64; 3],
     /// Wall time of uploading the scene and creating the kernels.
@@ -65,7 +68,7 @@ impl<'a> GpuRenderer<'a> {
         let t = Instant::now();
         let photons = crate::render::effective_photons(buffers, photons);
         let scene = DeviceScene::upload(ctx, buffers, photons)?;
-        let kernels = GpuKernels::for_scene(buffers.variant());
+        let kernels = GpuKernels::for_scene(scene.variant);
         kernels.create_all(ctx, photons.is_some())?;
         Ok(GpuRenderer {
             ctx,
@@ -76,6 +79,7 @@ impl<'a> GpuRenderer<'a> {
             accumulation: None,
             bidirectional: None,
             paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
+            steps_per_dispatch: 0,
             photon_capacity: [0; 3],
             setup_time: t.elapsed(),
             last_written: Vec::new(),
@@ -113,6 +117,19 @@ impl<'a> GpuRenderer<'a> {
         self.paths_per_invocation
     }
 
+    /// How many path vertices each invocation of the bidirectional integrators' kernels traces
+    /// per dispatch before it stores its run for the next dispatch to resume (0: no bound, the
+    /// default). The images are the same whatever the number; a render that runs into lavapipe's
+    /// loop limit a path per invocation sets it (then lowers it, down to 1).
+    pub fn set_steps_per_dispatch(&mut self, steps: u32) {
+        self.steps_per_dispatch = steps;
+    }
+
+    /// Vertices per invocation and dispatch of the bidirectional integrators' kernels now.
+    pub fn steps_per_dispatch(&self) -> u32 {
+        self.steps_per_dispatch
+    }
+
     /// The scene arrays the last [`GpuRenderer::update_scene`] wrote to the device: those that
     /// differ from the scene it held ("frame", "nodes", "primitives", "materials", ...).
     pub fn last_written(&self) -> &[&'static str] {
@@ -132,11 +149,12 @@ impl<'a> GpuRenderer<'a> {
         let (in_place, written) = self.scene.update_changed(self.ctx, buffers, photons, previous)?;
         self.device_mixed = false;
         self.last_written = written;
-        if buffers.variant() != self.kernels.variant() {
-            let kept = self.spare_kernels.iter().position(|k| k.variant() == buffers.variant());
+        let variant = self.scene.variant;
+        if variant != self.kernels.variant() {
+            let kept = self.spare_kernels.iter().position(|k| k.variant() == variant);
             let next = match kept {
                 Some(i) => self.spare_kernels.remove(i),
-                None => GpuKernels::for_scene(buffers.variant()),
+                None => GpuKernels::for_scene(variant),
             };
             self.spare_kernels.push(std::mem::replace(&mut self.kernels, next));
             if self.spare_kernels.len() > SPARE_KERNEL_SETS {
@@ -182,8 +200,10 @@ impl<'a> GpuRenderer<'a> {
         if self.kernels.variant().bidirectional {
             let on =
                 super::bidirectional::On { ctx, kernels: &self.kernels, scene: &self.scene, buffers: &self.buffers };
-            let (kept, per) = (&mut self.bidirectional, &mut self.paths_per_invocation);
-            return super::bidirectional::render_pass_bidirectional(on, kept, per, spp, first, passes, progress);
+            let kept = &mut self.bidirectional;
+            let runs =
+                super::bidirectional::Runs { per: &mut self.paths_per_invocation, steps: &mut self.steps_per_dispatch };
+            return super::bidirectional::render_pass_bidirectional(on, kept, runs, spp, first, passes, progress);
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();

@@ -6,7 +6,7 @@ use std::time::Instant;
 use crate::gpu::{BindingTypes, GpuContext, GpuError, Kernel};
 use crate::layout::constants::{
     BINDING_FRAME, BINDING_LIGHTS, BINDING_MATERIALS, BINDING_MEDIA, BINDING_NODES, BINDING_PRIMITIVES,
-    BINDING_SHAPE_DATA, BINDING_TEXTURES, BINDING_TEXTURE_DATA, SCENE_BINDINGS, WORKGROUP_SIZE,
+    BINDING_SHAPE_DATA, BINDING_TEXTURES, BINDING_TEXTURE_DATA, SCENE_BINDINGS, SCENE_PAGES, WORKGROUP_SIZE,
 };
 use crate::layout::{DispatchRange, EmitParams, VcmParams};
 use crate::render::prepare::KernelVariant;
@@ -45,23 +45,29 @@ enum Which {
 /// How the kernels read the scene (shaders/scene_bindings.glsl): as texel buffers, since on
 /// lavapipe a texel fetch goes through gallivm's vectorised texture path where a storage-buffer
 /// read costs about 15 scalar instructions per lane and word; `frame`, which every lane reads
-/// alike, as a uniform buffer, whose uniform reads gallivm makes once for all lanes.
+/// alike, as a uniform buffer, whose uniform reads gallivm makes once for all lanes. Each texel
+/// binding is an array of `SCENE_PAGES` pages (`DeviceScene::bindings`).
 pub const SCENE_BINDING_TYPES: BindingTypes = BindingTypes {
-    rgba: 1 << BINDING_NODES
-        | 1 << BINDING_PRIMITIVES
-        | 1 << BINDING_MATERIALS
-        | 1 << BINDING_LIGHTS
-        | 1 << BINDING_TEXTURES
-        | 1 << BINDING_MEDIA,
-    words: 1 << BINDING_TEXTURE_DATA | 1 << BINDING_SHAPE_DATA,
+    rgba: SCENE_RGBA,
+    words: SCENE_WORDS,
     uniform: 1 << BINDING_FRAME,
+    arrays: SCENE_RGBA | SCENE_WORDS,
+    array_len: SCENE_PAGES,
 };
+const SCENE_RGBA: u32 = 1 << BINDING_NODES
+    | 1 << BINDING_PRIMITIVES
+    | 1 << BINDING_MATERIALS
+    | 1 << BINDING_LIGHTS
+    | 1 << BINDING_TEXTURES
+    | 1 << BINDING_MEDIA;
+const SCENE_WORDS: u32 = 1 << BINDING_TEXTURE_DATA | 1 << BINDING_SHAPE_DATA;
 /// The camera kernel's: also its photon maps and bucket starts (bindings SCENE_BINDINGS + 2..8)
 /// as texel buffers and the grid parameters (SCENE_BINDINGS + 1) as a uniform buffer.
 const RENDER_BINDING_TYPES: BindingTypes = BindingTypes {
     rgba: SCENE_BINDING_TYPES.rgba | 0b01_0101 << (SCENE_BINDINGS + 2),
     words: SCENE_BINDING_TYPES.words | 0b10_1010 << (SCENE_BINDINGS + 2),
     uniform: SCENE_BINDING_TYPES.uniform | 1 << (SCENE_BINDINGS + 1),
+    ..SCENE_BINDING_TYPES
 };
 
 /// render_vcm's: its params and grid (SCENE_BINDINGS + 1, + 2) as uniform buffers, the light
@@ -72,11 +78,13 @@ const RENDER_VCM_BINDING_TYPES: BindingTypes = BindingTypes {
     rgba: SCENE_BINDING_TYPES.rgba | 0b1_1101_1000 << SCENE_BINDINGS,
     words: SCENE_BINDING_TYPES.words | 0b10_0000 << SCENE_BINDINGS,
     uniform: SCENE_BINDING_TYPES.uniform | 0b110 << SCENE_BINDINGS,
+    ..SCENE_BINDING_TYPES
 };
 
 /// grid_rank's (shaders/grid_rank.comp): bucket starts (binding 1) as words, the scattered photons
 /// (binding 2) as RGBA32UI texels, since every invocation reads its whole bucket.
-const GRID_RANK_BINDING_TYPES: BindingTypes = BindingTypes { rgba: 1 << 2, words: 1 << 1, uniform: 0 };
+const GRID_RANK_BINDING_TYPES: BindingTypes =
+    BindingTypes { rgba: 1 << 2, words: 1 << 1, uniform: 0, arrays: 0, array_len: 0 };
 
 /// Workgroups for a one-dimensional launch, spread over x and y so that neither passes 32768
 /// (the kernels rebuild the index with GLOBAL_INDEX and skip the surplus).
@@ -162,7 +170,7 @@ impl GpuKernels {
                 &self.vcm_light,
                 Spec {
                     name: scene("vcm_light"),
-                    bindings: SCENE_BINDINGS + 6,
+                    bindings: SCENE_BINDINGS + 8,
                     types: SCENE_BINDING_TYPES,
                     push: size_of::<VcmParams>(),
                     constants,
@@ -173,7 +181,7 @@ impl GpuKernels {
                 &self.render_vcm,
                 Spec {
                     name: scene("render_vcm"),
-                    bindings: SCENE_BINDINGS + 10,
+                    bindings: SCENE_BINDINGS + 12,
                     types: RENDER_VCM_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,

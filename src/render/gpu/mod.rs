@@ -12,4 +12,4 @@ mod scene;
 pub use camera::{render_gpu, GpuRenderer};
 pub use kernels::{GpuKernels, SCENE_BINDING_TYPES};
 pub use maps::{build_maps_gpu, DeviceMap, DeviceMaps};
-pub use scene::DeviceScene;
+pub use scene::{DeviceScene, PageSize, PagedArray, PAGE_BYTES_VAR};

@@ -1,8 +1,9 @@
 //! The scene arrays on the device: uploaded once, updated in place.
 
 use crate::gpu::{Buffer, GpuContext, GpuError};
-use crate::layout::constants::{NO_TEXTURE, SCENE_BINDINGS};
+use crate::layout::constants::{NO_TEXTURE, SCENE_BINDINGS, SCENE_PAGES};
 use crate::layout::Medium;
+use crate::limits::fmt_bytes;
 use crate::render::photons::PhotonSettings;
 use crate::render::prepare::KernelVariant;
 use crate::render::{photon_frame, SceneBuffers};
@@ -10,16 +11,144 @@ use crate::render::{photon_frame, SceneBuffers};
 /// The scene arrays on the device.
 pub struct DeviceScene {
     pub frame: Buffer,
-    pub nodes: Buffer,
-    pub primitives: Buffer,
-    pub materials: Buffer,
-    pub lights: Buffer,
-    pub textures: Buffer,
-    pub texture_data: Buffer,
-    pub shape_data: Buffer,
-    pub media: Buffer,
-    /// Which variant of the scene kernels the scene needs.
+    pub nodes: PagedArray,
+    pub primitives: PagedArray,
+    pub materials: PagedArray,
+    pub lights: PagedArray,
+    pub textures: PagedArray,
+    pub texture_data: PagedArray,
+    pub shape_data: PagedArray,
+    pub media: PagedArray,
+    /// How the arrays are split into pages.
+    pub page: PageSize,
+    /// Which variant of the scene kernels the scene needs, with its pages.
     pub variant: KernelVariant,
+}
+
+/// The size of one page of a scene array: a power of two of bytes that one texel view of R32UI
+/// words (`maxTexelBufferElements`), one storage binding (`maxStorageBufferRange`) and one
+/// allocation (`maxMemoryAllocationSize`) all hold, so a page is a shift and a mask in the
+/// kernels. 128 MiB on lavapipe (its storage range), 512 MiB on GPUs whose views hold 2^27
+/// texels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PageSize {
+    pub bytes: u64,
+    /// The device limit that sets it (or the environment variable that lowered it).
+    pub limit: &'static str,
+}
+
+/// Lowers the page size (bytes, a power of two of at least 16): a test-only way to split the
+/// small scenes of the test suite over several pages.
+pub const PAGE_BYTES_VAR: &str = "PHOTONIX_GPU_PAGE_BYTES";
+
+impl PageSize {
+    /// The device's page size, lowered by `PHOTONIX_GPU_PAGE_BYTES` when that is set.
+    pub fn for_device(ctx: &GpuContext) -> Result<PageSize, GpuError> {
+        let info = ctx.info();
+        let limits = [
+            (info.max_storage_buffer_range, "maxStorageBufferRange"),
+            (info.max_texel_buffer_elements.saturating_mul(4), "maxTexelBufferElements (R32UI words)"),
+            (info.max_memory_allocation_size, "maxMemoryAllocationSize"),
+        ];
+        let (most, limit) = limits.into_iter().min_by_key(|l| l.0).expect("three limits");
+        // The largest power of two within it; the kernels need at least 4 words (an RGBA texel).
+        let mut page = PageSize { bytes: 1u64 << most.max(16).ilog2(), limit };
+        if let Ok(v) = std::env::var(PAGE_BYTES_VAR) {
+            let bytes = PageSize::parse_override(&v)?;
+            if bytes < page.bytes {
+                page = PageSize { bytes, limit: PAGE_BYTES_VAR };
+            }
+        }
+        Ok(page)
+    }
+
+    /// The bytes `PHOTONIX_GPU_PAGE_BYTES` gives, or why they cannot be a page.
+    pub fn parse_override(v: &str) -> Result<u64, GpuError> {
+        v.trim().parse::<u64>().ok().filter(|b| b.is_power_of_two() && *b >= 16).ok_or_else(|| {
+            GpuError::Unsupported(format!("{PAGE_BYTES_VAR}={v:?}: give a power of two of at least 16 bytes"))
+        })
+    }
+
+    /// log2 of the words in a page (`SCENE_PAGE_WORDS_LOG2` in shaders/scene_bindings.glsl).
+    pub fn words_log2(self) -> u32 {
+        self.bytes.ilog2() - 2
+    }
+}
+
+/// One scene array on the device, split into pages of [`PageSize`] bytes (one, for all but the
+/// largest arrays), each its own buffer and texel view; the kernels find texel `i` in page
+/// `i >> log2` (shaders/scene_fetch.glsl).
+pub struct PagedArray {
+    name: &'static str,
+    /// What the array holds, for messages.
+    what: &'static str,
+    size: u64,
+    pages: Vec<Buffer>,
+}
+
+impl PagedArray {
+    fn upload(
+        ctx: &GpuContext,
+        name: &'static str,
+        what: &'static str,
+        bytes: &[u8],
+        page: PageSize,
+    ) -> Result<PagedArray, GpuError> {
+        let count = (bytes.len() as u64).div_ceil(page.bytes).max(1);
+        if count > SCENE_PAGES as u64 {
+            return Err(GpuError::Unsupported(format!(
+                "{what} need {}, more than the {SCENE_PAGES} pages of {} ({}) this device binds per scene array; \
+                 use smaller images or fewer shapes, or --backend cpu",
+                fmt_bytes(bytes.len() as u64),
+                fmt_bytes(page.bytes),
+                page.limit
+            )));
+        }
+        let pages = if bytes.is_empty() {
+            vec![ctx.upload(name, bytes)?]
+        } else {
+            let chunks = bytes.chunks(page.bytes as usize).enumerate();
+            chunks.map(|(k, chunk)| ctx.upload(&page_name(name, k), chunk)).collect::<Result<_, _>>()?
+        };
+        Ok(PagedArray { name, what, size: bytes.len() as u64, pages })
+    }
+
+    /// Bytes of the array (its pages together).
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// Pages the array takes (at least 1).
+    pub fn page_count(&self) -> u32 {
+        self.pages.len() as u32
+    }
+
+    /// The binding's `SCENE_PAGES` buffers: the pages, then the first again for the pages the
+    /// array does not use (every descriptor of an array must be valid; the kernels never read them).
+    fn bindings(&self) -> impl Iterator<Item = &Buffer> {
+        (0..SCENE_PAGES as usize).map(|k| self.pages.get(k).unwrap_or(&self.pages[0]))
+    }
+
+    /// Replaces the contents with `bytes`: written into the pages when the size is the same
+    /// (returns true), uploaded anew otherwise.
+    fn replace(&mut self, ctx: &GpuContext, bytes: &[u8], page: PageSize) -> Result<bool, GpuError> {
+        if bytes.len() as u64 == self.size {
+            for (buffer, chunk) in self.pages.iter().zip(bytes.chunks(page.bytes as usize)) {
+                ctx.write(buffer, chunk)?;
+            }
+            return Ok(true);
+        }
+        *self = PagedArray::upload(ctx, self.name, self.what, bytes, page)?;
+        Ok(false)
+    }
+}
+
+fn page_name(name: &str, k: usize) -> String {
+    if k == 0 {
+        name.to_string()
+    } else {
+        format!("{name} page {k}")
+    }
 }
 
 impl DeviceScene {
@@ -29,34 +158,47 @@ impl DeviceScene {
         photons: Option<&PhotonSettings>,
     ) -> Result<Self, GpuError> {
         let frame = photon_frame(buffers, photons);
-        // Every array is one storage binding: refuse, with what it holds, one the device cannot bind.
-        let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
-        for (what, bytes) in [
-            ("the scene's image and pattern textures", std::mem::size_of_val(buffers.texture_data.as_slice())),
-            ("the scene's primitives", std::mem::size_of_val(buffers.primitives.as_slice())),
-            ("the scene's BVH", std::mem::size_of_val(buffers.nodes.as_slice())),
-            ("the scene's shape data (uv)", std::mem::size_of_val(buffers.shape_data.as_slice())),
-        ] {
-            if bytes as u64 > limit {
-                return Err(GpuError::Unsupported(format!(
-                    "{what} need {} MiB, more than one storage buffer holds on this device ({} MiB); use smaller images or fewer shapes, or --backend cpu",
-                    (bytes as u64).div_ceil(1 << 20),
-                    limit >> 20
-                )));
-            }
-        }
-        Ok(DeviceScene {
+        let page = PageSize::for_device(ctx)?;
+        let up = |name, what, bytes| PagedArray::upload(ctx, name, what, bytes, page);
+        let mut scene = DeviceScene {
             frame: ctx.upload("frame", std::slice::from_ref(&frame))?,
-            nodes: ctx.upload("bvh_nodes", &buffers.nodes)?,
-            primitives: ctx.upload("primitives", &buffers.primitives)?,
-            materials: ctx.upload("materials", &buffers.materials)?,
-            lights: ctx.upload("lights", &buffers.lights)?,
-            textures: ctx.upload("textures", &buffers.textures)?,
-            texture_data: ctx.upload("texture_data", &buffers.texture_data)?,
-            shape_data: ctx.upload("shape_data", &buffers.shape_data)?,
-            media: ctx.upload("media", device_media(buffers))?,
+            nodes: up("bvh_nodes", "the scene's BVH", bytes_of(&buffers.nodes))?,
+            primitives: up("primitives", "the scene's primitives", bytes_of(&buffers.primitives))?,
+            materials: up("materials", "the scene's materials", bytes_of(&buffers.materials))?,
+            lights: up("lights", "the scene's lights", bytes_of(&buffers.lights))?,
+            textures: up("textures", "the scene's textures", bytes_of(&buffers.textures))?,
+            texture_data: up(
+                "texture_data",
+                "the scene's image and pattern textures",
+                bytes_of(&buffers.texture_data),
+            )?,
+            shape_data: up("shape_data", "the scene's shape data (normals, uv)", bytes_of(&buffers.shape_data))?,
+            media: up("media", "the scene's media", bytes_of(device_media(buffers)))?,
+            page,
             variant: buffers.variant(),
-        })
+        };
+        scene.variant = scene.paged_variant(buffers);
+        Ok(scene)
+    }
+
+    /// `buffers`' variant with the pages its arrays take on the device.
+    fn paged_variant(&self, buffers: &SceneBuffers) -> KernelVariant {
+        let arrays = self.arrays();
+        let pages = arrays.iter().map(|a| a.page_count()).max().unwrap_or(1);
+        buffers.variant().with_pages(pages, self.page.words_log2())
+    }
+
+    fn arrays(&self) -> [&PagedArray; 8] {
+        [
+            &self.nodes,
+            &self.primitives,
+            &self.materials,
+            &self.lights,
+            &self.textures,
+            &self.texture_data,
+            &self.shape_data,
+            &self.media,
+        ]
     }
 
     /// Replaces the scene's arrays with those of `buffers`: an array of the same byte size is
@@ -82,104 +224,59 @@ impl DeviceScene {
         photons: Option<&PhotonSettings>,
         previous: Option<(&SceneBuffers, Option<&PhotonSettings>)>,
     ) -> Result<(u32, Vec<&'static str>), GpuError> {
-        fn replace<T: bytemuck::Pod>(
-            ctx: &GpuContext,
-            buffer: &mut Buffer,
-            data: &[T],
-            old: Option<&[T]>,
-            written: &mut Vec<&'static str>,
-            name: &'static str,
-        ) -> Result<u32, GpuError> {
-            let bytes = std::mem::size_of_val(data) as u64;
-            if bytes == buffer.size()
-                && old.is_some_and(|old| bytemuck::cast_slice::<T, u8>(old) == bytemuck::cast_slice::<T, u8>(data))
-            {
-                return Ok(1);
-            }
-            written.push(name);
-            if bytes == buffer.size() {
-                ctx.write(buffer, data)?;
-                Ok(1)
-            } else {
-                *buffer = ctx.upload(buffer.name(), data)?;
-                Ok(0)
-            }
-        }
+        let page = self.page;
+        let mut written = Vec::new();
+        let mut kept = 0;
+        // The frame: one small uniform buffer.
         let frame = photon_frame(buffers, photons);
         let old_frame = previous.map(|(b, p)| photon_frame(b, p));
-        self.variant = buffers.variant();
-        let mut written = Vec::new();
-        let w = &mut written;
-        let kept = replace(
-            ctx,
-            &mut self.frame,
-            std::slice::from_ref(&frame),
-            old_frame.as_ref().map(std::slice::from_ref),
-            w,
-            "frame",
-        )? + replace(ctx, &mut self.nodes, &buffers.nodes, previous.map(|(b, _)| &b.nodes[..]), w, "nodes")?
-            + replace(
-                ctx,
-                &mut self.primitives,
-                &buffers.primitives,
-                previous.map(|(b, _)| &b.primitives[..]),
-                w,
-                "primitives",
-            )?
-            + replace(
-                ctx,
-                &mut self.materials,
-                &buffers.materials,
-                previous.map(|(b, _)| &b.materials[..]),
-                w,
-                "materials",
-            )?
-            + replace(ctx, &mut self.lights, &buffers.lights, previous.map(|(b, _)| &b.lights[..]), w, "lights")?
-            + replace(
-                ctx,
-                &mut self.textures,
-                &buffers.textures,
-                previous.map(|(b, _)| &b.textures[..]),
-                w,
-                "textures",
-            )?
-            + replace(
-                ctx,
-                &mut self.texture_data,
-                &buffers.texture_data,
-                previous.map(|(b, _)| &b.texture_data[..]),
-                w,
-                "texture_data",
-            )?
-            + replace(
-                ctx,
-                &mut self.shape_data,
-                &buffers.shape_data,
-                previous.map(|(b, _)| &b.shape_data[..]),
-                w,
-                "shape_data",
-            )?
-            + replace(ctx, &mut self.media, device_media(buffers), previous.map(|(b, _)| device_media(b)), w, "media")?;
+        if old_frame.is_some_and(|old| bytemuck::bytes_of(&old) == bytemuck::bytes_of(&frame)) {
+            kept += 1;
+        } else {
+            written.push("frame");
+            ctx.write(&self.frame, std::slice::from_ref(&frame))?;
+            kept += 1;
+        }
+        let old = |f: fn(&SceneBuffers) -> &[u8]| previous.map(|(b, _)| f(b));
+        let arrays: [(&mut PagedArray, &'static str, ArrayOf); 8] = [
+            (&mut self.nodes, "nodes", |b| bytes_of(&b.nodes)),
+            (&mut self.primitives, "primitives", |b| bytes_of(&b.primitives)),
+            (&mut self.materials, "materials", |b| bytes_of(&b.materials)),
+            (&mut self.lights, "lights", |b| bytes_of(&b.lights)),
+            (&mut self.textures, "textures", |b| bytes_of(&b.textures)),
+            (&mut self.texture_data, "texture_data", |b| bytes_of(&b.texture_data)),
+            (&mut self.shape_data, "shape_data", |b| bytes_of(&b.shape_data)),
+            (&mut self.media, "media", |b| bytes_of(device_media(b))),
+        ];
+        for (array, name, of) in arrays {
+            let bytes = of(buffers);
+            if old(of).is_some_and(|old| old == bytes) && array.size() == bytes.len() as u64 {
+                kept += 1;
+                continue;
+            }
+            written.push(name);
+            kept += array.replace(ctx, bytes, page)? as u32;
+        }
+        self.variant = self.paged_variant(buffers);
         Ok((kept, written))
     }
 
-    /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), followed
-    /// by a kernel's own buffers.
+    /// The scene's buffers in binding order (`BINDING_*`, shaders/scene_bindings.glsl), each
+    /// array as its `SCENE_PAGES` pages, followed by a kernel's own buffers.
     pub fn bindings<'a>(&'a self, own: &[&'a Buffer]) -> Vec<&'a Buffer> {
-        let scene = [
-            &self.frame,
-            &self.nodes,
-            &self.primitives,
-            &self.materials,
-            &self.lights,
-            &self.textures,
-            &self.texture_data,
-            &self.shape_data,
-            &self.media,
-        ];
-        debug_assert_eq!(scene.len(), SCENE_BINDINGS as usize);
-        scene.into_iter().chain(own.iter().copied()).collect()
+        debug_assert_eq!(self.arrays().len() + 1, SCENE_BINDINGS as usize);
+        std::iter::once(&self.frame)
+            .chain(self.arrays().into_iter().flat_map(PagedArray::bindings))
+            .chain(own.iter().copied())
+            .collect()
     }
+}
+
+/// Where an array's bytes are in a `SceneBuffers`.
+type ArrayOf = fn(&SceneBuffers) -> &[u8];
+
+fn bytes_of<T: bytemuck::Pod>(data: &[T]) -> &[u8] {
+    bytemuck::cast_slice(data)
 }
 
 /// The media as bound: Vulkan has no empty buffers, so a scene without media binds one unused.
