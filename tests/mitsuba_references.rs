@@ -120,9 +120,3 @@ fn tent_filter_matches_mitsuba_through_bpt() {
 fn gaussian_filter_matches_mitsuba_through_vcm() {
     check("filter_gaussian", FILTER_MAX_ERROR, 0.02);
 }
-
-/// The filters' scenes are a grey ball's edge against a white sky, where a wrong filter or splats
-/// left unfiltered show above the noise of 8 passes of 64 spp (the renders are deterministic):
-/// measured relMSE against Mitsuba's tent 6.07e-4 with our tent, 7.63e-4 with our box; against
-/// its Gaussian 6.03e-4 with ours, 9.64e-4 with the box (branch materials' value).
-const FILTER_MAX_ERROR: f64 = 7e-4;

@@ -104,7 +104,6 @@ fn materials_showroom_has_every_material_kind_on_its_spheres() {
             MaterialKind::ThinDielectric { .. } => "thin_dielectric",
             MaterialKind::Conductor { .. } => "conductor",
             MaterialKind::Plastic { .. } => "plastic",
-            MaterialKind::ThinDielectric { .. } => "thin_dielectric",
             MaterialKind::Mix { .. } => "mix",
             MaterialKind::Null => "null",
         })

@@ -117,7 +117,7 @@ fn convert_mitsuba(args: &ConvertArgs) -> Result<()> {
         note!("warning: {warning}");
     }
     let t = mitsuba::translate_file(&args.scene)?;
-    write_toml(&args.output, &t.toml, &scene)
+    write_toml(&args.output, &t.toml, &scene, &scene.inputs)
 }
 
 /// Writes the translation `toml` to `output` (whole or not at all) and says what it holds.

@@ -6,7 +6,7 @@ use super::out::{field, num, string, Fields};
 use super::props::Plugin;
 use super::textures::Param;
 use super::xml::Element;
-use super::{Pos, Result, Translator, Uv, RENDERER_HAS_BECKMANN};
+use super::{Pos, Result, Translator, Uv};
 
 /// Mitsuba's named indices of refraction (its `ior.h`).
 const IOR_NAMES: &[(&str, f64)] = &[
@@ -265,9 +265,6 @@ impl<'a> Translator<'a> {
             .map_or((default_distribution.to_string(), p.pos()), |(d, at)| (d.to_string(), at));
         match dist.as_str() {
             "ggx" => {}
-            "beckmann" | "phong" | "as" if RENDERER_HAS_BECKMANN => {
-                m.fields.push(("distribution".into(), string("beckmann")))
-            }
             "beckmann" | "phong" | "as" => {
                 self.warn(at, format!("the `{dist}` microfacet distribution is rendered as GGX of the same alpha"))
             }

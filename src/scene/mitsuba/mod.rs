@@ -345,7 +345,3 @@ fn collect_ids<'a>(e: &'a Element, ids: &mut HashMap<&'a str, &'a Element>) {
     }
 }
 
-/// Whether the renderer has Beckmann microfacets (`distribution = "beckmann"`, promised by
-/// branch `materials`); until then Mitsuba's Beckmann surfaces are GGX of the same alpha, with a
-/// warning.
-pub(crate) const RENDERER_HAS_BECKMANN: bool = false;
