@@ -344,4 +344,3 @@ fn collect_ids<'a>(e: &'a Element, ids: &mut HashMap<&'a str, &'a Element>) {
         collect_ids(c, ids);
     }
 }
-
