@@ -17,6 +17,7 @@ pub mod csg;
 mod error;
 pub mod files;
 mod format;
+pub mod front_end;
 pub mod gltf_scene;
 mod material;
 pub use auto_integrator::auto_integrator;

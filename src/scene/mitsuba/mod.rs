@@ -21,7 +21,6 @@ mod transform;
 mod xml;
 
 use std::collections::HashMap;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::SceneError;
@@ -31,33 +30,10 @@ use xml::Element;
 /// The first words of every translation.
 pub const HEADER: &str = "# Translated from the Mitsuba scene";
 
-/// A place in the scene file or an include: file number (see `Translation::files`), line and
-/// column, from 1.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Pos {
-    pub file: u32,
-    pub line: u32,
-    pub col: u32,
-}
+pub use super::front_end::Pos;
 
-/// An error of the front-end, at a position when it has one.
-#[derive(Clone, Debug)]
-pub struct MitsubaError {
-    pub pos: Option<Pos>,
-    pub message: String,
-}
-
-impl MitsubaError {
-    pub fn at(pos: Pos, message: String) -> MitsubaError {
-        MitsubaError { pos: Some(pos), message }
-    }
-}
-
-impl fmt::Display for MitsubaError {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(&self.message)
-    }
-}
+/// An error of the front-end (the one type both translating front-ends use).
+pub type MitsubaError = super::front_end::FrontEndError;
 
 /// A Mitsuba scene as TOML text, with where each TOML entry came from.
 #[derive(Clone, Debug)]

@@ -18,7 +18,6 @@ mod parser;
 mod tessellate;
 mod ttf;
 
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 use super::SceneError;
@@ -26,33 +25,10 @@ use super::SceneError;
 /// POV-Ray's standard include folder as Debian's `povray-includes` installs it.
 pub const STANDARD_INCLUDE_DIR: &str = "/usr/share/povray-3.7/include";
 
-/// A place in a `.pov` file or an include: file number (see `Translation::files`), line and
-/// column, from 1.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Pos {
-    pub file: u32,
-    pub line: u32,
-    pub col: u32,
-}
+pub use super::front_end::Pos;
 
-/// An error of the front-end, at a position when it has one.
-#[derive(Clone, Debug)]
-pub struct PovError {
-    pub pos: Option<Pos>,
-    pub message: String,
-}
-
-impl PovError {
-    pub fn at(pos: Pos, message: String) -> PovError {
-        PovError { pos: Some(pos), message }
-    }
-}
-
-impl fmt::Display for PovError {
-    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
-        f.write_str(&self.message)
-    }
-}
+/// An error of the front-end (the one type both translating front-ends use).
+pub type PovError = super::front_end::FrontEndError;
 
 /// What POV-Ray takes from its command line: the image size (`image_width`, `image_height`)
 /// and the animation clock.
