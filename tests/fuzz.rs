@@ -445,6 +445,9 @@ fn mutate(r: &mut Rng, input: &[u8]) -> Vec<u8> {
                 let lines: Vec<&[u8]> = b.split_inclusive(|&c| c == b'\n').collect();
                 let line = lines[r.below(lines.len())].to_vec();
                 let times = if r.chance(10) { 1 + r.below(5000) } else { 1 };
+                // A long line (a glTF data URI) repeated thousands of times would take the
+                // harness's own memory (6 GB once): the copies stop at the input limit.
+                let times = times.min((MAX_INPUT_BYTES / line.len().max(1)).max(1));
                 let at = r.below(len + 1);
                 let copies: Vec<u8> = line.iter().copied().cycle().take(line.len() * times).collect();
                 b.splice(at..at, copies);
