@@ -43,10 +43,10 @@ layout(push_constant) uniform Push { EmitParams params; };
 #include "scene.glsl"
 #include "photon.glsl"
 
-void store_photon(vec3 x, vec3 flux, vec3 wi, uint flags, bool volume) {
+void store_photon(vec3 x, vec3 flux, vec3 wi, vec3 side, uint flags, bool volume) {
     // Flux relative to the mean power per path keeps the half floats near 1.
     float inv_scale = float(params.total_paths) / frame.total_light_power;
-    Photon p = pack_photon(x, flux, inv_scale, wi, flags);
+    Photon p = pack_photon(x, flux, inv_scale, wi, side, flags);
     if (volume) {
         uint vslot = atomicAdd(counters[2], 1u);
         if (vslot < params.volume_capacity) STORE_PHOTON(volume_photons, vslot, p)

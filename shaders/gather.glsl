@@ -100,7 +100,8 @@ float edge_mass(float surface_reach[EDGE_PROBES], float r) {
 // Irradiance at x (normal n, facing the side photons must arrive from) from the photons of
 // `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
 // whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
-// photons that arrived from behind the surface or lie off its tangent plane.
+// photons that arrived from behind the surface, landed on its other side or lie off its tangent
+// plane.
 Gathered photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
     GridParams g = grids[map];
     Gathered found = Gathered(vec3(0.0), vec3(0.0), false);
@@ -131,7 +132,7 @@ Gathered photon_irradiance(uint map, vec3 x, vec3 n, uint exclude) {
                 found.off_disc = true;
                 continue;
             }
-            if (dot(photon_wi(p), n) <= 0.0) continue;
+            if (dot(photon_wi(p), n) <= 0.0 || !photon_on_side(photon_side(p), n)) continue;
             vec3 c = photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
             found.disc += c;
             if (off <= thin) found.thin += c;
@@ -177,7 +178,7 @@ Gathered photon_radiance(uint map, Hit h, Bsdf b, vec3 wo, uint exclude) {
                 continue;
             }
             vec3 wi = photon_wi(p);
-            if (!both_sides && dot(wi, nf) <= 0.0) continue;
+            if (!both_sides && (dot(wi, nf) <= 0.0 || !photon_on_side(photon_side(p), nf))) continue;
             vec3 c = bsdf_eval(b, wo, wi) * photon_flux(p, g.flux_scale) * (1.0 - d2 / r2);
             found.disc += c;
             if (off <= thin) found.thin += c;

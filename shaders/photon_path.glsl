@@ -1,6 +1,6 @@
 // One photon path from the lights: emission, bounces with Russian roulette, and the photons it
 // leaves at surfaces with estimate lobes. CPU twin: src/cpu/emit_photons.rs (`trace_photon_path`).
-// The including kernel defines `store_photon(vec3 x, vec3 flux, vec3 wi, uint flags, bool volume)` and
+// The including kernel defines `store_photon(vec3 x, vec3 flux, vec3 wi, vec3 side, uint flags, bool volume)` and
 // declares the scene bindings; rng, sampling, shape, texture, bsdf, trace, light and shading
 // come first.
 
@@ -78,9 +78,9 @@ void trace_photon_path(uint path, EmitParams params) {
             // A collision in a medium stores a volume photon carrying its sigma_t-weighted flux,
             // in the global pass only: the caustic map is of surfaces.
             if (scattered) {
-                if (params.caustics_only == 0u) store_photon(h.p, flux * collision, wo, flags, true);
+                if (params.caustics_only == 0u) store_photon(h.p, flux * collision, wo, vec3(0.0), flags, true);
             } else if (params.caustics_only == 0u || flags == PHOTON_FLAG_CAUSTIC) {
-                store_photon(h.p, flux, wo, flags, false);
+                store_photon(h.p, flux, wo, facing(b, wo), flags, false);
             }
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if (params.caustics_only != 0u || lobes == 0u) return;

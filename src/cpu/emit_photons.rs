@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::bsdf::{bsdf_flags, bsdf_sample, material_bsdf, shading_adjoint};
+use super::bsdf::{bsdf_flags, bsdf_sample, facing, material_bsdf, shading_adjoint};
 use super::light::{light_emit, pick_light};
 use super::medium::{medium_after, medium_hit, medium_sample, phase_bsdf};
 use super::photon::pack_photon;
@@ -22,14 +22,14 @@ pub fn photon_sequence(path: u32, params: &EmitParams) -> (u32, u32) {
     sequence_point(params.pass & 1, params.pass >> 1, params.total_paths, path)
 }
 
-/// Traces photon path `path` and calls `store(x, flux, wi, flags, volume)` at every surface with
-/// estimate lobes it meets and (`volume` true) every collision in a medium, exactly as the kernel
-/// does.
+/// Traces photon path `path` and calls `store(x, flux, wi, side, flags, volume)` at every surface
+/// with estimate lobes it meets (`side`: its normal facing the photon) and (`volume` true, `side`
+/// zero) every collision in a medium, exactly as the kernel does.
 pub fn trace_photon_path(
     s: &SceneView,
     path: u32,
     params: &EmitParams,
-    mut store: impl FnMut(Vec3, Vec3, Vec3, u32, bool),
+    mut store: impl FnMut(Vec3, Vec3, Vec3, Vec3, u32, bool),
 ) {
     let f = s.frame;
     if f.light_count == 0 {
@@ -117,10 +117,10 @@ pub fn trace_photon_path(
             // in the global pass only: the caustic map is of surfaces.
             if scattered {
                 if params.caustics_only == 0 {
-                    store(h.p, flux * collision, wo, flags, true);
+                    store(h.p, flux * collision, wo, Vec3::ZERO, flags, true);
                 }
             } else if params.caustics_only == 0 || flags == PHOTON_FLAG_CAUSTIC {
-                store(h.p, flux, wo, flags, false);
+                store(h.p, flux, wo, facing(&b, wo), flags, false);
             }
             // A caustic-only pass has no use for the path once it has met an estimate lobe.
             if params.caustics_only != 0 || lobes == 0 {
@@ -170,8 +170,8 @@ pub fn emit_photons(s: &SceneView, params: &EmitParams) -> PhotonMaps {
     let per_run: Vec<Vec<(Photon, u32, bool)>> = (params.path_begin..params.path_begin + params.path_count)
         .into_par_iter()
         .fold(Vec::new, |mut stored, path| {
-            trace_photon_path(s, path, params, |x, flux, wi, flags, volume| {
-                stored.push((pack_photon(x, flux, inv_scale, wi, flags), flags, volume));
+            trace_photon_path(s, path, params, |x, flux, wi, side, flags, volume| {
+                stored.push((pack_photon(x, flux, inv_scale, wi, side, flags), flags, volume));
             });
             stored
         })

@@ -7,6 +7,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::bsdf::{bsdf_estimate_is_constant, bsdf_eval, bsdf_flags, facing, Bsdf};
+use super::photon::photon_on_side;
 use super::photon_index::PhotonIndex;
 use super::sampling::onb;
 use super::shape::Hit;
@@ -29,7 +30,8 @@ fn map_index<'a>(s: &SceneView<'a>, map: usize, exclude: u32) -> (&'a PhotonInde
 /// Irradiance at `x` (normal `n`, facing the side photons must arrive from) from the photons of
 /// `map` within the map's radius, with the 2D Epanechnikov kernel K = 2/(pi r^2) (1 - d^2/r^2),
 /// whose integral over the disc is 1. Photons whose flags intersect `exclude` are skipped, as are
-/// photons that arrived from behind the surface or lie off its tangent plane.
+/// photons that arrived from behind the surface, landed on its other side or lie off its tangent
+/// plane.
 pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u32) -> Gathered {
     let (index, g) = map_index(s, map, exclude);
     let mut found = Gathered::default();
@@ -48,7 +50,7 @@ pub fn photon_irradiance(s: &SceneView, map: usize, x: Vec3, n: Vec3, exclude: u
             found.off_disc = true;
             return;
         }
-        if p.wi.dot(n) <= 0.0 {
+        if p.wi.dot(n) <= 0.0 || !photon_on_side(p.side, n) {
             return;
         }
         let c = p.flux * (1.0 - d2 / r2);
@@ -171,7 +173,7 @@ pub fn photon_radiance(s: &SceneView, map: usize, h: &Hit, b: &Bsdf, wo: Vec3, e
             found.off_disc = true;
             return;
         }
-        if !both_sides && p.wi.dot(nf) <= 0.0 {
+        if !both_sides && (p.wi.dot(nf) <= 0.0 || !photon_on_side(p.side, nf)) {
             return;
         }
         let c = bsdf_eval(b, wo, p.wi) * p.flux * (1.0 - d2 / r2);

@@ -2,7 +2,9 @@
 //! `flux_rg`: half-float R (low 16 bits) and G (high 16); `flux_b_dir`: half-float B (bits 0-15),
 //! octahedral direction toward the light (u bits 16-22, v bits 23-29), `PHOTON_FLAG_*` (bits
 //! 30-31). Flux is stored divided by the map's flux scale so that the halves stay near 1, where
-//! their 11-bit mantissa rounds by at most 0.05%.
+//! their 11-bit mantissa rounds by at most 0.05%. Flux is never negative, so the halves' three
+//! sign bits carry the signs of the facing normal where the photon landed (x, y, z): a lookup
+//! on the other side of a thin surface tells its photons apart (`photon_on_side`).
 
 use glam::{Vec2, Vec3};
 
@@ -63,18 +65,46 @@ pub fn oct_decode(bits: u32) -> Vec3 {
     v.normalize()
 }
 
-pub fn pack_photon(position: Vec3, flux: Vec3, inv_flux_scale: f32, wi: Vec3, flags: u32) -> Photon {
+/// Packs a photon that arrived along `wi` at `position`, where the surface's normal facing it
+/// is `side` (zero in a medium).
+pub fn pack_photon(position: Vec3, flux: Vec3, inv_flux_scale: f32, wi: Vec3, side: Vec3, flags: u32) -> Photon {
     let f = flux * inv_flux_scale;
+    let half = |v: f32, negative: bool| (f32_to_f16(v) & 0x7fff) | if negative { 0x8000 } else { 0 };
     Photon {
         position: position.into(),
-        flux_rg: f32_to_f16(f.x) | (f32_to_f16(f.y) << 16),
-        flux_b_dir: f32_to_f16(f.z) | (oct_encode(wi) << 16) | (flags << 30),
+        flux_rg: half(f.x, side.x < 0.0) | (half(f.y, side.y < 0.0) << 16),
+        flux_b_dir: half(f.z, side.z < 0.0) | (oct_encode(wi) << 16) | (flags << 30),
     }
 }
 
 pub fn photon_flux(p: &Photon, flux_scale: f32) -> Vec3 {
-    Vec3::new(f16_to_f32(p.flux_rg & 0xffff), f16_to_f32(p.flux_rg >> 16), f16_to_f32(p.flux_b_dir & 0xffff))
+    Vec3::new(f16_to_f32(p.flux_rg & 0x7fff), f16_to_f32((p.flux_rg >> 16) & 0x7fff), f16_to_f32(p.flux_b_dir & 0x7fff))
         * flux_scale
+}
+
+/// The signs of the facing normal where the photon landed: bit k set where component k is
+/// negative.
+pub fn photon_side(p: &Photon) -> u32 {
+    ((p.flux_rg >> 15) & 1) | ((p.flux_rg >> 30) & 2) | ((p.flux_b_dir >> 13) & 4)
+}
+
+/// Whether a photon of normal signs `side` landed on the side of its surface that a lookup of
+/// facing normal `n` sees: the sign of the photon's normal along `n`'s largest component
+/// agrees with `n`'s. Within a disc (curvature radius at least twice the lookup radius, or the
+/// photon lies off the disc) a photon of the same side has its normal within 30 degrees of `n`,
+/// and that component (at least 1/sqrt 3 of `n`) keeps its sign; one of the far side of a
+/// zero-thickness surface (a closed sphere seen from inside) has it reversed. Without this a
+/// photon that grazed the outside counts inside, where `wi` alone cannot tell.
+pub fn photon_on_side(side: u32, n: Vec3) -> bool {
+    let a = n.abs();
+    let (k, nk) = if a.x >= a.y && a.x >= a.z {
+        (0, n.x)
+    } else if a.y >= a.z {
+        (1, n.y)
+    } else {
+        (2, n.z)
+    };
+    ((side >> k) & 1) == u32::from(nk < 0.0)
 }
 
 pub fn photon_wi(p: &Photon) -> Vec3 {
@@ -117,5 +147,30 @@ mod tests {
         let degrees = worst.acos().to_degrees();
         println!("worst octahedral error {degrees:.2} degrees");
         assert!(degrees < 2.0, "{degrees}");
+    }
+
+    #[test]
+    fn the_landing_side_rides_in_the_flux_sign_bits() {
+        let n = Vec3::new(0.3, -0.9, 0.3).normalize();
+        let p = pack_photon(Vec3::ONE, Vec3::new(1.0, 0.5, 0.25), 1.0, Vec3::Z, n, 2);
+        assert_eq!(photon_flux(&p, 1.0), Vec3::new(1.0, 0.5, 0.25));
+        assert_eq!(photon_side(&p), 2);
+        assert_eq!(photon_flags(&p), 2);
+        assert!(photon_on_side(photon_side(&p), n));
+        assert!(!photon_on_side(photon_side(&p), -n));
+        // Normals up to 30 degrees apart agree, whatever the axis.
+        for i in 0..2000u32 {
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 2000.0;
+            let phi = i as f32 * 2.399_963;
+            let r = (1.0 - z * z).sqrt();
+            let q = Vec3::new(r * phi.cos(), r * phi.sin(), z);
+            let tilt = q.any_orthonormal_vector() * 30f32.to_radians().tan();
+            let m = (q + tilt).normalize();
+            let side = photon_side(&pack_photon(Vec3::ZERO, Vec3::ONE, 1.0, Vec3::Z, m, 0));
+            assert!(photon_on_side(side, q), "{q} {m}");
+            assert!(!photon_on_side(side, -q), "{q} {m}");
+        }
+        // A photon in a medium has no side (volume lookups do not ask).
+        assert_eq!(photon_side(&pack_photon(Vec3::ZERO, Vec3::ONE, 1.0, Vec3::Z, Vec3::ZERO, 0)), 0);
     }
 }

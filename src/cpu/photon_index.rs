@@ -14,7 +14,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::grid::{grid_cell, grid_face_gaps, grid_hash, grid_neighbour, grid_neighbour_in_reach, photon_order};
-use super::photon::{photon_flags, photon_flux, photon_wi};
+use super::photon::{photon_flags, photon_flux, photon_side, photon_wi};
 use crate::layout::{GridParams, Photon};
 
 static NEXT_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -33,11 +33,19 @@ thread_local! {
         const { std::cell::RefCell::new(LastCell { id: 0, cell: IVec3::ZERO, ranges: [(0, 0); 27] }) };
 }
 
-/// A photon's flux (times the map's flux scale) and unit direction toward the light, decoded.
+/// A photon's flux (times the map's flux scale), unit direction toward the light and the signs
+/// of the normal it landed on (`photon::photon_side`), decoded.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PhotonData {
     pub flux: Vec3,
     pub wi: Vec3,
+    pub side: u32,
+}
+
+impl PhotonData {
+    pub fn of(p: &Photon, flux_scale: f32) -> PhotonData {
+        PhotonData { flux: photon_flux(p, flux_scale), wi: photon_wi(p), side: photon_side(p) }
+    }
 }
 
 /// One slot of the cell table: an occupied cell and its range of photons (`end` = 0: empty).
@@ -155,8 +163,7 @@ impl PhotonIndex {
             .par_iter()
             .map(|p| [p.position[0], p.position[1], p.position[2], f32::from_bits(photon_flags(p))])
             .collect();
-        let data =
-            sorted.par_iter().map(|p| PhotonData { flux: photon_flux(p, g.flux_scale), wi: photon_wi(p) }).collect();
+        let data = sorted.par_iter().map(|p| PhotonData::of(p, g.flux_scale)).collect();
         let id = NEXT_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         PhotonIndex { id, dropped: drop, table: slots, table_mask: mask, records, data }
     }
@@ -249,7 +256,7 @@ mod tests {
                     p.y = (i % 4) as f32 * 0.5 - 1.0;
                 }
                 let wi = (Vec3::new(u(3), u(4), u(5)) * 2.0 - 1.0).normalize_or(Vec3::Y);
-                pack_photon(p, Vec3::new(u(6), u(7), u(8)), 1.0, wi, i % 4)
+                pack_photon(p, Vec3::new(u(6), u(7), u(8)), 1.0, wi, wi, i % 4)
             })
             .collect();
         for (radius, table_mask) in [(0.1, 16383u32), (0.3, 0), (0.3, 1023), (0.7, 7)] {
@@ -267,7 +274,7 @@ mod tests {
                     let mut expected = Vec::new();
                     for_each_photon_near(x, &g, &sorted, &starts, |p, d2| {
                         if photon_flags(p) & drop == 0 {
-                            let data = PhotonData { flux: photon_flux(p, g.flux_scale), wi: photon_wi(p) };
+                            let data = PhotonData::of(p, g.flux_scale);
                             expected.push((Vec3::from(p.position), photon_flags(p), data, d2));
                         }
                     });

@@ -232,7 +232,8 @@ gpu_structs! {
 
     /// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).
     /// Position in scene units; flux as three half floats relative to the map's flux scale; the
-    /// direction toward the light in 14 octahedral bits and two `PHOTON_FLAG_*` bits. Packing lives in
+    /// direction toward the light in 14 octahedral bits and two `PHOTON_FLAG_*` bits; the halves'
+    /// sign bits hold the signs of the normal it landed on. Packing lives in
     /// `shaders/photon.glsl` and its twin `cpu::photon`.
     pub struct Photon {
         pub position: [f32; 3], // scalars only: align 4, no padding
