@@ -237,6 +237,26 @@ fn tail_includes_stop_at_the_include_depth() {
     assert_eq!(load_error(p.join("loop.pov")), "loaded");
 }
 
+#[test]
+fn large_arrays_made_over_and_over_stop_at_the_token_budget() {
+    // Found by the hour-long fuzz run: a 4-million-slot array declared in a file that includes
+    // itself through a macro (128 levels, each making, measuring and dropping the array) ran
+    // for minutes on few tokens. (Copies in a loop: parser.rs's
+    // `array_slots_count_against_the_token_budget`, on a small budget; at the full budget they
+    // stop after as long as a runaway #while takes, about 10 CPU-seconds.)
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path();
+    let body = "#declare A = array[4194304];\n#macro T() #include \"inc.pov\" #end\nT()\n";
+    std::fs::write(p.join("inc.pov"), format!("{POV_BASE}{body}")).unwrap();
+    let started = std::time::Instant::now();
+    let e = load_error(p.join("inc.pov"));
+    assert!(e.contains("inc.pov") && e.contains("tokens") && e.contains("array's slots"), "{e}");
+    println!("inc.pov: refused after {:.1} s", started.elapsed().as_secs_f64());
+    // A large array made and copied once loads.
+    std::fs::write(p.join("once.pov"), format!("{POV_BASE}#declare A = array[1048576];\n#declare B = A;\n")).unwrap();
+    assert_eq!(load_error(p.join("once.pov")), "loaded");
+}
+
 // Class 5: the files the front-ends read are inputs, never overwritten
 
 /// A 2x2 grey PNG.
@@ -341,6 +361,32 @@ fn a_served_pov_scene_reads_nothing_outside_its_folder_and_says_nothing_of_it() 
             assert!(!e.contains(secret), "{line}: `{secret}` in {e}");
         }
     }
+    // A Mitsuba scene's includes pass the same gate, and its translation's Save replaces no
+    // scene.toml of the user's beside it.
+    std::fs::write(outside.join("secret.xml"), "<scene version=\"3.0.0\"><!-- SECRETWORD --></scene>").unwrap();
+    let xml = |include: &str| {
+        format!(
+            "<scene version=\"3.0.0\">{include}<sensor type=\"perspective\"><float name=\"fov\" value=\"40\"/></sensor>\
+             <emitter type=\"constant\"/><shape type=\"sphere\"/></scene>"
+        )
+    };
+    for include in ["/etc/passwd", "../outside/secret.xml", "../outside/missing.xml"] {
+        std::fs::write(folder.join("room.xml"), xml(&format!("<include filename=\"{include}\"/>"))).unwrap();
+        let path = folder.join("room.xml");
+        let e = bounded(8 << 20, 60, move || photonix::editor::SceneDocument::load(&path).err().map(|e| e.to_string()));
+        let e = e.unwrap_or_else(|| panic!("{include}: served"));
+        assert!(e.contains("not inside the scene's folder"), "{include}: {e}");
+        for secret in ["root", "SECRETWORD", "passwd", "secret", "missing", "outside"] {
+            assert!(!e.contains(secret), "{include}: `{secret}` in {e}");
+        }
+    }
+    std::fs::write(folder.join("room.xml"), xml("")).unwrap();
+    std::fs::write(folder.join("room.toml"), "# my own scene\n").unwrap();
+    let mut doc = photonix::editor::SceneDocument::load(&folder.join("room.xml")).unwrap();
+    let e = doc.save().unwrap_err();
+    assert!(e.contains("room.toml already exists beside room.xml"), "{e}");
+    assert_eq!(std::fs::read_to_string(folder.join("room.toml")).unwrap(), "# my own scene\n");
+
     // `photonix render` reads what the user's own scene names.
     std::fs::write(folder.join("scene.pov"), format!("{POV_BASE}#include \"../outside/ok.inc\"\n")).unwrap();
     std::fs::write(outside.join("ok.inc"), "#declare OK = 1;\n").unwrap();
@@ -494,6 +540,13 @@ fn pov_camera_and_light_errors_name_the_cause_at_their_line() {
     std::fs::write(p.join("far.toml"), toml).unwrap();
     let e = load_error(p.join("far.toml"));
     assert!(e.contains("too close") && !e.contains("equals"), "{e}");
+    // Numbers in messages read as numbers, not hundreds of digits (a fuzz finding).
+    std::fs::write(p.join("num.pov"), format!("{POV_BASE}sphere {{ 0, 1 1e-45 }}\nbox {{ 0, 1 1e300 }}\n")).unwrap();
+    let e = load_error(p.join("num.pov"));
+    assert!(e.contains("num.pov:4:") && e.contains("1e-45"), "{e}");
+    std::fs::write(p.join("dim.pov"), format!("{POV_BASE}#declare A = array[1e300];\n")).unwrap();
+    let e = load_error(p.join("dim.pov"));
+    assert!(e.contains("dim.pov:4:") && e.contains("1e300"), "{e}");
 }
 
 // Class 9: ci/slurm-farm checks everything before it submits

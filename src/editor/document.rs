@@ -249,11 +249,17 @@ impl SceneDocument {
             doc.translated_from = Some(path.to_path_buf());
             return Ok(doc);
         }
-        // A Mitsuba scene likewise (scene::mitsuba): its TOML names the files beside it.
+        // A Mitsuba scene likewise (scene::mitsuba): its includes read through the same gate,
+        // confined alike; its TOML names the files beside it, which the TOML's load confines.
         if crate::scene::mitsuba::is_mitsuba_path(path) {
-            let t = crate::scene::mitsuba::translate_file(path).map_err(|e| EditError::Invalid(e.to_string()))?;
+            let folder = folder_of(path)?;
+            let (t, _) = crate::scene::files::collect(confined.then_some(folder.as_path()), || {
+                crate::scene::mitsuba::translate_file(path)
+            });
+            let t = t.map_err(|e| EditError::Invalid(e.to_string()))?;
             let mut doc = Self::from_text(&path.with_extension("toml"), t.toml, confined)?;
             doc.saved = String::new();
+            doc.translated_from = Some(path.to_path_buf());
             return Ok(doc);
         }
         let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| {

@@ -53,9 +53,11 @@ impl Reader {
         if self.stack.len() >= MAX_INCLUDE_DEPTH {
             return Err(err(format!("includes nest more than {MAX_INCLUDE_DEPTH} deep at {shown}")));
         }
-        let bytes = crate::limits::read_limited(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
-            Some(cause) => err(format!("cannot read {shown}: {cause}")),
-            None => err(format!("{shown} is larger than {} bytes", crate::limits::MAX_SCENE_FILE_BYTES)),
+        // Through the scene's file gate: recorded as an input (no output may replace it) and,
+        // under the editor, confined to the scene's folder, where a refusal names no file.
+        let bytes = crate::scene::files::read(path, crate::limits::MAX_SCENE_FILE_BYTES).map_err(|e| match e {
+            crate::scene::files::FileError::Outside { .. } => err(format!("cannot read an included file: {e}")),
+            e => err(format!("cannot read {shown}: {e}")),
         })?;
         let file = self.files.len() as u32;
         self.files.push(path.to_path_buf());

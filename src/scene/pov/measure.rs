@@ -20,6 +20,9 @@ use super::parser::{Value, MAX_LANGUAGE_BYTES, MAX_VALUE_DEPTH, MAX_VALUE_NODES}
 pub struct Size {
     pub nodes: usize,
     pub bytes: usize,
+    /// The nodes and array slots (empty ones too) the walk visited: what storing, copying or
+    /// dropping the value costs, charged to the scene's token budget.
+    pub work: usize,
 }
 
 /// Which limit a value passed.
@@ -76,6 +79,7 @@ impl Walk {
             return Err(TooBig::Deep);
         }
         self.size.nodes += 1;
+        self.size.work += 1;
         self.size.bytes = self.size.bytes.saturating_add(bytes);
         if self.size.nodes > MAX_VALUE_NODES || self.size.bytes > MAX_LANGUAGE_BYTES {
             return Err(TooBig::Large);
@@ -89,6 +93,7 @@ impl Walk {
             Value::Vector(c) => self.node(d, size_of::<Value>() + 8 * c.len()),
             Value::Array(a) => {
                 self.node(d, size_of::<Value>() + a.items.len() * size_of::<Option<Value>>())?;
+                self.size.work += a.items.len();
                 a.items.iter().flatten().try_for_each(|x| self.value(x, d + 1))
             }
             Value::Object(o) => self.obj(o, d),

@@ -311,7 +311,10 @@ impl Parser {
             let n = self.float()?;
             self.expect_sym("]")?;
             if n.is_nan() || n < 1.0 || n > MAX_ARRAY as f64 {
-                return self.err(pos, format!("an array dimension must be 1 to {MAX_ARRAY}, not {n}"));
+                return self.err(
+                    pos,
+                    format!("an array dimension must be 1 to {MAX_ARRAY}, not {}", crate::limits::fmt_number(n)),
+                );
             }
             dims.push(n as usize);
         }
@@ -322,6 +325,7 @@ impl Parser {
         if total > MAX_ARRAY {
             return self.err(pos, format!("the array has more than {MAX_ARRAY} elements"));
         }
+        self.charge(total, pos)?;
         let mut items: Vec<Option<Value>> = vec![None; total];
         if self.accept_sym("{")? {
             // Nested braces initialise a multi-dimensional array in row order.
@@ -588,7 +592,7 @@ impl Parser {
         self.stop_at_less = false;
         let n = n?;
         if !(n >= min as f64 && n <= max as f64) {
-            return self.err(pos, format!("{what} must be {min} to {max}, not {n}"));
+            return self.err(pos, format!("{what} must be {min} to {max}, not {}", crate::limits::fmt_number(n)));
         }
         Ok(n as usize)
     }
@@ -834,7 +838,8 @@ impl Parser {
                 let n = self.float()?;
                 self.accept_sym(",")?;
                 if !(2.0..=7.0).contains(&n) || n.fract() != 0.0 {
-                    return self.err(pos, format!("a poly's order must be 2 to 7, not {n}"));
+                    return self
+                        .err(pos, format!("a poly's order must be 2 to 7, not {}", crate::limits::fmt_number(n)));
                 }
                 n as i32
             }
@@ -914,7 +919,13 @@ impl Parser {
                         }
                     }
                     if radius <= 0.0 {
-                        return self.err(pos, format!("a blob component's radius must be positive, not {radius}"));
+                        return self.err(
+                            pos,
+                            format!(
+                                "a blob component's radius must be positive, not {}",
+                                crate::limits::fmt_number(radius)
+                            ),
+                        );
                     }
                     comps.push(BlobComp { strength, radius, a, b, inv: m.inverse() });
                 }
@@ -1967,7 +1978,7 @@ impl Parser {
                 self.accept_sym(",")?;
                 let r = self.float()?;
                 if r <= 0.0 {
-                    return self.err(t.pos, format!("a black_hole's radius must be > 0, got {r}"));
+                    return self.err(t.pos, format!("a black_hole's radius must be > 0, got {}", crate::limits::fmt_number(r)));
                 }
                 w.insert("center".into(), vec(c));
                 w.insert("radius".into(), num(r));

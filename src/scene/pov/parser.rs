@@ -442,14 +442,34 @@ impl Parser {
         self.check_memory()
     }
 
-    /// Measures a value about to be stored as `name` (`measure`), refusing it past the limits.
-    fn measure_value(&self, value: &Value, depth: usize, name: &str) -> Result<super::measure::Size> {
-        super::measure::value_at(value, depth).map_err(|e| {
+    /// Measures a value about to be stored as `name` (`measure`), refusing it past the limits,
+    /// and charges its work to the token budget: a loop that stores a copy of a large array
+    /// each turn delivers few tokens but copies, measures and drops millions of slots.
+    fn measure_value(&mut self, value: &Value, depth: usize, name: &str) -> Result<super::measure::Size> {
+        let size = super::measure::value_at(value, depth).map_err(|e| {
             PovError::at(
                 self.here(),
                 format!("`{}` {}; see docs/limits.md", crate::limits::printable(name), e.reason()),
             )
-        })
+        })?;
+        self.charge(size.work, self.here())?;
+        Ok(size)
+    }
+
+    /// Counts `work` (array slots made, copied or measured) as tokens delivered, refusing the
+    /// scene past `max_tokens` like a runaway loop.
+    pub fn charge(&mut self, work: usize, pos: Pos) -> Result<()> {
+        self.delivered = self.delivered.saturating_add(work as u64);
+        if self.delivered > self.max_tokens {
+            return self.err(
+                pos,
+                format!(
+                    "the scene ran past {} tokens, an array's slots counting one each when it is made or stored (a runaway #while or macro, or large arrays made over and over?); see docs/limits.md",
+                    self.max_tokens
+                ),
+            );
+        }
+        Ok(())
     }
 
     /// Takes a value no longer stored off the language's memory.
@@ -1801,7 +1821,7 @@ fn index_array(v: Value, i: f64, pos: Pos, p: &Parser) -> Result<Value> {
 
 pub fn describe(t: &Tok) -> String {
     match t {
-        Tok::Num(n) => format!("the number {n}"),
+        Tok::Num(n) => format!("the number {}", crate::limits::fmt_number(*n)),
         Tok::Str(s) => format!("the string \"{s}\""),
         Tok::Word(w) => format!("`{w}`"),
         Tok::Directive(d) => format!("#{d}"),
@@ -2058,5 +2078,18 @@ mod tests {
         p.run_text("#declare R = image_width / image_height + clock;", Path::new("t.pov")).unwrap();
         let Some(Value::Float(r)) = p.lookup("R") else { panic!() };
         assert!((r - (640.0 / 480.0 + 0.25)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn array_slots_count_against_the_token_budget() {
+        // (The budget here is 100 000.) A 60 000-slot array made once fits; made twice, or
+        // copied once, it does not, whatever few tokens ask for it.
+        float("#declare A = array[60000]; #declare R = 1;");
+        let e = error("#declare A = array[60000]; #declare B = array[60000];");
+        assert!(e.message.contains("array's slots"), "{}", e.message);
+        let e = error("#declare A = array[40000]; #declare B = A;");
+        assert!(e.message.contains("array's slots"), "{}", e.message);
+        let e = error("#declare A = array[1000]; #for (I, 1, 1000) #declare B = A; #end");
+        assert!(e.message.contains("array's slots") && e.pos.map(|p| p.line) == Some(1), "{}", e.message);
     }
 }
