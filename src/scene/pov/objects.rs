@@ -326,6 +326,9 @@ impl Parser {
             return self.err(pos, format!("the array has more than {MAX_ARRAY} elements"));
         }
         self.charge(total, pos)?;
+        // The slots are allocated before the value is measured and stored: they must fit the
+        // language's memory now (4 million slots take about 1 GB).
+        self.check_allocation(total.saturating_mul(std::mem::size_of::<Option<Value>>()), pos)?;
         let mut items: Vec<Option<Value>> = vec![None; total];
         if self.accept_sym("{")? {
             // Nested braces initialise a multi-dimensional array in row order.

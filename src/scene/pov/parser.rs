@@ -501,6 +501,23 @@ impl Parser {
         Ok(())
     }
 
+    /// Refuses to allocate `bytes` more where the language's memory (`check_memory`) would not
+    /// hold them beside what is stored.
+    pub fn check_allocation(&self, bytes: usize, pos: Pos) -> Result<()> {
+        let total = self.declared_bytes.saturating_add(self.scene_bytes).saturating_add(bytes);
+        if total > self.memory_budget {
+            return self.err(
+                pos,
+                format!(
+                    "this would take {} more, past the {} the scene's declared values and objects may take; see docs/limits.md",
+                    crate::limits::fmt_bytes(bytes as u64),
+                    crate::limits::fmt_bytes(self.memory_budget as u64)
+                ),
+            );
+        }
+        Ok(())
+    }
+
     /// Adds an object placed in the scene to the language's memory.
     pub fn count_scene_object(&mut self, o: &super::ast::Obj) -> Result<()> {
         let bytes = super::measure::object(o).map_or(MAX_LANGUAGE_BYTES, |s| s.bytes);
