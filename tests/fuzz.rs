@@ -1511,6 +1511,7 @@ fn fuzz_corpus_replays_cleanly() {
         ("obj", check_obj_input),
         ("model", check_tagged_model_input),
         ("mitsuba", check_mitsuba_input),
+        ("pov", check_pov_input),
     ] {
         let Ok(entries) = std::fs::read_dir(repo("tests/fuzz_corpus").join(folder)) else { continue };
         let mut paths: Vec<PathBuf> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();
