@@ -33,15 +33,31 @@ fn main() {
         // A line `// variant: NAME` compiles the kernel once more as `<stem>_NAME` with
         // `VARIANT_NAME` defined (e.g. with the procedural textures that slow down lavapipe);
         // `// variant: A B` compiles `<stem>_A_B` with both defined.
+        // A line `// every build also: NAME` compiles each of these builds once more as
+        // `<build>_NAME` with `VARIANT_NAME` defined too (the scene kernels' `paged`: the page
+        // selection of scene arrays larger than one texel view, which lavapipe would otherwise
+        // inline at every fetch of every scene before it folds the specialization constant
+        // that removes it).
         let source = std::fs::read_to_string(kernel).unwrap_or_default();
         let variants = source.lines().filter_map(|l| l.strip_prefix("// variant: ")).map(str::trim);
-        let builds: Vec<(String, Vec<String>)> = std::iter::once((stem.clone(), Vec::new()))
+        let mut builds: Vec<(String, Vec<String>)> = std::iter::once((stem.clone(), Vec::new()))
             .chain(variants.map(|v| {
                 let names: Vec<&str> = v.split_whitespace().collect();
                 let defines = names.iter().map(|n| format!("VARIANT_{}", n.to_uppercase())).collect();
                 (format!("{stem}_{}", names.join("_")), defines)
             }))
             .collect();
+        for also in source.lines().filter_map(|l| l.strip_prefix("// every build also: ")).map(str::trim) {
+            let extra: Vec<(String, Vec<String>)> = builds
+                .iter()
+                .map(|(name, defines)| {
+                    let mut defines = defines.clone();
+                    defines.push(format!("VARIANT_{}", also.to_uppercase()));
+                    (format!("{name}_{also}"), defines)
+                })
+                .collect();
+            builds.extend(extra);
+        }
         for (name, define) in builds {
             let spv = out_dir.join(format!("{name}.spv"));
             match compile(kernel, &spv, &out_dir, &define) {
