@@ -4,6 +4,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 #[allow(dead_code)]
 #[path = "src/layout/constants.rs"]
@@ -27,29 +29,63 @@ fn main() {
 
     let mut index =
         String::from("/// Every compute kernel as (name, SPIR-V bytes).\npub const KERNELS: &[(&str, &[u8])] = &[\n");
-    let mut failures = Vec::new();
+    // Every build, in order: (kernel source, module name, defines).
+    let mut jobs: Vec<(&Path, String, Vec<String>)> = Vec::new();
     for kernel in &kernels {
         let stem = kernel.file_stem().unwrap().to_string_lossy().to_string();
         // A line `// variant: NAME` compiles the kernel once more as `<stem>_NAME` with
         // `VARIANT_NAME` defined (e.g. with the procedural textures that slow down lavapipe);
         // `// variant: A B` compiles `<stem>_A_B` with both defined.
+        // A line `// every build also: NAME` compiles each of these builds once more as
+        // `<build>_NAME` with `VARIANT_NAME` defined too (the scene kernels' `paged`: the page
+        // selection of scene arrays larger than one texel view, which lavapipe would otherwise
+        // inline at every fetch of every scene before it folds the specialization constant
+        // that removes it).
         let source = std::fs::read_to_string(kernel).unwrap_or_default();
         let variants = source.lines().filter_map(|l| l.strip_prefix("// variant: ")).map(str::trim);
-        let builds: Vec<(String, Vec<String>)> = std::iter::once((stem.clone(), Vec::new()))
+        let mut builds: Vec<(String, Vec<String>)> = std::iter::once((stem.clone(), Vec::new()))
             .chain(variants.map(|v| {
                 let names: Vec<&str> = v.split_whitespace().collect();
                 let defines = names.iter().map(|n| format!("VARIANT_{}", n.to_uppercase())).collect();
                 (format!("{stem}_{}", names.join("_")), defines)
             }))
             .collect();
-        for (name, define) in builds {
-            let spv = out_dir.join(format!("{name}.spv"));
-            match compile(kernel, &spv, &out_dir, &define) {
-                Ok(()) => {
-                    writeln!(index, "    ({name:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
-                }
-                Err(message) => failures.push(message),
+        for also in source.lines().filter_map(|l| l.strip_prefix("// every build also: ")).map(str::trim) {
+            let extra: Vec<(String, Vec<String>)> = builds
+                .iter()
+                .map(|(name, defines)| {
+                    let mut defines = defines.clone();
+                    defines.push(format!("VARIANT_{}", also.to_uppercase()));
+                    (format!("{name}_{also}"), defines)
+                })
+                .collect();
+            builds.extend(extra);
+        }
+        jobs.extend(builds.into_iter().map(|(name, defines)| (kernel.as_path(), name, defines)));
+    }
+    // On as many threads as there are cores: the paged builds doubled the modules (253), each a
+    // separate glslangValidator run. Results are kept in job order, so kernels.rs is the same.
+    let results: Vec<Mutex<Option<Result<(), String>>>> = jobs.iter().map(|_| Mutex::new(None)).collect();
+    let next = AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(jobs.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some((kernel, name, defines)) = jobs.get(i) else { break };
+                let result = compile(kernel, &out_dir.join(format!("{name}.spv")), &out_dir, defines);
+                *results[i].lock().unwrap() = Some(result);
+            });
+        }
+    });
+    let mut failures = Vec::new();
+    for ((_, name, _), result) in jobs.iter().zip(results) {
+        match result.into_inner().unwrap().expect("every job ran") {
+            Ok(()) => {
+                let spv = out_dir.join(format!("{name}.spv"));
+                writeln!(index, "    ({name:?}, include_bytes!({:?})),", spv.display().to_string()).unwrap();
             }
+            Err(message) => failures.push(message),
         }
     }
     index.push_str("];\n");

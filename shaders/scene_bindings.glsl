@@ -50,9 +50,9 @@ const bool SCENE_HAS_CONDUCTOR = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_CONDUCT
 const bool SCENE_HAS_PLASTIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PLASTIC)) != 0u;
 const bool SCENE_HAS_PHASE = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PHASE)) != 0u;
 const bool SCENE_HAS_THIN_DIELECTRIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_THIN_DIELECTRIC)) != 0u;
-// The most pages any scene array uses (1 when each fits one view, as in every scene of a few
-// million triangles or less: the fetches are then one texelFetch as before, the page selection
-// compiled out) and the size of a page, in words (`KernelVariant::pages`, `page_words_log2`).
+// The most pages any scene array uses and the size of a page, in words (`KernelVariant::pages`,
+// `page_words_log2`): read by the `paged` builds only, which the host picks where an array spans
+// several pages; in the others each fetch is one texelFetch (scene_fetch.glsl says why).
 layout(constant_id = 5) const uint SCENE_PAGES_USED = 1u;
 layout(constant_id = 6) const uint SCENE_PAGE_WORDS_LOG2 = 25u;
 

@@ -1,30 +1,37 @@
 // The scene's structs read back from their texel buffers (scene_bindings.glsl), field by field in
 // the order of layout.glsl; tests/texel_fetch.rs checks every struct round-trips through them.
 
-// Texel `i` of a paged array: page i >> log2 (log2 = texels per page), texel i & mask inside it.
-// Lavapipe runs an if-chain's branches under masks, so only the cases of pages in use are
-// compiled (SCENE_PAGES_USED); one page is one fetch, in a structured if without early returns,
-// which the driver folds before inlining multiplies it. Constant indices only: indexing an array
-// of texel buffers by a variable needs a device feature that is not required.
+// Texel `i` of a scene array. In the builds for scenes whose arrays each fit one page (every
+// scene of a few million triangles or less) it is the single texelFetch it always was: lavapipe
+// inlines every call of these functions before it folds specialization constants, so a page
+// selection there, even one a constant removes, doubled the inlined code and the pipelines'
+// creation time (BENCHMARKS.md, "Kernel creation: the page selection in its own builds").
+//
+// The `paged` builds (`// every build also: paged`; `KernelVariant::kernel_name`, for scenes
+// with an array over several pages) take texel `i` as texel `i & mask` of page `i >> log2`
+// (log2 = texels per page). Lavapipe runs an if-chain's branches under masks, so only the cases
+// of pages in use are compiled (SCENE_PAGES_USED). Constant indices only: indexing an array of
+// texel buffers by a variable needs a device feature that is not required.
+#ifdef VARIANT_PAGED
 #define PAGED_TEXEL(name, pages, log2)                                                              \
     uvec4 name(uint i) {                                                                            \
+        uint page = i >> (log2);                                                                    \
+        int j = int(i & ((1u << (log2)) - 1u));                                                     \
         uvec4 t;                                                                                    \
-        if (SCENE_PAGES_USED <= 1u) {                                                               \
-            t = texelFetch(pages[0], int(i));                                                       \
-        } else {                                                                                    \
-            uint page = i >> (log2);                                                                \
-            int j = int(i & ((1u << (log2)) - 1u));                                                 \
-            if (page == 0u) t = texelFetch(pages[0], j);                                            \
-            else if (SCENE_PAGES_USED == 2u || page == 1u) t = texelFetch(pages[1], j);             \
-            else if (SCENE_PAGES_USED == 3u || page == 2u) t = texelFetch(pages[2], j);             \
-            else if (SCENE_PAGES_USED == 4u || page == 3u) t = texelFetch(pages[3], j);             \
-            else if (SCENE_PAGES_USED == 5u || page == 4u) t = texelFetch(pages[4], j);             \
-            else if (SCENE_PAGES_USED == 6u || page == 5u) t = texelFetch(pages[5], j);             \
-            else if (SCENE_PAGES_USED == 7u || page == 6u) t = texelFetch(pages[6], j);             \
-            else t = texelFetch(pages[7], j);                                                       \
-        }                                                                                           \
+        if (page == 0u) t = texelFetch(pages[0], j);                                                \
+        else if (SCENE_PAGES_USED == 2u || page == 1u) t = texelFetch(pages[1], j);                 \
+        else if (SCENE_PAGES_USED == 3u || page == 2u) t = texelFetch(pages[2], j);                 \
+        else if (SCENE_PAGES_USED == 4u || page == 3u) t = texelFetch(pages[3], j);                 \
+        else if (SCENE_PAGES_USED == 5u || page == 4u) t = texelFetch(pages[4], j);                 \
+        else if (SCENE_PAGES_USED == 6u || page == 5u) t = texelFetch(pages[5], j);                 \
+        else if (SCENE_PAGES_USED == 7u || page == 6u) t = texelFetch(pages[6], j);                 \
+        else t = texelFetch(pages[7], j);                                                           \
         return t;                                                                                   \
     }
+#else
+#define PAGED_TEXEL(name, pages, log2) \
+    uvec4 name(uint i) { return texelFetch(pages[0], int(i)); }
+#endif
 // The chain above has a case per page: a different SCENE_PAGES makes this array's size negative.
 const uint SCENE_PAGES_CHECK[SCENE_PAGES == 8u ? 1 : -1] = uint[1](0u);
 

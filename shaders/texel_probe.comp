@@ -4,7 +4,8 @@
 // texture and shape words; photons 0..3 through fetch_photon (grid.glsl), which start at
 // each of the four words of a texel; and light vertex 1 and light material 1 through
 // fetch_light_vertex and fetch_light_material. tests/texel_fetch.rs compares what comes back with what
-// was sent.
+// was sent, through this build (one page per array) and the paged one (pages of 64 bytes).
+// every build also: paged
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

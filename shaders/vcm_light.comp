@@ -34,6 +34,7 @@
 // variant: analytic implicit csg media
 // variant: textured analytic implicit csg media
 // variant: textured alpha analytic implicit csg media
+// every build also: paged
 #extension GL_GOOGLE_include_directive : require
 #include "layout.glsl"
 

@@ -6,7 +6,7 @@
 //! (render_vcm's vertex slots). A loader
 //! that took a field from the wrong word, or a wrong texel stride, would bring back a different
 //! element. The same again with every scene array split into pages of 64 bytes (the paged
-//! fetches of scene_fetch.glsl), so that structs straddle pages.
+//! fetches of scene_fetch.glsl, in the probe's `paged` build), so that structs straddle pages.
 
 use photonix::gpu::BindingTypes;
 use photonix::gpu::{GpuContext, GpuOptions};
@@ -36,7 +36,11 @@ fn every_scene_struct_round_trips_through_pages_of_64_bytes() {
 fn round_trip(page_bytes: Option<usize>) {
     let gpu = GpuContext::new(&GpuOptions { device: None, validation: true })
         .unwrap_or_else(|e| panic!("cannot open the GPU: {e}"));
-    let spirv = photonix::shaders::spirv("texel_probe").expect("build.rs compiles shaders/texel_probe.comp");
+    // One page per array reads through the plain build, several through the paged one (as
+    // `KernelVariant::kernel_name` picks the scene kernels' builds).
+    let kernel = if page_bytes.is_some() { "texel_probe_paged" } else { "texel_probe" };
+    let spirv =
+        photonix::shaders::spirv(kernel).expect("build.rs compiles shaders/texel_probe.comp and its paged build");
     let size = |name: &str| {
         let layouts = gpu_struct_layouts();
         layouts.iter().find(|(n, _, _)| *n == name).unwrap_or_else(|| panic!("{name} is a shared struct")).2 / 4
@@ -107,7 +111,7 @@ fn round_trip(page_bytes: Option<usize>) {
         }
     };
     let probe = gpu
-        .create_specialized_kernel("texel_probe", &spirv, SCENE_BINDINGS + 13, types, 0, &constants)
+        .create_specialized_kernel(kernel, &spirv, SCENE_BINDINGS + 13, types, 0, &constants)
         .expect("the probe matches its layout");
     gpu.run("texel_probe", |r| r.dispatch(&probe, &bound, &[], [1, 1, 1])).unwrap();
 

@@ -86,8 +86,11 @@ pub struct KernelVariant {
     /// The bidirectional integrators' kernels (vcm_light, render_vcm) and no others.
     pub bidirectional: bool,
     /// The most pages a scene array takes on the device (1 unless one exceeds a page), and the
-    /// words in a page, log2 (`DeviceScene::page`). Specialization constants: with one page
-    /// each the kernels' fetches are single texel fetches.
+    /// words in a page, log2 (`DeviceScene::page`). With one page the kernels are the builds
+    /// whose fetches are single texel fetches; with more, the `paged` builds, whose page
+    /// selection takes both as specialization constants. A constant alone left the selection
+    /// in the SPIR-V, and lavapipe inlines it at every fetch before folding it away: twice the
+    /// code to create, for every scene.
     pub pages: u32,
     pub page_words_log2: u32,
 }
@@ -97,8 +100,8 @@ const DEFAULT_PAGE_WORDS_LOG2: u32 = 25;
 
 impl KernelVariant {
     /// The kernel `name` in this variant's build:
-    /// `name[_textured[_alpha]][_analytic[_implicit[_csg]]][_media]`
-    /// (the `// variant:` lines of the kernels, see build.rs).
+    /// `name[_textured[_alpha]][_analytic[_implicit[_csg]]][_media][_paged]`
+    /// (the `// variant:` and `// every build also:` lines of the kernels, see build.rs).
     pub fn kernel_name(self, name: &str) -> String {
         let mut out = name.to_string();
         if self.textured || self.alpha {
@@ -118,6 +121,10 @@ impl KernelVariant {
         }
         if self.media {
             out.push_str("_media");
+        }
+        // The page selection, only where an array spans pages (shaders/scene_fetch.glsl).
+        if self.pages > 1 {
+            out.push_str("_paged");
         }
         out
     }
