@@ -4,9 +4,12 @@
 //! - Directions live in a local shading frame whose z axis is the surface normal (the front
 //!   side), and point AWAY from the surface: `wo` toward the previous vertex (the viewer), `wi`
 //!   toward the next one (the light, or the sampled direction). Both are unit vectors.
-//! - `alpha` = (alpha_x, alpha_y) are the GGX widths themselves (Mitsuba's `alpha`), NOT a
-//!   perceptual roughness to square. Below 1e-3 (both) a lobe is a delta (pbrt-v4's
-//!   `EffectivelySmooth`); a rough lobe has its widths raised to at least 1e-4.
+//! - `alpha` = (alpha_x, alpha_y) are the microfacet widths themselves (Mitsuba's `alpha`), NOT
+//!   a perceptual roughness to square, of the distribution `dist`: `MICROFACET_GGX` or
+//!   `MICROFACET_BECKMANN` (alpha then the RMS slope), chosen by [`mf_d`], [`mf_g1`],
+//!   [`mf_sample_visible`] and [`mf_pdf_visible`]. Below 1e-3 (both) a lobe is a delta (pbrt-v4's
+//!   `EffectivelySmooth`) of either distribution; a rough lobe has its widths raised to at least
+//!   1e-4.
 //! - `*_eval` returns f without the cosine; `*_pdf` is per unit solid angle of `wi`, and 0 for a
 //!   delta lobe, which eval and pdf never see (measure zero).
 //! - `*_sample` returns `None` when it fails (GLSL: false, with zeroed outputs), else an
@@ -200,7 +203,7 @@ const MF_INV_SQRT_PI: f32 = 0.564_189_6;
 /// Beckmann masking need no cancelling 1 - erf.
 fn mf_erfc_scaled(x: f32) -> f32 {
     let t = 1.0 / (1.0 + 0.327_591_1 * x);
-    ((((1.061_405_4 * t - 1.453_152) * t + 1.421_413_8) * t - 0.284_496_74) * t + 0.254_829_6) * t
+    ((((1.061_405_4 * t - 1.453_152) * t + 1.421_413_8) * t - 0.284_496_75) * t + 0.254_829_6) * t
 }
 
 /// erf(x) of Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7, and f32 rounding; tested).
@@ -238,7 +241,7 @@ pub fn mf_erfinv(x: f32) -> f32 {
         p = 5.739_507_7e-3 + p * w;
         p = -7.622_461_3e-3 + p * w;
         p = 9.438_870_5e-3 + p * w;
-        p = 1.001_674_1 + p * w;
+        p = 1.001_674 + p * w;
         2.832_976_8 + p * w
     };
     p * x
