@@ -1650,8 +1650,10 @@ mod tests {
         // carries the Beckmann coat's table: its coat term alone is darker than Mitsuba's for
         // GGX and Beckmann alike (by 3-12% at 45-85 degrees, alpha 0.05), from the coat's
         // clamped Fresnel term (plastic_eval, change 2), which is no matter of the distribution.
+        /// Alpha; the plastic's albedo per viewer; the black-based plastic's; the conductor's.
+        type Albedos = (f32, [[f32; 3]; 3], [f32; 3], [f32; 3]);
         #[rustfmt::skip]
-        const MITSUBA: [(f32, [[f32; 3]; 3], [f32; 3], [f32; 3]); 4] = [
+        const MITSUBA: [Albedos; 4] = [
             (0.05, [[0.31428, 0.1812, 0.12791], [0.32173, 0.19009, 0.13738], [0.65036, 0.59178, 0.56832]], [0.04, 0.05043, 0.52978], [1.0, 1.0, 0.93927]),
             (0.15, [[0.31292, 0.18111, 0.12799], [0.32147, 0.19134, 0.1389], [0.52655, 0.4472, 0.41522]], [0.04002, 0.05198, 0.36241], [1.0, 0.99987, 0.91931]),
             (0.5, [[0.29074, 0.17451, 0.12485], [0.29085, 0.17761, 0.12922], [0.36211, 0.26479, 0.22321]], [0.03868, 0.04527, 0.15096], [0.94323, 0.87473, 0.93951]),
