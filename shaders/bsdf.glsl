@@ -238,21 +238,24 @@ BsdfSample microfacet_result(bool ok, vec3 wi_local, vec3 weight, float pdf, uin
 // The flags of a glossy lobe: followed by paths up to the threshold, an estimate lobe above it.
 uint glossy_flags(Bsdf b) { return BSDF_GLOSSY | (b.glossy_path ? BSDF_PATH : BSDF_ESTIMATE); }
 
-// Conductor: GGX metal with complex index color0 + i color1, its Fresnel term tinted by color2,
-// reflecting on both sides.
+// The microfacet distribution of a rough material (MICROFACET_*, from its flags).
+uint microfacet_dist(Bsdf b) { return (b.flags & MATERIAL_FLAG_BECKMANN) != 0u ? MICROFACET_BECKMANN : MICROFACET_GGX; }
+
+// Conductor: GGX or Beckmann metal with complex index color0 + i color1, its Fresnel term tinted
+// by color2, reflecting on both sides.
 
 vec3 conductor_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
     vec3 n = facing(b, wo), t, bt;
     bsdf_frame(b, n, t, bt);
-    return b.color2 * conductor_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.color0, b.color1);
+    return b.color2 * conductor_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, microfacet_dist(b), b.color0, b.color1);
 }
 
 float conductor_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
     if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return 0.0;
     vec3 n = facing(b, wo), t, bt;
     bsdf_frame(b, n, t, bt);
-    return conductor_pdf(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha);
+    return conductor_pdf(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, microfacet_dist(b));
 }
 
 BsdfSample conductor_bsdf_sample(Bsdf b, vec3 wo, vec3 u) {
@@ -261,24 +264,24 @@ BsdfSample conductor_bsdf_sample(Bsdf b, vec3 wo, vec3 u) {
     vec3 wi, weight;
     float pdf;
     uint lobe;
-    bool ok = conductor_sample(to_local(wo, t, bt, n), b.alpha, b.color0, b.color1, u.yz, wi, weight, pdf, lobe);
+    bool ok = conductor_sample(to_local(wo, t, bt, n), b.alpha, microfacet_dist(b), b.color0, b.color1, u.yz, wi, weight, pdf, lobe);
     BsdfSample s = microfacet_result(ok, wi, b.color2 * weight, pdf, lobe, t, bt, n, glossy_flags(b));
     if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
     return s;
 }
 
-// Rough dielectric: GGX reflection and refraction (the smooth one is smooth_dielectric_sample).
+// Rough dielectric: GGX or Beckmann reflection and refraction (the smooth one is smooth_dielectric_sample).
 
 float rough_dielectric_eval(Bsdf b, vec3 wo, vec3 wi) {
     vec3 t, bt;
     bsdf_frame(b, b.ns, t, bt);
-    return dielectric_eval(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, b.ior);
+    return dielectric_eval(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, microfacet_dist(b), b.ior);
 }
 
 float rough_dielectric_pdf(Bsdf b, vec3 wo, vec3 wi) {
     vec3 t, bt;
     bsdf_frame(b, b.ns, t, bt);
-    return dielectric_pdf(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, b.ior);
+    return dielectric_pdf(to_local(wo, t, bt, b.ns), to_local(wi, t, bt, b.ns), b.alpha, microfacet_dist(b), b.ior);
 }
 
 BsdfSample rough_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
@@ -287,7 +290,7 @@ BsdfSample rough_dielectric_sample(Bsdf b, vec3 wo, vec3 u) {
     vec3 wi, weight;
     float pdf;
     uint lobe;
-    bool ok = dielectric_sample(to_local(wo, t, bt, b.ns), b.alpha, b.ior, u, wi, weight, pdf, lobe);
+    bool ok = dielectric_sample(to_local(wo, t, bt, b.ns), b.alpha, microfacet_dist(b), b.ior, u, wi, weight, pdf, lobe);
     BsdfSample s = microfacet_result(ok, wi, weight * b.color0, pdf, lobe, t, bt, b.ns, glossy_flags(b));
     return s;
 }
@@ -304,7 +307,7 @@ vec3 plastic_bsdf_eval(Bsdf b, vec3 wo, vec3 wi) {
     if (dot(wi, b.ng) * dot(wo, b.ng) <= 0.0) return vec3(0.0);
     vec3 n = facing(b, wo), t, bt;
     bsdf_frame(b, n, t, bt);
-    return plastic_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data);
+    return plastic_eval(to_local(wo, t, bt, n), to_local(wi, t, bt, n), b.alpha, microfacet_dist(b), b.ior, b.color0, plastic_nonlinear(b), b.data);
 }
 
 float plastic_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
@@ -313,7 +316,7 @@ float plastic_bsdf_pdf(Bsdf b, vec3 wo, vec3 wi) {
     bsdf_frame(b, n, t, bt);
     vec3 wo_l = to_local(wo, t, bt, n), wi_l = to_local(wi, t, bt, n);
     // With a smooth coat the estimate lobe is the base alone, sampled by cosine.
-    return is_smooth(b) ? max(0.0, wi_l.z) * (1.0 / PI) : plastic_pdf(wo_l, wi_l, b.alpha, b.ior, b.color0);
+    return is_smooth(b) ? max(0.0, wi_l.z) * (1.0 / PI) : plastic_pdf(wo_l, wi_l, b.alpha, microfacet_dist(b), b.ior, b.color0);
 }
 
 float plastic_coat_probability(Bsdf b, vec3 wo) {
@@ -335,14 +338,14 @@ BsdfSample plastic_bsdf_sample(Bsdf b, vec3 wo, vec3 u, uint lobes) {
     if (is_smooth(b) && lobes == LOBES_ESTIMATE) {
         // The base alone, by cosine: weight f cos / pdf = pi f.
         vec3 wi_l = mf_cosine_direction(u.yz);
-        vec3 f = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data);
+        vec3 f = plastic_eval(wo_l, wi_l, b.alpha, microfacet_dist(b), b.ior, b.color0, plastic_nonlinear(b), b.data);
         BsdfSample s = BsdfSample(to_world(wi_l, t, bt, n), PI * f, wi_l.z * (1.0 / PI), BSDF_DIFFUSE | BSDF_REFLECTION | BSDF_ESTIMATE);
         return dot(s.wi, b.ng) * dot(wo, b.ng) > 0.0 && wi_l.z > 0.0 ? s : no_sample();
     }
     vec3 wi, weight;
     float pdf;
     uint lobe;
-    bool ok = plastic_sample(wo_l, b.alpha, b.ior, b.color0, plastic_nonlinear(b), b.data, u, wi, weight, pdf, lobe);
+    bool ok = plastic_sample(wo_l, b.alpha, microfacet_dist(b), b.ior, b.color0, plastic_nonlinear(b), b.data, u, wi, weight, pdf, lobe);
     BsdfSample s = microfacet_result(ok, wi, weight, pdf, lobe, t, bt, n, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
     if (dot(s.wi, b.ng) * dot(wo, b.ng) <= 0.0) return no_sample();
     return s;

@@ -1,15 +1,18 @@
-// Microfacet BSDFs as pure functions: GGX with visible-normal sampling, rough conductor, rough
-// dielectric, plastic (diffuse base under a dielectric coat) and Lambert.
-// CPU twin: src/cpu/microfacet.rs, which states the contracts; this file only points to them.
+// Microfacet BSDFs as pure functions: GGX and Beckmann distributions with visible-normal
+// sampling, rough conductor, rough dielectric, plastic (diffuse base under a dielectric coat) and
+// Lambert. CPU twin: src/cpu/microfacet.rs, which states the contracts; this file only points to
+// them.
 //
 // Everything works in a local shading frame: z is the surface normal (the front side), and both
 // directions point AWAY from the surface: `wo` toward the previous vertex (the viewer), `wi`
 // toward the next one (the light, or the sampled direction). `alpha` = (alpha_x, alpha_y) are the
-// GGX widths themselves, not a roughness to square. eval returns f without the cosine; pdf is
-// per unit solid angle of wi. A sampler returns false (and zeros) when it fails; otherwise wi,
-// weight = f |wi.z| / pdf, pdf (0 for a delta lobe) and the lobe (MF_REFLECTION or
-// MF_TRANSMISSION). Nothing here reads a buffer or a global, and every private name starts with
-// mf_ or MF_, so any kernel can include this file.
+// microfacet widths themselves, not a roughness to square, of the distribution `dist`
+// (MICROFACET_GGX or MICROFACET_BECKMANN). eval returns f without the cosine; pdf is per unit
+// solid angle of wi. A sampler returns false (and zeros) when it fails; otherwise wi, weight =
+// f |wi.z| / pdf, pdf (0 for a delta lobe) and the lobe (MF_REFLECTION or MF_TRANSMISSION).
+// Nothing here reads a buffer or a global, and every private name starts with mf_ or MF_, so any
+// kernel can include this file; the kernel defines the constant SCENE_HAS_BECKMANN (false compiles
+// the Beckmann code out) and, for plastics, mf_coat_word.
 
 const float MF_PI = 3.14159265358979;
 const uint MF_REFLECTION = 0u;
@@ -128,6 +131,132 @@ float ggx_pdf_visible(vec3 wo, vec3 m, vec2 alpha) {
 }
 
 // ---------------------------------------------------------------------------------------------
+// Beckmann distribution (Mitsuba 3.9.1's microfacet.h); see the twin for the contracts
+
+const float MF_INV_SQRT_PI = 0.5641896;
+
+// erfc(x) / exp(-x^2) for x >= 0, after Abramowitz and Stegun 7.1.26.
+float mf_erfc_scaled(float x) {
+    float t = 1.0 / (1.0 + 0.3275911 * x);
+    return ((((1.0614054 * t - 1.453152) * t + 1.4214138) * t - 0.28449674) * t + 0.2548296) * t;
+}
+
+float mf_erf(float x) {
+    float y = 1.0 - mf_erfc_scaled(abs(x)) * exp(-x * x);
+    return x < 0.0 ? -y : y;
+}
+
+// Giles 2010, single precision.
+float mf_erfinv(float x) {
+    x = clamp(x, -0.9999999, 0.9999999);
+    float w = -log((1.0 - x) * (1.0 + x));
+    float p;
+    if (w < 5.0) {
+        w = w - 2.5;
+        p = 2.8102264e-8;
+        p = 3.4327394e-7 + p * w;
+        p = -3.5233877e-6 + p * w;
+        p = -4.3915065e-6 + p * w;
+        p = 2.1858087e-4 + p * w;
+        p = -1.253725e-3 + p * w;
+        p = -4.1776816e-3 + p * w;
+        p = 0.24664073 + p * w;
+        p = 1.5014094 + p * w;
+    } else {
+        w = sqrt(w) - 3.0;
+        p = -2.0021426e-4;
+        p = 1.0095056e-4 + p * w;
+        p = 1.3493432e-3 + p * w;
+        p = -3.6734284e-3 + p * w;
+        p = 5.7395077e-3 + p * w;
+        p = -7.6224613e-3 + p * w;
+        p = 9.4388705e-3 + p * w;
+        p = 1.0016741 + p * w;
+        p = 2.8329768 + p * w;
+    }
+    return p * x;
+}
+
+float beckmann_d(vec3 m, vec2 alpha) {
+    if (m.z <= 0.0) return 0.0;
+    float c2 = m.z * m.z;
+    float x = m.x / alpha.x;
+    float y = m.y / alpha.y;
+    float den = MF_PI * alpha.x * alpha.y * c2 * c2;
+    if (den <= 0.0) return 0.0;
+    float d = exp(-(x * x + y * y) / c2) / den;
+    return d * m.z > 1e-20 ? d : 0.0;
+}
+
+float beckmann_g1(vec3 v, vec3 m, vec2 alpha) {
+    if (dot(v, m) * v.z <= 0.0) return 0.0;
+    float xy = alpha.x * alpha.x * v.x * v.x + alpha.y * alpha.y * v.y * v.y;
+    if (xy == 0.0) return 1.0;
+    float a = abs(v.z) / sqrt(xy);
+    // Exact (not Mitsuba's rational fit: see the twin).
+    float lambda = 0.5 * exp(-a * a) * (MF_INV_SQRT_PI / a - mf_erfc_scaled(a));
+    return 1.0 / (1.0 + max(lambda, 0.0));
+}
+
+vec2 mf_beckmann_sample_11(float cos_theta, vec2 u) {
+    u = clamp(u, vec2(1e-6), vec2(1.0 - 1e-6));
+    float tan_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta)) / max(cos_theta, 1e-7);
+    float cot_theta = 1.0 / max(tan_theta, 1e-7);
+    float maxval = mf_erf(cot_theta);
+    float x = maxval - (maxval + 1.0) * mf_erf(sqrt(-log(u.x)));
+    float target = u.x * (1.0 + maxval + MF_INV_SQRT_PI * tan_theta * exp(-cot_theta * cot_theta));
+    for (uint i = 0u; i < 3u; i++) {
+        float slope = mf_erfinv(x);
+        float value = 1.0 + x + MF_INV_SQRT_PI * tan_theta * exp(-slope * slope) - target;
+        float derivative = 1.0 - slope * tan_theta;
+        x -= value / derivative;
+    }
+    return vec2(mf_erfinv(x), mf_erfinv(2.0 * u.y - 1.0));
+}
+
+vec3 beckmann_sample_visible(vec3 wo, vec2 alpha, vec2 u) {
+    vec3 v = wo.z < 0.0 ? -wo : wo;
+    vec3 vs = normalize(vec3(alpha.x * v.x, alpha.y * v.y, v.z));
+    float sin2 = vs.x * vs.x + vs.y * vs.y;
+    float sin_phi = sin2 > 0.0 ? vs.y / sqrt(sin2) : 0.0;
+    float cos_phi = sin2 > 0.0 ? vs.x / sqrt(sin2) : 1.0;
+    vec2 s = mf_beckmann_sample_11(vs.z, u);
+    float sx = (cos_phi * s.x - sin_phi * s.y) * alpha.x;
+    float sy = (sin_phi * s.x + cos_phi * s.y) * alpha.y;
+    return normalize(vec3(-sx, -sy, 1.0));
+}
+
+float beckmann_pdf_visible(vec3 wo, vec3 m, vec2 alpha) {
+    if (wo.z == 0.0) return 0.0;
+    return beckmann_g1(wo, m, alpha) * abs(dot(wo, m)) * beckmann_d(m, alpha) / abs(wo.z);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The distribution of a material (dist: MICROFACET_GGX or MICROFACET_BECKMANN). The Beckmann
+// branches compile only where SCENE_HAS_BECKMANN, which the including kernel defines (a
+// specialization constant in the scene kernels: scenes without Beckmann build GGX alone).
+
+float mf_d(vec3 m, vec2 alpha, uint dist) {
+    if (SCENE_HAS_BECKMANN && dist == MICROFACET_BECKMANN) return beckmann_d(m, alpha);
+    return ggx_d(m, alpha);
+}
+
+float mf_g1(vec3 v, vec3 m, vec2 alpha, uint dist) {
+    if (SCENE_HAS_BECKMANN && dist == MICROFACET_BECKMANN) return beckmann_g1(v, m, alpha);
+    return ggx_g1(v, m, alpha);
+}
+
+vec3 mf_sample_visible(vec3 wo, vec2 alpha, uint dist, vec2 u) {
+    if (SCENE_HAS_BECKMANN && dist == MICROFACET_BECKMANN) return beckmann_sample_visible(wo, alpha, u);
+    return ggx_sample_visible(wo, alpha, u);
+}
+
+float mf_pdf_visible(vec3 wo, vec3 m, vec2 alpha, uint dist) {
+    if (SCENE_HAS_BECKMANN && dist == MICROFACET_BECKMANN) return beckmann_pdf_visible(wo, m, alpha);
+    return ggx_pdf_visible(wo, m, alpha);
+}
+
+// ---------------------------------------------------------------------------------------------
 // Rough conductor
 
 vec3 fresnel_conductor(float cos_theta, vec3 eta, vec3 k) {
@@ -135,23 +264,23 @@ vec3 fresnel_conductor(float cos_theta, vec3 eta, vec3 k) {
                 mf_fresnel_conductor1(cos_theta, eta.z, k.z));
 }
 
-vec3 conductor_eval(vec3 wo, vec3 wi, vec2 alpha, vec3 eta, vec3 k) {
+vec3 conductor_eval(vec3 wo, vec3 wi, vec2 alpha, uint dist, vec3 eta, vec3 k) {
     if (wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha)) return vec3(0.0);
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
-    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    float dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
     return fresnel_conductor(dot(wo, h), eta, k) * (dg / (4.0 * wo.z * wi.z));
 }
 
-float conductor_pdf(vec3 wo, vec3 wi, vec2 alpha) {
+float conductor_pdf(vec3 wo, vec3 wi, vec2 alpha, uint dist) {
     if (wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha)) return 0.0;
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
-    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    float pdf_m = mf_pdf_visible(wo, h, alpha, dist);
     return pdf_m > 0.0 ? pdf_m / (4.0 * dot(wo, h)) : 0.0;
 }
 
-bool conductor_sample(vec3 wo, vec2 alpha, vec3 eta, vec3 k, vec2 u, out vec3 wi, out vec3 weight, out float pdf,
+bool conductor_sample(vec3 wo, vec2 alpha, uint dist, vec3 eta, vec3 k, vec2 u, out vec3 wi, out vec3 weight, out float pdf,
                       out uint lobe) {
     wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
     if (wo.z <= 0.0) return false;
@@ -161,15 +290,15 @@ bool conductor_sample(vec3 wo, vec2 alpha, vec3 eta, vec3 k, vec2 u, out vec3 wi
         return true;
     }
     alpha = mf_rough_alpha(alpha);
-    vec3 m = ggx_sample_visible(wo, alpha, u);
+    vec3 m = mf_sample_visible(wo, alpha, dist, u);
     float dot_o = dot(wo, m);
     vec3 w = 2.0 * dot_o * m - wo;
     if (dot_o <= 0.0 || w.z <= 0.0) return false;
-    float p = ggx_pdf_visible(wo, m, alpha) / (4.0 * dot_o);
+    float p = mf_pdf_visible(wo, m, alpha, dist) / (4.0 * dot_o);
     if (!(p > 0.0)) return false;
     // f |cos| / pdf = F D G1(wo) G1(wi) / (4 wo.z) / (G1(wo) D / (4 wo.z)) = F G1(wi).
     wi = w;
-    weight = fresnel_conductor(dot_o, eta, k) * ggx_g1(w, m, alpha);
+    weight = fresnel_conductor(dot_o, eta, k) * mf_g1(w, m, alpha, dist);
     pdf = p;
     return true;
 }
@@ -209,12 +338,12 @@ DielectricPair dielectric_pair(vec3 wo, vec3 wi, float ior) {
     return p;
 }
 
-float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, float ior) {
+float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior) {
     if (mf_is_smooth(alpha)) return 0.0;
     DielectricPair p = dielectric_pair(wo, wi, ior);
     if (!p.valid) return 0.0;
     alpha = mf_rough_alpha(alpha);
-    float dg = ggx_d(p.h, alpha) * ggx_g1(wo, p.h, alpha) * ggx_g1(wi, p.h, alpha);
+    float dg = mf_d(p.h, alpha, dist) * mf_g1(wo, p.h, alpha, dist) * mf_g1(wi, p.h, alpha, dist);
     if (dg == 0.0) return 0.0;
     float cos_t;
     float f = mf_fresnel_dielectric(abs(p.dot_o), p.eta_o, p.eta_t, cos_t);
@@ -224,13 +353,13 @@ float dielectric_eval(vec3 wo, vec3 wi, vec2 alpha, float ior) {
     return (1.0 - f) * dg * abs(p.dot_o * p.dot_i) / (cos_oi * denom * denom);
 }
 
-float dielectric_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior) {
+float dielectric_pdf(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior) {
     if (mf_is_smooth(alpha)) return 0.0;
     DielectricPair p = dielectric_pair(wo, wi, ior);
     if (!p.valid) return 0.0;
     // The sampler only makes pairs that see the front of their microfacet.
     if (p.dot_o * wo.z <= 0.0 || p.dot_i * wi.z <= 0.0) return 0.0;
-    float pdf_m = ggx_pdf_visible(wo, p.h, mf_rough_alpha(alpha));
+    float pdf_m = mf_pdf_visible(wo, p.h, mf_rough_alpha(alpha), dist);
     float cos_t;
     float f = mf_fresnel_dielectric(abs(p.dot_o), p.eta_o, p.eta_t, cos_t);
     if (p.reflection) return f * pdf_m / (4.0 * abs(p.dot_o));
@@ -238,7 +367,7 @@ float dielectric_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior) {
     return (1.0 - f) * pdf_m * p.eta * p.eta * abs(p.dot_i) / (denom * denom);
 }
 
-bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out vec3 weight, out float pdf,
+bool dielectric_sample(vec3 wo, vec2 alpha, uint dist, float ior, vec3 u, out vec3 wi, out vec3 weight, out float pdf,
                        out uint lobe) {
     wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
     float cos_o = wo.z;
@@ -262,10 +391,10 @@ bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out 
         return true;
     }
     alpha = mf_rough_alpha(alpha);
-    vec3 m = ggx_sample_visible(wo, alpha, u.yz);
+    vec3 m = mf_sample_visible(wo, alpha, dist, u.yz);
     float dot_o = dot(wo, m);
     if (dot_o * side <= 0.0) return false;
-    float pdf_m = ggx_pdf_visible(wo, m, alpha);
+    float pdf_m = mf_pdf_visible(wo, m, alpha, dist);
     float cos_t;
     float f = mf_fresnel_dielectric(abs(dot_o), eta_o, eta_t, cos_t);
     if (u.x < f) {
@@ -275,7 +404,7 @@ bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out 
         if (!(p > 0.0)) return false;
         wi = w;
         // f |cos| / pdf = G1(wi): F, D and G1(wo) cancel.
-        weight = vec3(ggx_g1(w, m, alpha));
+        weight = vec3(mf_g1(w, m, alpha, dist));
         pdf = p;
         return true;
     }
@@ -288,7 +417,7 @@ bool dielectric_sample(vec3 wo, vec2 alpha, float ior, vec3 u, out vec3 wi, out 
     if (!(p > 0.0)) return false;
     wi = w;
     // f |cos| / pdf = G1(wi) / eta^2: (1 - F), D, G1(wo) and the Jacobian cancel.
-    weight = vec3(ggx_g1(w, m, alpha) / (eta * eta));
+    weight = vec3(mf_g1(w, m, alpha, dist) / (eta * eta));
     pdf = p;
     lobe = MF_TRANSMISSION;
     return true;
@@ -321,7 +450,7 @@ vec3 mf_plastic_base(float wo_z, float wi_z, float f_o, float f_i, float ior, ve
     return diffuse * (t_o * t_i / (MF_PI * eta2)) / bounce;
 }
 
-vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse, bool nonlinear, uint table) {
+vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior, vec3 diffuse, bool nonlinear, uint table) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return vec3(0.0);
     float cos_t;
     float f_o = mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t);
@@ -330,26 +459,26 @@ vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse, bool no
     if (mf_is_smooth(alpha)) return f;
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
-    float dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    float dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
     // The coat's Fresnel is clamped by F(wo.z) and F(wi.z) so that it reflects no more than
     // F(wo.z): see plastic_eval in the twin.
     float f_h = mf_fresnel_dielectric(abs(dot(wo, h)), 1.0, ior, cos_t);
     return f + vec3(min(f_h, min(f_o, f_i)) * dg / (4.0 * wo.z * wi.z));
 }
 
-float plastic_pdf(vec3 wo, vec3 wi, vec2 alpha, float ior, vec3 diffuse) {
+float plastic_pdf(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior, vec3 diffuse) {
     if (wo.z <= 0.0 || wi.z <= 0.0) return 0.0;
     float p_coat = mf_plastic_coat_probability(wo, ior, diffuse);
     float pdf = (1.0 - p_coat) * wi.z / MF_PI;
     if (mf_is_smooth(alpha)) return pdf;
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
-    float pdf_m = ggx_pdf_visible(wo, h, alpha);
+    float pdf_m = mf_pdf_visible(wo, h, alpha, dist);
     if (pdf_m > 0.0) pdf += p_coat * pdf_m / (4.0 * dot(wo, h));
     return pdf;
 }
 
-bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, bool nonlinear, uint table, vec3 u, out vec3 wi,
+bool plastic_sample(vec3 wo, vec2 alpha, uint dist, float ior, vec3 diffuse, bool nonlinear, uint table, vec3 u, out vec3 wi,
                     out vec3 weight, out float pdf, out uint lobe) {
     wi = vec3(0.0); weight = vec3(0.0); pdf = 0.0; lobe = MF_REFLECTION;
     if (wo.z <= 0.0) return false;
@@ -362,17 +491,17 @@ bool plastic_sample(vec3 wo, vec2 alpha, float ior, vec3 diffuse, bool nonlinear
             weight = vec3(mf_fresnel_dielectric(wo.z, 1.0, ior, cos_t) / p_coat);
             return true;
         }
-        vec3 m = ggx_sample_visible(wo, mf_rough_alpha(alpha), u.yz);
+        vec3 m = mf_sample_visible(wo, mf_rough_alpha(alpha), dist, u.yz);
         w = 2.0 * dot(wo, m) * m - wo;
     } else {
         w = mf_cosine_direction(u.yz);
     }
     if (w.z <= 0.0) return false;
     // Both lobes count in pdf and weight (one-sample MIS over the two lobes).
-    float p = plastic_pdf(wo, w, alpha, ior, diffuse);
+    float p = plastic_pdf(wo, w, alpha, dist, ior, diffuse);
     if (!(p > 0.0)) return false;
     wi = w;
-    weight = plastic_eval(wo, w, alpha, ior, diffuse, nonlinear, table) * (w.z / p);
+    weight = plastic_eval(wo, w, alpha, dist, ior, diffuse, nonlinear, table) * (w.z / p);
     pdf = p;
     return true;
 }

@@ -5,18 +5,20 @@
 //
 // Plain float arrays (no struct layout to mirror). Input record, PROBE_IN floats:
 //   0 wo[3], 3 wi[3], 6 u[3], 9 alpha[2], 11 ior, 12 eta[3], 15 k[3], 18 diffuse[3], 21 nonlinear
-//   (0 or 1), 22 a plastic coat table's index in `inputs` (-1: none), 23 unused
+//   (0 or 1), 22 a plastic coat table's index in `inputs` (-1: none), 23 the distribution
+//   (MICROFACET_GGX or MICROFACET_BECKMANN, as a float)
 // Output record, PROBE_OUT floats (a sample is: valid, wi[3], weight[3], pdf, lobe):
-//   0 ggx_d(h), 1 ggx_g1(wo, h), 2 ggx_g1(wi, h), 3 ggx_pdf_visible(wo, h), 4 ggx_sample_visible[3]
+//   0 mf_d(h), 1 mf_g1(wo, h), 2 mf_g1(wi, h), 3 mf_pdf_visible(wo, h), 4 mf_sample_visible[3]
 //   7 fresnel_conductor(wo.z)[3]
 //   10 conductor_eval[3], 13 conductor_pdf, 14 conductor_sample[9]
 //   23 dielectric_eval, 24 dielectric_pdf, 25 dielectric_sample[9]
 //   34 plastic_eval[3], 37 plastic_pdf, 38 plastic_sample[9]
 //   47 lambert_eval[3], 50 lambert_pdf, 51 lambert_sample[9], 60 unused[4]
-// h = normalize(wo + wi) turned to z >= 0; the ggx_* probes use max(alpha, 0.01), as they need
-// alpha > 0.
+// h = normalize(wo + wi) turned to z >= 0; the distribution's probes (0 to 6) use
+// max(alpha, 0.01), as they need alpha > 0. Every function of both distributions is compiled in.
 #extension GL_GOOGLE_include_directive : require
 #include "constants.glsl"
+const bool SCENE_HAS_BECKMANN = true;
 #include "microfacet.glsl"
 
 layout(local_size_x = WORKGROUP_SIZE) in;
@@ -67,16 +69,17 @@ void main() {
     vec3 diffuse = in3(a, 18u);
     bool nonlinear = inputs[a + 21u] != 0.0;
     uint table = inputs[a + 22u] < 0.0 ? NO_DATA : uint(inputs[a + 22u]);
+    uint dist = uint(inputs[a + 23u]);
 
-    // GGX
+    // The distribution
     vec2 ar = max(alpha, vec2(0.01));
     vec3 h = normalize(wo + wi);
     if (h.z < 0.0) h = -h;
-    out1(o, 0u, ggx_d(h, ar));
-    out1(o, 1u, ggx_g1(wo, h, ar));
-    out1(o, 2u, ggx_g1(wi, h, ar));
-    out1(o, 3u, ggx_pdf_visible(wo, h, ar));
-    out3(o, 4u, ggx_sample_visible(wo, ar, u.xy));
+    out1(o, 0u, mf_d(h, ar, dist));
+    out1(o, 1u, mf_g1(wo, h, ar, dist));
+    out1(o, 2u, mf_g1(wi, h, ar, dist));
+    out1(o, 3u, mf_pdf_visible(wo, h, ar, dist));
+    out3(o, 4u, mf_sample_visible(wo, ar, dist, u.xy));
     out3(o, 7u, fresnel_conductor(wo.z, eta, k));
 
     vec3 s_wi, s_weight;
@@ -85,21 +88,21 @@ void main() {
     bool valid;
 
     // Conductor
-    out3(o, 10u, conductor_eval(wo, wi, alpha, eta, k));
-    out1(o, 13u, conductor_pdf(wo, wi, alpha));
-    valid = conductor_sample(wo, alpha, eta, k, u.xy, s_wi, s_weight, s_pdf, s_lobe);
+    out3(o, 10u, conductor_eval(wo, wi, alpha, dist, eta, k));
+    out1(o, 13u, conductor_pdf(wo, wi, alpha, dist));
+    valid = conductor_sample(wo, alpha, dist, eta, k, u.xy, s_wi, s_weight, s_pdf, s_lobe);
     out_sample(o, 14u, valid, s_wi, s_weight, s_pdf, s_lobe);
 
     // Dielectric
-    out1(o, 23u, dielectric_eval(wo, wi, alpha, ior));
-    out1(o, 24u, dielectric_pdf(wo, wi, alpha, ior));
-    valid = dielectric_sample(wo, alpha, ior, u, s_wi, s_weight, s_pdf, s_lobe);
+    out1(o, 23u, dielectric_eval(wo, wi, alpha, dist, ior));
+    out1(o, 24u, dielectric_pdf(wo, wi, alpha, dist, ior));
+    valid = dielectric_sample(wo, alpha, dist, ior, u, s_wi, s_weight, s_pdf, s_lobe);
     out_sample(o, 25u, valid, s_wi, s_weight, s_pdf, s_lobe);
 
     // Plastic
-    out3(o, 34u, plastic_eval(wo, wi, alpha, ior, diffuse, nonlinear, table));
-    out1(o, 37u, plastic_pdf(wo, wi, alpha, ior, diffuse));
-    valid = plastic_sample(wo, alpha, ior, diffuse, nonlinear, table, u, s_wi, s_weight, s_pdf, s_lobe);
+    out3(o, 34u, plastic_eval(wo, wi, alpha, dist, ior, diffuse, nonlinear, table));
+    out1(o, 37u, plastic_pdf(wo, wi, alpha, dist, ior, diffuse));
+    valid = plastic_sample(wo, alpha, dist, ior, diffuse, nonlinear, table, u, s_wi, s_weight, s_pdf, s_lobe);
     out_sample(o, 38u, valid, s_wi, s_weight, s_pdf, s_lobe);
 
     // Lambert

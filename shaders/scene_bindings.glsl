@@ -50,6 +50,9 @@ const bool SCENE_HAS_CONDUCTOR = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_CONDUCT
 const bool SCENE_HAS_PLASTIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PLASTIC)) != 0u;
 const bool SCENE_HAS_PHASE = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_PHASE)) != 0u;
 const bool SCENE_HAS_THIN_DIELECTRIC = (SCENE_MATERIAL_KINDS & (1u << MATERIAL_THIN_DIELECTRIC)) != 0u;
+// Beckmann microfacets (microfacet.glsl's mf_d, mf_g1, mf_sample_visible, mf_pdf_visible): no
+// kind, but a bit of the same constant; without it every rough BSDF compiles GGX alone.
+const bool SCENE_HAS_BECKMANN = (SCENE_MATERIAL_KINDS & (1u << SCENE_KIND_BECKMANN)) != 0u;
 // The most pages any scene array uses and the size of a page, in words (`KernelVariant::pages`,
 // `page_words_log2`): read by the `paged` builds only, which the host picks where an array spans
 // several pages; in the others each fetch is one texelFetch (scene_fetch.glsl says why).

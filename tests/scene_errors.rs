@@ -136,6 +136,23 @@ fn ior_at_most_zero_is_rejected() {
 }
 
 #[test]
+fn unknown_microfacet_distribution_is_rejected_with_a_suggestion() {
+    let text = format!("{CAMERA}[materials.metal]\ntype = \"conductor\"\npreset = \"gold\"\nroughness = 0.2\ndistribution = \"beckman\"\n");
+    assert_mentions(
+        &error_of(&text),
+        &["bad.toml:9:", "material \"metal\"", "unknown distribution \"beckman\"", "did you mean \"beckmann\"?"],
+    );
+    let text = format!("{CAMERA}[materials.coat]\ntype = \"plastic\"\ndistribution = \"phong\"\n");
+    assert_mentions(
+        &error_of(&text),
+        &["bad.toml:7:", "material \"coat\"", "unknown distribution \"phong\"", "\"ggx\", \"beckmann\""],
+    );
+    // A distribution belongs to the rough kinds only.
+    let text = format!("{CAMERA}[materials.white]\ntype = \"diffuse\"\ndistribution = \"ggx\"\n");
+    assert_mentions(&error_of(&text), &["bad.toml:7:", "material \"white\"", "`distribution`"]);
+}
+
+#[test]
 fn fov_outside_0_180_is_rejected() {
     for fov in ["0", "180", "200"] {
         let text = format!("[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\nfov = {fov}\n");

@@ -286,14 +286,24 @@ fn same_geometric_side(b: &Bsdf, wo: Vec3, wi: Vec3) -> bool {
     wi.dot(b.ng) * wo.dot(b.ng) > 0.0
 }
 
-// Conductor: GGX metal with complex index color0 + i color1, reflecting on both sides.
+/// The microfacet distribution of a rough material (`MICROFACET_*`, from its flags).
+pub fn microfacet_dist(b: &Bsdf) -> u32 {
+    if b.flags & MATERIAL_FLAG_BECKMANN != 0 {
+        MICROFACET_BECKMANN
+    } else {
+        MICROFACET_GGX
+    }
+}
+
+// Conductor: GGX or Beckmann metal with complex index color0 + i color1, reflecting on both
+// sides.
 
 pub fn conductor_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
     if !same_geometric_side(b, wo, wi) {
         return Vec3::ZERO;
     }
     let f = frame_around(b, facing(b, wo));
-    b.color2 * conductor_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.color0, b.color1)
+    b.color2 * conductor_eval(to_local(wo, f), to_local(wi, f), b.alpha, microfacet_dist(b), b.color0, b.color1)
 }
 
 pub fn conductor_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
@@ -301,12 +311,12 @@ pub fn conductor_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
         return 0.0;
     }
     let f = frame_around(b, facing(b, wo));
-    conductor_pdf(to_local(wo, f), to_local(wi, f), b.alpha)
+    conductor_pdf(to_local(wo, f), to_local(wi, f), b.alpha, microfacet_dist(b))
 }
 
 pub fn conductor_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let f = frame_around(b, facing(b, wo));
-    let m = conductor_sample(to_local(wo, f), b.alpha, b.color0, b.color1, Vec2::new(u[1], u[2]))
+    let m = conductor_sample(to_local(wo, f), b.alpha, microfacet_dist(b), b.color0, b.color1, Vec2::new(u[1], u[2]))
         .map(|m| MfSample { weight: b.color2 * m.weight, ..m });
     let smp = microfacet_result(m, f, glossy_flags(b));
     if !same_geometric_side(b, wo, smp.wi) {
@@ -315,21 +325,21 @@ pub fn conductor_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     smp
 }
 
-// Rough dielectric: GGX reflection and refraction (the smooth one is `smooth_dielectric_sample`).
+// Rough dielectric: GGX or Beckmann reflection and refraction (the smooth one is `smooth_dielectric_sample`).
 
 pub fn rough_dielectric_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
     let f = frame_around(b, b.ns);
-    dielectric_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior)
+    dielectric_eval(to_local(wo, f), to_local(wi, f), b.alpha, microfacet_dist(b), b.ior)
 }
 
 pub fn rough_dielectric_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
     let f = frame_around(b, b.ns);
-    dielectric_pdf(to_local(wo, f), to_local(wi, f), b.alpha, b.ior)
+    dielectric_pdf(to_local(wo, f), to_local(wi, f), b.alpha, microfacet_dist(b), b.ior)
 }
 
 pub fn rough_dielectric_sample(b: &Bsdf, wo: Vec3, u: [f32; 3]) -> BsdfSample {
     let f = frame_around(b, b.ns);
-    let m = dielectric_sample(to_local(wo, f), b.alpha, b.ior, Vec3::from(u))
+    let m = dielectric_sample(to_local(wo, f), b.alpha, microfacet_dist(b), b.ior, Vec3::from(u))
         .map(|m| MfSample { weight: m.weight * b.color0, ..m });
     microfacet_result(m, f, glossy_flags(b))
 }
@@ -347,7 +357,7 @@ pub fn plastic_bsdf_eval(b: &Bsdf, wo: Vec3, wi: Vec3) -> Vec3 {
         return Vec3::ZERO;
     }
     let f = frame_around(b, facing(b, wo));
-    plastic_eval(to_local(wo, f), to_local(wi, f), b.alpha, b.ior, b.color0, &plastic_coat(b))
+    plastic_eval(to_local(wo, f), to_local(wi, f), b.alpha, microfacet_dist(b), b.ior, b.color0, &plastic_coat(b))
 }
 
 pub fn plastic_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
@@ -360,7 +370,7 @@ pub fn plastic_bsdf_pdf(b: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
     if is_smooth(b) {
         wi_l.z.max(0.0) * (1.0 / PI)
     } else {
-        plastic_pdf(wo_l, wi_l, b.alpha, b.ior, b.color0)
+        plastic_pdf(wo_l, wi_l, b.alpha, microfacet_dist(b), b.ior, b.color0)
     }
 }
 
@@ -386,7 +396,7 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
     if is_smooth(b) && lobes == LOBES_ESTIMATE {
         // The base alone, by cosine: weight f cos / pdf = pi f.
         let wi_l = mf_cosine_direction(Vec2::new(u[1], u[2]));
-        let fr = plastic_eval(wo_l, wi_l, b.alpha, b.ior, b.color0, &plastic_coat(b));
+        let fr = plastic_eval(wo_l, wi_l, b.alpha, microfacet_dist(b), b.ior, b.color0, &plastic_coat(b));
         let smp = BsdfSample {
             wi: to_world(wi_l, f),
             weight: PI * fr,
@@ -395,7 +405,7 @@ pub fn plastic_bsdf_sample(b: &Bsdf, wo: Vec3, u: [f32; 3], lobes: u32) -> BsdfS
         };
         return if same_geometric_side(b, wo, smp.wi) && wi_l.z > 0.0 { smp } else { BsdfSample::default() };
     }
-    let m = plastic_sample(wo_l, b.alpha, b.ior, b.color0, &plastic_coat(b), Vec3::from(u));
+    let m = plastic_sample(wo_l, b.alpha, microfacet_dist(b), b.ior, b.color0, &plastic_coat(b), Vec3::from(u));
     let smp = microfacet_result(m, f, BSDF_GLOSSY | BSDF_DIFFUSE | BSDF_ESTIMATE);
     if !same_geometric_side(b, wo, smp.wi) {
         return BsdfSample::default();

@@ -4,9 +4,12 @@
 //! - Directions live in a local shading frame whose z axis is the surface normal (the front
 //!   side), and point AWAY from the surface: `wo` toward the previous vertex (the viewer), `wi`
 //!   toward the next one (the light, or the sampled direction). Both are unit vectors.
-//! - `alpha` = (alpha_x, alpha_y) are the GGX widths themselves (Mitsuba's `alpha`), NOT a
-//!   perceptual roughness to square. Below 1e-3 (both) a lobe is a delta (pbrt-v4's
-//!   `EffectivelySmooth`); a rough lobe has its widths raised to at least 1e-4.
+//! - `alpha` = (alpha_x, alpha_y) are the microfacet widths themselves (Mitsuba's `alpha`), NOT
+//!   a perceptual roughness to square, of the distribution `dist`: `MICROFACET_GGX` or
+//!   `MICROFACET_BECKMANN` (alpha then the RMS slope), chosen by [`mf_d`], [`mf_g1`],
+//!   [`mf_sample_visible`] and [`mf_pdf_visible`]. Below 1e-3 (both) a lobe is a delta (pbrt-v4's
+//!   `EffectivelySmooth`) of either distribution; a rough lobe has its widths raised to at least
+//!   1e-4.
 //! - `*_eval` returns f without the cosine; `*_pdf` is per unit solid angle of `wi`, and 0 for a
 //!   delta lobe, which eval and pdf never see (measure zero).
 //! - `*_sample` returns `None` when it fails (GLSL: false, with zeroed outputs), else an
@@ -20,7 +23,7 @@ use std::f32::consts::PI;
 
 use glam::{Vec2, Vec3};
 
-use crate::layout::constants::{NO_DATA, PLASTIC_COAT_TABLE};
+use crate::layout::constants::{MICROFACET_BECKMANN, NO_DATA, PLASTIC_COAT_TABLE};
 
 /// Lobe of a sample: reflection (wi on wo's side of the surface) ...
 pub const MF_REFLECTION: u32 = 0;
@@ -191,6 +194,189 @@ pub fn ggx_pdf_visible(wo: Vec3, m: Vec3, alpha: Vec2) -> f32 {
 }
 
 // -------------------------------------------------------------------------------------------------
+// Beckmann distribution (Mitsuba 3.9.1's microfacet.h, formula for formula)
+
+/// 1 / sqrt(π).
+const MF_INV_SQRT_PI: f32 = 0.564_189_6;
+
+/// erfc(x) / exp(-x²) for x >= 0, after Abramowitz and Stegun 7.1.26: with it erf and the
+/// Beckmann masking need no cancelling 1 - erf.
+fn mf_erfc_scaled(x: f32) -> f32 {
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    ((((1.061_405_4 * t - 1.453_152) * t + 1.421_413_8) * t - 0.284_496_75) * t + 0.254_829_6) * t
+}
+
+/// erf(x) of Abramowitz and Stegun 7.1.26 (absolute error below 1.5e-7, and f32 rounding; tested).
+pub fn mf_erf(x: f32) -> f32 {
+    let y = 1.0 - mf_erfc_scaled(x.abs()) * (-x * x).exp();
+    if x < 0.0 {
+        -y
+    } else {
+        y
+    }
+}
+
+/// erf⁻¹(x) of Giles 2010 ("Approximating the erfinv function", its single-precision
+/// polynomials), `x` clamped to ±(1 - 1.2e-7) so that the result stays finite (|erf⁻¹| < 3.8).
+pub fn mf_erfinv(x: f32) -> f32 {
+    let x = x.clamp(-0.999_999_9, 0.999_999_9);
+    let w = -((1.0 - x) * (1.0 + x)).ln();
+    let p = if w < 5.0 {
+        let w = w - 2.5;
+        let mut p = 2.810_226_4e-8;
+        p = 3.432_739_4e-7 + p * w;
+        p = -3.523_387_7e-6 + p * w;
+        p = -4.391_506_5e-6 + p * w;
+        p = 2.185_808_7e-4 + p * w;
+        p = -1.253_725e-3 + p * w;
+        p = -4.177_681_6e-3 + p * w;
+        p = 0.246_640_73 + p * w;
+        1.501_409_4 + p * w
+    } else {
+        let w = w.sqrt() - 3.0;
+        let mut p = -2.002_142_6e-4;
+        p = 1.009_505_6e-4 + p * w;
+        p = 1.349_343_2e-3 + p * w;
+        p = -3.673_428_4e-3 + p * w;
+        p = 5.739_507_7e-3 + p * w;
+        p = -7.622_461_3e-3 + p * w;
+        p = 9.438_870_5e-3 + p * w;
+        p = 1.001_674 + p * w;
+        2.832_976_8 + p * w
+    };
+    p * x
+}
+
+/// Beckmann density of microfacet normals, anisotropic: D(m) = exp(-tan²θ (cos²φ/ax² +
+/// sin²φ/ay²)) / (π ax ay cos⁴θ) for m.z > 0, else 0; ∫ D(m) m.z dm = 1. As Mitsuba, 0 where
+/// D cosθ <= 1e-20 (also where cos⁴θ underflows). `alpha` is the RMS slope (Mitsuba's alpha).
+pub fn beckmann_d(m: Vec3, alpha: Vec2) -> f32 {
+    if m.z <= 0.0 {
+        return 0.0;
+    }
+    let c2 = m.z * m.z;
+    let x = m.x / alpha.x;
+    let y = m.y / alpha.y;
+    let den = PI * alpha.x * alpha.y * c2 * c2;
+    if den <= 0.0 {
+        return 0.0;
+    }
+    let d = (-(x * x + y * y) / c2).exp() / den;
+    if d * m.z > 1e-20 {
+        d
+    } else {
+        0.0
+    }
+}
+
+/// Smith masking of microfacet m seen from v for the Beckmann distribution, exact: 1 / (1 +
+/// Λ(a)), Λ(a) = (exp(-a²) / (a sqrt(π)) - erfc(a)) / 2 (Walter et al. 2007, eq. 27), a = 1 /
+/// (alpha_v tanθ_v) with alpha_v the width projected on v's azimuth; 1 at normal incidence, 0
+/// when v sees the back of m.
+///
+/// Mitsuba 3.9.1 uses a rational fit of it instead, (3.535 a + 2.181 a²) / (1 + 2.276 a +
+/// 2.577 a²), 1 from a = 1.6 on, which is within 0.35% (tested). We do not: its visible-normal
+/// density then integrates to 1 ± 0.3% while the sampler draws the exact one, which our
+/// chi-square test rejects (p < 1e-300 at alpha 0.15 seen at 85 degrees) and which would bias
+/// the sampled weights against the evaluated BSDF under MIS by as much.
+pub fn beckmann_g1(v: Vec3, m: Vec3, alpha: Vec2) -> f32 {
+    if dot(v, m) * v.z <= 0.0 {
+        return 0.0;
+    }
+    let xy = alpha.x * alpha.x * v.x * v.x + alpha.y * alpha.y * v.y * v.y;
+    if xy == 0.0 {
+        return 1.0;
+    }
+    let a = v.z.abs() / xy.sqrt();
+    let lambda = 0.5 * (-a * a).exp() * (MF_INV_SQRT_PI / a - mf_erfc_scaled(a));
+    1.0 / (1.0 + lambda.max(0.0))
+}
+
+/// Slopes of the visible normals of the unit-width Beckmann distribution seen at cosine
+/// `cos_theta` (> 0) from azimuth 0: Mitsuba's `sample_visible_11`, its CDF inverted in the erf
+/// domain by three Newton steps from the exact solution at grazing incidence (after Jakob 2014,
+/// "An Improved Visible Normal Sampling Routine for the Beckmann Distribution"). Its CDF is
+/// concave there, so Newton from below stays below the root.
+fn beckmann_sample_11(cos_theta: f32, u: Vec2) -> Vec2 {
+    let u = u.clamp(Vec2::splat(1e-6), Vec2::splat(1.0 - 1e-6));
+    // Bounded so that neither is infinite (normal and grazing incidence).
+    let tan_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt() / cos_theta.max(1e-7);
+    let cot_theta = 1.0 / tan_theta.max(1e-7);
+    let maxval = mf_erf(cot_theta);
+    let mut x = maxval - (maxval + 1.0) * mf_erf((-u.x.ln()).sqrt());
+    let target = u.x * (1.0 + maxval + MF_INV_SQRT_PI * tan_theta * (-cot_theta * cot_theta).exp());
+    for _ in 0..3 {
+        let slope = mf_erfinv(x);
+        let value = 1.0 + x + MF_INV_SQRT_PI * tan_theta * (-slope * slope).exp() - target;
+        let derivative = 1.0 - slope * tan_theta;
+        x -= value / derivative;
+    }
+    Vec2::new(mf_erfinv(x), mf_erfinv(2.0 * u.y - 1.0))
+}
+
+/// A microfacet normal drawn from the Beckmann normals visible from `wo` (from -wo when wo.z <
+/// 0, as [`ggx_sample_visible`]): stretch wo to unit width, draw slopes at its angle, rotate them
+/// to its azimuth and unstretch (Heitz and d'Eon 2014; Mitsuba's `sample`).
+pub fn beckmann_sample_visible(wo: Vec3, alpha: Vec2, u: Vec2) -> Vec3 {
+    let v = if wo.z < 0.0 { -wo } else { wo };
+    let vs = Vec3::new(alpha.x * v.x, alpha.y * v.y, v.z).normalize();
+    let sin2 = vs.x * vs.x + vs.y * vs.y;
+    let (sin_phi, cos_phi) = if sin2 > 0.0 { (vs.y / sin2.sqrt(), vs.x / sin2.sqrt()) } else { (0.0, 1.0) };
+    let s = beckmann_sample_11(vs.z, u);
+    let sx = (cos_phi * s.x - sin_phi * s.y) * alpha.x;
+    let sy = (sin_phi * s.x + cos_phi * s.y) * alpha.y;
+    Vec3::new(-sx, -sy, 1.0).normalize()
+}
+
+/// Density of [`beckmann_sample_visible`] as the pdf functions use it: G1(wo, m) |dot(wo, m)|
+/// D(m) / |wo.z| with the rational G1 (see [`beckmann_g1`]).
+pub fn beckmann_pdf_visible(wo: Vec3, m: Vec3, alpha: Vec2) -> f32 {
+    if wo.z == 0.0 {
+        return 0.0;
+    }
+    beckmann_g1(wo, m, alpha) * dot(wo, m).abs() * beckmann_d(m, alpha) / wo.z.abs()
+}
+
+// -------------------------------------------------------------------------------------------------
+// The distribution of a material: `MICROFACET_GGX` or `MICROFACET_BECKMANN` (`dist`)
+
+/// D of distribution `dist`.
+pub fn mf_d(m: Vec3, alpha: Vec2, dist: u32) -> f32 {
+    if dist == MICROFACET_BECKMANN {
+        beckmann_d(m, alpha)
+    } else {
+        ggx_d(m, alpha)
+    }
+}
+
+/// Smith G1 of distribution `dist`.
+pub fn mf_g1(v: Vec3, m: Vec3, alpha: Vec2, dist: u32) -> f32 {
+    if dist == MICROFACET_BECKMANN {
+        beckmann_g1(v, m, alpha)
+    } else {
+        ggx_g1(v, m, alpha)
+    }
+}
+
+/// A visible normal of distribution `dist`.
+pub fn mf_sample_visible(wo: Vec3, alpha: Vec2, dist: u32, u: Vec2) -> Vec3 {
+    if dist == MICROFACET_BECKMANN {
+        beckmann_sample_visible(wo, alpha, u)
+    } else {
+        ggx_sample_visible(wo, alpha, u)
+    }
+}
+
+/// The visible normals' density of distribution `dist`.
+pub fn mf_pdf_visible(wo: Vec3, m: Vec3, alpha: Vec2, dist: u32) -> f32 {
+    if dist == MICROFACET_BECKMANN {
+        beckmann_pdf_visible(wo, m, alpha)
+    } else {
+        ggx_pdf_visible(wo, m, alpha)
+    }
+}
+
+// -------------------------------------------------------------------------------------------------
 // Rough conductor
 
 /// Exact unpolarised Fresnel reflectance of a vacuum-conductor interface of complex index
@@ -206,24 +392,24 @@ pub fn fresnel_conductor(cos_theta: f32, eta: Vec3, k: Vec3) -> Vec3 {
 /// One-sided rough conductor, single scattering: F(dot(wo, h)) D(h) G1(wo, h) G1(wi, h) /
 /// (4 wo.z wi.z), h = normalize(wo + wi); zero unless wo.z > 0 and wi.z > 0. The energy lost to
 /// masking is lost (no multiple-scattering compensation), as in the reference.
-pub fn conductor_eval(wo: Vec3, wi: Vec3, alpha: Vec2, eta: Vec3, k: Vec3) -> Vec3 {
+pub fn conductor_eval(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, eta: Vec3, k: Vec3) -> Vec3 {
     if wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha) {
         return Vec3::ZERO;
     }
     let alpha = mf_rough_alpha(alpha);
     let h = (wo + wi).normalize();
-    let dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    let dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
     fresnel_conductor(dot(wo, h), eta, k) * (dg / (4.0 * wo.z * wi.z))
 }
 
 /// Density of [`conductor_sample`]: D_wo(h) / (4 dot(wo, h)) (the reflection Jacobian).
-pub fn conductor_pdf(wo: Vec3, wi: Vec3, alpha: Vec2) -> f32 {
+pub fn conductor_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32) -> f32 {
     if wo.z <= 0.0 || wi.z <= 0.0 || mf_is_smooth(alpha) {
         return 0.0;
     }
     let alpha = mf_rough_alpha(alpha);
     let h = (wo + wi).normalize();
-    let pdf_m = ggx_pdf_visible(wo, h, alpha);
+    let pdf_m = mf_pdf_visible(wo, h, alpha, dist);
     if pdf_m > 0.0 {
         pdf_m / (4.0 * dot(wo, h))
     } else {
@@ -233,7 +419,7 @@ pub fn conductor_pdf(wo: Vec3, wi: Vec3, alpha: Vec2) -> f32 {
 
 /// Reflects wo about a visible normal: weight F(dot(wo, m)) G1(wi, m). Smooth (delta): the
 /// mirror direction with weight F(wo.z), pdf 0.
-pub fn conductor_sample(wo: Vec3, alpha: Vec2, eta: Vec3, k: Vec3, u: Vec2) -> Option<MfSample> {
+pub fn conductor_sample(wo: Vec3, alpha: Vec2, dist: u32, eta: Vec3, k: Vec3, u: Vec2) -> Option<MfSample> {
     if wo.z <= 0.0 {
         return None;
     }
@@ -246,20 +432,20 @@ pub fn conductor_sample(wo: Vec3, alpha: Vec2, eta: Vec3, k: Vec3, u: Vec2) -> O
         });
     }
     let alpha = mf_rough_alpha(alpha);
-    let m = ggx_sample_visible(wo, alpha, u);
+    let m = mf_sample_visible(wo, alpha, dist, u);
     let dot_o = dot(wo, m);
     let w = 2.0 * dot_o * m - wo;
     if dot_o <= 0.0 || w.z <= 0.0 {
         return None;
     }
-    let p = ggx_pdf_visible(wo, m, alpha) / (4.0 * dot_o);
+    let p = mf_pdf_visible(wo, m, alpha, dist) / (4.0 * dot_o);
     if p.is_nan() || p <= 0.0 {
         return None;
     }
     // f |cos| / pdf = F D G1(wo) G1(wi) / (4 wo.z) / (G1(wo) D / (4 wo.z)) = F G1(wi).
     Some(MfSample {
         wi: w,
-        weight: fresnel_conductor(dot_o, eta, k) * ggx_g1(w, m, alpha),
+        weight: fresnel_conductor(dot_o, eta, k) * mf_g1(w, m, alpha, dist),
         pdf: p,
         lobe: MF_REFLECTION,
     })
@@ -284,7 +470,7 @@ pub fn conductor_sample(wo: Vec3, alpha: Vec2, eta: Vec3, k: Vec3, u: Vec2) -> O
 /// reciprocity f(wo, wi) / n_wo² = f(wi, wo) / n_wi² (Veach 1997, eq. 5.14); the adjoint BSDF
 /// for importance or photons is f(wi, wo) = eta² f(wo, wi), Walter's form. Both give the same
 /// image when every path that enters a dielectric leaves it again, since the factors cancel.
-pub fn dielectric_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
+pub fn dielectric_eval(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32) -> f32 {
     if mf_is_smooth(alpha) {
         return 0.0;
     }
@@ -292,7 +478,7 @@ pub fn dielectric_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
         return 0.0;
     };
     let alpha = mf_rough_alpha(alpha);
-    let dg = ggx_d(p.h, alpha) * ggx_g1(wo, p.h, alpha) * ggx_g1(wi, p.h, alpha);
+    let dg = mf_d(p.h, alpha, dist) * mf_g1(wo, p.h, alpha, dist) * mf_g1(wi, p.h, alpha, dist);
     if dg == 0.0 {
         return 0.0;
     }
@@ -339,7 +525,7 @@ pub fn dielectric_pair(wo: Vec3, wi: Vec3, ior: f32) -> Option<DielectricPair> {
 
 /// Density of [`dielectric_sample`]: F D_wo(h) / (4 |dot(wo, h)|) for reflection,
 /// (1 - F) D_wo(h) eta² |dot(wi, h)| / (dot(wo, h) + eta dot(wi, h))² for transmission.
-pub fn dielectric_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
+pub fn dielectric_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32) -> f32 {
     if mf_is_smooth(alpha) {
         return 0.0;
     }
@@ -350,7 +536,7 @@ pub fn dielectric_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
     if p.dot_o * wo.z <= 0.0 || p.dot_i * wi.z <= 0.0 {
         return 0.0;
     }
-    let pdf_m = ggx_pdf_visible(wo, p.h, mf_rough_alpha(alpha));
+    let pdf_m = mf_pdf_visible(wo, p.h, mf_rough_alpha(alpha), dist);
     let (f, _) = mf_fresnel_dielectric(p.dot_o.abs(), p.eta_o, p.eta_t);
     if p.reflection {
         return f * pdf_m / (4.0 * p.dot_o.abs());
@@ -363,7 +549,7 @@ pub fn dielectric_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32) -> f32 {
 /// or refracts: weight G1(wi, m) for reflection, G1(wi, m) / eta² for transmission. Smooth
 /// (delta): the mirror direction with weight 1 or the refracted one with weight 1 / eta², pdf 0.
 /// Works from either side (wo.z > 0 outside, wo.z < 0 inside).
-pub fn dielectric_sample(wo: Vec3, alpha: Vec2, ior: f32, u: Vec3) -> Option<MfSample> {
+pub fn dielectric_sample(wo: Vec3, alpha: Vec2, dist: u32, ior: f32, u: Vec3) -> Option<MfSample> {
     let cos_o = wo.z;
     if cos_o == 0.0 {
         return None;
@@ -381,12 +567,12 @@ pub fn dielectric_sample(wo: Vec3, alpha: Vec2, ior: f32, u: Vec3) -> Option<MfS
         return Some(MfSample { wi, weight: Vec3::splat(1.0 / (eta * eta)), pdf: 0.0, lobe: MF_TRANSMISSION });
     }
     let alpha = mf_rough_alpha(alpha);
-    let m = ggx_sample_visible(wo, alpha, Vec2::new(u.y, u.z));
+    let m = mf_sample_visible(wo, alpha, dist, Vec2::new(u.y, u.z));
     let dot_o = dot(wo, m);
     if dot_o * side <= 0.0 {
         return None;
     }
-    let pdf_m = ggx_pdf_visible(wo, m, alpha);
+    let pdf_m = mf_pdf_visible(wo, m, alpha, dist);
     let (f, cos_t) = mf_fresnel_dielectric(dot_o.abs(), eta_o, eta_t);
     if u.x < f {
         let w = 2.0 * dot_o * m - wo;
@@ -398,7 +584,7 @@ pub fn dielectric_sample(wo: Vec3, alpha: Vec2, ior: f32, u: Vec3) -> Option<MfS
             return None;
         }
         // f |cos| / pdf = G1(wi): F, D and G1(wo) cancel.
-        return Some(MfSample { wi: w, weight: Vec3::splat(ggx_g1(w, m, alpha)), pdf: p, lobe: MF_REFLECTION });
+        return Some(MfSample { wi: w, weight: Vec3::splat(mf_g1(w, m, alpha, dist)), pdf: p, lobe: MF_REFLECTION });
     }
     // Refraction through m turned to wo's side (pbrt-v3 Refract with relative index 1/eta).
     let w = -wo / eta + (dot_o.abs() / eta - cos_t) * (side * m);
@@ -412,7 +598,7 @@ pub fn dielectric_sample(wo: Vec3, alpha: Vec2, ior: f32, u: Vec3) -> Option<MfS
         return None;
     }
     // f |cos| / pdf = G1(wi) / eta²: (1 - F), D, G1(wo) and the Jacobian cancel.
-    Some(MfSample { wi: w, weight: Vec3::splat(ggx_g1(w, m, alpha) / (eta * eta)), pdf: p, lobe: MF_TRANSMISSION })
+    Some(MfSample { wi: w, weight: Vec3::splat(mf_g1(w, m, alpha, dist) / (eta * eta)), pdf: p, lobe: MF_TRANSMISSION })
 }
 
 // -------------------------------------------------------------------------------------------------
@@ -497,7 +683,7 @@ fn mf_plastic_base(wo_z: f32, wi_z: f32, f_o: f32, f_i: f32, ior: f32, diffuse: 
 /// coat's Fresnel by F(wo.z) and F(wi.z) bounds the coat by F(wo.z), hence albedo <= 1 for
 /// diffuse <= 1, keeps f symmetric, and changes nothing at the specular configuration (h = z,
 /// where all three cosines agree) nor for a smooth coat.
-pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &PlasticCoat) -> Vec3 {
+pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32, diffuse: Vec3, coat: &PlasticCoat) -> Vec3 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
     }
@@ -509,14 +695,14 @@ pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, co
     }
     let alpha = mf_rough_alpha(alpha);
     let h = (wo + wi).normalize();
-    let dg = ggx_d(h, alpha) * ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    let dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
     let (f_h, _) = mf_fresnel_dielectric(dot(wo, h).abs(), 1.0, ior);
     f + Vec3::splat(f_h.min(f_o.min(f_i)) * dg / (4.0 * wo.z * wi.z))
 }
 
 /// Density of [`plastic_sample`]'s non-delta part: p_coat D_wo(h) / (4 dot(wo, h)) (rough coat
 /// only) + (1 - p_coat) wi.z / π, p_coat = F(wo.z) / (F(wo.z) + (1 - F(wo.z)) mean(diffuse)).
-pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> f32 {
+pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32, diffuse: Vec3) -> f32 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return 0.0;
     }
@@ -527,7 +713,7 @@ pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> 
     }
     let alpha = mf_rough_alpha(alpha);
     let h = (wo + wi).normalize();
-    let pdf_m = ggx_pdf_visible(wo, h, alpha);
+    let pdf_m = mf_pdf_visible(wo, h, alpha, dist);
     if pdf_m > 0.0 {
         pdf += p_coat * pdf_m / (4.0 * dot(wo, h));
     }
@@ -537,7 +723,15 @@ pub fn plastic_pdf(wo: Vec3, wi: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3) -> 
 /// `u.x` picks the coat (probability p_coat, see [`plastic_pdf`]) or the base; `u.yz` draws a
 /// visible normal or a cosine direction. The weight counts both lobes (f and pdf of the mixture),
 /// except for a smooth coat's delta, whose weight is F(wo.z) / p_coat.
-pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &PlasticCoat, u: Vec3) -> Option<MfSample> {
+pub fn plastic_sample(
+    wo: Vec3,
+    alpha: Vec2,
+    dist: u32,
+    ior: f32,
+    diffuse: Vec3,
+    coat: &PlasticCoat,
+    u: Vec3,
+) -> Option<MfSample> {
     if wo.z <= 0.0 {
         return None;
     }
@@ -552,7 +746,7 @@ pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &Pla
                 lobe: MF_REFLECTION,
             });
         }
-        let m = ggx_sample_visible(wo, mf_rough_alpha(alpha), Vec2::new(u.y, u.z));
+        let m = mf_sample_visible(wo, mf_rough_alpha(alpha), dist, Vec2::new(u.y, u.z));
         2.0 * dot(wo, m) * m - wo
     } else {
         mf_cosine_direction(Vec2::new(u.y, u.z))
@@ -561,13 +755,13 @@ pub fn plastic_sample(wo: Vec3, alpha: Vec2, ior: f32, diffuse: Vec3, coat: &Pla
         return None;
     }
     // Both lobes count in pdf and weight (one-sample MIS over the two lobes).
-    let p = plastic_pdf(wo, w, alpha, ior, diffuse);
+    let p = plastic_pdf(wo, w, alpha, dist, ior, diffuse);
     if p.is_nan() || p <= 0.0 {
         return None;
     }
     Some(MfSample {
         wi: w,
-        weight: plastic_eval(wo, w, alpha, ior, diffuse, coat) * (w.z / p),
+        weight: plastic_eval(wo, w, alpha, dist, ior, diffuse, coat) * (w.z / p),
         pdf: p,
         lobe: MF_REFLECTION,
     })
@@ -608,6 +802,7 @@ pub fn lambert_sample(wo: Vec3, albedo: Vec3, u: Vec2) -> Option<MfSample> {
 mod tests {
     use super::*;
     use crate::cpu::rng::{pcg4d, rand_unit};
+    use crate::layout::constants::MICROFACET_GGX;
     use rayon::prelude::*;
 
     // ---------------------------------------------------------------------------------------------
@@ -627,6 +822,22 @@ mod tests {
 
     const ALPHAS: [Vec2; 5] =
         [Vec2::splat(0.05), Vec2::splat(0.15), Vec2::splat(0.5), Vec2::splat(1.0), Vec2::new(0.1, 0.4)];
+
+    const DISTS: [u32; 2] = [MICROFACET_GGX, MICROFACET_BECKMANN];
+
+    /// Every distribution at every alpha of `ALPHAS`, after alpha 0 (smooth) with `smooth`.
+    fn dist_alphas(smooth: bool) -> Vec<(u32, Vec2)> {
+        let alphas = smooth.then_some(Vec2::ZERO).into_iter().chain(ALPHAS);
+        DISTS.iter().flat_map(|&d| alphas.clone().map(move |a| (d, a))).collect()
+    }
+
+    fn dist_name(dist: u32) -> &'static str {
+        if dist == MICROFACET_BECKMANN {
+            "beckmann"
+        } else {
+            "ggx"
+        }
+    }
 
     /// Viewer directions: near normal, 45 degrees, grazing 85 degrees; an azimuth of 30 degrees
     /// so that the anisotropic case is not aligned with an axis.
@@ -867,8 +1078,14 @@ mod tests {
 
     type Case = (String, Box<dyn Fn(Vec3) -> Option<Vec3> + Sync>, Box<dyn Fn(Vec3) -> f32 + Sync>);
 
-    fn name(alpha: Vec2, wo: Vec3) -> String {
-        format!("alpha ({}, {}) wo theta {:.0}", alpha.x, alpha.y, wo.z.clamp(-1.0, 1.0).acos().to_degrees())
+    fn name(dist: u32, alpha: Vec2, wo: Vec3) -> String {
+        format!(
+            "{} alpha ({}, {}) wo theta {:.0}",
+            dist_name(dist),
+            alpha.x,
+            alpha.y,
+            wo.z.clamp(-1.0, 1.0).acos().to_degrees()
+        )
     }
 
     // ---------------------------------------------------------------------------------------------
@@ -966,7 +1183,7 @@ mod tests {
     }
 
     #[test]
-    fn ggx_d_and_visible_normals_are_normalised() {
+    fn d_and_visible_normals_are_normalised() {
         // ∫ D(m) cos(theta_m) dm = 1 (projected microfacet area), and ∫ D_wo(m) dm = 1, which
         // holds only if G1 is the Smith masking of this D.
         let hemisphere = |f: &(dyn Fn(Vec3) -> f32 + Sync)| -> f64 {
@@ -981,37 +1198,110 @@ mod tests {
                 })
                 .sum()
         };
-        for alpha in ALPHAS {
-            let projected = hemisphere(&|m| ggx_d(m, alpha) * m.z);
-            println!("alpha {alpha}: ∫ D cos = {projected:.6}");
-            assert!((projected - 1.0).abs() < 1e-4, "alpha {alpha}: {projected}");
+        let mut worst_beckmann: f64 = 0.0;
+        for (dist, alpha) in dist_alphas(false) {
+            let projected = hemisphere(&|m| mf_d(m, alpha, dist) * m.z);
+            println!("{} alpha {alpha}: ∫ D cos = {projected:.6}", dist_name(dist));
+            assert!((projected - 1.0).abs() < 1e-4, "{} alpha {alpha}: {projected}", dist_name(dist));
+            let tol = 1e-4;
             for wo in viewers() {
                 for wo in [wo, -wo] {
-                    let visible = hemisphere(&|m| ggx_pdf_visible(wo, m, alpha));
-                    println!("alpha {alpha} {}: ∫ D_wo = {visible:.6}", name(alpha, wo));
-                    assert!((visible - 1.0).abs() < 1e-4, "{}: {visible}", name(alpha, wo));
+                    let visible = hemisphere(&|m| mf_pdf_visible(wo, m, alpha, dist));
+                    println!("{}: ∫ D_wo = {visible:.6}", name(dist, alpha, wo));
+                    assert!((visible - 1.0).abs() < tol, "{}: {visible}", name(dist, alpha, wo));
+                    if dist == MICROFACET_BECKMANN {
+                        worst_beckmann = worst_beckmann.max((visible - 1.0).abs());
+                    }
                 }
             }
         }
+        println!("beckmann: worst |∫ D_wo - 1| = {worst_beckmann:.2e}");
+    }
+
+    /// erf in f64 by its Maclaurin series up to |x| = 4 (its largest term, about 1e6, leaves
+    /// 1e-10), ±1 beyond (erfc(4) = 1.5e-8).
+    fn erf64(x: f64) -> f64 {
+        if x.abs() > 4.0 {
+            return 1f64.copysign(x);
+        }
+        let (mut term, mut sum) = (x, x);
+        for n in 1..120 {
+            term *= -x * x / n as f64;
+            sum += term / (2 * n + 1) as f64;
+        }
+        sum * 2.0 / std::f64::consts::PI.sqrt()
+    }
+
+    #[test]
+    fn erf_and_its_inverse_match_f64() {
+        let (mut worst_erf, mut worst_inv): (f64, f64) = (0.0, 0.0);
+        for i in -4000..=4000 {
+            let x = i as f64 * 1e-3;
+            worst_erf = worst_erf.max((mf_erf(x as f32) as f64 - erf64(x)).abs());
+        }
+        // erfinv(erf(s)) = s where erf(s) is not within f32 rounding of ±1 (|s| < 3.5).
+        for i in -3400..=3400 {
+            let s = i as f64 * 1e-3;
+            let y = erf64(s) as f32;
+            let back = mf_erfinv(y) as f64;
+            // d erfinv / dy = sqrt(π)/2 exp(s²): an ulp of y moves s by that much.
+            let ulp_effect = 0.5 * std::f64::consts::PI.sqrt() * (s * s).exp() * f32::EPSILON as f64;
+            worst_inv = worst_inv.max((back - s).abs() / (1e-6 * s.abs().max(1.0) + 2.0 * ulp_effect));
+        }
+        println!("erf: worst absolute error {worst_erf:.2e}; erfinv: worst error {worst_inv:.2} of its bound");
+        // A&S's 1.5e-7 plus f32 rounding of 1 - poly exp(-x²) (ulps of 6e-8 near 1).
+        assert!(worst_erf < 5e-7, "{worst_erf}");
+        assert!(worst_inv < 1.0, "{worst_inv}");
+        assert!(mf_erfinv(1.0).is_finite() && mf_erfinv(-1.0).is_finite() && mf_erf(0.0) == 0.0);
+    }
+
+    #[test]
+    fn beckmann_g1_is_the_exact_smith_g1_and_near_mitsubas_fit() {
+        // Exact in f64: 1 / (1 + Λ(a)), Λ(a) = (erf(a) - 1) / 2 + exp(-a²) / (2 a sqrt(π)),
+        // a = 1 / (alpha tanθ). Ours is that to f32 rounding and erf's 1.5e-7; Mitsuba's
+        // rational fit (see beckmann_g1) is within 0.35%, which bounds what our choice changes.
+        let (mut worst, mut worst_fit): (f64, f64) = (0.0, 0.0);
+        for i in 1..=2000 {
+            let theta = (i as f64 / 2001.0) * std::f64::consts::FRAC_PI_2;
+            for alpha in [0.05f64, 0.3, 1.0] {
+                let v = Vec3::new(theta.sin() as f32, 0.0, theta.cos() as f32);
+                let a = 1.0 / (alpha * theta.tan());
+                let lambda = 0.5 * (erf64(a) - 1.0) + (-a * a).exp() / (2.0 * a * std::f64::consts::PI.sqrt());
+                let exact = 1.0 / (1.0 + lambda);
+                let ours = beckmann_g1(v, Vec3::Z, Vec2::splat(alpha as f32)) as f64;
+                let fit = if a >= 1.6 { 1.0 } else { (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a) };
+                if exact > 1e-3 {
+                    worst = worst.max((ours - exact).abs() / exact);
+                    worst_fit = worst_fit.max((fit - exact).abs() / exact);
+                }
+            }
+        }
+        println!("beckmann G1: worst relative error {worst:.2e}; Mitsuba's fit {worst_fit:.2e}");
+        assert!(worst < 2e-5, "{worst}");
+        assert!(worst_fit < 3.6e-3, "{worst_fit}");
+        // Its anisotropic width is the one projected on v's azimuth.
+        let v = Vec3::new(0.6, 0.0, 0.8);
+        let rotated = Vec3::new(0.0, 0.6, 0.8);
+        assert_eq!(beckmann_g1(v, Vec3::Z, Vec2::new(0.2, 0.7)), beckmann_g1(rotated, Vec3::Z, Vec2::new(0.7, 0.2)));
     }
 
     // ---------------------------------------------------------------------------------------------
     // Samplers against their densities (chi-square)
 
     #[test]
-    fn ggx_visible_normal_sampling_matches_its_pdf() {
+    fn visible_normal_sampling_matches_its_pdf() {
         let mut cases: Vec<Case> = Vec::new();
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             // The conductor's and plastic's tests cover more viewers through this sampler.
-            for wo in [dir(45.0, 30.0), -dir(30.0, 30.0)] {
+            for wo in [dir(45.0, 30.0), -dir(30.0, 30.0), dir(85.0, 30.0)] {
                 cases.push((
-                    name(alpha, wo),
-                    Box::new(move |u: Vec3| Some(ggx_sample_visible(wo, alpha, Vec2::new(u.x, u.y)))),
-                    Box::new(move |m| ggx_pdf_visible(wo, m, alpha)),
+                    name(dist, alpha, wo),
+                    Box::new(move |u: Vec3| Some(mf_sample_visible(wo, alpha, dist, Vec2::new(u.x, u.y)))),
+                    Box::new(move |m| mf_pdf_visible(wo, m, alpha, dist)),
                 ));
             }
         }
-        run_chi2("ggx visible normals", cases);
+        run_chi2("visible normals", cases);
     }
 
     const GOLD_ETA: Vec3 = Vec3::new(0.143, 0.374, 1.442);
@@ -1019,8 +1309,8 @@ mod tests {
     const PLASTIC_DIFFUSE: Vec3 = Vec3::new(0.5, 0.3, 0.2);
 
     /// A nonlinear coat of width `alpha` (its table leaked: tests keep it to the end).
-    fn nonlinear_coat(alpha: Vec2, ior: f32) -> PlasticCoat<'static> {
-        match crate::render::plastic_coat::plastic_coat_table(0.5 * (alpha.x + alpha.y), ior) {
+    fn nonlinear_coat(alpha: Vec2, dist: u32, ior: f32) -> PlasticCoat<'static> {
+        match crate::render::plastic_coat::plastic_coat_table(0.5 * (alpha.x + alpha.y), dist, ior) {
             Some(t) => PlasticCoat { nonlinear: true, words: Box::leak(t.into_boxed_slice()), table: 0 },
             None => PlasticCoat { nonlinear: true, ..PlasticCoat::LINEAR },
         }
@@ -1029,14 +1319,14 @@ mod tests {
     #[test]
     fn conductor_sampling_matches_its_pdf() {
         let mut cases: Vec<Case> = Vec::new();
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             for wo in viewers() {
                 cases.push((
-                    name(alpha, wo),
+                    name(dist, alpha, wo),
                     Box::new(move |u: Vec3| {
-                        conductor_sample(wo, alpha, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)).map(|s| s.wi)
+                        conductor_sample(wo, alpha, dist, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)).map(|s| s.wi)
                     }),
-                    Box::new(move |wi| conductor_pdf(wo, wi, alpha)),
+                    Box::new(move |wi| conductor_pdf(wo, wi, alpha, dist)),
                 ));
             }
         }
@@ -1048,12 +1338,12 @@ mod tests {
         // Outside (entering) and inside (leaving): 30 degrees inside is within the critical
         // angle of 41.8 degrees, 60 degrees beyond it (only rough microfacets let light out).
         let mut cases: Vec<Case> = Vec::new();
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             for wo in viewers().into_iter().chain([-dir(30.0, 30.0), -dir(60.0, 30.0)]) {
                 cases.push((
-                    name(alpha, wo),
-                    Box::new(move |u: Vec3| dielectric_sample(wo, alpha, 1.5, u).map(|s| s.wi)),
-                    Box::new(move |wi| dielectric_pdf(wo, wi, alpha, 1.5)),
+                    name(dist, alpha, wo),
+                    Box::new(move |u: Vec3| dielectric_sample(wo, alpha, dist, 1.5, u).map(|s| s.wi)),
+                    Box::new(move |wi| dielectric_pdf(wo, wi, alpha, dist, 1.5)),
                 ));
             }
         }
@@ -1063,14 +1353,14 @@ mod tests {
     #[test]
     fn plastic_sampling_matches_its_pdf() {
         let mut cases: Vec<Case> = Vec::new();
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             for wo in viewers() {
                 cases.push((
-                    name(alpha, wo),
+                    name(dist, alpha, wo),
                     Box::new(move |u: Vec3| {
-                        plastic_sample(wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR, u).map(|s| s.wi)
+                        plastic_sample(wo, alpha, dist, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR, u).map(|s| s.wi)
                     }),
-                    Box::new(move |wi| plastic_pdf(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE)),
+                    Box::new(move |wi| plastic_pdf(wo, wi, alpha, dist, 1.5, PLASTIC_DIFFUSE)),
                 ));
             }
         }
@@ -1103,42 +1393,46 @@ mod tests {
     /// plastic; `diffuse` is the plastic's base and Lambert's albedo.
     fn models(diffuse: Vec3) -> Vec<(Vec2, Model)> {
         let mut out = Vec::new();
-        for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
+        for (dist, alpha) in dist_alphas(true) {
             out.push((
                 alpha,
                 Model {
-                    name: format!("conductor alpha {alpha}"),
-                    eval: Box::new(move |wo, wi| conductor_eval(wo, wi, alpha, GOLD_ETA, GOLD_K)),
-                    pdf: Box::new(move |wo, wi| conductor_pdf(wo, wi, alpha)),
-                    sample: Box::new(move |wo, u| conductor_sample(wo, alpha, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y))),
+                    name: format!("{} conductor alpha {alpha}", dist_name(dist)),
+                    eval: Box::new(move |wo, wi| conductor_eval(wo, wi, alpha, dist, GOLD_ETA, GOLD_K)),
+                    pdf: Box::new(move |wo, wi| conductor_pdf(wo, wi, alpha, dist)),
+                    sample: Box::new(move |wo, u| {
+                        conductor_sample(wo, alpha, dist, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y))
+                    }),
                 },
             ));
             out.push((
                 alpha,
                 Model {
-                    name: format!("dielectric alpha {alpha}"),
-                    eval: Box::new(move |wo, wi| Vec3::splat(dielectric_eval(wo, wi, alpha, 1.5))),
-                    pdf: Box::new(move |wo, wi| dielectric_pdf(wo, wi, alpha, 1.5)),
-                    sample: Box::new(move |wo, u| dielectric_sample(wo, alpha, 1.5, u)),
+                    name: format!("{} dielectric alpha {alpha}", dist_name(dist)),
+                    eval: Box::new(move |wo, wi| Vec3::splat(dielectric_eval(wo, wi, alpha, dist, 1.5))),
+                    pdf: Box::new(move |wo, wi| dielectric_pdf(wo, wi, alpha, dist, 1.5)),
+                    sample: Box::new(move |wo, u| dielectric_sample(wo, alpha, dist, 1.5, u)),
                 },
             ));
             out.push((
                 alpha,
                 Model {
-                    name: format!("plastic alpha {alpha}"),
-                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, 1.5, diffuse, &PlasticCoat::LINEAR)),
-                    pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, 1.5, diffuse)),
-                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, 1.5, diffuse, &PlasticCoat::LINEAR, u)),
+                    name: format!("{} plastic alpha {alpha}", dist_name(dist)),
+                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, dist, 1.5, diffuse, &PlasticCoat::LINEAR)),
+                    pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, dist, 1.5, diffuse)),
+                    sample: Box::new(move |wo, u| {
+                        plastic_sample(wo, alpha, dist, 1.5, diffuse, &PlasticCoat::LINEAR, u)
+                    }),
                 },
             ));
-            let coat = nonlinear_coat(alpha, 1.5);
+            let coat = nonlinear_coat(alpha, dist, 1.5);
             out.push((
                 alpha,
                 Model {
-                    name: format!("nonlinear plastic alpha {alpha}"),
-                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, 1.5, diffuse, &coat)),
-                    pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, 1.5, diffuse)),
-                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, 1.5, diffuse, &coat, u)),
+                    name: format!("{} nonlinear plastic alpha {alpha}", dist_name(dist)),
+                    eval: Box::new(move |wo, wi| plastic_eval(wo, wi, alpha, dist, 1.5, diffuse, &coat)),
+                    pdf: Box::new(move |wo, wi| plastic_pdf(wo, wi, alpha, dist, 1.5, diffuse)),
+                    sample: Box::new(move |wo, u| plastic_sample(wo, alpha, dist, 1.5, diffuse, &coat, u)),
                 },
             ));
         }
@@ -1205,17 +1499,19 @@ mod tests {
     #[test]
     fn smooth_lobes_are_exact() {
         let alpha = Vec2::ZERO;
-        for i in 0..1000u32 {
+        for i in 0..2000u32 {
+            // A smooth lobe has no distribution: both give the same deltas.
+            let dist = DISTS[i as usize % 2];
             let wo = sphere(uniforms(21, i));
             let u = uniforms(22, i);
             // Conductor: the mirror direction, weighted by the Fresnel reflectance.
-            if let Some(s) = conductor_sample(wo, alpha, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)) {
+            if let Some(s) = conductor_sample(wo, alpha, dist, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)) {
                 assert!(wo.z > 0.0);
                 assert_eq!((s.wi, s.weight, s.pdf), (mf_mirror(wo), fresnel_conductor(wo.z, GOLD_ETA, GOLD_K), 0.0));
             }
             // Dielectric: reflection with weight 1, or Snell's refraction with weight 1 / eta²
             // (radiance form), chosen with probability F.
-            let s = dielectric_sample(wo, alpha, 1.5, u).unwrap();
+            let s = dielectric_sample(wo, alpha, dist, 1.5, u).unwrap();
             let eta = if wo.z > 0.0 { 1.5 } else { 1.0 / 1.5 };
             let (f, _) =
                 if wo.z > 0.0 { mf_fresnel_dielectric(wo.z, 1.0, 1.5) } else { mf_fresnel_dielectric(-wo.z, 1.5, 1.0) };
@@ -1231,8 +1527,11 @@ mod tests {
             }
             // No delta lobe shows through eval or pdf.
             let wi = sphere(uniforms(23, i));
-            assert_eq!(conductor_eval(wo, wi, alpha, GOLD_ETA, GOLD_K), Vec3::ZERO);
-            assert_eq!((dielectric_eval(wo, wi, alpha, 1.5), dielectric_pdf(wo, wi, alpha, 1.5)), (0.0, 0.0));
+            assert_eq!(conductor_eval(wo, wi, alpha, dist, GOLD_ETA, GOLD_K), Vec3::ZERO);
+            assert_eq!(
+                (dielectric_eval(wo, wi, alpha, dist, 1.5), dielectric_pdf(wo, wi, alpha, dist, 1.5)),
+                (0.0, 0.0)
+            );
         }
     }
 
@@ -1244,7 +1543,7 @@ mod tests {
         // f(wo, wi) = f(wi, wo) for every reflection: the conductor, the plastic, the dielectric
         // on either side. 1e-4 relative: the two orders differ only in which dot(., h) feeds F.
         let mut worst: f32 = 0.0;
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             for i in 0..5000u32 {
                 let wo = sphere(uniforms(31, i));
                 let mut wi = sphere(uniforms(32, i));
@@ -1252,14 +1551,17 @@ mod tests {
                     wi.z = -wi.z;
                 }
                 let pairs = [
-                    (conductor_eval(wo, wi, alpha, GOLD_ETA, GOLD_K), conductor_eval(wi, wo, alpha, GOLD_ETA, GOLD_K)),
                     (
-                        plastic_eval(wo, wi, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
-                        plastic_eval(wi, wo, alpha, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
+                        conductor_eval(wo, wi, alpha, dist, GOLD_ETA, GOLD_K),
+                        conductor_eval(wi, wo, alpha, dist, GOLD_ETA, GOLD_K),
                     ),
                     (
-                        Vec3::splat(dielectric_eval(wo, wi, alpha, 1.5)),
-                        Vec3::splat(dielectric_eval(wi, wo, alpha, 1.5)),
+                        plastic_eval(wo, wi, alpha, dist, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
+                        plastic_eval(wi, wo, alpha, dist, 1.5, PLASTIC_DIFFUSE, &PlasticCoat::LINEAR),
+                    ),
+                    (
+                        Vec3::splat(dielectric_eval(wo, wi, alpha, dist, 1.5)),
+                        Vec3::splat(dielectric_eval(wi, wo, alpha, dist, 1.5)),
                     ),
                 ];
                 for (a, b) in pairs {
@@ -1279,7 +1581,7 @@ mod tests {
         // n(w) the index on w's side. (Walter's eta²-scaled form would be plainly symmetric.)
         let mut worst: f32 = 0.0;
         let mut nonzero = 0;
-        for alpha in ALPHAS {
+        for (dist, alpha) in dist_alphas(false) {
             for i in 0..5000u32 {
                 let wo = sphere(uniforms(41, i));
                 let mut wi = sphere(uniforms(42, i));
@@ -1287,19 +1589,20 @@ mod tests {
                     wi.z = -wi.z;
                 }
                 let n = |w: Vec3| if w.z > 0.0 { 1.0 } else { 1.5 };
-                let a = dielectric_eval(wo, wi, alpha, 1.5) / (n(wo) * n(wo));
-                let b = dielectric_eval(wi, wo, alpha, 1.5) / (n(wi) * n(wi));
+                let a = dielectric_eval(wo, wi, alpha, dist, 1.5) / (n(wo) * n(wo));
+                let b = dielectric_eval(wi, wo, alpha, dist, 1.5) / (n(wi) * n(wi));
                 if a.abs().max(b.abs()) > 1e-6 {
                     nonzero += 1;
                 }
                 if a.abs().max(b.abs()) > 1e-3 {
                     worst = worst.max((a - b).abs() / a.abs().max(b.abs()));
                 }
-                // 1e-3 relative: h comes from wo + eta wi or from wi + wo / eta. The absolute 1e-6
+                // 1e-3 relative: h comes from wo + eta wi or from wi + wo / eta. The absolute 2e-6
                 // covers pairs at the edge of the support (dot(wo, h) = 0 within rounding), where
-                // one order gives a tiny value and the other exactly 0.
+                // one order gives a tiny value and the other exactly 0, and pairs at the critical
+                // angle, where 1 - F changes by a percent for an ulp of h (f about 2e-4 there).
                 assert!(
-                    (a - b).abs() <= 1e-3 * a.abs().max(b.abs()) + 1e-6,
+                    (a - b).abs() <= 1e-3 * a.abs().max(b.abs()) + 2e-6,
                     "alpha {alpha} wo {wo} wi {wi}: {a} vs {b}"
                 );
             }
@@ -1337,6 +1640,68 @@ mod tests {
     }
 
     #[test]
+    fn beckmann_albedo_matches_mitsuba() {
+        // Directional albedo (mean sample weight) of Mitsuba 3.9.1's roughconductor (material
+        // "none": F = 1) and nonlinear roughplastic (int_ior 1.5, ext_ior 1, base (0.5, 0.3, 0.2)
+        // and black), distribution beckmann, viewed at 1, 45 and 85 degrees (azimuth 30): 4M
+        // samples of llvm_ad_rgb's `sample` each (standard error below 2e-4). Mitsuba's G1 is a
+        // rational fit within 0.35% of ours (beckmann_g1), so we ask for 0.6% plus 4 standard
+        // errors. The plastic is compared by its base's part (coloured minus black), which
+        // carries the Beckmann coat's table: its coat term alone is darker than Mitsuba's for
+        // GGX and Beckmann alike (by 3-12% at 45-85 degrees, alpha 0.05), from the coat's
+        // clamped Fresnel term (plastic_eval, change 2), which is no matter of the distribution.
+        /// Alpha; the plastic's albedo per viewer; the black-based plastic's; the conductor's.
+        type Albedos = (f32, [[f32; 3]; 3], [f32; 3], [f32; 3]);
+        #[rustfmt::skip]
+        const MITSUBA: [Albedos; 4] = [
+            (0.05, [[0.31428, 0.1812, 0.12791], [0.32173, 0.19009, 0.13738], [0.65036, 0.59178, 0.56832]], [0.04, 0.05043, 0.52978], [1.0, 1.0, 0.93927]),
+            (0.15, [[0.31292, 0.18111, 0.12799], [0.32147, 0.19134, 0.1389], [0.52655, 0.4472, 0.41522]], [0.04002, 0.05198, 0.36241], [1.0, 0.99987, 0.91931]),
+            (0.5, [[0.29074, 0.17451, 0.12485], [0.29085, 0.17761, 0.12922], [0.36211, 0.26479, 0.22321]], [0.03868, 0.04527, 0.15096], [0.94323, 0.87473, 0.93951]),
+            (1.0, [[0.23105, 0.13997, 0.09778], [0.23396, 0.14625, 0.10562], [0.22786, 0.1641, 0.13457]], [0.01931, 0.03003, 0.07957], [0.46159, 0.64857, 0.90565]),
+        ];
+        const N: u32 = 1_000_000;
+        let dist = MICROFACET_BECKMANN;
+        let mut worst: f32 = 0.0;
+        for (a, plastic, black, conductor) in MITSUBA {
+            let alpha = Vec2::splat(a);
+            let coat = nonlinear_coat(alpha, dist, 1.5);
+            for (w, theta) in [1.0, 45.0, 85.0].into_iter().enumerate() {
+                let wo = dir(theta, 30.0);
+                let (c, c_se) = albedo(
+                    90 + w as u32,
+                    N,
+                    &|u| conductor_sample(wo, alpha, dist, Vec3::ZERO, Vec3::ONE, Vec2::new(u.x, u.y)),
+                    1.0,
+                );
+                let (p, p_se) =
+                    albedo(95 + w as u32, N, &|u| plastic_sample(wo, alpha, dist, 1.5, PLASTIC_DIFFUSE, &coat, u), 1.0);
+                let (coat_only, _) =
+                    albedo(95 + w as u32, N, &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ZERO, &coat, u), 1.0);
+                let p = p - coat_only;
+                let want_p = Vec3::from(plastic[w]) - Vec3::splat(black[w]);
+                println!(
+                    "{}: conductor {:.5} ± {:.5} (Mitsuba {:.5}), nonlinear plastic's base {p:.5} (Mitsuba {want_p:.5})",
+                    name(dist, alpha, wo),
+                    c.x,
+                    c_se.x,
+                    conductor[w]
+                );
+                for (ours, se, want) in
+                    [(c.x, c_se.x, conductor[w])].into_iter().chain((0..3).map(|ch| (p[ch], p_se[ch], want_p[ch])))
+                {
+                    worst = worst.max((ours - want).abs() / want);
+                    assert!(
+                        (ours - want).abs() <= 6e-3 * want + 4.0 * se + 2e-4,
+                        "{}: {ours} ± {se} vs Mitsuba {want}",
+                        name(dist, alpha, wo)
+                    );
+                }
+            }
+        }
+        println!("beckmann albedo: worst relative difference to Mitsuba {worst:.2e}");
+    }
+
+    #[test]
     fn white_furnace_albedo_is_at_most_one() {
         // Directional albedo ∫ f |cos| dwi = E[weight], estimated with each model's own sampler
         // (whose weight and pdf the tests above check), common random numbers across alphas.
@@ -1350,29 +1715,38 @@ mod tests {
         let (eta1, k1000) = (Vec3::ONE, Vec3::splat(1000.0));
         for (w, &wo) in wos.iter().enumerate() {
             let mut previous = f32::INFINITY;
-            for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
-                let (a, se) =
-                    albedo(50 + w as u32, N, &|u| conductor_sample(wo, alpha, eta1, k1000, Vec2::new(u.x, u.y)), 1.0);
+            for (dist, alpha) in dist_alphas(true) {
+                if alpha == Vec2::ZERO {
+                    previous = f32::INFINITY; // each distribution from smooth up
+                }
+                let (a, se) = albedo(
+                    50 + w as u32,
+                    N,
+                    &|u| conductor_sample(wo, alpha, dist, eta1, k1000, Vec2::new(u.x, u.y)),
+                    1.0,
+                );
                 let (gold, gold_se) = albedo(
                     50 + w as u32,
                     N,
-                    &|u| conductor_sample(wo, alpha, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)),
+                    &|u| conductor_sample(wo, alpha, dist, GOLD_ETA, GOLD_K, Vec2::new(u.x, u.y)),
                     1.0,
                 );
-                println!("conductor {}: perfect {:.4} ± {:.4}, gold {gold:.4}", name(alpha, wo), a.x, se.x);
-                assert!(a.x <= tol(se) && gold.max_element() <= tol(gold_se), "{}", name(alpha, wo));
+                println!("conductor {}: perfect {:.4} ± {:.4}, gold {gold:.4}", name(dist, alpha, wo), a.x, se.x);
+                assert!(a.x <= tol(se) && gold.max_element() <= tol(gold_se), "{}", name(dist, alpha, wo));
                 if alpha == Vec2::ZERO {
                     let exact = fresnel_conductor(wo.z, GOLD_ETA, GOLD_K);
                     assert!(a.x > 0.9999 && (gold - exact).abs().max_element() < 1e-6, "{a} {gold} {exact}");
                 }
-                // Masking loss grows with roughness (isotropic alphas are in increasing order).
-                if alpha.x == alpha.y {
-                    assert!(a.x <= previous + 1e-3, "{}: {} after {previous}", name(alpha, wo), a.x);
+                // GGX's masking loss grows with roughness (isotropic alphas are in increasing
+                // order). Beckmann's does not at grazing angles: at 85 degrees its albedo is 0.919
+                // at alpha 0.15 and 0.940 at 0.5 (Mitsuba 3.9.1 too, beckmann_albedo_matches_mitsuba).
+                if alpha.x == alpha.y && dist == MICROFACET_GGX {
+                    assert!(a.x <= previous + 1e-3, "{}: {} after {previous}", name(dist, alpha, wo), a.x);
                     previous = a.x;
                 }
                 // At alpha 0.05 masking is negligible unless grazing.
                 if alpha == Vec2::splat(0.05) && wo.z > 0.5 {
-                    assert!(a.x > 0.995, "{}: {}", name(alpha, wo), a.x);
+                    assert!(a.x > 0.995, "{}: {}", name(dist, alpha, wo), a.x);
                 }
             }
         }
@@ -1380,19 +1754,19 @@ mod tests {
         // dielectric_eval) R + T <= 1, = 1 for the smooth interface; from both sides.
         for (w, wo) in wos.iter().copied().chain([-dir(30.0, 30.0), -dir(60.0, 30.0)]).enumerate() {
             let eta = if wo.z > 0.0 { 1.5 } else { 1.0 / 1.5 };
-            for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
-                let (e, se) = albedo(60 + w as u32, N, &|u| dielectric_sample(wo, alpha, 1.5, u), eta * eta);
-                let (radiance, _) = albedo(60 + w as u32, N, &|u| dielectric_sample(wo, alpha, 1.5, u), 1.0);
+            for (dist, alpha) in dist_alphas(true) {
+                let (e, se) = albedo(60 + w as u32, N, &|u| dielectric_sample(wo, alpha, dist, 1.5, u), eta * eta);
+                let (radiance, _) = albedo(60 + w as u32, N, &|u| dielectric_sample(wo, alpha, dist, 1.5, u), 1.0);
                 println!(
                     "dielectric {}: energy {:.4} ± {:.4} (radiance albedo {:.4})",
-                    name(alpha, wo),
+                    name(dist, alpha, wo),
                     e.x,
                     se.x,
                     radiance.x
                 );
-                assert!(e.x <= tol(se), "{}", name(alpha, wo));
+                assert!(e.x <= tol(se), "{}", name(dist, alpha, wo));
                 if alpha == Vec2::ZERO {
-                    assert!((e.x - 1.0).abs() < 1e-5, "{}: {}", name(alpha, wo), e.x);
+                    assert!((e.x - 1.0).abs() < 1e-5, "{}: {}", name(dist, alpha, wo), e.x);
                 }
             }
         }
@@ -1400,44 +1774,45 @@ mod tests {
         // one does), and the rough coat's table keeps it: Mitsuba's rough interface loses the
         // light its microfacets shadow, so the albedo falls below 1 as alpha grows.
         for (w, &wo) in wos.iter().enumerate() {
-            for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
-                let coat = nonlinear_coat(alpha, 1.5);
-                let (a, se) = albedo(75 + w as u32, N, &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &coat, u), 1.0);
-                println!("nonlinear plastic {}: white base {:.4} ± {:.4}", name(alpha, wo), a.x, se.x);
-                assert!(a.max_element() <= tol(se), "{}", name(alpha, wo));
+            for (dist, alpha) in dist_alphas(true) {
+                let coat = nonlinear_coat(alpha, dist, 1.5);
+                let (a, se) =
+                    albedo(75 + w as u32, N, &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ONE, &coat, u), 1.0);
+                println!("nonlinear plastic {}: white base {:.4} ± {:.4}", name(dist, alpha, wo), a.x, se.x);
+                assert!(a.max_element() <= tol(se), "{}", name(dist, alpha, wo));
                 if alpha == Vec2::ZERO {
-                    assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(alpha, wo), a.x);
+                    assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(dist, alpha, wo), a.x);
                 }
             }
         }
         // Plastic on a white base: coat + base (1 - F(wo.z)) <= 1, = 1 for a smooth coat.
         for (w, &wo) in wos.iter().enumerate() {
             let (f_o, _) = mf_fresnel_dielectric(wo.z, 1.0, 1.5);
-            for alpha in [Vec2::ZERO].into_iter().chain(ALPHAS) {
+            for (dist, alpha) in dist_alphas(true) {
                 let (a, se) = albedo(
                     70 + w as u32,
                     N,
-                    &|u| plastic_sample(wo, alpha, 1.5, Vec3::ONE, &PlasticCoat::LINEAR, u),
+                    &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ONE, &PlasticCoat::LINEAR, u),
                     1.0,
                 );
                 let (coat, coat_se) = albedo(
                     70 + w as u32,
                     N,
-                    &|u| plastic_sample(wo, alpha, 1.5, Vec3::ZERO, &PlasticCoat::LINEAR, u),
+                    &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ZERO, &PlasticCoat::LINEAR, u),
                     1.0,
                 );
                 println!(
                     "plastic {}: white base {:.4} ± {:.4}; coat alone {:.4} ± {:.4} vs F(wo.z) {f_o:.4}",
-                    name(alpha, wo),
+                    name(dist, alpha, wo),
                     a.x,
                     se.x,
                     coat.x,
                     coat_se.x
                 );
-                assert!(a.max_element() <= tol(se), "{}", name(alpha, wo));
-                assert!(coat.x <= f_o * tol(coat_se), "{}: coat {} > F {f_o}", name(alpha, wo), coat.x);
+                assert!(a.max_element() <= tol(se), "{}", name(dist, alpha, wo));
+                assert!(coat.x <= f_o * tol(coat_se), "{}: coat {} > F {f_o}", name(dist, alpha, wo), coat.x);
                 if alpha == Vec2::ZERO {
-                    assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(alpha, wo), a.x);
+                    assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(dist, alpha, wo), a.x);
                 }
             }
         }

@@ -64,6 +64,17 @@ shared_constants! {
     /// `Material::flags`: a plastic whose base light bounces under the coat tint it again
     /// (Mitsuba's `nonlinear`; see `cpu::microfacet::plastic_eval`).
     MATERIAL_FLAG_NONLINEAR: u32 = 1;
+    /// `Material::flags`: a rough conductor, dielectric or plastic whose microfacets follow
+    /// Beckmann's distribution rather than GGX's (scene `distribution = "beckmann"`).
+    MATERIAL_FLAG_BECKMANN: u32 = 2;
+    /// The `dist` argument of the microfacet functions (`cpu::microfacet`): GGX ...
+    MICROFACET_GGX: u32 = 0;
+    /// ... or Beckmann (Mitsuba's default for its rough plugins).
+    MICROFACET_BECKMANN: u32 = 1;
+    /// The bit of `KernelVariant::material_kinds` (`SCENE_MATERIAL_KINDS`) set where a material
+    /// has `MATERIAL_FLAG_BECKMANN`: no kind, but compiled in or out like one, so scenes without
+    /// Beckmann microfacets build the GGX code alone. Above every `MATERIAL_*` kind.
+    SCENE_KIND_BECKMANN: u32 = 31;
     /// Entries of a rough nonlinear plastic's coat transmittance table, at cosines i / (n - 1)
     /// (Mitsuba's `MI_ROUGH_TRANSMITTANCE_RES`).
     PLASTIC_COAT_TABLE: u32 = 64;

@@ -11,8 +11,8 @@ use crate::layout::constants::*;
 use crate::layout::{Material, Medium, Primitive, Texture, TriangleShading};
 use crate::scene::image_texture::ImageTexture;
 use crate::scene::{
-    AnalyticKind, Channel, ColorParam, Geometry, ImageProjection, MaterialDesc, MaterialKind, MediumDesc, NormalMod,
-    Phase, ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
+    AnalyticKind, Channel, ColorParam, Distribution, Geometry, ImageProjection, MaterialDesc, MaterialKind, MediumDesc,
+    NormalMod, Phase, Roughness, ScalarParam, Scene, Shape, TextureDesc, TextureKind, TextureSpace,
 };
 
 /// The scene's arrays as the kernels read them (primitives not yet in BVH order).
@@ -62,9 +62,10 @@ pub fn pack_scene(scene: &Scene) -> PackedScene {
         if let MaterialKind::Plastic { ior, roughness, nonlinear: true, .. } = &m.kind {
             // A textured roughness scales the widths per point; the table is the constant's.
             let alpha = 0.5 * (roughness.alpha[0] + roughness.alpha[1]);
+            let dist = microfacet_distribution(roughness);
             let data = &mut packed.texture_data;
-            out.data = *coat_tables.entry((alpha.to_bits(), ior.to_bits())).or_insert_with(|| {
-                plastic_coat_table(alpha, *ior).map_or(NO_DATA, |table| {
+            out.data = *coat_tables.entry((alpha.to_bits(), dist, ior.to_bits())).or_insert_with(|| {
+                plastic_coat_table(alpha, dist, *ior).map_or(NO_DATA, |table| {
                     data.extend(table);
                     (data.len() as u32) - PLASTIC_COAT_WORDS
                 })
@@ -234,6 +235,7 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
             out.color0 = [1.0; 3];
             out.ior = *ior;
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+            out.flags = distribution_flag(roughness);
         }
         MaterialKind::Conductor { eta, k, roughness, tint } => {
             out.kind = MATERIAL_CONDUCTOR;
@@ -241,11 +243,12 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
             (out.color1, out.color1_tex) = color(k);
             (out.color2, out.color2_tex) = color(tint);
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
+            out.flags = distribution_flag(roughness);
         }
         MaterialKind::Plastic { reflectance, ior, roughness, nonlinear } => {
             out.kind = MATERIAL_PLASTIC;
             // `data`, a rough nonlinear coat's table, is added by `pack_scene`.
-            out.flags = if *nonlinear { MATERIAL_FLAG_NONLINEAR } else { 0 };
+            out.flags = if *nonlinear { MATERIAL_FLAG_NONLINEAR } else { 0 } | distribution_flag(roughness);
             (out.color0, out.color0_tex) = color(reflectance);
             out.ior = *ior;
             (out.roughness, out.roughness_tex) = (roughness.alpha, texture_index(roughness.texture));
@@ -262,6 +265,22 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
         MaterialKind::Null => out.kind = MATERIAL_NULL,
     }
     out
+}
+
+/// `MATERIAL_FLAG_BECKMANN` for Beckmann microfacets, else 0 (GGX).
+fn distribution_flag(r: &Roughness) -> u32 {
+    match r.distribution {
+        Distribution::Ggx => 0,
+        Distribution::Beckmann => MATERIAL_FLAG_BECKMANN,
+    }
+}
+
+/// The `MICROFACET_*` argument of the microfacet functions for `r`.
+fn microfacet_distribution(r: &Roughness) -> u32 {
+    match r.distribution {
+        Distribution::Ggx => MICROFACET_GGX,
+        Distribution::Beckmann => MICROFACET_BECKMANN,
+    }
 }
 
 /// The rows of the 3x4 affine map `a`.

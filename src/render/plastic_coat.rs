@@ -2,20 +2,20 @@
 //! and its GLSL twin): its internal diffuse reflectance, then the transmittance of its rough
 //! interface from outside at the cosines i / (`PLASTIC_COAT_TABLE` - 1). These are the integrals
 //! Mitsuba 3's `roughplastic` precomputes (microfacet.h's `eval_transmittance` and
-//! `eval_reflectance`, the same Gauss-Legendre orders), over GGX visible normals: a sample of
+//! `eval_reflectance`, the same Gauss-Legendre orders), over the coat distribution's visible normals: a sample of
 //! the interface's reflection or refraction weighted by its Fresnel term and the masking of the
 //! direction it leaves along, so light that the interface's microfacets shadow is lost, as there.
 
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::cpu::microfacet::{ggx_g1, ggx_sample_visible, mf_fresnel_dielectric, mf_is_smooth};
+use crate::cpu::microfacet::{mf_fresnel_dielectric, mf_g1, mf_is_smooth, mf_sample_visible};
 use crate::layout::constants::PLASTIC_COAT_TABLE;
 
-/// The table of a coat of GGX width `alpha` (isotropic; the host passes the mean of an
-/// anisotropic pair) and index `ior`, as `PLASTIC_COAT_WORDS` f32 bit patterns; `None` for a
-/// smooth coat, whose terms have closed forms.
-pub fn plastic_coat_table(alpha: f32, ior: f32) -> Option<Vec<u32>> {
+/// The table of a coat of width `alpha` (isotropic; the host passes the mean of an anisotropic
+/// pair) of distribution `dist` (`MICROFACET_*`) and index `ior`, as `PLASTIC_COAT_WORDS` f32
+/// bit patterns; `None` for a smooth coat, whose terms have closed forms.
+pub fn plastic_coat_table(alpha: f32, dist: u32, ior: f32) -> Option<Vec<u32>> {
     if mf_is_smooth(Vec2::splat(alpha)) {
         return None;
     }
@@ -25,23 +25,25 @@ pub fn plastic_coat_table(alpha: f32, ior: f32) -> Option<Vec<u32>> {
     let mu = |i: usize| (i as f32 / (n - 1) as f32).max(1e-6);
     let (outside, inside) = (gauss_legendre(32), gauss_legendre(128));
     let transmittance: Vec<f32> =
-        (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, ior, &outside, true)).collect();
+        (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, dist, ior, &outside, true)).collect();
     // 2 mean(R(mu) mu) over the same grid: Mitsuba's mean, not a quadrature rule in mu.
-    let internal: f32 =
-        (0..n).into_par_iter().map(|i| coat_integral(mu(i), alpha, 1.0 / ior, &inside, false) * mu(i)).sum::<f32>()
-            * 2.0
-            / n as f32;
+    let internal: f32 = (0..n)
+        .into_par_iter()
+        .map(|i| coat_integral(mu(i), alpha, dist, 1.0 / ior, &inside, false) * mu(i))
+        .sum::<f32>()
+        * 2.0
+        / n as f32;
     Some(std::iter::once(internal).chain(transmittance).map(f32::to_bits).collect())
 }
 
 /// The interface's albedo for light arriving at cosine `mu` from the side where the relative
 /// index is `eta` (eta_t / eta_i): its refraction's when `transmit`, else its reflection's.
-fn coat_integral(mu: f32, alpha: Vec2, eta: f32, rule: &[(f64, f64)], transmit: bool) -> f32 {
+fn coat_integral(mu: f32, alpha: Vec2, dist: u32, eta: f32, rule: &[(f64, f64)], transmit: bool) -> f32 {
     let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let mut sum = 0.0f64;
     for &(x, wx) in rule {
         for &(y, wy) in rule {
-            let m = ggx_sample_visible(wi, alpha, Vec2::new(0.5 * x as f32 + 0.5, 0.5 * y as f32 + 0.5));
+            let m = mf_sample_visible(wi, alpha, dist, Vec2::new(0.5 * x as f32 + 0.5, 0.5 * y as f32 + 0.5));
             let cos_i = wi.dot(m);
             if cos_i <= 0.0 {
                 continue;
@@ -52,14 +54,14 @@ fn coat_integral(mu: f32, alpha: Vec2, eta: f32, rule: &[(f64, f64)], transmit: 
                 if f >= 1.0 || wt.z >= 0.0 {
                     0.0
                 } else {
-                    (1.0 - f) * ggx_g1(wt, m, alpha)
+                    (1.0 - f) * mf_g1(wt, m, alpha, dist)
                 }
             } else {
                 let wr = 2.0 * cos_i * m - wi;
                 if wr.z <= 0.0 {
                     0.0
                 } else {
-                    f * ggx_g1(wr, m, alpha)
+                    f * mf_g1(wr, m, alpha, dist)
                 }
             };
             sum += value as f64 * wx * wy;
@@ -96,7 +98,7 @@ fn gauss_legendre(n: usize) -> Vec<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::layout::constants::PLASTIC_COAT_WORDS;
+    use crate::layout::constants::{MICROFACET_GGX, PLASTIC_COAT_WORDS};
 
     #[test]
     fn gauss_legendre_integrates_polynomials_exactly() {
@@ -115,12 +117,12 @@ mod tests {
         // numpy copy of its integrals): internal reflectance 0.576 (alpha 0.05), 0.486 (0.2),
         // 0.348 (0.4); transmittance at cosine 1 about 0.960, 0.957, 0.947.
         for (alpha, r_int, t1) in [(0.05, 0.5762, 0.9598), (0.2, 0.4863, 0.9568), (0.4, 0.3482, 0.9472)] {
-            let t = plastic_coat_table(alpha, 1.5).expect("a rough coat");
+            let t = plastic_coat_table(alpha, MICROFACET_GGX, 1.5).expect("a rough coat");
             assert_eq!(t.len() as u32, PLASTIC_COAT_WORDS);
             let (r, top) = (f32::from_bits(t[0]), f32::from_bits(t[PLASTIC_COAT_WORDS as usize - 1]));
             println!("alpha {alpha}: internal reflectance {r:.4} (Mitsuba {r_int}), T(1) {top:.4} (Mitsuba {t1})");
             assert!((r - r_int).abs() < 2e-3 && (top - t1).abs() < 2e-3, "alpha {alpha}: {r} {top}");
         }
-        assert!(plastic_coat_table(0.0, 1.5).is_none());
+        assert!(plastic_coat_table(0.0, MICROFACET_GGX, 1.5).is_none());
     }
 }

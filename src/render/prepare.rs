@@ -79,7 +79,8 @@ pub struct KernelVariant {
     /// of `material_emission` is a colour read rather than a texture lookup's code.
     pub emission_textures: bool,
     /// The material kinds the kernels' BSDFs can meet, bit `MATERIAL_*` (`MATERIAL_PHASE` with
-    /// media). A specialization constant: each kind's code is inlined at every BSDF call.
+    /// media), and bit `SCENE_KIND_BECKMANN` where a material has Beckmann microfacets. A
+    /// specialization constant: each kind's code is inlined at every BSDF call.
     pub material_kinds: u32,
     /// The path tracer's camera kernel (render_pt) in place of photon mapping's (render).
     pub path_traced: bool,
@@ -168,10 +169,13 @@ impl SceneBuffers {
             csg: self.frame.csg_first < self.frame.primitive_count,
             noise: self.textures.iter().any(|t| super::pack::texture_uses_noise(t, &self.texture_data)),
             emission_textures: self.materials.iter().any(|m| m.emission_tex != NO_TEXTURE),
-            material_kinds: self
-                .materials
-                .iter()
-                .fold(if self.media.is_empty() { 0 } else { 1 << MATERIAL_PHASE }, |kinds, m| kinds | 1 << m.kind),
+            material_kinds: self.materials.iter().fold(
+                if self.media.is_empty() { 0 } else { 1 << MATERIAL_PHASE },
+                |kinds, m| {
+                    let beckmann = if m.flags & MATERIAL_FLAG_BECKMANN != 0 { 1 << SCENE_KIND_BECKMANN } else { 0 };
+                    kinds | 1 << m.kind | beckmann
+                },
+            ),
             path_traced: self.frame.integrator == INTEGRATOR_PT,
             bidirectional: self.frame.integrator == INTEGRATOR_BPT || self.frame.integrator == INTEGRATOR_VCM,
             pages: 1,

@@ -96,12 +96,7 @@ mod tests {
 
     fn conductor(alpha: f32) -> MaterialDesc {
         let c = ColorParam::constant(Vec3::ONE);
-        MaterialDesc::new(MaterialKind::Conductor {
-            eta: c,
-            k: c,
-            roughness: Roughness { alpha: [alpha; 2], texture: None },
-            tint: c,
-        })
+        MaterialDesc::new(MaterialKind::Conductor { eta: c, k: c, roughness: Roughness::ggx(alpha), tint: c })
     }
 
     #[test]

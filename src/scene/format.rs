@@ -199,6 +199,7 @@ pub(crate) struct MaterialDef {
     pub bump: Option<Spanned<ParamDef>>,
     pub normal_map: Option<Spanned<ParamDef>>,
     pub roughness: Option<Spanned<toml::Value>>,
+    pub distribution: Option<Spanned<String>>,
     pub eta: Option<Spanned<ParamDef>>,
     pub k: Option<Spanned<ParamDef>>,
     pub preset: Option<Spanned<String>>,

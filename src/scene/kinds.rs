@@ -214,6 +214,8 @@ pub const REFLECTANCE: Field = field("reflectance", T::ColorOrTexture, Triple([0
 pub const TINT: Field = field("tint", T::ColorOrTexture, Triple([1.0; 3]));
 pub const IOR: Field = field("ior", T::Number, Number(1.5));
 pub const ROUGHNESS: Field = field("roughness", T::Roughness, Number(0.0));
+/// The distribution of a rough surface's microfacet normals (Mitsuba's `distribution`).
+pub const DISTRIBUTION: Field = field("distribution", T::Choice(&["ggx", "beckmann"]), Text("ggx"));
 /// Mitsuba's plastic `nonlinear`: the base tints the light bouncing under the coat.
 pub const NONLINEAR: Field = field("nonlinear", T::Bool, Bool(false));
 /// Names of `METAL_PRESETS` (convert/materials.rs), which holds their optical constants.
@@ -233,18 +235,23 @@ pub const MATERIALS: Family = Family {
     kinds: &[
         Kind { name: "diffuse", what: "a diffuse material", common: SURFACE, fields: &[REFLECTANCE] },
         Kind { name: "mirror", what: "a mirror material", common: SURFACE, fields: &[TINT] },
-        Kind { name: "dielectric", what: "a dielectric material", common: SURFACE, fields: &[IOR, ROUGHNESS] },
+        Kind {
+            name: "dielectric",
+            what: "a dielectric material",
+            common: SURFACE,
+            fields: &[IOR, ROUGHNESS, DISTRIBUTION],
+        },
         Kind {
             name: "conductor",
             what: "a conductor material",
             common: SURFACE,
-            fields: &[ETA, K, PRESET, ROUGHNESS, TINT],
+            fields: &[ETA, K, PRESET, ROUGHNESS, DISTRIBUTION, TINT],
         },
         Kind {
             name: "plastic",
             what: "a plastic material",
             common: SURFACE,
-            fields: &[REFLECTANCE, IOR, ROUGHNESS, NONLINEAR],
+            fields: &[REFLECTANCE, IOR, ROUGHNESS, DISTRIBUTION, NONLINEAR],
         },
         Kind { name: "thin_dielectric", what: "a thin dielectric material", common: SURFACE, fields: &[IOR] },
         Kind { name: "mix", what: "a mix material", common: &[TYPE], fields: &[MIXED, WEIGHT] },

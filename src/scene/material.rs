@@ -35,16 +35,33 @@ impl ScalarParam {
     }
 }
 
-/// GGX widths along dpdu and dpdv (alpha itself, not a perceptual roughness to square), each
-/// optionally times a texture's first channel; (0, 0) is smooth.
+/// Microfacet widths along dpdu and dpdv (alpha itself, not a perceptual roughness to square),
+/// each optionally times a texture's first channel, and the distribution of the microfacet
+/// normals; (0, 0) is smooth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Roughness {
     pub alpha: [f32; 2],
     pub texture: Option<u32>,
+    pub distribution: Distribution,
 }
 
 impl Roughness {
-    pub const SMOOTH: Roughness = Roughness { alpha: [0.0; 2], texture: None };
+    pub const SMOOTH: Roughness = Roughness { alpha: [0.0; 2], texture: None, distribution: Distribution::Ggx };
+
+    /// Isotropic GGX of width `alpha`.
+    pub fn ggx(alpha: f32) -> Roughness {
+        Roughness { alpha: [alpha; 2], ..Roughness::SMOOTH }
+    }
+}
+
+/// How a rough surface's microfacet normals are distributed (scene `distribution`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Distribution {
+    /// GGX (Trowbridge-Reitz): long tails; alpha is its width.
+    #[default]
+    Ggx,
+    /// Beckmann (Gaussian slopes; alpha is their RMS): Mitsuba's default for its rough plugins.
+    Beckmann,
 }
 
 /// What a material does with light, by kind.

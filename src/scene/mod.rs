@@ -41,8 +41,8 @@ pub use analytic::{Analytic, AnalyticKind};
 pub use csg::{Csg, CsgNode, CsgOp};
 pub use error::SceneError;
 pub use material::{
-    Channel, ColorParam, ImageProjection, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam, TextureDesc,
-    TextureKind, TextureSpace,
+    Channel, ColorParam, Distribution, ImageProjection, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam,
+    TextureDesc, TextureKind, TextureSpace,
 };
 pub use medium::{Density, MediumDesc, MediumInterface, Phase};
 pub use photons::PhotonSettings;

@@ -3,7 +3,7 @@
 
 Each scene is a Photonix scene file (<name>.toml); this script translates the subset they use
 (perspective and thin-lens cameras, diffuse, plastic, conductor (given eta and k) and
-thin dielectric materials, spheres, an infinite plane, spot lights,
+thin dielectric materials with their microfacet distribution, spheres, an infinite plane, spot lights,
 uniform and Hosek-Wilkie sky environments, the box, tent and gaussian filters) into a Mitsuba scene and renders it with the path
 tracer. tests/mitsuba_references.rs renders the same files with Photonix and compares.
 
@@ -64,13 +64,13 @@ def translate_material(name, m):
         alpha = float(m.get("roughness", 0.0))
         if alpha == 0.0:
             return {"type": "plastic", **out}
-        return {"type": "roughplastic", "distribution": "ggx", "alpha": alpha, **out}
+        return {"type": "roughplastic", "distribution": m.get("distribution", "ggx"), "alpha": alpha, **out}
     if m["type"] == "conductor":
         out = {"eta": rgb(m["eta"]), "k": rgb(m["k"]), "specular_reflectance": rgb(m.get("tint", 1.0))}
         alpha = float(m.get("roughness", 0.0))
         if alpha == 0.0:
             return {"type": "conductor", **out}
-        return {"type": "roughconductor", "distribution": "ggx", "alpha": alpha, **out}
+        return {"type": "roughconductor", "distribution": m.get("distribution", "ggx"), "alpha": alpha, **out}
     if m["type"] == "thin_dielectric":
         return {"type": "thindielectric", "int_ior": float(m.get("ior", 1.5)), "ext_ior": 1.0}
     sys.exit(f"material {name}: type {m['type']} is not translated")

@@ -10,7 +10,7 @@ use crate::limits::{fmt_f32, printable, MAX_IOR};
 use crate::scene::error::suggest;
 use crate::scene::format::{MaterialDef, ParamDef};
 use crate::scene::kinds::{self, MATERIALS};
-use crate::scene::material::{ColorParam, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam};
+use crate::scene::material::{ColorParam, Distribution, MaterialDesc, MaterialKind, NormalMod, Roughness, ScalarParam};
 
 /// Complex indices of refraction (eta, k) of common metals at the wavelengths of the R, G and B
 /// primaries (about 650, 550 and 450 nm), from published optical constants: gold, silver and
@@ -46,6 +46,7 @@ impl Builder<'_> {
             ("bump", span_of(&m.bump)),
             ("normal_map", span_of(&m.normal_map)),
             ("roughness", span_of(&m.roughness)),
+            ("distribution", span_of(&m.distribution)),
             ("eta", span_of(&m.eta)),
             ("k", span_of(&m.k)),
             ("preset", span_of(&m.preset)),
@@ -243,10 +244,16 @@ impl Builder<'_> {
         Ok(ior)
     }
 
-    /// `roughness`: the GGX width alpha, one number, [along u, along v], or a texture.
+    /// `roughness`: the microfacet width alpha, one number, [along u, along v], or a texture;
+    /// and `distribution`, that of the microfacet normals.
     pub(super) fn roughness(&mut self, m: &MaterialDef, object: &str) -> Result<Roughness> {
+        let distribution_name = match &m.distribution {
+            Some(d) => self.one_of(d, object, "distribution", kinds::DISTRIBUTION.choices())?,
+            None => kinds::DISTRIBUTION.text(),
+        };
+        let distribution = if distribution_name == "beckmann" { Distribution::Beckmann } else { Distribution::Ggx };
         let Some(def) = &m.roughness else {
-            return Ok(Roughness::SMOOTH);
+            return Ok(Roughness { distribution, ..Roughness::SMOOTH });
         };
         let span = def.span();
         let what = "`roughness` is the GGX width alpha in [0, 1]: one number, [along u, along v], or \
@@ -281,7 +288,7 @@ impl Builder<'_> {
         if let Some(bad) = alpha.iter().find(|a| !(**a >= 0.0 && **a <= 1.0)) {
             return Err(self.invalid(&span, object, format!("`roughness` is {bad}; {what}")));
         }
-        Ok(Roughness { alpha: alpha.map(|a| a as f32), texture })
+        Ok(Roughness { alpha: alpha.map(|a| a as f32), texture, distribution })
     }
 
     /// How deep the mixes under material `id` nest (0 for a material that is no mix).

@@ -418,7 +418,8 @@ impl Builder<'_> {
             }
             None => (None, None),
         };
-        let roughness = m.roughness.map(|alpha| Roughness { alpha: [alpha; 2], texture: rough_tex });
+        let roughness =
+            m.roughness.map(|alpha| Roughness { alpha: [alpha; 2], texture: rough_tex, ..Roughness::SMOOTH });
         let base_kind = match roughness {
             None => MaterialKind::Diffuse { reflectance },
             Some(r) => MaterialKind::Plastic { reflectance, ior: m.ior, roughness: r, nonlinear: false },

@@ -265,7 +265,8 @@ impl<'a> Translator<'a> {
             .map_or((default_distribution.to_string(), p.pos()), |(d, at)| (d.to_string(), at));
         match dist.as_str() {
             "ggx" => {}
-            "beckmann" | "phong" | "as" => {
+            "beckmann" => m.fields.push(("distribution".into(), string("beckmann"))),
+            "phong" | "as" => {
                 self.warn(at, format!("the `{dist}` microfacet distribution is rendered as GGX of the same alpha"))
             }
             other => {
