@@ -2,41 +2,13 @@
 // The including kernel declares the scene bindings and includes rng, sampling, shape, texture,
 // bsdf, trace and light (in that order).
 
-// The reconstruction filter: contracts in shading.rs (erfinv, filter_sample, film_offset,
-// filter_weight, filter_radius).
-float erfinv(float x) {
-    float w = -log((1.0 - x) * (1.0 + x));
-    float p;
-    if (w < 5.0) {
-        w -= 2.5;
-        p = 2.8102264e-8;
-        p = 3.4327394e-7 + p * w;
-        p = -3.5233877e-6 + p * w;
-        p = -4.3915065e-6 + p * w;
-        p = 2.1858087e-4 + p * w;
-        p = -1.253725e-3 + p * w;
-        p = -4.1776816e-3 + p * w;
-        p = 0.24664073 + p * w;
-        p = 1.5014094 + p * w;
-    } else {
-        w = sqrt(w) - 3.0;
-        p = -2.0021426e-4;
-        p = 1.0095056e-4 + p * w;
-        p = 1.3493432e-3 + p * w;
-        p = -3.6734284e-3 + p * w;
-        p = 5.7395077e-3 + p * w;
-        p = -7.6224613e-3 + p * w;
-        p = 9.4388705e-3 + p * w;
-        p = 1.0016741 + p * w;
-        p = 2.8329768 + p * w;
-    }
-    return p * x;
-}
+// The reconstruction filter: contracts in shading.rs (filter_sample, film_offset, filter_weight,
+// filter_radius); the Gaussian's inverse cdf is microfacet.glsl's mf_erfinv.
 
 float filter_sample(float u) {
     if (frame.pixel_filter == FILTER_TENT) return 0.5 + (u < 0.5 ? sqrt(2.0 * u) - 1.0 : 1.0 - sqrt(2.0 - 2.0 * u));
     if (frame.pixel_filter == FILTER_GAUSSIAN) {
-        return 0.5 + FILTER_GAUSSIAN_STDDEV * 1.4142135 * erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS);
+        return 0.5 + FILTER_GAUSSIAN_STDDEV * 1.4142135 * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS);
     }
     return u;
 }

@@ -6,52 +6,13 @@ use glam::Vec3;
 
 use super::bsdf::{bsdf_eval, Bsdf};
 use super::light::{light_sample, pick_light};
+use super::microfacet::mf_erfinv;
 use super::rng::{qmc2, rand1};
 use super::sampling::polygon_point;
 use super::shape::Hit;
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::FrameParams;
-
-/// Inverse of the error function, Giles' single-precision approximation ("Approximating the
-/// erfinv function", GPU Computing Gems, 2011): relative error below 4e-7 on (-1, 1).
-fn erfinv(x: f32) -> f32 {
-    let mut w = -((1.0 - x) * (1.0 + x)).ln();
-    let p = if w < 5.0 {
-        w -= 2.5;
-        let mut p = 2.810_226_4e-8;
-        for c in [
-            3.432_739_4e-7,
-            -3.523_387_7e-6,
-            -4.391_506_5e-6,
-            2.185_808_7e-4,
-            -1.253_725e-3,
-            -4.177_681_6e-3,
-            0.246_640_73,
-            1.501_409_4,
-        ] {
-            p = c + p * w;
-        }
-        p
-    } else {
-        w = w.sqrt() - 3.0;
-        let mut p = -2.002_142_6e-4;
-        for c in [
-            1.009_505_6e-4,
-            1.349_343_2e-3,
-            -3.673_428_4e-3,
-            5.739_507_7e-3,
-            -7.622_461_3e-3,
-            9.438_870_5e-3,
-            1.001_674,
-            2.832_976_8,
-        ] {
-            p = c + p * w;
-        }
-        p
-    };
-    p * x
-}
 
 /// Where uniform `u` puts a camera sample along one axis of its pixel (0 to 1 is the pixel),
 /// drawn from the reconstruction filter around the pixel's centre by inverting its cdf: filter
@@ -62,7 +23,7 @@ pub fn filter_sample(f: &FrameParams, u: f32) -> f32 {
         FILTER_TENT => 0.5 + if u < 0.5 { (2.0 * u).sqrt() - 1.0 } else { 1.0 - (2.0 - 2.0 * u).sqrt() },
         // The Gaussian's cdf inverted between its two truncation points.
         FILTER_GAUSSIAN => {
-            0.5 + FILTER_GAUSSIAN_STDDEV * std::f32::consts::SQRT_2 * erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS)
+            0.5 + FILTER_GAUSSIAN_STDDEV * std::f32::consts::SQRT_2 * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS)
         }
         _ => u,
     }
