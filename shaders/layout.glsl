@@ -121,7 +121,8 @@ struct FrameParams {
     uint integrator;
     uint techniques;
     uint pixel_filter;
-    uint _pad[2];
+    float filter_scale;
+    uint _pad;
 };
 
 struct DispatchRange {

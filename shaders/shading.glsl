@@ -3,32 +3,42 @@
 // bsdf, trace and light (in that order).
 
 // The reconstruction filter: contracts in shading.rs (filter_sample, film_offset, filter_weight,
-// filter_radius); the Gaussian's inverse cdf is microfacet.glsl's mf_erfinv.
+// filter_radius, filter_is_pixel); the Gaussian's inverse cdf is microfacet.glsl's mf_erfinv.
 
 float filter_sample(float u) {
-    if (frame.pixel_filter == FILTER_TENT) return 0.5 + (u < 0.5 ? sqrt(2.0 * u) - 1.0 : 1.0 - sqrt(2.0 - 2.0 * u));
+    float s = frame.filter_scale;
+    if (frame.pixel_filter == FILTER_TENT) return 0.5 + s * (u < 0.5 ? sqrt(2.0 * u) - 1.0 : 1.0 - sqrt(2.0 - 2.0 * u));
     if (frame.pixel_filter == FILTER_GAUSSIAN) {
-        return 0.5 + FILTER_GAUSSIAN_STDDEV * 1.4142135 * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS);
+        return 0.5 + s * FILTER_GAUSSIAN_STDDEV * 1.4142135 * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS);
     }
-    return u;
+    return s == 1.0 ? u : 0.5 + s * (u - 0.5);
 }
 
 vec2 film_offset(vec2 u) { return vec2(filter_sample(u.x), filter_sample(u.y)); }
 
 float filter_weight(float d) {
-    if (frame.pixel_filter == FILTER_TENT) return max(1.0 - abs(d), 0.0);
-    if (frame.pixel_filter == FILTER_GAUSSIAN) {
-        if (abs(d) > FILTER_GAUSSIAN_RADIUS) return 0.0;
-        return FILTER_GAUSSIAN_NORM * exp(-d * d / (2.0 * FILTER_GAUSSIAN_STDDEV * FILTER_GAUSSIAN_STDDEV));
+    float s = frame.filter_scale;
+    float x = d / s;
+    float w;
+    if (frame.pixel_filter == FILTER_TENT) {
+        w = max(1.0 - abs(x), 0.0);
+    } else if (frame.pixel_filter == FILTER_GAUSSIAN) {
+        w = abs(x) > FILTER_GAUSSIAN_RADIUS ? 0.0
+            : FILTER_GAUSSIAN_NORM * exp(-x * x / (2.0 * FILTER_GAUSSIAN_STDDEV * FILTER_GAUSSIAN_STDDEV));
+    } else {
+        w = abs(x) < 0.5 ? 1.0 : 0.0;
     }
-    return abs(d) < 0.5 ? 1.0 : 0.0;
+    return w / s;
 }
 
 float filter_radius() {
-    if (frame.pixel_filter == FILTER_TENT) return 1.0;
-    if (frame.pixel_filter == FILTER_GAUSSIAN) return FILTER_GAUSSIAN_RADIUS;
-    return 0.5;
+    float r = 0.5;
+    if (frame.pixel_filter == FILTER_TENT) r = 1.0;
+    if (frame.pixel_filter == FILTER_GAUSSIAN) r = FILTER_GAUSSIAN_RADIUS;
+    return frame.filter_scale * r;
 }
+
+bool filter_is_pixel() { return frame.pixel_filter == FILTER_BOX && frame.filter_scale == 1.0; }
 
 // The lens sample of a camera path: a pinhole draws none.
 vec2 lens_sample(uint stream, uint sample_index) {

@@ -98,7 +98,7 @@ bool camera_film(vec3 x, vec3 lens, out vec2 film) {
 // Whether some pixel's filter reaches film point `film`; contract in vcm.rs.
 bool film_reaches_image(vec2 film) {
     vec2 size = vec2(float(frame.width), float(frame.height));
-    if (frame.pixel_filter == FILTER_BOX) return film.x >= 0.0 && film.y >= 0.0 && film.x < size.x && film.y < size.y;
+    if (filter_is_pixel()) return film.x >= 0.0 && film.y >= 0.0 && film.x < size.x && film.y < size.y;
     float r = filter_radius() - 0.5;
     return film.x > -r && film.y > -r && film.x < size.x + r && film.y < size.y + r;
 }
@@ -106,7 +106,7 @@ bool film_reaches_image(vec2 film) {
 // The pixels whose filter reaches `film` (a box's: the one it lies in), as an inclusive range
 // of columns and rows; contract in vcm.rs, film_footprint.
 uvec4 film_footprint(vec2 film) {
-    if (frame.pixel_filter == FILTER_BOX) {
+    if (filter_is_pixel()) {
         uvec2 p = min(uvec2(film), uvec2(frame.width - 1u, frame.height - 1u));
         return uvec4(p, p);
     }

@@ -93,7 +93,7 @@ void connect_to_camera(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim,
     uvec4 span = film_footprint(film);
     for (uint py = span.y; py <= span.w; py++) {
         for (uint px = span.x; px <= span.z; px++) {
-            float w = frame.pixel_filter == FILTER_BOX ? 1.0
+            float w = filter_is_pixel() ? 1.0
                 : filter_weight(film.x - (float(px) + 0.5)) * filter_weight(film.y - (float(py) + 0.5));
             if (w <= 0.0) continue;
             uint base = ((py * frame.width + px) * LAYER_COUNT + layer) * 3u;

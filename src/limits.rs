@@ -19,6 +19,12 @@ pub const MAX_PASSES: u32 = 1_000_000;
 /// Most surfaces a camera or photon path visits (`max_depth`, `--photon-depth`); keeps the random
 /// dimensions of a path inside their domain.
 pub const MAX_DEPTH: u32 = 1024;
+/// Narrowest reconstruction filter, in pixels from a pixel's centre (`filter_radius`): a
+/// narrower one leaves most of each pixel unsampled.
+pub const MIN_FILTER_RADIUS: f32 = 0.1;
+/// Widest reconstruction filter: a light-tracing splat visits (2 x radius + 1)^2 pixels, at most
+/// 169, within lavapipe's loop limit on deep light paths.
+pub const MAX_FILTER_RADIUS: f32 = 6.0;
 /// Most final-gather rays per camera sample.
 pub const MAX_GATHER_RAYS: u32 = 1024;
 /// Most photon paths per map and pass.

@@ -61,6 +61,18 @@ fn filters_twins_agree_on_every_integrator() {
 }
 
 #[test]
+fn stretched_filters_twins_agree() {
+    // `filter_radius` stretches the filter on both twins: a box wider than its pixel takes the
+    // general splat path, a wide Gaussian's splats reach up to 5 pixels away.
+    for (filter, radius, integrator) in [("box", 1.2, "vcm"), ("gaussian", 4.5, "bpt"), ("tent", 0.6, "pt")] {
+        let mut scene = scene(integrator, Some(filter));
+        scene.render.filter_radius = Some(radius);
+        let buffers = common::buffers(&scene, 20, 20);
+        common::assert_twins_agree(&format!("{filter} of radius {radius}, {integrator}"), &buffers);
+    }
+}
+
+#[test]
 fn a_named_box_filter_is_the_default_image() {
     for integrator in ["pt", "vcm"] {
         let render = |filter| {

@@ -134,6 +134,7 @@ fn furnace() -> Scene {
             integrator: Integrator::Pt,
             integrator_auto: None,
             filter: Default::default(),
+            filter_radius: None,
         },
         photons: None,
         materials: vec![common::diffuse(rho, emission)],

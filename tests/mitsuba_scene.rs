@@ -378,6 +378,31 @@ fn the_film_size_and_field_of_view_axis_make_the_camera() {
 }
 
 #[test]
+fn the_reconstruction_filter_keeps_its_size() {
+    let with_filter = |rfilter: &str| {
+        scene3("").replace(
+            r#"<integer name="height" value="24"/></film>"#,
+            &format!(r#"<integer name="height" value="24"/>{rfilter}</film>"#),
+        )
+    };
+    use photonix::scene::Filter;
+    let (_d, _t, scene) = translate(&scene3(""));
+    assert_eq!((scene.render.filter, scene.render.filter_radius), (Filter::Gaussian, None));
+    // A Gaussian reaches four standard deviations, in Mitsuba as here; a tent its radius.
+    let (_d, t, scene) =
+        translate(&with_filter(r#"<rfilter type="gaussian"><float name="stddev" value="0.8"/></rfilter>"#));
+    assert_eq!((scene.render.filter, scene.render.filter_radius), (Filter::Gaussian, Some(3.2)), "{}", t.toml);
+    let (_d, _t, scene) =
+        translate(&with_filter(r#"<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>"#));
+    assert_eq!((scene.render.filter, scene.render.filter_radius), (Filter::Tent, Some(1.5)));
+    // Beyond our widest: kept at it, and said.
+    let (_d, t, scene) =
+        translate(&with_filter(r#"<rfilter type="gaussian"><float name="stddev" value="5"/></rfilter>"#));
+    assert_eq!(scene.render.filter_radius, Some(photonix::limits::MAX_FILTER_RADIUS));
+    assert!(t.warnings.iter().any(|w| w.contains("the filter reaches 20")), "{:?}", t.warnings);
+}
+
+#[test]
 fn a_homogeneous_medium_fills_its_shape() {
     let xml = scene3(
         r#"<shape type="cube"><bsdf type="dielectric"/>

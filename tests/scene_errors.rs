@@ -455,6 +455,8 @@ fn image_projection_errors_name_the_field_and_suggest() {
 fn new_material_and_filter_fields_are_checked() {
     let message = error_of(&format!("{CAMERA}[render]\nfilter = \"lanczos\"\n"));
     assert_mentions(&message, &["bad.toml:6:", "[render]", "unknown filter \"lanczos\"", "\"tent\""]);
+    let message = error_of(&format!("{CAMERA}[render]\nfilter = \"tent\"\nfilter_radius = 9\n"));
+    assert_mentions(&message, &["bad.toml:7:", "[render]", "`filter_radius` is 9 pixels", "0.1 to 6", "own is 1"]);
     let message = error_of(&format!("{CAMERA}[materials.p]\ntype = \"plastic\"\nnonlinear = \"yes\"\n"));
     assert_mentions(&message, &["bad.toml:7:13:", "material \"p\"", "`nonlinear`", "boolean"]);
     let message = error_of(&format!("{CAMERA}[materials.pane]\ntype = \"thin_dielectric\"\nnonlinear = true\n"));

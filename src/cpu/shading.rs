@@ -17,15 +17,20 @@ use crate::layout::FrameParams;
 /// Where uniform `u` puts a camera sample along one axis of its pixel (0 to 1 is the pixel),
 /// drawn from the reconstruction filter around the pixel's centre by inverting its cdf: filter
 /// importance sampling, so every sample weighs 1 and the accumulation is a plain mean. The box
-/// returns `u` itself.
+/// at its own size returns `u` itself.
 pub fn filter_sample(f: &FrameParams, u: f32) -> f32 {
+    let s = f.filter_scale;
     match f.pixel_filter {
-        FILTER_TENT => 0.5 + if u < 0.5 { (2.0 * u).sqrt() - 1.0 } else { 1.0 - (2.0 - 2.0 * u).sqrt() },
+        FILTER_TENT => 0.5 + s * if u < 0.5 { (2.0 * u).sqrt() - 1.0 } else { 1.0 - (2.0 - 2.0 * u).sqrt() },
         // The Gaussian's cdf inverted between its two truncation points.
         FILTER_GAUSSIAN => {
-            0.5 + FILTER_GAUSSIAN_STDDEV * std::f32::consts::SQRT_2 * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS)
+            0.5 + s
+                * FILTER_GAUSSIAN_STDDEV
+                * std::f32::consts::SQRT_2
+                * mf_erfinv((2.0 * u - 1.0) * FILTER_GAUSSIAN_MASS)
         }
-        _ => u,
+        _ if s == 1.0 => u,
+        _ => 0.5 + s * (u - 0.5),
     }
 }
 
@@ -38,23 +43,33 @@ pub fn film_offset(f: &FrameParams, u: [f32; 2]) -> [f32; 2] {
 /// pixel's centre; [`filter_sample`] draws from it. Mitsuba's Gaussian also subtracts its value
 /// at the radius (3.4e-4 of its peak), which this one leaves out.
 pub fn filter_weight(f: &FrameParams, d: f32) -> f32 {
-    match f.pixel_filter {
-        FILTER_TENT => (1.0 - d.abs()).max(0.0),
-        FILTER_GAUSSIAN if d.abs() <= FILTER_GAUSSIAN_RADIUS => {
-            FILTER_GAUSSIAN_NORM * (-d * d / (2.0 * FILTER_GAUSSIAN_STDDEV * FILTER_GAUSSIAN_STDDEV)).exp()
+    let s = f.filter_scale;
+    let x = d / s;
+    let w = match f.pixel_filter {
+        FILTER_TENT => (1.0 - x.abs()).max(0.0),
+        FILTER_GAUSSIAN if x.abs() <= FILTER_GAUSSIAN_RADIUS => {
+            FILTER_GAUSSIAN_NORM * (-x * x / (2.0 * FILTER_GAUSSIAN_STDDEV * FILTER_GAUSSIAN_STDDEV)).exp()
         }
         FILTER_GAUSSIAN => 0.0,
-        _ => f32::from(u8::from(d.abs() < 0.5)),
-    }
+        _ => f32::from(u8::from(x.abs() < 0.5)),
+    };
+    w / s
 }
 
 /// How far from a pixel's centre the filter reaches, in pixels.
 pub fn filter_radius(f: &FrameParams) -> f32 {
-    match f.pixel_filter {
-        FILTER_TENT => 1.0,
-        FILTER_GAUSSIAN => FILTER_GAUSSIAN_RADIUS,
-        _ => 0.5,
-    }
+    f.filter_scale
+        * match f.pixel_filter {
+            FILTER_TENT => 1.0,
+            FILTER_GAUSSIAN => FILTER_GAUSSIAN_RADIUS,
+            _ => 0.5,
+        }
+}
+
+/// Whether the filter is each pixel's own square: a film point then counts toward the one pixel
+/// it lies in, whole.
+pub fn filter_is_pixel(f: &FrameParams) -> bool {
+    f.pixel_filter == FILTER_BOX && f.filter_scale == 1.0
 }
 
 /// The lens sample of a camera path: a pinhole draws none.

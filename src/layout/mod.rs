@@ -215,7 +215,10 @@ gpu_structs! {
         pub techniques: u32,
         /// The reconstruction filter, `FILTER_*`.
         pub pixel_filter: u32,
-        pub _pad: [u32; 2],
+        /// The filter's width over its `FILTER_*` default (`[render] filter_radius`), > 0: the
+        /// filter is stretched by it along both axes.
+        pub filter_scale: f32,
+        pub _pad: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

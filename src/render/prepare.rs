@@ -609,7 +609,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         integrator: scene.render.integrator.code(),
         techniques: TECHNIQUES_ALL,
         pixel_filter: scene.render.filter.code(),
-        _pad: [0; 2],
+        filter_scale: scene.render.filter_scale(),
+        _pad: 0,
     };
     // Media: the null material needs the media variant's kernels even without a medium.
     let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);

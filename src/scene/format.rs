@@ -170,6 +170,7 @@ pub(crate) struct RenderDef {
     pub seed: Option<Spanned<i64>>,
     pub integrator: Option<Spanned<String>>,
     pub filter: Option<Spanned<String>>,
+    pub filter_radius: Option<Spanned<f64>>,
 }
 
 #[derive(Debug, Deserialize)]

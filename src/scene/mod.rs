@@ -224,6 +224,16 @@ pub struct RenderSettings {
     pub integrator_auto: Option<&'static str>,
     /// The reconstruction filter (`[render] filter`).
     pub filter: Filter,
+    /// How far the filter reaches from a pixel's centre, in pixels (`[render] filter_radius`);
+    /// `None`: the filter's own, `Filter::default_radius`.
+    pub filter_radius: Option<f32>,
+}
+
+impl RenderSettings {
+    /// `FrameParams::filter_scale`: the filter's radius over its default.
+    pub fn filter_scale(&self) -> f32 {
+        self.filter_radius.map_or(1.0, |r| r / self.filter.default_radius())
+    }
 }
 
 /// The pixel reconstruction filter, with Mitsuba 3's radii: how much a film point counts toward
@@ -242,6 +252,16 @@ pub enum Filter {
 impl Filter {
     pub const NAMES: [(&'static str, Filter); 3] =
         [("box", Filter::Box), ("tent", Filter::Tent), ("gaussian", Filter::Gaussian)];
+
+    /// How far the filter reaches from a pixel's centre at its default size, in pixels (a
+    /// Gaussian's: four standard deviations, as in Mitsuba).
+    pub fn default_radius(self) -> f32 {
+        match self {
+            Filter::Box => 0.5,
+            Filter::Tent => 1.0,
+            Filter::Gaussian => crate::layout::constants::FILTER_GAUSSIAN_RADIUS,
+        }
+    }
 
     /// `FrameParams::filter`.
     pub fn code(self) -> u32 {

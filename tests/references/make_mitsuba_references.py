@@ -76,6 +76,20 @@ def translate_material(name, m):
     sys.exit(f"material {name}: type {m['type']} is not translated")
 
 
+def rfilter(render):
+    """The film's filter; `filter_radius` is a tent's radius, a Gaussian's four standard deviations."""
+    out = {"type": render.get("filter", "box")}
+    if "filter_radius" in render:
+        r = float(render["filter_radius"])
+        if out["type"] == "tent":
+            out["radius"] = r
+        elif out["type"] == "gaussian":
+            out["stddev"] = r / 4
+        else:
+            sys.exit("Mitsuba 3's box filter has no radius")
+    return out
+
+
 def translate(mi, scene, spp):
     T = mi.ScalarTransform4f
     cam = scene["camera"]
@@ -86,7 +100,7 @@ def translate(mi, scene, spp):
         "fov_axis": "x",
         "to_world": T().look_at(origin=cam["position"], target=cam["look_at"], up=cam.get("up", [0, 1, 0])),
         "film": {"type": "hdrfilm", "width": w, "height": h, "pixel_format": "rgb",
-                 "rfilter": {"type": scene.get("render", {}).get("filter", "box")}},
+                 "rfilter": rfilter(scene.get("render", {}))},
         "sampler": {"type": "independent", "sample_count": spp},
     }
     if "aperture_radius" in cam:

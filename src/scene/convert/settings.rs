@@ -3,7 +3,9 @@
 use toml::Spanned;
 
 use super::{Builder, Result};
-use crate::limits::{fmt_f32, MAX_DEPTH, MAX_GATHER_RAYS, MAX_PASSES, MAX_PHOTON_PATHS, MAX_SPP};
+use crate::limits::{
+    fmt_f32, MAX_DEPTH, MAX_FILTER_RADIUS, MAX_GATHER_RAYS, MAX_PASSES, MAX_PHOTON_PATHS, MAX_SPP, MIN_FILTER_RADIUS,
+};
 use crate::scene::{Filter, Integrator, PhotonSettings, RenderSettings};
 
 const DEFAULT_SPP: u32 = 4;
@@ -25,6 +27,7 @@ impl Builder<'_> {
             integrator: Integrator::default(),
             integrator_auto: None,
             filter: Filter::default(),
+            filter_radius: None,
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -56,6 +59,23 @@ impl Builder<'_> {
             let name = self.one_of(name, object, "filter", &names)?;
             settings.filter =
                 Filter::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
+        }
+        if let Some(radius) = &r.filter_radius {
+            let v = self.number(radius, object, "filter_radius")?;
+            if !(MIN_FILTER_RADIUS..=MAX_FILTER_RADIUS).contains(&v) {
+                return Err(self.invalid(
+                    &radius.span(),
+                    object,
+                    format!(
+                        "`filter_radius` is {} pixels; it must lie in {MIN_FILTER_RADIUS} to {MAX_FILTER_RADIUS} \
+                         (the `{}` filter's own is {}; leave the field out for it)",
+                        fmt_f32(v),
+                        Filter::NAMES.iter().find(|(_, f)| *f == settings.filter).map_or("box", |(n, _)| n),
+                        fmt_f32(settings.filter.default_radius())
+                    ),
+                ));
+            }
+            settings.filter_radius = Some(v);
         }
         Ok((settings, auto))
     }

@@ -177,25 +177,24 @@ impl<'a> Translator<'a> {
         Ok(())
     }
 
-    /// The film's reconstruction filter (Mitsuba 3's default: a Gaussian).
+    /// The film's reconstruction filter (Mitsuba 3's default: a Gaussian) and its size: a box's
+    /// or a tent's `radius`, a Gaussian's `stddev` (its radius is four of them, in Mitsuba as
+    /// here).
     fn filter(&mut self, rfilter: Option<&'a Element>, film: &Plugin, render: &mut Fields) -> Result<()> {
-        let (kind, pos) = match rfilter {
+        let (kind, pos, radius) = match rfilter {
             Some(f) => {
                 let f = self.resolve(f, "rfilter")?;
                 let p = Plugin::new(f);
                 let kind = p.kind.clone();
-                for name in ["radius", "stddev"] {
-                    if p.float(name)?.is_some() {
-                        self.warn(
-                            f.pos,
-                            format!("the filter's `{name}` is not read; Photonix uses Mitsuba's default size"),
-                        );
-                    }
-                }
+                let radius = match kind.as_str() {
+                    "box" | "tent" => p.float("radius")?,
+                    "gaussian" => p.float("stddev")?.map(|s| 4.0 * s),
+                    _ => None,
+                };
                 self.finish(&p);
-                (kind, f.pos)
+                (kind, f.pos, radius)
             }
-            None => ("gaussian".to_string(), film.pos()),
+            None => ("gaussian".to_string(), film.pos(), None),
         };
         let ours = match kind.as_str() {
             "box" | "tent" | "gaussian" => kind.clone(),
@@ -211,6 +210,22 @@ impl<'a> Translator<'a> {
             }
         };
         render.push(("filter".into(), string(&ours)));
+        if let Some(r) = radius {
+            let (lo, hi) = (f64::from(crate::limits::MIN_FILTER_RADIUS), f64::from(crate::limits::MAX_FILTER_RADIUS));
+            // Finite: props::parse_number admits no NaN or infinity.
+            let kept = r.clamp(lo, hi);
+            if kept != r {
+                self.warn(
+                    pos,
+                    format!(
+                        "the filter reaches {} pixels; Photonix's reach {lo} to {hi}, so it uses {}",
+                        num(r),
+                        num(kept)
+                    ),
+                );
+            }
+            render.push(("filter_radius".into(), num(kept)));
+        }
         Ok(())
     }
 }
