@@ -460,10 +460,9 @@ vec3 plastic_eval(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior, vec3 diffu
     alpha = mf_rough_alpha(alpha);
     vec3 h = normalize(wo + wi);
     float dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
-    // The coat's Fresnel is clamped by F(wo.z) and F(wi.z) so that it reflects no more than
-    // F(wo.z): see plastic_eval in the twin.
+    // The coat's Fresnel at the microfacet, as Mitsuba's: see plastic_eval in the twin.
     float f_h = mf_fresnel_dielectric(abs(dot(wo, h)), 1.0, ior, cos_t);
-    return f + vec3(min(f_h, min(f_o, f_i)) * dg / (4.0 * wo.z * wi.z));
+    return f + vec3(f_h * dg / (4.0 * wo.z * wi.z));
 }
 
 float plastic_pdf(vec3 wo, vec3 wi, vec2 alpha, uint dist, float ior, vec3 diffuse) {

@@ -677,12 +677,12 @@ fn mf_plastic_base(wo_z: f32, wi_z: f32, f_o: f32, f_i: f32, ior: f32, diffuse: 
 /// back down (Fdr_int 0.49 at alpha 0.2 against 0.60 smooth, ior 1.5), so the base is darker
 /// than a smooth-Fresnel model by 4-40% at alpha 0.05-0.4.
 ///
-/// Change 2 (both modes): with F(dot(wo, h)) alone, the rough coat reflects up to 5e-4 MORE
-/// than F(wo.z) (alpha 0.05 to 0.1 near 45 degrees, where the mean of the convex F over the
-/// visible normals beats the masking loss), so a white base reflected up to 1.0005. Clamping the
-/// coat's Fresnel by F(wo.z) and F(wi.z) bounds the coat by F(wo.z), hence albedo <= 1 for
-/// diffuse <= 1, keeps f symmetric, and changes nothing at the specular configuration (h = z,
-/// where all three cosines agree) nor for a smooth coat.
+/// The coat's Fresnel term is F(dot(wo, h)), as Mitsuba's: a rough coat then reflects up to 2e-3
+/// more than F(wo.z) (alpha 0.05 to 0.15 near 45 degrees, where the mean of the convex F over the
+/// visible normals beats the masking loss), so a white base reflects up to 1.002 there, as in
+/// Mitsuba. An earlier clamp of it by F(wo.z) and F(wi.z) held the albedo at 1 but darkened the
+/// coat by 5% at 45 degrees and 30% at 85 (alpha 0.05): glossy floors seen at grazing angles,
+/// real rooms' commonest surface, came out dark.
 pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32, diffuse: Vec3, coat: &PlasticCoat) -> Vec3 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
@@ -697,7 +697,7 @@ pub fn plastic_eval(wo: Vec3, wi: Vec3, alpha: Vec2, dist: u32, ior: f32, diffus
     let h = (wo + wi).normalize();
     let dg = mf_d(h, alpha, dist) * mf_g1(wo, h, alpha, dist) * mf_g1(wi, h, alpha, dist);
     let (f_h, _) = mf_fresnel_dielectric(dot(wo, h).abs(), 1.0, ior);
-    f + Vec3::splat(f_h.min(f_o.min(f_i)) * dg / (4.0 * wo.z * wi.z))
+    f + Vec3::splat(f_h * dg / (4.0 * wo.z * wi.z))
 }
 
 /// Density of [`plastic_sample`]'s non-delta part: p_coat D_wo(h) / (4 dot(wo, h)) (rough coat
@@ -1646,10 +1646,8 @@ mod tests {
         // and black), distribution beckmann, viewed at 1, 45 and 85 degrees (azimuth 30): 4M
         // samples of llvm_ad_rgb's `sample` each (standard error below 2e-4). Mitsuba's G1 is a
         // rational fit within 0.35% of ours (beckmann_g1), so we ask for 0.6% plus 4 standard
-        // errors. The plastic is compared by its base's part (coloured minus black), which
-        // carries the Beckmann coat's table: its coat term alone is darker than Mitsuba's for
-        // GGX and Beckmann alike (by 3-12% at 45-85 degrees, alpha 0.05), from the coat's
-        // clamped Fresnel term (plastic_eval, change 2), which is no matter of the distribution.
+        // errors. The plastic is compared by its coat alone (a black base) and by its base's part
+        // (coloured minus black), which carries the Beckmann coat's table.
         /// Alpha; the plastic's albedo per viewer; the black-based plastic's; the conductor's.
         type Albedos = (f32, [[f32; 3]; 3], [f32; 3], [f32; 3]);
         #[rustfmt::skip]
@@ -1679,6 +1677,7 @@ mod tests {
                     albedo(95 + w as u32, N, &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ZERO, &coat, u), 1.0);
                 let p = p - coat_only;
                 let want_p = Vec3::from(plastic[w]) - Vec3::splat(black[w]);
+                println!("{}: the coat alone {:.5} (Mitsuba {:.5})", name(dist, alpha, wo), coat_only.x, black[w]);
                 println!(
                     "{}: conductor {:.5} ± {:.5} (Mitsuba {:.5}), nonlinear plastic's base {p:.5} (Mitsuba {want_p:.5})",
                     name(dist, alpha, wo),
@@ -1686,8 +1685,9 @@ mod tests {
                     c_se.x,
                     conductor[w]
                 );
-                for (ours, se, want) in
-                    [(c.x, c_se.x, conductor[w])].into_iter().chain((0..3).map(|ch| (p[ch], p_se[ch], want_p[ch])))
+                for (ours, se, want) in [(c.x, c_se.x, conductor[w]), (coat_only.x, p_se.x, black[w])]
+                    .into_iter()
+                    .chain((0..3).map(|ch| (p[ch], p_se[ch], want_p[ch])))
                 {
                     worst = worst.max((ours - want).abs() / want);
                     assert!(
@@ -1779,13 +1779,17 @@ mod tests {
                 let (a, se) =
                     albedo(75 + w as u32, N, &|u| plastic_sample(wo, alpha, dist, 1.5, Vec3::ONE, &coat, u), 1.0);
                 println!("nonlinear plastic {}: white base {:.4} ± {:.4}", name(dist, alpha, wo), a.x, se.x);
-                assert!(a.max_element() <= tol(se), "{}", name(dist, alpha, wo));
+                assert!(a.max_element() <= tol(se) + 3e-3, "{}", name(dist, alpha, wo));
                 if alpha == Vec2::ZERO {
                     assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(dist, alpha, wo), a.x);
                 }
             }
         }
-        // Plastic on a white base: coat + base (1 - F(wo.z)) <= 1, = 1 for a smooth coat.
+        // Plastic on a white base: coat + base (1 - F(wo.z)) <= 1, = 1 for a smooth coat, but for
+        // the rough coat's F(dot(wo, h)) (Mitsuba's), which may reflect more than F(wo.z)
+        // (plastic_eval; measured up to 1.7e-3 at 45 degrees, Beckmann alpha 0.15, where
+        // Mitsuba's coat reflects the same 0.0520): 3e-3 is allowed for it.
+        const COAT_EXCESS: f32 = 3e-3;
         for (w, &wo) in wos.iter().enumerate() {
             let (f_o, _) = mf_fresnel_dielectric(wo.z, 1.0, 1.5);
             for (dist, alpha) in dist_alphas(true) {
@@ -1809,8 +1813,13 @@ mod tests {
                     coat.x,
                     coat_se.x
                 );
-                assert!(a.max_element() <= tol(se), "{}", name(dist, alpha, wo));
-                assert!(coat.x <= f_o * tol(coat_se), "{}: coat {} > F {f_o}", name(dist, alpha, wo), coat.x);
+                assert!(a.max_element() <= tol(se) + COAT_EXCESS, "{}", name(dist, alpha, wo));
+                assert!(
+                    coat.x <= f_o * tol(coat_se) + COAT_EXCESS,
+                    "{}: coat {} > F {f_o}",
+                    name(dist, alpha, wo),
+                    coat.x
+                );
                 if alpha == Vec2::ZERO {
                     assert!((a.x - 1.0).abs() < 0.01, "{}: {}", name(dist, alpha, wo), a.x);
                 }
