@@ -28,7 +28,7 @@ from __future__ import annotations
 import collections.abc as _abc
 import datetime as _datetime
 import os as _os
-from typing import Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Literal, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as _np
 
@@ -226,12 +226,20 @@ class Renderer:
         self._device = None if device is None else str(device)
         self._core = _photonix.RendererCore(backend, self._device)
 
-    def render(self, **options: object) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
+    @overload
+    def render(self, *, layers: Literal[False] = False, **options: Any) -> _np.ndarray: ...
+
+    @overload
+    def render(self, *, layers: Literal[True], **options: Any) -> Dict[str, _np.ndarray]: ...
+
+    def render(self, *, layers: bool = False, **options: Any) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
         """Renders `self.scene` with `photonix.render`'s options (not backend or device)."""
         for name in ("backend", "device"):
             if name in options:
                 raise TypeError(f"{name} is chosen when the Renderer is made; make another Renderer for another")
-        return render(self.scene, backend=self._backend, device=self._device, _renderer=self._core, **options)  # type: ignore[arg-type]
+        return render(
+            self.scene, backend=self._backend, device=self._device, layers=layers, _renderer=self._core, **options
+        )
 
     def cancel(self) -> None:
         """Stops the render under way (from any thread); nothing when none is."""
@@ -270,6 +278,97 @@ def _pass_range(pass_range: Union[None, str, Sequence[int], range]) -> Optional[
         return (int(a), int(b))
     a, b = pass_range
     return (int(a), int(b))
+
+
+# The return type follows `layers`: an array without, a dict of arrays with (for type checkers).
+@overload
+def render(
+    scene: Union[Scene, PathLike],
+    *,
+    passes: Optional[int] = None,
+    time: Union[None, float, _datetime.timedelta] = None,
+    target_error: Optional[float] = None,
+    seed: Optional[int] = None,
+    backend: str = "auto",
+    resolution: Optional[Tuple[int, int]] = None,
+    pass_range: Union[None, str, Tuple[int, int], range] = None,
+    layers: Literal[False] = False,
+    spp: Optional[int] = None,
+    max_depth: Optional[int] = None,
+    photons: Optional[int] = None,
+    caustic_photons: Optional[int] = None,
+    radius: Optional[float] = None,
+    caustic_radius: Optional[float] = None,
+    gather_rays: Optional[int] = None,
+    photon_depth: Optional[int] = None,
+    no_photons: bool = False,
+    device: Union[None, int, str] = None,
+    accumulation: Optional[PathLike] = None,
+    progress: Optional[Callable[[Progress], None]] = None,
+    info: Optional[dict] = None,
+    integrator: Optional[str] = None,
+    _renderer: Optional[object] = None,
+) -> _np.ndarray: ...
+
+
+@overload
+def render(
+    scene: Union[Scene, PathLike],
+    *,
+    passes: Optional[int] = None,
+    time: Union[None, float, _datetime.timedelta] = None,
+    target_error: Optional[float] = None,
+    seed: Optional[int] = None,
+    backend: str = "auto",
+    resolution: Optional[Tuple[int, int]] = None,
+    pass_range: Union[None, str, Tuple[int, int], range] = None,
+    layers: Literal[True],
+    spp: Optional[int] = None,
+    max_depth: Optional[int] = None,
+    photons: Optional[int] = None,
+    caustic_photons: Optional[int] = None,
+    radius: Optional[float] = None,
+    caustic_radius: Optional[float] = None,
+    gather_rays: Optional[int] = None,
+    photon_depth: Optional[int] = None,
+    no_photons: bool = False,
+    device: Union[None, int, str] = None,
+    accumulation: Optional[PathLike] = None,
+    progress: Optional[Callable[[Progress], None]] = None,
+    info: Optional[dict] = None,
+    integrator: Optional[str] = None,
+    _renderer: Optional[object] = None,
+) -> Dict[str, _np.ndarray]: ...
+
+
+@overload
+def render(
+    scene: Union[Scene, PathLike],
+    *,
+    passes: Optional[int] = None,
+    time: Union[None, float, _datetime.timedelta] = None,
+    target_error: Optional[float] = None,
+    seed: Optional[int] = None,
+    backend: str = "auto",
+    resolution: Optional[Tuple[int, int]] = None,
+    pass_range: Union[None, str, Tuple[int, int], range] = None,
+    layers: bool = False,
+    spp: Optional[int] = None,
+    max_depth: Optional[int] = None,
+    photons: Optional[int] = None,
+    caustic_photons: Optional[int] = None,
+    radius: Optional[float] = None,
+    caustic_radius: Optional[float] = None,
+    gather_rays: Optional[int] = None,
+    photon_depth: Optional[int] = None,
+    no_photons: bool = False,
+    device: Union[None, int, str] = None,
+    accumulation: Optional[PathLike] = None,
+    progress: Optional[Callable[[Progress], None]] = None,
+    info: Optional[dict] = None,
+    integrator: Optional[str] = None,
+    _renderer: Optional[object] = None,
+) -> Union[_np.ndarray, Dict[str, _np.ndarray]]: ...
 
 
 def render(
