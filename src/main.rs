@@ -38,7 +38,11 @@ fn main() -> ExitCode {
         Err(e) => {
             // Names from files and arguments reach the terminal with control characters escaped.
             eprintln!("error: {}", photonix::limits::printable_message(&format!("{e:#}")));
-            ExitCode::FAILURE
+            // An interrupted render has its own status, so a scheduler can tell it from a failure.
+            match e.downcast_ref::<cli::render::Interrupted>() {
+                Some(_) => ExitCode::from(cli::render::EXIT_INTERRUPTED),
+                None => ExitCode::FAILURE,
+            }
         }
     }
 }

@@ -573,7 +573,7 @@ fn slurm_farm_refuses_bad_submissions_before_submitting() {
             .unwrap();
         (out.status.success(), String::from_utf8_lossy(&out.stderr).to_string() + &String::from_utf8_lossy(&out.stdout))
     };
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 7] = [
         (&["-o", "final.txt", "--passes", "8", "--tasks", "2"], "must end in .exr or .png"),
         (&["-o", "nowhere/final.exr", "--passes", "8", "--tasks", "2"], "does not exist"),
         (&["-o", "final.exr", "--passes", "2000000", "--tasks", "2"], "more than 1000000"),
@@ -583,6 +583,7 @@ fn slurm_farm_refuses_bad_submissions_before_submitting() {
             &["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--pass-range", "0..1"],
             "sets the output and the passes",
         ),
+        (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--resume"], "resumes them"),
     ];
     for (args, reason) in cases {
         let (ok, text) = farm(args);

@@ -21,6 +21,9 @@ class RenderError(PhotonixError):
 class ImageError(PhotonixError):
     """An image or accumulation file that cannot be read or written."""
 
+class Cancelled(PhotonixError):
+    """A render cancelled (Renderer.cancel) before its first pass finished."""
+
 class Scene:
     """A scene: its TOML text, the file it came from, and the parsed scene. Edits go through
     the text and are parsed like any scene file; an edit the parser refuses changes nothing."""
@@ -31,6 +34,9 @@ class Scene:
     @property
     def path(self) -> pathlib.Path:
         """The file the scene was read from (or named after, for `loads`)."""
+    @property
+    def source(self) -> pathlib.Path:
+        """The file read: the TOML, or the POV-Ray, glTF or Mitsuba scene translated to it."""
     @property
     def name(self) -> str:
         """The file name without its extension."""
@@ -48,6 +54,15 @@ class Scene:
         """Sets the value at a scene path (a number, bool, string, list, numpy array or dict;
         None removes the key) and parses the result; raises SceneError (file:line:column) and
         leaves the scene unchanged when the parser refuses it."""
+    def set_many(self, edits: Sequence[Tuple[str, Any]]) -> None:
+        """Sets several paths, parsing once: all change, or on an error none."""
+    def add(self, path: str, value: Any) -> None:
+        """Appends an entry to an array of tables (`shapes`, `lights`) or adds a new key
+        (`materials.blue`)."""
+    def remove(self, path: str) -> None:
+        """Removes a key (`materials.blue`) or an array entry (`shapes[floor]`, `lights[0]`)."""
+    def to_dict(self) -> Dict[str, Any]:
+        """The whole scene as nested dicts and lists."""
     def __getitem__(self, path: str) -> Any: ...
     def __setitem__(self, path: str, value: Any) -> None: ...
     def copy(self) -> Scene:
@@ -64,7 +79,15 @@ class Progress:
     pass_fraction: float
     elapsed: float
 
-def load(path: str) -> Scene: ...
+class RendererCore:
+    """The compiled half of photonix.Renderer: a render thread keeping the device and kernels."""
+
+    def __init__(self, backend: str = "auto", device: Optional[str] = None) -> None: ...
+    def cancel(self) -> None: ...
+    def close(self) -> None: ...
+
+def load(path: str, resolution: Optional[Tuple[int, int]] = None) -> Scene: ...
+def load_dict(scene: Dict[str, Any], path: str = "scene.toml") -> Scene: ...
 def loads(text: str, path: str = "scene.toml") -> Scene: ...
 def render(
     scene: Scene,
@@ -91,6 +114,7 @@ def render(
     progress: Optional[Callable[[Progress], None]] = None,
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
+    renderer: Optional[RendererCore] = None,
 ) -> Union[npt.NDArray[np.float32], Dict[str, npt.NDArray[np.float32]]]: ...
 def write_image(path: str, image: npt.NDArray[np.float32], exposure: float = 0.0) -> None: ...
 def write_layers(path: str, layers: Sequence[Tuple[str, npt.NDArray[np.float32]]]) -> None: ...

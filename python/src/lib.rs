@@ -46,6 +46,12 @@ create_exception!(
 );
 create_exception!(
     _photonix,
+    Cancelled,
+    PhotonixError,
+    "A render cancelled (Renderer.cancel) before its first pass finished."
+);
+create_exception!(
+    _photonix,
     ImageError,
     PhotonixError,
     "An image or accumulation file that cannot be read or written."
@@ -67,6 +73,8 @@ const STOP_CHECK_PATHS: u64 = 1 << 16;
 #[derive(Clone)]
 pub struct Scene {
     path: PathBuf,
+    /// The file read: the TOML itself, or the POV-Ray, glTF or Mitsuba file translated to it.
+    source: PathBuf,
     text: String,
     scene: photonix::scene::Scene,
 }
@@ -78,7 +86,15 @@ fn scene_error(e: impl std::fmt::Display) -> PyErr {
 impl Scene {
     fn parse(text: String, path: PathBuf) -> PyResult<Scene> {
         let scene = photonix::scene::parse_scene(&text, &path).map_err(scene_error)?;
-        Ok(Scene { path, text, scene })
+        Ok(Scene { source: path.clone(), path, text, scene })
+    }
+
+    /// Parses `doc` as this scene's new text: on a SceneError the scene is unchanged.
+    fn reparse(&mut self, doc: &DocumentMut) -> PyResult<()> {
+        let source = self.source.clone();
+        *self = Scene::parse(doc.to_string(), self.path.clone())?;
+        self.source = source;
+        Ok(())
     }
 }
 
@@ -130,36 +146,124 @@ impl Scene {
     /// key that is not there yet (it is added).
     fn set(&mut self, path: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let mut doc = self.document()?;
+        set_in(&mut doc, path, value)?;
+        self.reparse(&doc)
+    }
+
+    /// Sets several scene paths at once (a list of (path, value), as `set`), parsing once: all
+    /// of them change, or on an error none. What `traverse(...).update()` calls.
+    fn set_many(&mut self, edits: Vec<(String, Bound<'_, PyAny>)>) -> PyResult<()> {
+        let mut doc = self.document()?;
+        for (path, value) in &edits {
+            set_in(&mut doc, path, value)?;
+        }
+        self.reparse(&doc)
+    }
+
+    /// Adds an entry: to an array of tables (`add("shapes", {...})`, `add("lights", {...})`,
+    /// appended as a table), or a new key of a table (`add("materials.blue", {...})`; refused
+    /// when it is there already: use `set` to replace it). Parsed like any edit: a SceneError
+    /// leaves the scene unchanged.
+    fn add(&mut self, path: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+        let mut doc = self.document()?;
         let steps = parse_scene_path(path)?;
         let (last, parents) = steps.split_last().expect("parse_scene_path returns at least one step");
         let Step::Key(key) = last else {
             return Err(PyValueError::new_err(format!(
-                "scene path `{path}` ends in an array entry; name the field to set (e.g. `{path}.radiance`)"
+                "scene path `{path}` ends in an array entry; name the array to add to (e.g. `shapes`)"
             )));
         };
         let table = lookup_table_mut(doc.as_item_mut(), parents, path)?;
-        if value.is_none() {
-            if table.remove(key).is_none() {
-                return Err(pyo3::exceptions::PyKeyError::new_err(format!(
-                    "scene path `{path}`: there is no `{key}` to remove"
-                )));
+        match table.get_mut(key) {
+            Some(item) if item.is_array_of_tables() => {
+                let entry = py_to_table(value, path)?;
+                item.as_array_of_tables_mut().expect("checked to be an array of tables").push(entry);
             }
-        } else {
-            let new = py_to_value(value, path, 0)?;
-            // Keep the old value's comment and spacing where there was one.
-            match table.get_mut(key) {
-                Some(Item::Value(old)) => {
-                    let decor = old.decor().clone();
-                    *old = new;
-                    *old.decor_mut() = decor;
-                }
-                _ => {
-                    table.insert(key, Item::Value(new));
-                }
+            Some(_) => {
+                return Err(PyValueError::new_err(format!(
+                    "scene path `{path}` is there already; `set` replaces it, `remove` removes it"
+                )))
+            }
+            None if value.cast::<PyDict>().is_ok() && parents.is_empty() && ARRAYS.contains(&key.as_str()) => {
+                let mut array = toml_edit::ArrayOfTables::new();
+                array.push(py_to_table(value, path)?);
+                table.insert(key, Item::ArrayOfTables(array));
+            }
+            None => {
+                let item = match value.cast::<PyDict>() {
+                    Ok(_) => Item::Table(py_to_table(value, path)?),
+                    Err(_) => Item::Value(py_to_value(value, path, 0)?),
+                };
+                table.insert(key, item);
             }
         }
-        *self = Scene::parse(doc.to_string(), self.path.clone())?;
-        Ok(())
+        self.reparse(&doc)
+    }
+
+    /// Removes what a scene path names: a key (`materials.blue`, `camera.fov`) or an entry of
+    /// an array of tables (`shapes[floor]`, `lights[0]`). A removal the parser refuses (a
+    /// material a shape still uses) raises SceneError and changes nothing.
+    fn remove(&mut self, path: &str) -> PyResult<()> {
+        let mut doc = self.document()?;
+        let steps = parse_scene_path(path)?;
+        match steps.as_slice() {
+            [parents @ .., Step::Key(key), entry @ (Step::Index(_) | Step::Name(_))] => {
+                let table = lookup_table_mut(doc.as_item_mut(), parents, path)?;
+                let array = table.get_mut(key).and_then(Item::as_array_of_tables_mut).ok_or_else(|| {
+                    pyo3::exceptions::PyKeyError::new_err(format!(
+                        "scene path `{path}`: `{key}` is not an array of tables"
+                    ))
+                })?;
+                let index = match entry {
+                    Step::Index(i) => (*i < array.len()).then_some(*i),
+                    Step::Name(name) => array.iter().position(|t| has_name(t, name)),
+                    Step::Key(_) => unreachable!("matched as an entry"),
+                };
+                let names: Vec<String> = array
+                    .iter()
+                    .enumerate()
+                    .map(|(i, t)| t.get("name").and_then(|n| n.as_str()).map_or(format!("[{i}]"), |n| format!("[{n}]")))
+                    .collect();
+                let index = index.ok_or_else(|| {
+                    pyo3::exceptions::PyKeyError::new_err(format!(
+                        "scene path `{path}`: no such entry (there is {})",
+                        names.join(", ")
+                    ))
+                })?;
+                array.remove(index);
+                if array.is_empty() {
+                    table.remove(key);
+                }
+            }
+            [parents @ .., Step::Key(key)] => {
+                let table = lookup_table_mut(doc.as_item_mut(), parents, path)?;
+                if table.remove(key).is_none() {
+                    return Err(pyo3::exceptions::PyKeyError::new_err(format!(
+                        "scene path `{path}`: there is no `{key}` to remove"
+                    )));
+                }
+            }
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "scene path `{path}`: name a key or an array entry to remove"
+                )))
+            }
+        }
+        self.reparse(&doc)
+    }
+
+    /// The whole scene as nested dicts and lists (tables, arrays of tables, values), as `get`
+    /// gives each part: what `traverse` walks, and what `load_dict` takes back.
+    fn to_dict(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let doc = self.document()?;
+        node_to_py(py, &Node::Item(doc.as_item()))
+    }
+
+    /// The file that was read: the TOML itself, or the POV-Ray, glTF or Mitsuba scene that
+    /// `load` translated (then `path` is the TOML's name beside it, where `save` would put it).
+    #[getter]
+    fn source(&self) -> PathBuf {
+        self.source.clone()
     }
 
     fn __getitem__(&self, py: Python<'_>, path: &str) -> PyResult<Py<PyAny>> {
@@ -191,6 +295,98 @@ impl Scene {
             self.scene.camera.height
         )
     }
+}
+
+/// The top-level arrays of tables of the scene format (docs/scene-format.md).
+const ARRAYS: [&str; 3] = ["shapes", "lights", "instances"];
+
+/// `Scene.set` on a document: sets (or with None removes) the value at `path`.
+fn set_in(doc: &mut DocumentMut, path: &str, value: &Bound<'_, PyAny>) -> PyResult<()> {
+    {
+        let steps = parse_scene_path(path)?;
+        let (last, parents) = steps.split_last().expect("parse_scene_path returns at least one step");
+        let Step::Key(key) = last else {
+            return Err(PyValueError::new_err(format!(
+                "scene path `{path}` ends in an array entry; name the field to set (e.g. `{path}.radiance`)"
+            )));
+        };
+        let table = lookup_table_mut(doc.as_item_mut(), parents, path)?;
+        if value.is_none() {
+            if table.remove(key).is_none() {
+                return Err(pyo3::exceptions::PyKeyError::new_err(format!(
+                    "scene path `{path}`: there is no `{key}` to remove"
+                )));
+            }
+        } else {
+            let new = py_to_value(value, path, 0)?;
+            // Keep the old value's comment and spacing where there was one.
+            match table.get_mut(key) {
+                Some(Item::Value(old)) => {
+                    let decor = old.decor().clone();
+                    *old = new;
+                    *old.decor_mut() = decor;
+                }
+                _ => {
+                    table.insert(key, Item::Value(new));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A dict as a table: a list of dicts in it becomes an array of tables (`[[shapes.children]]`),
+/// a dict an inline table, anything else a value (`py_to_value`).
+fn py_to_table(value: &Bound<'_, PyAny>, path: &str) -> PyResult<toml_edit::Table> {
+    let dict = value.cast::<PyDict>().map_err(|_| {
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "scene path `{path}`: an entry is a dict of its fields, not a {}",
+            value.get_type().name().map(|n| n.to_string()).unwrap_or_default()
+        ))
+    })?;
+    let mut table = toml_edit::Table::new();
+    for (k, v) in dict.iter() {
+        let key: String = k
+            .extract()
+            .map_err(|_| PyValueError::new_err(format!("scene path `{path}`: a table's keys must be strings")))?;
+        let inner = format!("{path}.{key}");
+        table.insert(&key, py_to_item(&v, &inner, 2)?);
+    }
+    Ok(table)
+}
+
+/// A Python value as a TOML item for `load_dict`: the top-level dicts and the dicts in them
+/// (`camera`, `materials`, `materials.red`) as tables, lists of dicts as arrays of tables
+/// (`shapes`, `lights`), deeper dicts as inline tables, the rest as values.
+fn py_to_item(value: &Bound<'_, PyAny>, path: &str, depth: usize) -> PyResult<Item> {
+    if let Ok(dict) = value.cast::<PyDict>() {
+        if depth >= 2 {
+            return Ok(Item::Value(py_to_value(value, path, 0)?));
+        }
+        let mut table = toml_edit::Table::new();
+        let mut only_tables = !dict.is_empty();
+        for (k, v) in dict.iter() {
+            let key: String = k
+                .extract()
+                .map_err(|_| PyValueError::new_err(format!("scene path `{path}`: a table's keys must be strings")))?;
+            let item = py_to_item(&v, &format!("{path}.{key}"), depth + 1)?;
+            only_tables &= item.is_table();
+            table.insert(&key, item);
+        }
+        // `[materials]` with nothing but `[materials.red]`, ... under it needs no header.
+        table.set_implicit(only_tables);
+        return Ok(Item::Table(table));
+    }
+    if let Ok(list) = value.cast::<PyList>() {
+        if !list.is_empty() && list.iter().all(|v| v.cast::<PyDict>().is_ok()) {
+            let mut array = toml_edit::ArrayOfTables::new();
+            for (i, v) in list.iter().enumerate() {
+                array.push(py_to_table(&v, &format!("{path}[{i}]"))?);
+            }
+            return Ok(Item::ArrayOfTables(array));
+        }
+    }
+    Ok(Item::Value(py_to_value(value, path, 0)?))
 }
 
 impl Scene {
@@ -508,6 +704,10 @@ struct Outcome {
     why: String,
     device: String,
     seconds: f64,
+    /// Seconds spent opening the device and making (or updating) the renderer.
+    setup_seconds: f64,
+    /// Whether a kept renderer was given the scene (no new kernels, no new device).
+    reused: bool,
 }
 
 enum Failure {
@@ -528,59 +728,103 @@ fn render_failure(e: impl std::fmt::Display) -> Failure {
     Failure::Render(e.to_string())
 }
 
+/// The backend a render (or a kept `Renderer`) runs on, chosen and opened once: the device
+/// context when it is a GPU, with the seconds opening it took.
+struct Opened {
+    ctx: Option<GpuContext>,
+    backend: Backend,
+    why: String,
+    open_seconds: f64,
+}
+
+/// Chooses the backend as `photonix render` does and opens the device; auto falls back to the
+/// CPU backend when the GPU will not open.
+fn open_backend(choice: BackendChoice, device: Option<String>) -> Result<Opened, Failure> {
+    let t = Instant::now();
+    let options = GpuOptions::from_env(device.clone()).map_err(render_failure)?;
+    let (backend, why) = match choice {
+        BackendChoice::Gpu => (Backend::Gpu, "backend=\"gpu\"".to_string()),
+        BackendChoice::Cpu => (Backend::Cpu, "backend=\"cpu\"".to_string()),
+        BackendChoice::Auto => {
+            let (backend, why) = auto_backend(&list_devices(), device.is_some());
+            (backend, format!("auto: {why}"))
+        }
+    };
+    let opened = |ctx, backend, why| Opened { ctx, backend, why, open_seconds: t.elapsed().as_secs_f64() };
+    match backend {
+        Backend::Cpu => Ok(opened(None, backend, why)),
+        Backend::Gpu => match GpuContext::new(&options) {
+            Ok(ctx) => Ok(opened(Some(ctx), backend, why)),
+            Err(_) if choice == BackendChoice::Auto && device.is_none() => {
+                Ok(opened(None, Backend::Cpu, "auto: the GPU failed to open".to_string()))
+            }
+            Err(e) => Err(render_failure(e)),
+        },
+    }
+}
+
+/// A renderer kept from one render to the next on the same backend, with the image size it was
+/// made for (a new size makes a new one; the device and its context stay).
+type Kept<'a> = Option<(Renderer<'a>, (u32, u32))>;
+
 /// Runs `job` on the calling thread (the worker), as `photonix render` does: memory checks,
-/// prepare, the device, then the progressive passes.
-fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Result<Outcome, Failure> {
+/// prepare, then the progressive passes, on `opened`'s backend. With a renderer in `kept` it is
+/// given the new scene (`update_scene`: the kernels stay, only the arrays that changed are
+/// written) instead of being made anew; `setup_seconds` in the outcome is what that took.
+fn run_on<'a>(
+    job: &Job,
+    opened: &'a Opened,
+    kept: &mut Kept<'a>,
+    stop: Arc<AtomicBool>,
+    events: mpsc::Sender<Event>,
+) -> Result<Outcome, Failure> {
     photonix::render::set_thread_stop_flag(Some(stop));
     photonix::render::set_thread_stop_paths(Some(STOP_CHECK_PATHS));
     let start = Instant::now();
     let settings = FrameSettings { width: job.width, height: job.height, max_depth: job.max_depth, seed: job.seed };
     let photons = job.photons.as_ref();
-    let options = GpuOptions::from_env(job.device.clone()).map_err(render_failure)?;
-    let (mut backend, mut why) = match job.backend {
-        BackendChoice::Gpu => (Backend::Gpu, "backend=\"gpu\"".to_string()),
-        BackendChoice::Cpu => (Backend::Cpu, "backend=\"cpu\"".to_string()),
-        BackendChoice::Auto => {
-            let (backend, why) = auto_backend(&list_devices(), job.device.is_some());
-            (backend, format!("auto: {why}"))
-        }
-    };
     let estimate = |limit| memory::estimate(job.width, job.height, photons, limit);
-    let host = estimate((backend == Backend::Gpu).then_some(u64::MAX));
+    let host = estimate((opened.backend == Backend::Gpu).then_some(u64::MAX));
     check_fits(&host, job.width, job.height, photons, available_host_memory(), None).map_err(render_failure)?;
 
     let buffers = prepare(&job.scene, &settings).map_err(|e| Failure::Scene(e.to_string()))?;
     if let Some(p) = photons {
         check_radii(&buffers, p).map_err(render_failure)?;
     }
-    let ctx = match backend {
-        Backend::Cpu => None,
-        Backend::Gpu => match GpuContext::new(&options) {
-            Ok(ctx) => {
-                let info = ctx.info();
-                let limit = info.max_storage_buffer_range.min(info.max_memory_allocation_size);
-                if let Some(p) = photons {
-                    memory::check_photon_buffer(p, limit).map_err(render_failure)?;
-                }
-                let device = estimate(Some(limit));
-                check_fits(&device, job.width, job.height, photons, None, Some(info.device_local_heap_bytes))
-                    .map_err(render_failure)?;
-                Some(ctx)
-            }
-            // As on the command line: auto falls back to the CPU backend when the GPU will not open.
-            Err(_) if job.backend == BackendChoice::Auto && job.device.is_none() => {
-                (backend, why) = (Backend::Cpu, "auto: the GPU failed to open".to_string());
-                None
-            }
-            Err(e) => return Err(render_failure(e)),
-        },
-    };
+    if let Some(ctx) = &opened.ctx {
+        let info = ctx.info();
+        let limit = info.max_storage_buffer_range.min(info.max_memory_allocation_size);
+        if let Some(p) = photons {
+            memory::check_photon_buffer(p, limit).map_err(render_failure)?;
+        }
+        let device = estimate(Some(limit));
+        check_fits(&device, job.width, job.height, photons, None, Some(info.device_local_heap_bytes))
+            .map_err(render_failure)?;
+    }
     let provenance = Provenance::new(&buffers, job.spp, photons);
-    let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons).map_err(render_failure)?;
+    let setup = Instant::now();
+    let size = (job.width, job.height);
+    let reused = match kept.as_mut() {
+        Some((renderer, kept_size)) if *kept_size == size => {
+            // A failed update leaves a renderer that must not be used again.
+            if let Err(e) = renderer.update_scene(&buffers, photons) {
+                *kept = None;
+                return Err(render_failure(e));
+            }
+            true
+        }
+        _ => false,
+    };
+    if !reused {
+        *kept = None;
+        *kept = Some((Renderer::new(opened.ctx.as_ref(), &buffers, photons).map_err(render_failure)?, size));
+    }
+    let setup_seconds = setup.elapsed().as_secs_f64();
+    let renderer = &mut kept.as_mut().expect("made above").0;
     let mut device = String::new();
     let passes_done = std::cell::Cell::new(0u32);
     let max_group = renderer.max_pass_group(job.spp);
-    let (acc, reason) = render_progressive(
+    let result = render_progressive(
         job.width,
         job.height,
         &job.budget,
@@ -601,8 +845,160 @@ fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Res
             let _ = events.send(Event::Progress(last, acc.passes, 1, 1));
             Ok::<(), Failure>(())
         },
-    )?;
-    Ok(Outcome { acc, reason, provenance, backend, why, device, seconds: start.elapsed().as_secs_f64() })
+    );
+    // A device error mid-render may leave the kept renderer unusable: make a new one next time.
+    let (acc, reason) = result.inspect_err(|_| *kept = None)?;
+    Ok(Outcome {
+        acc,
+        reason,
+        provenance,
+        backend: opened.backend,
+        why: opened.why.clone(),
+        device,
+        seconds: start.elapsed().as_secs_f64(),
+        setup_seconds,
+        reused,
+    })
+}
+
+/// A render with nothing kept: opens the backend, renders, and lets everything go.
+fn run_job(job: &Job, stop: Arc<AtomicBool>, events: mpsc::Sender<Event>) -> Result<Outcome, Failure> {
+    let opened = open_backend(job.backend, job.device.clone())?;
+    let mut kept = None;
+    let mut outcome = run_on(job, &opened, &mut kept, stop, events)?;
+    outcome.setup_seconds += opened.open_seconds;
+    Ok(outcome)
+}
+
+// ---------------------------------------------------------------------------------------------
+// A kept renderer
+
+/// One render for a `RendererCore`'s thread.
+struct Request {
+    job: Job,
+    stop: Arc<AtomicBool>,
+    events: mpsc::Sender<Event>,
+    reply: mpsc::Sender<Result<Outcome, Failure>>,
+}
+
+/// The thread that owns a kept renderer: it opens the backend once, then renders each request
+/// with the renderer of the one before (the device context and the kernels stay). The thread
+/// owns them because the renderer borrows the context; it ends, freeing them, when the
+/// `RendererCore` is dropped (its request channel closes).
+fn renderer_thread(choice: BackendChoice, device: Option<String>, requests: mpsc::Receiver<Request>) {
+    let opened = open_backend(choice, device);
+    let mut first = true;
+    let opened = match &opened {
+        Ok(o) => Ok(o),
+        Err(Failure::Render(m)) => Err(m.clone()),
+        Err(Failure::Scene(m)) => Err(m.clone()),
+    };
+    let mut kept: Kept<'_> = None;
+    for request in requests {
+        let outcome = match opened {
+            Err(ref message) => Err(Failure::Render(message.clone())),
+            Ok(opened) => run_on(&request.job, opened, &mut kept, request.stop, request.events).map(|mut o| {
+                if std::mem::take(&mut first) {
+                    o.setup_seconds += opened.open_seconds;
+                }
+                o
+            }),
+        };
+        let _ = request.reply.send(outcome);
+    }
+}
+
+/// The compiled half of `photonix.Renderer`: a render thread keeping the backend, the device and
+/// the kernels from one render to the next, and the stop flag of the render under way, which
+/// `cancel` sets from any thread. Frozen (no `&mut self`): `render` on one thread and `cancel`
+/// on another never meet a borrow error.
+#[pyclass(module = "photonix", frozen)]
+pub struct RendererCore {
+    requests: std::sync::Mutex<Option<mpsc::Sender<Request>>>,
+    worker: std::sync::Mutex<Option<std::thread::JoinHandle<()>>>,
+    /// The stop flag of the render under way, if any.
+    current: std::sync::Mutex<Option<Arc<AtomicBool>>>,
+    /// Renders waiting for the thread or under way: one at a time runs, the others queue.
+    busy: std::sync::Mutex<()>,
+    backend: BackendChoice,
+    device: Option<String>,
+}
+
+#[pymethods]
+impl RendererCore {
+    #[new]
+    #[pyo3(signature = (backend="auto", device=None))]
+    fn new(backend: &str, device: Option<String>) -> PyResult<RendererCore> {
+        let choice = parse_backend(backend)?;
+        if device.is_some() && choice == BackendChoice::Cpu {
+            return Err(PyValueError::new_err(
+                "device picks a Vulkan device, but backend=\"cpu\" uses none; leave one of them out",
+            ));
+        }
+        let (sender, receiver) = mpsc::channel();
+        let thread_device = device.clone();
+        let worker = std::thread::Builder::new()
+            .name("photonix-renderer".into())
+            .spawn(move || renderer_thread(choice, thread_device, receiver))
+            .map_err(|e| RenderError::new_err(format!("cannot start the render thread: {e}")))?;
+        Ok(RendererCore {
+            requests: std::sync::Mutex::new(Some(sender)),
+            worker: std::sync::Mutex::new(Some(worker)),
+            current: std::sync::Mutex::new(None),
+            busy: std::sync::Mutex::new(()),
+            backend: choice,
+            device,
+        })
+    }
+
+    /// Stops the render under way after the submission in progress (it returns the passes
+    /// finished, see `photonix.Renderer.cancel`); does nothing when none is. Any thread may call it.
+    fn cancel(&self) {
+        if let Some(stop) = self.current.lock().expect("the stop flag's lock is not poisoned").as_ref() {
+            stop.store(true, Ordering::Relaxed);
+        }
+    }
+
+    /// Ends the render thread, freeing the device (also done when the renderer is dropped).
+    fn close(&self, py: Python<'_>) {
+        self.requests.lock().expect("the request lock is not poisoned").take();
+        let worker = self.worker.lock().expect("the worker lock is not poisoned").take();
+        if let Some(worker) = worker {
+            py.detach(|| {
+                let _ = worker.join();
+            });
+        }
+    }
+}
+
+impl RendererCore {
+    /// Sends `job` to the render thread and returns the channel its outcome comes back on, with
+    /// the guard that keeps other renders waiting meanwhile.
+    fn submit(
+        &self,
+        job: Job,
+        stop: Arc<AtomicBool>,
+        events: mpsc::Sender<Event>,
+    ) -> Result<mpsc::Receiver<Result<Outcome, Failure>>, Failure> {
+        let (reply, outcome) = mpsc::channel();
+        let requests = self.requests.lock().expect("the request lock is not poisoned");
+        let sender =
+            requests.as_ref().ok_or_else(|| Failure::Render("this Renderer was closed; make a new one".into()))?;
+        *self.current.lock().expect("the stop flag's lock is not poisoned") = Some(stop.clone());
+        sender
+            .send(Request { job, stop, events, reply })
+            .map_err(|_| Failure::Render("the render thread has ended; make a new Renderer".into()))?;
+        Ok(outcome)
+    }
+}
+
+fn parse_backend(backend: &str) -> PyResult<BackendChoice> {
+    match backend {
+        "auto" => Ok(BackendChoice::Auto),
+        "gpu" => Ok(BackendChoice::Gpu),
+        "cpu" => Ok(BackendChoice::Cpu),
+        other => Err(PyValueError::new_err(format!("backend={other:?} is not one of \"auto\", \"gpu\", \"cpu\""))),
+    }
 }
 
 /// Progress of a render, as the callback receives it.
@@ -662,11 +1058,11 @@ fn layers_to_dict<'py>(py: Python<'py>, layers: &Layers) -> PyResult<Bound<'py, 
 #[pyo3(signature = (scene, *, passes=None, time=None, target_error=None, seed=None, backend="auto",
     resolution=None, pass_range=None, layers=false, spp=None, max_depth=None, photons=None,
     caustic_photons=None, radius=None, caustic_radius=None, gather_rays=None, photon_depth=None,
-    no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None))]
+    no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None, renderer=None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
-    scene: &Scene,
+    scene: &Bound<'py, Scene>,
     passes: Option<u32>,
     time: Option<f64>,
     target_error: Option<f64>,
@@ -689,16 +1085,18 @@ fn render<'py>(
     progress: Option<Bound<'py, PyAny>>,
     info: Option<Bound<'py, PyDict>>,
     integrator: Option<&str>,
+    renderer: Option<Py<RendererCore>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     // Check every argument before any work, with the command line's ranges.
-    let backend = match backend {
-        "auto" => BackendChoice::Auto,
-        "gpu" => BackendChoice::Gpu,
-        "cpu" => BackendChoice::Cpu,
-        other => {
-            return Err(PyValueError::new_err(format!("backend={other:?} is not one of \"auto\", \"gpu\", \"cpu\"")))
+    let backend = parse_backend(backend)?;
+    if let Some(core) = &renderer {
+        let core = core.get();
+        if core.backend != backend || core.device != device {
+            return Err(PyValueError::new_err(
+                "a kept renderer renders on the backend and device it was made with; leave backend and device out",
+            ));
         }
-    };
+    }
     if device.is_some() && backend == BackendChoice::Cpu {
         return Err(PyValueError::new_err(
             "device picks a Vulkan device, but backend=\"cpu\" uses none; leave one of them out",
@@ -763,7 +1161,13 @@ fn render<'py>(
         ("photon_depth", photon_depth.is_some()),
     ];
     let given: Vec<&str> = photon_flags.iter().filter_map(|(n, on)| on.then_some(*n)).collect();
-    let mut s = scene.scene.clone();
+    // The scene as it is now, borrowed only for this copy: another thread may edit it while
+    // this one renders (the render is of the scene as it was when it started).
+    let mut s = scene
+        .try_borrow()
+        .map_err(|_| SceneError::new_err("the scene is being edited; render it after the edit"))?
+        .scene
+        .clone();
     if let Some(name) = integrator {
         let named = match name {
             Integrator::AUTO => None,
@@ -835,8 +1239,21 @@ fn render<'py>(
         std::thread::scope(|threads| {
             let (sender, receiver) = mpsc::channel();
             let worker_stop = stop.clone();
-            let job = &job;
-            let worker = threads.spawn(move || run_job(job, worker_stop, sender));
+            // A kept renderer's thread renders one request at a time; `busy` keeps the stop
+            // flag that `cancel` sets that of the render under way.
+            let core = renderer.as_ref().map(|r| r.get());
+            let _busy = core.map(|c| c.busy.lock().unwrap_or_else(|e| e.into_inner()));
+            enum Running<'s> {
+                Here(std::thread::ScopedJoinHandle<'s, Result<Outcome, Failure>>),
+                Kept(Result<mpsc::Receiver<Result<Outcome, Failure>>, Failure>),
+            }
+            let running = match core {
+                Some(core) => Running::Kept(core.submit(job.clone(), worker_stop, sender)),
+                None => {
+                    let job = &job;
+                    Running::Here(threads.spawn(move || run_job(job, worker_stop, sender)))
+                }
+            };
             let mut raised: Option<PyErr> = None;
             let mut latest: Option<Event> = None;
             loop {
@@ -879,7 +1296,18 @@ fn render<'py>(
                     break;
                 }
             }
-            (worker.join().expect("the render worker does not panic"), raised)
+            let result = match running {
+                Running::Here(worker) => worker.join().expect("the render worker does not panic"),
+                Running::Kept(submitted) => submitted.and_then(|outcome| {
+                    outcome.recv().unwrap_or_else(|_| {
+                        Err(Failure::Render("the render thread has ended; make a new Renderer".into()))
+                    })
+                }),
+            };
+            if let Some(core) = core {
+                *core.current.lock().unwrap_or_else(|e| e.into_inner()) = None;
+            }
+            (result, raised)
         })
     });
 
@@ -890,9 +1318,14 @@ fn render<'py>(
         }
     }
     let outcome = result?;
+    // Stopped with nothing raised here: `Renderer.cancel` from another thread.
+    let cancelled = !interrupted && outcome.reason == StopReason::Interrupted;
     if outcome.acc.passes == 0 {
         if interrupted {
             return Err(PyKeyboardInterrupt::new_err("interrupted before the first pass finished; no image"));
+        }
+        if cancelled {
+            return Err(Cancelled::new_err("cancelled before the first pass finished; no image"));
         }
         return Err(RenderError::new_err("no pass finished; no image"));
     }
@@ -910,7 +1343,8 @@ fn render<'py>(
     }
     if let Some(info) = info {
         let reason = match (interrupted, outcome.reason) {
-            (true, _) | (_, StopReason::Interrupted) => "interrupted",
+            (true, _) => "interrupted",
+            (_, StopReason::Interrupted) => "cancelled",
             (_, StopReason::Passes) => "passes",
             (_, StopReason::Time) => "time",
             (_, StopReason::TargetError) => "target_error",
@@ -925,6 +1359,10 @@ fn render<'py>(
         info.set_item("seconds", outcome.seconds)?;
         info.set_item("resolution", (width, height))?;
         info.set_item("spp", job.spp)?;
+        info.set_item("integrator", job.scene.render.integrator.name())?;
+        info.set_item("integrator_reason", job.scene.render.integrator_auto.map(|why| format!("auto: {why}")))?;
+        info.set_item("setup_seconds", outcome.setup_seconds)?;
+        info.set_item("renderer_kept", outcome.reused)?;
     }
     let mean = outcome.acc.mean();
     if layers {
@@ -1047,9 +1485,52 @@ fn devices(py: Python<'_>) -> PyResult<Bound<'_, PyList>> {
     Ok(list)
 }
 
-/// Reads and parses the scene file at `path`.
+/// Reads a scene file through the front-end its extension names, as `photonix render` does:
+/// TOML, POV-Ray (`.pov`, at `resolution`, default 320x240 as POV-Ray's +W +H), glTF (`.gltf`,
+/// `.glb`; `resolution` in place of the camera's) or Mitsuba (`.xml`). A POV-Ray, glTF or
+/// Mitsuba scene is translated to TOML as `photonix convert` does, so it edits like any other;
+/// its `path` is the TOML's name beside the file (nothing is written there).
 #[pyfunction]
-fn load(path: PathBuf) -> PyResult<Scene> {
+#[pyo3(signature = (path, resolution=None))]
+fn load(path: PathBuf, resolution: Option<(u32, u32)>) -> PyResult<Scene> {
+    use photonix::scene::{gltf_scene, mitsuba, pov};
+    if let Some((w, h)) = resolution {
+        let side = 1..=MAX_IMAGE_SIDE;
+        if !side.contains(&w) || !side.contains(&h) || w as u64 * h as u64 > MAX_PIXELS {
+            return Err(PyValueError::new_err(format!(
+                "resolution=({w}, {h}) is out of range; give sizes from 1 to {MAX_IMAGE_SIDE}, at most {MAX_PIXELS} pixels"
+            )));
+        }
+    }
+    let translated = if pov::is_pov_path(&path) {
+        let mut options = pov::PovOptions::default();
+        if let Some((w, h)) = resolution {
+            (options.width, options.height) = (w, h);
+        }
+        Some(pov::translate_file(&path, &options).map(|t| t.toml))
+    } else if gltf_scene::is_gltf_path(&path) {
+        Some(gltf_scene::translate_file_at(&path, None, resolution).map(|t| t.toml))
+    } else if mitsuba::is_mitsuba_path(&path) {
+        if resolution.is_some() {
+            return Err(PyValueError::new_err(
+                "resolution= sizes a POV-Ray or glTF scene; a Mitsuba scene has its film's: set `camera.resolution` after loading, or pass resolution to render",
+            ));
+        }
+        Some(mitsuba::translate_file(&path).map(|t| t.toml))
+    } else {
+        None
+    };
+    if let Some(toml) = translated {
+        let toml = toml.map_err(scene_error)?;
+        let mut scene = Scene::parse(toml, path.with_extension("toml"))?;
+        scene.source = path;
+        return Ok(scene);
+    }
+    if resolution.is_some() {
+        return Err(PyValueError::new_err(
+            "resolution= sizes a POV-Ray or glTF scene; a TOML scene has its camera's: pass resolution to render",
+        ));
+    }
     // Read once, under the library's size limit (the text is kept for edits); when that fails,
     // `load_scene` says why in the command line's words.
     let limit = photonix::limits::MAX_SCENE_FILE_BYTES;
@@ -1060,6 +1541,22 @@ fn load(path: PathBuf) -> PyResult<Scene> {
             Ok(_) => format!("cannot read {}", path.display()),
         })),
     }
+}
+
+/// A scene from a dict in the TOML schema (docs/scene-format.md), as Mitsuba's `load_dict`:
+/// top-level dicts are tables (`camera`, `render`, `materials` with one dict per material),
+/// lists of dicts arrays of tables (`shapes`, `lights`). `path` names it and is where relative
+/// mesh and texture paths are read from.
+#[pyfunction]
+#[pyo3(signature = (scene, path="scene.toml"))]
+fn load_dict(scene: &Bound<'_, PyDict>, path: &str) -> PyResult<Scene> {
+    let mut doc = DocumentMut::new();
+    for (k, v) in scene.iter() {
+        let key: String = k.extract().map_err(|_| PyValueError::new_err("the scene dict's keys must be strings"))?;
+        let item = py_to_item(&v, &key, 0)?;
+        doc.insert(&key, item);
+    }
+    Scene::parse(doc.to_string(), PathBuf::from(path))
 }
 
 /// Parses scene text. `path` names it in messages, gives the scene its name, and is where
@@ -1077,6 +1574,7 @@ fn _photonix(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Progress>()?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(loads, m)?)?;
+    m.add_function(wrap_pyfunction!(load_dict, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(write_image, m)?)?;
     m.add_function(wrap_pyfunction!(write_layers, m)?)?;
@@ -1087,6 +1585,8 @@ fn _photonix(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", py.get_type::<SceneError>())?;
     m.add("RenderError", py.get_type::<RenderError>())?;
     m.add("ImageError", py.get_type::<ImageError>())?;
+    m.add("Cancelled", py.get_type::<Cancelled>())?;
+    m.add_class::<RendererCore>()?;
     m.add("MAX_PASSES", MAX_PASSES)?;
     Ok(())
 }

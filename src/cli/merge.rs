@@ -7,9 +7,9 @@ use anyhow::{bail, Result};
 
 use photonix::io::image::{format_of, Format};
 use photonix::io::{check_not_overwriting, check_output_path, write_image};
-use photonix::render::accumulation::{format_ranges, merge, write_accumulation};
+use photonix::render::accumulation::{format_ranges, merge, missing_passes, write_accumulation};
 
-use super::parse::parse_exposure;
+use super::parse::{parse_exposure, parse_passes};
 
 #[derive(clap::Args)]
 pub struct MergeArgs {
@@ -25,6 +25,10 @@ pub struct MergeArgs {
     /// PNG only: scale radiance by 2^EXPOSURE, -64 to 64, before sRGB encoding
     #[arg(long, value_parser = parse_exposure, allow_hyphen_values = true)]
     exposure: Option<f32>,
+    /// The parts must hold exactly passes 0..PASSES (1 to 1000000): a render farm's check that
+    /// no task's part is missing or short; otherwise nothing is written
+    #[arg(long, value_parser = parse_passes, allow_negative_numbers = true)]
+    passes: Option<u32>,
 }
 
 pub fn run(args: MergeArgs) -> Result<()> {
@@ -48,6 +52,32 @@ pub fn run(args: MergeArgs) -> Result<()> {
         check_not_overwriting(&args.output, input, &format!("input {} of the merge", i + 1))?;
     }
     let (acc, provenance) = merge(&args.inputs)?;
+    // Missing passes: those of 0..--passes, or, for a final image, the gaps between the parts'
+    // ranges (a part lost or cut short). Nothing is written then: an image short of passes looks
+    // like a finished one.
+    let end = acc.ranges.iter().map(|r| r.1).max().unwrap_or(0);
+    let missing = match args.passes {
+        Some(n) => missing_passes(&acc.ranges, 0, n),
+        None if !args.accumulation => {
+            missing_passes(&acc.ranges, acc.ranges.iter().map(|r| r.0).min().unwrap_or(0), end)
+        }
+        None => Vec::new(),
+    };
+    if !missing.is_empty() {
+        bail!(
+            "the parts hold passes {} but passes {} are missing{}; nothing was written (render the missing passes with \
+             `photonix render --pass-range A..B` and merge again)",
+            format_ranges(&acc.ranges),
+            format_ranges(&missing),
+            args.passes.map_or(String::new(), |n| format!(" of 0..{n}"))
+        );
+    }
+    if let Some(n) = args.passes.filter(|&n| end > n) {
+        bail!(
+            "the parts hold passes {}, beyond the {n} passes of --passes {n}; nothing was written",
+            format_ranges(&acc.ranges)
+        );
+    }
     if args.accumulation {
         write_accumulation(&args.output, &acc, &provenance)?;
     } else {

@@ -13,10 +13,12 @@ use photonix::io::{
     check_not_input, check_not_overwriting, check_output_path, contact_sheet, write_image, write_layers_exr,
 };
 use photonix::limits::{printable_message, MAX_PASSES};
-use photonix::render::accumulation::{format_ranges, write_accumulation, Provenance};
+use photonix::render::accumulation::{
+    check_same_render, format_ranges, read_accumulation, write_accumulation, Provenance,
+};
 use photonix::render::memory::{self, available_host_memory, check_fits};
 use photonix::render::photons::check_radii;
-use photonix::render::progressive::{render_progressive, Accumulator, Budget, StopReason};
+use photonix::render::progressive::{render_progressive_from, Accumulator, Budget, StopReason};
 use photonix::render::{
     auto_backend, prepare, Backend, FrameSettings, PhotonSettings, RenderOutput, RenderStats, Renderer,
 };
@@ -175,6 +177,10 @@ struct ProgressiveArgs {
     /// Render exactly passes A..B (B at most 1000000) and write an accumulation file (see docs/progressive.md)
     #[arg(long, value_parser = parse_pass_range)]
     pass_range: Option<(u32, u32)>,
+    /// With --pass-range A..B: when the output already holds passes A..K of this same render (an
+    /// interrupted run's, or a checkpoint), render only K..B and add them to it
+    #[arg(long)]
+    resume: bool,
 }
 
 impl ProgressiveArgs {
@@ -190,6 +196,54 @@ impl ProgressiveArgs {
             (None, None) => (0, scene_passes),
         };
         Ok(Budget { first, end, time: self.time, target_error: self.target_error })
+    }
+}
+
+/// A render stopped by Ctrl-C or SIGTERM before its budget was spent: what it finished was
+/// written, but it is not the image asked for, so the process fails (`EXIT_INTERRUPTED`) and a
+/// scheduler retries it (ci/slurm-farm's tasks requeue and `--resume`).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct Interrupted(pub String);
+
+/// The exit status of an interrupted render: EX_TEMPFAIL of sysexits.h, "a temporary failure;
+/// the user is invited to retry".
+pub const EXIT_INTERRUPTED: u8 = 75;
+
+/// The passes an interrupted run of the same render already wrote to `output`, for `--resume`:
+/// `None` when there is no output yet. Refused: a file that is not an accumulation file of this
+/// render (scene, settings, size), or whose passes are not A..K for the range A..B asked.
+fn resume_from(
+    output: &Path,
+    range: (u32, u32),
+    provenance: &Provenance,
+    width: u32,
+    height: u32,
+) -> Result<Option<Accumulator>> {
+    if !output.exists() {
+        return Ok(None);
+    }
+    let (acc, theirs) = read_accumulation(output).context("--resume reads the output of the interrupted run")?;
+    let theirs = theirs.ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: --resume needs the record of the render it continues; remove the file to render it anew",
+            output.display()
+        )
+    })?;
+    let ours = Accumulator::new(width, height);
+    let this_render = Path::new("this render");
+    check_same_render((this_render, &ours, provenance), (output, &acc, &theirs))
+        .context("--resume continues only an output of the same render; remove the file to render it anew")?;
+    match acc.ranges.as_slice() {
+        [(a, k)] if *a == range.0 && *k <= range.1 => Ok(Some(acc)),
+        _ => bail!(
+            "{} holds passes {}, not passes {}..K of the --pass-range {}..{} asked; remove it, or give the range it belongs to",
+            output.display(),
+            format_ranges(&acc.ranges),
+            range.0,
+            range.0,
+            range.1
+        ),
     }
 }
 
@@ -225,6 +279,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     if args.progressive.pass_range.is_some() && args.layers {
         bail!("--pass-range writes an accumulation file, which holds every layer already; leave out --layers");
+    }
+    if args.progressive.resume && args.progressive.pass_range.is_none() {
+        bail!("--resume continues an accumulation file of a pass range; give --pass-range A..B with it");
+    }
+    if args.progressive.resume && args.progressive.target_error.is_some() {
+        bail!("--target-error needs the error estimate of every pass, which a resumed file does not keep; give one of them");
     }
     let png = |p: &Path| matches!(photonix::io::image::format_of(p), Ok(photonix::io::image::Format::Png));
     if args.exposure.is_some() && !png(&output) && !args.contact_sheet.as_deref().is_some_and(png) {
@@ -279,6 +339,22 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if let Some(p) = &photons {
         check_radii(&buffers, p)?;
     }
+    let provenance = Provenance::new(&buffers, spp, photons.as_ref());
+    // --resume: start from the passes the output holds (read before any device is opened)
+    let mut budget = budget;
+    let mut start = Accumulator::new(width, height);
+    if let (true, Some(range)) = (args.progressive.resume, args.progressive.pass_range) {
+        if let Some(acc) = resume_from(&output, range, &provenance, width, height)? {
+            let done = acc.ranges[0].1;
+            if done == range.1 {
+                note!("{} holds passes {}..{} already; nothing to render", output.display(), range.0, range.1);
+                return Ok(());
+            }
+            note!("resuming: {} holds passes {}..{done}; rendering {done}..{}", output.display(), range.0, range.1);
+            budget.first = done;
+            start = acc;
+        }
+    }
     if args.check {
         note!(
             "check: {} would render {width}x{height}, passes {}..{} of {spp} samples, to {}; nothing was written",
@@ -319,7 +395,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
         },
         Backend::Cpu => None,
     };
-    let provenance = Provenance::new(&buffers, spp, photons.as_ref());
     let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons.as_ref())?;
     // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
     let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
@@ -349,9 +424,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let passes_done = std::cell::Cell::new(0u32);
     let paths_per_pass = photons.map_or(0, |p| p.photons as u64 + p.caustic_photons as u64);
     let max_group = renderer.max_pass_group(spp);
-    let result = render_progressive(
-        width,
-        height,
+    let result = render_progressive_from(
+        start,
         &budget,
         max_group,
         |first, most| -> Result<RenderOutput> {
@@ -397,7 +471,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let (acc, reason) = result?;
     if acc.passes == 0 {
-        bail!("interrupted before the first pass finished; no image was written");
+        return Err(Interrupted("interrupted before the first pass finished; no image was written".into()).into());
     }
 
     // Write the outputs and the summary
@@ -430,6 +504,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
         format_ranges(&acc.ranges),
         summary(&scene.name, &output, &stats, width, height, backend, &backend_why)
     );
+    if reason == StopReason::Interrupted {
+        let rerun = match args.progressive.pass_range {
+            Some((a, b)) => format!(
+                "; run the same command with --resume to render the rest of {a}..{b} (ci/slurm-farm's tasks do)"
+            ),
+            None => String::new(),
+        };
+        return Err(Interrupted(format!(
+            "interrupted: {} holds passes {}, not all that were asked{rerun}",
+            output.display(),
+            format_ranges(&acc.ranges)
+        ))
+        .into());
+    }
     Ok(())
 }
 

@@ -239,43 +239,7 @@ pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), Accumulatio
     for path in &paths[1..] {
         let (next, provenance) = read_accumulation(path)?;
         let provenance = provenance.ok_or_else(|| AccumulationError::NoProvenance { path: path.clone() })?;
-        let (fw, fh) = (total.sum.direct.width, total.sum.direct.height);
-        let (w, h) = (next.sum.direct.width, next.sum.direct.height);
-        if (w, h) != (fw, fh) {
-            return Err(AccumulationError::SizeMismatch {
-                path: path.clone(),
-                w,
-                h,
-                first: first_path.clone(),
-                fw,
-                fh,
-            });
-        }
-        // Settings first, by name: a difference there is easier to act on than a scene hash.
-        let value = |p: &Provenance, key: &str| {
-            p.settings.iter().find(|(k, _)| k == key).map_or("(none)".to_string(), |(_, v)| v.clone())
-        };
-        let keys = first.settings.iter().chain(&provenance.settings).map(|(k, _)| k.as_str());
-        for key in keys {
-            let (ours, theirs) = (value(&first, key), value(&provenance, key));
-            if ours != theirs {
-                return Err(AccumulationError::SettingMismatch {
-                    path: path.clone(),
-                    what: key.replace('_', " "),
-                    theirs,
-                    first: first_path.clone(),
-                    ours,
-                });
-            }
-        }
-        if provenance.scene != first.scene {
-            return Err(AccumulationError::SceneMismatch {
-                path: path.clone(),
-                theirs: format!("{:016x}", provenance.scene),
-                ours: format!("{:016x}", first.scene),
-                first: first_path.clone(),
-            });
-        }
+        check_same_render((first_path, &total, &first), (path, &next, &provenance))?;
         let overlaps = next.ranges.iter().any(|&(a, b)| total.ranges.iter().any(|&(c, d)| a < d && c < b));
         if overlaps {
             return Err(AccumulationError::Overlap {
@@ -296,6 +260,72 @@ pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), Accumulatio
         total.ranges.sort_unstable();
     }
     Ok((total, first))
+}
+
+/// Refuses `theirs` unless it is a part of the same render as `ours`: the same image size, the
+/// same settings (compared by name first: a difference there is easier to act on than a scene
+/// hash) and the same scene hash. Used by merge and by `render --resume`.
+pub fn check_same_render(
+    ours: (&Path, &Accumulator, &Provenance),
+    theirs: (&Path, &Accumulator, &Provenance),
+) -> Result<(), AccumulationError> {
+    let (first_path, total, first) = ours;
+    let (path, next, provenance) = theirs;
+    let (fw, fh) = (total.sum.direct.width, total.sum.direct.height);
+    let (w, h) = (next.sum.direct.width, next.sum.direct.height);
+    if (w, h) != (fw, fh) {
+        return Err(AccumulationError::SizeMismatch {
+            path: path.to_owned(),
+            w,
+            h,
+            first: first_path.to_owned(),
+            fw,
+            fh,
+        });
+    }
+    let value = |p: &Provenance, key: &str| {
+        p.settings.iter().find(|(k, _)| k == key).map_or("(none)".to_string(), |(_, v)| v.clone())
+    };
+    let keys = first.settings.iter().chain(&provenance.settings).map(|(k, _)| k.as_str());
+    for key in keys {
+        let (ours, theirs) = (value(first, key), value(provenance, key));
+        if ours != theirs {
+            return Err(AccumulationError::SettingMismatch {
+                path: path.to_owned(),
+                what: key.replace('_', " "),
+                theirs,
+                first: first_path.to_owned(),
+                ours,
+            });
+        }
+    }
+    if provenance.scene != first.scene {
+        return Err(AccumulationError::SceneMismatch {
+            path: path.to_owned(),
+            theirs: format!("{:016x}", provenance.scene),
+            ours: format!("{:016x}", first.scene),
+            first: first_path.to_owned(),
+        });
+    }
+    Ok(())
+}
+
+/// The passes of `first..end` that `ranges` (disjoint, in any order) do not hold, as ranges.
+pub fn missing_passes(ranges: &[(u32, u32)], first: u32, end: u32) -> Vec<(u32, u32)> {
+    let mut sorted = ranges.to_vec();
+    sorted.sort_unstable();
+    let mut missing = Vec::new();
+    let mut cursor = first;
+    for (a, b) in sorted {
+        if a > cursor && cursor < end {
+            missing.push((cursor, a.min(end)));
+        }
+        cursor = cursor.max(b);
+    }
+    if cursor < end {
+        missing.push((cursor, end));
+    }
+    missing
 }
 
 #[cfg(test)]
@@ -333,5 +363,14 @@ mod tests {
         assert!(read_accumulation(&old).unwrap().1.is_none());
         let e = merge(&[good, old]).unwrap_err().to_string();
         assert!(e.contains("no record of the scene and settings"), "{e}");
+    }
+
+    #[test]
+    fn missing_passes_are_named_as_ranges() {
+        assert_eq!(missing_passes(&[(0, 2), (2, 4)], 0, 4), vec![]);
+        assert_eq!(missing_passes(&[(4, 6), (0, 2)], 0, 8), vec![(2, 4), (6, 8)]);
+        assert_eq!(missing_passes(&[(1, 2)], 0, 4), vec![(0, 1), (2, 4)]);
+        assert_eq!(missing_passes(&[(0, 9)], 0, 4), vec![]);
+        assert_eq!(missing_passes(&[], 3, 5), vec![(3, 5)]);
     }
 }

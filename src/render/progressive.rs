@@ -100,7 +100,8 @@ impl Accumulator {
     /// relMSE x n_a n_b / (n_a + n_b)^2 (a quarter for equal halves). Needs four passes.
     pub fn error_estimate(&self) -> Option<f64> {
         let (n_even, n_odd) = (self.even_passes, self.odd_passes);
-        if self.passes < 4 || n_even == 0 || n_odd == 0 {
+        // A resumed accumulator's halves miss the passes read from its file.
+        if self.passes < 4 || n_even == 0 || n_odd == 0 || n_even + n_odd != self.passes {
             return None;
         }
         let scale = |image: &Image, n: u32| Image {
@@ -144,11 +145,26 @@ pub fn render_progressive<E>(
     height: u32,
     budget: &Budget,
     max_group: u32,
+    render_passes: impl FnMut(u32, u32) -> Result<RenderOutput, E>,
+    after_pass: impl FnMut(&Accumulator, Duration) -> Result<(), E>,
+) -> Result<(Accumulator, StopReason), E> {
+    render_progressive_from(Accumulator::new(width, height), budget, max_group, render_passes, after_pass)
+}
+
+/// `render_progressive` that adds the passes to `acc`, which may hold passes already: a resumed
+/// render (`render --resume`) starts from the passes its interrupted run wrote, `budget.first`
+/// being the first pass not yet rendered. The sums are float32 in memory and in the file, so the
+/// passes are added in the order an uninterrupted render adds them and, where each pass is its
+/// own group (the CPU backend, lavapipe), the sums are the same bits. The error estimate's
+/// halves are not in the file: a resumed accumulator has none (`error_estimate` is `None`).
+pub fn render_progressive_from<E>(
+    mut acc: Accumulator,
+    budget: &Budget,
+    max_group: u32,
     mut render_passes: impl FnMut(u32, u32) -> Result<RenderOutput, E>,
     mut after_pass: impl FnMut(&Accumulator, Duration) -> Result<(), E>,
 ) -> Result<(Accumulator, StopReason), E> {
     let start = Instant::now();
-    let mut acc = Accumulator::new(width, height);
     let mut pass = budget.first;
     let mut most = 1;
     while pass < budget.end {
