@@ -378,6 +378,21 @@ fn the_film_size_and_field_of_view_axis_make_the_camera() {
 }
 
 #[test]
+fn the_sample_count_becomes_passes_of_a_few_samples() {
+    // The same samples in all, in passes short enough for `--time` and the editor's preview.
+    for (count, spp, passes) in [(256, 4, 64), (9, 3, 3), (7, 1, 7), (1, 1, 1)] {
+        let xml = scene3("").replace(
+            "</sensor>",
+            &format!(
+                r#"<sampler type="independent"><integer name="sample_count" value="{count}"/></sampler></sensor>"#
+            ),
+        );
+        let (_d, _t, scene) = translate(&xml);
+        assert_eq!((scene.render.spp, scene.render.passes), (spp, passes), "sample_count {count}");
+    }
+}
+
+#[test]
 fn the_reconstruction_filter_keeps_its_size() {
     let with_filter = |rfilter: &str| {
         scene3("").replace(

@@ -61,9 +61,9 @@ impl<'a> Translator<'a> {
                 for s in p.plugins("sampler", None) {
                     let sampler = Plugin::new(self.resolve(s, "sampler")?);
                     if let Some(n) = sampler.integer("sample_count")? {
-                        let n = n.clamp(1, crate::limits::MAX_SPP as i64);
-                        render.push(("spp".into(), n.to_string()));
-                        render.push(("passes".into(), "1".into()));
+                        let (spp, passes) = split_samples(n.clamp(1, crate::limits::MAX_SPP as i64));
+                        render.push(("spp".into(), spp.to_string()));
+                        render.push(("passes".into(), passes.to_string()));
                     }
                     let _ = sampler.integer("seed")?.map(|s| render.push(("seed".into(), (s.rem_euclid(1 << 32)).to_string())));
                     self.finish(&sampler);
@@ -228,4 +228,12 @@ impl<'a> Translator<'a> {
         }
         Ok(())
     }
+}
+
+/// Mitsuba's `sample_count` as progressive passes of a few samples each, the same samples in all:
+/// a `--time` budget or a preview then stops after a few samples rather than after the whole
+/// count (one pass of 256 samples of a room runs a minute at 160 x 90).
+pub(super) fn split_samples(n: i64) -> (i64, i64) {
+    let spp = [4, 3, 2].into_iter().find(|d| n % d == 0).unwrap_or(1);
+    (spp, n / spp)
 }
