@@ -134,6 +134,7 @@ fn furnace() -> Scene {
             integrator: Integrator::Pt,
             integrator_auto: None,
             filter: Default::default(),
+            denoise: false,
         },
         photons: None,
         materials: vec![common::diffuse(rho, emission)],

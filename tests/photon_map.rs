@@ -109,6 +109,7 @@ fn closed_box(rho: f32) -> Scene {
             integrator: Default::default(),
             integrator_auto: None,
             filter: Default::default(),
+            denoise: false,
         },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],

@@ -57,6 +57,7 @@ fn light_over_plane() -> Scene {
             integrator: Default::default(),
             integrator_auto: None,
             filter: Default::default(),
+            denoise: false,
         },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],

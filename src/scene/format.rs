@@ -170,6 +170,7 @@ pub(crate) struct RenderDef {
     pub seed: Option<Spanned<i64>>,
     pub integrator: Option<Spanned<String>>,
     pub filter: Option<Spanned<String>>,
+    pub denoise: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

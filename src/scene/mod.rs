@@ -224,6 +224,8 @@ pub struct RenderSettings {
     pub integrator_auto: Option<&'static str>,
     /// The reconstruction filter (`[render] filter`).
     pub filter: Filter,
+    /// Denoise the image with Open Image Denoise (`[render] denoise`, `--denoise`).
+    pub denoise: bool,
 }
 
 /// The pixel reconstruction filter, with Mitsuba 3's radii: how much a film point counts toward

@@ -25,6 +25,7 @@ impl Builder<'_> {
             integrator: Integrator::default(),
             integrator_auto: None,
             filter: Filter::default(),
+            denoise: false,
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -56,6 +57,9 @@ impl Builder<'_> {
             let name = self.one_of(name, object, "filter", &names)?;
             settings.filter =
                 Filter::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
+        }
+        if let Some(denoise) = &r.denoise {
+            settings.denoise = *denoise.get_ref();
         }
         Ok((settings, auto))
     }
