@@ -118,6 +118,8 @@ def render(
     progress: Optional[Callable[[Progress], None]] = None,
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
+    denoise: Optional[bool] = None,
+    aovs: bool = False,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
     """Renders `scene` (a Scene, or a path to a scene file) progressively and returns the mean
     of the passes: a float32 numpy array of shape (height, width, 3) holding linear radiance, or
@@ -145,6 +147,12 @@ def render(
                     (passes_done, passes_total, current_pass, pass_fraction, elapsed)
       info          a dict to fill with what happened: passes, pass_ranges, stop_reason,
                     error_estimate, backend, backend_reason, device, seconds, resolution, spp
+                    (and denoise_seconds where denoised)
+      denoise       denoise with Intel Open Image Denoise, guided by albedo and normal layers
+                    (None: the scene's [render] denoise); with layers=True the raw mean is
+                    kept as "noisy". Needs the library: see docs/denoising.md
+      aovs          also return the feature layers albedo, normal, depth, position in the
+                    dict (implies the dict, as layers=True)
 
     Raises SceneError (a scene the renderer cannot prepare), RenderError (refused before
     starting: memory, radii, device; or a device failure), ValueError (an option out of range)
@@ -180,6 +188,8 @@ def render(
         progress=progress,
         info=info,
         integrator=integrator,
+        denoise=denoise,
+        aovs=aovs,
     )
 
 
