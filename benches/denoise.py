@@ -50,6 +50,27 @@ def to_png(images, path):
         mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True).write(str(path))
 
 
+def flip_table(png_dir, scenes):
+    """LDR FLIP (flip-evaluator, default 67 pixels per degree) of each sRGB PNG panel against the
+    reference's panel, where `pip install flip-evaluator` (1.7 was used) and Pillow are there."""
+    try:
+        import numpy as np
+        import flip_evaluator as flip
+        from PIL import Image
+    except ImportError:
+        print("(no FLIP: pip install flip-evaluator pillow)", file=sys.stderr)
+        return
+    print("| scene | FLIP raw | FLIP denoised | FLIP raw long |")
+    print("| --- | --- | --- | --- |")
+    for scene in scenes:
+        a = np.asarray(Image.open(Path(png_dir) / f"{scene}.png").convert("RGB")).astype(np.float32) / 255
+        w = a.shape[1] // 4
+        panels = [a[:, k * w:(k + 1) * w] for k in range(4)]
+        values = [flip.evaluate(panels[3], panels[k], "LDR", applyMagma=False)[1] for k in range(3)]
+        print(f"| {scene} | " + " | ".join(f"{v:.4f}" for v in values) + " |")
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--binary", default=str(REPO / "target" / "release" / "photonix"))
@@ -77,6 +98,8 @@ def main():
             if args.png_dir:
                 Path(args.png_dir).mkdir(parents=True, exist_ok=True)
                 to_png([img["raw"], img["denoised"], img["long"], ref], Path(args.png_dir) / f"{scene}.png")
+    if args.png_dir:
+        flip_table(args.png_dir, [r[0] for r in rows])
     b, lb = f"{args.budget:g} s", f"{args.long:g} s"
     print(f"| scene | relMSE raw {b} (passes) | denoised {b} (passes; features s, denoise s) | raw {lb} (passes) "
           f"| raw / denoised | raw {lb} / denoised | denoised mean / reference R, G, B | raw mean / reference |")

@@ -476,8 +476,8 @@ fn editor_latency_benchmark() {
         println!("{label}: showcase.toml, {size} px preview, {edits} edits");
         println!("{label}: edit to first frame at the server: {}", summary(&server_first));
         println!("{label}: edit to first frame at the page: {}", summary(&page_first));
-        println!("{label}: edit to first full-size (160 px) frame at the server: {}", summary(&server_full));
-        println!("{label}: edit to first full-size (160 px) frame at the page: {}", summary(&page_full));
+        println!("{label}: edit to first full-size ({size} px) frame at the server: {}", summary(&server_full));
+        println!("{label}: edit to first full-size ({size} px) frame at the page: {}", summary(&page_full));
         for (i, ladder) in steps.iter().enumerate() {
             println!("{label}: edit {i}: (step, render ms, stages) {ladder:?}");
         }

@@ -519,7 +519,11 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         drop(s);
         if denoise && denoiser.is_none() {
             match crate::gpu::oidn::Denoiser::open(cuda) {
-                Ok(d) => denoiser = Some(d),
+                Ok(mut d) => {
+                    // A change cancels a running denoise too: the next frame need not wait for it.
+                    d.set_stop_flag(Some(shared.stop.clone()));
+                    denoiser = Some(d);
+                }
                 Err(e) => {
                     // Raw frames from now on; the page hears why.
                     shared.state.lock().expect("renderer state lock").denoise = false;
@@ -654,8 +658,12 @@ fn preview_step(
     };
     let Some(denoiser) = denoiser else { return Ok((Some(image), cost)) };
     let t = Instant::now();
-    let denoised =
-        crate::render::denoise::denoise_image(denoiser, &image, features.as_ref()).map_err(|e| e.to_string())?;
+    let denoised = match crate::render::denoise::denoise_image(denoiser, &image, features.as_ref()) {
+        Ok(image) => image,
+        // A change stopped it: like a stopped render, no frame.
+        Err(crate::gpu::oidn::DenoiseError::Cancelled) => return Ok((None, cost)),
+        Err(e) => return Err(e.to_string()),
+    };
     cost.stages.insert("denoise".into(), json!(t.elapsed().as_secs_f64() * 1e3));
     Ok((Some(denoised), cost))
 }

@@ -4,7 +4,8 @@
 //! lives only in src/gpu/.)
 //!
 //! The few C functions used are declared from OIDN 2.5's `include/OpenImageDenoise/oidn.h`:
-//! device, buffers, the "RT" filter with `hdr` and `cleanAux`, errors and releases.
+//! device, buffers, the "RT" filter with `hdr` and `cleanAux`, its progress monitor (to cancel),
+//! errors and releases.
 //!
 //! Where the library is looked for, first found wins (see docs/denoising.md):
 //! 1. `PHOTONIX_OIDN`: the library file, or a folder holding it (alone: nothing else is tried,
@@ -16,6 +17,8 @@
 
 use std::ffi::{c_char, c_void, CStr};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// The library's file name (the 2.x ABI).
 pub const LIBRARY: &str = if cfg!(target_os = "windows") {
@@ -40,6 +43,8 @@ pub enum DenoiseError {
     Load { path: String, reason: String },
     #[error("Open Image Denoise: {what} failed: {message}")]
     Device { what: &'static str, message: String },
+    #[error("the denoise was cancelled")]
+    Cancelled,
     #[error("denoise: the {name} image is {got} pixels, the color image {want}")]
     Size { name: &'static str, got: usize, want: usize },
 }
@@ -83,6 +88,7 @@ struct Api {
     new_filter: unsafe extern "C" fn(Handle, *const c_char) -> Handle,
     set_filter_image: unsafe extern "C" fn(Handle, *const c_char, Handle, i32, usize, usize, usize, usize, usize),
     set_filter_bool: unsafe extern "C" fn(Handle, *const c_char, bool),
+    set_progress_monitor: unsafe extern "C" fn(Handle, Option<Monitor>, *mut c_void),
     commit_filter: unsafe extern "C" fn(Handle),
     execute_filter: unsafe extern "C" fn(Handle),
     release_filter: unsafe extern "C" fn(Handle),
@@ -157,6 +163,7 @@ impl Api {
                 new_filter: *library.get(b"oidnNewFilter\0").map_err(missing)?,
                 set_filter_image: *library.get(b"oidnSetFilterImage\0").map_err(missing)?,
                 set_filter_bool: *library.get(b"oidnSetFilterBool\0").map_err(missing)?,
+                set_progress_monitor: *library.get(b"oidnSetFilterProgressMonitorFunction\0").map_err(missing)?,
                 commit_filter: *library.get(b"oidnCommitFilter\0").map_err(missing)?,
                 execute_filter: *library.get(b"oidnExecuteFilter\0").map_err(missing)?,
                 release_filter: *library.get(b"oidnReleaseFilter\0").map_err(missing)?,
@@ -176,6 +183,10 @@ pub struct Denoiser {
     api: Api,
     device: Handle,
     device_type: DeviceType,
+    /// The filters of the last image size, kept for the next image of that size.
+    cache: Option<Cache>,
+    /// Cancels a running denoise when set (`set_stop_flag`).
+    stop: Option<Arc<AtomicBool>>,
 }
 
 // SAFETY: OIDN devices and their objects may be used from any thread, one call at a time
@@ -194,7 +205,7 @@ impl Denoiser {
                 message: format!("no {} device", device_type.name()),
             });
         }
-        let mut denoiser = Denoiser { api, device, device_type };
+        let mut denoiser = Denoiser { api, device, device_type, cache: None, stop: None };
         // SAFETY: a device just created.
         unsafe { (denoiser.api.commit_device)(denoiser.device) };
         denoiser.check("opening the device")?;
@@ -232,63 +243,75 @@ impl Denoiser {
         Err(DenoiseError::Device { what, message: text })
     }
 
-    /// Runs one "RT" filter (HDR, `clean_aux` as given) over `color` (RGB float triples) with the
-    /// optional albedo and normal guides, in place of `color`'s pixels into `out`.
-    fn filter(
-        &mut self,
-        images: &[(&CStr, &[[f32; 3]])],
-        clean_aux: bool,
-        hdr: bool,
-        width: usize,
-        height: usize,
-    ) -> Result<Vec<[f32; 3]>, DenoiseError> {
-        let bytes = width * height * 12;
-        let mut buffers = Vec::new();
-        let result = (|| {
-            // SAFETY: a live device; every buffer holds width x height float triples, written
-            // from slices of exactly that size, and is released below.
+    /// Makes a running denoise stop (with [`DenoiseError::Cancelled`]) soon after `flag` is set,
+    /// through OIDN's progress monitor: the editor drops a stale preview's denoise.
+    pub fn set_stop_flag(&mut self, flag: Option<Arc<AtomicBool>>) {
+        self.stop = flag;
+        self.release_filters();
+    }
+
+    fn release_filters(&mut self) {
+        if let Some(cache) = self.cache.take() {
+            // SAFETY: objects created by `prepare`, released once.
             unsafe {
-                for (_, pixels) in images {
-                    let b = (self.api.new_buffer)(self.device, bytes);
-                    if b.is_null() {
-                        self.check("allocating a buffer")?;
-                    }
-                    buffers.push(b);
-                    (self.api.write_buffer)(b, 0, bytes, pixels.as_ptr().cast());
+                for f in cache.filters {
+                    (self.api.release_filter)(f);
                 }
-                let output = (self.api.new_buffer)(self.device, bytes);
-                buffers.push(output);
-                self.check("allocating the buffers")?;
-                let filter = (self.api.new_filter)(self.device, c"RT".as_ptr());
-                self.check("creating the RT filter")?;
-                let set = |name: &CStr, b: Handle| {
-                    (self.api.set_filter_image)(filter, name.as_ptr(), b, OIDN_FORMAT_FLOAT3, width, height, 0, 0, 0)
-                };
-                for ((name, _), b) in images.iter().zip(&buffers) {
-                    set(name, *b);
+                for b in cache.buffers {
+                    (self.api.release_buffer)(b);
                 }
-                set(c"output", output);
-                (self.api.set_filter_bool)(filter, c"hdr".as_ptr(), hdr);
-                (self.api.set_filter_bool)(filter, c"cleanAux".as_ptr(), clean_aux);
-                (self.api.commit_filter)(filter);
-                let committed = self.check("setting up the RT filter");
-                if committed.is_ok() {
-                    (self.api.execute_filter)(filter);
-                }
-                (self.api.release_filter)(filter);
-                committed?;
-                self.check("running the RT filter")?;
-                let mut out = vec![[0.0f32; 3]; width * height];
-                (self.api.read_buffer)(output, 0, bytes, out.as_mut_ptr().cast());
-                self.check("reading the result")?;
-                Ok(out)
             }
-        })();
-        for b in buffers {
-            // SAFETY: buffers created above, released once.
-            unsafe { (self.api.release_buffer)(b) };
         }
-        result
+    }
+
+    /// The filters and buffers of a `width` x `height` denoise, made and committed once per size
+    /// (committing an RT filter builds its network and scratch memory: most of a small image's
+    /// time), then reused: the editor's preview denoises many frames of one size.
+    fn prepare(&mut self, width: usize, height: usize, guided: bool) -> Result<(), DenoiseError> {
+        if self.cache.as_ref().is_some_and(|c| (c.width, c.height, c.guided) == (width, height, guided)) {
+            return Ok(());
+        }
+        self.release_filters();
+        let bytes = width * height * 12;
+        let mut cache = Cache { width, height, guided, buffers: Vec::new(), filters: Vec::new() };
+        let monitor: Option<Monitor> = self.stop.as_ref().map(|_| monitor as Monitor);
+        let user = self.stop.as_ref().map_or(std::ptr::null_mut(), |f| Arc::as_ptr(f) as *mut c_void);
+        // SAFETY: a live device; every buffer holds width x height float triples; the monitor's
+        // user pointer is the AtomicBool `self.stop` keeps alive while the filters live (a new
+        // flag releases them first).
+        let made = unsafe {
+            // Buffers: color, output, then albedo, normal and their prefiltered copies.
+            for _ in 0..if guided { 6 } else { 2 } {
+                cache.buffers.push((self.api.new_buffer)(self.device, bytes));
+            }
+            let b = cache.buffers.clone();
+            let mut filter = |inputs: &[(&CStr, Handle)], output: Handle, hdr: bool, clean_aux: bool| {
+                let f = (self.api.new_filter)(self.device, c"RT".as_ptr());
+                cache.filters.push(f);
+                for (name, buffer) in inputs.iter().chain([&(c"output", output)]) {
+                    (self.api.set_filter_image)(f, name.as_ptr(), *buffer, OIDN_FORMAT_FLOAT3, width, height, 0, 0, 0);
+                }
+                (self.api.set_filter_bool)(f, c"hdr".as_ptr(), hdr);
+                (self.api.set_filter_bool)(f, c"cleanAux".as_ptr(), clean_aux);
+                (self.api.set_progress_monitor)(f, monitor, user);
+                (self.api.commit_filter)(f);
+            };
+            if guided {
+                // Prefilter the guides (OIDN 2.x takes each as the "albedo" or "normal" input of
+                // an RT filter with no colour), then the colour with them, as clean.
+                filter(&[(c"albedo", b[2])], b[4], false, false);
+                filter(&[(c"normal", b[3])], b[5], false, false);
+                filter(&[(c"color", b[0]), (c"albedo", b[4]), (c"normal", b[5])], b[1], true, true);
+            } else {
+                filter(&[(c"color", b[0])], b[1], true, false);
+            }
+            self.cache = Some(cache);
+            self.check("setting up the RT filters")
+        };
+        if made.is_err() {
+            self.release_filters();
+        }
+        made
     }
 
     /// Denoises `color` (HDR radiance, row by row) with OIDN's "RT" filter, guided by `albedo`
@@ -311,21 +334,62 @@ impl Denoiser {
             }
         };
         sized("color", color)?;
-        let Some((albedo, normal)) = guides else {
-            return self.filter(&[(c"color", color)], false, true, w, h);
-        };
-        sized("albedo", albedo)?;
-        sized("normal", normal)?;
-        // Prefilter the guides: albedo is LDR, the normal its own kind of image (OIDN 2.x takes
-        // each as the "albedo" or "normal" input of an RT filter with no colour).
-        let albedo = self.filter(&[(c"albedo", albedo)], false, false, w, h)?;
-        let normal = self.filter(&[(c"normal", normal)], false, false, w, h)?;
-        self.filter(&[(c"color", color), (c"albedo", &albedo), (c"normal", &normal)], true, true, w, h)
+        if let Some((albedo, normal)) = guides {
+            sized("albedo", albedo)?;
+            sized("normal", normal)?;
+        }
+        self.prepare(w, h, guides.is_some())?;
+        let cache = self.cache.as_ref().expect("prepared just above");
+        let bytes = want * 12;
+        let mut out = vec![[0.0f32; 3]; want];
+        // SAFETY: the buffers hold `bytes` each, written from and read into slices of that size;
+        // the filters were committed on them by `prepare`.
+        unsafe {
+            (self.api.write_buffer)(cache.buffers[0], 0, bytes, color.as_ptr().cast());
+            if let Some((albedo, normal)) = guides {
+                (self.api.write_buffer)(cache.buffers[2], 0, bytes, albedo.as_ptr().cast());
+                (self.api.write_buffer)(cache.buffers[3], 0, bytes, normal.as_ptr().cast());
+            }
+            for &f in &cache.filters {
+                (self.api.execute_filter)(f);
+                let mut message: *const c_char = std::ptr::null();
+                if (self.api.get_device_error)(self.device, &mut message) == OIDN_ERROR_CANCELLED {
+                    return Err(DenoiseError::Cancelled);
+                }
+                if !message.is_null() {
+                    let text = CStr::from_ptr(message).to_string_lossy().into_owned();
+                    return Err(DenoiseError::Device { what: "running the RT filter", message: text });
+                }
+            }
+            (self.api.read_buffer)(cache.buffers[1], 0, bytes, out.as_mut_ptr().cast());
+        }
+        self.check("reading the result")?;
+        Ok(out)
     }
+}
+
+/// OIDN's progress monitor: false (cancel) once the denoiser's stop flag or `render::STOP` is set.
+unsafe extern "C" fn monitor(user: *mut c_void, _progress: f64) -> bool {
+    // SAFETY: `user` is the `AtomicBool` of the denoiser's stop flag, alive while its filters are.
+    let stop = unsafe { &*(user as *const AtomicBool) };
+    !(stop.load(Ordering::Relaxed) || crate::render::STOP.load(Ordering::Relaxed))
+}
+
+type Monitor = unsafe extern "C" fn(*mut c_void, f64) -> bool;
+const OIDN_ERROR_CANCELLED: i32 = 5;
+
+/// The committed filters and buffers of one image size (`Denoiser::prepare`).
+struct Cache {
+    width: usize,
+    height: usize,
+    guided: bool,
+    buffers: Vec<Handle>,
+    filters: Vec<Handle>,
 }
 
 impl Drop for Denoiser {
     fn drop(&mut self) {
+        self.release_filters();
         // SAFETY: the device was created by `new` and is released once.
         unsafe { (self.api.release_device)(self.device) };
     }
