@@ -322,7 +322,7 @@ impl Denoiser {
         width: u32,
         height: u32,
         color: &[[f32; 3]],
-        guides: Option<(&[[f32; 3]], &[[f32; 3]])>,
+        guides: Option<Guides>,
     ) -> Result<Vec<[f32; 3]>, DenoiseError> {
         let (w, h) = (width as usize, height as usize);
         let want = w * h;
@@ -376,6 +376,8 @@ unsafe extern "C" fn monitor(user: *mut c_void, _progress: f64) -> bool {
 }
 
 type Monitor = unsafe extern "C" fn(*mut c_void, f64) -> bool;
+/// The albedo and normal guides of a denoise, RGB triples row by row.
+pub type Guides<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
 const OIDN_ERROR_CANCELLED: i32 = 5;
 
 /// The committed filters and buffers of one image size (`Denoiser::prepare`).
