@@ -91,7 +91,10 @@ fn renders_png_exr_layers_and_contact_sheet_on_both_backends() {
     let layers = exr::prelude::read_all_flat_layers_from_file(dir.path().join("layers.exr")).unwrap();
     let names: Vec<String> =
         layers.layer_data.iter().map(|l| l.attributes.layer_name.as_ref().unwrap().to_string()).collect();
-    assert_eq!(names, ["combined", "direct", "specular", "indirect", "caustics"]);
+    assert_eq!(
+        names,
+        ["combined", "direct", "specular", "indirect", "caustics", "albedo", "normal", "depth", "position"]
+    );
     let sheet = image::open(dir.path().join("sheet.png")).unwrap();
     assert_eq!(sheet.width(), 4 * 24 + 3 * 4);
     // The diff tool compares the two backends' images.

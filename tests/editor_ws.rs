@@ -400,9 +400,13 @@ fn editor_latency_benchmark() {
     let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().build().unwrap();
     let mut options = photonix::editor::ServeOptions::new(path);
     options.backend = BackendChoice::Cpu;
-    options.preview_size = 160;
+    // PHOTONIX_BENCH_PREVIEW_SIZE: the preview's long side (160 unless given); PHOTONIX_BENCH_DENOISE=0
+    // turns the preview's denoising off (on by default where Open Image Denoise loads).
+    let size: u64 = std::env::var("PHOTONIX_BENCH_PREVIEW_SIZE").ok().and_then(|n| n.parse().ok()).unwrap_or(160);
+    let denoise = std::env::var("PHOTONIX_BENCH_DENOISE").map_or(true, |v| v != "0");
+    options.preview_size = size as u32;
     let server = runtime.block_on(photonix::editor::Server::start(options)).unwrap();
-    let label = server.device();
+    let label = format!("{} (denoise {})", server.device(), if denoise { "on" } else { "off" });
     runtime.block_on(async {
         let url = format!("ws://{}/ws?token={}", server.addr, server.token);
         let mut page = tokio_tungstenite::connect_async(url).await.unwrap().0;
@@ -410,6 +414,7 @@ fn editor_latency_benchmark() {
             "look_at": camera.look_at.to_array(), "up": camera.up.to_array(), "fov": camera.fov_deg,
             "width": 640, "height": 640 } });
         send_json(&mut page, view).await;
+        send_json(&mut page, json!({ "type": "denoise", "on": denoise })).await;
         async fn frame(page: &mut Socket, after: u64, step: u64) -> Value {
             loop {
                 if let Received::Frame(header, _) = receive(page).await {
@@ -420,7 +425,8 @@ fn editor_latency_benchmark() {
             }
         }
         let full_size = frame(&mut page, 0, 2).await;
-        assert_eq!((full_size["width"].as_u64(), full_size["height"].as_u64()), (Some(160), Some(160)));
+        assert_eq!((full_size["width"].as_u64(), full_size["height"].as_u64()), (Some(size), Some(size)));
+        assert_eq!(full_size["denoised"].as_bool(), Some(denoise));
         let mut generation = full_size["generation"].as_u64().unwrap();
         let (mut server_first, mut page_first, mut page_full) = (Vec::new(), Vec::new(), Vec::new());
         let (mut server_full, mut steps) = (Vec::new(), Vec::new());
@@ -452,7 +458,7 @@ fn editor_latency_benchmark() {
                     break h;
                 }
             };
-            assert_eq!(full["width"].as_u64(), Some(160));
+            assert_eq!(full["width"].as_u64(), Some(size));
             page_full.push(t.elapsed().as_secs_f64() * 1e3);
             server_full.push(full["since_change_ms"].as_f64().unwrap());
             steps.push(ladder);
@@ -467,11 +473,11 @@ fn editor_latency_benchmark() {
                 s[s.len() - 1]
             )
         };
-        println!("{label}: showcase.toml, 160 px preview, {edits} edits");
+        println!("{label}: showcase.toml, {size} px preview, {edits} edits");
         println!("{label}: edit to first frame at the server: {}", summary(&server_first));
         println!("{label}: edit to first frame at the page: {}", summary(&page_first));
-        println!("{label}: edit to first full-size (160 px) frame at the server: {}", summary(&server_full));
-        println!("{label}: edit to first full-size (160 px) frame at the page: {}", summary(&page_full));
+        println!("{label}: edit to first full-size ({size} px) frame at the server: {}", summary(&server_full));
+        println!("{label}: edit to first full-size ({size} px) frame at the page: {}", summary(&page_full));
         for (i, ladder) in steps.iter().enumerate() {
             println!("{label}: edit {i}: (step, render ms, stages) {ladder:?}");
         }

@@ -350,12 +350,16 @@ fn flags_that_would_be_ignored_are_refused() {
         (vec!["-o", "out.png", "--backend", "cpu", "--device", "0"], vec!["--device", "--backend cpu"]),
         (vec!["-o", "out.exr", "--exposure", "2"], vec!["--exposure scales PNG output only"]),
         (vec!["-o", "out.png", "--no-photons", "--gather-rays", "2"], vec!["--no-photons", "--gather-rays"]),
-        (vec!["-o", "out.exr", "--pass-range", "0..1", "--layers"], vec!["--layers"]),
     ] {
         refused(&render(p, &extra), &pieces);
     }
     succeeds(&render(p, &["-o", "a.exr", "--backend", "cpu", "--pass-range", "0..1"]));
     refused(&run(&["merge", "a.exr", "-o", "m.exr", "--exposure", "1"], p), &["--exposure scales PNG output only"]);
+    // Only a final image is denoised; sums for a later merge are not.
+    refused(
+        &run(&["merge", "a.exr", "-o", "m.exr", "--accumulation", "--denoise"], p),
+        &["--denoise", "--accumulation"],
+    );
 }
 
 // 7. Smaller

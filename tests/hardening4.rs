@@ -578,7 +578,7 @@ fn slurm_farm_refuses_bad_submissions_before_submitting() {
         (&["-o", "nowhere/final.exr", "--passes", "8", "--tasks", "2"], "does not exist"),
         (&["-o", "final.exr", "--passes", "2000000", "--tasks", "2"], "more than 1000000"),
         (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--spp", "0"], "--spp"),
-        (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--layers"], "--layers"),
+        (&["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--exposure", "1"], "--exposure"),
         (
             &["-o", "final.exr", "--passes", "8", "--tasks", "2", "--", "--pass-range", "0..1"],
             "sets the output and the passes",

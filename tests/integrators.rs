@@ -7,7 +7,7 @@ use glam::Vec3;
 use photonix::io::metrics::{downsample, mean_ratio, rel_mse};
 use photonix::io::read_exr;
 use photonix::render::{render_cpu, RenderOutput, SceneBuffers};
-use photonix::scene::{load_scene, parse_scene, Camera, Integrator, Projection, RenderSettings, Scene, Shape};
+use photonix::scene::{load_scene, parse_scene, Integrator, Projection, Scene};
 
 fn shipped(name: &str, integrator: Integrator) -> Scene {
     let mut scene = load_scene(&common::repo_path(&format!("scenes/{name}.toml"))).expect("shipped scene loads");
@@ -83,79 +83,9 @@ fn pt_matches_references() {
     }
 }
 
-/// A closed room whose every wall is a Lambertian emitter of radiance E and albedo rho, seen
-/// from inside: L = E (1 + rho + rho^2 + ...) = E / (1 - rho) everywhere (a white furnace), which
-/// every path reaches by both emission met and light sampling, so multiple importance sampling
-/// must weigh each path to 1 in total. With rho = 0.5 and E = 1, L = 2; max_depth 24 cuts the
-/// series 2^-24 short.
-fn furnace() -> Scene {
-    let (rho, emission) = (0.5, 1.0);
-    let c = [
-        Vec3::new(-1.0, -1.0, -1.0),
-        Vec3::new(1.0, -1.0, -1.0),
-        Vec3::new(1.0, 1.0, -1.0),
-        Vec3::new(-1.0, 1.0, -1.0),
-        Vec3::new(-1.0, -1.0, 1.0),
-        Vec3::new(1.0, -1.0, 1.0),
-        Vec3::new(1.0, 1.0, 1.0),
-        Vec3::new(-1.0, 1.0, 1.0),
-    ];
-    let faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [3, 2, 6, 7], [0, 3, 7, 4], [1, 2, 6, 5]];
-    let mut shapes: Vec<Shape> = Vec::new();
-    for f in faces {
-        for tri in [[f[0], f[1], f[2]], [f[0], f[2], f[3]]] {
-            let mut v = tri.map(|i| c[i]);
-            // Wind each triangle so its normal faces the room's centre: emission leaves the front.
-            let n = (v[1] - v[0]).cross(v[2] - v[0]);
-            if n.dot(-v[0]) < 0.0 {
-                v.swap(1, 2);
-            }
-            shapes.push(common::triangle(v, 0));
-        }
-    }
-    Scene {
-        name: "furnace".into(),
-        path: "furnace.toml".into(),
-        camera: Camera {
-            position: Vec3::new(0.1, -0.2, 0.05),
-            look_at: Vec3::new(0.6, 0.3, 1.0),
-            up: Vec3::Y,
-            fov_deg: 90.0,
-            projection: Projection::Perspective,
-            lens: None,
-            width: 16,
-            height: 16,
-        },
-        render: RenderSettings {
-            spp: 16,
-            passes: 1,
-            max_depth: 24,
-            seed: 5,
-            integrator: Integrator::Pt,
-            integrator_auto: None,
-            filter: Default::default(),
-            filter_radius: None,
-        },
-        photons: None,
-        materials: vec![common::diffuse(rho, emission)],
-        material_names: vec!["wall".into()],
-        textures: vec![],
-        shapes,
-        lights: vec![],
-        environment: None,
-        warnings: vec![],
-        objects: vec![],
-        instances: vec![],
-        media: vec![],
-        medium_names: vec![],
-        atmosphere: None,
-        inputs: vec![],
-    }
-}
-
 #[test]
 fn pt_furnace_is_one_over_one_minus_albedo_on_both_twins() {
-    let scene = furnace();
+    let scene = common::furnace();
     let buffers = common::buffers(&scene, 16, 16);
     let ctx = common::gpu();
     for (backend, image) in [
@@ -423,7 +353,7 @@ fn bpt_and_vcm_match_references() {
 #[test]
 fn bpt_and_vcm_furnace_is_one_over_one_minus_albedo() {
     for integrator in [Integrator::Bpt, Integrator::Vcm] {
-        let mut scene = furnace();
+        let mut scene = common::furnace();
         scene.render.integrator = integrator;
         let image = cpu(&common::buffers(&scene, 16, 16), 64).image;
         let n = image.pixels.len() as f64;

@@ -110,6 +110,7 @@ fn closed_box(rho: f32) -> Scene {
             integrator_auto: None,
             filter: Default::default(),
             filter_radius: None,
+            denoise: false,
         },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],

@@ -58,6 +58,7 @@ fn light_over_plane() -> Scene {
             integrator_auto: None,
             filter: Default::default(),
             filter_radius: None,
+            denoise: false,
         },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],

@@ -276,7 +276,14 @@ fn the_driver_doubles_groups_up_to_the_limit() {
     let constant = |value: f32, passes: u32| {
         let mut layers = Layers::new(2, 2);
         layers.direct.pixels.iter_mut().for_each(|p| *p = [value; 3]);
-        RenderOutput { image: layers.combined(), layers, stats: RenderStats::default(), complete: true, passes }
+        RenderOutput {
+            image: layers.combined(),
+            layers,
+            features: None,
+            stats: RenderStats::default(),
+            complete: true,
+            passes,
+        }
     };
     let (acc, reason) = render_progressive(
         2,
@@ -323,7 +330,14 @@ fn the_error_estimate_weighs_unequal_halves() {
     let output = |value: f32, passes: u32| {
         let mut layers = Layers::new(2, 2);
         layers.direct.pixels.iter_mut().for_each(|p| *p = [value; 3]);
-        RenderOutput { image: layers.combined(), layers, stats: RenderStats::default(), complete: true, passes }
+        RenderOutput {
+            image: layers.combined(),
+            layers,
+            features: None,
+            stats: RenderStats::default(),
+            complete: true,
+            passes,
+        }
     };
     let mut acc = Accumulator::new(2, 2);
     acc.add(0, &output(1.0, 1));

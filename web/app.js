@@ -105,7 +105,7 @@ function send(message) {
 function onText(msg) {
   switch (msg.type) {
     case 'scene': setScene(msg); break;
-    case 'hello': state.session = msg.session; updateButtons(); break;
+    case 'hello': state.session = msg.session; setDenoise(msg); updateButtons(); break;
     case 'reply': {
       const resolve = pending.get(msg.id);
       pending.delete(msg.id);
@@ -134,9 +134,21 @@ function onFrame(buffer) {
   // In Solid shading the frame is not shown, and neither is its line (no repaint for it).
   if (!viewport.rendered) return;
   const passes = header.passes ? `, ${header.passes} passes` : '';
+  const denoised = header.denoised ? `, denoised in ${(header.stages.denoise || 0).toFixed(0)} ms` : '';
   $('frame-info').textContent =
-    `${header.width}×${header.height}${passes}, ${header.render_ms.toFixed(0)} ms (${header.since_change_ms.toFixed(0)} ms since the change) on ${header.device}`;
+    `${header.width}×${header.height}${passes}${denoised}, ${header.render_ms.toFixed(0)} ms (${header.since_change_ms.toFixed(0)} ms since the change) on ${header.device}`;
 }
+
+// The preview's denoising toggle: on by default; disabled, saying why, without the library.
+function setDenoise(hello) {
+  const box = $('denoise');
+  box.checked = Boolean(hello.denoise);
+  box.disabled = Boolean(hello.denoiser_missing);
+  $('denoise-label').title = hello.denoiser_missing
+    ? `Not available: ${hello.denoiser_missing}`
+    : 'Denoise the rendered preview with Open Image Denoise';
+}
+$('denoise').onchange = (e) => socket.send(JSON.stringify({ type: 'denoise', on: e.target.checked }));
 
 // Commands ---------------------------------------------------------------------------------------
 /// Sends an edit; resolves to true once the server applied it and the page has the scene of

@@ -308,6 +308,8 @@ def render(
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
     _renderer: Optional[object] = None,
+    denoise: Optional[bool] = None,
+    aovs: Literal[False] = False,
 ) -> _np.ndarray: ...
 
 
@@ -338,6 +340,8 @@ def render(
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
     _renderer: Optional[object] = None,
+    denoise: Optional[bool] = None,
+    aovs: bool = False,
 ) -> Dict[str, _np.ndarray]: ...
 
 
@@ -368,6 +372,8 @@ def render(
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
     _renderer: Optional[object] = None,
+    denoise: Optional[bool] = None,
+    aovs: bool = False,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]: ...
 
 
@@ -397,6 +403,8 @@ def render(
     info: Optional[dict] = None,
     integrator: Optional[str] = None,
     _renderer: Optional[object] = None,
+    denoise: Optional[bool] = None,
+    aovs: bool = False,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
     """Renders `scene` (a Scene, or a path to a scene file) progressively and returns the mean
     of the passes: a float32 numpy array of shape (height, width, 3) holding linear radiance, or
@@ -426,7 +434,13 @@ def render(
                     error_estimate, backend, backend_reason, device, seconds, resolution, spp,
                     integrator (the one that rendered) and integrator_reason (why `auto`
                     chose it; None when it was named), setup_seconds (opening the device and
-                    making the kernels), renderer_kept (a Renderer's kept kernels were used)
+                    making the kernels), renderer_kept (a Renderer's kept kernels were used),
+                    and denoise_seconds where denoised
+      denoise       denoise with Intel Open Image Denoise, guided by albedo and normal layers
+                    (None: the scene's [render] denoise); with layers=True the raw mean is
+                    kept as "noisy". Needs the library: see docs/denoising.md
+      aovs          also return the feature layers albedo, normal, depth, position in the
+                    dict (implies the dict, as layers=True)
 
     Raises SceneError (a scene the renderer cannot prepare), RenderError (refused before
     starting: memory, radii, device; or a device failure), ValueError (an option out of range)
@@ -463,6 +477,8 @@ def render(
         info=info,
         integrator=integrator,
         renderer=_renderer,
+        denoise=denoise,
+        aovs=aovs,
     )
 
 

@@ -680,6 +680,8 @@ struct Job {
     budget: Budget,
     backend: BackendChoice,
     device: Option<String>,
+    /// Render the feature layers too (`denoise=True`, `aovs=True`).
+    features: bool,
 }
 
 #[derive(Clone, Copy, PartialEq)]
@@ -821,6 +823,7 @@ fn run_on<'a>(
     }
     let setup_seconds = setup.elapsed().as_secs_f64();
     let renderer = &mut kept.as_mut().expect("made above").0;
+    renderer.set_features(job.features);
     let mut device = String::new();
     let passes_done = std::cell::Cell::new(0u32);
     let max_group = renderer.max_pass_group(job.spp);
@@ -1058,7 +1061,8 @@ fn layers_to_dict<'py>(py: Python<'py>, layers: &Layers) -> PyResult<Bound<'py, 
 #[pyo3(signature = (scene, *, passes=None, time=None, target_error=None, seed=None, backend="auto",
     resolution=None, pass_range=None, layers=false, spp=None, max_depth=None, photons=None,
     caustic_photons=None, radius=None, caustic_radius=None, gather_rays=None, photon_depth=None,
-    no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None, renderer=None))]
+    no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None,
+    renderer=None, denoise=None, aovs=false))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -1086,6 +1090,8 @@ fn render<'py>(
     info: Option<Bound<'py, PyDict>>,
     integrator: Option<&str>,
     renderer: Option<Py<RendererCore>>,
+    denoise: Option<bool>,
+    aovs: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     // Check every argument before any work, with the command line's ranges.
     let backend = parse_backend(backend)?;
@@ -1217,6 +1223,11 @@ fn render<'py>(
         (None, None) => (0, s.render.passes),
     };
     let (width, height) = resolution.unwrap_or((s.camera.width, s.camera.height));
+    let denoise = denoise.unwrap_or(s.render.denoise);
+    // Load the library before the render, so that a missing one fails now, not after it.
+    if denoise {
+        photonix::gpu::oidn::available().map_err(|e| RenderError::new_err(e.to_string()))?;
+    }
     let job = Job {
         scene: s.clone(),
         width,
@@ -1228,6 +1239,7 @@ fn render<'py>(
         budget: Budget { first, end, time, target_error },
         backend,
         device,
+        features: denoise || aovs,
     };
 
     // Render on a worker; this thread waits without the GIL, taking it back every POLL for
@@ -1341,7 +1353,7 @@ fn render<'py>(
     if let Some(path) = &accumulation {
         write_accumulation(path, &outcome.acc, &outcome.provenance).map_err(|e| ImageError::new_err(e.to_string()))?;
     }
-    if let Some(info) = info {
+    if let Some(info) = &info {
         let reason = match (interrupted, outcome.reason) {
             (true, _) => "interrupted",
             (_, StopReason::Interrupted) => "cancelled",
@@ -1365,10 +1377,38 @@ fn render<'py>(
         info.set_item("renderer_kept", outcome.reused)?;
     }
     let mean = outcome.acc.mean();
-    if layers {
-        Ok(layers_to_dict(py, &mean)?.into_any())
+    let features = outcome.acc.mean_features();
+    let noisy = mean.combined();
+    let denoised = if denoise {
+        let cuda = photonix::render::denoise::prefers_cuda(&outcome.device);
+        let t = Instant::now();
+        let image = py
+            .detach(|| {
+                let mut denoiser = photonix::gpu::oidn::Denoiser::open(cuda)?;
+                photonix::render::denoise::denoise_image(&mut denoiser, &noisy, features.as_ref())
+            })
+            .map_err(|e| RenderError::new_err(e.to_string()))?;
+        if let Some(info) = &info {
+            info.set_item("denoise_seconds", t.elapsed().as_secs_f64())?;
+        }
+        Some(image)
     } else {
-        image_to_numpy(py, &mean.combined())
+        None
+    };
+    if layers || aovs {
+        let dict = layers_to_dict(py, &mean)?;
+        if let Some(image) = &denoised {
+            dict.set_item("combined", image_to_numpy(py, image)?)?;
+            dict.set_item("noisy", image_to_numpy(py, &noisy)?)?;
+        }
+        if let Some(features) = features.as_ref().filter(|_| aovs) {
+            for (name, image) in features.named() {
+                dict.set_item(name, image_to_numpy(py, image)?)?;
+            }
+        }
+        Ok(dict.into_any())
+    } else {
+        image_to_numpy(py, denoised.as_ref().unwrap_or(&noisy))
     }
 }
 

@@ -48,6 +48,21 @@ def test_layers_sum_to_the_combined_image():
     np.testing.assert_allclose(total, layers["combined"], rtol=1e-5, atol=1e-6)
 
 
+def test_denoise_keeps_the_noisy_image_and_returns_the_feature_layers():
+    # Open Image Denoise as the binary finds it (ci/setup installs it into target/oidn).
+    info = {}
+    layers = photonix.render(BOX, passes=1, denoise=True, aovs=True, info=info, **SMALL)
+    assert {"combined", "noisy", "albedo", "normal", "depth", "position"} <= set(layers)
+    # The noisy layer is the plain render. The denoised image keeps its mean roughly: at 24x24
+    # the light is a handful of pixels whose edges the filter softens (5% seen; the furnace test,
+    # tests/denoise.rs, holds 0.5% on a flat image).
+    plain = photonix.render(BOX, passes=1, **SMALL)
+    np.testing.assert_array_equal(layers["noisy"], plain)
+    assert abs(layers["combined"].mean() / plain.mean() - 1) < 0.1
+    assert 0 <= layers["albedo"].min() and layers["albedo"].max() <= 1
+    assert info["denoise_seconds"] > 0
+
+
 def test_python_render_writes_the_same_accumulation_file_as_the_command_line(tmp_path):
     binary = photonix_bin()
     ours = tmp_path / "python.exr"

@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 
+use photonix::gpu::oidn::Denoiser;
 use photonix::io::image::{format_of, Format};
 use photonix::io::{check_not_overwriting, check_output_path, write_image};
 use photonix::render::accumulation::{format_ranges, merge, missing_passes, write_accumulation};
+use photonix::render::denoise::denoise_image;
 
 use super::parse::{parse_exposure, parse_passes};
 
@@ -29,6 +31,11 @@ pub struct MergeArgs {
     /// no task's part is missing or short; otherwise nothing is written
     #[arg(long, value_parser = parse_passes, allow_negative_numbers = true)]
     passes: Option<u32>,
+    /// Denoise the merged image with Intel Open Image Denoise, guided by the parts' feature
+    /// layers where every part carries them (`render --pass-range A..B --denoise` or --layers);
+    /// the sum is denoised, never a part (see docs/denoising.md)
+    #[arg(long)]
+    denoise: bool,
 }
 
 pub fn run(args: MergeArgs) -> Result<()> {
@@ -46,6 +53,12 @@ pub fn run(args: MergeArgs) -> Result<()> {
         bail!(
             "--exposure scales PNG output only, and {} is an EXR; leave it out, or write a .png",
             args.output.display()
+        );
+    }
+    if args.denoise && args.accumulation {
+        bail!(
+            "--accumulation writes sums for a later merge, and only a final image is denoised; leave out one of \
+             --denoise and --accumulation"
         );
     }
     for (i, input) in args.inputs.iter().enumerate() {
@@ -80,9 +93,26 @@ pub fn run(args: MergeArgs) -> Result<()> {
     }
     if args.accumulation {
         write_accumulation(&args.output, &acc, &provenance)?;
-    } else {
-        write_image(&args.output, &acc.mean().combined(), args.exposure.unwrap_or(0.0))?;
+        note!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
+        return Ok(());
     }
-    note!("merged {} passes ({}) -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
+    let mut image = acc.mean().combined();
+    let mut how = String::new();
+    if args.denoise {
+        // The CPU device: merge runs where the parts are gathered, with no renderer's GPU.
+        let mut denoiser = Denoiser::open(false)?;
+        let features = acc.mean_features();
+        if features.is_none() {
+            note!(
+                "warning: not every part carries feature layers (render them with --denoise or --layers); denoising \
+                 without albedo and normal guides"
+            );
+        }
+        let t = std::time::Instant::now();
+        image = denoise_image(&mut denoiser, &image, features.as_ref())?;
+        how = format!(", denoised in {:.3} s ({})", t.elapsed().as_secs_f64(), denoiser.device_type().name());
+    }
+    write_image(&args.output, &image, args.exposure.unwrap_or(0.0))?;
+    note!("merged {} passes ({}){how} -> {}", acc.passes, format_ranges(&acc.ranges), args.output.display());
     Ok(())
 }

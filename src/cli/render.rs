@@ -73,9 +73,16 @@ pub struct RenderArgs {
     photons: PhotonArgs,
     #[command(flatten)]
     progressive: ProgressiveArgs,
-    /// Write a multi-layer EXR (direct, specular, indirect, caustics, combined); needs -o *.exr
+    /// Write a multi-layer EXR (combined, direct, specular, indirect, caustics, and the feature
+    /// layers albedo, normal, depth, position; noisy where denoised); needs -o *.exr. With
+    /// --pass-range: the accumulation file carries the feature layers too
     #[arg(long)]
     layers: bool,
+    /// Denoise the image with Intel Open Image Denoise, guided by albedo and normal layers (the
+    /// library is loaded at run time; see docs/denoising.md) [default: the scene's [render] denoise].
+    /// With --pass-range the part is not denoised but carries the feature layers for `merge --denoise`
+    #[arg(long)]
+    denoise: bool,
     /// Also write the four terms side by side as a PNG
     #[arg(long, value_name = "PNG")]
     contact_sheet: Option<PathBuf>,
@@ -277,9 +284,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.progressive.pass_range.is_some() && !is_exr {
         bail!("--pass-range writes an accumulation file, which is an EXR; give an output ending in .exr");
     }
-    if args.progressive.pass_range.is_some() && args.layers {
-        bail!("--pass-range writes an accumulation file, which holds every layer already; leave out --layers");
-    }
     if args.progressive.resume && args.progressive.pass_range.is_none() {
         bail!("--resume continues an accumulation file of a pass range; give --pass-range A..B with it");
     }
@@ -396,6 +400,21 @@ pub fn run(args: RenderArgs) -> Result<()> {
         Backend::Cpu => None,
     };
     let mut renderer = Renderer::new(ctx.as_ref(), &buffers, photons.as_ref())?;
+    // Denoise (never a pass range's part: merge --denoise denoises the sum), loading the
+    // library before the render so that a missing one fails now, not after it.
+    let denoise = args.denoise || scene.render.denoise;
+    let denoiser = if denoise && !budget_is_range(&args) {
+        let cuda = ctx.as_ref().is_some_and(|c| photonix::render::denoise::prefers_cuda(&c.info().name));
+        Some(std::cell::RefCell::new(photonix::gpu::oidn::Denoiser::open(cuda)?))
+    } else {
+        None
+    };
+    if denoise && budget_is_range(&args) {
+        note!("--pass-range: the part is not denoised; it carries the feature layers for `photonix merge --denoise`");
+    }
+    // The feature layers cost a camera ray per sample: only where they are written or denoise.
+    renderer.set_features(args.layers || denoise);
+    let denoise_time = std::cell::Cell::new(std::time::Duration::ZERO);
     // Ctrl-C and SIGTERM finish the dispatch under way; the finished passes are written.
     let _ = ctrlc::set_handler(|| photonix::render::STOP.store(true, std::sync::atomic::Ordering::Relaxed));
 
@@ -405,13 +424,30 @@ pub fn run(args: RenderArgs) -> Result<()> {
             return Ok(());
         }
         let mean = acc.mean();
-        let combined = mean.combined();
+        let noisy = mean.combined();
+        let features = acc.mean_features();
+        let denoised = match &denoiser {
+            Some(d) => {
+                let t = std::time::Instant::now();
+                let image = photonix::render::denoise::denoise_image(&mut d.borrow_mut(), &noisy, features.as_ref())?;
+                denoise_time.set(denoise_time.get() + t.elapsed());
+                Some(image)
+            }
+            None => None,
+        };
+        let combined = denoised.as_ref().unwrap_or(&noisy);
         if args.layers {
-            let mut named = vec![("combined", &combined)];
+            let mut named = vec![("combined", combined)];
+            if denoised.is_some() {
+                named.push(("noisy", &noisy));
+            }
             named.extend(mean.named());
+            if let Some(features) = &features {
+                named.extend(features.named());
+            }
             write_layers_exr(&output, &named)?;
         } else {
-            write_image(&output, &combined, exposure)?;
+            write_image(&output, combined, exposure)?;
         }
         Ok(())
     };
@@ -475,6 +511,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
 
     // Write the outputs and the summary
+    denoise_time.set(std::time::Duration::ZERO);
     let t = std::time::Instant::now();
     write_result(&acc)?;
     if let Some(sheet) = &args.contact_sheet {
@@ -486,7 +523,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         stats.stages.insert(0, ("setup".into(), renderer.setup_time()));
     }
     stats.stages.insert(0, ("prepare".into(), prepare_time));
-    stats.stages.push(("write".into(), t.elapsed()));
+    let write_time = t.elapsed().saturating_sub(denoise_time.get());
+    if let Some(d) = &denoiser {
+        stats.stages.push((format!("denoise ({})", d.borrow().device_type().name()), denoise_time.get()));
+    }
+    stats.stages.push(("write".into(), write_time));
     stats.samples_per_pixel = spp * acc.passes;
     let why = match reason {
         StopReason::Passes => "all passes done".to_string(),

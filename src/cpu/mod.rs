@@ -17,6 +17,7 @@ pub mod phase;
 pub mod photon;
 pub mod photon_index;
 pub mod render;
+pub mod render_features;
 pub mod render_pt;
 pub mod rng;
 pub mod sampling;

@@ -140,6 +140,8 @@ struct State {
     shutdown: bool,
     /// Longest side of the full-size preview, pixels.
     preview_size: u32,
+    /// Denoise the preview frames (the page's toggle; on by default where the library loads).
+    denoise: bool,
 }
 
 struct Shared {
@@ -157,6 +159,8 @@ pub struct Renderer {
     thread: Option<std::thread::JoinHandle<()>>,
     /// "cpu" or the Vulkan device's name.
     pub device: String,
+    /// Why the preview cannot be denoised (Open Image Denoise missing), or `None`.
+    pub denoiser: Option<String>,
 }
 
 impl Renderer {
@@ -178,6 +182,7 @@ impl Renderer {
                 final_image: None,
                 shutdown: false,
                 preview_size: preview_size.clamp(16, 4096),
+                denoise: crate::gpu::oidn::available().is_ok(),
             }),
             wake: Condvar::new(),
             stop: Arc::new(AtomicBool::new(false)),
@@ -190,7 +195,23 @@ impl Renderer {
             .spawn(move || run(thread_shared, backend, ready_tx))
             .map_err(|e| format!("cannot start the renderer thread: {e}"))?;
         let device = ready_rx.recv().map_err(|_| "the renderer thread stopped while starting".to_string())??;
-        Ok(Renderer { shared, thread: Some(thread), device })
+        let denoiser = crate::gpu::oidn::available().err().map(|e| e.to_string());
+        Ok(Renderer { shared, thread: Some(thread), device, denoiser })
+    }
+
+    /// Turns the preview's denoising on or off; a new generation shows it at once. Refused
+    /// where the library is missing (the message says what to install).
+    pub fn set_denoise(&self, on: bool) -> Result<(), String> {
+        if let (true, Some(missing)) = (on, &self.denoiser) {
+            return Err(missing.clone());
+        }
+        self.change(|s| s.denoise = on);
+        Ok(())
+    }
+
+    /// Whether the preview is denoised now.
+    pub fn denoise(&self) -> bool {
+        self.shared.state.lock().expect("renderer state lock").denoise
     }
 
     pub fn subscribe(&self) -> broadcast::Receiver<Event> {
@@ -343,6 +364,7 @@ struct Backend<'a> {
 impl Backend<'_> {
     /// Renders pass `pass` of `scene`, seen from `view` when given (else its own camera), at the
     /// size of `settings`.
+    #[allow(clippy::too_many_arguments)]
     fn render(
         &mut self,
         scene: &Arc<Scene>,
@@ -351,6 +373,7 @@ impl Backend<'_> {
         photons: Option<&PhotonSettings>,
         spp: u32,
         pass: u32,
+        features: bool,
     ) -> Result<(RenderOutput, StepCost), String> {
         let mut cost = StepCost::default();
         let same = self.prepared.as_ref().is_some_and(|p| {
@@ -409,6 +432,7 @@ impl Backend<'_> {
             cost.upload_ms = t.elapsed().as_secs_f64() * 1e3;
         }
         let r = self.renderer.as_mut().expect("made just above");
+        r.set_features(features);
         let out = r.render_pass(spp, pass, &mut |_, _| {}).map_err(err)?;
         Ok((out, cost))
     }
@@ -444,6 +468,10 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
     set_thread_stop_paths(stop_paths);
     let _ = ready.send(Ok(device.clone()));
     let mut backend = Backend { ctx: ctx.as_ref(), renderer: None, prepared: None, renderer_photons: None };
+    // Open Image Denoise's device, opened at the first denoised step and kept: CUDA where the
+    // kernels run on an NVIDIA GPU, else the CPU (src/render/denoise.rs).
+    let cuda = ctx.as_ref().is_some_and(|c| crate::render::denoise::prefers_cuda(&c.info().name));
+    let mut denoiser: Option<crate::gpu::oidn::Denoiser> = None;
     let mut preview = PreviewState::default();
     // What the last stopped step did before it stopped, reported with the next frame (where an
     // edit's wait for the stale step went).
@@ -487,13 +515,30 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         let view = s.view.expect("checked above");
         let owner = s.owner;
         let preview_size = s.preview_size;
+        let denoise = s.denoise;
         drop(s);
+        if denoise && denoiser.is_none() {
+            match crate::gpu::oidn::Denoiser::open(cuda) {
+                Ok(mut d) => {
+                    // A change cancels a running denoise too: the next frame need not wait for it.
+                    d.set_stop_flag(Some(shared.stop.clone()));
+                    denoiser = Some(d);
+                }
+                Err(e) => {
+                    // Raw frames from now on; the page hears why.
+                    shared.state.lock().expect("renderer state lock").denoise = false;
+                    let message = format!("preview: not denoised: {e}");
+                    let _ = shared.events.send(Event::Message(json!({ "type": "error", "message": message })));
+                }
+            }
+        }
+        let step_denoiser = if denoise { denoiser.as_mut() } else { None };
         if preview.generation != generation {
             preview = PreviewState { generation, ..Default::default() };
         }
         let step = preview.step;
         let t = Instant::now();
-        let result = preview_step(&mut backend, &scene, &view, preview_size, &mut preview);
+        let result = preview_step(&mut backend, &scene, &view, preview_size, &mut preview, step_denoiser);
         let current = shared.state.lock().expect("renderer state lock").generation == generation;
         match result {
             Ok((Some(image), cost)) if current => {
@@ -516,6 +561,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                     "stale": stale.take(),
                     "since_change_ms": changed_at.elapsed().as_secs_f64() * 1e3,
                     "device": device,
+                    "denoised": denoise && denoiser.is_some(),
                 });
                 let _ = shared.events.send(Event::Frame { header, png: Arc::new(png) });
             }
@@ -574,12 +620,15 @@ fn preview_resolution(view: &View, preview_size: u32, level_divisor: u32) -> (u3
 }
 
 /// Renders one preview step; no image when a change stopped it.
+/// Renders one preview step, denoised with `denoiser` where given (its time in the cost's
+/// stages as `denoise`); no image when a change stopped it.
 fn preview_step(
     backend: &mut Backend,
     scene: &Arc<Scene>,
     view: &View,
     preview_size: u32,
     preview: &mut PreviewState,
+    denoiser: Option<&mut crate::gpu::oidn::Denoiser>,
 ) -> Result<(Option<Image>, StepCost), String> {
     let step = preview.step;
     let (divisor, photons, pass) = match step {
@@ -592,19 +641,31 @@ fn preview_step(
     };
     let (width, height) = preview_resolution(view, preview_size, divisor);
     let settings = FrameSettings { width, height, max_depth: scene.render.max_depth, seed: scene.render.seed };
-    let (out, mut cost) = backend.render(scene, Some(view), &settings, photons.as_ref(), 1, pass)?;
+    let denoise = denoiser.is_some();
+    let (out, mut cost) = backend.render(scene, Some(view), &settings, photons.as_ref(), 1, pass, denoise)?;
     for (name, time) in &out.stats.stages {
         cost.stages.insert(name.clone(), json!(time.as_secs_f64() * 1e3));
     }
     if !out.complete {
         return Ok((None, cost));
     }
-    if step < 2 {
-        return Ok((Some(out.image), cost));
-    }
-    let acc = preview.accumulator.get_or_insert_with(|| Accumulator::new(width, height));
-    acc.add(pass, &out);
-    Ok((Some(acc.mean().combined()), cost))
+    let (image, features) = if step < 2 {
+        (out.image, out.features)
+    } else {
+        let acc = preview.accumulator.get_or_insert_with(|| Accumulator::new(width, height));
+        acc.add(pass, &out);
+        (acc.mean().combined(), acc.mean_features())
+    };
+    let Some(denoiser) = denoiser else { return Ok((Some(image), cost)) };
+    let t = Instant::now();
+    let denoised = match crate::render::denoise::denoise_image(denoiser, &image, features.as_ref()) {
+        Ok(image) => image,
+        // A change stopped it: like a stopped render, no frame.
+        Err(crate::gpu::oidn::DenoiseError::Cancelled) => return Ok((None, cost)),
+        Err(e) => return Err(e.to_string()),
+    };
+    cost.stages.insert("denoise".into(), json!(t.elapsed().as_secs_f64() * 1e3));
+    Ok((Some(denoised), cost))
 }
 
 /// Photon settings with `1/divisor` of the paths (at least 1000) and `gather_rays` final
@@ -681,7 +742,9 @@ fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, 
         // One pass per output: the editor shows each as it lands.
         1,
         |pass, _| {
-            backend.render(scene, None, &settings, scene.photons.as_ref(), scene.render.spp, pass).map(|(out, _)| out)
+            backend
+                .render(scene, None, &settings, scene.photons.as_ref(), scene.render.spp, pass, false)
+                .map(|(out, _)| out)
         },
         |acc, _| {
             publish(status("running", Some(acc), None), Some(acc.mean().combined()));

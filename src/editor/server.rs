@@ -18,7 +18,8 @@
 //!   `GET /api/render/image.exr`, `/api/render/image.png`: the final render;
 //! - `GET /ws`: the WebSocket; the server sends the scene (text, `{"type": "scene", ...}`), the
 //!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
-//!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`,
+//!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`, `{"type": "denoise", "on": bool}` (the preview's denoising toggle; the hello says
+//!   whether it is on and, where the library is missing, why not: `denoise`, `denoiser_missing`),
 //!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
 //!   `{"type": "reply", "id", "ok", "error"}`); after the scene and the final render's status
 //!   it sends `{"type": "hello", "session"}`, the page's session number. Each page's view is its own: the renderer
@@ -659,11 +660,26 @@ async fn websocket(State(app): State<Arc<App>>, ws: WebSocketUpgrade) -> Respons
 #[derive(Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 enum PageMessage {
-    View { view: View },
-    Edit { id: Option<u64>, command: Command },
-    Undo { id: Option<u64> },
-    Redo { id: Option<u64> },
-    Save { id: Option<u64> },
+    View {
+        view: View,
+    },
+    Edit {
+        id: Option<u64>,
+        command: Command,
+    },
+    Undo {
+        id: Option<u64>,
+    },
+    Redo {
+        id: Option<u64>,
+    },
+    Save {
+        id: Option<u64>,
+    },
+    /// The preview's denoising toggle.
+    Denoise {
+        on: bool,
+    },
 }
 
 async fn session(app: Arc<App>, mut socket: WebSocket) {
@@ -683,7 +699,12 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
         return;
     }
     // The page's own session number: its frames' `owner`, its steps' `undo_author`.
-    let hello = json!({ "type": "hello", "session": me });
+    let hello = json!({
+        "type": "hello",
+        "session": me,
+        "denoise": app.renderer.denoise(),
+        "denoiser_missing": app.renderer.denoiser,
+    });
     if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
         return;
     }
@@ -752,6 +773,13 @@ async fn handle_page_message(app: &Arc<App>, text: &str, session: u64) -> Option
                 .set_view(view, session)
                 .err()
                 .map(|m| json!({ "type": "error", "message": m }).to_string());
+        }
+        PageMessage::Denoise { on } => {
+            return app
+                .renderer
+                .set_denoise(on)
+                .err()
+                .map(|m| json!({ "type": "error", "message": format!("denoising: {m}") }).to_string());
         }
         PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command), session).await),
         PageMessage::Undo { id } => (id, change(app, Change::Undo, session).await),

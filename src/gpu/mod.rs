@@ -40,6 +40,7 @@ mod device_info;
 mod error;
 mod instance;
 mod kernel;
+pub mod oidn;
 mod submitter;
 mod validation;
 

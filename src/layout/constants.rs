@@ -475,6 +475,14 @@ shared_constants! {
     LAYER_CAUSTICS: u32 = 3;
     LAYER_COUNT: u32 = 4;
 
+    /// Feature layers of render_features (the denoiser's guides), one vec4 each per pixel:
+    /// albedo (rgb) and shading normal (xyz) of the first non-specular vertex, position (xyz)
+    /// and depth (w) of the first surface seen. Sums over samples, like the layers above.
+    FEATURE_ALBEDO: u32 = 0;
+    FEATURE_NORMAL: u32 = 1;
+    FEATURE_POSITION: u32 = 2;
+    FEATURE_COUNT: u32 = 3;
+
     /// `FrameParams::integrator`: the estimator of a render (`[render] integrator`). Photon
     /// mapping: camera paths through delta and smooth glossy lobes, then light sampling, the
     /// caustic map and a final gather (render.comp).

@@ -8,7 +8,9 @@
 //! of the scene as the kernels see it and the settings that change the image), so that merge
 //! refuses parts of different renders. (One attribute, not several: the EXR writer orders custom
 //! attributes by hash, which would make the bytes of two identical renders differ.) The image is
-//! the sum divided by the pass count.
+//! the sum divided by the pass count. A render with feature layers (`--layers` or `--denoise`)
+//! also holds their sums in layers `albedo`, `normal`, `depth` and `position`; merge sums them
+//! where every part has them, so a merged render can be denoised.
 
 use std::path::{Path, PathBuf};
 
@@ -159,6 +161,9 @@ pub fn write_accumulation(path: &Path, acc: &Accumulator, provenance: &Provenanc
     let combined = acc.sum.combined();
     let mut named: Vec<(&str, &Image)> = vec![("combined", &combined)];
     named.extend(acc.sum.named());
+    if let Some(features) = &acc.features {
+        named.extend(features.named());
+    }
     let mark = format!("passes={};ranges={};{}", acc.passes, format_ranges(&acc.ranges), provenance.text());
     let attributes = vec![(MARK, AttributeValue::Text(Text::from(mark.as_str())))];
     Ok(write_layers_exr_with(path, &named, attributes)?)
@@ -225,6 +230,27 @@ pub fn read_accumulation(path: &Path) -> Result<(Accumulator, Option<Provenance>
             }
         }
     }
+    // The feature layers, where the part has all of them.
+    let find =
+        |name: &str| read.layer_data.iter().find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.eq(name)));
+    if ["albedo", "normal", "depth", "position"].iter().all(|n| find(n).is_some()) {
+        let mut features = super::Features::new(w, h);
+        for (name, dst) in features.named_mut() {
+            let layer = find(name).expect("checked just above");
+            for (c, channel_name) in ["R", "G", "B"].iter().enumerate() {
+                let channel = layer
+                    .channel_data
+                    .list
+                    .iter()
+                    .find(|ch| ch.name.to_string() == *channel_name)
+                    .ok_or(AccumulationError::MissingLayer { path: path.to_owned(), layer: name })?;
+                for (p, v) in dst.pixels.iter_mut().zip(channel.sample_data.values_as_f32()) {
+                    p[c] = v;
+                }
+            }
+        }
+        acc.features = Some(features);
+    }
     acc.passes = passes;
     acc.ranges = ranges;
     Ok((acc, provenance))
@@ -255,6 +281,20 @@ pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), Accumulatio
                 }
             }
         }
+        // Feature layers survive only where every part has them.
+        total.features = match (total.features.take(), next.features) {
+            (Some(mut sum), Some(part)) => {
+                for ((_, dst), (_, src)) in sum.named_mut().into_iter().zip(part.named()) {
+                    for (d, s) in dst.pixels.iter_mut().zip(&src.pixels) {
+                        for c in 0..3 {
+                            d[c] += s[c];
+                        }
+                    }
+                }
+                Some(sum)
+            }
+            _ => None,
+        };
         total.passes += next.passes;
         total.ranges.extend(next.ranges);
         total.ranges.sort_unstable();

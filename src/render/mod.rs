@@ -4,6 +4,7 @@
 
 pub mod accumulation;
 pub mod bench;
+pub mod denoise;
 pub mod gpu;
 pub mod instances;
 pub mod media_bounds;
@@ -27,7 +28,8 @@ pub use renderer::Renderer;
 use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
 use crate::layout::constants::{
-    INTEGRATOR_BPT, INTEGRATOR_PPM, INTEGRATOR_PT, INTEGRATOR_VCM, LAYER_COUNT, LAYER_DIRECT,
+    FEATURE_ALBEDO, FEATURE_COUNT, FEATURE_NORMAL, FEATURE_POSITION, INTEGRATOR_BPT, INTEGRATOR_PPM, INTEGRATOR_PT,
+    INTEGRATOR_VCM, LAYER_COUNT, LAYER_DIRECT,
 };
 use crate::layout::{DispatchRange, FrameParams};
 
@@ -190,8 +192,57 @@ impl Layers {
     }
 }
 
+/// The feature layers of a render (src/cpu/render_features.rs): the denoiser's guides and the
+/// pipelines' depth and position. Depth fills all three channels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Features {
+    pub albedo: Image,
+    pub normal: Image,
+    pub depth: Image,
+    pub position: Image,
+}
+
+impl Features {
+    pub fn new(width: u32, height: u32) -> Features {
+        let blank = Image::new(width, height);
+        Features { albedo: blank.clone(), normal: blank.clone(), depth: blank.clone(), position: blank }
+    }
+
+    /// The layers with their EXR names.
+    pub fn named(&self) -> [(&'static str, &Image); 4] {
+        [("albedo", &self.albedo), ("normal", &self.normal), ("depth", &self.depth), ("position", &self.position)]
+    }
+
+    pub fn named_mut(&mut self) -> [(&'static str, &mut Image); 4] {
+        [
+            ("albedo", &mut self.albedo),
+            ("normal", &mut self.normal),
+            ("depth", &mut self.depth),
+            ("position", &mut self.position),
+        ]
+    }
+
+    /// Divides feature sums (`FEATURE_COUNT` vec4 per pixel) by the sample count and copies one
+    /// band of them in from row `row_begin`.
+    pub fn resolve_band(&mut self, row_begin: u32, sums: &[[f32; 4]], samples: u32) {
+        let start = (row_begin * self.albedo.width) as usize;
+        let inv = 1.0 / samples.max(1) as f32;
+        for (i, pixel) in sums.chunks_exact(FEATURE_COUNT as usize).enumerate() {
+            let [a, n, p] =
+                [FEATURE_ALBEDO, FEATURE_NORMAL, FEATURE_POSITION].map(|k| pixel[k as usize].map(|c| c * inv));
+            self.albedo.pixels[start + i] = [a[0], a[1], a[2]];
+            self.normal.pixels[start + i] = [n[0], n[1], n[2]];
+            self.position.pixels[start + i] = [p[0], p[1], p[2]];
+            self.depth.pixels[start + i] = [p[3]; 3];
+        }
+    }
+}
+
 pub struct RenderOutput {
     pub layers: Layers,
+    /// The feature layers (means over the same samples), where the renderer was asked for them
+    /// ([`Renderer::set_features`](renderer::Renderer::set_features)).
+    pub features: Option<Features>,
     /// The sum of the layers: what `-o` writes.
     pub image: Image,
     pub stats: RenderStats,
@@ -407,7 +458,7 @@ pub fn render_cpu_keeping(
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, stats, complete, passes: 1 }
+    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1 }
 }
 
 /// A pass of the bidirectional integrators on the CPU: per sample, the light stage, then the
@@ -454,7 +505,35 @@ fn render_vcm_cpu(
     stages.push(("light paths".to_string(), light_time));
     stages.push(("render".to_string(), camera_time));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, stats, complete, passes: 1 }
+    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1 }
+}
+
+/// The feature layers of passes `first..first + passes` (`spp` samples each) on the CPU backend,
+/// averaged over their samples; `None` when a stop request cut them short.
+pub fn render_features_cpu(
+    buffers: &SceneBuffers,
+    photons: Option<&PhotonSettings>,
+    spp: u32,
+    first: u32,
+    passes: u32,
+) -> Option<Features> {
+    let frame = photon_frame(buffers, photons);
+    let mut view = buffers.view();
+    view.frame = &frame;
+    let band_rows = stop_band_rows(frame.width, frame.height);
+    let mut sums = vec![[0.0f32; 4]; (frame.width * frame.height * FEATURE_COUNT) as usize];
+    for pass in first..first + passes {
+        for unit in work_units(frame.height, spp, 1, band_rows, pass) {
+            if stop_requested() {
+                return None;
+            }
+            let band = &mut sums[(unit.row_begin * frame.width * FEATURE_COUNT) as usize..];
+            crate::cpu::render_features::render_features(&view, &unit, band);
+        }
+    }
+    let mut features = Features::new(frame.width, frame.height);
+    features.resolve_band(0, &sums, spp * passes);
+    Some(features)
 }
 
 fn unit_paths(unit: &DispatchRange) -> u64 {

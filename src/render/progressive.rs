@@ -6,7 +6,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::{stop_requested, Layers, RenderOutput};
+use super::{stop_requested, Features, Layers, RenderOutput};
 use crate::io::metrics::rel_mse;
 use crate::io::Image;
 
@@ -36,6 +36,8 @@ pub enum StopReason {
 pub struct Accumulator {
     /// Sum over passes of each pass's mean image, per layer.
     pub sum: Layers,
+    /// Sum over passes of each pass's mean feature layers, where the outputs carried them.
+    pub features: Option<Features>,
     /// Sums of the combined image over two halves of the passes (alternate outputs), for the
     /// error estimate, and the passes in each.
     even: Image,
@@ -51,6 +53,7 @@ impl Accumulator {
     pub fn new(width: u32, height: u32) -> Accumulator {
         Accumulator {
             sum: Layers::new(width, height),
+            features: None,
             even: Image::new(width, height),
             odd: Image::new(width, height),
             even_passes: 0,
@@ -65,6 +68,13 @@ impl Accumulator {
         let n = out.passes.max(1);
         for ((_, dst), (_, src)) in self.sum.named_mut().into_iter().zip(out.layers.named()) {
             add_into(dst, src, n);
+        }
+        if let Some(features) = &out.features {
+            let (w, h) = (features.albedo.width, features.albedo.height);
+            let sum = self.features.get_or_insert_with(|| Features::new(w, h));
+            for ((_, dst), (_, src)) in sum.named_mut().into_iter().zip(features.named()) {
+                add_into(dst, src, n);
+            }
         }
         // The half with fewer passes takes it, so the halves stay even when outputs hold
         // different pass counts (one pass each: even and odd passes from an even first pass).
@@ -92,6 +102,18 @@ impl Accumulator {
             }
         }
         mean
+    }
+
+    /// The mean feature layers over the passes so far, where every output carried them.
+    pub fn mean_features(&self) -> Option<Features> {
+        let mut mean = self.features.clone()?;
+        let inv = 1.0 / self.passes.max(1) as f32;
+        for (_, layer) in mean.named_mut() {
+            for p in &mut layer.pixels {
+                *p = p.map(|c| c * inv);
+            }
+        }
+        Some(mean)
     }
 
     /// An estimate of the mean image's relMSE against the converged image, from the relMSE

@@ -24,6 +24,8 @@ pub struct Renderer<'a> {
     /// The CPU backend's light-stage buffers (bpt and vcm), kept across passes.
     light_stage: LightStage,
     stop: Option<Arc<AtomicBool>>,
+    /// Render the feature layers too (`set_features`).
+    features: bool,
 }
 
 impl<'a> Renderer<'a> {
@@ -36,13 +38,27 @@ impl<'a> Renderer<'a> {
     ) -> Result<Renderer<'a>, GpuError> {
         let photons = effective_photons(buffers, photons).copied();
         let gpu = ctx.map(|ctx| GpuRenderer::new(ctx, buffers, photons.as_ref())).transpose()?;
-        Ok(Renderer { buffers: buffers.clone(), photons, gpu, light_stage: LightStage::default(), stop: None })
+        Ok(Renderer {
+            buffers: buffers.clone(),
+            photons,
+            gpu,
+            light_stage: LightStage::default(),
+            stop: None,
+            features: false,
+        })
     }
 
     /// Makes passes stop (returning an incomplete output after the dispatch under way) when
     /// `flag` is set, besides the process-wide `render::STOP`.
     pub fn set_stop_flag(&mut self, flag: Option<Arc<AtomicBool>>) {
         self.stop = flag;
+    }
+
+    /// Makes every output carry the feature layers of its samples (albedo, normal, depth,
+    /// position: `RenderOutput::features`), rendered by a kernel of their own after the image's,
+    /// so the image is the same bits with or without them.
+    pub fn set_features(&mut self, on: bool) {
+        self.features = on;
     }
 
     /// Renders pass `pass` with `spp` samples per pixel; `progress(done, total)` is called as work
@@ -70,7 +86,7 @@ impl<'a> Renderer<'a> {
         if self.stop.is_some() {
             set_thread_stop_flag(self.stop.clone());
         }
-        let out = match &mut self.gpu {
+        let mut out = match &mut self.gpu {
             Some(gpu) => gpu.render_passes(spp, first, passes, progress),
             None => Ok(render_cpu_keeping(
                 &self.buffers,
@@ -81,6 +97,25 @@ impl<'a> Renderer<'a> {
                 progress,
             )),
         };
+        let mut failed = None;
+        if let Some(out) = out.as_mut().ok().filter(|o| self.features && o.complete) {
+            let t = std::time::Instant::now();
+            let features = match &mut self.gpu {
+                Some(gpu) => gpu.render_features(spp, first, out.passes.max(1)),
+                None => Ok(super::render_features_cpu(&self.buffers, self.photons.as_ref(), spp, first, 1)),
+            };
+            match features {
+                Ok(Some(features)) => {
+                    out.features = Some(features);
+                    out.stats.stages.push(("features".to_string(), t.elapsed()));
+                }
+                Ok(None) => out.complete = false,
+                Err(e) => failed = Some(e),
+            }
+        }
+        if let Some(e) = failed {
+            out = Err(e);
+        }
         if self.stop.is_some() {
             set_thread_stop_flag(None);
         }

@@ -171,6 +171,7 @@ pub(crate) struct RenderDef {
     pub integrator: Option<Spanned<String>>,
     pub filter: Option<Spanned<String>>,
     pub filter_radius: Option<Spanned<f64>>,
+    pub denoise: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

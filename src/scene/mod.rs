@@ -227,6 +227,8 @@ pub struct RenderSettings {
     /// How far the filter reaches from a pixel's centre, in pixels (`[render] filter_radius`);
     /// `None`: the filter's own, `Filter::default_radius`.
     pub filter_radius: Option<f32>,
+    /// Denoise the image with Open Image Denoise (`[render] denoise`, `--denoise`).
+    pub denoise: bool,
 }
 
 impl RenderSettings {

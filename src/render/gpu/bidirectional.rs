@@ -348,9 +348,14 @@ fn render_samples(
     ];
     let stats = RenderStats::device(ctx, stages, rays, spp * passes);
     match ctx.download::<u32>(&b.broken_off)?[0] {
-        0 => {
-            Ok(Samples::Rendered(Box::new(RenderOutput { image: layers.combined(), layers, stats, complete, passes })))
-        }
+        0 => Ok(Samples::Rendered(Box::new(RenderOutput {
+            image: layers.combined(),
+            layers,
+            features: None,
+            stats,
+            complete,
+            passes,
+        }))),
         broken_off => Ok(Samples::BrokenOff(broken_off)),
     }
 }

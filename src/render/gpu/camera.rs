@@ -32,6 +32,8 @@ pub struct GpuRenderer<'a> {
     scene: DeviceScene,
     /// Created by the first pass, then reused while the image size stays.
     accumulation: Option<(Buffer, u32)>,
+    /// The feature sums (`render_features`), likewise: made only where features are asked for.
+    features: Option<(Buffer, u32)>,
     /// The bidirectional integrators' buffers, likewise.
     bidirectional: Option<super::bidirectional::BidirectionalBuffers>,
     /// Light and camera paths per invocation of vcm_light and render_vcm
@@ -77,6 +79,7 @@ impl<'a> GpuRenderer<'a> {
             photons: photons.copied(),
             scene,
             accumulation: None,
+            features: None,
             bidirectional: None,
             paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
             steps_per_dispatch: 0,
@@ -317,7 +320,73 @@ impl<'a> GpuRenderer<'a> {
         stages.push(("render".to_string(), render_time));
         stages.push(("download".to_string(), download_time));
         let stats = RenderStats::device(ctx, stages, rays, spp * passes);
-        Ok(RenderOutput { image: layers.combined(), layers, stats, complete, passes })
+        Ok(RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes })
+    }
+}
+
+impl GpuRenderer<'_> {
+    /// The feature layers of passes `first..first + passes` (`spp` samples each), averaged over
+    /// their samples, band by band as the camera kernel goes; `None` when a stop request cut them
+    /// short. The same sums as `render::render_features_cpu`, sample for sample.
+    pub fn render_features(
+        &mut self,
+        spp: u32,
+        first: u32,
+        passes: u32,
+    ) -> Result<Option<crate::render::Features>, GpuError> {
+        use crate::layout::constants::FEATURE_COUNT;
+        let ctx = self.ctx;
+        let f = photon_frame(&self.buffers, self.photons.as_ref());
+        let limit = ctx.info().max_storage_buffer_range.min(ctx.info().max_memory_allocation_size);
+        let row_bytes = f.width as u64 * 16 * FEATURE_COUNT as u64;
+        let max_rows = (limit / row_bytes).min(f.height as u64) as u32;
+        if max_rows == 0 {
+            return Err(GpuError::Unsupported(format!(
+                "one row of feature layers of {} pixels needs {row_bytes} bytes, more than the device's storage buffer limit of {limit} bytes; lower the resolution",
+                f.width
+            )));
+        }
+        let max_rows = crate::render::stop_band_rows(f.width, max_rows);
+        let bytes = max_rows as u64 * row_bytes;
+        if self.features.as_ref().is_none_or(|(b, w)| b.size() != bytes || *w != f.width) {
+            self.features = Some((ctx.create_buffer("features", bytes)?, f.width));
+        }
+        let buffer = &self.features.as_ref().expect("created just above").0;
+        let kernel = self.kernels.render_features(ctx)?;
+        let mut features = crate::render::Features::new(f.width, f.height);
+        let mut band = 0;
+        while band < f.height {
+            let rows = max_rows.min(f.height - band);
+            // Every sample of every pass of this band, one submission per band of samples.
+            let units: Vec<DispatchRange> = (first..first + passes)
+                .flat_map(|pass| (0..spp).map(move |s| pass * spp + s))
+                .map(|sample_index| DispatchRange { row_begin: band, row_count: rows, sample_index, part: 0 })
+                .collect();
+            let per_submit = (PATHS_PER_SUBMIT / (rows as u64 * f.width as u64)).max(1) as usize;
+            for (k, chunk) in units.chunks(per_submit).enumerate() {
+                if crate::render::stop_requested() {
+                    return Ok(None);
+                }
+                ctx.run("render_features", |rec| {
+                    if k == 0 {
+                        rec.fill_zero(buffer)?;
+                    }
+                    for unit in chunk {
+                        rec.dispatch(
+                            kernel,
+                            &self.scene.bindings(&[buffer]),
+                            bytemuck::bytes_of(unit),
+                            groups(rows * f.width),
+                        )?;
+                    }
+                    Ok(())
+                })?;
+            }
+            let sums: Vec<[f32; 4]> = ctx.download(buffer)?;
+            features.resolve_band(band, &sums[..(rows * f.width * FEATURE_COUNT) as usize], spp * passes);
+            band += rows;
+        }
+        Ok(Some(features))
     }
 }
 

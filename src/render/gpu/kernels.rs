@@ -40,6 +40,7 @@ enum Which {
     Render,
     VcmLight,
     RenderVcm,
+    RenderFeatures,
 }
 
 /// How the kernels read the scene (shaders/scene_bindings.glsl): as texel buffers, since on
@@ -108,6 +109,7 @@ pub struct GpuKernels {
     render: OnceCell<Kernel>,
     vcm_light: OnceCell<Kernel>,
     render_vcm: OnceCell<Kernel>,
+    render_features: OnceCell<Kernel>,
     /// Which build of the scene kernels (`SceneBuffers::variant`).
     variant: KernelVariant,
 }
@@ -187,6 +189,17 @@ impl GpuKernels {
                     constants,
                 },
             ),
+            // The feature layers (shaders/render_features.comp), only where they are asked for.
+            Which::RenderFeatures => (
+                &self.render_features,
+                Spec {
+                    name: scene("render_features"),
+                    bindings: SCENE_BINDINGS + 1,
+                    types: SCENE_BINDING_TYPES,
+                    push: size_of::<DispatchRange>(),
+                    constants,
+                },
+            ),
         }
     }
 
@@ -225,6 +238,9 @@ impl GpuKernels {
     }
     pub(super) fn render_vcm(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
         self.get(ctx, Which::RenderVcm)
+    }
+    pub(super) fn render_features(&self, ctx: &GpuContext) -> Result<&Kernel, GpuError> {
+        self.get(ctx, Which::RenderFeatures)
     }
 
     /// Creates each kernel once on a fresh set and returns (name, seconds) per kernel: what

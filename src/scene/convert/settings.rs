@@ -28,6 +28,7 @@ impl Builder<'_> {
             integrator_auto: None,
             filter: Filter::default(),
             filter_radius: None,
+            denoise: false,
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -76,6 +77,9 @@ impl Builder<'_> {
                 ));
             }
             settings.filter_radius = Some(v);
+        }
+        if let Some(denoise) = &r.denoise {
+            settings.denoise = *denoise.get_ref();
         }
         Ok((settings, auto))
     }
