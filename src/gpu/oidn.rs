@@ -115,6 +115,9 @@ fn candidates() -> (Vec<PathBuf>, bool) {
         }
     }
     out.extend(in_folder(&Path::new(env!("CARGO_MANIFEST_DIR")).join("target/oidn")));
+    // The executable's target/ is usually the source tree's: each place once, in its first turn.
+    let mut seen = std::collections::HashSet::new();
+    out.retain(|p| seen.insert(p.clone()));
     (out, true)
 }
 
