@@ -212,42 +212,29 @@ pub fn read_accumulation(path: &Path) -> Result<(Accumulator, Option<Provenance>
     let size = read.attributes.display_window.size;
     let (w, h) = (size.width() as u32, size.height() as u32);
     let mut acc = Accumulator::new(w, h);
-    for (name, dst) in acc.sum.named_mut() {
-        let layer = read
-            .layer_data
-            .iter()
-            .find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.eq(name)))
-            .ok_or(AccumulationError::MissingLayer { path: path.to_owned(), layer: name })?;
+    // One RGB layer of the file into `dst`, its pixels in order.
+    let find =
+        |name: &str| read.layer_data.iter().find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.eq(name)));
+    let read_layer = |name: &'static str, dst: &mut Image| -> Result<(), AccumulationError> {
+        let missing = || AccumulationError::MissingLayer { path: path.to_owned(), layer: name };
+        let layer = find(name).ok_or_else(missing)?;
         for (c, channel_name) in ["R", "G", "B"].iter().enumerate() {
-            let channel = layer
-                .channel_data
-                .list
-                .iter()
-                .find(|ch| ch.name.to_string() == *channel_name)
-                .ok_or(AccumulationError::MissingLayer { path: path.to_owned(), layer: name })?;
+            let channel =
+                layer.channel_data.list.iter().find(|ch| ch.name.to_string() == *channel_name).ok_or_else(missing)?;
             for (p, v) in dst.pixels.iter_mut().zip(channel.sample_data.values_as_f32()) {
                 p[c] = v;
             }
         }
+        Ok(())
+    };
+    for (name, dst) in acc.sum.named_mut() {
+        read_layer(name, dst)?;
     }
     // The feature layers, where the part has all of them.
-    let find =
-        |name: &str| read.layer_data.iter().find(|l| l.attributes.layer_name.as_ref().is_some_and(|n| n.eq(name)));
     if ["albedo", "normal", "depth", "position"].iter().all(|n| find(n).is_some()) {
         let mut features = super::Features::new(w, h);
         for (name, dst) in features.named_mut() {
-            let layer = find(name).expect("checked just above");
-            for (c, channel_name) in ["R", "G", "B"].iter().enumerate() {
-                let channel = layer
-                    .channel_data
-                    .list
-                    .iter()
-                    .find(|ch| ch.name.to_string() == *channel_name)
-                    .ok_or(AccumulationError::MissingLayer { path: path.to_owned(), layer: name })?;
-                for (p, v) in dst.pixels.iter_mut().zip(channel.sample_data.values_as_f32()) {
-                    p[c] = v;
-                }
-            }
+            read_layer(name, dst)?;
         }
         acc.features = Some(features);
     }
