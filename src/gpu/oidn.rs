@@ -356,7 +356,11 @@ impl Denoiser {
             for &f in &cache.filters {
                 (self.api.execute_filter)(f);
                 let mut message: *const c_char = std::ptr::null();
-                if (self.api.get_device_error)(self.device, &mut message) == OIDN_ERROR_CANCELLED {
+                let code = (self.api.get_device_error)(self.device, &mut message);
+                // The monitor said stop: whatever OIDN reports then, it is the cancel asked for.
+                let stopped = self.stop.as_ref().is_some_and(|f| f.load(Ordering::Relaxed))
+                    || crate::render::STOP.load(Ordering::Relaxed);
+                if code == OIDN_ERROR_CANCELLED || (code != 0 && stopped) {
                     return Err(DenoiseError::Cancelled);
                 }
                 if !message.is_null() {
@@ -381,7 +385,9 @@ unsafe extern "C" fn monitor(user: *mut c_void, _progress: f64) -> bool {
 type Monitor = unsafe extern "C" fn(*mut c_void, f64) -> bool;
 /// The albedo and normal guides of a denoise, RGB triples row by row.
 pub type Guides<'a> = (&'a [[f32; 3]], &'a [[f32; 3]]);
-const OIDN_ERROR_CANCELLED: i32 = 5;
+/// `OIDN_ERROR_CANCELLED` of oidn.h (after NONE, UNKNOWN, INVALID_ARGUMENT, INVALID_OPERATION,
+/// OUT_OF_MEMORY, UNSUPPORTED_HARDWARE).
+const OIDN_ERROR_CANCELLED: i32 = 6;
 
 /// The committed filters and buffers of one image size (`Denoiser::prepare`).
 struct Cache {
