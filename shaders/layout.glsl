@@ -74,7 +74,8 @@ struct Light {
     float radius;
     uint medium;
     uint grid;
-    uint _pad[2];
+    uint tree_trail;
+    float tree_probability;
 };
 
 struct Medium {
@@ -122,7 +123,7 @@ struct FrameParams {
     uint techniques;
     uint pixel_filter;
     float filter_scale;
-    uint _pad;
+    uint light_tree;
 };
 
 struct DispatchRange {

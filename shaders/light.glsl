@@ -15,6 +15,137 @@ uint pick_light(float u, bool photons) {
     return lo;
 }
 
+// A bound on the light that the lights under light-tree node `node` send to a point x of
+// normal n (n = 0 in a medium): their power over the squared distance to their box, times the
+// cosine of the smallest angle between their emission cone and x as seen from anywhere in the box,
+// times the cosine of the smallest angle at x to the box (Conty and Kulla 2018, as pbrt-v4's
+// LightBounds::Importance; the squared distance is at least the box's half-diagonal squared).
+// CPU twin: src/cpu/light.rs.
+float tree_word(uint w) { return uintBitsToFloat(texture_word(w)); }
+
+float light_node_importance(uint node, vec3 x, vec3 n) {
+    vec3 lo = vec3(tree_word(node + LIGHT_NODE_MIN), tree_word(node + LIGHT_NODE_MIN + 1u), tree_word(node + LIGHT_NODE_MIN + 2u));
+    vec3 hi = vec3(tree_word(node + LIGHT_NODE_MAX), tree_word(node + LIGHT_NODE_MAX + 1u), tree_word(node + LIGHT_NODE_MAX + 2u));
+    vec3 axis = vec3(tree_word(node + LIGHT_NODE_AXIS), tree_word(node + LIGHT_NODE_AXIS + 1u), tree_word(node + LIGHT_NODE_AXIS + 2u));
+    float power = tree_word(node + LIGHT_NODE_POWER);
+    float cos_o = tree_word(node + LIGHT_NODE_COS_SPREAD);
+    float cos_e = tree_word(node + LIGHT_NODE_COS_FALLOFF);
+    vec3 to_x = x - 0.5 * (lo + hi);
+    float d2 = dot(to_x, to_x);
+    vec3 half_diagonal = 0.5 * (hi - lo);
+    float r2 = dot(half_diagonal, half_diagonal);
+    // The box as seen from x: a cone of cos_b around the direction to its centre (the whole
+    // sphere from inside its bounding sphere).
+    float cos_b = d2 <= r2 ? -1.0 : sqrt(max(1.0 - r2 / d2, 0.0));
+    float sin_b = sqrt(max(1.0 - cos_b * cos_b, 0.0));
+    vec3 w = d2 > 0.0 ? to_x / sqrt(d2) : vec3(0.0, 0.0, 1.0);
+    float cos_w = dot(axis, w);
+    float sin_w = sqrt(max(1.0 - cos_w * cos_w, 0.0));
+    float sin_o = sqrt(max(1.0 - cos_o * cos_o, 0.0));
+    // theta_x = max(0, theta_w - theta_o), then theta' = max(0, theta_x - theta_b).
+    float cos_x = cos_w > cos_o ? 1.0 : cos_w * cos_o + sin_w * sin_o;
+    float sin_x = cos_w > cos_o ? 0.0 : sin_w * cos_o - cos_w * sin_o;
+    float cos_p = cos_x > cos_b ? 1.0 : cos_x * cos_b + sin_x * sin_b;
+    if (cos_p <= cos_e) return 0.0;
+    float importance = power * cos_p / max(max(d2, r2), 1e-20);
+    if (n != vec3(0.0)) {
+        float cos_i = abs(dot(w, n));
+        float sin_i = sqrt(max(1.0 - cos_i * cos_i, 0.0));
+        importance *= cos_i > cos_b ? 1.0 : cos_i * cos_b + sin_i * sin_b;
+    }
+    return max(importance, 0.0);
+}
+
+// The light tree's share of direct-light selection; the infinite lights have the rest.
+float tree_share() { return tree_word(frame.light_tree + LIGHT_TREE_SHARE); }
+
+// The light that casts direct light on point x of normal n (n = 0 in a medium), and the
+// probability `pmf` of that choice (0 with NO_LIGHT when none can): an infinite light by power
+// outside the tree's share, else a walk down the light tree, each step in proportion to the
+// children's importance. Contract: src/cpu/light.rs, pick_direct_light.
+uint pick_direct_light(float u, vec3 x, vec3 n, out float pmf) {
+    pmf = 0.0;
+    uint base = frame.light_tree;
+    if (base == NO_LIGHT) return NO_LIGHT;
+    float share = tree_share();
+    if (u >= share) {
+        // The infinite lights' running probabilities cover the rest, [share, 1).
+        float v = (u - share) / (1.0 - share);
+        uint count = texture_word(base + LIGHT_TREE_INFINITE_COUNT);
+        for (uint k = 0u; k < count; k++) {
+            uint at = base + LIGHT_TREE_INFINITE + 2u * k;
+            if (v < tree_word(at + 1u) || k + 1u == count) {
+                uint light = texture_word(at);
+                pmf = (1.0 - share) * light_at(light).tree_probability;
+                return light;
+            }
+        }
+        return NO_LIGHT;
+    }
+    u = u / share;
+    pmf = share;
+    uint node = texture_word(base + LIGHT_TREE_ROOT);
+    for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
+        uint child = texture_word(node + LIGHT_NODE_CHILD);
+        if ((child & LIGHT_NODE_LEAF) != 0u) return child & ~LIGHT_NODE_LEAF;
+        uint first = node + LIGHT_NODE_WORDS;
+        float a = light_node_importance(first, x, n);
+        float b = light_node_importance(child, x, n);
+        if (!(a + b > 0.0)) break;
+        float p = a / (a + b);
+        if (u < p) {
+            u = min(u / p, 0.99999994);
+            pmf *= p;
+            node = first;
+        } else {
+            u = min((u - p) / (1.0 - p), 0.99999994);
+            pmf *= b / (a + b);
+            node = child;
+        }
+    }
+    pmf = 0.0;
+    return NO_LIGHT;
+}
+
+// The normal that light selection weighs a vertex's view of the lights with: the shading
+// normal, or zero at a medium's scattering point (light arrives from every side).
+vec3 receiver_normal(Bsdf b) { return b.kind == MATERIAL_PHASE ? vec3(0.0) : b.ns; }
+
+// The probability that pick_direct_light at x of normal n chooses light i: its trail through
+// the tree, step by step. Contract: src/cpu/light.rs, direct_light_pmf.
+float direct_light_pmf(uint i, vec3 x, vec3 n) {
+    Light l = light_at(i);
+    if (l.tree_probability <= 0.0) return 0.0;
+    float share = tree_share();
+    if (l.tree_trail == NO_LIGHT) return (1.0 - share) * l.tree_probability;
+    float pmf = share;
+    uint node = texture_word(frame.light_tree + LIGHT_TREE_ROOT);
+    for (uint depth = 0u; depth < LIGHT_TREE_MAX_DEPTH; depth++) {
+        uint child = texture_word(node + LIGHT_NODE_CHILD);
+        if ((child & LIGHT_NODE_LEAF) != 0u) return pmf;
+        uint first = node + LIGHT_NODE_WORDS;
+        float a = light_node_importance(first, x, n);
+        float b = light_node_importance(child, x, n);
+        if (!(a + b > 0.0)) return 0.0;
+        if (((l.tree_trail >> depth) & 1u) == 0u) {
+            pmf *= a / (a + b);
+            node = first;
+        } else {
+            pmf *= b / (a + b);
+            node = child;
+        }
+    }
+    return 0.0;
+}
+
+// The cosine between a surface's geometric normal and w that its emission sees: emission leaves
+// where it is > 0, the front face of a one-sided emitter, either face of a two-sided one.
+// Contract: src/cpu/light.rs, emitter_cosine.
+float emitter_cosine(uint flags, vec3 ng, vec3 w) {
+    float c = dot(ng, w);
+    return (flags & MATERIAL_FLAG_TWO_SIDED) != 0u ? abs(c) : c;
+}
+
 // Intensity profile of point and spot lights along unit direction w (away from the light):
 // a smooth step (3t^2 - 2t^3, as pbrt-v4 and POV-Ray's cubic_spline) in cos from the outer
 // cone to the inner one, times cos^exponent (POV-Ray's tightness). A point light's cone is
@@ -176,8 +307,9 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
         vec3 to_light = h.p - x;
         float dist2 = dot(to_light, to_light);
         vec3 wi = to_light / sqrt(dist2);
-        float cos_l = -dot(h.ng, wi);
-        vec3 weight = cos_l > 0.0 ? material_emission(material_at(h.material), h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
+        Material m = material_at(h.material);
+        float cos_l = emitter_cosine(m.flags, h.ng, -wi);
+        vec3 weight = cos_l > 0.0 ? material_emission(m, h) * (cos_l * inv_pdf / dist2) : vec3(0.0);
         // The shadow ray stops short of the point by its offset over the cosine there: a hit on
         // the light's own surface moves along a grazing ray by its error over that cosine.
         return LightSample(h.p, wi, weight, h.eps / max(cos_l, 1e-2), light_pdf(l, wi, sqrt(dist2), cos_l), cos_l);
@@ -216,10 +348,23 @@ void light_emit(Light l, vec2 u_pos, vec2 u_dir, out vec3 o, out vec3 d, out vec
     case LIGHT_AREA: {
         float inv_pdf;
         Hit h = shape_sample(l.primitive, u_pos, inv_pdf);
-        o = h.p + h.ng * h.eps;
-        d = cosine_direction(h.ng, u_dir);
-        cos_l = dot(d, h.ng);
-        power = PI * inv_pdf * material_emission(material_at(h.material), h);
+        Material m = material_at(h.material);
+        // A two-sided emitter (cos_outer -1, see light_record) leaves by either face, each half
+        // the time by the first number, the number stretched back over [0, 1).
+        vec3 n = h.ng;
+        vec2 ud = u_dir;
+        if (l.cos_outer < 0.0) {
+            if (ud.x < 0.5) {
+                ud.x = 2.0 * ud.x;
+            } else {
+                ud.x = 2.0 * ud.x - 1.0;
+                n = -n;
+            }
+        }
+        o = h.p + n * h.eps;
+        d = cosine_direction(n, ud);
+        cos_l = dot(d, n);
+        power = (1.0 - l.cos_outer) * PI * inv_pdf * material_emission(m, h);
         return;
     }
     case LIGHT_ENVIRONMENT:

@@ -350,11 +350,11 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
 #endif
         {
             Material m = material_at(h.material);
-            // Everything a mirror or glass shows is the specular term. Emission leaves the front
-            // face only; it counts wherever a camera path meets it, since estimate lobes end the
+            // Everything a mirror or glass shows is the specular term. Emission leaves the emitting
+            // faces only; it counts wherever a camera path meets it, since estimate lobes end the
             // path and light sampling covers them. A gather path counts none: direct light and
             // caustics do.
-            if (camera && dot(wo, h.ng) > 0.0 && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
+            if (camera && emitter_cosine(m.flags, h.ng, wo) > 0.0 && part == 0u) terms[depth > 0u ? LAYER_SPECULAR : LAYER_DIRECT] += throughput * material_emission(m, h);
             b = material_bsdf(m, h);
         }
         uint dim = depth * RNG_DIMS_PER_BOUNCE;

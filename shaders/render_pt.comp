@@ -90,6 +90,9 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
     uint skip = NO_LIGHT;
     // The last scattering vertex and the density its lobes drew the path ray with (0: delta).
     vec3 prev_p = o;
+    // The normal light selection used at prev_p (zero in a medium), for the pick probability
+    // that weighs emission met against light sampling there.
+    vec3 prev_n = vec3(0.0);
     float prev_pdf = 0.0;
     bool first_specular = false;
     uint diffuse = 0u;
@@ -169,13 +172,13 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
                 Light l = light_at(i);
                 if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
                 if (dot(d, load3(l.direction)) <= -l.cos_outer) {
-                    float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability / l.area) : 1.0;
+                    float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, direct_light_pmf(i, prev_p, prev_n) / l.area) : 1.0;
                     terms[layer] += throughput * load3(l.intensity) * (w / l.area);
                 }
             }
             WHEN(frame.environment != NO_LIGHT) {
                 Light l = light_at(frame.environment);
-                float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability * light_pdf(l, d, 0.0, 0.0)) : 1.0;
+                float w = prev_pdf > 0.0 ? mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, direct_light_pmf(frame.environment, prev_p, prev_n) * light_pdf(l, d, 0.0, 0.0)) : 1.0;
                 terms[layer] += throughput * environment_radiance(l, d) * w;
             }
             break;
@@ -189,9 +192,9 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
 #endif
         {
             Material m = material_at(h.material);
-            // Emission leaves the front face only; a light that light sampling could have drawn
+            // Emission leaves the emitting faces only (emitter_cosine); a light that light sampling could have drawn
             // is weighed against it.
-            float cos_l = dot(wo, h.ng);
+            float cos_l = emitter_cosine(m.flags, h.ng, wo);
             if (cos_l > 0.0) {
                 vec3 emitted = material_emission(m, h);
                 if (emitted != vec3(0.0)) {
@@ -200,7 +203,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
                     float w = 1.0;
                     if (prev_pdf > 0.0 && light != NO_LIGHT && hp == prim) {
                         Light l = light_at(light);
-                        w = mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability * light_pdf(l, d, length(h.p - prev_p), cos_l));
+                        w = mis_weight(frame.techniques, TECHNIQUE_BSDF, prev_pdf, direct_light_pmf(light, prev_p, prev_n) * light_pdf(l, d, length(h.p - prev_p), cos_l));
                     }
                     terms[path_layer(first_specular, diffuse, specular_after)] += throughput * emitted * w;
                 }
@@ -209,6 +212,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
         }
         uint flags = bsdf_flags(b);
         if (flags == 0u) break;
+        vec3 receiver = scattered ? vec3(0.0) : b.ns;
         skip = scattered ? NO_LIGHT : ray_skip(prim);
         uint dim = vertex * RNG_DIMS_PER_BOUNCE;
         float q = bsdf_path_probability(b, wo);
@@ -232,19 +236,21 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
         // Light sampling, where the lobes are not all delta.
         bool light_ray = false;
         if ((flags & BSDF_ESTIMATE) != 0u && frame.light_count > 0u) {
-            Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
-            if (l.pick_probability > 0.0) {
+            float pmf;
+            uint light = pick_direct_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), h.p, receiver, pmf);
+            if (pmf > 0.0) {
+                Light l = light_at(light);
                 vec2 ul = qmc2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
                 LightSample ls = light_sample(l, h.p, grid_sample(l.grid, ul, stream, sample_index));
                 float cosine = scattered ? 1.0 : abs(dot(b.ns, ls.wi));
                 vec3 fr = bsdf_eval(b, wo, ls.wi) * ls.weight * cosine;
                 if (fr != vec3(0.0)) {
                     float p_bsdf = ls.pdf > 0.0 ? (1.0 - q) * bsdf_pdf(b, wo, ls.wi) : 0.0;
-                    float w = mis_weight(frame.techniques, TECHNIQUE_LIGHT, l.pick_probability * ls.pdf, p_bsdf);
+                    float w = mis_weight(frame.techniques, TECHNIQUE_LIGHT, pmf * ls.pdf, p_bsdf);
                     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
                     vec3 to_target = ls.p - origin;
                     float len = length(to_target);
-                    unoccluded = throughput * fr * (w / l.pick_probability);
+                    unoccluded = throughput * fr * (w / pmf);
                     shadow_layer = path_layer(first_specular, diffuse + 1u, false);
                     shadow_medium = medium;
                     o = origin;
@@ -266,6 +272,7 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
             prev_pdf = choice * bsdf_pdf(b, wo, smp.wi);
         }
         prev_p = h.p;
+        prev_n = receiver;
         throughput *= smp.weight / choice;
         vertex++;
         // Russian roulette, on the throughput's largest channel.

@@ -75,8 +75,10 @@ float emission_weight(SubPath sp, float direct, float emission) {
 vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, uint medium, uint stream, uint dim, uvec3 n, float vm, inout uint rays) {
     if (frame.light_count == 0u) return vec3(0.0);
     uint sample_index = params.sample_index;
-    Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
-    if (l.pick_probability <= 0.0) return vec3(0.0);
+    float pmf;
+    uint light = pick_direct_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), h.p, receiver_normal(b), pmf);
+    if (pmf <= 0.0) return vec3(0.0);
+    Light l = light_at(light);
     vec2 ul = qmc2(stream, sample_index, frame.seed, dim + RNG_LIGHT_U);
     LightSample ls = light_sample(l, h.p, grid_sample(l.grid, ul, stream, sample_index));
     float cos_to_light = abs_cos(b, ls.wi);
@@ -89,19 +91,20 @@ vec3 light_sampling(Hit h, Bsdf b, vec3 wo, SubPath sp, uint skip, uint prim, ui
     else if (l.kind != LIGHT_AREA && l.kind != LIGHT_ENVIRONMENT && l.kind != LIGHT_DISTANT) direct = dist * dist;
     // Contract in vcm.rs, light_sampling: no density, no sample.
     if (direct <= 0.0) return vec3(0.0);
-    float emission = emission_pdf_at(l, ls.wi, ls.cos_l, h.p);
+    // Emission chooses its light by power, light sampling by the tree.
+    float emission = emission_pdf_at(l, ls.wi, ls.cos_l, h.p) * l.pick_probability;
     float cos_at_light = l.kind == LIGHT_AREA ? ls.cos_l : 1.0;
     vec2 pdfs = lobe_pdfs(b, wo, ls.wi);
     float forward = light_is_delta(l) ? 0.0 : pdfs.x;
-    float w_light = mis(forward / (l.pick_probability * direct));
-    float w_camera = wmul(mis(emission * cos_to_light / (direct * cos_at_light)), vm + sp.d_vcm + wmul(sp.d_vc, mis(pdfs.y)));
+    float w_light = mis(forward / (pmf * direct));
+    float w_camera = wmul(mis(emission * cos_to_light / (pmf * direct * cos_at_light)), vm + sp.d_vcm + wmul(sp.d_vc, mis(pdfs.y)));
     float w = 1.0 / (w_light + 1.0 + w_camera);
     vec3 origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
     vec3 to_target = ls.p - origin;
     float len = length(to_target);
     vec3 tr = vcm_transmittance(origin, to_target / len, max(len - ls.eps, 0.0), medium_toward(h, prim, medium, wo, ls.wi), skip, n, rays);
     if (tr == vec3(0.0)) return vec3(0.0);
-    return fr * (w / l.pick_probability) * tr;
+    return fr * (w / pmf) * tr;
 }
 
 // Light vertex lv (in slot `slot`): its point and BSDF, the surface's material as vcm_light
@@ -170,6 +173,10 @@ struct CameraPath {
     uint segment;
     vec3 terms[4];
     uint rays;
+    // The last vertex and the normal light sampling chose its light with there (zero in a
+    // medium): emission met is weighed with that choice's probability.
+    vec3 prev_x;
+    vec3 prev_n;
 };
 
 CameraPath camera_path_start(uint px, uint py) {
@@ -194,6 +201,8 @@ CameraPath camera_path_start(uint px, uint py) {
     c.segment = 0u;
     c.terms = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
     c.rays = 0u;
+    c.prev_x = c.o;
+    c.prev_n = vec3(0.0);
     return c;
 }
 
@@ -226,13 +235,13 @@ bool camera_path_step(inout CameraPath c) {
             Light l = light_at(i);
             if (l.kind != LIGHT_DISTANT || l.area <= 0.0) break;
             if (dot(c.d, load3(l.direction)) <= -l.cos_outer) {
-                float w = take_whole ? 1.0 : emission_weight(c.sp, l.pick_probability / l.area, l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
+                float w = take_whole ? 1.0 : emission_weight(c.sp, direct_light_pmf(i, c.prev_x, c.prev_n) / l.area, l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
                 c.terms[layer] += c.sp.throughput * load3(l.intensity) * (w / l.area);
             }
         }
         WHEN(frame.environment != NO_LIGHT) {
             Light l = light_at(frame.environment);
-            float w = take_whole ? 1.0 : emission_weight(c.sp, l.pick_probability * environment_pdf(l, c.d), l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
+            float w = take_whole ? 1.0 : emission_weight(c.sp, direct_light_pmf(frame.environment, c.prev_x, c.prev_n) * environment_pdf(l, c.d), l.pick_probability * emission_pdf_at(l, c.d, 1.0, c.o));
             c.terms[layer] += c.sp.throughput * environment_radiance(l, c.d) * w;
         }
         return false;
@@ -243,7 +252,7 @@ bool camera_path_step(inout CameraPath c) {
     vertex_at(nv.scattered, prim, c.medium, c.o, c.d, t, h, b);
     // An orthographic camera's first density is by area (camera_d_vcm).
     sub_arrive(c.sp, nv.dist, abs_cos(b, wo), m > 1u || frame.camera_kind != CAMERA_ORTHOGRAPHIC);
-    float cos_l = dot(wo, h.ng);
+    float cos_l = nv.scattered ? 0.0 : emitter_cosine(material_at(h.material).flags, h.ng, wo);
     if (!nv.scattered && cos_l > 0.0 && emission_allowed) {
         vec3 emitted = material_emission(material_at(h.material), h);
         if (emitted != vec3(0.0)) {
@@ -252,7 +261,7 @@ bool camera_path_step(inout CameraPath c) {
             float w = 1.0;
             if (!(take_whole || light == NO_LIGHT || hp != prim)) {
                 Light l = light_at(light);
-                w = emission_weight(c.sp, l.pick_probability / l.area, l.pick_probability * emission_pdf(l, c.d, cos_l));
+                w = emission_weight(c.sp, direct_light_pmf(light, c.prev_x, c.prev_n) / l.area, l.pick_probability * emission_pdf(l, c.d, cos_l));
             }
             c.terms[layer] += c.sp.throughput * emitted * w;
         }
@@ -390,6 +399,8 @@ bool camera_path_step(inout CameraPath c) {
 #ifdef VARIANT_MEDIA
     if (!nv.scattered && (smp.flags & BSDF_TRANSMISSION) != 0u) c.medium = medium_after(prim, h.ng, smp.wi, c.medium);
 #endif
+    c.prev_x = h.p;
+    c.prev_n = receiver_normal(b);
     c.o = offset_origin(h, wo, smp.flags);
     c.d = smp.wi;
     c.m++;
@@ -441,6 +452,8 @@ void store_run(uint i, uint job, CameraPath c) {
     }
     w[34] = c.rays;
     w[35] = 0u;
+    w[36] = floatBitsToUint(c.prev_x.x); w[37] = floatBitsToUint(c.prev_x.y); w[38] = floatBitsToUint(c.prev_x.z);
+    w[39] = floatBitsToUint(c.prev_n.x); w[40] = floatBitsToUint(c.prev_n.y); w[41] = floatBitsToUint(c.prev_n.z);
     for (uint k = 0u; k < VCM_CAMERA_STATE_WORDS; k++) run_states[at + k] = w[k];
 }
 
@@ -466,6 +479,8 @@ uint load_run(uint i, out CameraPath c) {
     c.segment = w[21];
     for (int t = 0; t < 4; t++) c.terms[t] = uintBitsToFloat(uvec3(w[22 + 3 * t], w[23 + 3 * t], w[24 + 3 * t]));
     c.rays = w[34];
+    c.prev_x = uintBitsToFloat(uvec3(w[36], w[37], w[38]));
+    c.prev_n = uintBitsToFloat(uvec3(w[39], w[40], w[41]));
     return w[0];
 }
 

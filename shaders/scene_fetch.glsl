@@ -144,7 +144,8 @@ Light light_at(uint i) {
     l.radius = uintBitsToFloat(e.w);
     l.medium = f.x;
     l.grid = f.y;
-    l._pad = uint[2](f.z, f.w);
+    l.tree_trail = f.z;
+    l.tree_probability = uintBitsToFloat(f.w);
     return l;
 }
 

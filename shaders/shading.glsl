@@ -137,9 +137,12 @@ vec2 grid_sample(uint grid, vec2 u, uint stream, uint sample_index) {
 ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_index, uint dim, uint penumbra_since, uint ray) {
     ShadowRay none = ShadowRay(h.p, vec3(0.0, 1.0, 0.0), NO_RAY, vec3(0.0), 1u, false);
     if (frame.light_count == 0u) return none;
-    Light l = light_at(pick_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), false));
-    // A scene whose lights all give photons only picks one with probability 0.
-    if (l.pick_probability <= 0.0) return none;
+    vec3 receiver = b.kind == MATERIAL_PHASE ? vec3(0.0) : b.ns;
+    float pmf;
+    uint light = pick_direct_light(rand1(stream, sample_index, frame.seed, dim + RNG_LIGHT_PICK), h.p, receiver, pmf);
+    // A scene whose lights all give photons only picks none.
+    if (pmf <= 0.0) return none;
+    Light l = light_at(light);
     // A scattering point in a homogeneous medium leaves point and spot lights to the camera
     // segment's equiangular sample (render.comp).
     if (b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT)) return none;
@@ -161,5 +164,5 @@ ShadowRay direct_light_sample(Hit h, Bsdf b, vec3 wo, uint stream, uint sample_i
     float t_max = max(shadow_length - s.eps, 0.0);
     // A medium's phase function has no cosine: it is per solid angle already.
     float cosine = b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(b.ns, s.wi));
-    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / (l.pick_probability * float(none.rays))), none.rays, none.adaptive);
+    return ShadowRay(origin, to_target / shadow_length, t_max, f * (cosine / (pmf * float(none.rays))), none.rays, none.adaptive);
 }

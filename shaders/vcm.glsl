@@ -153,7 +153,7 @@ float abs_cos(Bsdf b, vec3 w) { return b.kind == MATERIAL_PHASE ? 1.0 : abs(dot(
 // probability; contract in vcm.rs, emission_pdf.
 float emission_pdf(Light l, vec3 w, float cos_l) {
     float disc = PI * l.radius * l.radius;
-    if (l.kind == LIGHT_AREA) return max(cos_l, 0.0) / (PI * l.area);
+    if (l.kind == LIGHT_AREA) return max(cos_l, 0.0) / (PI * l.area * (1.0 - l.cos_outer));
     if (l.kind == LIGHT_ENVIRONMENT) return environment_pdf(l, w) / disc;
     if (l.kind == LIGHT_DISTANT) return l.area > 0.0 ? 1.0 / (l.area * disc) : 1.0 / disc;
     return 1.0 / (2.0 * PI * (1.0 - l.cos_outer));

@@ -122,6 +122,7 @@ struct LightPath {
     bool specular_first;
     uint slot0;
     uint stored;  // vertices in its slots so far
+    uint light;  // the light it left
 };
 
 // Emits light path `path`: false when it has no ray to follow (no light, no power, no density).
@@ -131,7 +132,8 @@ bool light_path_start(uint path, out LightPath lp) {
     if (frame.light_count == 0u) return false;
     uint sample_index = params.sample_index;
     uint dim0 = RNG_VCM_LIGHT_DOMAIN;
-    Light l = light_at(pick_light(rand1(path, sample_index, frame.seed, dim0 + RNG_LIGHT_PICK), false));
+    lp.light = pick_light(rand1(path, sample_index, frame.seed, dim0 + RNG_LIGHT_PICK), false);
+    Light l = light_at(lp.light);
     if (l.pick_probability <= 0.0) return false;
     vec3 power;
     float cos_l;
@@ -181,6 +183,8 @@ bool light_path_step(inout LightPath lp) {
     uint flags = bsdf_flags(b);
     if (flags == 0u) return false;
     sub_arrive(lp.sp, nv.dist, abs_cos(b, wo), lp.k > 1u || lp.finite);
+    // Contract in vcm.rs, trace_light_path: light sampling's choice of the light from here.
+    if (lp.k == 1u) lp.sp.d_vcm = wmul(lp.sp.d_vcm, mis(direct_light_pmf(lp.light, h.p, receiver_normal(b)) / light_at(lp.light).pick_probability));
     if ((flags & BSDF_ESTIMATE) != 0u) {
         uint slot = lp.slot0 + lp.stored;
         lp.stored++;
@@ -288,7 +292,7 @@ void store_run(uint i, uint job, bool alive, LightPath lp) {
     w[24] = lp.specular_first ? 1u : 0u;
     w[25] = lp.slot0;
     w[26] = lp.stored;
-    w[27] = 0u;
+    w[27] = lp.light;
     for (uint k = 0u; k < VCM_LIGHT_STATE_WORDS; k++) run_states[at + k] = w[k];
 }
 
@@ -316,6 +320,7 @@ uint load_run(uint i, out bool alive, out LightPath lp) {
     lp.specular_first = w[24] != 0u;
     lp.slot0 = w[25];
     lp.stored = w[26];
+    lp.light = w[27];
     return w[0];
 }
 

@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::bsdf::material_emission;
+use super::bsdf::{material_emission, Bsdf};
 use super::sampling::{cone_direction, cosine_direction, disc_point, onb};
 use super::shape::shape_sample;
 use super::SceneView;
@@ -27,6 +27,170 @@ pub fn pick_light(s: &SceneView, u: f32, photons: bool) -> u32 {
         }
     }
     lo
+}
+
+fn tree_word(s: &SceneView, w: u32) -> f32 {
+    f32::from_bits(s.texture_data[w as usize])
+}
+
+fn tree_vec(s: &SceneView, w: u32) -> Vec3 {
+    Vec3::new(tree_word(s, w), tree_word(s, w + 1), tree_word(s, w + 2))
+}
+
+/// A bound on the light that the lights under light-tree node `node` send to a point `x` of
+/// normal `n` (zero in a medium): their power over the squared distance to their box, times the
+/// cosine of the smallest angle between their emission cone and `x` as seen from anywhere in the
+/// box, times the cosine of the smallest angle at `x` to the box (Conty and Kulla 2018, as
+/// pbrt-v4's `LightBounds::Importance`; the squared distance is at least the box's half-diagonal
+/// squared). Twin of `light_node_importance` in shaders/light.glsl.
+pub fn light_node_importance(s: &SceneView, node: u32, x: Vec3, n: Vec3) -> f32 {
+    let lo = tree_vec(s, node + LIGHT_NODE_MIN);
+    let hi = tree_vec(s, node + LIGHT_NODE_MAX);
+    let axis = tree_vec(s, node + LIGHT_NODE_AXIS);
+    let power = tree_word(s, node + LIGHT_NODE_POWER);
+    let cos_o = tree_word(s, node + LIGHT_NODE_COS_SPREAD);
+    let cos_e = tree_word(s, node + LIGHT_NODE_COS_FALLOFF);
+    let to_x = x - 0.5 * (lo + hi);
+    let d2 = to_x.dot(to_x);
+    let half_diagonal = 0.5 * (hi - lo);
+    let r2 = half_diagonal.dot(half_diagonal);
+    // The box as seen from x: a cone of cos_b around the direction to its centre (the whole
+    // sphere from inside its bounding sphere).
+    let cos_b = if d2 <= r2 { -1.0 } else { (1.0 - r2 / d2).max(0.0).sqrt() };
+    let sin_b = (1.0 - cos_b * cos_b).max(0.0).sqrt();
+    let w = if d2 > 0.0 { to_x / d2.sqrt() } else { Vec3::Z };
+    let cos_w = axis.dot(w);
+    let sin_w = (1.0 - cos_w * cos_w).max(0.0).sqrt();
+    let sin_o = (1.0 - cos_o * cos_o).max(0.0).sqrt();
+    // theta_x = max(0, theta_w - theta_o), then theta' = max(0, theta_x - theta_b).
+    let (cos_x, sin_x) =
+        if cos_w > cos_o { (1.0, 0.0) } else { (cos_w * cos_o + sin_w * sin_o, sin_w * cos_o - cos_w * sin_o) };
+    let cos_p = if cos_x > cos_b { 1.0 } else { cos_x * cos_b + sin_x * sin_b };
+    if cos_p <= cos_e {
+        return 0.0;
+    }
+    let mut importance = power * cos_p / d2.max(r2).max(1e-20);
+    if n != Vec3::ZERO {
+        let cos_i = w.dot(n).abs();
+        let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+        importance *= if cos_i > cos_b { 1.0 } else { cos_i * cos_b + sin_i * sin_b };
+    }
+    importance.max(0.0)
+}
+
+/// The light tree's share of direct-light selection; the infinite lights have the rest.
+fn tree_share(s: &SceneView) -> f32 {
+    tree_word(s, s.frame.light_tree + LIGHT_TREE_SHARE)
+}
+
+/// The light that casts direct light on point `x` of normal `n` (zero in a medium), and the
+/// probability of that choice: (`NO_LIGHT`, 0) when none can. An infinite light is drawn by
+/// power outside the tree's share; else a walk down the light tree, each step in proportion to
+/// the children's importance (see `render::light_tree`).
+pub fn pick_direct_light(s: &SceneView, u: f32, x: Vec3, n: Vec3) -> (u32, f32) {
+    let base = s.frame.light_tree;
+    if base == NO_LIGHT {
+        return (NO_LIGHT, 0.0);
+    }
+    let share = tree_share(s);
+    if u >= share {
+        // The infinite lights' running probabilities cover the rest, [share, 1).
+        let v = (u - share) / (1.0 - share);
+        let count = s.texture_data[(base + LIGHT_TREE_INFINITE_COUNT) as usize];
+        for k in 0..count {
+            let at = base + LIGHT_TREE_INFINITE + 2 * k;
+            if v < tree_word(s, at + 1) || k + 1 == count {
+                let light = s.texture_data[at as usize];
+                return (light, (1.0 - share) * s.lights[light as usize].tree_probability);
+            }
+        }
+        return (NO_LIGHT, 0.0);
+    }
+    let mut u = u / share;
+    let mut pmf = share;
+    let mut node = s.texture_data[(base + LIGHT_TREE_ROOT) as usize];
+    for _ in 0..LIGHT_TREE_MAX_DEPTH {
+        let child = s.texture_data[(node + LIGHT_NODE_CHILD) as usize];
+        if child & LIGHT_NODE_LEAF != 0 {
+            return (child & !LIGHT_NODE_LEAF, pmf);
+        }
+        let first = node + LIGHT_NODE_WORDS;
+        let a = light_node_importance(s, first, x, n);
+        let b = light_node_importance(s, child, x, n);
+        if (a + b).is_nan() || a + b <= 0.0 {
+            break;
+        }
+        let p = a / (a + b);
+        if u < p {
+            u = (u / p).min(ONE_MINUS_EPSILON);
+            pmf *= p;
+            node = first;
+        } else {
+            u = ((u - p) / (1.0 - p)).min(ONE_MINUS_EPSILON);
+            pmf *= b / (a + b);
+            node = child;
+        }
+    }
+    (NO_LIGHT, 0.0)
+}
+
+/// The normal that light selection weighs a vertex's view of the lights with: the shading
+/// normal, or zero at a medium's scattering point (light arrives from every side).
+pub fn receiver_normal(b: &Bsdf) -> Vec3 {
+    if b.kind == MATERIAL_PHASE {
+        Vec3::ZERO
+    } else {
+        b.ns
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPSILON: f32 = 0.999_999_94;
+
+/// The probability that `pick_direct_light` at `x` of normal `n` chooses light `i`: its trail
+/// through the tree, step by step.
+pub fn direct_light_pmf(s: &SceneView, i: u32, x: Vec3, n: Vec3) -> f32 {
+    let l = &s.lights[i as usize];
+    if l.tree_probability <= 0.0 {
+        return 0.0;
+    }
+    let share = tree_share(s);
+    if l.tree_trail == NO_LIGHT {
+        return (1.0 - share) * l.tree_probability;
+    }
+    let mut pmf = share;
+    let mut node = s.texture_data[(s.frame.light_tree + LIGHT_TREE_ROOT) as usize];
+    for depth in 0..LIGHT_TREE_MAX_DEPTH {
+        let child = s.texture_data[(node + LIGHT_NODE_CHILD) as usize];
+        if child & LIGHT_NODE_LEAF != 0 {
+            return pmf;
+        }
+        let first = node + LIGHT_NODE_WORDS;
+        let a = light_node_importance(s, first, x, n);
+        let b = light_node_importance(s, child, x, n);
+        if (a + b).is_nan() || a + b <= 0.0 {
+            return 0.0;
+        }
+        if (l.tree_trail >> depth) & 1 == 0 {
+            pmf *= a / (a + b);
+            node = first;
+        } else {
+            pmf *= b / (a + b);
+            node = child;
+        }
+    }
+    0.0
+}
+
+/// The cosine between a surface's geometric normal and `w` that its emission sees: emission
+/// leaves where it is > 0, the front face of a one-sided emitter, either face of a two-sided one.
+pub fn emitter_cosine(flags: u32, ng: Vec3, w: Vec3) -> f32 {
+    let c = ng.dot(w);
+    if flags & MATERIAL_FLAG_TWO_SIDED != 0 {
+        c.abs()
+    } else {
+        c
+    }
 }
 
 /// Intensity profile of point and spot lights along unit direction `w` (away from the light):
@@ -199,12 +363,9 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             let to_light = h.p - x;
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
-            let cos_l = -h.ng.dot(wi);
-            let weight = if cos_l > 0.0 {
-                material_emission(s, &s.materials[h.material as usize], &h) * (cos_l * inv_pdf / dist2)
-            } else {
-                Vec3::ZERO
-            };
+            let m = &s.materials[h.material as usize];
+            let cos_l = emitter_cosine(m.flags, h.ng, -wi);
+            let weight = if cos_l > 0.0 { material_emission(s, m, &h) * (cos_l * inv_pdf / dist2) } else { Vec3::ZERO };
             // The shadow ray stops short of the point by its offset over the cosine there: a hit on
             // the light's own surface moves along a grazing ray by its error over that cosine.
             let pdf = light_pdf(s, l, wi, dist2.sqrt(), cos_l);
@@ -262,12 +423,19 @@ pub fn light_emission(s: &SceneView, l: &Light, u_pos: [f32; 2], u_dir: [f32; 2]
         LIGHT_AREA => {
             let (h, inv_pdf) = shape_sample(s, l.primitive, u_pos);
             let emitted = material_emission(s, &s.materials[h.material as usize], &h);
-            let direction = cosine_direction(h.ng, u_dir);
+            // A two-sided emitter (cos_outer -1, see `light_record`) leaves by either face, each
+            // half the time by the first number, the number stretched back over [0, 1).
+            let (n, ud) = match (l.cos_outer < 0.0, u_dir[0] < 0.5) {
+                (false, _) => (h.ng, u_dir),
+                (true, true) => (h.ng, [2.0 * u_dir[0], u_dir[1]]),
+                (true, false) => (-h.ng, [2.0 * u_dir[0] - 1.0, u_dir[1]]),
+            };
+            let direction = cosine_direction(n, ud);
             Emission {
-                origin: h.p + h.ng * h.eps,
+                origin: h.p + n * h.eps,
                 direction,
-                power: PI * inv_pdf * emitted,
-                cos_l: direction.dot(h.ng),
+                power: (1.0 - l.cos_outer) * PI * inv_pdf * emitted,
+                cos_l: direction.dot(n),
             }
         }
         LIGHT_DISTANT | LIGHT_ENVIRONMENT => {

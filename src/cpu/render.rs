@@ -9,7 +9,7 @@ use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, facing, materi
 use super::gather::{
     edge_mass, edge_probe_ray, open_edge_reach, photon_radiance, Gathered, MAP_CAUSTIC, MAP_GLOBAL, MAP_VOLUME,
 };
-use super::light::{distant_discs_radiance, environment_radiance, pick_light, spot_falloff};
+use super::light::{distant_discs_radiance, emitter_cosine, environment_radiance, pick_light, spot_falloff};
 use super::medium::{
     equiangular_sample, medium_after, medium_hit, medium_sample, medium_sigma_t_at, medium_transmittance, phase_bsdf,
     spot_span,
@@ -371,11 +371,11 @@ pub fn radiance(
             phase_bsdf(s, medium, wo)
         } else {
             let m = &s.materials[h.material as usize];
-            // Everything a mirror or glass shows is the specular term. Emission leaves the front
-            // face only; it counts wherever a camera path meets it, since estimate lobes end the
+            // Everything a mirror or glass shows is the specular term. Emission leaves the emitting
+            // faces only; it counts wherever a camera path meets it, since estimate lobes end the
             // path and light sampling covers them. A gather path counts none: direct light and
             // caustics do.
-            if camera && wo.dot(h.ng) > 0.0 && part == 0 {
+            if camera && emitter_cosine(m.flags, h.ng, wo) > 0.0 && part == 0 {
                 terms[(if depth > 0 { LAYER_SPECULAR } else { LAYER_DIRECT }) as usize] +=
                     throughput * material_emission(s, m, &h);
             }

@@ -16,7 +16,9 @@ use super::bsdf::{
     bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_pdf, bsdf_sample, material_bsdf, material_emission,
 };
 use super::instance::hit_primitive;
-use super::light::{environment_radiance, light_pdf, light_sample, pick_light};
+use super::light::{
+    direct_light_pmf, emitter_cosine, environment_radiance, light_pdf, light_sample, pick_direct_light, receiver_normal,
+};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2};
 use super::shading::{camera_ray, film_offset, grid_sample, lens_sample, offset_origin, ray_skip, NO_RAY};
@@ -98,6 +100,9 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
     // The last scattering vertex and the solid-angle density its lobes drew the path ray with
     // (0: a delta lobe or the camera, whose emission seen is taken whole).
     let mut prev_p = o;
+    // The normal light selection used at prev_p (zero in a medium), for the pick probability
+    // that weighs emission met against light sampling there.
+    let mut prev_n = Vec3::ZERO;
     let mut prev_pdf = 0.0f32;
     // The path's signature so far (see `path_layer`).
     let (mut first_specular, mut diffuse, mut specular_after) = (false, 0u32, false);
@@ -171,10 +176,11 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
             // The path leaves the scene: the environment and the discs of distant lights, each
             // weighed against its own light sampling.
             let layer = path_layer(first_specular, diffuse, specular_after) as usize;
-            for l in s.lights.iter().take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0) {
+            for (i, l) in s.lights.iter().enumerate().take_while(|(_, l)| l.kind == LIGHT_DISTANT && l.area > 0.0) {
                 if d.dot(Vec3::from(l.direction)) <= -l.cos_outer {
                     let w = if prev_pdf > 0.0 {
-                        mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, l.pick_probability / l.area)
+                        let pmf = direct_light_pmf(s, i as u32, prev_p, prev_n);
+                        mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, pmf / l.area)
                     } else {
                         1.0
                     };
@@ -188,7 +194,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
                         f.techniques,
                         TECHNIQUE_BSDF,
                         prev_pdf,
-                        l.pick_probability * light_pdf(s, l, d, 0.0, 0.0),
+                        direct_light_pmf(s, f.environment, prev_p, prev_n) * light_pdf(s, l, d, 0.0, 0.0),
                     )
                 } else {
                     1.0
@@ -202,9 +208,9 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
             phase_bsdf(s, medium, wo)
         } else {
             let m = &s.materials[h.material as usize];
-            // Emission leaves the front face only; a light that light sampling could have drawn
+            // Emission leaves the emitting faces only (emitter_cosine); a light that light sampling could have drawn
             // is weighed against it.
-            let cos_l = wo.dot(h.ng);
+            let cos_l = emitter_cosine(m.flags, h.ng, wo);
             if cos_l > 0.0 {
                 let emitted = material_emission(s, m, &h);
                 if emitted != Vec3::ZERO {
@@ -213,7 +219,8 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
                     let light = s.primitives[hp as usize].light;
                     let w = if prev_pdf > 0.0 && light != NO_LIGHT && hp == prim {
                         let l = &s.lights[light as usize];
-                        let p_light = l.pick_probability * light_pdf(s, l, d, (h.p - prev_p).length(), cos_l);
+                        let pmf = direct_light_pmf(s, light, prev_p, prev_n);
+                        let p_light = pmf * light_pdf(s, l, d, (h.p - prev_p).length(), cos_l);
                         mis_weight(f.techniques, TECHNIQUE_BSDF, prev_pdf, p_light)
                     } else {
                         1.0
@@ -227,6 +234,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
         if flags == 0 {
             break;
         }
+        let receiver = receiver_normal(&b);
         skip = if scattered { NO_LIGHT } else { ray_skip(s, prim) };
         let dim = vertex * RNG_DIMS_PER_BOUNCE;
         let q = bsdf_path_probability(&b, wo);
@@ -251,19 +259,21 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
         // Light sampling, where the lobes are not all delta.
         let mut light_ray = false;
         if flags & BSDF_ESTIMATE != 0 && f.light_count > 0 {
-            let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
-            if l.pick_probability > 0.0 {
+            let u_pick = rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK);
+            let (light, pmf) = pick_direct_light(s, u_pick, h.p, receiver);
+            if pmf > 0.0 {
+                let l = &s.lights[light as usize];
                 let ul = qmc2(stream, sample, f.seed, dim + RNG_LIGHT_U);
                 let ls = light_sample(s, l, h.p, grid_sample(l.grid, ul, stream, sample));
                 let cos = if scattered { 1.0 } else { b.ns.dot(ls.wi).abs() };
                 let fr = bsdf_eval(&b, wo, ls.wi) * ls.weight * cos;
                 if fr != Vec3::ZERO {
                     let p_bsdf = if ls.pdf > 0.0 { (1.0 - q) * bsdf_pdf(&b, wo, ls.wi) } else { 0.0 };
-                    let w = mis_weight(f.techniques, TECHNIQUE_LIGHT, l.pick_probability * ls.pdf, p_bsdf);
+                    let w = mis_weight(f.techniques, TECHNIQUE_LIGHT, pmf * ls.pdf, p_bsdf);
                     let origin = offset_origin(&h, ls.wi, BSDF_REFLECTION);
                     let to_target = ls.p - origin;
                     let length = to_target.length();
-                    unoccluded = throughput * fr * (w / l.pick_probability);
+                    unoccluded = throughput * fr * (w / pmf);
                     shadow_layer = path_layer(first_specular, diffuse + 1, false);
                     shadow_medium = medium;
                     o = origin;
@@ -285,6 +295,7 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
             prev_pdf = choice * bsdf_pdf(&b, wo, smp.wi);
         }
         prev_p = h.p;
+        prev_n = receiver;
         throughput *= smp.weight / choice;
         vertex += 1;
         // Russian roulette, on the throughput's largest channel.

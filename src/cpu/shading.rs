@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use super::bsdf::{bsdf_eval, Bsdf};
-use super::light::{light_sample, pick_light};
+use super::light::{light_sample, pick_direct_light, receiver_normal};
 use super::microfacet::mf_erfinv;
 use super::rng::{qmc2, rand1};
 use super::sampling::polygon_point;
@@ -203,11 +203,13 @@ pub fn direct_light_sample(
     if f.light_count == 0 {
         return none;
     }
-    let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
-    // A scene whose lights all give photons only picks one with probability 0.
-    if l.pick_probability <= 0.0 {
+    let receiver = receiver_normal(b);
+    let (light, pmf) = pick_direct_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), h.p, receiver);
+    // A scene whose lights all give photons only picks none.
+    if pmf <= 0.0 {
         return none;
     }
+    let l = &s.lights[light as usize];
     // A scattering point in a homogeneous medium leaves point and spot lights to the camera
     // segment's equiangular sample (`render::radiance`).
     if b.kind == MATERIAL_PHASE && b.color1.y == 0.0 && (l.kind == LIGHT_POINT || l.kind == LIGHT_SPOT) {
@@ -238,8 +240,7 @@ pub fn direct_light_sample(
         t_max: (shadow_length - ls.eps).max(0.0),
         // A medium's phase function has no cosine: it is per solid angle already.
         unoccluded: fr
-            * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() }
-                / (l.pick_probability * none.rays as f32)),
+            * (if b.kind == MATERIAL_PHASE { 1.0 } else { b.ns.dot(ls.wi).abs() } / (pmf * none.rays as f32)),
         rays: none.rays,
         adaptive: none.adaptive,
     }

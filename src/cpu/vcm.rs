@@ -42,7 +42,10 @@ use super::bsdf::{
 use super::grid::for_each_photon_near;
 use super::grid_build::{build_grid, grid_params};
 use super::instance::hit_primitive;
-use super::light::{environment_pdf, environment_radiance, light_emission, light_sample, pick_light};
+use super::light::{
+    direct_light_pmf, emitter_cosine, environment_pdf, environment_radiance, light_emission, light_sample,
+    pick_direct_light, pick_light, receiver_normal,
+};
 use super::medium::{medium_after, medium_hit, medium_sample, medium_transmittance, phase_bsdf};
 use super::render_pt::path_layer;
 use super::rng::{bsdf_numbers, qmc2, rand1, rand2, rand4, sequence_point};
@@ -263,7 +266,8 @@ pub fn splat_value(low: u32, high: u32) -> f32 {
 pub fn emission_pdf(s: &SceneView, l: &Light, w: Vec3, cos_l: f32) -> f32 {
     let disc = std::f32::consts::PI * l.radius * l.radius;
     match l.kind {
-        LIGHT_AREA => cos_l.max(0.0) / (std::f32::consts::PI * l.area),
+        // Over the emitter's hemisphere, or both (a two-sided one's cos_outer is -1).
+        LIGHT_AREA => cos_l.max(0.0) / (std::f32::consts::PI * l.area * (1.0 - l.cos_outer)),
         LIGHT_ENVIRONMENT => environment_pdf(s, l, w) / disc,
         LIGHT_DISTANT if l.area > 0.0 => 1.0 / (l.area * disc),
         LIGHT_DISTANT => 1.0 / disc,
@@ -803,7 +807,8 @@ pub fn trace_light_path(
     }
     let sample = p.sample_index;
     let dim0 = RNG_VCM_LIGHT_DOMAIN;
-    let l = &s.lights[pick_light(s, rand1(path, sample, f.seed, dim0 + RNG_LIGHT_PICK), false) as usize];
+    let light = pick_light(s, rand1(path, sample, f.seed, dim0 + RNG_LIGHT_PICK), false);
+    let l = &s.lights[light as usize];
     if l.pick_probability <= 0.0 {
         return (rays, stored);
     }
@@ -876,6 +881,13 @@ pub fn trace_light_path(
             break;
         }
         sub.arrive(next.dist, abs_cos(&b, wo), k > 1 || finite);
+        if k == 1 {
+            // d_vcm holds light sampling's density of the start over emission's, each with its
+            // own choice of light: by power for emission, by the light tree at this vertex for
+            // light sampling from it.
+            let pmf = direct_light_pmf(s, light, h.p, receiver_normal(&b));
+            sub.d_vcm = wmul(sub.d_vcm, mis(pmf / l.pick_probability));
+        }
         if flags & BSDF_ESTIMATE != 0 {
             positions[stored as usize] = h.p;
             let in_medium = if next.scattered { VERTEX_MEDIUM } else { 0 };
@@ -1067,6 +1079,9 @@ pub fn radiance_vcm(
     let mut specular_path = true;
     let mut medium = f.camera_medium;
     let mut segment = 0u32;
+    // The last vertex and the normal light sampling chose its light with there (zero in a
+    // medium): emission met is weighed with that choice's probability.
+    let (mut prev_x, mut prev_n) = (o, Vec3::ZERO);
     for m in 1..=f.max_depth + 1 {
         let mut medium_emission = Vec3::ZERO;
         let next = next_vertex(
@@ -1104,13 +1119,13 @@ pub fn radiance_vcm(
             if !emission_allowed {
                 break;
             }
-            for l in s.lights.iter().take_while(|l| l.kind == LIGHT_DISTANT && l.area > 0.0) {
+            for (i, l) in s.lights.iter().enumerate().take_while(|(_, l)| l.kind == LIGHT_DISTANT && l.area > 0.0) {
                 if d.dot(Vec3::from(l.direction)) <= -l.cos_outer {
                     let w = if take_whole {
                         1.0
                     } else {
                         let emission = l.pick_probability * emission_pdf_at(s, l, d, 1.0, o);
-                        emission_weight(&sub, l.pick_probability / l.area, emission)
+                        emission_weight(&sub, direct_light_pmf(s, i as u32, prev_x, prev_n) / l.area, emission)
                     };
                     terms[layer] += sub.throughput * Vec3::from(l.intensity) * (w / l.area);
                 }
@@ -1121,7 +1136,8 @@ pub fn radiance_vcm(
                     1.0
                 } else {
                     let emission = l.pick_probability * emission_pdf_at(s, l, d, 1.0, o);
-                    emission_weight(&sub, l.pick_probability * environment_pdf(s, l, d), emission)
+                    let pmf = direct_light_pmf(s, f.environment, prev_x, prev_n);
+                    emission_weight(&sub, pmf * environment_pdf(s, l, d), emission)
                 };
                 terms[layer] += sub.throughput * environment_radiance(s, l, d) * w;
             }
@@ -1131,7 +1147,7 @@ pub fn radiance_vcm(
         let (h, b) = vertex_at(s, next.scattered, prim, medium, o, d, t);
         // An orthographic camera's first density is by area (`camera_d_vcm`).
         sub.arrive(next.dist, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
-        let cos_l = wo.dot(h.ng);
+        let cos_l = emitter_cosine(s.materials[h.material as usize].flags, h.ng, wo);
         if !next.scattered && cos_l > 0.0 && emission_allowed {
             let emitted = material_emission(s, &s.materials[h.material as usize], &h);
             if emitted != Vec3::ZERO {
@@ -1142,7 +1158,7 @@ pub fn radiance_vcm(
                 } else {
                     let l = &s.lights[light as usize];
                     let emission = l.pick_probability * emission_pdf(s, l, d, cos_l);
-                    emission_weight(&sub, l.pick_probability / l.area, emission)
+                    emission_weight(&sub, direct_light_pmf(s, light, prev_x, prev_n) / l.area, emission)
                 };
                 terms[layer] += sub.throughput * emitted * w;
             }
@@ -1285,6 +1301,7 @@ pub fn radiance_vcm(
         if !next.scattered && smp.flags & BSDF_TRANSMISSION != 0 {
             medium = medium_after(s, prim, h.ng, smp.wi, medium);
         }
+        (prev_x, prev_n) = (h.p, receiver_normal(&b));
         o = offset_origin(&h, wo, smp.flags);
         d = smp.wi;
     }
@@ -1324,10 +1341,12 @@ fn light_sampling(
         return Vec3::ZERO;
     }
     let sample = p.sample_index;
-    let l = &s.lights[pick_light(s, rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK), false) as usize];
-    if l.pick_probability <= 0.0 {
+    let u_pick = rand1(stream, sample, f.seed, dim + RNG_LIGHT_PICK);
+    let (light, pmf) = pick_direct_light(s, u_pick, h.p, receiver_normal(b));
+    if pmf <= 0.0 {
         return Vec3::ZERO;
     }
+    let l = &s.lights[light as usize];
     let ul = qmc2(stream, sample, f.seed, dim + RNG_LIGHT_U);
     let ls = light_sample(s, l, h.p, grid_sample(l.grid, ul, stream, sample));
     let cos_to_light = abs_cos(b, ls.wi);
@@ -1344,9 +1363,13 @@ fn light_sampling(
     }
     let (forward, reverse) = lobe_pdfs(b, wo, ls.wi);
     let forward = if light_is_delta(l) { 0.0 } else { forward };
-    let w_light = mis(forward / (l.pick_probability * direct));
-    let w_camera =
-        wmul(mis(emission * cos_to_light / (direct * cos_at_light)), vm + sub.d_vcm + wmul(sub.d_vc, mis(reverse)));
+    let w_light = mis(forward / (pmf * direct));
+    // Emission chooses its light by power, light sampling by the tree.
+    let emission = emission * l.pick_probability;
+    let w_camera = wmul(
+        mis(emission * cos_to_light / (pmf * direct * cos_at_light)),
+        vm + sub.d_vcm + wmul(sub.d_vc, mis(reverse)),
+    );
     let w = 1.0 / (w_light + 1.0 + w_camera);
     // The shadow ray runs to the sampled point itself, stopping short by the sample's own offset.
     let origin = offset_origin(h, ls.wi, BSDF_REFLECTION);
@@ -1357,7 +1380,7 @@ fn light_sampling(
     if tr == Vec3::ZERO {
         return Vec3::ZERO;
     }
-    fr * (w / l.pick_probability) * tr
+    fr * (w / pmf) * tr
 }
 
 /// A camera vertex joined to light vertex `lv` (SmallVCM's ConnectVertices): the weighed

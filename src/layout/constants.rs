@@ -67,6 +67,9 @@ shared_constants! {
     /// `Material::flags`: a rough conductor, dielectric or plastic whose microfacets follow
     /// Beckmann's distribution rather than GGX's (scene `distribution = "beckmann"`).
     MATERIAL_FLAG_BECKMANN: u32 = 2;
+    /// `Material::flags`: emission leaves both faces (scene `two_sided = true`), not the front
+    /// (the side the geometric normal points to) alone.
+    MATERIAL_FLAG_TWO_SIDED: u32 = 4;
     /// The `dist` argument of the microfacet functions (`cpu::microfacet`): GGX ...
     MICROFACET_GGX: u32 = 0;
     /// ... or Beckmann (Mitsuba's default for its rough plugins).
@@ -291,6 +294,32 @@ shared_constants! {
     ENV_SIN_ROTATION: u32 = 3;
     ENV_TEXELS: u32 = 4;
 
+    /// Words of the light tree's block in the texture data, from `FrameParams::light_tree`
+    /// (see `render::light_tree`): the word of the root node (`NO_LIGHT`: no finite light casts
+    /// direct light), the tree's share of direct-light selection (f32 bits), the number k of
+    /// infinite lights chosen beside it, then k pairs (light index, running probability as f32
+    /// bits ending at 1) from which an infinite light is drawn in the rest of the choice.
+    LIGHT_TREE_ROOT: u32 = 0;
+    LIGHT_TREE_SHARE: u32 = 1;
+    LIGHT_TREE_INFINITE_COUNT: u32 = 2;
+    LIGHT_TREE_INFINITE: u32 = 3;
+    /// Words of one light-tree node, from its word: bounds min and max (3 + 3 f32), power
+    /// (f32), the emission cone's axis (3 f32), cos of its spread and of the falloff past it
+    /// (f32 each; Conty and Kulla's theta_o and theta_e), then the child word: the second
+    /// child's node word (the first follows this node), or a leaf's light index with
+    /// `LIGHT_NODE_LEAF` set.
+    LIGHT_NODE_MIN: u32 = 0;
+    LIGHT_NODE_MAX: u32 = 3;
+    LIGHT_NODE_POWER: u32 = 6;
+    LIGHT_NODE_AXIS: u32 = 7;
+    LIGHT_NODE_COS_SPREAD: u32 = 10;
+    LIGHT_NODE_COS_FALLOFF: u32 = 11;
+    LIGHT_NODE_CHILD: u32 = 12;
+    LIGHT_NODE_WORDS: u32 = 13;
+    LIGHT_NODE_LEAF: u32 = 0x8000_0000;
+    /// Deepest light tree the kernels walk (the host builds balanced ones, far shallower).
+    LIGHT_TREE_MAX_DEPTH: u32 = 32;
+
     /// `FrameParams::camera_kind`: a perspective camera (pinhole, or thin lens with
     /// `lens_radius` > 0): film position (sx, sy) looks along `forward + sx right + sy up`.
     CAMERA_PERSPECTIVE: u32 = 0;
@@ -388,7 +417,7 @@ shared_constants! {
     /// Words of the state an invocation of render_vcm and of vcm_light stores when it stops
     /// after `VcmParams::steps_per_dispatch` vertices: the run's next path and the path under
     /// way (`CameraPath`, `LightPath`, word by word in the kernels' `store_run`).
-    VCM_CAMERA_STATE_WORDS: u32 = 36;
+    VCM_CAMERA_STATE_WORDS: u32 = 42;
     VCM_LIGHT_STATE_WORDS: u32 = 28;
 
     /// Threads per workgroup of the one-dimensional kernels.

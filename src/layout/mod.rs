@@ -141,7 +141,8 @@ gpu_structs! {
         pub photon_probability: f32,
         pub photon_cdf: f32,
         /// Cosine of the cone's half-angle: the spot's outer angle (-1 for a point light), the
-        /// distant light's angular radius (1 for a sharp one).
+        /// distant light's angular radius (1 for a sharp one), an area light's emission about its
+        /// normal (0: the front hemisphere; -1: both faces, `MATERIAL_FLAG_TWO_SIDED`).
         pub cos_outer: f32,
         /// 1 / (cos inner - cos outer) of a spot's smooth falloff; huge for a hard edge.
         pub falloff_scale: f32,
@@ -153,7 +154,13 @@ gpu_structs! {
         pub medium: u32,
         /// An area light's POV-Ray grid (`LIGHT_GRID_*`): n | m << 8 | jitter << 16; 0 for none.
         pub grid: u32,
-        pub _pad: [u32; 2],
+        /// The branches from the light tree's root to this light's leaf (bit d set: the second
+        /// child at depth d), or `NO_LIGHT` for a light outside the tree (an infinite one, or
+        /// one that casts no direct light). See `render::light_tree`.
+        pub tree_trail: u32,
+        /// Direct-light selection: 1 for a light in the tree, an infinite light's fraction of the
+        /// infinite lights' share, 0 for a light that casts no direct light.
+        pub tree_probability: f32,
     }
 
     /// Per-render constants of every kernel, 144 bytes.
@@ -218,7 +225,9 @@ gpu_structs! {
         /// The filter's width over its `FILTER_*` default (`[render] filter_radius`), > 0: the
         /// filter is stretched by it along both axes.
         pub filter_scale: f32,
-        pub _pad: u32,
+        /// Word offset in the texture data of the light tree (`LIGHT_TREE_*`), or `NO_LIGHT` when
+        /// no light casts direct light.
+        pub light_tree: u32,
     }
 
     /// Push constants of one camera-kernel dispatch: a band of rows, one sample, and one part of

@@ -7,6 +7,7 @@ pub mod bench;
 pub mod denoise;
 pub mod gpu;
 pub mod instances;
+pub mod light_tree;
 pub mod media_bounds;
 pub mod memory;
 pub mod open_edges;

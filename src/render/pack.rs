@@ -264,6 +264,9 @@ pub fn pack_material(m: &MaterialDesc) -> Material {
         }
         MaterialKind::Null => out.kind = MATERIAL_NULL,
     }
+    if m.two_sided {
+        out.flags |= MATERIAL_FLAG_TWO_SIDED;
+    }
     out
 }
 

@@ -6,6 +6,7 @@ use std::sync::OnceLock;
 use glam::{Mat3, Vec3};
 
 use super::instances::pack_instances;
+use super::light_tree;
 use super::pack::{pack_environment, pack_scene};
 use crate::accel::wide::WideBvh;
 use crate::accel::{build_bvh, BvhError};
@@ -323,6 +324,35 @@ fn spot_solid_angle(l: &Light) -> f32 {
     (2.0 * std::f64::consts::PI * sum * h) as f32
 }
 
+/// Builds the light tree over the lights that cast direct light (see `render::light_tree`) at
+/// the end of the texture data; returns its word offset, or `NO_LIGHT`.
+fn tree_lights(
+    lights: &mut [Light],
+    powers: &[(f32, f32)],
+    (primitives, primitive_bounds): (&[Primitive], &[(Vec3, Vec3)]),
+    materials: &[Material],
+    texture_data: &mut Vec<u32>,
+) -> u32 {
+    let mut finite = Vec::new();
+    let mut infinite = Vec::new();
+    for (i, (l, &(direct, _))) in lights.iter().zip(powers).enumerate() {
+        let i = i as u32;
+        match l.kind {
+            LIGHT_DISTANT | LIGHT_ENVIRONMENT => infinite.push((i, direct)),
+            LIGHT_AREA => {
+                let p = &primitives[l.primitive as usize];
+                let (lo, hi) = primitive_bounds[l.primitive as usize];
+                let one_sided = materials[p.material as usize].flags & MATERIAL_FLAG_TWO_SIDED == 0;
+                let normal = (p.kind & PRIMITIVE_KIND_MASK == PRIMITIVE_TRIANGLE && one_sided)
+                    .then(|| (Vec3::from(p.p1) - Vec3::from(p.p0)).cross(Vec3::from(p.p2) - Vec3::from(p.p0)));
+                finite.push((i, light_tree::area_bounds(lo, hi, normal, direct)));
+            }
+            _ => finite.push((i, light_tree::point_bounds(l, direct))),
+        }
+    }
+    light_tree::build(lights, &finite, &infinite, texture_data)
+}
+
 /// Fills one pick distribution (probability and running cdf) from `power(powers[i])`; returns
 /// the total. A light of power 0 gets an empty interval; the last light with power gets cdf 1
 /// (and every light after it), so a pick of u close to 1 never falls past it.
@@ -409,6 +439,11 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         .chain(instanced.primitives.iter().map(|_| 0.0))
         .chain(unbounded.iter().map(|_| 0.0))
         .collect();
+    let primitive_bounds: Vec<(Vec3, Vec3)> = bvh
+        .order
+        .iter()
+        .map(|&i| bounded.get(i as usize).map_or((Vec3::ZERO, Vec3::ZERO), |&j| packed.bounds[j]))
+        .collect();
     // A hit on an instance is named (instance + 1) x primitive count + primitive, in one u32.
     let names = (instanced.instance_count as u64 + 1) * primitives.len() as u64;
     if names >= NO_LIGHT as u64 {
@@ -463,7 +498,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         // A Lambertian emitter of radiance L and area A emits power pi * A * L. A light of no
         // power (or one so faint its power rounds to 0) is left out: were every light such, the
         // pick probabilities would be 0 / 0.
-        let power = PI * area * channel_mean(emission.into());
+        // A two-sided one, twice that.
+        let sides = if material.two_sided { 2.0 } else { 1.0 };
+        let power = sides * PI * area * channel_mean(emission.into());
         if power.is_nan() || power <= 0.0 {
             continue;
         }
@@ -477,7 +514,9 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             }
             _ => 0,
         };
-        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, grid, ..Default::default() });
+        // `cos_outer`: the emitter's cone about its normal, the hemisphere or (two-sided) the sphere.
+        let cos_outer = if material.two_sided { -1.0 } else { 0.0 };
+        lights.push(Light { kind: LIGHT_AREA, primitive: i as u32, area, grid, cos_outer, ..Default::default() });
     }
     for (light, power) in others {
         lights.push(light);
@@ -531,6 +570,8 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             l.photon_cdf = cdf;
         },
     );
+    let light_tree =
+        tree_lights(&mut lights, &powers, (&primitives, &primitive_bounds), &packed.materials, &mut texture_data);
 
     // An infinite plane holds photons over the part of it near the rest of the scene: its disc
     // inside the sphere around the bounded shapes, the point and spot lights and the camera.
@@ -610,7 +651,7 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
         techniques: TECHNIQUES_ALL,
         pixel_filter: scene.render.filter.code(),
         filter_scale: scene.render.filter_scale(),
-        _pad: 0,
+        light_tree,
     };
     // Media: the null material needs the media variant's kernels even without a medium.
     let tracking_boxes = super::media_bounds::tracking_boxes(scene, &packed.bounds, root, cam.position);

@@ -197,6 +197,7 @@ pub(crate) struct MaterialDef {
     pub tint: Option<Spanned<ParamDef>>,
     pub ior: Option<Spanned<f64>>,
     pub emission: Option<Spanned<ParamDef>>,
+    pub two_sided: Option<Spanned<bool>>,
     pub opacity: Option<Spanned<ParamDef>>,
     pub bump: Option<Spanned<ParamDef>>,
     pub normal_map: Option<Spanned<ParamDef>>,

@@ -206,6 +206,8 @@ use FieldType as T;
 
 pub const TYPE: Field = field("type", T::Name, Required);
 pub const EMISSION: Field = field("emission", T::ColorOrTexture, Triple([0.0; 3]));
+/// Emission leaves both faces (a glowing dome seen from inside, a lamp shade), not the front alone.
+pub const TWO_SIDED: Field = field("two_sided", T::Bool, Bool(false));
 pub const OPACITY: Field = field("opacity", T::NumberOrTexture, Number(1.0));
 pub const BUMP: Field = field("bump", T::Texture, Unset);
 pub const NORMAL_MAP: Field = field("normal_map", T::Texture, Unset);
@@ -227,7 +229,7 @@ pub const K: Field = field("k", T::ColorOrTexture, Unset);
 pub const MIXED: Field = field("materials", T::Names, Required);
 pub const WEIGHT: Field = field("weight", T::NumberOrTexture, Number(0.5));
 
-const SURFACE: &[Field] = &[TYPE, EMISSION, OPACITY, BUMP, NORMAL_MAP];
+const SURFACE: &[Field] = &[TYPE, EMISSION, TWO_SIDED, OPACITY, BUMP, NORMAL_MAP];
 
 pub const MATERIALS: Family = Family {
     table: "materials",

@@ -95,6 +95,8 @@ pub enum MaterialKind {
 pub struct MaterialDesc {
     pub kind: MaterialKind,
     pub emission: ColorParam,
+    /// The emission leaves both faces (scene `two_sided`), not the front alone.
+    pub two_sided: bool,
     /// In [0, 1]; below 1 the surface lets that fraction of rays through (stochastic alpha).
     pub opacity: ScalarParam,
     pub normal: NormalMod,
@@ -122,6 +124,7 @@ impl MaterialDesc {
         MaterialDesc {
             kind,
             emission: ColorParam::constant(Vec3::ZERO),
+            two_sided: false,
             opacity: ScalarParam::constant(1.0),
             normal: NormalMod::None,
         }

@@ -42,6 +42,7 @@ impl Builder<'_> {
             ("tint", span_of(&m.tint)),
             ("ior", span_of(&m.ior)),
             ("emission", span_of(&m.emission)),
+            ("two_sided", span_of(&m.two_sided)),
             ("opacity", span_of(&m.opacity)),
             ("bump", span_of(&m.bump)),
             ("normal_map", span_of(&m.normal_map)),
@@ -221,7 +222,8 @@ impl Builder<'_> {
                 MaterialKind::Mix { a: ids[0], b: ids[1], weight }
             }
         };
-        self.add_material(name, MaterialDesc { kind, emission, opacity, normal });
+        let two_sided = m.two_sided.as_ref().map_or(kinds::TWO_SIDED.flag(), |t| *t.get_ref());
+        self.add_material(name, MaterialDesc { kind, emission, two_sided, opacity, normal });
         Ok(())
     }
 

@@ -442,7 +442,7 @@ impl Builder<'_> {
             (None, Some((t, scale))) => NormalMod::Bump { texture: image(self, t, Channel::R), strength: 0.01 * scale },
             (None, None) => NormalMod::None,
         };
-        let finish = |kind: MaterialKind| MaterialDesc { kind, emission, opacity, normal };
+        let finish = |kind: MaterialKind| MaterialDesc { kind, emission, two_sided: false, opacity, normal };
         let metallic = m.metallic > 0.0 || metal_tex.is_some();
         // glTF's transmission passes light through the dielectric part (not the metal): a mix of
         // the opaque material and smooth or rough glass of the material's index, by the factor.

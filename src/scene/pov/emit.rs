@@ -1119,6 +1119,8 @@ impl Emitter<'_> {
                 .map(|i| colour[i] * (f.emission[i] + if f.ambient[i] > f.diffuse { f.ambient[i] } else { 0.0 }));
             if e.iter().any(|x| *x > 0.0) {
                 m.insert("emission".into(), rgb(e));
+                // POV-Ray's glow is the same from either side: a sky sphere lights what it holds.
+                m.insert("two_sided".into(), T::Boolean(true));
             }
         }
         let reflection = f.reflection.iter().cloned().fold(0.0, f64::max);

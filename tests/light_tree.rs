@@ -1,0 +1,220 @@
+//! Direct light chosen by the light tree (issue 51): lights of very different power at very
+//! different distances, and an emitter that encloses the scene, each light its own share,
+//! against closed forms on both backends.
+
+mod common;
+
+use std::f64::consts::PI;
+
+use glam::DVec3;
+use photonix::io::Image;
+use photonix::render::SceneBuffers;
+use photonix::scene::{parse_scene, Scene};
+
+const SIZE: u32 = 32;
+const ALBEDO: f64 = 0.5;
+const CAMERA_HEIGHT: f64 = 6.0;
+const FOV_DEG: f64 = 60.0;
+
+/// A large diffuse floor (albedo 0.5) at y = 0 seen from straight above (camera-right is -x,
+/// image up is +z), with `more` (TOML) beside it, rendered by `integrator`.
+fn floor_scene(integrator: &str, more: &str) -> Scene {
+    let text = format!(
+        r#"
+[camera]
+position = [0, {CAMERA_HEIGHT}, 0]
+look_at = [0, 0, 0]
+up = [0, 0, 1]
+fov = {FOV_DEG}
+resolution = [{SIZE}, {SIZE}]
+
+[render]
+max_depth = 3
+seed = 7
+integrator = "{integrator}"
+
+[photons]
+enabled = false
+
+[materials.floor]
+type = "diffuse"
+reflectance = {ALBEDO}
+
+[[shapes]]
+type = "quad"
+material = "floor"
+vertices = [[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]]
+
+{more}
+"#
+    );
+    parse_scene(&text, &common::repo_path("scenes/test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Where film position (sx, sy) in [-1, 1]^2 looks at on the floor.
+fn floor_point(sx: f64, sy: f64) -> DVec3 {
+    let t = (FOV_DEG * 0.5).to_radians().tan() * CAMERA_HEIGHT;
+    DVec3::new(-sx * t, 0.0, sy * t)
+}
+
+/// The mean over pixel (px, py) of `radiance(x)` on the floor, by an 8 x 8 grid of points.
+fn pixel_mean(px: u32, py: u32, radiance: &impl Fn(DVec3) -> f64) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..8 {
+        for j in 0..8 {
+            let sx = 2.0 * (px as f64 + (i as f64 + 0.5) / 8.0) / SIZE as f64 - 1.0;
+            let sy = 1.0 - 2.0 * (py as f64 + (j as f64 + 0.5) / 8.0) / SIZE as f64;
+            sum += radiance(floor_point(sx, sy));
+        }
+    }
+    sum / 64.0
+}
+
+/// Radiance of the floor lit by a point light of intensity `i` at `p`: rho / pi I cos / d^2.
+fn point_lit(x: DVec3, p: DVec3, i: f64) -> f64 {
+    let d = p - x;
+    ALBEDO / PI * i * (d.y / d.length()) / d.length_squared()
+}
+
+fn render(buffers: &SceneBuffers, spp: u32, gpu: bool) -> Image {
+    if gpu {
+        common::gpu_image(&common::gpu(), buffers, spp)
+    } else {
+        common::cpu_image(buffers, spp)
+    }
+}
+
+/// Checks the render against `radiance` block by block (8 x 8 pixels: the closed form's mean
+/// against the render's, within `tolerance`) and that no pixel is a firefly (above 10 times the
+/// median of its 3 x 3 neighbourhood).
+fn check(label: &str, image: &Image, radiance: impl Fn(DVec3) -> f64, tolerance: f64) {
+    let mut worst = 0.0f64;
+    for by in 0..SIZE / 8 {
+        for bx in 0..SIZE / 8 {
+            let (mut rendered, mut expected) = (0.0, 0.0);
+            for py in by * 8..by * 8 + 8 {
+                for px in bx * 8..bx * 8 + 8 {
+                    rendered += image.pixel(px, py)[1] as f64;
+                    expected += pixel_mean(px, py, &radiance);
+                }
+            }
+            worst = worst.max((rendered / expected - 1.0).abs());
+        }
+    }
+    let mut fireflies = 0;
+    for py in 1..SIZE - 1 {
+        for px in 1..SIZE - 1 {
+            let mut around: Vec<f32> = (0..9).map(|k| image.pixel(px + k % 3 - 1, py + k / 3 - 1)[1]).collect();
+            around.sort_by(f32::total_cmp);
+            if image.pixel(px, py)[1] > 10.0 * around[4] {
+                fireflies += 1;
+            }
+        }
+    }
+    println!("{label}: worst 8x8 block off by {:.2}%, {fireflies} fireflies", 100.0 * worst);
+    assert!(worst < tolerance, "{label}: a block is off by {:.2}%", 100.0 * worst);
+    assert_eq!(fireflies, 0, "{label}: fireflies");
+}
+
+// A far sun and a near lamp: the sun, a point light 14 km away of 2e8 W/sr (irradiance 1 at the
+// floor, 45 degrees up), holds a hundred million times the lamp's power; by power alone the
+// lamp's side of the frame is black with white dots.
+
+const SUN_AND_LAMP: &str = r#"
+[[lights]]
+type = "point"
+position = [10000, 10000, 0]
+intensity = 2e8
+
+[[lights]]
+type = "point"
+position = [-2, 0.6, 1]
+intensity = 2
+"#;
+
+fn sun_and_lamp(x: DVec3) -> f64 {
+    point_lit(x, DVec3::new(10000.0, 10000.0, 0.0), 2e8) + point_lit(x, DVec3::new(-2.0, 0.6, 1.0), 2.0)
+}
+
+fn check_sun_and_lamp(integrator: &str, gpu: bool) {
+    let buffers = common::buffers(&floor_scene(integrator, SUN_AND_LAMP), SIZE, SIZE);
+    let image = render(&buffers, 64, gpu);
+    let backend = if gpu { "gpu" } else { "cpu" };
+    // Point lights leave only the choice between them as noise: 64 samples hold each block's
+    // mean within about 1% (measured below 0.5%).
+    check(&format!("{backend} {integrator}: far sun and near lamp"), &image, sun_and_lamp, 0.02);
+}
+
+#[test]
+fn a_far_sun_and_a_near_lamp_both_light_their_sides_cpu() {
+    for integrator in ["pt", "vcm"] {
+        check_sun_and_lamp(integrator, false);
+    }
+}
+
+#[test]
+fn a_far_sun_and_a_near_lamp_both_light_their_sides_gpu() {
+    check_sun_and_lamp("pt", true);
+}
+
+// A glowing dome: a two-sided emitting sphere of radius 1000 around the scene (POV-Ray's sky
+// sphere) and a point light inside it. The dome gives the floor E = pi L, so L_floor = rho L plus
+// the lamp's light; by power alone it takes every shadow ray and the lamp is lost, and with
+// one-sided emission it glows outward only and lights nothing inside.
+
+const DOME_RADIANCE: f64 = 0.4;
+
+fn dome() -> String {
+    format!(
+        r#"
+[materials.dome]
+type = "diffuse"
+reflectance = 0
+emission = {DOME_RADIANCE}
+two_sided = true
+
+[[shapes]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1000
+material = "dome"
+
+[[lights]]
+type = "point"
+position = [1, 1, -1]
+intensity = 3
+"#
+    )
+}
+
+fn dome_lit(x: DVec3) -> f64 {
+    ALBEDO * DOME_RADIANCE + point_lit(x, DVec3::new(1.0, 1.0, -1.0), 3.0)
+}
+
+fn check_dome(integrator: &str, gpu: bool) {
+    let buffers = common::buffers(&floor_scene(integrator, &dome()), SIZE, SIZE);
+    let image = render(&buffers, 64, gpu);
+    let backend = if gpu { "gpu" } else { "cpu" };
+    check(&format!("{backend} {integrator}: inside a glowing dome"), &image, dome_lit, 0.03);
+}
+
+#[test]
+fn a_glowing_dome_lights_the_scene_inside_it_cpu() {
+    for integrator in ["pt", "vcm"] {
+        check_dome(integrator, false);
+    }
+}
+
+#[test]
+fn a_glowing_dome_lights_the_scene_inside_it_gpu() {
+    check_dome("pt", true);
+}
+
+#[test]
+fn the_twins_agree_on_the_light_tree_and_two_sided_emitters() {
+    for integrator in ["pt", "vcm", "ppm"] {
+        let buffers = common::buffers(&floor_scene(integrator, &format!("{}{SUN_AND_LAMP}", dome())), SIZE, SIZE);
+        assert_ne!(buffers.frame.light_tree, photonix::layout::constants::NO_LIGHT);
+        common::assert_twins_agree(&format!("{integrator}: dome, sun and lamp"), &buffers);
+    }
+}
