@@ -109,7 +109,8 @@ function onText(msg) {
     case 'reply': {
       const resolve = pending.get(msg.id);
       pending.delete(msg.id);
-      if (!msg.ok) showMessage(msg.error);
+      // A save that would replace a file is asked about, not shown as an error.
+      if (!msg.ok && !msg.replace_needed) showMessage(msg.error);
       if (resolve) resolve(msg);
       break;
     }
@@ -160,9 +161,44 @@ export async function edit(command) {
 }
 export const undo = () => send({ type: 'undo' });
 export const redo = () => send({ type: 'redo' });
+/// Saves; where the save would replace a file the editor did not open or last write (a .toml
+/// beside the .pov, or a file changed on disk since), asks first and replaces only when told.
 export async function save() {
-  if ((await send({ type: 'save' })).ok) showMessage(`saved ${state.scene.file}`, 'info');
+  let reply = await send({ type: 'save' });
+  if (!reply.ok && reply.replace_needed) {
+    if (!await askReplace(reply.error)) { showMessage(`not saved: ${state.scene.file} kept as it is`, 'info'); return; }
+    reply = await send({ type: 'save', replace: true });
+  }
+  if (reply.ok) showMessage(`saved ${state.scene.file}`, 'info');
 }
+
+/// The question of a save that would replace a file: resolves true for "Replace it".
+function askReplace(message) {
+  const dialog = $('replace-dialog');
+  $('replace-text').textContent = message;
+  document.body.dataset.asking = 'replace';
+  return new Promise((resolve) => {
+    const done = (yes) => {
+      $('replace-yes').onclick = $('replace-no').onclick = dialog.oncancel = null;
+      dialog.close();
+      document.body.dataset.asking = '';
+      resolve(yes);
+    };
+    $('replace-yes').onclick = () => done(true);
+    $('replace-no').onclick = () => done(false);
+    dialog.oncancel = () => done(false);
+    dialog.showModal();
+  });
+}
+
+/// What the server opened in place of the file named (the .toml saved beside a .pov), said
+/// until closed.
+function showNotice(text) {
+  $('notice').hidden = !text;
+  $('notice-text').textContent = text || '';
+  document.body.dataset.notice = text || '';
+}
+$('notice-close').onclick = () => showNotice(null);
 export function sendView(view) { send({ type: 'view', view }); }
 
 const waiting = [];
@@ -254,6 +290,7 @@ function setScene(scene) {
   state.scene = scene;
   document.body.dataset.revision = String(scene.revision);
   $('file-name').textContent = scene.file + (scene.dirty ? ' •' : '');
+  if (!old || old.notice !== scene.notice) showNotice(scene.notice);
   viewport.setScene(scene, !old);
   // Keep the selection where its entries still exist (by id: another tab's delete of an
   // entry before it does not move it).
@@ -441,7 +478,10 @@ async function images() {
   return reply.images;
 }
 
-const properties = new Properties($('properties'), { edit, state, showMessage, images, entryOf, setGroup, newMaterial, switchMaterialType });
+const properties = new Properties($('properties'), {
+  edit, state, showMessage, images, entryOf, setGroup, newMaterial, switchMaterialType,
+  typedTransform: (sel, part, values) => viewport.typedTransform(sel, part, values),
+});
 const renderDialog = new RenderDialog($('render-dialog'), { showMessage, token });
 
 $('undo').onclick = undo;

@@ -3,7 +3,7 @@
 //! viewport and for picking). Format (documented in docs/editor.md):
 //!
 //! ```text
-//! { "revision", "file", "dirty", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
+//! { "revision", "file", "dirty", "notice", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
 //!   "bounds": { "min": [x,y,z], "max": [x,y,z] },
 //!   "camera": { "fields": {..}, "position", "look_at", "up", "fov", "width", "height", "projection", "view_height" },
 //!   "render": {..}, "photons": {..} | null, "environment": {..} | null,
@@ -13,6 +13,8 @@
 //!   "instances": [ { "id", "fields": {..}, "object", "copies", "drawn", "color", "emissive",
 //!                    "positions": [..], "groups": [..] } ] }
 //! ```
+//! `notice` (or null) says what was opened in place of the file named and why (a `.toml` saved
+//! beside a `.pov` and newer than it; `SceneDocument::load`).
 //! `undo_author` and `redo_author` name the page session that made the step Undo or Redo would
 //! take (0: an API call; null: no step), so a page can say whether it is its own.
 //! `id` is the entry's stable id (`SceneDocument::ids`): the page selects and edits by it.
@@ -171,6 +173,7 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "revision": doc.revision(),
         "file": doc.path().file_name().map(|n| n.to_string_lossy().into_owned()),
         "dirty": doc.dirty(),
+        "notice": doc.notice(),
         "can_undo": doc.can_undo(),
         "can_redo": doc.can_redo(),
         "undo_author": doc.undo_author(),

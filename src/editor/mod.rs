@@ -13,6 +13,6 @@ pub mod gltf;
 pub mod preview;
 pub mod server;
 
-pub use document::{Command, EditError, SceneDocument, Target};
+pub use document::{Command, EditError, SaveError, SceneDocument, Target};
 pub use preview::{BackendChoice, FinalRequest, View};
 pub use server::{ServeError, ServeOptions, Server};

@@ -3,7 +3,9 @@
 //! Routes (every one behind the token, see `auth`):
 //! - `GET /` and the page's assets, embedded in the binary (`assets.rs`);
 //! - `GET /api/scene`: the scene as the page sees it (`geometry::scene_json`);
-//! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save`;
+//! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save` (409 with
+//!   `"replace_needed": true` where it would replace a file the editor did not open or last
+//!   write; `?replace=true` saves over it);
 //! - `GET /api/scene.toml`: the scene's current text (a download);
 //! - `GET /api/scene.glb`: the scene's geometry as glTF 2.0 binary (`gltf.rs`, a download);
 //! - `GET /api/kinds`: every kind of material, light, shape and medium with its fields and
@@ -20,7 +22,8 @@
 //!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
 //!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`, `{"type": "denoise", "on": bool}` (the preview's denoising toggle; the hello says
 //!   whether it is on and, where the library is missing, why not: `denoise`, `denoiser_missing`),
-//!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
+//!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (`"replace": true` to save
+//!   over a file a plain save refuses, whose reply says `"replace_needed": true`) (each answered by a
 //!   `{"type": "reply", "id", "ok", "error"}`); after the scene and the final render's status
 //!   it sends `{"type": "hello", "session"}`, the page's session number. Each page's view is its own: the renderer
 //!   renders the view last sent (by whichever page), and a page gets only the preview frames of
@@ -44,7 +47,7 @@ use serde_json::{json, Value as Json};
 use tokio::sync::broadcast;
 
 use super::assets::asset;
-use super::document::{Command, EditError, SceneDocument};
+use super::document::{Command, EditError, SaveError, SceneDocument};
 use super::geometry::scene_json;
 use super::preview::{encode_exr, encode_png, BackendChoice, Event, FinalRequest, Renderer, View};
 
@@ -175,6 +178,11 @@ impl Server {
     /// The scene's current text (what a save would write).
     pub fn scene_text(&self) -> String {
         self.app.doc.lock().expect("document lock").text().to_string()
+    }
+
+    /// What was opened in place of the file named, and why (`SceneDocument::load`).
+    pub fn notice(&self) -> Option<String> {
+        self.app.doc.lock().expect("document lock").notice().map(str::to_string)
     }
 
     /// True when the scene has edits that are not saved (Ctrl-C warns about them).
@@ -463,22 +471,38 @@ async fn post_redo(State(app): State<Arc<App>>) -> Response {
     reply(change(&app, Change::Redo, 0).await)
 }
 
-async fn save(app: &Arc<App>) -> Result<u64, String> {
+/// Saves; with `replace`, over a file the plain save leaves alone (the user said so).
+async fn save(app: &Arc<App>, replace: bool) -> Result<u64, SaveError> {
     let app2 = app.clone();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
-        doc.save()?;
+        doc.save_replacing(replace)?;
         let json = Arc::new(scene_message(&doc));
         *app2.scene_json.lock().expect("scene json lock") = json.clone();
         let _ = app2.updates.send(json);
         Ok(doc.revision())
     })
     .await
-    .map_err(|e| format!("the save failed: {e}"))?
+    .map_err(|e| SaveError::Failed(format!("the save failed: {e}")))?
 }
 
-async fn post_save(State(app): State<Arc<App>>) -> Response {
-    reply(save(&app).await)
+#[derive(Deserialize)]
+struct SaveQuery {
+    #[serde(default)]
+    replace: bool,
+}
+
+/// `POST /api/save[?replace=true]`: a save that would replace another file is refused with 409
+/// and `"replace_needed": true`, so the caller can ask and send `replace=true`.
+async fn post_save(State(app): State<Arc<App>>, Query(query): Query<SaveQuery>) -> Response {
+    match save(&app, query.replace).await {
+        Ok(revision) => axum::Json(json!({ "ok": true, "revision": revision })).into_response(),
+        Err(SaveError::WouldReplace(message)) => {
+            (StatusCode::CONFLICT, axum::Json(json!({ "ok": false, "error": message, "replace_needed": true })))
+                .into_response()
+        }
+        Err(SaveError::Failed(message)) => error(StatusCode::UNPROCESSABLE_ENTITY, &message),
+    }
 }
 
 #[derive(Deserialize)]
@@ -673,8 +697,11 @@ enum PageMessage {
     Redo {
         id: Option<u64>,
     },
+    /// `replace`: the user agreed to replace the file a plain save would not.
     Save {
         id: Option<u64>,
+        #[serde(default)]
+        replace: bool,
     },
     /// The preview's denoising toggle.
     Denoise {
@@ -784,7 +811,14 @@ async fn handle_page_message(app: &Arc<App>, text: &str, session: u64) -> Option
         PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command), session).await),
         PageMessage::Undo { id } => (id, change(app, Change::Undo, session).await),
         PageMessage::Redo { id } => (id, change(app, Change::Redo, session).await),
-        PageMessage::Save { id } => (id, save(app).await),
+        PageMessage::Save { id, replace } => match save(app, replace).await {
+            Ok(revision) => (id, Ok(revision)),
+            Err(SaveError::WouldReplace(message)) => {
+                let reply = json!({ "type": "reply", "id": id, "ok": false, "error": message, "replace_needed": true });
+                return Some(reply.to_string());
+            }
+            Err(SaveError::Failed(message)) => (id, Err(message)),
+        },
     };
     let reply: Json = match result {
         Ok(revision) => json!({ "type": "reply", "id": id, "ok": true, "revision": revision }),
