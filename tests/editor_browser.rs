@@ -292,7 +292,16 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     assert!(!url.as_str().unwrap().contains("token"), "{url}");
     driver.screenshot("01-first-frame.png");
 
-    // Click the ball in the viewport (solid shading, so the click lands on drawn geometry)
+    // Click the ball in Rendered shading (the default): the surfaces are not drawn over the
+    // render, yet the click picks what it lands on
+    driver.click("#canvas");
+    driver.wait_for("the ball selected in Rendered shading", "return document.body.dataset.selection", |v| {
+        v == "shape:1"
+    });
+    driver.press("\u{E00C}"); // Escape
+    driver.wait_for("nothing selected", "return document.body.dataset.selection", |v| v == "");
+
+    // Click the ball in the viewport in solid shading
     driver.click("#shading");
     let point = driver.script(
         "const e = window.photonixEditor, v = e.viewport, c = v.canvas.getBoundingClientRect();
@@ -303,7 +312,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     // WebDriver's element click presses the mouse.
     let (dx, dy) = (point[0].as_f64().unwrap(), point[1].as_f64().unwrap());
     assert!(dx.abs() < 2.0 && dy.abs() < 2.0, "the ball projects to ({dx}, {dy}) from the centre");
-    assert!(outline_pixels(&driver).iter().sum::<u64>() < 20, "an outline before any selection");
+    driver.wait_for("no outline before any selection", OUTLINE_PIXELS, |v| v[0].as_u64().unwrap_or(99) < 20);
     driver.click("#canvas");
     driver.wait_for("the ball to be selected", "return document.body.dataset.selection", |v| v == "shape:1");
     // Its silhouette is outlined: a ring of orange pixels around the ball.
@@ -1151,4 +1160,99 @@ fn browser_imports_3ds_and_ifs_and_shows_the_final_render_time() {
     });
     driver.screenshot("61-final-render.png");
     driver.click("#render-cancel");
+}
+
+/// A POV-Ray scene for the reopening test: a ball on a floor, a lamp.
+const POV_SCENE: &str = "camera { location <0, 1, -4> look_at <0, 0.5, 0> }
+light_source { <2, 4, -3> rgb 1 }
+plane { y, 0 pigment { rgb 0.8 } }
+sphere { <0, 0.5, 0>, 0.5 pigment { rgb <0.8, 0.1, 0.1> } }
+";
+
+#[test]
+fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_replacing() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let token = "editor-browser-reopen-0123456789";
+    let options = |scene: &std::path::Path| {
+        let mut o = photonix::editor::ServeOptions::new(scene.to_path_buf());
+        o.backend = photonix::editor::BackendChoice::Cpu;
+        o.preview_size = 48;
+        o.port = port;
+        o.token = Some(token.to_string());
+        o
+    };
+    let mut f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| {
+        let pov = o.scene.with_extension("pov");
+        std::fs::remove_file(&o.scene).unwrap();
+        std::fs::write(&pov, POV_SCENE).unwrap();
+        *o = options(&pov);
+    });
+    let (pov, toml) = (f.dir.path().join("scene.pov"), f.dir.path().join("scene.toml"));
+    let restart = |f: &mut Fixture| {
+        let server = f.server.take().unwrap();
+        f.runtime.block_on(server.shutdown());
+        f.server = Some(f.runtime.block_on(photonix::editor::Server::start(options(&pov))).expect("restart"));
+    };
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+    assert_eq!(driver.script("return document.body.dataset.notice || ''"), "", "a notice on a first opening");
+
+    // Edit the translation (move the ball) and save: scene.toml appears beside scene.pov
+    driver.click("#tree-shape-1");
+    driver.wait_for("the ball selected", "return document.body.dataset.selection", |v| v == "shape:1");
+    driver.type_into("#tf-translate-0", "0.75\n");
+    wait_text(&f, "the move", |t| t.contains("translate = [0.75, 0, 0]"));
+    driver.click("#save");
+    let start = Instant::now();
+    while !std::fs::read_to_string(&toml).is_ok_and(|t| t.contains("translate = [0.75, 0, 0]")) {
+        assert!(start.elapsed() < Duration::from_secs(30), "the save did not write scene.toml");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(driver.script("return document.body.dataset.asking || ''"), "", "the first save asked");
+
+    // `serve scene.pov` again: the edited scene.toml (newer) is opened, and the page says so
+    restart(&mut f);
+    driver.wait_for("the reconnection", "return document.body.dataset.connections", |v| v == "2");
+    let notice = driver.wait_for("the notice", "return document.body.dataset.notice || ''", |v| v != "");
+    let notice = notice.as_str().unwrap();
+    assert!(notice.contains("opened scene.toml") && notice.contains("scene.pov"), "{notice}");
+    assert!(driver.script("return document.getElementById('notice').hidden") == false, "the notice is not shown");
+    assert!(f.text().contains("translate = [0.75, 0, 0]"), "the reopened scene lost the edit:\n{}", f.text());
+    driver.screenshot("70-reopened-pov.png");
+
+    // The .pov is edited afterwards (newer): its translation opens, and Save asks first
+    let later = std::time::SystemTime::now() + Duration::from_secs(5);
+    std::fs::File::options().write(true).open(&pov).unwrap().set_modified(later).unwrap();
+    restart(&mut f);
+    driver.wait_for("the second reconnection", "return document.body.dataset.connections", |v| v == "3");
+    let notice = driver.wait_for("the older notice", "return document.body.dataset.notice || ''", |v| {
+        v.as_str().is_some_and(|n| n.contains("older"))
+    });
+    assert!(notice.as_str().unwrap().contains("Save asks"), "{notice}");
+    assert!(!f.text().contains("translate = [0.75"), "the translation is not the .pov's");
+    let saved = std::fs::read_to_string(&toml).unwrap();
+    // Keep it: nothing is written
+    driver.click("#save");
+    driver.wait_for("the question", "return document.body.dataset.asking || ''", |v| v == "replace");
+    let question = driver.script("return document.getElementById('replace-text').textContent");
+    assert!(question.as_str().unwrap().contains("scene.toml already exists beside scene.pov"), "{question}");
+    driver.screenshot("71-save-asks.png");
+    driver.click("#replace-no");
+    driver.wait_for("the answer", "return document.body.dataset.asking || ''", |v| v == "");
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(std::fs::read_to_string(&toml).unwrap(), saved, "'keep it' replaced scene.toml");
+    // Replace it: written
+    driver.click("#save");
+    driver.wait_for("the question again", "return document.body.dataset.asking || ''", |v| v == "replace");
+    driver.click("#replace-yes");
+    let start = Instant::now();
+    while std::fs::read_to_string(&toml).unwrap() == saved {
+        assert!(start.elapsed() < Duration::from_secs(30), "'replace it' did not write scene.toml");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(std::fs::read_to_string(&toml).unwrap(), f.text());
+    driver.wait_for("the notice gone after the save", "return document.body.dataset.notice || ''", |v| v == "");
 }

@@ -430,6 +430,17 @@ export class Viewport {
     this.perspective.up.set(...cam.up).normalize();
     this.perspective.fov = cam.projection === 'perspective' ? cam.fov : 45;
     view.controls.target.set(...cam.look_at);
+    // A look_at next to the eye (a glTF camera's is 1 mm ahead) would make the orbit turn
+    // about the eye: orbit about the point of the view's axis nearest the scene's centre.
+    const eye = this.perspective.position;
+    const ahead = view.controls.target.clone().sub(eye);
+    if (this.extent && ahead.length() < this.extent * 0.05 && ahead.length() > 0) {
+      const b = this.sceneData.bounds;
+      const centre = new THREE.Vector3(...b.min).add(new THREE.Vector3(...b.max)).multiplyScalar(0.5);
+      const dir = ahead.normalize();
+      const distance = Math.max(centre.sub(eye).dot(dir), this.extent * 0.25);
+      view.controls.target.copy(eye).addScaledVector(dir, distance);
+    }
     this.perspective.lookAt(view.controls.target);
     this.perspective.updateProjectionMatrix();
     view.controls.update();
@@ -771,6 +782,33 @@ export class Viewport {
     else if (commands.length) this.app.edit({ op: 'batch', commands });
   }
 
+  /// The edit of a typed transform part (`translate`, `rotate` or `scale`, three numbers) of
+  /// entry `sel`. A typed rotate or scale turns and scales about the entry's own centre (its
+  /// bounding box's, in its own coordinates), as the gizmo does, not about the world's origin:
+  /// the translate takes up the difference, so the centre stays where it is.
+  typedTransform(sel, part, values) {
+    const target = { [`${sel.kind}_id`]: sel.id };
+    const command = { op: 'set_transform', target, [part]: [...values] };
+    const o = this.objectOf(sel);
+    if (part === 'translate' || !o || (o.kind !== 'mesh' && o.kind !== 'area')) return command;
+    o.mesh.geometry.computeBoundingBox();
+    if (o.mesh.geometry.boundingBox.isEmpty()) return command;
+    const local = o.mesh.geometry.boundingBox.getCenter(new THREE.Vector3());
+    o.holder.updateMatrix();
+    const centre = local.clone().applyMatrix4(o.holder.matrix);
+    const after = new THREE.Object3D();
+    after.rotation.order = EULER_ORDER;
+    after.position.copy(o.holder.position);
+    after.quaternion.copy(o.holder.quaternion);
+    after.scale.copy(o.holder.scale);
+    if (part === 'rotate') after.rotation.set(values[0] * DEG, values[1] * DEG, values[2] * DEG, EULER_ORDER);
+    else after.scale.set(...values);
+    after.updateMatrix();
+    after.position.add(centre.clone().sub(local.clone().applyMatrix4(after.matrix)));
+    command.translate = after.position.toArray().map(round);
+    return command;
+  }
+
   /// The fields of the entry a target names, as written in the file.
   entryFields(t) {
     const list = t.kind === 'shape' ? this.sceneData.shapes : t.kind === 'light' ? this.sceneData.lights : this.sceneData.instances || [];
@@ -929,11 +967,20 @@ export class Viewport {
     const ndc = new THREE.Vector2(((x - r.x) / r.w) * 2 - 1, -((y - r.y) / r.h) * 2 + 1);
     const raycaster = new THREE.Raycaster();
     raycaster.setFromCamera(ndc, r.view.camera);
-    const hits = raycaster.intersectObjects(this.pickables.filter((m) => m.visible && !this.hidden.has(keyOf(m.userData.object.target))), false);
+    const hits = raycaster.intersectObjects(this.pickables.filter((m) => this.pickable(m)), false);
     const additive = e.shiftKey || e.ctrlKey || e.metaKey;
     if (!hits.length) { if (!additive) this.app.select(null); return; }
     const t = hits[0].object.userData.object.target;
     this.app.pick(t.kind === 'camera' ? { kind: 'camera' } : { kind: t.kind, id: t.id }, additive);
+  }
+
+  /// Whether a click may pick `mesh`: not hidden by the user (H) in this tab. Surfaces are left
+  /// undrawn over the rendered image (`draw` clears their `visible`), yet what the click lands on
+  /// there is the same object, so their visibility is not asked; an icon's is.
+  pickable(mesh) {
+    const o = mesh.userData.object;
+    if (this.hidden.has(keyOf(o.target))) return false;
+    return mesh.visible || o.kind === 'mesh' || o.kind === 'area';
   }
 
   // Drawing ------------------------------------------------------------------------------------
