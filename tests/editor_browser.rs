@@ -250,9 +250,18 @@ const OUTLINE_PIXELS: &str = "const c = document.getElementById('canvas');
     }
     return n;";
 
-fn outline_pixels(driver: &Driver) -> Vec<u64> {
-    let v = driver.script(OUTLINE_PIXELS);
-    v.as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect()
+/// The bounding box of the `index`th shape's triangles in the page's scene.
+fn bounds_of(page: &Value, index: usize) -> ([f64; 3], [f64; 3]) {
+    let p: Vec<f64> =
+        page["shapes"][index]["positions"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for v in p.chunks(3) {
+        for i in 0..3 {
+            lo[i] = lo[i].min(v[i]);
+            hi[i] = hi[i].max(v[i]);
+        }
+    }
+    (lo, hi)
 }
 
 /// The ball's (the second shape's) `transform.translate` in `text`.
@@ -809,7 +818,31 @@ fn browser_imports_models_and_edits_materials() {
     // In front of the view: the camera at z = 4 looks along -z.
     assert!(glb[2] < 4.0 && ply[2] < 4.0, "{glb:?} {ply:?}");
     photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
+    // Standing on the floor (y = 0), not half under it, and near the view's centre
+    for index in [3, 4] {
+        let (lo, hi) = bounds_of(&f.scene_json(), index);
+        assert!(lo[1].abs() < 1e-3, "import {index} does not stand on the floor: {lo:?} {hi:?}");
+        assert!(lo[0].abs().min(hi[0].abs()) < 2.5 && lo[2] > -1.0, "import {index} landed far away: {lo:?} {hi:?}");
+    }
     driver.screenshot("30-imported.png");
+
+    // A typed rotate and scale turn about the block's own centre, not about the world's origin
+    driver.click("#tree-shape-2");
+    driver.wait_for("the block", "return document.body.dataset.selection", |v| v == "shape:2");
+    let centre = |page: &Value| {
+        let (lo, hi) = bounds_of(page, 2);
+        [0, 1, 2].map(|i| (lo[i] + hi[i]) / 2.0)
+    };
+    let before = centre(&f.scene_json());
+    driver.type_into("#tf-rotate-0", "90\n");
+    wait_text(&f, "the typed rotate", |t| t.contains("rotate = [90, 30, 0]"));
+    driver.wait_for("the rotate in the panel", "return document.getElementById('tf-rotate-0')?.value", |v| v == "90");
+    driver.type_into("#tf-scale-1", "2\n");
+    wait_text(&f, "the typed scale", |t| t.contains("scale = [1, 2, 1]"));
+    let after = centre(&f.scene_json());
+    let moved = (0..3).map(|i| (after[i] - before[i]).abs()).fold(0.0, f64::max);
+    assert!(moved < 1e-3, "the typed rotate and scale moved the block's centre from {before:?} to {after:?}");
+    driver.press("\u{E00C}"); // Escape
 
     // The glass: every field of its type, those not written shown with their defaults
     driver.click("#tree-material-glass");
@@ -846,6 +879,14 @@ fn browser_imports_models_and_edits_materials() {
     );
     wait_text(&f, "the picked colour", |t| t.contains("reflectance = [0.2159, 0.2159, 0.2159]"));
     driver.screenshot("31-material-switched.png");
+    // To a conductor (its colour becomes the tint) and back: the colour is kept
+    driver.click("#mat-type option[value='conductor']");
+    wait_text(&f, "the conductor", |t| t.contains("[materials.glass]\ntype = \"conductor\""));
+    driver.click("#mat-type option[value='diffuse']");
+    let text = wait_text(&f, "the diffuse again", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
+    let glass = &text[text.find("[materials.glass]").unwrap()..];
+    let glass = &glass[..glass.find("\n\n").unwrap_or(glass.len())];
+    assert!(glass.contains("reflectance = [0.2159, 0.2159, 0.2159]") && !glass.contains("tint"), "{glass}");
     // Wireframe shading, and the Blender mouse scheme with its numpad views
     driver.click("#wireframe");
     let wire = driver.script(
@@ -1167,6 +1208,7 @@ const POV_SCENE: &str = "camera { location <0, 1, -4> look_at <0, 0.5, 0> }
 light_source { <2, 4, -3> rgb 1 }
 plane { y, 0 pigment { rgb 0.8 } }
 sphere { <0, 0.5, 0>, 0.5 pigment { rgb <0.8, 0.1, 0.1> } }
+blob { threshold 0.6 sphere { <1.2, 0.4, 0>, 0.5, 1 } sphere { <1.5, 0.4, 0>, 0.5, 1 } pigment { rgb 0.8 } }
 ";
 
 #[test]
@@ -1200,6 +1242,20 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     });
     assert_eq!(driver.script("return document.body.dataset.notice || ''"), "", "a notice on a first opening");
 
+    // The blob is one entry (not thousands of triangles), and moves as one
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 2, "the plane and the ball only");
+    assert_eq!(page["instances"].as_array().unwrap().len(), 1, "the blob as one entry");
+    assert_eq!(page["instances"][0]["fields"]["name"], "blob (line 5)");
+    assert_eq!(driver.script("return document.querySelectorAll('[id^=tree-shape-], [id^=tree-instance-]').length"), 3);
+    driver.click("#tree-instance-0");
+    driver.wait_for("the blob selected", "return document.body.dataset.selection", |v| v == "instance:0");
+    driver.type_into("#tf-translate-2", "0.5\n");
+    wait_text(&f, "the blob moved", |t| t.contains("translate = [0, 0, 0.5]"));
+    driver.screenshot("69-pov-blob-moved.png");
+    driver.click("#undo");
+    wait_text(&f, "the blob back", |t| !t.contains("translate = [0, 0, 0.5]"));
+
     // Edit the translation (move the ball) and save: scene.toml appears beside scene.pov
     driver.click("#tree-shape-1");
     driver.wait_for("the ball selected", "return document.body.dataset.selection", |v| v == "shape:1");
@@ -1221,6 +1277,8 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     assert!(notice.contains("opened scene.toml") && notice.contains("scene.pov"), "{notice}");
     assert!(driver.script("return document.getElementById('notice').hidden") == false, "the notice is not shown");
     assert!(f.text().contains("translate = [0.75, 0, 0]"), "the reopened scene lost the edit:\n{}", f.text());
+    // The selection (the ball) is kept across the restart: the same entry of the same file
+    driver.wait_for("the ball still selected", "return document.body.dataset.selection", |v| v == "shape:1");
     driver.screenshot("70-reopened-pov.png");
 
     // The .pov is edited afterwards (newer): its translation opens, and Save asks first
@@ -1255,4 +1313,24 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     }
     assert_eq!(std::fs::read_to_string(&toml).unwrap(), f.text());
     driver.wait_for("the notice gone after the save", "return document.body.dataset.notice || ''", |v| v == "");
+
+    // The ball's material made a mix, with only one other material in the scene: not refused,
+    // the mix starts from the ball's own look; and back to diffuse, its colour is kept
+    let ball_material = f.scene_json()["shapes"][1]["fields"]["material"].as_str().unwrap().to_string();
+    driver.click(&format!("#tree-material-{ball_material}"));
+    driver.wait_for("the ball's material", "return document.body.dataset.selection", |v| {
+        v.as_str() == Some(&format!("material:{ball_material}"))
+    });
+    let colour = "reflectance = [0.48, 0.06, 0.06]";
+    assert!(f.text().contains(colour), "{}", f.text());
+    driver.click("#mat-type option[value='mix']");
+    let text = wait_text(&f, "the mix", |t| t.contains("type = \"mix\""));
+    assert!(text.contains(&format!("materials = [\"{ball_material}_base\"")), "{text}");
+    let base = &text[text.find(&format!("[materials.{ball_material}_base]")).expect("the base material")..];
+    assert!(base[..base.find("\n\n").unwrap_or(base.len())].contains(colour), "{base}");
+    driver.click("#mat-type option[value='diffuse']");
+    let text = wait_text(&f, "the diffuse again", |t| !t.contains("type = \"mix\""));
+    let own = &text[text.find(&format!("[materials.{ball_material}]")).unwrap()..];
+    assert!(own[..own.find("\n\n").unwrap_or(own.len())].contains(colour), "{own}");
+    assert_eq!(driver.script("return document.body.dataset.lastError || ''"), "", "the page showed an error");
 }

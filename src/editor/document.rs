@@ -307,7 +307,12 @@ impl SceneDocument {
                     crate::scene::gltf_scene::translate_file(path, None).map(|t| t.toml)
                 }
             });
-            let toml = toml.map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut toml = toml.map_err(|e| EditError::Invalid(e.to_string()))?;
+            if pov {
+                // One POV-Ray object, one entry (a blob is not 10 000 triangles in the tree).
+                let source = std::fs::read_to_string(path).ok();
+                toml = super::pov_objects::regroup(&toml, source.as_deref());
+            }
             let mut doc = Self::from_text(&path.with_extension("toml"), toml, confined)?;
             doc.saved = String::new();
             doc.translated_from = Some(path.to_path_buf());

@@ -18,6 +18,9 @@
 //! `undo_author` and `redo_author` name the page session that made the step Undo or Redo would
 //! take (0: an API call; null: no step), so a page can say whether it is its own.
 //! `id` is the entry's stable id (`SceneDocument::ids`): the page selects and edits by it.
+//! `geometry` is a key of the entry's triangles (a hash of `positions`): the scene messages
+//! broadcast after an edit (`delta_message`, `"delta": true`) leave out the `positions` of
+//! entries whose key the scene before had, and the page keeps those it has.
 //! `positions` lists three vertices per triangle; analytic shapes (spheres, discs, cones, tori,
 //! superellipsoids) come tessellated, an infinite plane as a square as large as the scene.
 //! `groups` (`{ "start", "count", "color" }`, in triangles) colours the runs of an entry made
@@ -150,6 +153,7 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
     let with_ids = |mut entries: Vec<Json>, ids: &[u64]| -> Vec<Json> {
         for (entry, id) in entries.iter_mut().zip(ids) {
             entry["id"] = json!(id);
+            entry["geometry"] = json!(geometry_key(&entry["positions"]));
         }
         entries
     };
@@ -201,6 +205,56 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "lights": lights,
         "instances": instances,
     })
+}
+
+/// An entry's geometry key: a hash of its `positions` (FNV-1a over the numbers' bits), the same
+/// for the same triangles, so a page that has them need not get them again.
+fn geometry_key(positions: &Json) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    let numbers = positions.as_array().map_or(&[][..], |a| a.as_slice());
+    for v in numbers {
+        let bits = (v.as_f64().unwrap_or(f64::NAN) as f32).to_bits();
+        for byte in bits.to_le_bytes() {
+            hash = (hash ^ byte as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    format!("{hash:016x}-{}", numbers.len())
+}
+
+const LISTS: [&str; 3] = ["shapes", "lights", "instances"];
+
+/// The scene message `scene` (from `scene_json`) as sent to pages that have the scene before
+/// it: with `"delta": true` and without the `positions` of the entries whose geometry key
+/// `known` holds (the page takes them from the entry of that key it has). An edit beside a
+/// 100k-triangle mesh then sends kilobytes, not the mesh again. Returns the text and the keys
+/// of this scene (the next message's `known`); `scene` is left as it was.
+pub fn delta_message(
+    scene: &mut Json,
+    known: &std::collections::HashSet<String>,
+) -> (String, std::collections::HashSet<String>) {
+    let mut keys = std::collections::HashSet::new();
+    let mut taken = Vec::new();
+    for list in LISTS {
+        let Some(entries) = scene.get_mut(list).and_then(Json::as_array_mut) else { continue };
+        for (i, entry) in entries.iter_mut().enumerate() {
+            let Some(key) = entry["geometry"].as_str().map(str::to_string) else { continue };
+            if known.contains(&key) {
+                if let Some(positions) = entry.as_object_mut().and_then(|o| o.remove("positions")) {
+                    taken.push((list, i, positions));
+                }
+            }
+            keys.insert(key);
+        }
+    }
+    scene["delta"] = json!(true);
+    let text = scene.to_string();
+    if let Some(o) = scene.as_object_mut() {
+        o.remove("delta");
+    }
+    for (list, i, positions) in taken {
+        scene[list][i]["positions"] = positions;
+    }
+    (text, keys)
 }
 
 /// The bounds of every shape but the infinite planes, instanced copies included; a unit box

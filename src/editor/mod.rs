@@ -10,6 +10,7 @@ mod assets;
 pub mod document;
 pub mod geometry;
 pub mod gltf;
+mod pov_objects;
 pub mod preview;
 pub mod server;
 

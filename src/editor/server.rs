@@ -12,10 +12,11 @@
 //!   defaults (`scene::kinds::json`); `GET /kinds.js` is the same as a module the page imports;
 //! - `GET /api/images`: the image files in the scene's folder (`{"images": ["textures/a.png"]}`),
 //!   for the texture picker;
-//! - `POST /api/import?name=F.glb&material=M&at=x,y,z`: the body is written to F.glb in the
-//!   scene's folder and a mesh shape using it is added (any model format the renderer reads:
-//!   OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt), with `material` (else the file's own materials) and
-//!   its bounding box centred on `at` (one undo step);
+//! - `POST /api/import?name=F.glb&material=M&at=x,y,z&floor=true&size=S`: the body is written
+//!   to F.glb in the scene's folder and a mesh shape using it is added (any model format the
+//!   renderer reads: OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt), with `material` (else the file's own
+//!   materials), scaled to `size` across where it is more than 4 times off it, and its bounding
+//!   box centred on `at` (with `floor`, standing on it) (one undo step);
 //! - `POST /api/render` (`FinalRequest`), `/api/render/cancel`, `GET /api/render/status`,
 //!   `GET /api/render/image.exr`, `/api/render/image.png`: the final render;
 //! - `GET /ws`: the WebSocket; the server sends the scene (text, `{"type": "scene", ...}`), the
@@ -103,8 +104,12 @@ struct App {
     renderer: Renderer,
     token: String,
     cookie: String,
-    /// The scene as the page sees it, for the current revision.
-    scene_json: Mutex<Arc<String>>,
+    /// The scene as the page sees it, for the current revision: the JSON, and its text once a
+    /// new page or `GET /api/scene` asked for it (a large mesh makes megabytes of it, which an
+    /// edit's broadcast leaves out: `geometry::delta_message`).
+    scene_json: Mutex<(Json, Option<Arc<String>>)>,
+    /// The geometry keys of the scene last broadcast, which every page has.
+    sent_geometry: Mutex<std::collections::HashSet<String>>,
     /// Scene updates and replies that every page gets.
     updates: broadcast::Sender<Arc<String>>,
     max_upload_bytes: usize,
@@ -141,14 +146,16 @@ impl Server {
         let addr = SocketAddr::new(options.host, options.port);
         let listener = tokio::net::TcpListener::bind(addr).await.map_err(|cause| ServeError::Bind { addr, cause })?;
         let addr = listener.local_addr().map_err(|cause| ServeError::Bind { addr, cause })?;
-        let json = Arc::new(scene_message(&doc));
+        let json = scene_message(&doc);
+        let (_, sent) = super::geometry::delta_message(&mut json.clone(), &Default::default());
         let (updates, _) = broadcast::channel(64);
         let app = Arc::new(App {
             doc: Mutex::new(doc),
             renderer,
             cookie: format!("photonix_token_{}", addr.port()),
             token: token.clone(),
-            scene_json: Mutex::new(json),
+            scene_json: Mutex::new((json, None)),
+            sent_geometry: Mutex::new(sent),
             updates,
             max_upload_bytes: options.max_upload_bytes,
             next_session: AtomicU64::new(1),
@@ -351,10 +358,17 @@ async fn static_asset(request: Request) -> Response {
     }
 }
 
-fn scene_message(doc: &SceneDocument) -> String {
+fn scene_message(doc: &SceneDocument) -> Json {
     let mut value = scene_json(doc);
     value["type"] = json!("scene");
-    value.to_string()
+    value
+}
+
+/// The whole scene message as text (for a new page, `GET /api/scene`, a page that missed one).
+fn full_scene(app: &App) -> Arc<String> {
+    let mut guard = app.scene_json.lock().expect("scene json lock");
+    let (value, text) = &mut *guard;
+    text.get_or_insert_with(|| Arc::new(value.to_string())).clone()
 }
 
 async fn get_kinds() -> Response {
@@ -368,7 +382,7 @@ async fn get_kinds_module() -> Response {
 }
 
 async fn get_scene(State(app): State<Arc<App>>) -> Response {
-    let json = app.scene_json.lock().expect("scene json lock").clone();
+    let json = full_scene(&app);
     ([(header::CONTENT_TYPE, "application/json")], json.to_string()).into_response()
 }
 
@@ -425,6 +439,7 @@ enum Change {
 /// scene to every page and to the renderer. Returns the new revision.
 async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, String> {
     let app2 = app.clone();
+    let arrived = std::time::Instant::now();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
         let result = match &change {
@@ -433,7 +448,8 @@ async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, Stri
             Change::Redo => doc.redo(),
         };
         result.map_err(|e: EditError| e.to_string())?;
-        publish(&app2, &doc);
+        app2.renderer.set_scene_of_edit(Arc::new(doc.scene().clone()), arrived);
+        broadcast_scene(&app2, &doc);
         Ok(doc.revision())
     })
     .await
@@ -443,9 +459,18 @@ async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, Stri
 /// Sends the document's scene to the renderer and to every page.
 fn publish(app: &App, doc: &SceneDocument) {
     app.renderer.set_scene(Arc::new(doc.scene().clone()));
-    let json = Arc::new(scene_message(doc));
-    *app.scene_json.lock().expect("scene json lock") = json.clone();
-    let _ = app.updates.send(json);
+    broadcast_scene(app, doc);
+}
+
+/// Sends the document's scene to every page (the renderer has it already): the geometry the
+/// pages have already is left out (`geometry::delta_message`).
+fn broadcast_scene(app: &App, doc: &SceneDocument) {
+    let mut value = scene_message(doc);
+    let mut sent = app.sent_geometry.lock().expect("sent geometry lock");
+    let (delta, keys) = super::geometry::delta_message(&mut value, &sent);
+    *sent = keys;
+    *app.scene_json.lock().expect("scene json lock") = (value, None);
+    let _ = app.updates.send(Arc::new(delta));
 }
 
 fn reply(result: Result<u64, String>) -> Response {
@@ -477,9 +502,7 @@ async fn save(app: &Arc<App>, replace: bool) -> Result<u64, SaveError> {
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
         doc.save_replacing(replace)?;
-        let json = Arc::new(scene_message(&doc));
-        *app2.scene_json.lock().expect("scene json lock") = json.clone();
-        let _ = app2.updates.send(json);
+        broadcast_scene(&app2, &doc);
         Ok(doc.revision())
     })
     .await
@@ -509,8 +532,27 @@ async fn post_save(State(app): State<Arc<App>>, Query(query): Query<SaveQuery>) 
 struct ImportQuery {
     name: String,
     material: Option<String>,
-    /// `x,y,z`: where the model's bounding box centre goes.
+    /// `x,y,z`: where the model's bounding box centre goes (with `floor`, the centre of its
+    /// bottom face: it stands on the point).
     at: Option<String>,
+    #[serde(default)]
+    floor: bool,
+    /// The size (bounding box diagonal, scene units) the model is scaled to when its own is
+    /// more than 4 times larger or smaller (a model in millimetres in a scene in metres).
+    size: Option<f64>,
+}
+
+/// The uniform scale that brings a model whose bounding box diagonal is `diagonal` to `size`,
+/// when it is more than 4 times off (else 1), to 3 significant digits.
+fn import_scale(diagonal: f64, size: Option<f64>) -> f64 {
+    match size {
+        Some(size) if size > 0.0 && diagonal > 0.0 && (diagonal > 4.0 * size || diagonal < size / 4.0) => {
+            let k = size / diagonal;
+            let digits = 10f64.powi(2 - k.log10().floor() as i32);
+            (k * digits).round() / digits
+        }
+        _ => 1.0,
+    }
 }
 
 /// The model formats the renderer reads (`scene::model::Format`), by extension.
@@ -593,13 +635,16 @@ async fn post_import(State(app): State<Arc<App>>, Query(query): Query<ImportQuer
             .map(|s| s.geometry.bounds())
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
         if let (Some(at), Some((lo, hi))) = (at, bounds) {
+            let scale = import_scale((hi - lo).length() as f64, query.size);
             let centre = (lo + hi) * 0.5;
-            let translate = [at[0] - centre.x as f64, at[1] - centre.y as f64, at[2] - centre.z as f64];
+            let anchor = [centre.x as f64, if query.floor { lo.y as f64 } else { centre.y as f64 }, centre.z as f64];
+            // The transform scales about the origin, then moves: the anchor lands on `at`.
+            let translate = [0, 1, 2].map(|i| at[i] - scale * anchor[i]);
             let place = Command::SetTransform {
                 target: super::document::Target::Shape(index),
                 translate: Some(translate),
                 rotate: None,
-                scale: None,
+                scale: (scale != 1.0).then_some(super::document::Scale::Uniform(scale)),
             };
             if doc.apply(&place).is_ok() {
                 doc.merge_last_step();
@@ -717,7 +762,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     }
     let mut updates = app.updates.subscribe();
     let mut events = app.renderer.subscribe();
-    let first = app.scene_json.lock().expect("scene json lock").clone();
+    let first = full_scene(&app);
     if socket.send(Message::Text(first.as_str().into())).await.is_err() {
         return;
     }
@@ -750,7 +795,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
             update = updates.recv() => match update {
                 Ok(json) => Some(json.to_string()),
                 // Missed scene updates: send the current scene.
-                Err(broadcast::error::RecvError::Lagged(_)) => Some(app.scene_json.lock().expect("scene json lock").to_string()),
+                Err(broadcast::error::RecvError::Lagged(_)) => Some(full_scene(&app).to_string()),
                 Err(broadcast::error::RecvError::Closed) => return,
             },
             event = events.recv() => match event {
@@ -843,6 +888,15 @@ mod tests {
         {
             assert!(check_import_name(bad).is_err(), "{bad:?}");
         }
+    }
+
+    #[test]
+    fn imports_far_off_the_scenes_size_are_scaled_to_it() {
+        assert_eq!(import_scale(1.0, Some(2.0)), 1.0);
+        assert_eq!(import_scale(1.0, None), 1.0);
+        assert_eq!(import_scale(300.0, Some(1.5)), 0.005);
+        assert_eq!(import_scale(0.01, Some(1.0)), 100.0);
+        assert_eq!(import_scale(3.0, Some(1.0)), 1.0);
     }
 
     #[test]
