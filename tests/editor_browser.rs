@@ -970,11 +970,11 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     driver.session("POST", "/url", json!({ "url": f.server().url() }));
     let a = driver.window();
     frames(&driver, 1);
-    // Rendered shading: no grid drawn over the render.
+    // Rendered shading: no grid drawn over the render, nor the axes (the last helper).
     let grids = driver.script(
         "const v = window.photonixEditor.viewport; v.draw(); return v.helpers.children.filter((g) => g.userData.grid).map((g) => g.visible)",
     );
-    assert_eq!(grids, json!([false, false, false]), "grids over the render");
+    assert_eq!(grids, json!([false, false, false, false]), "grids or axes over the render");
     driver.click("#tree-shape-1");
     driver.wait_for("A: the ball", "return document.body.dataset.selection", |v| v == "shape:1");
     let view_a = driver.script("return window.photonixEditor.viewport.perspective.position.toArray()");

@@ -54,6 +54,12 @@ pub(super) type Parts = BTreeMap<u32, Vec<f32>>;
 
 /// The page's view of `doc`.
 pub fn scene_json(doc: &SceneDocument) -> Json {
+    scene_json_known(doc, &std::collections::HashSet::new())
+}
+
+/// `scene_json` with no `positions` for the shapes whose geometry key `known` holds (the pages
+/// have them): a 100k-triangle mesh is not turned into a million JSON numbers at every edit.
+pub fn scene_json_known(doc: &SceneDocument, known: &std::collections::HashSet<String>) -> Json {
     let scene = doc.scene();
     let origins = doc.origins();
     let parsed: DocumentMut = doc.text().parse().unwrap_or_default();
@@ -96,7 +102,12 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
                 entry["positions"] = json!(positions);
                 entry["groups"] = json!(groups);
             } else {
-                entry["positions"] = json!(positions(range));
+                let positions = positions(range);
+                let key = key_of(&positions);
+                if !known.contains(&key) {
+                    entry["positions"] = json!(positions);
+                }
+                entry["geometry"] = json!(key);
             }
             entry
         })
@@ -153,7 +164,9 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
     let with_ids = |mut entries: Vec<Json>, ids: &[u64]| -> Vec<Json> {
         for (entry, id) in entries.iter_mut().zip(ids) {
             entry["id"] = json!(id);
-            entry["geometry"] = json!(geometry_key(&entry["positions"]));
+            if entry.get("geometry").is_none() {
+                entry["geometry"] = json!(geometry_key(&entry["positions"]));
+            }
         }
         entries
     };
@@ -210,11 +223,16 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
 /// An entry's geometry key: a hash of its `positions` (FNV-1a over the numbers' bits), the same
 /// for the same triangles, so a page that has them need not get them again.
 fn geometry_key(positions: &Json) -> String {
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     let numbers = positions.as_array().map_or(&[][..], |a| a.as_slice());
+    let floats: Vec<f32> = numbers.iter().map(|v| v.as_f64().unwrap_or(f64::NAN) as f32).collect();
+    key_of(&floats)
+}
+
+/// `geometry_key` of the numbers before they are JSON (the same key: JSON holds an f32 exactly).
+fn key_of(numbers: &[f32]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
     for v in numbers {
-        let bits = (v.as_f64().unwrap_or(f64::NAN) as f32).to_bits();
-        for byte in bits.to_le_bytes() {
+        for byte in v.to_bits().to_le_bytes() {
             hash = (hash ^ byte as u64).wrapping_mul(0x0100_0000_01b3);
         }
     }

@@ -107,7 +107,7 @@ struct App {
     /// The scene as the page sees it, for the current revision: the JSON, and its text once a
     /// new page or `GET /api/scene` asked for it (a large mesh makes megabytes of it, which an
     /// edit's broadcast leaves out: `geometry::delta_message`).
-    scene_json: Mutex<(Json, Option<Arc<String>>)>,
+    scene_json: Mutex<Option<Arc<String>>>,
     /// The geometry keys of the scene last broadcast, which every page has.
     sent_geometry: Mutex<std::collections::HashSet<String>>,
     /// Scene updates and replies that every page gets.
@@ -146,15 +146,14 @@ impl Server {
         let addr = SocketAddr::new(options.host, options.port);
         let listener = tokio::net::TcpListener::bind(addr).await.map_err(|cause| ServeError::Bind { addr, cause })?;
         let addr = listener.local_addr().map_err(|cause| ServeError::Bind { addr, cause })?;
-        let json = scene_message(&doc);
-        let (_, sent) = super::geometry::delta_message(&mut json.clone(), &Default::default());
+        let (_, sent) = super::geometry::delta_message(&mut scene_message(&doc), &Default::default());
         let (updates, _) = broadcast::channel(64);
         let app = Arc::new(App {
             doc: Mutex::new(doc),
             renderer,
             cookie: format!("photonix_token_{}", addr.port()),
             token: token.clone(),
-            scene_json: Mutex::new((json, None)),
+            scene_json: Mutex::new(None),
             sent_geometry: Mutex::new(sent),
             updates,
             max_upload_bytes: options.max_upload_bytes,
@@ -364,11 +363,16 @@ fn scene_message(doc: &SceneDocument) -> Json {
     value
 }
 
-/// The whole scene message as text (for a new page, `GET /api/scene`, a page that missed one).
+/// The whole scene message as text (for a new page, `GET /api/scene`, a page that missed one),
+/// made once per revision when asked for. Locks the document, then the text (as an edit does).
 fn full_scene(app: &App) -> Arc<String> {
-    let mut guard = app.scene_json.lock().expect("scene json lock");
-    let (value, text) = &mut *guard;
-    text.get_or_insert_with(|| Arc::new(value.to_string())).clone()
+    if let Some(text) = app.scene_json.lock().expect("scene json lock").clone() {
+        return text;
+    }
+    let doc = app.doc.lock().expect("document lock");
+    let text = Arc::new(scene_message(&doc).to_string());
+    *app.scene_json.lock().expect("scene json lock") = Some(text.clone());
+    text
 }
 
 async fn get_kinds() -> Response {
@@ -382,7 +386,8 @@ async fn get_kinds_module() -> Response {
 }
 
 async fn get_scene(State(app): State<Arc<App>>) -> Response {
-    let json = full_scene(&app);
+    // Waits for the document (an edit under way) and may build megabytes: off the async threads.
+    let json = tokio::task::block_in_place(|| full_scene(&app));
     ([(header::CONTENT_TYPE, "application/json")], json.to_string()).into_response()
 }
 
@@ -465,11 +470,12 @@ fn publish(app: &App, doc: &SceneDocument) {
 /// Sends the document's scene to every page (the renderer has it already): the geometry the
 /// pages have already is left out (`geometry::delta_message`).
 fn broadcast_scene(app: &App, doc: &SceneDocument) {
-    let mut value = scene_message(doc);
     let mut sent = app.sent_geometry.lock().expect("sent geometry lock");
+    let mut value = super::geometry::scene_json_known(doc, &sent);
+    value["type"] = json!("scene");
     let (delta, keys) = super::geometry::delta_message(&mut value, &sent);
     *sent = keys;
-    *app.scene_json.lock().expect("scene json lock") = (value, None);
+    *app.scene_json.lock().expect("scene json lock") = None;
     let _ = app.updates.send(Arc::new(delta));
 }
 
@@ -762,7 +768,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     }
     let mut updates = app.updates.subscribe();
     let mut events = app.renderer.subscribe();
-    let first = full_scene(&app);
+    let first = tokio::task::block_in_place(|| full_scene(&app));
     if socket.send(Message::Text(first.as_str().into())).await.is_err() {
         return;
     }
@@ -795,7 +801,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
             update = updates.recv() => match update {
                 Ok(json) => Some(json.to_string()),
                 // Missed scene updates: send the current scene.
-                Err(broadcast::error::RecvError::Lagged(_)) => Some(full_scene(&app).to_string()),
+                Err(broadcast::error::RecvError::Lagged(_)) => Some(tokio::task::block_in_place(|| full_scene(&app)).to_string()),
                 Err(broadcast::error::RecvError::Closed) => return,
             },
             event = events.recv() => match event {
