@@ -391,6 +391,9 @@ fn a_served_pov_scene_reads_nothing_outside_its_folder_and_says_nothing_of_it() 
     }
     std::fs::write(folder.join("room.xml"), xml("")).unwrap();
     std::fs::write(folder.join("room.toml"), "# my own scene\n").unwrap();
+    // Older than the .xml: the translation opens (a newer .toml would open in its place).
+    let older = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+    std::fs::File::options().write(true).open(folder.join("room.toml")).unwrap().set_modified(older).unwrap();
     let mut doc = photonix::editor::SceneDocument::load(&folder.join("room.xml")).unwrap();
     let e = doc.save().unwrap_err();
     assert!(e.contains("room.toml already exists beside room.xml"), "{e}");
