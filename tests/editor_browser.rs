@@ -133,9 +133,21 @@ impl Driver {
 
     /// Types `text` over the field's value (Ctrl+A, then the text: a clear would send a change
     /// of its own, which a number field answers by restoring its value).
+    /// Again when the page redrew the field between the find and the typing (a scene update
+    /// redraws the panel), as `click`.
     fn type_into(&self, css: &str, text: &str) {
-        let id = self.element(css);
-        self.session("POST", &format!("/element/{id}/value"), json!({ "text": format!("\u{E009}a\u{E000}{text}") }));
+        let body = json!({ "text": format!("\u{E009}a\u{E000}{text}") }).to_string();
+        for _ in 0..20 {
+            let id = self.element(css);
+            let path = format!("/session/{}/element/{id}/value", self.session);
+            let r = http(self.addr, "POST", &path, &[("Content-Type", "application/json")], body.as_bytes());
+            if r.status == 200 {
+                return;
+            }
+            assert!(r.text().contains("stale element"), "POST {path}: {}", r.text());
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        panic!("{css} stays stale");
     }
 
     /// Performs WebDriver pointer actions of the mouse (`pointerMove` at viewport pixels,
@@ -699,7 +711,8 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
         "return window.photonixEditor.state.scene.shapes[10].fields.transform?.rotate?.[1]",
         |v| v.as_f64() == Some(137.0),
     );
-    // Turned about the origin, it went elsewhere: frame it (F) to see its gizmo.
+    // Turned about its own centre (the typed rotate's pivot), it stays in place; frame it (F)
+    // to see its gizmo.
     driver.press("f");
     let before = f.text();
     drag_x_arrow(&driver, 40.0);
@@ -882,6 +895,7 @@ fn browser_imports_models_and_edits_materials() {
     // To a conductor (its colour becomes the tint) and back: the colour is kept
     driver.click("#mat-type option[value='conductor']");
     wait_text(&f, "the conductor", |t| t.contains("[materials.glass]\ntype = \"conductor\""));
+    driver.wait_for("the conductor's panel", "return document.getElementById('mat-type')?.value", |v| v == "conductor");
     driver.click("#mat-type option[value='diffuse']");
     let text = wait_text(&f, "the diffuse again", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
     let glass = &text[text.find("[materials.glass]").unwrap()..];
@@ -1328,6 +1342,8 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     assert!(text.contains(&format!("materials = [\"{ball_material}_base\"")), "{text}");
     let base = &text[text.find(&format!("[materials.{ball_material}_base]")).expect("the base material")..];
     assert!(base[..base.find("\n\n").unwrap_or(base.len())].contains(colour), "{base}");
+    // The panel redrawn for the mix first (a click on the old one would switch nothing).
+    driver.wait_for("the mix's panel", "return document.getElementById('mat-type')?.value", |v| v == "mix");
     driver.click("#mat-type option[value='diffuse']");
     let text = wait_text(&f, "the diffuse again", |t| !t.contains("type = \"mix\""));
     let own = &text[text.find(&format!("[materials.{ball_material}]")).unwrap()..];
