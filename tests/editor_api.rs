@@ -233,6 +233,53 @@ fn save_writes_the_edits_atomically_and_keeps_comments() {
 }
 
 #[test]
+fn save_asks_before_replacing_a_file_changed_on_disk() {
+    let f = Fixture::new();
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "shape": 1 }, "translate": [0, 0.25, 0] })));
+    // Another program writes the file meanwhile: a plain save refuses (409) and says so
+    let theirs = format!("{}\n# written by another program\n", editor_support::SCENE);
+    std::fs::write(&f.scene, &theirs).unwrap();
+    let r = f.call("POST", "/api/save", b"");
+    assert_eq!(r.status, 409, "{}", r.text());
+    let reply = r.json();
+    assert_eq!(reply["replace_needed"], true, "{reply}");
+    assert!(reply["error"].as_str().unwrap().contains("scene.toml changed on disk"), "{reply}");
+    assert_eq!(std::fs::read_to_string(&f.scene).unwrap(), theirs);
+    // Told to replace it, it does; then later saves need no question (the file is the editor's)
+    ok(&f.call("POST", "/api/save?replace=true", b""));
+    assert_eq!(std::fs::read_to_string(&f.scene).unwrap(), f.text());
+    ok(&f.edit(json!({ "op": "set_transform", "target": { "shape": 1 }, "translate": [0, 0.5, 0] })));
+    ok(&f.call("POST", "/api/save", b""));
+    assert_eq!(std::fs::read_to_string(&f.scene).unwrap(), f.text());
+}
+
+#[test]
+fn serving_a_pov_scene_again_opens_the_newer_toml_saved_beside_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let pov = dir.path().join("room.pov");
+    std::fs::write(&pov, "camera { location <0, 1, -4> look_at 0 }\nlight_source { <2, 4, -3> rgb 1 }\nsphere { 0, 1 pigment { rgb 1 } }\n").unwrap();
+    let mut doc = photonix::editor::SceneDocument::load(&pov).unwrap();
+    assert_eq!(doc.notice(), None);
+    doc.apply(
+        &serde_json::from_value(json!({ "op": "set", "target": { "shape": 0 }, "field": "name", "value": "edited" }))
+            .unwrap(),
+    )
+    .unwrap();
+    doc.save().unwrap();
+    // Opened again: the .toml (newer), with the edit, and a notice naming both files
+    let doc = photonix::editor::SceneDocument::load(&pov).unwrap();
+    assert_eq!(doc.path(), dir.path().join("room.toml"));
+    assert!(doc.text().contains("name = \"edited\""), "{}", doc.text());
+    let notice = doc.notice().unwrap();
+    assert!(notice.contains("opened room.toml") && notice.contains("room.pov"), "{notice}");
+    assert!(!doc.dirty());
+    // A broken newer .toml is an error naming it, not a silent translation
+    std::fs::write(dir.path().join("room.toml"), "[camera\n").unwrap();
+    let e = photonix::editor::SceneDocument::load(&pov).err().unwrap().to_string();
+    assert!(e.contains("room.toml beside room.pov is newer") && e.contains("move it away"), "{e}");
+}
+
+#[test]
 fn requests_without_the_right_token_are_refused() {
     let f = Fixture::new();
     let addr = f.addr();

@@ -133,9 +133,21 @@ impl Driver {
 
     /// Types `text` over the field's value (Ctrl+A, then the text: a clear would send a change
     /// of its own, which a number field answers by restoring its value).
+    /// Again when the page redrew the field between the find and the typing (a scene update
+    /// redraws the panel), as `click`.
     fn type_into(&self, css: &str, text: &str) {
-        let id = self.element(css);
-        self.session("POST", &format!("/element/{id}/value"), json!({ "text": format!("\u{E009}a\u{E000}{text}") }));
+        let body = json!({ "text": format!("\u{E009}a\u{E000}{text}") }).to_string();
+        for _ in 0..20 {
+            let id = self.element(css);
+            let path = format!("/session/{}/element/{id}/value", self.session);
+            let r = http(self.addr, "POST", &path, &[("Content-Type", "application/json")], body.as_bytes());
+            if r.status == 200 {
+                return;
+            }
+            assert!(r.text().contains("stale element"), "POST {path}: {}", r.text());
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        panic!("{css} stays stale");
     }
 
     /// Performs WebDriver pointer actions of the mouse (`pointerMove` at viewport pixels,
@@ -250,9 +262,18 @@ const OUTLINE_PIXELS: &str = "const c = document.getElementById('canvas');
     }
     return n;";
 
-fn outline_pixels(driver: &Driver) -> Vec<u64> {
-    let v = driver.script(OUTLINE_PIXELS);
-    v.as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect()
+/// The bounding box of the `index`th shape's triangles in the page's scene.
+fn bounds_of(page: &Value, index: usize) -> ([f64; 3], [f64; 3]) {
+    let p: Vec<f64> =
+        page["shapes"][index]["positions"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let (mut lo, mut hi) = ([f64::MAX; 3], [f64::MIN; 3]);
+    for v in p.chunks(3) {
+        for i in 0..3 {
+            lo[i] = lo[i].min(v[i]);
+            hi[i] = hi[i].max(v[i]);
+        }
+    }
+    (lo, hi)
 }
 
 /// The ball's (the second shape's) `transform.translate` in `text`.
@@ -292,7 +313,16 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     assert!(!url.as_str().unwrap().contains("token"), "{url}");
     driver.screenshot("01-first-frame.png");
 
-    // Click the ball in the viewport (solid shading, so the click lands on drawn geometry)
+    // Click the ball in Rendered shading (the default): the surfaces are not drawn over the
+    // render, yet the click picks what it lands on
+    driver.click("#canvas");
+    driver.wait_for("the ball selected in Rendered shading", "return document.body.dataset.selection", |v| {
+        v == "shape:1"
+    });
+    driver.press("\u{E00C}"); // Escape
+    driver.wait_for("nothing selected", "return document.body.dataset.selection", |v| v == "");
+
+    // Click the ball in the viewport in solid shading
     driver.click("#shading");
     let point = driver.script(
         "const e = window.photonixEditor, v = e.viewport, c = v.canvas.getBoundingClientRect();
@@ -303,7 +333,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     // WebDriver's element click presses the mouse.
     let (dx, dy) = (point[0].as_f64().unwrap(), point[1].as_f64().unwrap());
     assert!(dx.abs() < 2.0 && dy.abs() < 2.0, "the ball projects to ({dx}, {dy}) from the centre");
-    assert!(outline_pixels(&driver).iter().sum::<u64>() < 20, "an outline before any selection");
+    driver.wait_for("no outline before any selection", OUTLINE_PIXELS, |v| v[0].as_u64().unwrap_or(99) < 20);
     driver.click("#canvas");
     driver.wait_for("the ball to be selected", "return document.body.dataset.selection", |v| v == "shape:1");
     // Its silhouette is outlined: a ring of orange pixels around the ball.
@@ -681,7 +711,8 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
         "return window.photonixEditor.state.scene.shapes[10].fields.transform?.rotate?.[1]",
         |v| v.as_f64() == Some(137.0),
     );
-    // Turned about the origin, it went elsewhere: frame it (F) to see its gizmo.
+    // Turned about its own centre (the typed rotate's pivot), it stays in place; frame it (F)
+    // to see its gizmo.
     driver.press("f");
     let before = f.text();
     drag_x_arrow(&driver, 40.0);
@@ -800,7 +831,31 @@ fn browser_imports_models_and_edits_materials() {
     // In front of the view: the camera at z = 4 looks along -z.
     assert!(glb[2] < 4.0 && ply[2] < 4.0, "{glb:?} {ply:?}");
     photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
+    // Standing on the floor (y = 0), not half under it, and near the view's centre
+    for index in [3, 4] {
+        let (lo, hi) = bounds_of(&f.scene_json(), index);
+        assert!(lo[1].abs() < 1e-3, "import {index} does not stand on the floor: {lo:?} {hi:?}");
+        assert!(lo[0].abs().min(hi[0].abs()) < 2.5 && lo[2] > -1.0, "import {index} landed far away: {lo:?} {hi:?}");
+    }
     driver.screenshot("30-imported.png");
+
+    // A typed rotate and scale turn about the block's own centre, not about the world's origin
+    driver.click("#tree-shape-2");
+    driver.wait_for("the block", "return document.body.dataset.selection", |v| v == "shape:2");
+    let centre = |page: &Value| {
+        let (lo, hi) = bounds_of(page, 2);
+        [0, 1, 2].map(|i| (lo[i] + hi[i]) / 2.0)
+    };
+    let before = centre(&f.scene_json());
+    driver.type_into("#tf-rotate-0", "90\n");
+    wait_text(&f, "the typed rotate", |t| t.contains("rotate = [90, 30, 0]"));
+    driver.wait_for("the rotate in the panel", "return document.getElementById('tf-rotate-0')?.value", |v| v == "90");
+    driver.type_into("#tf-scale-1", "2\n");
+    wait_text(&f, "the typed scale", |t| t.contains("scale = [1, 2, 1]"));
+    let after = centre(&f.scene_json());
+    let moved = (0..3).map(|i| (after[i] - before[i]).abs()).fold(0.0, f64::max);
+    assert!(moved < 1e-3, "the typed rotate and scale moved the block's centre from {before:?} to {after:?}");
+    driver.press("\u{E00C}"); // Escape
 
     // The glass: every field of its type, those not written shown with their defaults
     driver.click("#tree-material-glass");
@@ -837,6 +892,15 @@ fn browser_imports_models_and_edits_materials() {
     );
     wait_text(&f, "the picked colour", |t| t.contains("reflectance = [0.2159, 0.2159, 0.2159]"));
     driver.screenshot("31-material-switched.png");
+    // To a conductor (its colour becomes the tint) and back: the colour is kept
+    driver.click("#mat-type option[value='conductor']");
+    wait_text(&f, "the conductor", |t| t.contains("[materials.glass]\ntype = \"conductor\""));
+    driver.wait_for("the conductor's panel", "return document.getElementById('mat-type')?.value", |v| v == "conductor");
+    driver.click("#mat-type option[value='diffuse']");
+    let text = wait_text(&f, "the diffuse again", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
+    let glass = &text[text.find("[materials.glass]").unwrap()..];
+    let glass = &glass[..glass.find("\n\n").unwrap_or(glass.len())];
+    assert!(glass.contains("reflectance = [0.2159, 0.2159, 0.2159]") && !glass.contains("tint"), "{glass}");
     // Wireframe shading, and the Blender mouse scheme with its numpad views
     driver.click("#wireframe");
     let wire = driver.script(
@@ -920,11 +984,11 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     driver.session("POST", "/url", json!({ "url": f.server().url() }));
     let a = driver.window();
     frames(&driver, 1);
-    // Rendered shading: no grid drawn over the render.
+    // Rendered shading: no grid drawn over the render, nor the axes (the last helper).
     let grids = driver.script(
         "const v = window.photonixEditor.viewport; v.draw(); return v.helpers.children.filter((g) => g.userData.grid).map((g) => g.visible)",
     );
-    assert_eq!(grids, json!([false, false, false]), "grids over the render");
+    assert_eq!(grids, json!([false, false, false, false]), "grids or axes over the render");
     driver.click("#tree-shape-1");
     driver.wait_for("A: the ball", "return document.body.dataset.selection", |v| v == "shape:1");
     let view_a = driver.script("return window.photonixEditor.viewport.perspective.position.toArray()");
@@ -1151,4 +1215,138 @@ fn browser_imports_3ds_and_ifs_and_shows_the_final_render_time() {
     });
     driver.screenshot("61-final-render.png");
     driver.click("#render-cancel");
+}
+
+/// A POV-Ray scene for the reopening test: a ball on a floor, a lamp.
+const POV_SCENE: &str = "camera { location <0, 1, -4> look_at <0, 0.5, 0> }
+light_source { <2, 4, -3> rgb 1 }
+plane { y, 0 pigment { rgb 0.8 } }
+sphere { <0, 0.5, 0>, 0.5 pigment { rgb <0.8, 0.1, 0.1> } }
+blob { threshold 0.6 sphere { <1.2, 0.4, 0>, 0.5, 1 } sphere { <1.5, 0.4, 0>, 0.5, 1 } pigment { rgb 0.8 } }
+";
+
+#[test]
+fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_replacing() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
+    let token = "editor-browser-reopen-0123456789";
+    let options = |scene: &std::path::Path| {
+        let mut o = photonix::editor::ServeOptions::new(scene.to_path_buf());
+        o.backend = photonix::editor::BackendChoice::Cpu;
+        o.preview_size = 48;
+        o.port = port;
+        o.token = Some(token.to_string());
+        o
+    };
+    let mut f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| {
+        let pov = o.scene.with_extension("pov");
+        std::fs::remove_file(&o.scene).unwrap();
+        std::fs::write(&pov, POV_SCENE).unwrap();
+        *o = options(&pov);
+    });
+    let (pov, toml) = (f.dir.path().join("scene.pov"), f.dir.path().join("scene.toml"));
+    let restart = |f: &mut Fixture| {
+        let server = f.server.take().unwrap();
+        f.runtime.block_on(server.shutdown());
+        f.server = Some(f.runtime.block_on(photonix::editor::Server::start(options(&pov))).expect("restart"));
+    };
+    let driver = Driver::start();
+    driver.session("POST", "/url", json!({ "url": f.server().url() }));
+    driver.wait_for("the first rendered frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        v.as_u64().unwrap_or(0) >= 1
+    });
+    assert_eq!(driver.script("return document.body.dataset.notice || ''"), "", "a notice on a first opening");
+
+    // The blob is one entry (not thousands of triangles), and moves as one
+    let page = f.scene_json();
+    assert_eq!(page["shapes"].as_array().unwrap().len(), 2, "the plane and the ball only");
+    assert_eq!(page["instances"].as_array().unwrap().len(), 1, "the blob as one entry");
+    assert_eq!(page["instances"][0]["fields"]["name"], "blob (line 5)");
+    assert_eq!(driver.script("return document.querySelectorAll('[id^=tree-shape-], [id^=tree-instance-]').length"), 3);
+    driver.click("#tree-instance-0");
+    driver.wait_for("the blob selected", "return document.body.dataset.selection", |v| v == "instance:0");
+    driver.type_into("#tf-translate-2", "0.5\n");
+    wait_text(&f, "the blob moved", |t| t.contains("translate = [0, 0, 0.5]"));
+    driver.screenshot("69-pov-blob-moved.png");
+    driver.click("#undo");
+    wait_text(&f, "the blob back", |t| !t.contains("translate = [0, 0, 0.5]"));
+
+    // Edit the translation (move the ball) and save: scene.toml appears beside scene.pov
+    driver.click("#tree-shape-1");
+    driver.wait_for("the ball selected", "return document.body.dataset.selection", |v| v == "shape:1");
+    driver.type_into("#tf-translate-0", "0.75\n");
+    wait_text(&f, "the move", |t| t.contains("translate = [0.75, 0, 0]"));
+    driver.click("#save");
+    let start = Instant::now();
+    while !std::fs::read_to_string(&toml).is_ok_and(|t| t.contains("translate = [0.75, 0, 0]")) {
+        assert!(start.elapsed() < Duration::from_secs(30), "the save did not write scene.toml");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(driver.script("return document.body.dataset.asking || ''"), "", "the first save asked");
+
+    // `serve scene.pov` again: the edited scene.toml (newer) is opened, and the page says so
+    restart(&mut f);
+    driver.wait_for("the reconnection", "return document.body.dataset.connections", |v| v == "2");
+    let notice = driver.wait_for("the notice", "return document.body.dataset.notice || ''", |v| v != "");
+    let notice = notice.as_str().unwrap();
+    assert!(notice.contains("opened scene.toml") && notice.contains("scene.pov"), "{notice}");
+    assert!(driver.script("return document.getElementById('notice').hidden") == false, "the notice is not shown");
+    assert!(f.text().contains("translate = [0.75, 0, 0]"), "the reopened scene lost the edit:\n{}", f.text());
+    // The selection (the ball) is kept across the restart: the same entry of the same file
+    driver.wait_for("the ball still selected", "return document.body.dataset.selection", |v| v == "shape:1");
+    driver.screenshot("70-reopened-pov.png");
+
+    // The .pov is edited afterwards (newer): its translation opens, and Save asks first
+    let later = std::time::SystemTime::now() + Duration::from_secs(5);
+    std::fs::File::options().write(true).open(&pov).unwrap().set_modified(later).unwrap();
+    restart(&mut f);
+    driver.wait_for("the second reconnection", "return document.body.dataset.connections", |v| v == "3");
+    let notice = driver.wait_for("the older notice", "return document.body.dataset.notice || ''", |v| {
+        v.as_str().is_some_and(|n| n.contains("older"))
+    });
+    assert!(notice.as_str().unwrap().contains("Save asks"), "{notice}");
+    assert!(!f.text().contains("translate = [0.75"), "the translation is not the .pov's");
+    let saved = std::fs::read_to_string(&toml).unwrap();
+    // Keep it: nothing is written
+    driver.click("#save");
+    driver.wait_for("the question", "return document.body.dataset.asking || ''", |v| v == "replace");
+    let question = driver.script("return document.getElementById('replace-text').textContent");
+    assert!(question.as_str().unwrap().contains("scene.toml already exists beside scene.pov"), "{question}");
+    driver.screenshot("71-save-asks.png");
+    driver.click("#replace-no");
+    driver.wait_for("the answer", "return document.body.dataset.asking || ''", |v| v == "");
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(std::fs::read_to_string(&toml).unwrap(), saved, "'keep it' replaced scene.toml");
+    // Replace it: written
+    driver.click("#save");
+    driver.wait_for("the question again", "return document.body.dataset.asking || ''", |v| v == "replace");
+    driver.click("#replace-yes");
+    let start = Instant::now();
+    while std::fs::read_to_string(&toml).unwrap() == saved {
+        assert!(start.elapsed() < Duration::from_secs(30), "'replace it' did not write scene.toml");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(std::fs::read_to_string(&toml).unwrap(), f.text());
+    driver.wait_for("the notice gone after the save", "return document.body.dataset.notice || ''", |v| v == "");
+
+    // The ball's material made a mix, with only one other material in the scene: not refused,
+    // the mix starts from the ball's own look; and back to diffuse, its colour is kept
+    let ball_material = f.scene_json()["shapes"][1]["fields"]["material"].as_str().unwrap().to_string();
+    driver.click(&format!("#tree-material-{ball_material}"));
+    driver.wait_for("the ball's material", "return document.body.dataset.selection", |v| {
+        v.as_str() == Some(&format!("material:{ball_material}"))
+    });
+    let colour = "reflectance = [0.48, 0.06, 0.06]";
+    assert!(f.text().contains(colour), "{}", f.text());
+    driver.click("#mat-type option[value='mix']");
+    let text = wait_text(&f, "the mix", |t| t.contains("type = \"mix\""));
+    assert!(text.contains(&format!("materials = [\"{ball_material}_base\"")), "{text}");
+    let base = &text[text.find(&format!("[materials.{ball_material}_base]")).expect("the base material")..];
+    assert!(base[..base.find("\n\n").unwrap_or(base.len())].contains(colour), "{base}");
+    // The panel redrawn for the mix first (a click on the old one would switch nothing).
+    driver.wait_for("the mix's panel", "return document.getElementById('mat-type')?.value", |v| v == "mix");
+    driver.click("#mat-type option[value='diffuse']");
+    let text = wait_text(&f, "the diffuse again", |t| !t.contains("type = \"mix\""));
+    let own = &text[text.find(&format!("[materials.{ball_material}]")).unwrap()..];
+    assert!(own[..own.find("\n\n").unwrap_or(own.len())].contains(colour), "{own}");
+    assert_eq!(driver.script("return document.body.dataset.lastError || ''"), "", "the page showed an error");
 }

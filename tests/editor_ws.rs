@@ -484,3 +484,122 @@ fn editor_latency_benchmark() {
     });
     runtime.block_on(server.shutdown());
 }
+
+/// A binary PLY of a wavy `n` x `n` grid of quads (2 n² triangles) over [-1, 1]² at y 0.2.
+fn wavy_grid_ply(n: usize) -> Vec<u8> {
+    let side = n + 1;
+    let mut out = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        side * side,
+        2 * n * n
+    )
+    .into_bytes();
+    for j in 0..side {
+        for i in 0..side {
+            let (x, z) = (i as f32 / n as f32 * 2.0 - 1.0, j as f32 / n as f32 * 2.0 - 1.0);
+            let y = 0.2 + 0.05 * (x * 9.0).sin() * (z * 7.0).cos();
+            for v in [x, y, z] {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = (j * side + i) as i32;
+            for tri in [[a, a + side as i32, a + 1], [a + 1, a + side as i32, a + side as i32 + 1]] {
+                out.push(3);
+                for v in tri {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Issue 52: with a 100k-triangle mesh in the scene, the scene message after an edit of
+/// something else (the ball's colour, the ball's position) does not carry the mesh again (17 MB
+/// before). Prints the time from the edit's arrival at the server to its first frame and what
+/// the renderer spent on it; the issue's target of 200 ms is not asserted: the renderer's
+/// `prepare` of the whole scene (its BVH over the mesh) takes 240-360 ms of it on this 2-core
+/// machine (BENCHMARKS.md, docs/editor.md).
+#[test]
+fn an_edit_beside_a_100k_triangle_mesh_sends_kilobytes_not_the_mesh() {
+    let f = Fixture::with(BackendChoice::Cpu, |o| {
+        std::fs::write(o.scene.with_file_name("terrain.ply"), wavy_grid_ply(224)).unwrap();
+        let text = format!(
+            "{}\n[[shapes]]\nname = \"terrain\"\ntype = \"mesh\"\nfile = \"terrain.ply\"\nmaterial = \"white\"\n",
+            editor_support::SCENE
+        );
+        std::fs::write(&o.scene, text).unwrap();
+        o.preview_size = 64;
+    });
+    let scene = f.scene_json();
+    let triangles = scene["shapes"][3]["positions"].as_array().unwrap().len() / 9;
+    assert!(triangles >= 100_000, "{triangles} triangles");
+    f.runtime.block_on(async {
+        // The first scene message carries the mesh (17 MB), past tungstenite's default limit.
+        let url = format!("ws://{}/ws?token={}", f.addr(), f.token());
+        let config = tokio_tungstenite::tungstenite::protocol::WebSocketConfig::default()
+            .max_message_size(Some(64 << 20))
+            .max_frame_size(Some(64 << 20));
+        let mut page = tokio_tungstenite::connect_async_with_config(url, Some(config), false).await.unwrap().0;
+        send(&mut page, Message::Text(VIEW.into())).await.unwrap();
+        // The first generation's full-size frame: the renderer is warm.
+        let mut generation = loop {
+            if let Received::Frame(h, _) = receive(&mut page).await {
+                if h["step"].as_u64() >= Some(2) {
+                    break h["generation"].as_u64().unwrap();
+                }
+            }
+        };
+        let mut times = Vec::new();
+        let mut sizes = Vec::new();
+        for i in 0..6 {
+            let command = if i % 2 == 0 {
+                json!({ "op": "set", "target": { "material": "red" }, "field": "reflectance", "value": [0.7, 0.1 + 0.05 * i as f64, 0.1] })
+            } else {
+                json!({ "op": "set_transform", "target": { "shape": 1 }, "translate": [0.05 * i as f64, 0, 0] })
+            };
+            let t = Instant::now();
+            send_json(&mut page, json!({ "type": "edit", "id": i, "command": command })).await;
+            let (mut first, mut scene_bytes) = (None, None);
+            while first.is_none() || scene_bytes.is_none() {
+                match tokio::time::timeout(Duration::from_secs(120), next(&mut page)).await.unwrap().unwrap().unwrap() {
+                    Message::Text(text) if text.as_str().starts_with("{\"type\":\"scene\"") || text.contains("\"type\":\"scene\"") => {
+                        scene_bytes = Some(text.len());
+                    }
+                    Message::Binary(bytes) => {
+                        let length = u32::from_le_bytes(bytes[..4].try_into().unwrap()) as usize;
+                        let header: Value = serde_json::from_slice(&bytes[4..4 + length]).unwrap();
+                        if header["generation"].as_u64() > Some(generation) && first.is_none() {
+                            generation = header["generation"].as_u64().unwrap();
+                            // From the edit's arrival at the server (its receipt time).
+                            first = Some((t.elapsed().as_secs_f64() * 1e3, header["since_edit_ms"].as_f64()));
+                            println!(
+                                "  since the scene reached the renderer {:.0} ms: prepare {:.0} ms, upload {:.0} ms, render {:.0} ms",
+                                header["since_change_ms"].as_f64().unwrap_or(0.0),
+                                header["prepare_ms"].as_f64().unwrap_or(0.0),
+                                header["upload_ms"].as_f64().unwrap_or(0.0),
+                                header["render_ms"].as_f64().unwrap_or(0.0)
+                            );
+                        }
+                    }
+                    _ => {}
+                }
+            }
+            let (page_ms, server_ms) = first.unwrap();
+            println!(
+                "edit {i}: first frame {page_ms:.0} ms at the page, {} ms at the server; scene message {} bytes",
+                server_ms.map_or("?".into(), |m| format!("{m:.0}")),
+                scene_bytes.unwrap()
+            );
+            times.push(server_ms.unwrap_or(page_ms));
+            sizes.push(scene_bytes.unwrap());
+        }
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        println!("median edit to first frame at the server: {median:.0} ms; scene messages {sizes:?} bytes");
+        assert!(sizes.iter().all(|&s| s < 1 << 20), "scene messages carry the mesh again: {sizes:?} bytes");
+    });
+}

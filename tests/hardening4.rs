@@ -317,9 +317,13 @@ fn files_the_front_ends_read_are_inputs_and_never_overwritten() {
         assert!(scene.inputs.contains(&canonical(f)), "{f} not in {:?}", scene.inputs);
     }
 
-    // The editor's Save of a translation does not replace the .toml already beside it.
+    // The editor's Save of a translation does not replace the .toml already beside it (older
+    // than the .pov, so the translation is what opens; a newer one would open in its place).
     std::fs::write(p.join("scene.toml"), "# my own scene\n").unwrap();
+    let older = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+    std::fs::File::options().write(true).open(p.join("scene.toml")).unwrap().set_modified(older).unwrap();
     let mut doc = photonix::editor::SceneDocument::load(&p.join("scene.pov")).unwrap();
+    assert!(doc.notice().is_some_and(|n| n.contains("older")), "{:?}", doc.notice());
     let e = doc.save().unwrap_err();
     assert!(e.contains("scene.toml already exists beside scene.pov"), "{e}");
     assert_eq!(std::fs::read_to_string(p.join("scene.toml")).unwrap(), "# my own scene\n");
@@ -387,6 +391,9 @@ fn a_served_pov_scene_reads_nothing_outside_its_folder_and_says_nothing_of_it() 
     }
     std::fs::write(folder.join("room.xml"), xml("")).unwrap();
     std::fs::write(folder.join("room.toml"), "# my own scene\n").unwrap();
+    // Older than the .xml: the translation opens (a newer .toml would open in its place).
+    let older = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+    std::fs::File::options().write(true).open(folder.join("room.toml")).unwrap().set_modified(older).unwrap();
     let mut doc = photonix::editor::SceneDocument::load(&folder.join("room.xml")).unwrap();
     let e = doc.save().unwrap_err();
     assert!(e.contains("room.toml already exists beside room.xml"), "{e}");

@@ -104,12 +104,13 @@ function send(message) {
 
 function onText(msg) {
   switch (msg.type) {
-    case 'scene': setScene(msg); break;
+    case 'scene': receiveScene(msg); break;
     case 'hello': state.session = msg.session; setDenoise(msg); updateButtons(); break;
     case 'reply': {
       const resolve = pending.get(msg.id);
       pending.delete(msg.id);
-      if (!msg.ok) showMessage(msg.error);
+      // A save that would replace a file is asked about, not shown as an error.
+      if (!msg.ok && !msg.replace_needed) showMessage(msg.error);
       if (resolve) resolve(msg);
       break;
     }
@@ -160,9 +161,44 @@ export async function edit(command) {
 }
 export const undo = () => send({ type: 'undo' });
 export const redo = () => send({ type: 'redo' });
+/// Saves; where the save would replace a file the editor did not open or last write (a .toml
+/// beside the .pov, or a file changed on disk since), asks first and replaces only when told.
 export async function save() {
-  if ((await send({ type: 'save' })).ok) showMessage(`saved ${state.scene.file}`, 'info');
+  let reply = await send({ type: 'save' });
+  if (!reply.ok && reply.replace_needed) {
+    if (!await askReplace(reply.error)) { showMessage(`not saved: ${state.scene.file} kept as it is`, 'info'); return; }
+    reply = await send({ type: 'save', replace: true });
+  }
+  if (reply.ok) showMessage(`saved ${state.scene.file}`, 'info');
 }
+
+/// The question of a save that would replace a file: resolves true for "Replace it".
+function askReplace(message) {
+  const dialog = $('replace-dialog');
+  $('replace-text').textContent = message;
+  document.body.dataset.asking = 'replace';
+  return new Promise((resolve) => {
+    const done = (yes) => {
+      $('replace-yes').onclick = $('replace-no').onclick = dialog.oncancel = null;
+      dialog.close();
+      document.body.dataset.asking = '';
+      resolve(yes);
+    };
+    $('replace-yes').onclick = () => done(true);
+    $('replace-no').onclick = () => done(false);
+    dialog.oncancel = () => done(false);
+    dialog.showModal();
+  });
+}
+
+/// What the server opened in place of the file named (the .toml saved beside a .pov), said
+/// until closed.
+function showNotice(text) {
+  $('notice').hidden = !text;
+  $('notice-text').textContent = text || '';
+  document.body.dataset.notice = text || '';
+}
+$('notice-close').onclick = () => showNotice(null);
 export function sendView(view) { send({ type: 'view', view }); }
 
 const waiting = [];
@@ -194,15 +230,22 @@ export function entryOf(sel) {
   return listOf(sel.kind).find((e) => e.id === sel.id) || null;
 }
 
-/// The selection entries still in `scene`, their indices brought up to date.
+/// The selection entries still in `scene`, their indices brought up to date. After a restart of
+/// the server (every id new), an entry is kept where the scene has, at its index, an entry
+/// whose fields are the same as written (its `label`): the same entry of the same file, not
+/// another one moved into its place.
+let restarted = false;
+const labelOf = (entry) => JSON.stringify(entry.fields);
 function refreshed(list, scene) {
   const out = [];
   for (const sel of list) {
     if (sel.kind === 'camera') out.push(sel);
     else if (sel.kind === 'material') { if (scene.materials.some((m) => m.name === sel.name)) out.push(sel); }
     else {
-      const index = listOf(sel.kind, scene).findIndex((e) => e.id === sel.id);
-      if (index >= 0) out.push({ kind: sel.kind, id: sel.id, index });
+      const entries = listOf(sel.kind, scene);
+      let index = entries.findIndex((e) => e.id === sel.id);
+      if (index < 0 && restarted && sel.label !== undefined && entries[sel.index] && labelOf(entries[sel.index]) === sel.label) index = sel.index;
+      if (index >= 0) out.push({ kind: sel.kind, id: entries[index].id, index, label: labelOf(entries[index]) });
     }
   }
   return out;
@@ -249,15 +292,46 @@ export function selectMany(list, additive) {
   select([...state.selection, ...list.filter((s) => !keys.has(keyOf(s)))]);
 }
 
+/// A scene from the server. One broadcast after an edit (`delta`) leaves out the triangles of
+/// the entries whose geometry this page has (the same `geometry` key): they come from the scene
+/// before. Any missing (a message missed), the whole scene is fetched.
+async function receiveScene(scene) {
+  if (scene.delta) {
+    const known = new Map();
+    for (const list of ['shapes', 'lights', 'instances']) {
+      for (const e of (state.scene && state.scene[list]) || []) if (e.positions) known.set(e.geometry, e.positions);
+    }
+    let missing = false;
+    for (const list of ['shapes', 'lights', 'instances']) {
+      for (const e of scene[list] || []) {
+        if (e.positions) continue;
+        if (known.has(e.geometry)) e.positions = known.get(e.geometry); else missing = true;
+      }
+    }
+    if (missing) {
+      const response = await fetch('api/scene', { headers: token ? { Authorization: `token ${token}` } : {} });
+      if (!response.ok) { showMessage(`cannot fetch the scene (${response.status})`); return; }
+      scene = await response.json();
+      if (state.scene && scene.revision < state.scene.revision) return;
+    }
+  }
+  setScene(scene);
+}
+
 function setScene(scene) {
   const old = state.scene;
   state.scene = scene;
   document.body.dataset.revision = String(scene.revision);
   $('file-name').textContent = scene.file + (scene.dirty ? ' •' : '');
+  if (!old || old.notice !== scene.notice) showNotice(scene.notice);
   viewport.setScene(scene, !old);
   // Keep the selection where its entries still exist (by id: another tab's delete of an
-  // entry before it does not move it).
+  // entry before it does not move it). A restarted server has new ids for every entry.
+  const ids = (sc) => new Set(['shapes', 'lights', 'instances'].flatMap((l) => (sc[l] || []).map((e) => e.id)));
+  const before = old ? ids(old) : new Set();
+  restarted = Boolean(old) && ![...ids(scene)].some((id) => before.has(id));
   select(state.selection);
+  restarted = false;
   // A warning is new when its text is, whatever line it names now (an edit above it moves it).
   const bare = (w) => w.replace(/^[^:]*:\d+(:\d+)?: /, '');
   const known = new Set(old ? old.warnings.map(bare) : []);
@@ -332,20 +406,59 @@ export async function newMaterial() {
   if (await edit({ op: 'add', kind: 'material', name, table: { type: 'diffuse', reflectance: materialDefaults('diffuse').reflectance } })) select({ kind: 'material', name });
 }
 
-/// Switches a material's type in one step: fields the new type does not take go, those it
-/// needs come with their defaults (a mix gets the first two other materials).
+/// The fields a type switch took out of each material (this tab), by material name: switching
+/// back (diffuse to conductor to diffuse) gives them back, so the colour is not lost.
+const setAside = new Map();
+
+/// A constant colour (three numbers), not a texture.
+const isColour = (v) => Array.isArray(v) && v.length === 3 && v.every((x) => typeof x === 'number');
+
+/// Switches a material's type in one step: fields the new type does not take are set aside
+/// (and given back by a later switch to a type that takes them), those it needs come with
+/// their defaults (a conductor's preset), the colour goes over to the new type's colour field
+/// (reflectance or tint), and a mix gets two materials: the first two others, or, where there
+/// are not two, a copy of this material's look (and a diffuse one), added in the same step.
 export async function switchMaterialType(material, type) {
   if (type === material.fields.type) return;
   const takes = new Set(materialFieldNames(type));
   const fields = { type };
-  for (const field of Object.keys(material.fields)) if (!takes.has(field)) fields[field] = null;
-  if (type === 'conductor' && !material.fields.preset && !material.fields.eta) [fields.preset] = materialChoices('conductor', 'preset');
-  if (type === 'mix' && !material.fields.materials) {
-    const others = state.scene.materials.filter((m) => m.name !== material.name && m.fields.type !== 'null' && m.fields.type !== 'mix').map((m) => m.name);
-    if (others.length < 2) { showMessage('a mix needs two other materials (not mix or null); add them first'); select(state.selection); return; }
-    fields.materials = others.slice(0, 2);
+  const aside = { ...(setAside.get(material.name) || {}) };
+  for (const [field, value] of Object.entries(material.fields)) {
+    if (field !== 'type' && !takes.has(field)) { fields[field] = null; aside[field] = value; }
   }
-  if (!await edit({ op: 'set_fields', target: { material: material.name }, fields })) select(state.selection);
+  // Given back: what an earlier switch set aside and this type takes.
+  for (const [field, value] of Object.entries(aside)) {
+    if (takes.has(field) && material.fields[field] === undefined && field !== 'type') { fields[field] = value; delete aside[field]; }
+  }
+  // The colour, whichever field holds it.
+  const colour = [material.fields.reflectance, material.fields.tint].find(isColour);
+  for (const field of ['reflectance', 'tint']) {
+    if (takes.has(field) && material.fields[field] === undefined && fields[field] === undefined && colour) fields[field] = colour;
+  }
+  if (type === 'conductor' && !material.fields.preset && !material.fields.eta && !fields.eta && !fields.preset) [fields.preset] = materialChoices('conductor', 'preset');
+  const commands = [];
+  if (type === 'mix' && !material.fields.materials && !fields.materials) {
+    const names = new Set(state.scene.materials.map((m) => m.name));
+    const fresh = (base) => { let n = base, k = 2; while (names.has(n)) n = `${base}_${k++}`; names.add(n); return n; };
+    const others = state.scene.materials.filter((m) => m.name !== material.name && m.fields.type !== 'null' && m.fields.type !== 'mix').map((m) => m.name);
+    const parts = others.slice(0, 2);
+    if (parts.length < 2 && material.fields.type !== 'null') {
+      // This material's own look, so the mix starts from it.
+      const look = Object.fromEntries(Object.entries(material.fields).filter(([, v]) => v !== null));
+      const name = fresh(`${material.name}_base`);
+      commands.push({ op: 'add', kind: 'material', name, table: look });
+      parts.unshift(name);
+    }
+    while (parts.length < 2) {
+      const name = fresh(`${material.name}_mixed`);
+      commands.push({ op: 'add', kind: 'material', name, table: { type: 'diffuse', reflectance: materialDefaults('diffuse').reflectance } });
+      parts.push(name);
+    }
+    fields.materials = parts;
+  }
+  commands.push({ op: 'set_fields', target: { material: material.name }, fields });
+  if (await edit(commands.length === 1 ? commands[0] : { op: 'batch', commands })) setAside.set(material.name, aside);
+  else select(state.selection);
 }
 
 /// Hides or shows entries in this tab's solid view.
@@ -366,8 +479,12 @@ async function addThing(what) {
   const lo = scene.bounds.min, hi = scene.bounds.max;
   const extent = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 1;
   const s = round(extent * 0.08);
-  // In front of the view, beside what is there already.
-  const c = viewport.placementPoint(s);
+  // Where the view's centre meets the floor (standing on it), or in front of the view; beside
+  // what is there already.
+  const { point: c, floor } = viewport.placement(s);
+  // How far above the point the thing's centre goes for it to stand there.
+  const standing = { sphere: s, box: s, cylinder: s, torus: round(s / 2), quad: round(s * 0.01) }[type];
+  if (floor && kind === 'shape' && standing) c[1] = round(c[1] + standing);
   const add = (v) => v.map((x, i) => round(c[i] + x));
   if (kind === 'shape' && scene.materials.length === 0) {
     if (!await edit({ op: 'add', kind: 'material', name: 'default', table: { type: 'diffuse' } })) return;
@@ -407,9 +524,13 @@ export async function importModel(file) {
   const name = file.name.replace(/[^A-Za-z0-9._-]/g, '_').replace(/^\.+/, '');
   const lo = state.scene.bounds.min, hi = state.scene.bounds.max;
   const extent = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 1;
-  const at = viewport.placementPoint(extent * 0.08).join(',');
+  // Standing on the floor at the view's centre (the server puts the bottom of its box there),
+  // about a quarter of the scene across unless it is within 4 times of that already.
+  const { point, floor } = viewport.placement(extent * 0.08);
+  const size = round(extent * 0.25);
   const before = new Set(state.scene.shapes.map((e) => e.id));
-  const response = await fetch(`api/import?name=${encodeURIComponent(name)}&at=${encodeURIComponent(at)}`, {
+  const query = `name=${encodeURIComponent(name)}&at=${encodeURIComponent(point.join(','))}&size=${size}${floor ? '&floor=true' : ''}`;
+  const response = await fetch(`api/import?${query}`, {
     method: 'POST', body: file, headers: token ? { Authorization: `token ${token}` } : {},
   });
   const reply = await response.json().catch(() => ({ ok: false, error: `import failed (${response.status})` }));
@@ -441,7 +562,10 @@ async function images() {
   return reply.images;
 }
 
-const properties = new Properties($('properties'), { edit, state, showMessage, images, entryOf, setGroup, newMaterial, switchMaterialType });
+const properties = new Properties($('properties'), {
+  edit, state, showMessage, images, entryOf, setGroup, newMaterial, switchMaterialType,
+  typedTransform: (sel, part, values) => viewport.typedTransform(sel, part, values),
+});
 const renderDialog = new RenderDialog($('render-dialog'), { showMessage, token });
 
 $('undo').onclick = undo;
@@ -469,6 +593,8 @@ $('layout').onclick = () => { viewport.setQuad(!viewport.quad); $('layout').clas
 $('view-camera').onclick = () => viewport.viewThroughCamera();
 $('camera-to-view').onclick = () => viewport.cameraToView();
 $('render-open').onclick = () => renderDialog.open();
+$('help-open').onclick = () => $('help-dialog').showModal();
+$('help-close').onclick = () => $('help-dialog').close();
 
 function setMode(mode) {
   viewport.setMode(mode);
@@ -521,6 +647,7 @@ window.addEventListener('keydown', (e) => {
   else if (key === 'escape') { viewport.cancelBoxSelect(); select([]); }
   else if (key === 'b') viewport.startBoxSelect();
   else if (key === 'f12') renderDialog.open();
+  else if (e.key === '?') $('help-dialog').showModal();
   else handled = false;
   if (handled) e.preventDefault();
 });

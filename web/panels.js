@@ -190,7 +190,7 @@ export class Properties {
       this.root.append(this.fieldset(title, target, entry.fields, scene, 'obj'));
       if (one.kind === 'instance') this.root.append(this.instanceNote(entry));
       const hasTransform = one.kind !== 'light' || entry.fields.type === 'area';
-      if (hasTransform) this.root.append(this.transform(target, entry.fields.transform || {}));
+      if (hasTransform) this.root.append(this.transform(target, entry.fields.transform || {}, one));
       const material = entry.fields.material && scene.materials.find((m) => m.name === entry.fields.material);
       if (material) this.root.append(this.material(material, scene));
     } else if (one.kind === 'material') {
@@ -351,7 +351,8 @@ export class Properties {
     return input;
   }
 
-  transform(target, t) {
+  /// `sel`: the selection entry, whose typed rotate and scale turn about its own centre.
+  transform(target, t, sel) {
     const fs = el('fieldset', {}, el('legend', {}, 'Transform'));
     const translate = t.translate ? [...t.translate] : [0, 0, 0];
     const rotate = t.rotate ? [...t.rotate] : [0, 0, 0];
@@ -361,7 +362,7 @@ export class Properties {
       const row = el('div', { class: 'row' }, el('label', {}, part === 'rotate' ? 'rotate (degrees, X then Y then Z)' : part));
       values.forEach((v, axis) => row.append(this.number(`tf-${part}-${axis}`, v, (x) => {
         values[axis] = x;
-        this.app.edit({ op: 'set_transform', target, [part]: [...values] });
+        this.app.edit(this.app.typedTransform(sel, part, values));
       })));
       fs.append(row);
     }

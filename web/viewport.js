@@ -15,7 +15,9 @@ const DEG = Math.PI / 180;
 const EULER_ORDER = 'ZYX';
 const OUTLINE_COLOR = 0xffa640;
 
-function round(v) { return Number.parseFloat(Number(v).toPrecision(7)); }
+// Seven significant digits, and 0 for what is float noise next to 0 (a turn of 90 degrees
+// leaves 1.7e-11 where the matrix has 0), so the file reads as typed.
+function round(v) { const r = Number.parseFloat(Number(v).toPrecision(7)); return Math.abs(r) < 1e-9 ? 0 : r; }
 // Angles in degrees: to a millionth of a degree, so 1e-14 from a matrix reads back as 0.
 function roundAngle(v) { return round(Math.round(v * 1e6) / 1e6); }
 
@@ -398,6 +400,9 @@ export class Viewport {
       this.helpers.add(grid);
     }
     const axes = new THREE.AxesHelper(extent * 0.25);
+    // Hidden over the render too (with the grids): nothing of the editor's drawn over the image
+    // but the selection.
+    axes.userData.grid = true;
     axes.layers.enableAll();
     this.helpers.add(axes);
     this.applySnap();
@@ -430,6 +435,17 @@ export class Viewport {
     this.perspective.up.set(...cam.up).normalize();
     this.perspective.fov = cam.projection === 'perspective' ? cam.fov : 45;
     view.controls.target.set(...cam.look_at);
+    // A look_at next to the eye (a glTF camera's is 1 mm ahead) would make the orbit turn
+    // about the eye: orbit about the point of the view's axis nearest the scene's centre.
+    const eye = this.perspective.position;
+    const ahead = view.controls.target.clone().sub(eye);
+    if (this.extent && ahead.length() < this.extent * 0.05 && ahead.length() > 0) {
+      const b = this.sceneData.bounds;
+      const centre = new THREE.Vector3(...b.min).add(new THREE.Vector3(...b.max)).multiplyScalar(0.5);
+      const dir = ahead.normalize();
+      const distance = Math.max(centre.sub(eye).dot(dir), this.extent * 0.25);
+      view.controls.target.copy(eye).addScaledVector(dir, distance);
+    }
     this.perspective.lookAt(view.controls.target);
     this.perspective.updateProjectionMatrix();
     view.controls.update();
@@ -463,26 +479,61 @@ export class Viewport {
     this.sendView(true);
   }
 
-  /// The point new things go: in front of the perspective view, at its orbit centre (or closer,
-  /// within the scene's size), moved sideways past anything already there.
-  placementPoint(size) {
+  /// The point new things go: in front of the view where its centre meets the scene, else at
+  /// its orbit centre (or closer, within
+  /// the scene's size); moved sideways past anything already there, then dropped onto the
+  /// surface facing up below it, when there is one (`floor` is then true and the point is on
+  /// it): things stand on the floor, not half under it.
+  placement(size) {
     const view = this.views[3];
     const forward = view.controls.target.clone().sub(this.perspective.position);
     const distance = Math.min(forward.length(), this.extent);
     forward.normalize();
-    const base = this.perspective.position.clone().addScaledVector(forward, distance);
+    let base = this.perspective.position.clone().addScaledVector(forward, distance);
+    const surfaces = this.pickables.filter((m) => ['mesh', 'area'].includes(m.userData.object.kind) && !this.hidden.has(keyOf(m.userData.object.target)));
+    const raycaster = new THREE.Raycaster();
+    const up = (hit) => hit.face && Math.abs(hit.face.normal.clone().transformDirection(hit.object.matrixWorld).y) > 0.7;
+    raycaster.set(this.perspective.position, forward);
+    const [ahead] = raycaster.intersectObjects(surfaces, false);
+    // What the view's centre meets (an object there is stepped past sideways below).
+    if (ahead && ahead.distance < this.extent * 3) base = ahead.point.clone();
     const right = new THREE.Vector3().crossVectors(forward, this.perspective.up).normalize();
     // Things there already: their boxes grown by the new thing's size; floors and walls (a side
     // more than half the scene across) do not count, everything stands on or beside them.
     const boxes = this.objects.filter((o) => o.kind === 'mesh' || o.kind === 'area').map((o) => this.worldBox(o))
       .filter((b) => { const d = b.getSize(new THREE.Vector3()); return Math.max(d.x, d.y, d.z) < this.extent * 0.5; })
       .map((b) => b.expandByScalar(size));
-    for (let k = 0; k < 40; k++) {
+    // The floor below a point (from a little above, so a point on it finds it).
+    const floorBelow = (q) => {
+      raycaster.set(q.clone().setY(q.y + size * 0.01), new THREE.Vector3(0, -1, 0));
+      return raycaster.intersectObjects(surfaces, false).find((hit) => up(hit) && hit.distance < this.extent);
+    };
+    // The nearest free place with a floor under it, else the nearest free place.
+    // Sideways first, then in rows nearer the view (flat along the floor).
+    const nearer = new THREE.Vector3(-forward.x, 0, -forward.z);
+    if (nearer.lengthSq() > 1e-6) nearer.normalize();
+    let free = null;
+    for (let n = 0; n < 40 * 3; n++) {
+      const k = n % 40, row = Math.floor(n / 40);
       const step = (k % 2 ? 1 : -1) * Math.ceil(k / 2);
-      const p = base.clone().addScaledVector(right, step * size * 2.5);
-      if (!boxes.some((b) => b.containsPoint(p))) return p.toArray().map(round);
+      if (Math.abs(step) > 6 && row > 0) continue;
+      const q = base.clone().addScaledVector(right, step * size * 2.5).addScaledVector(nearer, row * size * 2.5);
+      if (boxes.some((b) => b.containsPoint(q))) continue;
+      const below = floorBelow(q);
+      // Standing there: its own box (a size around the point above the floor) clear too.
+      if (below && !boxes.some((b) => b.containsPoint(below.point.clone().setY(below.point.y + size)))) {
+        return { point: below.point.toArray().map(round), floor: true };
+      }
+      if (!free) free = q;
     }
-    return base.toArray().map(round);
+    return { point: (free || base).toArray().map(round), floor: false };
+  }
+
+  /// The centre of a new thing of half-size `size` (`placement`, lifted onto the floor).
+  placementPoint(size) {
+    const { point, floor } = this.placement(size);
+    if (floor) point[1] = round(point[1] + size);
+    return point;
   }
 
   /// How far a duplicate of `list` moves: along x by the selection's width and a tenth more
@@ -771,6 +822,33 @@ export class Viewport {
     else if (commands.length) this.app.edit({ op: 'batch', commands });
   }
 
+  /// The edit of a typed transform part (`translate`, `rotate` or `scale`, three numbers) of
+  /// entry `sel`. A typed rotate or scale turns and scales about the entry's own centre (its
+  /// bounding box's, in its own coordinates), as the gizmo does, not about the world's origin:
+  /// the translate takes up the difference, so the centre stays where it is.
+  typedTransform(sel, part, values) {
+    const target = { [`${sel.kind}_id`]: sel.id };
+    const command = { op: 'set_transform', target, [part]: [...values] };
+    const o = this.objectOf(sel);
+    if (part === 'translate' || !o || (o.kind !== 'mesh' && o.kind !== 'area')) return command;
+    o.mesh.geometry.computeBoundingBox();
+    if (o.mesh.geometry.boundingBox.isEmpty()) return command;
+    const local = o.mesh.geometry.boundingBox.getCenter(new THREE.Vector3());
+    o.holder.updateMatrix();
+    const centre = local.clone().applyMatrix4(o.holder.matrix);
+    const after = new THREE.Object3D();
+    after.rotation.order = EULER_ORDER;
+    after.position.copy(o.holder.position);
+    after.quaternion.copy(o.holder.quaternion);
+    after.scale.copy(o.holder.scale);
+    if (part === 'rotate') after.rotation.set(values[0] * DEG, values[1] * DEG, values[2] * DEG, EULER_ORDER);
+    else after.scale.set(...values);
+    after.updateMatrix();
+    after.position.add(centre.clone().sub(local.clone().applyMatrix4(after.matrix)));
+    command.translate = after.position.toArray().map(round);
+    return command;
+  }
+
   /// The fields of the entry a target names, as written in the file.
   entryFields(t) {
     const list = t.kind === 'shape' ? this.sceneData.shapes : t.kind === 'light' ? this.sceneData.lights : this.sceneData.instances || [];
@@ -929,11 +1007,20 @@ export class Viewport {
     const ndc = new THREE.Vector2(((x - r.x) / r.w) * 2 - 1, -((y - r.y) / r.h) * 2 + 1);
     const raycaster = new THREE.Raycaster();
     raycaster.setFromCamera(ndc, r.view.camera);
-    const hits = raycaster.intersectObjects(this.pickables.filter((m) => m.visible && !this.hidden.has(keyOf(m.userData.object.target))), false);
+    const hits = raycaster.intersectObjects(this.pickables.filter((m) => this.pickable(m)), false);
     const additive = e.shiftKey || e.ctrlKey || e.metaKey;
     if (!hits.length) { if (!additive) this.app.select(null); return; }
     const t = hits[0].object.userData.object.target;
     this.app.pick(t.kind === 'camera' ? { kind: 'camera' } : { kind: t.kind, id: t.id }, additive);
+  }
+
+  /// Whether a click may pick `mesh`: not hidden by the user (H) in this tab. Surfaces are left
+  /// undrawn over the rendered image (`draw` clears their `visible`), yet what the click lands on
+  /// there is the same object, so their visibility is not asked; an icon's is.
+  pickable(mesh) {
+    const o = mesh.userData.object;
+    if (this.hidden.has(keyOf(o.target))) return false;
+    return mesh.visible || o.kind === 'mesh' || o.kind === 'area';
   }
 
   // Drawing ------------------------------------------------------------------------------------
@@ -949,7 +1036,7 @@ export class Viewport {
         const hidden = this.hidden.has(keyOf(o.target));
         o.mesh.visible = !hidden && (!rendered || (o.kind !== 'mesh' && o.kind !== 'area'));
       }
-      // The render has no grid drawn over it (the axes stay, small, at the origin).
+      // The render has no grid or axes drawn over it.
       for (const g of this.helpers.children) if (g.userData.grid) g.visible = !rendered;
       // Seen from (nearly) its own position, the camera's icon would fill the view.
       if (this.cameraIcon) {

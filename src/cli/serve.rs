@@ -69,6 +69,9 @@ pub fn run(args: ServeArgs) -> Result<()> {
     runtime.block_on(async {
         let server = Server::start(serve).await?;
         note!("photonix serve: editing {} on {} ({why})", args.scene.display(), server.device());
+        if let Some(notice) = server.notice() {
+            note!("note: {notice}");
+        }
         if !server.addr.ip().is_loopback() {
             note!("warning: listening on {}: other machines can reach the editor; anyone with the URL can edit and save the scene", server.addr.ip());
         }

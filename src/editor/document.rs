@@ -181,6 +181,21 @@ pub struct SceneDocument {
     translated_from: Option<PathBuf>,
     /// Counts every change of the text (edits, undo, redo).
     revision: u64,
+    /// What the editor opened when it is not simply the file it was given (the `.toml` saved
+    /// beside a `.pov` in place of its translation, or the other way round): the page says it.
+    notice: Option<String>,
+}
+
+/// Why a save wrote nothing.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum SaveError {
+    /// The save would replace a file that is not the one the editor opened or last saved (a
+    /// `.toml` beside the translated `.pov`, or a scene file changed on disk since): the page
+    /// asks, and saves again with `replace` only when told to.
+    #[error("{0}")]
+    WouldReplace(String),
+    #[error("{0}")]
+    Failed(String),
 }
 
 /// The result of parsing a candidate text.
@@ -216,8 +231,57 @@ fn entry_counts(text: &str) -> [usize; 3] {
 impl SceneDocument {
     /// Loads `path`, which must parse as a scene reading no file outside its folder (the
     /// editor's server: no model, texture or file a model names is read outside it).
+    ///
+    /// A translated scene (`.pov`, `.glb`/`.gltf`, Mitsuba `.xml`) with a `.toml` of its name beside
+    /// it that is newer opens that `.toml`: the editor saved it there, and opening the
+    /// translation again would show none of those edits (and a Save would lose them). `notice`
+    /// says which file was opened and why.
     pub fn load(path: &Path) -> Result<SceneDocument, EditError> {
-        SceneDocument::open(path, true)
+        if let Some(doc) = SceneDocument::open_saved_beside(path)? {
+            return Ok(doc);
+        }
+        let mut doc = SceneDocument::open(path, true)?;
+        if doc.translated_from.is_some() && std::fs::symlink_metadata(&doc.path).is_ok() {
+            doc.notice = Some(format!(
+                "opened the translation of {source}: {toml} beside it is older than {source}, so it was not opened; Save asks before replacing it",
+                source = file_name(path),
+                toml = file_name(&doc.path),
+            ));
+        }
+        Ok(doc)
+    }
+
+    /// The `.toml` beside the translated scene `path` when it is newer than `path` (or as new).
+    fn open_saved_beside(path: &Path) -> Result<Option<SceneDocument>, EditError> {
+        let translated = crate::scene::pov::is_pov_path(path)
+            || crate::scene::gltf_scene::is_gltf_path(path)
+            || crate::scene::mitsuba::is_mitsuba_path(path);
+        let beside = path.with_extension("toml");
+        if !translated || beside == path {
+            return Ok(None);
+        }
+        let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+        let (Some(source_time), Some(toml_time)) = (modified(path), modified(&beside)) else {
+            return Ok(None);
+        };
+        if toml_time < source_time {
+            return Ok(None);
+        }
+        let (source, toml) = (file_name(path), file_name(&beside));
+        let mut doc = SceneDocument::open(&beside, true).map_err(|e| {
+            EditError::Invalid(format!(
+                "{toml} beside {source} is newer than it (the editor's last save) and was opened in its place, but it does not load: {e}; fix it, or move it away to open {source} again"
+            ))
+        })?;
+        doc.notice = Some(format!(
+            "opened {toml}, saved beside {source} and newer than it, so the edits saved there are kept; to start again from {source}, move {toml} away"
+        ));
+        Ok(Some(doc))
+    }
+
+    /// What the editor opened in place of the file it was given, and why (see `load`).
+    pub fn notice(&self) -> Option<&str> {
+        self.notice.as_deref()
     }
 
     /// `load`, reading the files the scene names wherever they are (`photonix export`).
@@ -243,7 +307,12 @@ impl SceneDocument {
                     crate::scene::gltf_scene::translate_file(path, None).map(|t| t.toml)
                 }
             });
-            let toml = toml.map_err(|e| EditError::Invalid(e.to_string()))?;
+            let mut toml = toml.map_err(|e| EditError::Invalid(e.to_string()))?;
+            if pov {
+                // One POV-Ray object, one entry (a blob is not 10 000 triangles in the tree).
+                let source = std::fs::read_to_string(path).ok();
+                toml = super::pov_objects::regroup(&toml, source.as_deref());
+            }
             let mut doc = Self::from_text(&path.with_extension("toml"), toml, confined)?;
             doc.saved = String::new();
             doc.translated_from = Some(path.to_path_buf());
@@ -284,6 +353,7 @@ impl SceneDocument {
             confined,
             saved: text.clone(),
             translated_from: None,
+            notice: None,
             text,
             scene,
             origins,
@@ -523,28 +593,51 @@ impl SceneDocument {
     }
 
     /// Writes the text to the scene file atomically (a temporary file in the same folder, then
-    /// a rename): the file is either the old one or the new one, never a mix.
+    /// a rename): the file is either the old one or the new one, never a mix. Replaces nothing
+    /// the editor did not open or last write (`save_replacing` does, once the user said so).
     pub fn save(&mut self) -> Result<(), String> {
-        // The first save of a translation writes `<name>.toml` beside the .pov or .glb: a file of
-        // that name already there is the user's own scene, not this one's, and is not replaced.
-        if let Some(source) = &self.translated_from {
-            if std::fs::symlink_metadata(&self.path).is_ok() {
-                let name = |p: &Path| p.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default();
-                return Err(format!(
-                    "not saved: {} already exists beside {}, and saving the translation would replace it; move it away (or edit it with `photonix serve {}`)",
-                    crate::limits::printable(&name(&self.path)),
-                    crate::limits::printable(&name(source)),
-                    crate::limits::printable(&name(&self.path)),
-                ));
-            }
+        self.save_replacing(false).map_err(|e| e.to_string())
+    }
+
+    /// `save`; with `replace`, also over a file that `save` would not replace: a `.toml`
+    /// beside the translated scene, or a scene file changed on disk since it was opened or saved.
+    pub fn save_replacing(&mut self, replace: bool) -> Result<(), SaveError> {
+        if !replace {
+            self.check_replace()?;
         }
         let text = self.text.clone();
         crate::io::image::write_atomically(&self.path, |tmp| {
             std::fs::write(tmp, text.as_bytes()).map_err(|e| e.to_string())
         })
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| SaveError::Failed(e.to_string()))?;
         self.saved = self.text.clone();
         self.translated_from = None;
+        self.notice = None;
+        Ok(())
+    }
+
+    /// Refuses a save that would replace a file other than the one this document was read from
+    /// or last wrote.
+    fn check_replace(&self) -> Result<(), SaveError> {
+        let name = file_name(&self.path);
+        if std::fs::symlink_metadata(&self.path).is_err() {
+            return Ok(());
+        }
+        // The first save of a translation writes `<name>.toml` beside the .pov or .glb: a file of
+        // that name already there is not this document.
+        if let Some(source) = &self.translated_from {
+            return Err(SaveError::WouldReplace(format!(
+                "not saved: {name} already exists beside {}, and saving the translation would replace it; replace it, or move it away (or edit it with `photonix serve {name}`)",
+                file_name(source),
+            )));
+        }
+        // Something else wrote the file since the editor read or saved it.
+        let on_disk = crate::limits::read_limited(&self.path, crate::limits::MAX_SCENE_FILE_BYTES).ok();
+        if on_disk.as_deref() != Some(self.saved.as_bytes()) {
+            return Err(SaveError::WouldReplace(format!(
+                "not saved: {name} changed on disk since the editor opened or last saved it (another program or editor wrote it); replace it with the editor's scene, or save nothing and keep it"
+            )));
+        }
         Ok(())
     }
 
@@ -593,6 +686,11 @@ impl SceneDocument {
 }
 
 /// The folder of `path`, canonical.
+/// The file's name, printable, for messages.
+fn file_name(path: &Path) -> String {
+    crate::limits::printable(&path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default())
+}
+
 fn folder_of(path: &Path) -> Result<PathBuf, EditError> {
     path.parent()
         .map(|p| if p.as_os_str().is_empty() { Path::new(".") } else { p })

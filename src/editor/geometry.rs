@@ -3,7 +3,7 @@
 //! viewport and for picking). Format (documented in docs/editor.md):
 //!
 //! ```text
-//! { "revision", "file", "dirty", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
+//! { "revision", "file", "dirty", "notice", "can_undo", "can_redo", "undo_author", "redo_author", "warnings": [..],
 //!   "bounds": { "min": [x,y,z], "max": [x,y,z] },
 //!   "camera": { "fields": {..}, "position", "look_at", "up", "fov", "width", "height", "projection", "view_height" },
 //!   "render": {..}, "photons": {..} | null, "environment": {..} | null,
@@ -13,9 +13,14 @@
 //!   "instances": [ { "id", "fields": {..}, "object", "copies", "drawn", "color", "emissive",
 //!                    "positions": [..], "groups": [..] } ] }
 //! ```
+//! `notice` (or null) says what was opened in place of the file named and why (a `.toml` saved
+//! beside a `.pov` and newer than it; `SceneDocument::load`).
 //! `undo_author` and `redo_author` name the page session that made the step Undo or Redo would
 //! take (0: an API call; null: no step), so a page can say whether it is its own.
 //! `id` is the entry's stable id (`SceneDocument::ids`): the page selects and edits by it.
+//! `geometry` is a key of the entry's triangles (a hash of `positions`): the scene messages
+//! broadcast after an edit (`delta_message`, `"delta": true`) leave out the `positions` of
+//! entries whose key the scene before had, and the page keeps those it has.
 //! `positions` lists three vertices per triangle; analytic shapes (spheres, discs, cones, tori,
 //! superellipsoids) come tessellated, an infinite plane as a square as large as the scene.
 //! `groups` (`{ "start", "count", "color" }`, in triangles) colours the runs of an entry made
@@ -49,6 +54,12 @@ pub(super) type Parts = BTreeMap<u32, Vec<f32>>;
 
 /// The page's view of `doc`.
 pub fn scene_json(doc: &SceneDocument) -> Json {
+    scene_json_known(doc, &std::collections::HashSet::new())
+}
+
+/// `scene_json` with no `positions` for the shapes whose geometry key `known` holds (the pages
+/// have them): a 100k-triangle mesh is not turned into a million JSON numbers at every edit.
+pub fn scene_json_known(doc: &SceneDocument, known: &std::collections::HashSet<String>) -> Json {
     let scene = doc.scene();
     let origins = doc.origins();
     let parsed: DocumentMut = doc.text().parse().unwrap_or_default();
@@ -91,7 +102,12 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
                 entry["positions"] = json!(positions);
                 entry["groups"] = json!(groups);
             } else {
-                entry["positions"] = json!(positions(range));
+                let positions = positions(range);
+                let key = key_of(&positions);
+                if !known.contains(&key) {
+                    entry["positions"] = json!(positions);
+                }
+                entry["geometry"] = json!(key);
             }
             entry
         })
@@ -148,6 +164,9 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
     let with_ids = |mut entries: Vec<Json>, ids: &[u64]| -> Vec<Json> {
         for (entry, id) in entries.iter_mut().zip(ids) {
             entry["id"] = json!(id);
+            if entry.get("geometry").is_none() {
+                entry["geometry"] = json!(geometry_key(&entry["positions"]));
+            }
         }
         entries
     };
@@ -171,6 +190,7 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "revision": doc.revision(),
         "file": doc.path().file_name().map(|n| n.to_string_lossy().into_owned()),
         "dirty": doc.dirty(),
+        "notice": doc.notice(),
         "can_undo": doc.can_undo(),
         "can_redo": doc.can_redo(),
         "undo_author": doc.undo_author(),
@@ -198,6 +218,61 @@ pub fn scene_json(doc: &SceneDocument) -> Json {
         "lights": lights,
         "instances": instances,
     })
+}
+
+/// An entry's geometry key: a hash of its `positions` (FNV-1a over the numbers' bits), the same
+/// for the same triangles, so a page that has them need not get them again.
+fn geometry_key(positions: &Json) -> String {
+    let numbers = positions.as_array().map_or(&[][..], |a| a.as_slice());
+    let floats: Vec<f32> = numbers.iter().map(|v| v.as_f64().unwrap_or(f64::NAN) as f32).collect();
+    key_of(&floats)
+}
+
+/// `geometry_key` of the numbers before they are JSON (the same key: JSON holds an f32 exactly).
+fn key_of(numbers: &[f32]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for v in numbers {
+        for byte in v.to_bits().to_le_bytes() {
+            hash = (hash ^ byte as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    format!("{hash:016x}-{}", numbers.len())
+}
+
+const LISTS: [&str; 3] = ["shapes", "lights", "instances"];
+
+/// The scene message `scene` (from `scene_json`) as sent to pages that have the scene before
+/// it: with `"delta": true` and without the `positions` of the entries whose geometry key
+/// `known` holds (the page takes them from the entry of that key it has). An edit beside a
+/// 100k-triangle mesh then sends kilobytes, not the mesh again. Returns the text and the keys
+/// of this scene (the next message's `known`); `scene` is left as it was.
+pub fn delta_message(
+    scene: &mut Json,
+    known: &std::collections::HashSet<String>,
+) -> (String, std::collections::HashSet<String>) {
+    let mut keys = std::collections::HashSet::new();
+    let mut taken = Vec::new();
+    for list in LISTS {
+        let Some(entries) = scene.get_mut(list).and_then(Json::as_array_mut) else { continue };
+        for (i, entry) in entries.iter_mut().enumerate() {
+            let Some(key) = entry["geometry"].as_str().map(str::to_string) else { continue };
+            if known.contains(&key) {
+                if let Some(positions) = entry.as_object_mut().and_then(|o| o.remove("positions")) {
+                    taken.push((list, i, positions));
+                }
+            }
+            keys.insert(key);
+        }
+    }
+    scene["delta"] = json!(true);
+    let text = scene.to_string();
+    if let Some(o) = scene.as_object_mut() {
+        o.remove("delta");
+    }
+    for (list, i, positions) in taken {
+        scene[list][i]["positions"] = positions;
+    }
+    (text, keys)
 }
 
 /// The bounds of every shape but the infinite planes, instanced copies included; a unit box

@@ -10,9 +10,10 @@ mod assets;
 pub mod document;
 pub mod geometry;
 pub mod gltf;
+mod pov_objects;
 pub mod preview;
 pub mod server;
 
-pub use document::{Command, EditError, SceneDocument, Target};
+pub use document::{Command, EditError, SaveError, SceneDocument, Target};
 pub use preview::{BackendChoice, FinalRequest, View};
 pub use server::{ServeError, ServeOptions, Server};

@@ -132,6 +132,9 @@ struct State {
     generation: u64,
     /// When the current generation began, for the edit-to-frame latency.
     changed_at: Instant,
+    /// When the edit that made the current scene reached the server (`set_scene_of_edit`),
+    /// before it was applied and parsed: the frame's `since_edit_ms`.
+    edit_at: Option<Instant>,
     mode: Mode,
     final_request: Option<(FinalRequest, Arc<Scene>)>,
     cancel_final: bool,
@@ -175,6 +178,7 @@ impl Renderer {
                 owner: 0,
                 generation: 0,
                 changed_at: Instant::now(),
+                edit_at: None,
                 mode: Mode::Preview,
                 final_request: None,
                 cancel_final: false,
@@ -220,7 +224,20 @@ impl Renderer {
 
     /// Starts a new preview generation with `scene`.
     pub fn set_scene(&self, scene: Arc<Scene>) {
-        self.change(|s| s.scene = Some(scene));
+        self.change(|s| {
+            s.scene = Some(scene);
+            s.edit_at = None;
+        });
+    }
+
+    /// `set_scene` for the edit that reached the server at `edit_at`: the frames say how long
+    /// after it they came (`since_edit_ms`: the edit applied, parsed, the scene sent and
+    /// rendered).
+    pub fn set_scene_of_edit(&self, scene: Arc<Scene>, edit_at: Instant) {
+        self.change(|s| {
+            s.scene = Some(scene);
+            s.edit_at = Some(edit_at);
+        });
     }
 
     /// Starts a new preview generation from `view`, for the page `owner`; the same view of the
@@ -381,7 +398,31 @@ impl Backend<'_> {
             let same_settings = (a.width, a.height, a.max_depth, a.seed) == (b.width, b.height, b.max_depth, b.seed);
             Arc::ptr_eq(&p.scene, scene) && p.view.as_ref() == view && same_settings
         });
-        if !same {
+        // Only the size changed (the next step of the same scene and view: quarter, half, full
+        // size): the prepared scene serves as it is but for the frame's size and the film's
+        // width, which `prepare` derives from them alone. Preparing again (the BVH over every
+        // triangle: 240-360 ms for a 100k-triangle mesh here) made an edit wait for the stale
+        // step's prepare, which no stop flag interrupts.
+        let resized = !same
+            && self.prepared.as_ref().is_some_and(|p| {
+                let (a, b) = (&p.settings, settings);
+                Arc::ptr_eq(&p.scene, scene)
+                    && p.view.as_ref() == view
+                    && (a.max_depth, a.seed) == (b.max_depth, b.seed)
+            });
+        if resized {
+            let p = self.prepared.as_mut().expect("checked above");
+            let frame = &mut p.buffers.frame;
+            if frame.camera_kind != crate::layout::constants::CAMERA_LATLONG {
+                // camera_right = right * tan(fov / 2) * aspect: scale by the aspects' ratio.
+                let old_aspect = frame.width as f32 / frame.height.max(1) as f32;
+                let new_aspect = settings.width as f32 / settings.height.max(1) as f32;
+                frame.camera_right = (Vec3::from(frame.camera_right) * (new_aspect / old_aspect)).into();
+            }
+            frame.width = settings.width;
+            frame.height = settings.height;
+            p.settings = *settings;
+        } else if !same {
             let t = Instant::now();
             let viewed;
             let target: &Scene = match view {
@@ -511,6 +552,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
         shared.stop.store(false, Ordering::SeqCst);
         let generation = s.generation;
         let changed_at = s.changed_at;
+        let edit_at = s.edit_at;
         let scene = s.scene.clone().expect("checked above");
         let view = s.view.expect("checked above");
         let owner = s.owner;
@@ -560,6 +602,7 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                     "stages": cost.stages,
                     "stale": stale.take(),
                     "since_change_ms": changed_at.elapsed().as_secs_f64() * 1e3,
+                    "since_edit_ms": edit_at.map(|t| t.elapsed().as_secs_f64() * 1e3),
                     "device": device,
                     "denoised": denoise && denoiser.is_some(),
                 });

@@ -3,24 +3,28 @@
 //! Routes (every one behind the token, see `auth`):
 //! - `GET /` and the page's assets, embedded in the binary (`assets.rs`);
 //! - `GET /api/scene`: the scene as the page sees it (`geometry::scene_json`);
-//! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save`;
+//! - `POST /api/edit` (a `Command` as JSON), `/api/undo`, `/api/redo`, `/api/save` (409 with
+//!   `"replace_needed": true` where it would replace a file the editor did not open or last
+//!   write; `?replace=true` saves over it);
 //! - `GET /api/scene.toml`: the scene's current text (a download);
 //! - `GET /api/scene.glb`: the scene's geometry as glTF 2.0 binary (`gltf.rs`, a download);
 //! - `GET /api/kinds`: every kind of material, light, shape and medium with its fields and
 //!   defaults (`scene::kinds::json`); `GET /kinds.js` is the same as a module the page imports;
 //! - `GET /api/images`: the image files in the scene's folder (`{"images": ["textures/a.png"]}`),
 //!   for the texture picker;
-//! - `POST /api/import?name=F.glb&material=M&at=x,y,z`: the body is written to F.glb in the
-//!   scene's folder and a mesh shape using it is added (any model format the renderer reads:
-//!   OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt), with `material` (else the file's own materials) and
-//!   its bounding box centred on `at` (one undo step);
+//! - `POST /api/import?name=F.glb&material=M&at=x,y,z&floor=true&size=S`: the body is written
+//!   to F.glb in the scene's folder and a mesh shape using it is added (any model format the
+//!   renderer reads: OBJ, glTF/.glb, PLY, 3DS, IFS, .bpt), with `material` (else the file's own
+//!   materials), scaled to `size` across where it is more than 4 times off it, and its bounding
+//!   box centred on `at` (with `floor`, standing on it) (one undo step);
 //! - `POST /api/render` (`FinalRequest`), `/api/render/cancel`, `GET /api/render/status`,
 //!   `GET /api/render/image.exr`, `/api/render/image.png`: the final render;
 //! - `GET /ws`: the WebSocket; the server sends the scene (text, `{"type": "scene", ...}`), the
 //!   final render's status, errors, and frames (binary: a u32 little-endian length, that many
 //!   bytes of JSON header, then a PNG); the page sends `{"type": "view", "view": View}`, `{"type": "denoise", "on": bool}` (the preview's denoising toggle; the hello says
 //!   whether it is on and, where the library is missing, why not: `denoise`, `denoiser_missing`),
-//!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (each answered by a
+//!   `{"type": "edit", "id", "command"}`, `undo`, `redo` and `save` (`"replace": true` to save
+//!   over a file a plain save refuses, whose reply says `"replace_needed": true`) (each answered by a
 //!   `{"type": "reply", "id", "ok", "error"}`); after the scene and the final render's status
 //!   it sends `{"type": "hello", "session"}`, the page's session number. Each page's view is its own: the renderer
 //!   renders the view last sent (by whichever page), and a page gets only the preview frames of
@@ -44,7 +48,7 @@ use serde_json::{json, Value as Json};
 use tokio::sync::broadcast;
 
 use super::assets::asset;
-use super::document::{Command, EditError, SceneDocument};
+use super::document::{Command, EditError, SaveError, SceneDocument};
 use super::geometry::scene_json;
 use super::preview::{encode_exr, encode_png, BackendChoice, Event, FinalRequest, Renderer, View};
 
@@ -100,8 +104,12 @@ struct App {
     renderer: Renderer,
     token: String,
     cookie: String,
-    /// The scene as the page sees it, for the current revision.
-    scene_json: Mutex<Arc<String>>,
+    /// The scene as the page sees it, for the current revision: the JSON, and its text once a
+    /// new page or `GET /api/scene` asked for it (a large mesh makes megabytes of it, which an
+    /// edit's broadcast leaves out: `geometry::delta_message`).
+    scene_json: Mutex<Option<Arc<String>>>,
+    /// The geometry keys of the scene last broadcast, which every page has.
+    sent_geometry: Mutex<std::collections::HashSet<String>>,
     /// Scene updates and replies that every page gets.
     updates: broadcast::Sender<Arc<String>>,
     max_upload_bytes: usize,
@@ -138,14 +146,15 @@ impl Server {
         let addr = SocketAddr::new(options.host, options.port);
         let listener = tokio::net::TcpListener::bind(addr).await.map_err(|cause| ServeError::Bind { addr, cause })?;
         let addr = listener.local_addr().map_err(|cause| ServeError::Bind { addr, cause })?;
-        let json = Arc::new(scene_message(&doc));
+        let (_, sent) = super::geometry::delta_message(&mut scene_message(&doc), &Default::default());
         let (updates, _) = broadcast::channel(64);
         let app = Arc::new(App {
             doc: Mutex::new(doc),
             renderer,
             cookie: format!("photonix_token_{}", addr.port()),
             token: token.clone(),
-            scene_json: Mutex::new(json),
+            scene_json: Mutex::new(None),
+            sent_geometry: Mutex::new(sent),
             updates,
             max_upload_bytes: options.max_upload_bytes,
             next_session: AtomicU64::new(1),
@@ -175,6 +184,11 @@ impl Server {
     /// The scene's current text (what a save would write).
     pub fn scene_text(&self) -> String {
         self.app.doc.lock().expect("document lock").text().to_string()
+    }
+
+    /// What was opened in place of the file named, and why (`SceneDocument::load`).
+    pub fn notice(&self) -> Option<String> {
+        self.app.doc.lock().expect("document lock").notice().map(str::to_string)
     }
 
     /// True when the scene has edits that are not saved (Ctrl-C warns about them).
@@ -343,10 +357,22 @@ async fn static_asset(request: Request) -> Response {
     }
 }
 
-fn scene_message(doc: &SceneDocument) -> String {
+fn scene_message(doc: &SceneDocument) -> Json {
     let mut value = scene_json(doc);
     value["type"] = json!("scene");
-    value.to_string()
+    value
+}
+
+/// The whole scene message as text (for a new page, `GET /api/scene`, a page that missed one),
+/// made once per revision when asked for. Locks the document, then the text (as an edit does).
+fn full_scene(app: &App) -> Arc<String> {
+    if let Some(text) = app.scene_json.lock().expect("scene json lock").clone() {
+        return text;
+    }
+    let doc = app.doc.lock().expect("document lock");
+    let text = Arc::new(scene_message(&doc).to_string());
+    *app.scene_json.lock().expect("scene json lock") = Some(text.clone());
+    text
 }
 
 async fn get_kinds() -> Response {
@@ -360,7 +386,8 @@ async fn get_kinds_module() -> Response {
 }
 
 async fn get_scene(State(app): State<Arc<App>>) -> Response {
-    let json = app.scene_json.lock().expect("scene json lock").clone();
+    // Waits for the document (an edit under way) and may build megabytes: off the async threads.
+    let json = tokio::task::block_in_place(|| full_scene(&app));
     ([(header::CONTENT_TYPE, "application/json")], json.to_string()).into_response()
 }
 
@@ -417,6 +444,7 @@ enum Change {
 /// scene to every page and to the renderer. Returns the new revision.
 async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, String> {
     let app2 = app.clone();
+    let arrived = std::time::Instant::now();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
         let result = match &change {
@@ -425,7 +453,8 @@ async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, Stri
             Change::Redo => doc.redo(),
         };
         result.map_err(|e: EditError| e.to_string())?;
-        publish(&app2, &doc);
+        app2.renderer.set_scene_of_edit(Arc::new(doc.scene().clone()), arrived);
+        broadcast_scene(&app2, &doc);
         Ok(doc.revision())
     })
     .await
@@ -435,9 +464,19 @@ async fn change(app: &Arc<App>, change: Change, author: u64) -> Result<u64, Stri
 /// Sends the document's scene to the renderer and to every page.
 fn publish(app: &App, doc: &SceneDocument) {
     app.renderer.set_scene(Arc::new(doc.scene().clone()));
-    let json = Arc::new(scene_message(doc));
-    *app.scene_json.lock().expect("scene json lock") = json.clone();
-    let _ = app.updates.send(json);
+    broadcast_scene(app, doc);
+}
+
+/// Sends the document's scene to every page (the renderer has it already): the geometry the
+/// pages have already is left out (`geometry::delta_message`).
+fn broadcast_scene(app: &App, doc: &SceneDocument) {
+    let mut sent = app.sent_geometry.lock().expect("sent geometry lock");
+    let mut value = super::geometry::scene_json_known(doc, &sent);
+    value["type"] = json!("scene");
+    let (delta, keys) = super::geometry::delta_message(&mut value, &sent);
+    *sent = keys;
+    *app.scene_json.lock().expect("scene json lock") = None;
+    let _ = app.updates.send(Arc::new(delta));
 }
 
 fn reply(result: Result<u64, String>) -> Response {
@@ -463,30 +502,63 @@ async fn post_redo(State(app): State<Arc<App>>) -> Response {
     reply(change(&app, Change::Redo, 0).await)
 }
 
-async fn save(app: &Arc<App>) -> Result<u64, String> {
+/// Saves; with `replace`, over a file the plain save leaves alone (the user said so).
+async fn save(app: &Arc<App>, replace: bool) -> Result<u64, SaveError> {
     let app2 = app.clone();
     tokio::task::spawn_blocking(move || {
         let mut doc = app2.doc.lock().expect("document lock");
-        doc.save()?;
-        let json = Arc::new(scene_message(&doc));
-        *app2.scene_json.lock().expect("scene json lock") = json.clone();
-        let _ = app2.updates.send(json);
+        doc.save_replacing(replace)?;
+        broadcast_scene(&app2, &doc);
         Ok(doc.revision())
     })
     .await
-    .map_err(|e| format!("the save failed: {e}"))?
+    .map_err(|e| SaveError::Failed(format!("the save failed: {e}")))?
 }
 
-async fn post_save(State(app): State<Arc<App>>) -> Response {
-    reply(save(&app).await)
+#[derive(Deserialize)]
+struct SaveQuery {
+    #[serde(default)]
+    replace: bool,
+}
+
+/// `POST /api/save[?replace=true]`: a save that would replace another file is refused with 409
+/// and `"replace_needed": true`, so the caller can ask and send `replace=true`.
+async fn post_save(State(app): State<Arc<App>>, Query(query): Query<SaveQuery>) -> Response {
+    match save(&app, query.replace).await {
+        Ok(revision) => axum::Json(json!({ "ok": true, "revision": revision })).into_response(),
+        Err(SaveError::WouldReplace(message)) => {
+            (StatusCode::CONFLICT, axum::Json(json!({ "ok": false, "error": message, "replace_needed": true })))
+                .into_response()
+        }
+        Err(SaveError::Failed(message)) => error(StatusCode::UNPROCESSABLE_ENTITY, &message),
+    }
 }
 
 #[derive(Deserialize)]
 struct ImportQuery {
     name: String,
     material: Option<String>,
-    /// `x,y,z`: where the model's bounding box centre goes.
+    /// `x,y,z`: where the model's bounding box centre goes (with `floor`, the centre of its
+    /// bottom face: it stands on the point).
     at: Option<String>,
+    #[serde(default)]
+    floor: bool,
+    /// The size (bounding box diagonal, scene units) the model is scaled to when its own is
+    /// more than 4 times larger or smaller (a model in millimetres in a scene in metres).
+    size: Option<f64>,
+}
+
+/// The uniform scale that brings a model whose bounding box diagonal is `diagonal` to `size`,
+/// when it is more than 4 times off (else 1), to 3 significant digits.
+fn import_scale(diagonal: f64, size: Option<f64>) -> f64 {
+    match size {
+        Some(size) if size > 0.0 && diagonal > 0.0 && (diagonal > 4.0 * size || diagonal < size / 4.0) => {
+            let k = size / diagonal;
+            let digits = 10f64.powi(2 - k.log10().floor() as i32);
+            (k * digits).round() / digits
+        }
+        _ => 1.0,
+    }
 }
 
 /// The model formats the renderer reads (`scene::model::Format`), by extension.
@@ -569,13 +641,16 @@ async fn post_import(State(app): State<Arc<App>>, Query(query): Query<ImportQuer
             .map(|s| s.geometry.bounds())
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)));
         if let (Some(at), Some((lo, hi))) = (at, bounds) {
+            let scale = import_scale((hi - lo).length() as f64, query.size);
             let centre = (lo + hi) * 0.5;
-            let translate = [at[0] - centre.x as f64, at[1] - centre.y as f64, at[2] - centre.z as f64];
+            let anchor = [centre.x as f64, if query.floor { lo.y as f64 } else { centre.y as f64 }, centre.z as f64];
+            // The transform scales about the origin, then moves: the anchor lands on `at`.
+            let translate = [0, 1, 2].map(|i| at[i] - scale * anchor[i]);
             let place = Command::SetTransform {
                 target: super::document::Target::Shape(index),
                 translate: Some(translate),
                 rotate: None,
-                scale: None,
+                scale: (scale != 1.0).then_some(super::document::Scale::Uniform(scale)),
             };
             if doc.apply(&place).is_ok() {
                 doc.merge_last_step();
@@ -673,8 +748,11 @@ enum PageMessage {
     Redo {
         id: Option<u64>,
     },
+    /// `replace`: the user agreed to replace the file a plain save would not.
     Save {
         id: Option<u64>,
+        #[serde(default)]
+        replace: bool,
     },
     /// The preview's denoising toggle.
     Denoise {
@@ -690,7 +768,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     }
     let mut updates = app.updates.subscribe();
     let mut events = app.renderer.subscribe();
-    let first = app.scene_json.lock().expect("scene json lock").clone();
+    let first = tokio::task::block_in_place(|| full_scene(&app));
     if socket.send(Message::Text(first.as_str().into())).await.is_err() {
         return;
     }
@@ -723,7 +801,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
             update = updates.recv() => match update {
                 Ok(json) => Some(json.to_string()),
                 // Missed scene updates: send the current scene.
-                Err(broadcast::error::RecvError::Lagged(_)) => Some(app.scene_json.lock().expect("scene json lock").to_string()),
+                Err(broadcast::error::RecvError::Lagged(_)) => Some(tokio::task::block_in_place(|| full_scene(&app)).to_string()),
                 Err(broadcast::error::RecvError::Closed) => return,
             },
             event = events.recv() => match event {
@@ -784,7 +862,14 @@ async fn handle_page_message(app: &Arc<App>, text: &str, session: u64) -> Option
         PageMessage::Edit { id, command } => (id, change(app, Change::Edit(command), session).await),
         PageMessage::Undo { id } => (id, change(app, Change::Undo, session).await),
         PageMessage::Redo { id } => (id, change(app, Change::Redo, session).await),
-        PageMessage::Save { id } => (id, save(app).await),
+        PageMessage::Save { id, replace } => match save(app, replace).await {
+            Ok(revision) => (id, Ok(revision)),
+            Err(SaveError::WouldReplace(message)) => {
+                let reply = json!({ "type": "reply", "id": id, "ok": false, "error": message, "replace_needed": true });
+                return Some(reply.to_string());
+            }
+            Err(SaveError::Failed(message)) => (id, Err(message)),
+        },
     };
     let reply: Json = match result {
         Ok(revision) => json!({ "type": "reply", "id": id, "ok": true, "revision": revision }),
@@ -809,6 +894,15 @@ mod tests {
         {
             assert!(check_import_name(bad).is_err(), "{bad:?}");
         }
+    }
+
+    #[test]
+    fn imports_far_off_the_scenes_size_are_scaled_to_it() {
+        assert_eq!(import_scale(1.0, Some(2.0)), 1.0);
+        assert_eq!(import_scale(1.0, None), 1.0);
+        assert_eq!(import_scale(300.0, Some(1.5)), 0.005);
+        assert_eq!(import_scale(0.01, Some(1.0)), 100.0);
+        assert_eq!(import_scale(3.0, Some(1.0)), 1.0);
     }
 
     #[test]

@@ -71,7 +71,21 @@ pub(crate) fn convert_with_origins(file: SceneFile, src: &Source<'_>) -> Result<
     }
     let mut materials: Vec<_> = file.materials.iter().collect();
     materials.sort_by_key(|(key, _)| key.span().start);
-    for (key, def) in materials {
+    // A mix after the materials it names, wherever the file has it (the editor's switch of a
+    // material to a mix of one added after it); otherwise in file order.
+    let mut ordered = Vec::with_capacity(materials.len());
+    while !materials.is_empty() {
+        let ready = |def: &Spanned<crate::scene::format::MaterialDef>| {
+            def.get_ref()
+                .materials
+                .as_ref()
+                .is_none_or(|list| list.get_ref().iter().all(|n| !materials.iter().any(|(k, _)| k.get_ref() == n)))
+        };
+        // The first one ready, or the first one (a cycle or an unknown name: its error then).
+        let next = materials.iter().position(|(_, def)| ready(def)).unwrap_or(0);
+        ordered.push(materials.remove(next));
+    }
+    for (key, def) in ordered {
         builder.material(key, def)?;
     }
 
