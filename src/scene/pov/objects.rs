@@ -2686,9 +2686,11 @@ impl Parser {
                         // |direction| = 0.5 |right| / tan(angle / 2) (POV-Ray's reference manual).
                         let len = 0.5 * c.right.length() / (a.to_radians() / 2.0).tan();
                         c.direction = c.direction.normalize_or(DVec3::Z) * len;
+                        c.ortho_angle = None;
                     } else {
                         // An orthographic camera with an angle sees as wide as a perspective one
-                        // would at the look_at distance; approximated by keeping right and up.
+                        // would at the look_at distance, which may come later: emit sizes it.
+                        c.ortho_angle = Some(a);
                     }
                 }
                 "look_at" => {
@@ -2706,7 +2708,10 @@ impl Parser {
                     }
                     // POV-Ray keeps the lengths of direction, right and up and turns them.
                     let (ld, lr, lu) = (c.direction.length(), c.right.length(), c.up.length());
-                    let handed = c.up.cross(c.direction).dot(c.right) >= 0.0;
+                    // POV-Ray's test (parse.cpp): up x direction . right > 0 keeps right as the
+                    // sky makes it; 0 (up along direction: `up z` with the default direction)
+                    // or less turns it around.
+                    let handed = c.up.cross(c.direction).dot(c.right) > 0.0;
                     let d = (at - c.location).normalize_or(DVec3::Z);
                     let mut r = c.sky.cross(d).normalize_or(DVec3::X);
                     if !handed {
