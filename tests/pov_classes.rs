@@ -204,5 +204,78 @@ fn version_36_without_assumed_gamma_is_not_washed_out() {
         reflectance("#version 3.6; #if (version < 3.7) #declare G = 1; #end global_settings { assumed_gamma G }"),
         0.5
     ));
-    let _ = error;
+}
+
+/// Input POV-Ray 3.7.0 accepts (each checked by rendering it with POV-Ray): a declared light
+/// placed with modifiers (`radiosity/cornell`), a `#` that no directive follows
+/// (`language/image_size`), strings compared with `!=` (the mesh camera's macros).
+#[test]
+fn input_povray_accepts_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        "#version 3.7;
+camera { location <0, 0, -5> look_at 0 # }
+#declare Patch = light_source { <0, 5, 0>, rgb 0.5 spotlight point_at <0, 0, 0> radius 10 falloff 20 }
+light_source { Patch translate <1, 0, 2> }
+light_source { Patch }
+#declare S = \"a\";
+#if (S != \"b\" & S = \"a\" & !(S != \"a\")) box { 0, 1 pigment { rgb 1 } # \n}#end
+",
+    );
+    let lights = t["lights"].as_array().unwrap();
+    assert_eq!(lights.len(), 2, "{lights:?}");
+    assert_eq!(lights[0]["type"].as_str(), Some("spot"));
+    // Moved with the placement's transform, point_at too (z mirrored into Photonix's frame).
+    assert_eq!(floats(&lights[0]["position"]), vec![1.0, 5.0, -2.0]);
+    assert_eq!(floats(&lights[0]["point_at"]), vec![1.0, 0.0, -2.0]);
+    assert_eq!(floats(&lights[1]["position"]), vec![0.0, 5.0, 0.0]);
+    assert_eq!(t["shapes"].as_array().unwrap().len(), 1);
+    // A declared object that is not a light is an error at its name.
+    let e = error(dir.path(), "#declare B = box { 0, 1 }\nlight_source { B }");
+    assert!(e.contains("scene.pov:2:16") && e.contains("not a light_source"), "{e}");
+}
+
+/// `scene.ini` beside `scene.pov` gives the size, the first frame and the clock, as POV-Ray
+/// reads its options file; `Given` (the command line's `--frame`, `--clock`, `--resolution`)
+/// overrides it. The portfolio scenes index arrays at `frame_number - 1`.
+#[test]
+fn the_ini_beside_a_scene_gives_its_frame_clock_and_size() {
+    use photonix::scene::pov::{options_for, Given};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(
+        dir.path(),
+        "anim.pov",
+        "#version 3.7;
+#declare Xs = array[2] { -1, 1 };
+camera { location <0, 0, -5> look_at 0 }
+sphere { <Xs[frame_number - 1] + clock, image_width, image_height>, 0.5 }
+",
+    );
+    // Without the .ini, frame 0 indexes the array at -1: POV-Ray's error too.
+    let e = photonix::scene::load_scene(&scene).err().unwrap().to_string();
+    assert!(e.contains("anim.pov:4:") && e.contains("-1"), "{e}");
+    write(
+        dir.path(),
+        "anim.ini",
+        "; options\nInitial_Frame=1\nFinal_Frame=3\nInitial_Clock=0\nFinal_Clock=1\n+w100 +h50\n",
+    );
+    let centre = |given: Given| {
+        let o = options_for(&scene, given).unwrap();
+        let t = translate_file(&scene, &o).unwrap();
+        let t: toml::Table = t.toml.parse().unwrap();
+        floats(&t["shapes"][0]["center"])
+    };
+    assert_eq!(centre(Given::default()), vec![-1.0, 100.0, -50.0]);
+    assert_eq!(centre(Given { frame: Some(2), ..Given::default() }), vec![1.5, 100.0, -50.0]);
+    assert_eq!(
+        centre(Given { frame: Some(2), clock: Some(0.25), resolution: Some((64, 48)) }),
+        vec![1.25, 64.0, -48.0]
+    );
+    // load_scene reads the .ini too.
+    let s = photonix::scene::load_scene(&scene).unwrap();
+    assert_eq!((s.camera.width, s.camera.height), (100, 50));
+    write(dir.path(), "anim.ini", "Initial_Frame=one\n");
+    let e = options_for(&scene, Given::default()).err().unwrap().to_string();
+    assert!(e.contains("anim.ini:1") && e.contains("initial_frame"), "{e}");
 }

@@ -2742,22 +2742,52 @@ impl Parser {
 
     fn light(&mut self, pos: Pos) -> Result<Light> {
         self.expect_sym("{")?;
-        let position = self.vec3()?;
-        self.accept_sym(",")?;
-        let c = self.colour()?;
-        let mut l = Light {
-            position,
-            colour: [c[0], c[1], c[2]],
-            kind: LightKind::Point,
-            area: None,
-            fade_distance: 0.0,
-            fade_power: 0.0,
-            shadowless: false,
-            looks_like: None,
-            pos,
+        // `light_source { Declared modifiers }`: a copy of a declared light, then its
+        // modifiers (the radiosity Cornell box places its declared patch nine times so).
+        let mut base = None;
+        if let Some(w) = self.peek_word()? {
+            if let Some(Value::Object(o)) = self.lookup(&w) {
+                match &o.kind {
+                    ObjKind::Light(l) => base = Some((**l).clone()),
+                    _ => {
+                        let wpos = self.peek()?.map_or(pos, |t| t.pos);
+                        return self.err(wpos, format!("`{w}` is a declared object, not a light_source"));
+                    }
+                }
+                self.next()?;
+            }
+        }
+        let mut l = match base {
+            Some(mut l) => {
+                l.pos = pos;
+                l
+            }
+            None => {
+                let position = self.vec3()?;
+                self.accept_sym(",")?;
+                let c = self.colour()?;
+                Light {
+                    position,
+                    colour: [c[0], c[1], c[2]],
+                    kind: LightKind::Point,
+                    area: None,
+                    fade_distance: 0.0,
+                    fade_power: 0.0,
+                    shadowless: false,
+                    looks_like: None,
+                    pos,
+                }
+            }
         };
         let (mut point_at, mut radius, mut falloff, mut tightness) = (DVec3::ZERO, 30.0, 45.0, 0.0);
         let mut spot = 0;
+        match l.kind {
+            LightKind::Spot { point_at: p, radius: r, falloff: f, tightness: t } => {
+                (point_at, radius, falloff, tightness, spot) = (p, r, f, t, 1);
+            }
+            LightKind::Parallel { point_at: p } => (point_at, spot) = (p, 2),
+            LightKind::Point => {}
+        }
         loop {
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;

@@ -1189,6 +1189,20 @@ impl Parser {
             self.next()?;
             let pos = self.here();
             let b = self.sum()?;
+            // Strings compare by their text, as POV-Ray 3.7 compares them (`#if (c_file != "")`
+            // in the mesh camera's macros).
+            if let (Value::Str(x), Value::Str(y)) = (&a, &b) {
+                let r = match op {
+                    "=" => x == y,
+                    "!=" => x != y,
+                    "<" => x < y,
+                    "<=" => x <= y,
+                    ">=" => x >= y,
+                    _ => x > y,
+                };
+                a = Value::Float(r as u8 as f64);
+                continue;
+            }
             let (x, y) = (scalar(&a, pos, self)?, scalar(&b, pos, self)?);
             let r = match op {
                 "<" => x < y,
@@ -1390,8 +1404,10 @@ impl Parser {
             "clock" | "initial_clock" => f(self.options.clock),
             "final_clock" => f(1.0),
             "clock_delta" => f(0.0),
-            "clock_on" => f(0.0),
-            "frame_number" | "initial_frame" | "final_frame" => f(0.0),
+            "clock_on" => f((self.options.final_frame > self.options.initial_frame) as u8 as f64),
+            "frame_number" => f(self.options.frame as f64),
+            "initial_frame" => f(self.options.initial_frame as f64),
+            "final_frame" => f(self.options.final_frame as f64),
             "image_width" => f(self.options.width as f64),
             "image_height" => f(self.options.height as f64),
             // POV-Ray's own version until a `#version` sets the language's (the standard
