@@ -279,3 +279,41 @@ sphere { <Xs[frame_number - 1] + clock, image_width, image_height>, 0.5 }
     let e = options_for(&scene, Given::default()).err().unwrap().to_string();
     assert!(e.contains("anim.ini:1") && e.contains("initial_frame"), "{e}");
 }
+
+/// `filter` with `reflection` and no ior is POV-Ray's glass (`pigment { rgbf <1, 1, 1, 0.9> }
+/// finish { reflection 0.1 }`): POV-Ray 3.7.0 shows the floor through it. It was a mirror mixed
+/// over an opaque diffuse base, an opaque ball; it is a thin pane, which lets the floor through.
+#[test]
+fn filter_with_reflection_is_glass_not_an_opaque_ball() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |ball: &str| {
+        format!(
+            "#version 3.7;
+global_settings {{ assumed_gamma 1 }}
+camera {{ location <0, 1.5, -5> look_at <0, 0.8, 0> }}
+light_source {{ <3, 6, -4>, rgb 1 }}
+plane {{ y, 0 pigment {{ checker rgb <1, 0, 0> rgb <0, 0, 1> }} }}
+{ball}
+"
+        )
+    };
+    let glass = scene("sphere { <0, 1, 0>, 1 pigment { rgbf <1, 1, 1, 0.9> } finish { reflection 0.1 } }");
+    let (t, _) = translated(dir.path(), &glass);
+    let ms = t["materials"].as_table().unwrap();
+    assert!(ms.values().any(|m| m["type"].as_str() == Some("thin_dielectric")), "{ms:?}");
+    // Through the ball the floor behind shows: red and blue, no green (an opaque white ball,
+    // as before, is grey there: green as strong as red and blue). The floor behind lies in the
+    // ball's shadow, lit through the pane by photons only, so it is darker than POV-Ray's, whose
+    // filter lets the light's shadow rays through.
+    let with = render(&load(dir.path(), &glass), 4);
+    look_at("filter_reflection_glass", &with);
+    let colour = |c| mean(&with, 15..26, 13..22, c);
+    let (r, g, b) = (colour(0), colour(1), colour(2));
+    println!("through the ball: {r:.3} {g:.3} {b:.3}");
+    assert!(r + b > 0.1 && g < 0.25 * r.max(b), "{r} {g} {b}");
+    let opaque = glass.replace("rgbf <1, 1, 1, 0.9>", "rgb 1");
+    let image = render(&load(dir.path(), &opaque), 4);
+    let (r, g, b) = (mean(&image, 15..26, 13..22, 0), mean(&image, 15..26, 13..22, 1), mean(&image, 15..26, 13..22, 2));
+    println!("the opaque ball: {r:.3} {g:.3} {b:.3}");
+    assert!(g > 0.5 * r.max(b), "{r} {g} {b}");
+}

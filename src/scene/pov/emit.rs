@@ -1180,6 +1180,20 @@ impl Emitter<'_> {
             }
         }
         let reflection = f.reflection.iter().cloned().fold(0.0, f64::max);
+        if reflection > 0.02 && transparency >= 0.5 {
+            // POV-Ray's glass without an ior (`pigment { rgbf <1, 1, 1, 0.9> } finish {
+            // reflection 0.1 }`): mostly let through, unbent, with a reflection. A mix of a
+            // mirror over a base with an opacity cannot say it (the renderer takes the opacity
+            // of the material a shape names, not of a mix's entries: the sphere came out opaque),
+            // so it is a thin pane: Fresnel reflection (about 8% head on, more at grazing
+            // angles) and the rest through unbent. The filter's tint is not kept.
+            let mut pane = Table::new();
+            pane.insert("type".into(), T::String("thin_dielectric".into()));
+            if let Some(b) = bump {
+                pane.insert("bump".into(), b);
+            }
+            return self.write_material(pane, pos);
+        }
         if reflection > 0.02 {
             // A mirror for the reflected share, mixed over the base by its strength.
             let tint = if f.metallic > 0.0 {
