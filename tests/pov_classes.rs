@@ -317,3 +317,31 @@ plane {{ y, 0 pigment {{ checker rgb <1, 0, 0> rgb <0, 0, 1> }} }}
     println!("the opaque ball: {r:.3} {g:.3} {b:.3}");
     assert!(g > 0.5 * r.max(b), "{r} {g} {b}");
 }
+
+/// A layered floor (`texture { base } texture { see-through lines with reflection }`) keeps its
+/// top layer's reflection (it kept the bottom layer alone: no reflection), and an opaque solid
+/// top layer covers the layers below.
+#[test]
+fn a_layered_floor_keeps_its_reflection() {
+    let dir = tempfile::tempdir().unwrap();
+    let floor = |layers: &str| {
+        let (t, _) = translated(
+            dir.path(),
+            &format!("#version 3.7;\ncamera {{ location <0, 2, -5> look_at 0 }}\nlight_source {{ <3, 6, -4>, rgb 1 }}\nplane {{ y, 0 {layers} }}\n"),
+        );
+        t["materials"].as_table().unwrap().clone()
+    };
+    let ms = floor(
+        "texture { pigment { rgb <0.2, 0.4, 0.6> } finish { diffuse 1 } }
+         texture { pigment { gradient x color_map { [0.1 rgbt 1] [0.1 rgb 0] } } finish { reflection 0.3 phong 1 } }",
+    );
+    let mix = ms.values().find(|m| m["type"].as_str() == Some("mix")).unwrap_or_else(|| panic!("{ms:?}"));
+    assert!((mix["weight"].as_float().unwrap() - 0.3).abs() < 1e-9, "{mix:?}");
+    assert!(ms.values().any(|m| m["type"].as_str() == Some("mirror")));
+    let base = ms.values().find(|m| m["type"].as_str() == Some("plastic")).unwrap_or_else(|| panic!("{ms:?}"));
+    assert_eq!(floats(&base["reflectance"]), vec![0.2, 0.4, 0.6]);
+    // An opaque top layer covers the bottom one.
+    let ms = floor("texture { pigment { rgb 0.2 } finish { diffuse 1 } } texture { pigment { rgb <1, 0, 0> } finish { diffuse 1 } }");
+    assert_eq!(ms.len(), 1, "{ms:?}");
+    assert_eq!(floats(&ms.values().next().unwrap()["reflectance"]), vec![1.0, 0.0, 0.0]);
+}

@@ -27,6 +27,41 @@ use crate::scene::kinds;
 const MIRROR: DMat4 =
     DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
 
+/// Layered textures (`texture { A } texture { B }`, B over A) as one: POV-Ray draws each layer
+/// over those below by its pigment's opacity, and the upper layers are usually a see-through
+/// pigment (grid lines, veins) carrying a finish (a floor's reflection, a varnish's highlight).
+/// The bottom layer stands, under the upper layers' finishes: each channel's largest
+/// `reflection`, the strongest `phong` and `specular` (with their sizes), the largest
+/// `metallic`, and the first bump among the layers when the bottom has none. An upper layer
+/// whose pigment is a solid opaque colour (no map) covers everything below it and replaces it.
+/// Upper layers' patterned pigments are not drawn (a mix would need their opacity as a
+/// weight, which the renderer's mixes cannot take from a pigment yet).
+fn layered(layers: &[Tex]) -> Tex {
+    let mut t = layers[0].clone();
+    for u in &layers[1..] {
+        let opaque = matches!(u.pigment.kind, PigmentKind::Solid(c) if c[3] + c[4] < 0.02) && u.map.is_none();
+        if opaque {
+            t = u.clone();
+            continue;
+        }
+        let (f, g) = (&mut t.finish, &u.finish);
+        for i in 0..3 {
+            f.reflection[i] = f.reflection[i].max(g.reflection[i]);
+        }
+        if g.phong > f.phong {
+            (f.phong, f.phong_size) = (g.phong, g.phong_size);
+        }
+        if g.specular > f.specular {
+            (f.specular, f.roughness) = (g.specular, g.roughness);
+        }
+        f.metallic = f.metallic.max(g.metallic);
+        if t.normal.is_none() && u.normal.is_some() {
+            t.normal = u.normal.as_ref().map(|n| Normal { xform: t.xform.inverse() * u.xform * n.xform, ..n.clone() });
+        }
+    }
+    t
+}
+
 /// Where the camera looks, in POV-Ray's coordinates: its `look_at`; without one, the point
 /// along its direction as far as the centre of the scene's finite objects (when they lie
 /// ahead), else one direction length ahead. Lights are matched to POV-Ray's brightness there.
@@ -1072,10 +1107,10 @@ impl Emitter<'_> {
     /// per distinct result.
     fn material(&mut self, tex: Option<&Vec<Tex>>, int: Option<&Interior>, pos: Pos, glow_ok: bool) -> Result<String> {
         let default = self.scene.default_tex.clone();
-        let Some(t) = tex.and_then(|l| l.first()).or(default.as_ref()) else {
+        let layers = tex.filter(|l| !l.is_empty()).map(|l| layered(l));
+        let Some(t) = layers.or(default) else {
             return Err(PovError::at(pos, "internal: no default texture".into()));
         };
-        let t = t.clone();
         // A light's looks_like object is one emitter: its maps stand in by their mean colours.
         let mixes = self.light_emission.is_none();
         if let Some(map) = t.map.as_ref().filter(|_| mixes) {
