@@ -345,3 +345,28 @@ fn a_layered_floor_keeps_its_reflection() {
     assert_eq!(ms.len(), 1, "{ms:?}");
     assert_eq!(floats(&ms.values().next().unwrap()["reflectance"]), vec![1.0, 0.0, 0.0]);
 }
+
+/// A glass's `fade_distance` and `fade_color` become an absorbing medium inside it, matched to
+/// POV-Ray's attenuation half way to the fade colour at the fade distance: sigma = -ln((1 + c) /
+/// 2) / f (POV-Ray 3.7.0 draws `fade_color <0.2, 0.8, 0.2>` green through the ball; the glass had
+/// no tint at all before).
+#[test]
+fn glass_fade_is_an_absorbing_interior() {
+    let dir = tempfile::tempdir().unwrap();
+    let (t, _) = translated(
+        dir.path(),
+        "#version 3.7;
+camera { location <0, 1.5, -5> look_at <0, 0.8, 0> }
+light_source { <3, 6, -4>, rgb 1 }
+sphere { <0, 1, 0>, 1 pigment { rgbf 1 } interior { ior 1.5 fade_distance 0.5 fade_color <0.2, 0.8, 0.2> } }
+",
+    );
+    let ball = &t["shapes"][0];
+    let medium = &t["media"][ball["interior"].as_str().unwrap()];
+    let sigma = floats(&medium["sigma_a"]);
+    for (s, c) in sigma.iter().zip([0.2f64, 0.8, 0.2]) {
+        let want = -((1.0 + c) / 2.0).ln() / 0.5;
+        assert!((s - want).abs() < 1e-9, "{sigma:?}");
+    }
+    assert_eq!(t["materials"][ball["material"].as_str().unwrap()]["type"].as_str(), Some("dielectric"));
+}

@@ -208,6 +208,10 @@ pub struct Interior {
     pub ior: f64,
     /// `media { ... }` blocks, in order (Photonix takes the first).
     pub media: Vec<Media>,
+    /// `fade_distance` (0: no fade) and `fade_color` (default black): the attenuation of light
+    /// through a transparent object's inside.
+    pub fade_distance: f64,
+    pub fade_colour: [f64; 3],
 }
 
 /// POV-Ray's `normal { PATTERN amount ... }`: a pattern whose gradient tilts the shading normal.

@@ -895,8 +895,34 @@ impl Emitter<'_> {
         s.insert("material".into(), T::String(material));
         if let Some(md) = int.and_then(|i| i.media.first()).filter(|_| !self.hole) {
             self.interior_media(o, md, int.map_or(0, |i| i.media.len()), &mut s)?;
+        } else if let Some(md) = int.and_then(|i| self.fade_medium(i, o.pos)).filter(|_| !self.hole) {
+            self.interior_media(o, &md, 1, &mut s)?;
         }
         Ok(s)
+    }
+
+    /// A glass's `fade_distance` f and `fade_color` c as an absorbing medium inside it. POV-Ray
+    /// multiplies the light that crosses a distance d of the inside by c + (1 - c) / (1 +
+    /// (d / f)^p); an absorption sigma = -ln((1 + c) / 2) / f per channel gives the same at
+    /// d = f (half way to the fade colour), and the exponential Beer-Lambert fall-off
+    /// elsewhere. Only on a dielectric (ior > 1) without media of its own.
+    fn fade_medium(&self, int: &Interior, pos: Pos) -> Option<Media> {
+        if int.ior <= 1.0 || int.fade_distance <= 0.0 || !int.media.is_empty() {
+            return None;
+        }
+        let sigma = int.fade_colour.map(|c| {
+            let c = self.linear([c, c, c, 0.0, 0.0])[0].clamp(0.0, 1.0);
+            -((1.0 + c) / 2.0).ln() / int.fade_distance
+        });
+        Some(Media {
+            absorption: sigma,
+            emission: [0.0; 3],
+            scattering: [0.0; 3],
+            g: 0.0,
+            density: None,
+            xform: DMat4::IDENTITY,
+            pos,
+        })
     }
 
     /// An object's interior media as the shape's `interior`: on the closed shapes Photonix fills

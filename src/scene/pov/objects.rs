@@ -2542,7 +2542,7 @@ impl Parser {
 
     pub fn interior(&mut self) -> Result<Interior> {
         self.expect_sym("{")?;
-        let mut i = Interior { ior: 1.0, media: Vec::new() };
+        let mut i = Interior { ior: 1.0, media: Vec::new(), fade_distance: 0.0, fade_colour: [0.0; 3] };
         loop {
             let t = self.expect_any("`}`")?;
             let pos = t.pos;
@@ -2555,11 +2555,13 @@ impl Parser {
             };
             match w.as_str() {
                 "ior" => i.ior = self.float()?,
-                "caustics" | "dispersion" | "dispersion_samples" | "fade_distance" | "fade_power" => {
+                "caustics" | "dispersion" | "dispersion_samples" | "fade_power" => {
                     self.float()?;
                 }
+                "fade_distance" => i.fade_distance = self.float()?,
                 "fade_color" | "fade_colour" => {
-                    self.colour()?;
+                    let c = self.colour()?;
+                    i.fade_colour = [c[0], c[1], c[2]];
                 }
                 "media" => {
                     let m = self.media(pos)?;
