@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Result};
 
 use photonix::io::image::{same_file, write_atomically};
-use photonix::scene::pov::{is_pov_path, load_pov, translate_file, PovOptions};
+use photonix::scene::pov::{is_pov_path, load_pov, options_for, translate_file, Given};
 use photonix::scene::{gltf_scene, mitsuba};
 
 #[derive(clap::Args)]
@@ -20,9 +20,12 @@ pub struct ConvertArgs {
     /// Image size as WIDTHxHEIGHT: for a POV-Ray scene POV-Ray's +W +H (the scene reads it as image_width, image_height; default 320x240); for a glTF scene the camera's resolution (default: 360 rows, the width by the camera's aspect ratio)
     #[arg(long)]
     resolution: Option<String>,
-    /// POV-Ray's clock (+K)
-    #[arg(long, default_value_t = 0.0)]
-    clock: f64,
+    /// POV-Ray's clock (+K) [default: the frame's, from the .ini beside the scene, else 0]
+    #[arg(long)]
+    clock: Option<f64>,
+    /// POV-Ray's frame number (frame_number) [default: the .ini's Initial_Frame, else 0]
+    #[arg(long)]
+    frame: Option<i64>,
 }
 
 pub fn run(args: ConvertArgs) -> Result<()> {
@@ -61,7 +64,9 @@ pub fn run(args: ConvertArgs) -> Result<()> {
     if xml {
         return convert_mitsuba(&args);
     }
-    let options = PovOptions { width: w, height: h, clock: args.clock, ..PovOptions::default() };
+    // The .ini beside the scene (size, frames, clock) under the flags given.
+    let given = Given { frame: args.frame, clock: args.clock, resolution: given.map(|_| (w, h)) };
+    let options = options_for(&args.scene, given)?;
     // Load once so that a scene Photonix would refuse is reported at its .pov line, not later.
     let scene = load_pov(&args.scene, &options)?;
     for warning in &scene.warnings {

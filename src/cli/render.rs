@@ -60,6 +60,13 @@ pub struct RenderArgs {
     /// Image size as WIDTHxHEIGHT [default: the scene's]
     #[arg(long, value_parser = parse_resolution)]
     resolution: Option<(u32, u32)>,
+    /// POV-Ray scenes: the frame number the scene reads (frame_number) [default: the .ini's
+    /// Initial_Frame beside the scene, else 0]
+    #[arg(long)]
+    frame: Option<i64>,
+    /// POV-Ray scenes: the clock (+K) [default: the frame's, from the .ini, else 0]
+    #[arg(long)]
+    clock: Option<f64>,
     /// Most surfaces a camera path visits, 1 to 1024 [default: the scene's]
     #[arg(long, value_parser = parse_depth, allow_negative_numbers = true)]
     max_depth: Option<u32>,
@@ -260,7 +267,17 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.device.is_some() && matches!(args.backend, BackendArg::Cpu) {
         bail!("--device picks a Vulkan device, but --backend cpu uses none; leave one of them out");
     }
-    let mut scene = load_scene(&args.scene)?;
+    let pov = photonix::scene::pov::is_pov_path(&args.scene);
+    if !pov && (args.frame.is_some() || args.clock.is_some()) {
+        bail!("--frame and --clock are for POV-Ray scenes (.pov); {} is not one", args.scene.display());
+    }
+    let mut scene = if pov && (args.frame.is_some() || args.clock.is_some()) {
+        use photonix::scene::pov::{load_pov, options_for, Given};
+        let given = Given { frame: args.frame, clock: args.clock, resolution: None };
+        load_pov(&args.scene, &options_for(&args.scene, given)?)?
+    } else {
+        load_scene(&args.scene)?
+    };
     if let Some(IntegratorArg(named)) = args.integrator {
         scene.set_integrator(named);
     }

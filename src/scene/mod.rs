@@ -502,7 +502,8 @@ pub struct SceneOrigins {
 /// (`mitsuba`).
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
     if pov::is_pov_path(path) {
-        return pov::load_pov(path, &pov::PovOptions::default());
+        // The `.ini` beside the scene gives its size and frame, as POV-Ray reads it.
+        return pov::load_pov(path, &pov::options_for(path, pov::Given::default())?);
     }
     if gltf_scene::is_gltf_path(path) {
         return gltf_scene::load_gltf(path);

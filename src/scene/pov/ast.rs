@@ -208,6 +208,10 @@ pub struct Interior {
     pub ior: f64,
     /// `media { ... }` blocks, in order (Photonix takes the first).
     pub media: Vec<Media>,
+    /// `fade_distance` (0: no fade) and `fade_color` (default black): the attenuation of light
+    /// through a transparent object's inside.
+    pub fade_distance: f64,
+    pub fade_colour: [f64; 3],
 }
 
 /// POV-Ray's `normal { PATTERN amount ... }`: a pattern whose gradient tilts the shading normal.
@@ -303,6 +307,9 @@ pub struct Camera {
     pub sky: DVec3,
     /// The point `look_at` named, where the light's brightness is matched (docs/pov-ray.md).
     pub look_at: Option<DVec3>,
+    /// `angle` on an orthographic camera (degrees): POV-Ray sizes the view to what a
+    /// perspective camera of that angle sees at the look_at distance.
+    pub ortho_angle: Option<f64>,
     pub aperture: f64,
     pub focal_point: Option<DVec3>,
     pub blur_samples: i64,
@@ -320,6 +327,7 @@ impl Default for Camera {
             up: DVec3::Y,
             sky: DVec3::Y,
             look_at: None,
+            ortho_angle: None,
             aperture: 0.0,
             focal_point: None,
             blur_samples: 0,

@@ -19,12 +19,81 @@ use crate::layout::constants::MIX_MAX_DEPTH;
 use crate::scene::kinds;
 
 /// POV-Ray is left-handed with +z into the screen; Photonix is right-handed. Mirroring z maps
-/// one onto the other and keeps x right and y up on the image.
+/// one onto the other and keeps x right and y up on the image, for POV-Ray's usual camera
+/// (right = up x direction). A camera whose right is the other way (`right -x*4/3`, or `up z`
+/// with the default direction, which POV-Ray's `look_at` turns around) is a right-handed view
+/// of the scene: POV-Ray's coordinates are then kept as they are (`Emitter::flip`), so the image
+/// is not mirrored.
 const MIRROR: DMat4 =
     DMat4::from_cols_array(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
 
-fn mirror(p: DVec3) -> DVec3 {
-    DVec3::new(p.x, p.y, -p.z)
+/// Layered textures (`texture { A } texture { B }`, B over A) as one: POV-Ray draws each layer
+/// over those below by its pigment's opacity, and the upper layers are usually a see-through
+/// pigment (grid lines, veins) carrying a finish (a floor's reflection, a varnish's highlight).
+/// The bottom layer stands, under the upper layers' finishes: each channel's largest
+/// `reflection`, the strongest `phong` and `specular` (with their sizes), the largest
+/// `metallic`, and the first bump among the layers when the bottom has none. An upper layer
+/// whose pigment is a solid opaque colour (no map) covers everything below it and replaces it.
+/// Upper layers' patterned pigments are not drawn (a mix would need their opacity as a
+/// weight, which the renderer's mixes cannot take from a pigment yet).
+fn layered(layers: &[Tex]) -> Tex {
+    let mut t = layers[0].clone();
+    for u in &layers[1..] {
+        let opaque = matches!(u.pigment.kind, PigmentKind::Solid(c) if c[3] + c[4] < 0.02) && u.map.is_none();
+        if opaque {
+            t = u.clone();
+            continue;
+        }
+        let (f, g) = (&mut t.finish, &u.finish);
+        for i in 0..3 {
+            f.reflection[i] = f.reflection[i].max(g.reflection[i]);
+        }
+        if g.phong > f.phong {
+            (f.phong, f.phong_size) = (g.phong, g.phong_size);
+        }
+        if g.specular > f.specular {
+            (f.specular, f.roughness) = (g.specular, g.roughness);
+        }
+        f.metallic = f.metallic.max(g.metallic);
+        if t.normal.is_none() && u.normal.is_some() {
+            t.normal = u.normal.as_ref().map(|n| Normal { xform: t.xform.inverse() * u.xform * n.xform, ..n.clone() });
+        }
+    }
+    t
+}
+
+/// Where the camera looks, in POV-Ray's coordinates: its `look_at`; without one, the point
+/// along its direction as far as the centre of the scene's finite objects (when they lie
+/// ahead), else one direction length ahead. Lights are matched to POV-Ray's brightness there.
+fn view_target(scene: &PovScene, c: &super::ast::Camera) -> DVec3 {
+    if let Some(at) = c.look_at {
+        return at;
+    }
+    let ahead = c.direction.normalize_or(DVec3::Z);
+    let (mut lo, mut hi) = (DVec3::splat(f64::MAX), DVec3::splat(f64::MIN));
+    for o in &scene.objects {
+        let (a, b) = bounds_of(o);
+        lo = lo.min(a);
+        hi = hi.max(b);
+    }
+    if lo.cmple(hi).all() {
+        let along = (0.5 * (lo + hi) - c.location).dot(ahead);
+        if along.is_finite() && along > c.direction.length() {
+            return c.location + ahead * along;
+        }
+    }
+    c.location + c.direction
+}
+
+/// A light farther than this many times the camera's distance from where it looks becomes a
+/// distant light: across the part of the scene the camera sees its 1/d^2 falloff would change
+/// its brightness by a few percent (POV-Ray's light has none), and its direction by a degree.
+pub const FAR_LIGHT_RATIO: f64 = 50.0;
+
+/// Whether a POV-Ray camera is left-handed (right . (up x direction) > 0, POV-Ray's default): its
+/// scene is mirrored into Photonix's coordinates.
+fn left_handed(c: &super::ast::Camera) -> bool {
+    c.right.dot(c.up.cross(c.direction)) > 0.0
 }
 
 fn num(x: f64) -> T {
@@ -378,6 +447,8 @@ struct Emitter<'a> {
     gamma: f64,
     /// Where the camera looks (POV-Ray coordinates): lights are matched to POV-Ray there.
     target: DVec3,
+    /// The camera's distance to `target`: the size of the scene the lights are judged against.
+    view_distance: f64,
     lights: Vec<(Table, Pos)>,
     skipped_triangles: usize,
     warnings: Vec<String>,
@@ -391,6 +462,9 @@ struct Emitter<'a> {
     atmosphere: Option<String>,
     /// Writing a hole of a media container (`media_csg`): its media are set there.
     hole: bool,
+    /// POV-Ray's coordinates to Photonix's: `MIRROR` for a left-handed camera, else the
+    /// identity (`left_handed`).
+    flip: DMat4,
 }
 
 /// The pattern that weighs a texture map's mixes, and its entries' values (sorted).
@@ -425,7 +499,7 @@ pub const MAX_TRANSLATION_BYTES: usize = 256 << 20;
 /// The TOML text and, for each entry, its first line and the `.pov` position it came from.
 pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result<Emitted> {
     let camera = scene.camera.clone().unwrap_or_default();
-    let target = camera.look_at.unwrap_or(camera.location + camera.direction);
+    let target = view_target(scene, &camera);
     let mut e = Emitter {
         scene,
         files,
@@ -437,6 +511,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         media: HashMap::new(),
         gamma: scene.assumed_gamma.unwrap_or(1.0),
         target,
+        view_distance: (target - camera.location).length(),
         lights: Vec::new(),
         skipped_triangles: 0,
         warnings: Vec::new(),
@@ -445,6 +520,7 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
         light_emission: None,
         atmosphere: None,
         hole: false,
+        flip: if left_handed(&camera) { MIRROR } else { DMat4::IDENTITY },
     };
     e.text.push_str("# Translated from POV-Ray by photonix (docs/pov-ray.md); each entry names its source line.\n");
     e.newlines = 1;
@@ -507,6 +583,11 @@ pub fn emit(scene: &PovScene, options: &PovOptions, files: &[PathBuf]) -> Result
 }
 
 impl Emitter<'_> {
+    /// A point or direction of POV-Ray's in Photonix's coordinates.
+    fn mirror(&self, p: DVec3) -> DVec3 {
+        self.flip.transform_point3(p)
+    }
+
     /// Appends one top-level entry (`key` holding `value`), remembering where it came from.
     fn entry(&mut self, key: &str, value: T, pos: Pos) -> Result<()> {
         if self.text.len() > MAX_TRANSLATION_BYTES {
@@ -547,19 +628,30 @@ impl Emitter<'_> {
         if forward.length() <= 0.0 || c.up.length() <= 0.0 || c.right.length() <= 0.0 {
             return Err(PovError::at(c.pos, "the camera's direction, right and up must not be zero".into()));
         }
-        t.insert("position".into(), vec3(mirror(c.location)));
+        t.insert("position".into(), vec3(self.mirror(c.location)));
         // One unit ahead stops telling a direction in 32-bit floats far from the origin: the step
         // grows with the distance (to 1% of it), so the direction survives the rounding.
         let step = (c.location.abs().max_element() * 0.01).max(1.0);
-        t.insert("look_at".into(), vec3(mirror(c.location + forward.normalize() * step)));
-        t.insert("up".into(), vec3(mirror(c.up)));
+        t.insert("look_at".into(), vec3(self.mirror(c.location + forward.normalize() * step)));
+        t.insert("up".into(), vec3(self.mirror(c.up)));
         t.insert(
             "resolution".into(),
             T::Array(vec![T::Integer(options.width as i64), T::Integer(options.height as i64)]),
         );
         if c.orthographic {
             t.insert("type".into(), T::String("orthographic".into()));
-            t.insert("view_height".into(), num(c.up.length()));
+            // With `angle`, POV-Ray sees as wide as a perspective camera of that angle at the
+            // look_at distance (checked with POV-Ray 3.7.0: 30 degrees from 10 units is 5.3
+            // units wide, from 20 units 10.6), up keeping its ratio to right.
+            let height = match c.ortho_angle {
+                Some(a) => {
+                    let d = c.look_at.map_or(forward.length(), |at| (at - c.location).length());
+                    let width = 2.0 * d * (0.5 * a.to_radians()).tan();
+                    width * c.up.length() / c.right.length()
+                }
+                None => c.up.length(),
+            };
+            t.insert("view_height".into(), num(height));
         } else {
             // The vertical field of view that up and direction span.
             let fov = 2.0 * (0.5 * c.up.length() / forward.length()).atan();
@@ -568,7 +660,7 @@ impl Emitter<'_> {
         if c.aperture > 0.0 {
             t.insert("aperture".into(), num(c.aperture));
             // POV-Ray's default focal point is the origin.
-            t.insert("focal_point".into(), vec3(mirror(c.focal_point.unwrap_or(DVec3::ZERO))));
+            t.insert("focal_point".into(), vec3(self.mirror(c.focal_point.unwrap_or(DVec3::ZERO))));
             if c.blur_samples > 0 {
                 t.insert("blur_samples".into(), T::Integer(c.blur_samples));
             }
@@ -611,7 +703,7 @@ impl Emitter<'_> {
             }
             ObjKind::Triangles { tris, normals } => {
                 let material = self.material(tex, int, o.pos, true)?;
-                let m = MIRROR * o.xform;
+                let m = self.flip * o.xform;
                 // Normals move by the inverse transpose.
                 let normal_matrix = DMat3::from_mat4(m).inverse().transpose();
                 for (k, t) in tris.iter().enumerate() {
@@ -640,7 +732,7 @@ impl Emitter<'_> {
             ObjKind::Patch { points } => {
                 // A Bezier patch maps to one under any affine map: its control points are baked.
                 let material = self.material(tex, int, o.pos, true)?;
-                let m = MIRROR * o.xform;
+                let m = self.flip * o.xform;
                 let mut s = Table::new();
                 s.insert("type".into(), T::String("bicubic_patch".into()));
                 s.insert("material".into(), T::String(material));
@@ -657,7 +749,7 @@ impl Emitter<'_> {
     /// A shape table: a primitive, or a CSG node with its children inline.
     fn shape(&mut self, o: &Obj, tex: Option<&Vec<Tex>>, int: Option<&Interior>) -> Result<Table> {
         let mut s = Table::new();
-        let m = MIRROR * o.xform * MIRROR;
+        let m = self.flip * o.xform * self.flip;
         let kind = |s: &mut Table, k: &str| {
             s.insert("type".into(), T::String(k.into()));
         };
@@ -669,13 +761,14 @@ impl Emitter<'_> {
                     .is_some_and(|(sc, _, _)| (sc.abs() - DVec3::splat(scale)).abs().max_element() <= 1e-9 * scale);
                 if uniform {
                     kind(&mut s, "sphere");
-                    s.insert("center".into(), vec3(m.transform_point3(mirror(*center))));
+                    s.insert("center".into(), vec3(m.transform_point3(self.mirror(*center))));
                     s.insert("radius".into(), num(radius * scale));
                 } else {
                     // An ellipsoid: the round superellipsoid, scaled.
                     kind(&mut s, "superellipsoid");
                     s.insert("exponents".into(), T::Array(vec![num(1.0), num(1.0)]));
-                    let local = m * DMat4::from_translation(mirror(*center)) * DMat4::from_scale(DVec3::splat(*radius));
+                    let local =
+                        m * DMat4::from_translation(self.mirror(*center)) * DMat4::from_scale(DVec3::splat(*radius));
                     if let Some(t) = transform_table(&local, o.pos, "sphere")? {
                         s.insert("transform".into(), t);
                     }
@@ -683,7 +776,7 @@ impl Emitter<'_> {
             }
             ObjKind::Box { a, b } => {
                 kind(&mut s, "box");
-                let (p, q) = (mirror(*a), mirror(*b));
+                let (p, q) = (self.mirror(*a), self.mirror(*b));
                 s.insert("min".into(), vec3(p.min(q)));
                 s.insert("max".into(), vec3(p.max(q)));
                 if let Some(t) = transform_table(&m, o.pos, "box")? {
@@ -692,8 +785,8 @@ impl Emitter<'_> {
             }
             ObjKind::Cylinder { a, b, radius, open } => {
                 kind(&mut s, "cylinder");
-                s.insert("base".into(), vec3(mirror(*a)));
-                s.insert("cap".into(), vec3(mirror(*b)));
+                s.insert("base".into(), vec3(self.mirror(*a)));
+                s.insert("cap".into(), vec3(self.mirror(*b)));
                 s.insert("radius".into(), num(*radius));
                 if *open {
                     s.insert("open".into(), T::Boolean(true));
@@ -704,8 +797,8 @@ impl Emitter<'_> {
             }
             ObjKind::Cone { a, ra, b, rb, open } => {
                 kind(&mut s, "cone");
-                s.insert("base".into(), vec3(mirror(*a)));
-                s.insert("cap".into(), vec3(mirror(*b)));
+                s.insert("base".into(), vec3(self.mirror(*a)));
+                s.insert("cap".into(), vec3(self.mirror(*b)));
                 s.insert("base_radius".into(), num(*ra));
                 s.insert("cap_radius".into(), num(*rb));
                 if *open {
@@ -718,7 +811,7 @@ impl Emitter<'_> {
             ObjKind::Plane { normal, offset } => {
                 // Baked exactly: any affine map takes a plane to a plane.
                 kind(&mut s, "plane");
-                let n = mirror(*normal);
+                let n = self.mirror(*normal);
                 let len = n.length();
                 if len <= 0.0 {
                     return Err(PovError::at(o.pos, "the plane's normal is zero".into()));
@@ -731,8 +824,8 @@ impl Emitter<'_> {
             }
             ObjKind::Disc { center, normal, radius, hole } => {
                 kind(&mut s, "disc");
-                s.insert("center".into(), vec3(mirror(*center)));
-                s.insert("normal".into(), vec3(mirror(*normal)));
+                s.insert("center".into(), vec3(self.mirror(*center)));
+                s.insert("normal".into(), vec3(self.mirror(*normal)));
                 s.insert("radius".into(), num(*radius));
                 if *hole > 0.0 {
                     s.insert("inner_radius".into(), num(*hole));
@@ -802,8 +895,34 @@ impl Emitter<'_> {
         s.insert("material".into(), T::String(material));
         if let Some(md) = int.and_then(|i| i.media.first()).filter(|_| !self.hole) {
             self.interior_media(o, md, int.map_or(0, |i| i.media.len()), &mut s)?;
+        } else if let Some(md) = int.and_then(|i| self.fade_medium(i, o.pos)).filter(|_| !self.hole) {
+            self.interior_media(o, &md, 1, &mut s)?;
         }
         Ok(s)
+    }
+
+    /// A glass's `fade_distance` f and `fade_color` c as an absorbing medium inside it. POV-Ray
+    /// multiplies the light that crosses a distance d of the inside by c + (1 - c) / (1 +
+    /// (d / f)^p); an absorption sigma = -ln((1 + c) / 2) / f per channel gives the same at
+    /// d = f (half way to the fade colour), and the exponential Beer-Lambert fall-off
+    /// elsewhere. Only on a dielectric (ior > 1) without media of its own.
+    fn fade_medium(&self, int: &Interior, pos: Pos) -> Option<Media> {
+        if int.ior <= 1.0 || int.fade_distance <= 0.0 || !int.media.is_empty() {
+            return None;
+        }
+        let sigma = int.fade_colour.map(|c| {
+            let c = self.linear([c, c, c, 0.0, 0.0])[0].clamp(0.0, 1.0);
+            -((1.0 + c) / 2.0).ln() / int.fade_distance
+        });
+        Some(Media {
+            absorption: sigma,
+            emission: [0.0; 3],
+            scattering: [0.0; 3],
+            g: 0.0,
+            density: None,
+            xform: DMat4::IDENTITY,
+            pos,
+        })
     }
 
     /// An object's interior media as the shape's `interior`: on the closed shapes Photonix fills
@@ -1014,10 +1133,10 @@ impl Emitter<'_> {
     /// per distinct result.
     fn material(&mut self, tex: Option<&Vec<Tex>>, int: Option<&Interior>, pos: Pos, glow_ok: bool) -> Result<String> {
         let default = self.scene.default_tex.clone();
-        let Some(t) = tex.and_then(|l| l.first()).or(default.as_ref()) else {
+        let layers = tex.filter(|l| !l.is_empty()).map(|l| layered(l));
+        let Some(t) = layers.or(default) else {
             return Err(PovError::at(pos, "internal: no default texture".into()));
         };
-        let t = t.clone();
         // A light's looks_like object is one emitter: its maps stand in by their mean colours.
         let mixes = self.light_emission.is_none();
         if let Some(map) = t.map.as_ref().filter(|_| mixes) {
@@ -1124,6 +1243,20 @@ impl Emitter<'_> {
             }
         }
         let reflection = f.reflection.iter().cloned().fold(0.0, f64::max);
+        if reflection > 0.02 && transparency >= 0.5 {
+            // POV-Ray's glass without an ior (`pigment { rgbf <1, 1, 1, 0.9> } finish {
+            // reflection 0.1 }`): mostly let through, unbent, with a reflection. A mix of a
+            // mirror over a base with an opacity cannot say it (the renderer takes the opacity
+            // of the material a shape names, not of a mix's entries: the sphere came out opaque),
+            // so it is a thin pane: Fresnel reflection (about 8% head on, more at grazing
+            // angles) and the rest through unbent. The filter's tint is not kept.
+            let mut pane = Table::new();
+            pane.insert("type".into(), T::String("thin_dielectric".into()));
+            if let Some(b) = bump {
+                pane.insert("bump".into(), b);
+            }
+            return self.write_material(pane, pos);
+        }
         if reflection > 0.02 {
             // A mirror for the reflected share, mixed over the base by its strength.
             let tint = if f.metallic > 0.0 {
@@ -1240,7 +1373,7 @@ impl Emitter<'_> {
             fields: fields.clone(),
             values: entries.iter().map(|(v, _)| *v).collect(),
             listed: map.listed,
-            world_from_pattern: MIRROR * t.xform * t.pigment.xform,
+            world_from_pattern: self.flip * t.xform * t.pigment.xform,
             ppos: t.pigment.pos,
             pos,
         };
@@ -1324,7 +1457,7 @@ impl Emitter<'_> {
     fn pattern_texture(&mut self, t: &Tex, pos: Pos) -> Result<String> {
         // The pattern is evaluated at pattern_from_world(p) in POV-Ray's coordinates:
         // world_from_pattern = mirror * texture transforms * pigment transforms.
-        let w = MIRROR * t.xform * t.pigment.xform;
+        let w = self.flip * t.xform * t.pigment.xform;
         self.world_pattern(&t.pigment.kind, &w, t.pigment.pos, pos)
     }
 
@@ -1410,7 +1543,7 @@ impl Emitter<'_> {
     /// slope in pattern space; `strength` = k x amount x the pattern's scale gives the same tilt
     /// in world space, with k from how POV-Ray perturbs (docs/pov-ray.md, "Normals").
     fn bump(&mut self, t: &Tex, n: &Normal) -> Result<T> {
-        let w = MIRROR * t.xform * n.xform;
+        let w = self.flip * t.xform * n.xform;
         let scale = DMat3::from_mat4(w).determinant().abs().cbrt();
         let frequency = n
             .fields
@@ -1455,7 +1588,7 @@ impl Emitter<'_> {
                     density_scale = (c[0] + c[1] + c[2]) / 3.0
                 }
                 kind => {
-                    let w = MIRROR * md.xform * d.xform;
+                    let w = self.flip * md.xform * d.xform;
                     let name = self.world_pattern(kind, &w, d.pos, md.pos)?;
                     t.insert("density".into(), T::String(name));
                 }
@@ -1565,7 +1698,7 @@ impl Emitter<'_> {
                 "the rainbow's direction is zero; give the direction toward its centre".into(),
             ));
         }
-        t.insert("direction".into(), vec3(mirror(r.direction)));
+        t.insert("direction".into(), vec3(self.mirror(r.direction)));
         t.insert("angle".into(), num(r.angle));
         t.insert("width".into(), num(r.width));
         let mut map = r.map.clone();
@@ -1577,7 +1710,7 @@ impl Emitter<'_> {
             t.insert("strength".into(), num((1.0 - see).clamp(0.0, 1.0)));
         }
         if let Some(up) = r.up {
-            t.insert("up".into(), vec3(mirror(up)));
+            t.insert("up".into(), vec3(self.mirror(up)));
         }
         if let Some(a) = r.arc_angle {
             t.insert("arc_angle".into(), num(a));
@@ -1617,10 +1750,35 @@ impl Emitter<'_> {
             1.0
         };
         let mut intensity = colour.map(|c| PI * c * d * d * fade);
-        // A light far from a large scene (POV-Ray's suns at 10^4 units) can ask for more than
-        // the scene format's number limit: it is dimmed to the limit, with a warning.
         let limit = crate::limits::MAX_SCENE_VALUE * 0.999;
         let most = intensity.iter().cloned().fold(0.0, f64::max);
+        // A point or area light far from the scene (POV-Ray's suns, 10^4 to 10^6 units away) is a
+        // distant light of irradiance pi c along its direction to where the camera looks: the
+        // same white-surface radiance c as POV-Ray's everywhere in the scene, where a point
+        // light's intensity pi c d^2 would hit the number limit and take the other lights'
+        // share of the photons. An area light keeps its size as the sun's angular diameter.
+        let far = d > FAR_LIGHT_RATIO * self.view_distance.max(1e-9) || most > limit;
+        if far && matches!(l.kind, LightKind::Point) && l.looks_like.is_none() {
+            let mut t = Table::new();
+            t.insert("type".into(), T::String("distant".into()));
+            t.insert("direction".into(), vec3(self.mirror(self.target - l.position)));
+            t.insert("irradiance".into(), rgb(colour.map(|c| PI * c * fade)));
+            if let Some(a) = &l.area {
+                let r = 0.5 * a.axis1.length().max(a.axis2.length());
+                let diameter = (2.0 * (r / d).atan()).to_degrees();
+                if diameter > 1e-6 {
+                    t.insert("angular_diameter".into(), num(diameter.min(90.0)));
+                }
+            }
+            // POV-Ray's light is a point: nothing shows where the sun would be.
+            if l.area.is_some() {
+                t.insert("visible".into(), T::Boolean(false));
+            }
+            self.lights.push((t, l.pos));
+            return Ok(());
+        }
+        // A spotlight (which a distant light cannot be) far from a large scene can still ask for
+        // more than the scene format's number limit: it is dimmed to the limit, with a warning.
         if most > limit {
             intensity = intensity.map(|i| i * limit / most);
             let path = self.files.get(l.pos.file as usize).map(|p| p.display().to_string()).unwrap_or_default();
@@ -1664,7 +1822,7 @@ impl Emitter<'_> {
         match &l.kind {
             LightKind::Parallel { point_at } => {
                 t.insert("type".into(), T::String("distant".into()));
-                let dir = mirror(*point_at - l.position);
+                let dir = self.mirror(*point_at - l.position);
                 if dir.length() <= 0.0 {
                     return Err(PovError::at(l.pos, "a parallel light needs point_at away from its position".into()));
                 }
@@ -1673,8 +1831,8 @@ impl Emitter<'_> {
             }
             LightKind::Spot { point_at, radius, falloff, tightness } => {
                 t.insert("type".into(), T::String("spot".into()));
-                t.insert("position".into(), vec3(mirror(l.position)));
-                t.insert("point_at".into(), vec3(mirror(*point_at)));
+                t.insert("position".into(), vec3(self.mirror(l.position)));
+                t.insert("point_at".into(), vec3(self.mirror(*point_at)));
                 t.insert("intensity".into(), rgb(intensity));
                 let falloff = falloff.clamp(1e-3, 90.0);
                 t.insert("radius".into(), num(radius.clamp(0.0, falloff)));
@@ -1691,7 +1849,7 @@ impl Emitter<'_> {
                     let r = 0.5 * a.axis1.length().max(a.axis2.length()).max(1e-6);
                     t.insert("type".into(), T::String("area".into()));
                     t.insert("shape".into(), T::String("sphere".into()));
-                    t.insert("center".into(), vec3(mirror(l.position)));
+                    t.insert("center".into(), vec3(self.mirror(l.position)));
                     t.insert("radius".into(), num(r));
                     t.insert("radiance".into(), rgb(intensity.map(|i| i / (PI * r * r))));
                     t.insert("samples".into(), T::Array(vec![T::Integer(a.n1 as i64), T::Integer(a.n2 as i64)]));
@@ -1704,7 +1862,7 @@ impl Emitter<'_> {
                 }
                 None => {
                     t.insert("type".into(), T::String("point".into()));
-                    t.insert("position".into(), vec3(mirror(l.position)));
+                    t.insert("position".into(), vec3(self.mirror(l.position)));
                     t.insert("intensity".into(), rgb(intensity));
                 }
             },

@@ -152,7 +152,9 @@ pub fn lex(text: &str, file: u32) -> Result<Vec<Token>, PovError> {
                 step(&mut i, &mut line, &mut col);
             }
             if start == i {
-                return Err(PovError::at(pos, "`#` must be followed by a directive such as #declare or #if".into()));
+                // POV-Ray 3.7 reads a `#` that no directive follows as nothing
+                // (`language/image_size.pov` ends a camera with `look_at <0,2,0>#`).
+                continue;
             }
             out.push(Token { tok: Tok::Directive(chars[start..i].iter().collect()), pos });
             continue;

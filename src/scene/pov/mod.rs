@@ -11,6 +11,7 @@ mod ast;
 mod emit;
 mod image;
 mod implicit;
+mod ini;
 mod lexer;
 mod measure;
 mod objects;
@@ -21,6 +22,8 @@ mod ttf;
 use std::path::{Path, PathBuf};
 
 use super::SceneError;
+
+pub use ini::{ini_path, options_for, Given};
 
 /// POV-Ray's standard include folder as Debian's `povray-includes` installs it.
 pub const STANDARD_INCLUDE_DIR: &str = "/usr/share/povray-3.7/include";
@@ -37,6 +40,11 @@ pub struct PovOptions {
     pub width: u32,
     pub height: u32,
     pub clock: f64,
+    /// `frame_number`, and the animation's `initial_frame` and `final_frame` (0, 0, 0 for a
+    /// still; `--frame` and the scene's `.ini`, `ini::options_for`).
+    pub frame: i64,
+    pub initial_frame: i64,
+    pub final_frame: i64,
     /// Folders searched for `#include` after the scene's own folder.
     pub include_dirs: Vec<PathBuf>,
 }
@@ -44,7 +52,15 @@ pub struct PovOptions {
 impl Default for PovOptions {
     fn default() -> PovOptions {
         // 320x240 is the size of POV-Ray's own quick renders; `--resolution` overrides it.
-        PovOptions { width: 320, height: 240, clock: 0.0, include_dirs: vec![PathBuf::from(STANDARD_INCLUDE_DIR)] }
+        PovOptions {
+            width: 320,
+            height: 240,
+            clock: 0.0,
+            frame: 0,
+            initial_frame: 0,
+            final_frame: 0,
+            include_dirs: vec![PathBuf::from(STANDARD_INCLUDE_DIR)],
+        }
     }
 }
 

@@ -2542,7 +2542,7 @@ impl Parser {
 
     pub fn interior(&mut self) -> Result<Interior> {
         self.expect_sym("{")?;
-        let mut i = Interior { ior: 1.0, media: Vec::new() };
+        let mut i = Interior { ior: 1.0, media: Vec::new(), fade_distance: 0.0, fade_colour: [0.0; 3] };
         loop {
             let t = self.expect_any("`}`")?;
             let pos = t.pos;
@@ -2555,11 +2555,13 @@ impl Parser {
             };
             match w.as_str() {
                 "ior" => i.ior = self.float()?,
-                "caustics" | "dispersion" | "dispersion_samples" | "fade_distance" | "fade_power" => {
+                "caustics" | "dispersion" | "dispersion_samples" | "fade_power" => {
                     self.float()?;
                 }
+                "fade_distance" => i.fade_distance = self.float()?,
                 "fade_color" | "fade_colour" => {
-                    self.colour()?;
+                    let c = self.colour()?;
+                    i.fade_colour = [c[0], c[1], c[2]];
                 }
                 "media" => {
                     let m = self.media(pos)?;
@@ -2686,9 +2688,11 @@ impl Parser {
                         // |direction| = 0.5 |right| / tan(angle / 2) (POV-Ray's reference manual).
                         let len = 0.5 * c.right.length() / (a.to_radians() / 2.0).tan();
                         c.direction = c.direction.normalize_or(DVec3::Z) * len;
+                        c.ortho_angle = None;
                     } else {
                         // An orthographic camera with an angle sees as wide as a perspective one
-                        // would at the look_at distance; approximated by keeping right and up.
+                        // would at the look_at distance, which may come later: emit sizes it.
+                        c.ortho_angle = Some(a);
                     }
                 }
                 "look_at" => {
@@ -2706,7 +2710,10 @@ impl Parser {
                     }
                     // POV-Ray keeps the lengths of direction, right and up and turns them.
                     let (ld, lr, lu) = (c.direction.length(), c.right.length(), c.up.length());
-                    let handed = c.up.cross(c.direction).dot(c.right) >= 0.0;
+                    // POV-Ray's test (parse.cpp): up x direction . right > 0 keeps right as the
+                    // sky makes it; 0 (up along direction: `up z` with the default direction)
+                    // or less turns it around.
+                    let handed = c.up.cross(c.direction).dot(c.right) > 0.0;
                     let d = (at - c.location).normalize_or(DVec3::Z);
                     let mut r = c.sky.cross(d).normalize_or(DVec3::X);
                     if !handed {
@@ -2737,22 +2744,52 @@ impl Parser {
 
     fn light(&mut self, pos: Pos) -> Result<Light> {
         self.expect_sym("{")?;
-        let position = self.vec3()?;
-        self.accept_sym(",")?;
-        let c = self.colour()?;
-        let mut l = Light {
-            position,
-            colour: [c[0], c[1], c[2]],
-            kind: LightKind::Point,
-            area: None,
-            fade_distance: 0.0,
-            fade_power: 0.0,
-            shadowless: false,
-            looks_like: None,
-            pos,
+        // `light_source { Declared modifiers }`: a copy of a declared light, then its
+        // modifiers (the radiosity Cornell box places its declared patch nine times so).
+        let mut base = None;
+        if let Some(w) = self.peek_word()? {
+            if let Some(Value::Object(o)) = self.lookup(&w) {
+                match &o.kind {
+                    ObjKind::Light(l) => base = Some((**l).clone()),
+                    _ => {
+                        let wpos = self.peek()?.map_or(pos, |t| t.pos);
+                        return self.err(wpos, format!("`{w}` is a declared object, not a light_source"));
+                    }
+                }
+                self.next()?;
+            }
+        }
+        let mut l = match base {
+            Some(mut l) => {
+                l.pos = pos;
+                l
+            }
+            None => {
+                let position = self.vec3()?;
+                self.accept_sym(",")?;
+                let c = self.colour()?;
+                Light {
+                    position,
+                    colour: [c[0], c[1], c[2]],
+                    kind: LightKind::Point,
+                    area: None,
+                    fade_distance: 0.0,
+                    fade_power: 0.0,
+                    shadowless: false,
+                    looks_like: None,
+                    pos,
+                }
+            }
         };
         let (mut point_at, mut radius, mut falloff, mut tightness) = (DVec3::ZERO, 30.0, 45.0, 0.0);
         let mut spot = 0;
+        match l.kind {
+            LightKind::Spot { point_at: p, radius: r, falloff: f, tightness: t } => {
+                (point_at, radius, falloff, tightness, spot) = (p, r, f, t, 1);
+            }
+            LightKind::Parallel { point_at: p } => (point_at, spot) = (p, 2),
+            LightKind::Point => {}
+        }
         loop {
             let t = self.expect_any("`}`")?;
             let tpos = t.pos;

@@ -168,7 +168,13 @@ pub struct Parser {
     /// `MAX_LANGUAGE_BYTES`, or half the memory available when that is less (the memory budget,
     /// docs/limits.md): the translation and the scene it loads need the rest.
     memory_budget: usize,
+    /// The language version `#version` set last (None before any): `version` reads it, and a
+    /// scene that ends below 3.7 without `assumed_gamma` has POV-Ray's legacy gamma.
+    version: Option<f64>,
 }
+
+/// The gamma of a legacy scene's colours (`Parser::legacy_gamma`): POV-Ray's default display gamma.
+pub const LEGACY_DISPLAY_GAMMA: f64 = 2.2;
 
 /// Directives that may open a declared value (`#declare X = #if (c) A #else B #end`).
 const VALUE_CONDITIONALS: [&str; 4] = ["if", "ifdef", "ifndef", "switch"];
@@ -197,6 +203,7 @@ impl Parser {
             nesting: 0,
             barriers: Vec::new(),
             max_tokens: MAX_TOKENS,
+            version: None,
             expression_depth: 0,
             read: HashMap::new(),
             declared_bytes: 0,
@@ -215,7 +222,21 @@ impl Parser {
             self.statement()?;
         }
         self.scene.default_tex = Some(self.default_tex(start));
+        self.legacy_gamma();
         Ok(std::mem::take(&mut self.scene))
+    }
+
+    /// POV-Ray 3.7 reads a scene whose language version ends below 3.7 (`#version 3.6`)
+    /// without `assumed_gamma` in its legacy mode: the colours go to the display as written, so
+    /// they are display-encoded (gamma 2.2, POV-Ray's default `Display_Gamma`), as
+    /// `assumed_gamma 2.2` says. Checked with POV-Ray 3.7.0: such a scene writes 0.706 for a
+    /// white face at 45 degrees, a `#version 3.7` one 0.859 (0.706 encoded). A file with no
+    /// `#version` at all is read as 3.7 here (POV-Ray warns and takes it as legacy): every
+    /// example scene names its version, and short hand-written scenes mean linear colours.
+    fn legacy_gamma(&mut self) {
+        if self.scene.assumed_gamma.is_none() && self.version.is_some_and(|v| v < 3.7 - 1e-9) {
+            self.scene.assumed_gamma = Some(LEGACY_DISPLAY_GAMMA);
+        }
     }
 
     /// Evaluates scene text as if it were the file `path` (the unit tests).
@@ -236,6 +257,7 @@ impl Parser {
             self.statement()?;
         }
         self.scene.default_tex = Some(self.default_tex(start));
+        self.legacy_gamma();
         Ok(std::mem::take(&mut self.scene))
     }
 
@@ -816,8 +838,9 @@ impl Parser {
                 self.scopes.push(HashMap::new());
             }
             "version" => {
-                self.float()?;
+                let v = self.float()?;
                 self.accept_sym_raw(";")?;
+                self.version = Some(v);
             }
             "debug" | "warning" | "render" | "statistics" => {
                 let text = self.string()?;
@@ -1166,6 +1189,20 @@ impl Parser {
             self.next()?;
             let pos = self.here();
             let b = self.sum()?;
+            // Strings compare by their text, as POV-Ray 3.7 compares them (`#if (c_file != "")`
+            // in the mesh camera's macros).
+            if let (Value::Str(x), Value::Str(y)) = (&a, &b) {
+                let r = match op {
+                    "=" => x == y,
+                    "!=" => x != y,
+                    "<" => x < y,
+                    "<=" => x <= y,
+                    ">=" => x >= y,
+                    _ => x > y,
+                };
+                a = Value::Float(r as u8 as f64);
+                continue;
+            }
             let (x, y) = (scalar(&a, pos, self)?, scalar(&b, pos, self)?);
             let r = match op {
                 "<" => x < y,
@@ -1367,11 +1404,15 @@ impl Parser {
             "clock" | "initial_clock" => f(self.options.clock),
             "final_clock" => f(1.0),
             "clock_delta" => f(0.0),
-            "clock_on" => f(0.0),
-            "frame_number" | "initial_frame" | "final_frame" => f(0.0),
+            "clock_on" => f((self.options.final_frame > self.options.initial_frame) as u8 as f64),
+            "frame_number" => f(self.options.frame as f64),
+            "initial_frame" => f(self.options.initial_frame as f64),
+            "final_frame" => f(self.options.final_frame as f64),
             "image_width" => f(self.options.width as f64),
             "image_height" => f(self.options.height as f64),
-            "version" => f(3.7),
+            // POV-Ray's own version until a `#version` sets the language's (the standard
+            // includes save it, set 3.5 and restore it).
+            "version" => f(self.version.unwrap_or(3.7)),
             "color" | "colour" | "rgb" | "rgbf" | "rgbt" | "rgbft" | "srgb" | "srgbf" | "srgbt" | "srgbft" => {
                 self.colour_word(w, pos)
             }
