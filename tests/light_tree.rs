@@ -51,24 +51,7 @@ vertices = [[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]]
     parse_scene(&text, &common::repo_path("scenes/test.toml")).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Where film position (sx, sy) in [-1, 1]^2 looks at on the floor.
-fn floor_point(sx: f64, sy: f64) -> DVec3 {
-    let t = (FOV_DEG * 0.5).to_radians().tan() * CAMERA_HEIGHT;
-    DVec3::new(-sx * t, 0.0, sy * t)
-}
-
-/// The mean over pixel (px, py) of `radiance(x)` on the floor, by an 8 x 8 grid of points.
-fn pixel_mean(px: u32, py: u32, radiance: &impl Fn(DVec3) -> f64) -> f64 {
-    let mut sum = 0.0;
-    for i in 0..8 {
-        for j in 0..8 {
-            let sx = 2.0 * (px as f64 + (i as f64 + 0.5) / 8.0) / SIZE as f64 - 1.0;
-            let sy = 1.0 - 2.0 * (py as f64 + (j as f64 + 0.5) / 8.0) / SIZE as f64;
-            sum += radiance(floor_point(sx, sy));
-        }
-    }
-    sum / 64.0
-}
+const VIEW: common::OverheadView = common::OverheadView { size: SIZE, fov_deg: FOV_DEG, height: CAMERA_HEIGHT };
 
 /// Radiance of the floor lit by a point light of intensity `i` at `p`: rho / pi I cos / d^2.
 fn point_lit(x: DVec3, p: DVec3, i: f64) -> f64 {
@@ -95,7 +78,7 @@ fn check(label: &str, image: &Image, radiance: impl Fn(DVec3) -> f64, tolerance:
             for py in by * 8..by * 8 + 8 {
                 for px in bx * 8..bx * 8 + 8 {
                     rendered += image.pixel(px, py)[1] as f64;
-                    expected += pixel_mean(px, py, &radiance);
+                    expected += VIEW.pixel_mean(px, py, &radiance);
                 }
             }
             worst = worst.max((rendered / expected - 1.0).abs());
@@ -136,13 +119,18 @@ fn sun_and_lamp(x: DVec3) -> f64 {
     point_lit(x, DVec3::new(10000.0, 10000.0, 0.0), 2e8) + point_lit(x, DVec3::new(-2.0, 0.6, 1.0), 2.0)
 }
 
-fn check_sun_and_lamp(integrator: &str, gpu: bool) {
-    let buffers = common::buffers(&floor_scene(integrator, SUN_AND_LAMP), SIZE, SIZE);
+/// Renders the floor with `more` beside it (64 samples) and checks it against `radiance`.
+fn render_and_check(label: &str, integrator: &str, gpu: bool, more: &str, radiance: fn(DVec3) -> f64, tolerance: f64) {
+    let buffers = common::buffers(&floor_scene(integrator, more), SIZE, SIZE);
     let image = render(&buffers, 64, gpu);
     let backend = if gpu { "gpu" } else { "cpu" };
+    check(&format!("{backend} {integrator}: {label}"), &image, radiance, tolerance);
+}
+
+fn check_sun_and_lamp(integrator: &str, gpu: bool) {
     // Point lights leave only the choice between them as noise: 64 samples hold each block's
-    // mean within about 1% (measured below 0.5%).
-    check(&format!("{backend} {integrator}: far sun and near lamp"), &image, sun_and_lamp, 0.02);
+    // mean within about 1%.
+    render_and_check("far sun and near lamp", integrator, gpu, SUN_AND_LAMP, sun_and_lamp, 0.02);
 }
 
 #[test]
@@ -192,10 +180,7 @@ fn dome_lit(x: DVec3) -> f64 {
 }
 
 fn check_dome(integrator: &str, gpu: bool) {
-    let buffers = common::buffers(&floor_scene(integrator, &dome()), SIZE, SIZE);
-    let image = render(&buffers, 64, gpu);
-    let backend = if gpu { "gpu" } else { "cpu" };
-    check(&format!("{backend} {integrator}: inside a glowing dome"), &image, dome_lit, 0.03);
+    render_and_check("inside a glowing dome", integrator, gpu, &dome(), dome_lit, 0.03);
 }
 
 #[test]

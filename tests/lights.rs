@@ -58,10 +58,11 @@ vertices = [[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]]
     ))
 }
 
+const VIEW: common::OverheadView = common::OverheadView { size: SIZE, fov_deg: FOV_DEG, height: CAMERA_HEIGHT };
+
 /// Where film position (sx, sy) in [-1, 1]^2 looks at on the plane y = 0.
 fn plane_point(sx: f64, sy: f64) -> DVec3 {
-    let t = (FOV_DEG * 0.5).to_radians().tan() * CAMERA_HEIGHT;
-    DVec3::new(-sx * t, 0.0, sy * t)
+    VIEW.point(sx, sy)
 }
 
 /// Where the centre of pixel (px, py) looks at on the plane y = 0.
@@ -71,15 +72,7 @@ fn pixel_centre(px: u32, py: u32) -> DVec3 {
 
 /// The mean over pixel (px, py) of `radiance(x)` on the plane, by an 8 x 8 grid of points.
 fn pixel_mean(px: u32, py: u32, radiance: impl Fn(DVec3) -> f64) -> f64 {
-    let mut sum = 0.0;
-    for i in 0..8 {
-        for j in 0..8 {
-            let sx = 2.0 * (px as f64 + (i as f64 + 0.5) / 8.0) / SIZE as f64 - 1.0;
-            let sy = 1.0 - 2.0 * (py as f64 + (j as f64 + 0.5) / 8.0) / SIZE as f64;
-            sum += radiance(plane_point(sx, sy));
-        }
-    }
-    sum / 64.0
+    VIEW.pixel_mean(px, py, radiance)
 }
 
 fn render(buffers: &SceneBuffers, spp: u32, gpu: bool) -> Image {

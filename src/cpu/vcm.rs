@@ -1147,8 +1147,9 @@ pub fn radiance_vcm(
         let (h, b) = vertex_at(s, next.scattered, prim, medium, o, d, t);
         // An orthographic camera's first density is by area (`camera_d_vcm`).
         sub.arrive(next.dist, abs_cos(&b, wo), m > 1 || f.camera_kind != CAMERA_ORTHOGRAPHIC);
-        let cos_l = emitter_cosine(s.materials[h.material as usize].flags, h.ng, wo);
-        if !next.scattered && cos_l > 0.0 && emission_allowed {
+        // A medium's scattering point has no material (its hit names the medium).
+        let cos_l = if next.scattered { 0.0 } else { emitter_cosine(s.materials[h.material as usize].flags, h.ng, wo) };
+        if cos_l > 0.0 && emission_allowed {
             let emitted = material_emission(s, &s.materials[h.material as usize], &h);
             if emitted != Vec3::ZERO {
                 let hp = hit_primitive(s, prim);

@@ -202,3 +202,32 @@ pub fn furnace() -> photonix::scene::Scene {
         inputs: vec![],
     }
 }
+
+/// A camera straight above the plane y = 0 (camera-right is -x, image up is +z) of a square
+/// image: where its film positions look, and a pixel's mean of a closed form over the plane.
+pub struct OverheadView {
+    pub size: u32,
+    pub fov_deg: f64,
+    pub height: f64,
+}
+
+impl OverheadView {
+    /// Where film position (sx, sy) in [-1, 1]^2 looks at on the plane.
+    pub fn point(&self, sx: f64, sy: f64) -> glam::DVec3 {
+        let t = (self.fov_deg * 0.5).to_radians().tan() * self.height;
+        glam::DVec3::new(-sx * t, 0.0, sy * t)
+    }
+
+    /// The mean over pixel (px, py) of `radiance(x)` on the plane, by an 8 x 8 grid of points.
+    pub fn pixel_mean(&self, px: u32, py: u32, radiance: impl Fn(glam::DVec3) -> f64) -> f64 {
+        let mut sum = 0.0;
+        for i in 0..8 {
+            for j in 0..8 {
+                let sx = 2.0 * (px as f64 + (i as f64 + 0.5) / 8.0) / self.size as f64 - 1.0;
+                let sy = 1.0 - 2.0 * (py as f64 + (j as f64 + 0.5) / 8.0) / self.size as f64;
+                sum += radiance(self.point(sx, sy));
+            }
+        }
+        sum / 64.0
+    }
+}
