@@ -29,7 +29,6 @@ float light_node_importance(uint node, vec3 x, vec3 n) {
     vec3 axis = vec3(tree_word(node + LIGHT_NODE_AXIS), tree_word(node + LIGHT_NODE_AXIS + 1u), tree_word(node + LIGHT_NODE_AXIS + 2u));
     float power = tree_word(node + LIGHT_NODE_POWER);
     float cos_o = tree_word(node + LIGHT_NODE_COS_SPREAD);
-    float cos_e = tree_word(node + LIGHT_NODE_COS_FALLOFF);
     vec3 to_x = x - 0.5 * (lo + hi);
     float d2 = dot(to_x, to_x);
     vec3 half_diagonal = 0.5 * (hi - lo);
@@ -46,7 +45,8 @@ float light_node_importance(uint node, vec3 x, vec3 n) {
     float cos_x = cos_w > cos_o ? 1.0 : cos_w * cos_o + sin_w * sin_o;
     float sin_x = cos_w > cos_o ? 0.0 : sin_w * cos_o - cos_w * sin_o;
     float cos_p = cos_x > cos_b ? 1.0 : cos_x * cos_b + sin_x * sin_b;
-    if (cos_p <= cos_e) return 0.0;
+    // Past the cone by the falloff, pi/2 (cos 0), nothing leaves.
+    if (cos_p <= 0.0) return 0.0;
     float importance = power * cos_p / max(max(d2, r2), 1e-20);
     if (n != vec3(0.0)) {
         float cos_i = abs(dot(w, n));

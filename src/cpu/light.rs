@@ -49,7 +49,6 @@ pub fn light_node_importance(s: &SceneView, node: u32, x: Vec3, n: Vec3) -> f32 
     let axis = tree_vec(s, node + LIGHT_NODE_AXIS);
     let power = tree_word(s, node + LIGHT_NODE_POWER);
     let cos_o = tree_word(s, node + LIGHT_NODE_COS_SPREAD);
-    let cos_e = tree_word(s, node + LIGHT_NODE_COS_FALLOFF);
     let to_x = x - 0.5 * (lo + hi);
     let d2 = to_x.dot(to_x);
     let half_diagonal = 0.5 * (hi - lo);
@@ -66,7 +65,8 @@ pub fn light_node_importance(s: &SceneView, node: u32, x: Vec3, n: Vec3) -> f32 
     let (cos_x, sin_x) =
         if cos_w > cos_o { (1.0, 0.0) } else { (cos_w * cos_o + sin_w * sin_o, sin_w * cos_o - cos_w * sin_o) };
     let cos_p = if cos_x > cos_b { 1.0 } else { cos_x * cos_b + sin_x * sin_b };
-    if cos_p <= cos_e {
+    // Past the cone by the falloff, pi/2 (cos 0), nothing leaves.
+    if cos_p <= 0.0 {
         return 0.0;
     }
     let mut importance = power * cos_p / d2.max(r2).max(1e-20);

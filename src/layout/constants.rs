@@ -304,18 +304,17 @@ shared_constants! {
     LIGHT_TREE_INFINITE_COUNT: u32 = 2;
     LIGHT_TREE_INFINITE: u32 = 3;
     /// Words of one light-tree node, from its word: bounds min and max (3 + 3 f32), power
-    /// (f32), the emission cone's axis (3 f32), cos of its spread and of the falloff past it
-    /// (f32 each; Conty and Kulla's theta_o and theta_e), then the child word: the second
-    /// child's node word (the first follows this node), or a leaf's light index with
+    /// (f32), the emission cone's axis (3 f32), cos of its spread (f32; Conty and Kulla's
+    /// theta_o; their falloff theta_e is pi/2 for every light we have), then the child word:
+    /// the second child's node word (the first follows this node), or a leaf's light index with
     /// `LIGHT_NODE_LEAF` set.
     LIGHT_NODE_MIN: u32 = 0;
     LIGHT_NODE_MAX: u32 = 3;
     LIGHT_NODE_POWER: u32 = 6;
     LIGHT_NODE_AXIS: u32 = 7;
     LIGHT_NODE_COS_SPREAD: u32 = 10;
-    LIGHT_NODE_COS_FALLOFF: u32 = 11;
-    LIGHT_NODE_CHILD: u32 = 12;
-    LIGHT_NODE_WORDS: u32 = 13;
+    LIGHT_NODE_CHILD: u32 = 11;
+    LIGHT_NODE_WORDS: u32 = 12;
     LIGHT_NODE_LEAF: u32 = 0x8000_0000;
     /// Deepest light tree the kernels walk (the host builds balanced ones, far shallower).
     LIGHT_TREE_MAX_DEPTH: u32 = 32;

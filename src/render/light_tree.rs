@@ -31,36 +31,34 @@ pub struct LightBounds {
 }
 
 /// The directions light leaves in: those within `spread` (radians) of `axis`, then a falloff of
-/// up to `falloff` past them (pi/2 for a Lambertian surface, whose light leaves all of its
-/// hemisphere). A `spread` of pi is every direction.
+/// up to pi/2 past them (Conty and Kulla's theta_e: a Lambertian surface's light leaves all of
+/// its hemisphere; a spot is given as much, conservatively). A `spread` of pi is every direction.
 #[derive(Clone, Copy, Debug)]
 pub struct Cone {
     pub axis: Vec3,
     pub spread: f32,
-    pub falloff: f32,
 }
 
 impl Cone {
-    pub const SPHERE: Cone = Cone { axis: Vec3::Y, spread: PI, falloff: PI / 2.0 };
+    pub const SPHERE: Cone = Cone { axis: Vec3::Y, spread: PI };
 
-    /// The smallest cone holding both (pbrt-v4's `DirectionCone::Union`), with the wider falloff.
+    /// The smallest cone holding both (pbrt-v4's `DirectionCone::Union`).
     fn union(a: Cone, b: Cone) -> Cone {
-        let falloff = a.falloff.max(b.falloff);
         let between = a.axis.dot(b.axis).clamp(-1.0, 1.0).acos();
         if (between + b.spread).min(PI) <= a.spread {
-            return Cone { falloff, ..a };
+            return a;
         }
         if (between + a.spread).min(PI) <= b.spread {
-            return Cone { falloff, ..b };
+            return b;
         }
         let spread = 0.5 * (a.spread + between + b.spread);
         let turn_axis = a.axis.cross(b.axis);
         if spread >= PI || turn_axis.length_squared() < 1e-12 {
-            return Cone { falloff, ..Cone::SPHERE };
+            return Cone::SPHERE;
         }
         let turn = spread - a.spread;
         let axis = glam::Quat::from_axis_angle(turn_axis.normalize(), turn) * a.axis;
-        Cone { axis: axis.normalize(), spread, falloff }
+        Cone { axis: axis.normalize(), spread }
     }
 }
 
@@ -86,7 +84,7 @@ impl LightBounds {
 pub fn point_bounds(l: &Light, power: f32) -> LightBounds {
     let p = Vec3::from(l.position);
     let cone = if l.kind == LIGHT_SPOT {
-        Cone { axis: Vec3::from(l.direction), spread: l.cos_outer.clamp(-1.0, 1.0).acos(), falloff: PI / 2.0 }
+        Cone { axis: Vec3::from(l.direction), spread: l.cos_outer.clamp(-1.0, 1.0).acos() }
     } else {
         Cone::SPHERE
     };
@@ -95,7 +93,7 @@ pub fn point_bounds(l: &Light, power: f32) -> LightBounds {
 
 pub fn area_bounds(lo: Vec3, hi: Vec3, normal: Option<Vec3>, power: f32) -> LightBounds {
     let cone = match normal {
-        Some(n) if n.length_squared() > 0.0 => Cone { axis: n.normalize(), spread: 0.0, falloff: PI / 2.0 },
+        Some(n) if n.length_squared() > 0.0 => Cone { axis: n.normalize(), spread: 0.0 },
         _ => Cone::SPHERE,
     };
     LightBounds { lo, hi, power, cone }
@@ -185,7 +183,6 @@ fn emit(
         bounds.cone.axis.y,
         bounds.cone.axis.z,
         bounds.cone.spread.cos(),
-        bounds.cone.falloff.cos(),
     ];
     for (w, f) in node.iter_mut().zip(floats) {
         *w = f.to_bits();
@@ -199,8 +196,8 @@ mod tests {
 
     #[test]
     fn a_cone_union_holds_both_cones() {
-        let a = Cone { axis: Vec3::Y, spread: 0.0, falloff: PI / 2.0 };
-        let b = Cone { axis: Vec3::X, spread: 0.0, falloff: PI / 2.0 };
+        let a = Cone { axis: Vec3::Y, spread: 0.0 };
+        let b = Cone { axis: Vec3::X, spread: 0.0 };
         let u = Cone::union(a, b);
         assert!((u.spread - PI / 4.0).abs() < 1e-5, "{u:?}");
         assert!(u.axis.dot(Vec3::Y).acos() <= u.spread + 1e-5 && u.axis.dot(Vec3::X).acos() <= u.spread + 1e-5);
