@@ -125,7 +125,7 @@ impl Driver {
             if r.status == 200 {
                 return;
             }
-            assert!(r.text().contains("stale element"), "POST {path}: {}", r.text());
+            assert!(redrawn(&r.text()), "POST {path}: {}", r.text());
             std::thread::sleep(Duration::from_millis(100));
         }
         panic!("{css} stays stale");
@@ -144,10 +144,18 @@ impl Driver {
             if r.status == 200 {
                 return;
             }
-            assert!(r.text().contains("stale element"), "POST {path}: {}", r.text());
+            assert!(redrawn(&r.text()), "POST {path}: {}", r.text());
             std::thread::sleep(Duration::from_millis(100));
         }
         panic!("{css} stays stale");
+    }
+
+    /// Waits for two animation frames, so the page has drawn (and its gizmo has followed the
+    /// camera) since whatever it was asked before.
+    fn next_frame(&self) {
+        let script = "const done = arguments[arguments.length - 1];
+                      requestAnimationFrame(() => requestAnimationFrame(() => done(true)));";
+        self.session("POST", "/execute/async", json!({ "script": script, "args": [] }));
     }
 
     /// Performs WebDriver pointer actions of the mouse (`pointerMove` at viewport pixels,
@@ -285,6 +293,26 @@ fn ball_translate(text: &str) -> [f64; 3] {
     [0, 1, 2].map(|i| number(t.get(i).expect("three numbers")))
 }
 
+/// Whether a WebDriver error says the element went away or is hidden for a moment: the page
+/// redraws the tree and the panel on every scene update, so a find and the next command can
+/// straddle a redraw.
+fn redrawn(error: &str) -> bool {
+    error.contains("stale element") || error.contains("element not interactable")
+}
+
+/// As `wait_text`, then until the page has the server's revision too: the page hears of an
+/// edit after the server has written it, and a panel drawn from the revision before would
+/// take the next click or typed value as a change of that older state.
+fn wait_page(driver: &Driver, f: &Fixture, what: &str, done: impl Fn(&str) -> bool) -> String {
+    let text = wait_text(f, what, done);
+    let revision = f.scene_json()["revision"].as_u64().expect("the scene's revision");
+    driver.wait_for(&format!("the page to have {what}"), "return Number(document.body.dataset.revision)", |v| {
+        v.as_u64() >= Some(revision)
+    });
+    driver.next_frame();
+    text
+}
+
 /// Waits until the server's scene text satisfies `done`.
 fn wait_text(f: &Fixture, what: &str, done: impl Fn(&str) -> bool) -> String {
     let start = Instant::now();
@@ -350,7 +378,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
 
     // Move it by a typed value; the server's scene changes
     driver.type_into("#tf-translate-0", "0.75\n");
-    let text = wait_text(&f, "the move", |t| t.contains("transform = { translate = [0.75, 0, 0] }"));
+    let text = wait_page(&driver, &f, "the move", |t| t.contains("transform = { translate = [0.75, 0, 0] }"));
     assert!(text.contains("name = \"ball\""));
     driver.wait_for("the moved ball in the panel", "return document.getElementById('tf-translate-0')?.value", |v| {
         v == "0.75"
@@ -390,7 +418,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     driver.pointer(Value::Array((1..=5).map(|i| point(12.0 * i as f64)).collect()));
     driver.screenshot("05-gizmo-dragging.png");
     driver.pointer(json!([point(90.0), { "type": "pointerUp", "button": 0 }]));
-    let text = wait_text(&f, "the drag", |t| t != before_drag);
+    let text = wait_page(&driver, &f, "the drag", |t| t != before_drag);
     let translate = ball_translate(&text);
     assert!(translate[0] > 0.8, "dragging the X arrow right moved the ball to {translate:?}");
     assert_eq!((translate[1], translate[2]), (0.0, 0.0), "the drag left the X axis: {translate:?}");
@@ -400,7 +428,7 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
     driver.screenshot("06-gizmo-dropped.png");
     // A drag is one undoable edit.
     driver.click("#undo");
-    wait_text(&f, "the drag's undo", |t| t == before_drag);
+    wait_page(&driver, &f, "the drag's undo", |t| t == before_drag);
 
     // Four views: the ball is outlined in each (top, front, right, perspective)
     driver.click("#layout");
@@ -414,13 +442,13 @@ fn browser_selects_moves_deletes_undoes_and_saves() {
 
     // Delete, then undo
     driver.click("#delete");
-    wait_text(&f, "the deletion", |t| !t.contains("name = \"ball\""));
+    wait_page(&driver, &f, "the deletion", |t| !t.contains("name = \"ball\""));
     driver.wait_for("the tree without the ball", "return document.querySelectorAll('[id^=tree-shape-]').length", |v| {
         v == 2
     });
     driver.screenshot("08-deleted.png");
     driver.click("#undo");
-    let text = wait_text(&f, "the undo", |t| t.contains("name = \"ball\""));
+    let text = wait_page(&driver, &f, "the undo", |t| t.contains("name = \"ball\""));
     assert!(text.contains("translate = [0.75, 0, 0]"), "{text}");
     driver
         .wait_for("the tree with the ball", "return document.querySelectorAll('[id^=tree-shape-]').length", |v| v == 3);
@@ -487,7 +515,8 @@ fn browser_shows_instances_and_picks_a_texture() {
 
     // Move the grid by a typed value
     driver.type_into("#tf-translate-1", "0.5\n");
-    let text = wait_text(&f, "the grid's move", |t| t.contains("transform = { translate = [-1.5, 0.5, -1.5] }"));
+    let text =
+        wait_page(&driver, &f, "the grid's move", |t| t.contains("transform = { translate = [-1.5, 0.5, -1.5] }"));
     assert!(text.contains("name = \"fence\""));
     let moved = driver.wait_for(
         "the moved copies",
@@ -507,7 +536,7 @@ fn browser_shows_instances_and_picks_a_texture() {
     assert_eq!(field, "reflectance");
     let frames = driver.script("return Number(document.body.dataset.frames)").as_u64().unwrap();
     driver.click("#tex-file option[value='checker.png']");
-    let text = wait_text(&f, "the texture", |t| t.contains("reflectance = { texture = \"checker\" }"));
+    let text = wait_page(&driver, &f, "the texture", |t| t.contains("reflectance = { texture = \"checker\" }"));
     assert!(text.contains("[textures.checker]\ntype = \"image\"\nfile = \"checker.png\""), "{text}");
     let scene = photonix::scene::parse_scene(&text, &f.scene).unwrap();
     assert_eq!(scene.textures.len(), 1);
@@ -586,6 +615,9 @@ fn click_at(driver: &Driver, (x, y): (i64, i64)) {
 
 /// Drags the move gizmo's X arrow by `pixels` along its screen direction.
 fn drag_x_arrow(driver: &Driver, pixels: f64) {
+    // The gizmo's handles are placed for the camera when the page draws: after a framing (F)
+    // or a scene update, the next frame puts them where the press will look.
+    driver.next_frame();
     let handle = driver.script(
         "const v = window.photonixEditor.viewport, c = v.canvas.getBoundingClientRect();
          const arrow = v.gizmo._gizmo.picker.translate.children.find((m) => m.name === 'X');
@@ -659,7 +691,7 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     // Group them (one undo step): five `group = "short block"` lines; the tree shows the group
     driver.type_into("#group-name", "short block");
     driver.click("#group-set");
-    let text = wait_text(&f, "the group", |t| t.matches("group = \"short block\"").count() == 5);
+    let text = wait_page(&driver, &f, "the group", |t| t.matches("group = \"short block\"").count() == 5);
     let scene = photonix::scene::parse_scene(&text, &f.scene).unwrap();
     assert_eq!(scene.shapes.len(), photonix::scene::parse_scene(&cornell, &f.scene).unwrap().shapes.len());
     driver.wait_for(
@@ -684,7 +716,7 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     // Drag the shared gizmo's X arrow: the five quads move together, by the same amount
     let before = f.text();
     drag_x_arrow(&driver, 80.0);
-    let text = wait_text(&f, "the group's move", |t| t != before);
+    let text = wait_page(&driver, &f, "the group's move", |t| t != before);
     let tables = shape_tables(&text);
     let moves: Vec<Option<[f64; 3]>> = tables.iter().map(translate_of).collect();
     let dx = moves[5].expect("the block moved")[0];
@@ -698,14 +730,14 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     }
     driver.screenshot("22-cornell-group-moved.png");
     driver.click("#undo");
-    wait_text(&f, "the move's undo", |t| t == before);
+    wait_page(&driver, &f, "the move's undo", |t| t == before);
 
     // Rotations read back as typed: 137 degrees about y stays [0, 137, 0] through a move and a
     // turn of the gizmo (the matrix's own Euler triple would be [180, 43, 180])
     driver.click("#tree-shape-10");
     driver.wait_for("the tall block's top", "return document.body.dataset.selection", |v| v == "shape:10");
     driver.type_into("#tf-rotate-1", "137\n");
-    wait_text(&f, "the rotation", |t| t.contains("rotate = [0, 137, 0]"));
+    wait_page(&driver, &f, "the rotation", |t| t.contains("rotate = [0, 137, 0]"));
     driver.wait_for(
         "the page's scene",
         "return window.photonixEditor.state.scene.shapes[10].fields.transform?.rotate?.[1]",
@@ -716,19 +748,19 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
     driver.press("f");
     let before = f.text();
     drag_x_arrow(&driver, 40.0);
-    let text = wait_text(&f, "the turned quad's move", |t| t != before);
+    let text = wait_page(&driver, &f, "the turned quad's move", |t| t != before);
     assert!(text.contains("rotate = [0, 137, 0]"), "{text}");
     driver.script(
         "const v = window.photonixEditor.viewport; v.gizmo.setMode('rotate'); v.startGizmo();
          v.pivot.rotateOnWorldAxis(new v.pivot.position.constructor(0, 1, 0), 10 * Math.PI / 180);
          v.followGizmo(); v.commitGizmo(); v.gizmo.setMode('translate');",
     );
-    wait_text(&f, "the turn", |t| t.contains("rotate = [0, 147, 0]"));
+    wait_page(&driver, &f, "the turn", |t| t.contains("rotate = [0, 147, 0]"));
 
     // Delete selects nothing: a second X deletes nothing more
     let shapes = shape_tables(&f.text()).len();
     driver.press("x");
-    wait_text(&f, "the delete", |t| shape_tables(t).len() == shapes - 1);
+    wait_page(&driver, &f, "the delete", |t| shape_tables(t).len() == shapes - 1);
     driver.wait_for("nothing selected", "return document.body.dataset.selection", |v| v == "");
     driver.press("x");
     std::thread::sleep(Duration::from_millis(500));
@@ -741,7 +773,7 @@ fn browser_groups_a_cornell_block_and_moves_it_as_one() {
         { "type": "keyDown", "value": "\u{E008}" }, { "type": "keyDown", "value": "D" },
         { "type": "keyUp", "value": "D" }, { "type": "keyUp", "value": "\u{E008}" },
     ]));
-    let text = wait_text(&f, "the duplicate", |t| shape_tables(t).len() == shapes);
+    let text = wait_page(&driver, &f, "the duplicate", |t| shape_tables(t).len() == shapes);
     let copy = shape_tables(&text).pop().unwrap();
     assert_eq!(copy.get("name").and_then(|n| n.as_str()), Some("floor copy"));
     let offset = translate_of(&copy).expect("the copy is moved");
@@ -819,10 +851,10 @@ fn browser_imports_models_and_edits_materials() {
         [0, 1, 2].map(|i| (lo[i] + hi[i]) / 2.0)
     };
     driver.choose_file("#import", &root.join("scenes/meshes/rounded-cube.glb"));
-    wait_text(&f, "the .glb", |t| t.contains("file = \"rounded-cube.glb\""));
+    wait_page(&driver, &f, "the .glb", |t| t.contains("file = \"rounded-cube.glb\""));
     driver.wait_for("the .glb selected", "return document.body.dataset.selection", |v| v == "shape:3");
     driver.choose_file("#import", &root.join("tests/models/assimp/cube.ply"));
-    let text = wait_text(&f, "the .ply", |t| t.contains("file = \"cube.ply\""));
+    let text = wait_page(&driver, &f, "the .ply", |t| t.contains("file = \"cube.ply\""));
     driver.wait_for("the .ply selected", "return document.body.dataset.selection", |v| v == "shape:4");
     assert!(f.dir.path().join("rounded-cube.glb").exists() && f.dir.path().join("cube.ply").exists());
     let (glb, ply) = (centre_of(3), centre_of(4));
@@ -848,10 +880,10 @@ fn browser_imports_models_and_edits_materials() {
     };
     let before = centre(&f.scene_json());
     driver.type_into("#tf-rotate-0", "90\n");
-    wait_text(&f, "the typed rotate", |t| t.contains("rotate = [90, 30, 0]"));
+    wait_page(&driver, &f, "the typed rotate", |t| t.contains("rotate = [90, 30, 0]"));
     driver.wait_for("the rotate in the panel", "return document.getElementById('tf-rotate-0')?.value", |v| v == "90");
     driver.type_into("#tf-scale-1", "2\n");
-    wait_text(&f, "the typed scale", |t| t.contains("scale = [1, 2, 1]"));
+    wait_page(&driver, &f, "the typed scale", |t| t.contains("scale = [1, 2, 1]"));
     let after = centre(&f.scene_json());
     let moved = (0..3).map(|i| (after[i] - before[i]).abs()).fold(0.0, f64::max);
     assert!(moved < 1e-3, "the typed rotate and scale moved the block's centre from {before:?} to {after:?}");
@@ -869,16 +901,16 @@ fn browser_imports_models_and_edits_materials() {
     assert_eq!(driver.script("return document.getElementById('mat-opacity').value"), "1");
     // A smooth glass made rough
     driver.type_into("#mat-roughness", "0.2\n");
-    wait_text(&f, "the roughness", |t| t.contains("ior = 1.5\nroughness = 0.2"));
+    wait_page(&driver, &f, "the roughness", |t| t.contains("ior = 1.5\nroughness = 0.2"));
     // Its type switched: plastic keeps ior and roughness and shows its reflectance's default
     driver.click("#mat-type option[value='plastic']");
-    let text = wait_text(&f, "the plastic", |t| t.contains("[materials.glass]\ntype = \"plastic\""));
+    let text = wait_page(&driver, &f, "the plastic", |t| t.contains("[materials.glass]\ntype = \"plastic\""));
     assert!(text.contains("[materials.glass]\ntype = \"plastic\"\nior = 1.5\nroughness = 0.2"), "{text}");
     driver
         .wait_for("the plastic's panel", "return document.getElementById('mat-reflectance-0')?.value", |v| v == "0.8");
     // ... and diffuse drops them
     driver.click("#mat-type option[value='diffuse']");
-    let text = wait_text(&f, "the diffuse", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
+    let text = wait_page(&driver, &f, "the diffuse", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
     let glass = &text[text.find("[materials.glass]").unwrap()..];
     let glass = &glass[..glass.find("\n\n").unwrap_or(glass.len())];
     assert!(!glass.contains("ior") && !glass.contains("roughness"), "{glass}");
@@ -890,14 +922,14 @@ fn browser_imports_models_and_edits_materials() {
         "const c = document.getElementById('mat-reflectance-color'); c.value = '#808080';
          c.dispatchEvent(new Event('change', { bubbles: true }));",
     );
-    wait_text(&f, "the picked colour", |t| t.contains("reflectance = [0.2159, 0.2159, 0.2159]"));
+    wait_page(&driver, &f, "the picked colour", |t| t.contains("reflectance = [0.2159, 0.2159, 0.2159]"));
     driver.screenshot("31-material-switched.png");
     // To a conductor (its colour becomes the tint) and back: the colour is kept
     driver.click("#mat-type option[value='conductor']");
-    wait_text(&f, "the conductor", |t| t.contains("[materials.glass]\ntype = \"conductor\""));
+    wait_page(&driver, &f, "the conductor", |t| t.contains("[materials.glass]\ntype = \"conductor\""));
     driver.wait_for("the conductor's panel", "return document.getElementById('mat-type')?.value", |v| v == "conductor");
     driver.click("#mat-type option[value='diffuse']");
-    let text = wait_text(&f, "the diffuse again", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
+    let text = wait_page(&driver, &f, "the diffuse again", |t| t.contains("[materials.glass]\ntype = \"diffuse\""));
     let glass = &text[text.find("[materials.glass]").unwrap()..];
     let glass = &glass[..glass.find("\n\n").unwrap_or(glass.len())];
     assert!(glass.contains("reflectance = [0.2159, 0.2159, 0.2159]") && !glass.contains("tint"), "{glass}");
@@ -933,7 +965,7 @@ fn browser_imports_models_and_edits_materials() {
     );
     assert_eq!(f.text(), before, "G wrote before the click");
     driver.pointer(json!([{ "type": "pointerDown", "button": 0 }, { "type": "pointerUp", "button": 0 }]));
-    let text = wait_text(&f, "the grab", |t| t != before);
+    let text = wait_page(&driver, &f, "the grab", |t| t != before);
     let ball_table = &shape_tables(&text)[1];
     let moved = translate_of(ball_table).expect("the ball moved");
     assert!(moved[0] > 0.05 && moved[1].abs() < 1e-3, "moved right in the view: {moved:?}");
@@ -949,7 +981,7 @@ fn browser_imports_models_and_edits_materials() {
     driver.click("#navigation option[value='default']");
     // A new material
     driver.click("#new-material");
-    let text = wait_text(&f, "the new material", |t| t.contains("[materials.material_1]"));
+    let text = wait_page(&driver, &f, "the new material", |t| t.contains("[materials.material_1]"));
     photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
     driver.wait_for("the new material selected", "return document.body.dataset.selection", |v| {
         v == "material:material_1"
@@ -973,7 +1005,7 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     let mut f = Fixture::with(photonix::editor::BackendChoice::Cpu, |o| *o = options(&o.scene.clone()));
     let driver = Driver::start();
     let frames = |d: &Driver, at_least: u64| {
-        d.wait_for("a frame", "return Number(document.body.dataset.frames || 0)", |v| {
+        d.wait_for(&format!("frame {at_least}"), "return Number(document.body.dataset.frames || 0)", |v| {
             v.as_u64().unwrap_or(0) >= at_least
         })
         .as_u64()
@@ -1041,6 +1073,12 @@ fn browser_tabs_keep_their_own_views_and_selections_and_reconnect_after_a_restar
     driver.session("POST", &format!("/element/{radius}/value"), json!({ "text": "\n" }));
     wait_text(&f, "A's radius", |t| t.contains("radius = 0.3"));
     driver.wait_for("A: its own step", "return document.body.dataset.undoAuthor", |v| v == "mine");
+
+    // Tab B closes: the preview renders the view last sent, and B reconnecting after A would
+    // take it from A (background tabs' timers run late).
+    driver.switch_to(&b);
+    driver.session("DELETE", "/window", Value::Null);
+    driver.switch_to(&a);
 
     // The server stops: one notice saying how to reconnect, however long it is away
     let server = f.server.take().unwrap();
@@ -1178,10 +1216,10 @@ fn browser_imports_3ds_and_ifs_and_shows_the_final_render_time() {
 
     // A 3DS model and an IFS model through the page: each an entry of the scene, selected
     driver.choose_file("#import", &root.join("tests/models/assimp/cube_with_diffuse_texture.3DS"));
-    wait_text(&f, "the .3ds", |t| t.contains("file = \"cube_with_diffuse_texture.3DS\""));
+    wait_page(&driver, &f, "the .3ds", |t| t.contains("file = \"cube_with_diffuse_texture.3DS\""));
     driver.wait_for("the .3ds selected", "return document.body.dataset.selection", |v| v == "shape:3");
     driver.choose_file("#import", &ifs);
-    let text = wait_text(&f, "the .ifs", |t| t.contains("file = \"pyramid.ifs\""));
+    let text = wait_page(&driver, &f, "the .ifs", |t| t.contains("file = \"pyramid.ifs\""));
     driver.wait_for("the .ifs selected", "return document.body.dataset.selection", |v| v == "shape:4");
     let (scene, origins) = photonix::scene::parse_scene_in(&text, &f.scene, None).unwrap();
     // The cube's 12 triangles and the pyramid's 6, each entry its own.
@@ -1265,16 +1303,16 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     driver.click("#tree-instance-0");
     driver.wait_for("the blob selected", "return document.body.dataset.selection", |v| v == "instance:0");
     driver.type_into("#tf-translate-2", "0.5\n");
-    wait_text(&f, "the blob moved", |t| t.contains("translate = [0, 0, 0.5]"));
+    wait_page(&driver, &f, "the blob moved", |t| t.contains("translate = [0, 0, 0.5]"));
     driver.screenshot("69-pov-blob-moved.png");
     driver.click("#undo");
-    wait_text(&f, "the blob back", |t| !t.contains("translate = [0, 0, 0.5]"));
+    wait_page(&driver, &f, "the blob back", |t| !t.contains("translate = [0, 0, 0.5]"));
 
     // Edit the translation (move the ball) and save: scene.toml appears beside scene.pov
     driver.click("#tree-shape-1");
     driver.wait_for("the ball selected", "return document.body.dataset.selection", |v| v == "shape:1");
     driver.type_into("#tf-translate-0", "0.75\n");
-    wait_text(&f, "the move", |t| t.contains("translate = [0.75, 0, 0]"));
+    wait_page(&driver, &f, "the move", |t| t.contains("translate = [0.75, 0, 0]"));
     driver.click("#save");
     let start = Instant::now();
     while !std::fs::read_to_string(&toml).is_ok_and(|t| t.contains("translate = [0.75, 0, 0]")) {
@@ -1338,14 +1376,14 @@ fn browser_reopening_a_pov_scene_keeps_the_saved_edits_and_save_asks_before_repl
     let colour = "reflectance = [0.48, 0.06, 0.06]";
     assert!(f.text().contains(colour), "{}", f.text());
     driver.click("#mat-type option[value='mix']");
-    let text = wait_text(&f, "the mix", |t| t.contains("type = \"mix\""));
+    let text = wait_page(&driver, &f, "the mix", |t| t.contains("type = \"mix\""));
     assert!(text.contains(&format!("materials = [\"{ball_material}_base\"")), "{text}");
     let base = &text[text.find(&format!("[materials.{ball_material}_base]")).expect("the base material")..];
     assert!(base[..base.find("\n\n").unwrap_or(base.len())].contains(colour), "{base}");
     // The panel redrawn for the mix first (a click on the old one would switch nothing).
     driver.wait_for("the mix's panel", "return document.getElementById('mat-type')?.value", |v| v == "mix");
     driver.click("#mat-type option[value='diffuse']");
-    let text = wait_text(&f, "the diffuse again", |t| !t.contains("type = \"mix\""));
+    let text = wait_page(&driver, &f, "the diffuse again", |t| !t.contains("type = \"mix\""));
     let own = &text[text.find(&format!("[materials.{ball_material}]")).unwrap()..];
     assert!(own[..own.find("\n\n").unwrap_or(own.len())].contains(colour), "{own}");
     assert_eq!(driver.script("return document.body.dataset.lastError || ''"), "", "the page showed an error");

@@ -62,7 +62,9 @@ function connect() {
     connectionNotice(null);
     document.body.dataset.connected = '1';
     document.body.dataset.connections = String(Number(document.body.dataset.connections || 0) + 1);
-    viewport.sendView(true);
+    // The preview renders the view last sent: a tab in the background claims it only when
+    // it is looked at again.
+    if (!document.hidden) viewport.sendView(true);
   };
   socket.onclose = async () => {
     document.body.dataset.connected = '0';

@@ -826,7 +826,22 @@ export class Viewport {
   /// entry `sel`. A typed rotate or scale turns and scales about the entry's own centre (its
   /// bounding box's, in its own coordinates), as the gizmo does, not about the world's origin:
   /// the translate takes up the difference, so the centre stays where it is.
+  ///
+  /// The holder takes the new transform at once: a second part typed before the server's
+  /// answer arrives then turns about the centre as the first left it, not as it was.
   typedTransform(sel, part, values) {
+    const command = this.typedCommand(sel, part, values);
+    const o = this.objectOf(sel);
+    if (o && (o.kind === 'mesh' || o.kind === 'area')) {
+      if (command.translate) o.holder.position.set(...command.translate);
+      if (part === 'rotate') o.holder.rotation.set(values[0] * DEG, values[1] * DEG, values[2] * DEG, EULER_ORDER);
+      if (part === 'scale') o.holder.scale.set(...values);
+      o.holder.updateMatrix();
+    }
+    return command;
+  }
+
+  typedCommand(sel, part, values) {
     const target = { [`${sel.kind}_id`]: sel.id };
     const command = { op: 'set_transform', target, [part]: [...values] };
     const o = this.objectOf(sel);

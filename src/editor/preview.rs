@@ -154,6 +154,9 @@ struct Shared {
     stop: Arc<AtomicBool>,
     wake: Condvar,
     events: broadcast::Sender<Event>,
+    /// The newest preview frame, for a page that connects after it was sent: a converged
+    /// preview sends no more, and the page would stay blank.
+    last_preview: Mutex<Option<Event>>,
 }
 
 /// The handle the server holds; dropping it stops the thread.
@@ -191,6 +194,7 @@ impl Renderer {
             wake: Condvar::new(),
             stop: Arc::new(AtomicBool::new(false)),
             events,
+            last_preview: Mutex::new(None),
         });
         let (ready_tx, ready_rx) = std::sync::mpsc::channel();
         let thread_shared = shared.clone();
@@ -220,6 +224,11 @@ impl Renderer {
 
     pub fn subscribe(&self) -> broadcast::Receiver<Event> {
         self.shared.events.subscribe()
+    }
+
+    /// The newest preview frame sent, if any.
+    pub fn last_preview(&self) -> Option<Event> {
+        self.shared.last_preview.lock().expect("last preview lock").clone()
     }
 
     /// Starts a new preview generation with `scene`.
@@ -606,7 +615,9 @@ fn run(shared: Arc<Shared>, backend: BackendChoice, ready: std::sync::mpsc::Send
                     "device": device,
                     "denoised": denoise && denoiser.is_some(),
                 });
-                let _ = shared.events.send(Event::Frame { header, png: Arc::new(png) });
+                let frame = Event::Frame { header, png: Arc::new(png) };
+                *shared.last_preview.lock().expect("last preview lock") = Some(frame.clone());
+                let _ = shared.events.send(frame);
             }
             // Stopped by a change, or a change came during the step: start the new generation.
             Ok((_, cost)) => {

@@ -760,6 +760,17 @@ enum PageMessage {
     },
 }
 
+/// A frame as the page reads it: a u32 little-endian length, that many bytes of JSON header,
+/// then the PNG.
+fn frame_bytes(header: &serde_json::Value, png: &[u8]) -> Vec<u8> {
+    let header = header.to_string();
+    let mut bytes = Vec::with_capacity(4 + header.len() + png.len());
+    bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    bytes.extend_from_slice(header.as_bytes());
+    bytes.extend_from_slice(png);
+    bytes
+}
+
 async fn session(app: Arc<App>, mut socket: WebSocket) {
     let me = app.next_session.fetch_add(1, Ordering::Relaxed);
     let mut closing = app.closing.subscribe();
@@ -785,6 +796,15 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
     });
     if socket.send(Message::Text(hello.to_string().into())).await.is_err() {
         return;
+    }
+    // A page that comes after the preview converged gets its last frame, when it is everyone's
+    // (the file's camera) rather than another page's view.
+    if let Some(Event::Frame { header, png }) = app.renderer.last_preview() {
+        if matches!(header["owner"].as_u64(), None | Some(0))
+            && socket.send(Message::Binary(frame_bytes(&header, &png).into())).await.is_err()
+        {
+            return;
+        }
     }
     loop {
         let outgoing = tokio::select! {
@@ -815,12 +835,7 @@ async fn session(app: Arc<App>, mut socket: WebSocket) {
                     None
                 }
                 Ok(Event::Frame { header, png }) => {
-                    let header = header.to_string();
-                    let mut bytes = Vec::with_capacity(4 + header.len() + png.len());
-                    bytes.extend_from_slice(&(header.len() as u32).to_le_bytes());
-                    bytes.extend_from_slice(header.as_bytes());
-                    bytes.extend_from_slice(&png);
-                    if socket.send(Message::Binary(bytes.into())).await.is_err() {
+                    if socket.send(Message::Binary(frame_bytes(&header, &png).into())).await.is_err() {
                         return;
                     }
                     None
