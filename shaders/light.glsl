@@ -69,18 +69,21 @@ uint pick_direct_light(float u, vec3 x, vec3 n, out float pmf) {
     if (base == NO_LIGHT) return NO_LIGHT;
     float share = tree_share();
     if (u >= share) {
-        // The infinite lights' running probabilities cover the rest, [share, 1).
+        // The lights beside the tree (the infinite ones; every light under light_sampler =
+        // "power"): their running probabilities cover the rest, [share, 1), searched for the
+        // first that passes v.
         float v = (u - share) / (1.0 - share);
         uint count = texture_word(base + LIGHT_TREE_INFINITE_COUNT);
-        for (uint k = 0u; k < count; k++) {
-            uint at = base + LIGHT_TREE_INFINITE + 2u * k;
-            if (v < tree_word(at + 1u) || k + 1u == count) {
-                uint light = texture_word(at);
-                pmf = (1.0 - share) * light_at(light).tree_probability;
-                return light;
-            }
+        if (count == 0u) return NO_LIGHT;
+        uint lo = 0u;
+        uint hi = count - 1u;
+        while (lo < hi) {
+            uint mid = (lo + hi) / 2u;
+            if (v < tree_word(base + LIGHT_TREE_INFINITE + 2u * mid + 1u)) hi = mid; else lo = mid + 1u;
         }
-        return NO_LIGHT;
+        uint light = texture_word(base + LIGHT_TREE_INFINITE + 2u * lo);
+        pmf = (1.0 - share) * light_at(light).tree_probability;
+        return light;
     }
     u = u / share;
     pmf = share;

@@ -273,3 +273,48 @@ fn the_twins_agree_on_a_sphere_sampled_by_its_cap() {
         common::assert_twins_agree(&format!("{integrator}: a glowing sphere"), &buffers);
     }
 }
+
+/// `light_sampler = "power"`: every light picked by its power wherever the point is. The far sun
+/// then takes nearly every sample and the lamp's side turns to fireflies (the tree's case); one
+/// light alone renders as under the tree; and the twins agree.
+#[test]
+fn the_power_sampler_picks_by_power_as_before_the_tree() {
+    use photonix::scene::LightSampler;
+    let mut scene = floor_scene("pt", SUN_AND_LAMP);
+    scene.render.light_sampler = LightSampler::Power;
+    let buffers = common::buffers(&scene, SIZE, SIZE);
+    let lit = common::cpu_image(&buffers, 64);
+    let mut blocks_off = 0;
+    for by in 0..SIZE / 8 {
+        for bx in 0..SIZE / 8 {
+            let (mut rendered, mut expected) = (0.0, 0.0);
+            for py in by * 8..by * 8 + 8 {
+                for px in bx * 8..bx * 8 + 8 {
+                    rendered += lit.pixel(px, py)[1] as f64;
+                    expected += VIEW.pixel_mean(px, py, sun_and_lamp);
+                }
+            }
+            if (rendered / expected - 1.0).abs() > 0.05 {
+                blocks_off += 1;
+            }
+        }
+    }
+    println!(
+        "power sampler, far sun and near lamp: {blocks_off} of 16 blocks more than 5% off ({fireflies} lit pixels)"
+    );
+    assert!(blocks_off >= 4, "the power sampler found the lamp as the tree does: {blocks_off} blocks off");
+
+    let mut scene = floor_scene("pt", &bulb());
+    scene.render.light_sampler = LightSampler::Power;
+    let image = common::cpu_image(&common::buffers(&scene, SIZE, SIZE), 64);
+    check("cpu pt, power sampler: a glowing sphere", &image, bulb_lit, 0.02);
+
+    for integrator in ["pt", "vcm", "ppm"] {
+        let mut scene = floor_scene(integrator, &format!("{}{SUN_AND_LAMP}", dome()));
+        scene.render.light_sampler = LightSampler::Power;
+        common::assert_twins_agree(
+            &format!("{integrator}, power sampler: dome, sun and lamp"),
+            &common::buffers(&scene, SIZE, SIZE),
+        );
+    }
+}

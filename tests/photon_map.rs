@@ -111,6 +111,7 @@ fn closed_box(rho: f32) -> Scene {
             filter: Default::default(),
             filter_radius: None,
             denoise: false,
+            light_sampler: Default::default(),
         },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],

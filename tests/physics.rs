@@ -59,6 +59,7 @@ fn light_over_plane() -> Scene {
             filter: Default::default(),
             filter_radius: None,
             denoise: false,
+            light_sampler: Default::default(),
         },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],

@@ -94,17 +94,25 @@ pub fn pick_direct_light(s: &SceneView, u: f32, x: Vec3, n: Vec3) -> (u32, f32) 
     }
     let share = tree_share(s);
     if u >= share {
-        // The infinite lights' running probabilities cover the rest, [share, 1).
+        // The lights beside the tree (the infinite ones; every light under `light_sampler =
+        // "power"`): their running probabilities cover the rest, [share, 1), searched for the
+        // first that passes v.
         let v = (u - share) / (1.0 - share);
         let count = s.texture_data[(base + LIGHT_TREE_INFINITE_COUNT) as usize];
-        for k in 0..count {
-            let at = base + LIGHT_TREE_INFINITE + 2 * k;
-            if v < tree_word(s, at + 1) || k + 1 == count {
-                let light = s.texture_data[at as usize];
-                return (light, (1.0 - share) * s.lights[light as usize].tree_probability);
+        if count == 0 {
+            return (NO_LIGHT, 0.0);
+        }
+        let (mut lo, mut hi) = (0u32, count - 1);
+        while lo < hi {
+            let mid = (lo + hi) / 2;
+            if v < tree_word(s, base + LIGHT_TREE_INFINITE + 2 * mid + 1) {
+                hi = mid;
+            } else {
+                lo = mid + 1;
             }
         }
-        return (NO_LIGHT, 0.0);
+        let light = s.texture_data[(base + LIGHT_TREE_INFINITE + 2 * lo) as usize];
+        return (light, (1.0 - share) * s.lights[light as usize].tree_probability);
     }
     let mut u = u / share;
     let mut pmf = share;

@@ -13,7 +13,7 @@ use crate::accel::{build_bvh, BvhError};
 use crate::cpu::SceneView;
 use crate::layout::constants::*;
 use crate::layout::{BvhNode, FrameParams, Light, Material, Medium, Primitive, Texture};
-use crate::scene::{Geometry, LightKind, Projection, Scene, ThinLens};
+use crate::scene::{Geometry, LightKind, LightSampler, Projection, Scene, ThinLens};
 
 /// Everything a render dispatch binds, owned.
 #[derive(Clone, Debug)]
@@ -325,8 +325,10 @@ fn spot_solid_angle(l: &Light) -> f32 {
 }
 
 /// Builds the light tree over the lights that cast direct light (see `render::light_tree`) at
-/// the end of the texture data; returns its word offset, or `NO_LIGHT`.
+/// the end of the texture data; returns its word offset, or `NO_LIGHT`. Under `light_sampler =
+/// "power"` the tree is empty and every light is picked beside it by power.
 fn tree_lights(
+    sampler: LightSampler,
     lights: &mut [Light],
     powers: &[(f32, f32)],
     (primitives, primitive_bounds): (&[Primitive], &[(Vec3, Vec3)]),
@@ -338,6 +340,8 @@ fn tree_lights(
     for (i, (l, &(direct, _))) in lights.iter().zip(powers).enumerate() {
         let i = i as u32;
         match l.kind {
+            // Picked by power beside the tree: the infinite lights, and every light when asked.
+            _ if sampler == LightSampler::Power => infinite.push((i, direct)),
             LIGHT_DISTANT | LIGHT_ENVIRONMENT => infinite.push((i, direct)),
             LIGHT_AREA => {
                 let p = &primitives[l.primitive as usize];
@@ -570,8 +574,14 @@ pub fn prepare(scene: &Scene, settings: &FrameSettings) -> Result<SceneBuffers, 
             l.photon_cdf = cdf;
         },
     );
-    let light_tree =
-        tree_lights(&mut lights, &powers, (&primitives, &primitive_bounds), &packed.materials, &mut texture_data);
+    let light_tree = tree_lights(
+        scene.render.light_sampler,
+        &mut lights,
+        &powers,
+        (&primitives, &primitive_bounds),
+        &packed.materials,
+        &mut texture_data,
+    );
 
     // An infinite plane holds photons over the part of it near the rest of the scene: its disc
     // inside the sphere around the bounded shapes, the point and spot lights and the camera.

@@ -172,6 +172,7 @@ pub(crate) struct RenderDef {
     pub filter: Option<Spanned<String>>,
     pub filter_radius: Option<Spanned<f64>>,
     pub denoise: Option<Spanned<bool>>,
+    pub light_sampler: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -229,6 +229,22 @@ pub struct RenderSettings {
     pub filter_radius: Option<f32>,
     /// Denoise the image with Open Image Denoise (`[render] denoise`, `--denoise`).
     pub denoise: bool,
+    /// How light sampling at a shading point picks its light (`[render] light_sampler`).
+    pub light_sampler: LightSampler,
+}
+
+/// How light sampling at a shading point picks the light (`[render] light_sampler`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampler {
+    /// The light tree: by each light's importance for the point (the default).
+    #[default]
+    Tree,
+    /// In proportion to power, wherever the point is: the baseline the tree is measured against.
+    Power,
+}
+
+impl LightSampler {
+    pub const NAMES: [(&'static str, LightSampler); 2] = [("tree", LightSampler::Tree), ("power", LightSampler::Power)];
 }
 
 impl RenderSettings {

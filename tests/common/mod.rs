@@ -185,6 +185,7 @@ pub fn furnace() -> photonix::scene::Scene {
             filter: Default::default(),
             filter_radius: None,
             denoise: false,
+            light_sampler: Default::default(),
         },
         photons: None,
         materials: vec![diffuse(rho, emission)],

@@ -6,7 +6,7 @@ use super::{Builder, Result};
 use crate::limits::{
     fmt_f32, MAX_DEPTH, MAX_FILTER_RADIUS, MAX_GATHER_RAYS, MAX_PASSES, MAX_PHOTON_PATHS, MAX_SPP, MIN_FILTER_RADIUS,
 };
-use crate::scene::{Filter, Integrator, PhotonSettings, RenderSettings};
+use crate::scene::{Filter, Integrator, LightSampler, PhotonSettings, RenderSettings};
 
 const DEFAULT_SPP: u32 = 4;
 const DEFAULT_PASSES: u32 = 4;
@@ -29,6 +29,7 @@ impl Builder<'_> {
             filter: Filter::default(),
             filter_radius: None,
             denoise: false,
+            light_sampler: LightSampler::default(),
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -80,6 +81,12 @@ impl Builder<'_> {
         }
         if let Some(denoise) = &r.denoise {
             settings.denoise = *denoise.get_ref();
+        }
+        if let Some(name) = &r.light_sampler {
+            let names: Vec<&str> = LightSampler::NAMES.iter().map(|(n, _)| *n).collect();
+            let name = self.one_of(name, object, "light_sampler", &names)?;
+            settings.light_sampler =
+                LightSampler::NAMES.iter().find(|(n, _)| *n == name).expect("one_of returns one of the names").1;
         }
         Ok((settings, auto))
     }
