@@ -292,39 +292,6 @@ float light_pdf(Light l, vec3 wi, float dist, float cos_l) {
     return env;
 }
 
-// A point p of the cap of the sphere (centre c, radius r) that x sees, drawn uniformly in the
-// cap's solid angle (pbrt-v4's Sphere::Sample, after Shirley's cone sampling); returns the cap's
-// solid angle, 1/pdf, or 0 where x is inside the sphere (the caller then samples by area).
-// Every sample from outside lands on a face x sees, where by area half of them fall behind.
-// CPU twin: src/cpu/light.rs, sphere_cap_point.
-float sphere_cap_point(vec3 c, float r, vec3 x, vec2 u, out vec3 p) {
-    p = c;
-    vec3 to_c = c - x;
-    float d2 = dot(to_c, to_c);
-    if (d2 <= 1.0001 * r * r) return 0.0;
-    float sin2_max = r * r / d2;
-    float sin_max = sqrt(sin2_max);
-    float cos_max = sqrt(max(1.0 - sin2_max, 0.0));
-    float one_minus_cos_max = 1.0 - cos_max;
-    float cos_t = (cos_max - 1.0) * u.x + 1.0;
-    float sin2_t = 1.0 - cos_t * cos_t;
-    // A far, small sphere: 1 - cos_max cancels in single precision; its series instead.
-    if (sin2_max < 0.00068523) {
-        sin2_t = sin2_max * u.x;
-        cos_t = sqrt(1.0 - sin2_t);
-        one_minus_cos_max = 0.5 * sin2_max;
-    }
-    // The angle at the centre between x and the point whose direction from x makes angle t.
-    float cos_a = sin2_t / sin_max + cos_t * sqrt(max(1.0 - sin2_t / sin2_max, 0.0));
-    float sin_a = sqrt(max(1.0 - cos_a * cos_a, 0.0));
-    float phi = 2.0 * PI * u.y;
-    vec3 z = to_c / sqrt(d2);
-    vec3 t, b;
-    onb(z, t, b);
-    p = c - r * (sin_a * cos(phi) * t + sin_a * sin(phi) * b + cos_a * z);
-    return 2.0 * PI * one_minus_cos_max;
-}
-
 LightSample light_sample(Light l, vec3 x, vec2 u) {
     // The environment's searches are loops: no lane enters them unless it holds the environment.
     LightSample env = LightSample(x, vec3(0.0, 1.0, 0.0), vec3(0.0), frame.ray_epsilon, 0.0, 1.0);
@@ -337,19 +304,13 @@ LightSample light_sample(Light l, vec3 x, vec2 u) {
     case LIGHT_ENVIRONMENT:
         return env;
     case LIGHT_AREA: {
-        // A sphere seen from outside by its cap's solid angle: L over the pdf by solid angle.
+        // shape_sample_from: a sphere seen from outside by its cap's solid angle, L over the
+        // pdf by solid angle.
         // Else by area (see shape_sample for the density): L cos' / d^2 over the pdf by area.
         // The MIS density stays light_pdf's by area either way: the two strategies weigh a
         // path by the same function, and both reach exactly the faces x sees.
-        Primitive prim = primitive_at(l.primitive);
-        float solid_angle = 0.0;
-        vec3 cap = vec3(0.0);
-        if ((prim.kind & PRIMITIVE_KIND_MASK) == PRIMITIVE_SPHERE) {
-            solid_angle = sphere_cap_point(load3(prim.p0), prim.p1[0], x, u, cap);
-        }
-        float inv_pdf;
-        Hit h;
-        if (solid_angle > 0.0) shape_surface(l.primitive, cap, h); else h = shape_sample(l.primitive, u, inv_pdf);
+        float inv_pdf, solid_angle;
+        Hit h = shape_sample_from(l.primitive, x, u, inv_pdf, solid_angle);
         vec3 to_light = h.p - x;
         float dist2 = dot(to_light, to_light);
         vec3 wi = to_light / sqrt(dist2);

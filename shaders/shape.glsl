@@ -628,6 +628,39 @@ Hit shape_hit(uint i, vec3 o, vec3 d, float t) {
     return h;
 }
 
+// A point p of the cap of the sphere (centre c, radius r) that x sees, drawn uniformly in the
+// cap's solid angle (pbrt-v4's Sphere::Sample, after Shirley's cone sampling); returns the cap's
+// solid angle, 1/pdf, or 0 where x is inside the sphere (the caller then samples by area).
+// Every sample from outside lands on a face x sees, where by area half of them fall behind.
+// CPU twin: src/cpu/shape.rs, sphere_cap_point.
+float sphere_cap_point(vec3 c, float r, vec3 x, vec2 u, out vec3 p) {
+    p = c;
+    vec3 to_c = c - x;
+    float d2 = dot(to_c, to_c);
+    if (d2 <= 1.0001 * r * r) return 0.0;
+    float sin2_max = r * r / d2;
+    float sin_max = sqrt(sin2_max);
+    float cos_max = sqrt(max(1.0 - sin2_max, 0.0));
+    float one_minus_cos_max = 1.0 - cos_max;
+    float cos_t = (cos_max - 1.0) * u.x + 1.0;
+    float sin2_t = 1.0 - cos_t * cos_t;
+    // A far, small sphere: 1 - cos_max cancels in single precision; its series instead.
+    if (sin2_max < 0.00068523) {
+        sin2_t = sin2_max * u.x;
+        cos_t = sqrt(1.0 - sin2_t);
+        one_minus_cos_max = 0.5 * sin2_max;
+    }
+    // The angle at the centre between x and the point whose direction from x makes angle t.
+    float cos_a = sin2_t / sin_max + cos_t * sqrt(max(1.0 - sin2_t / sin2_max, 0.0));
+    float sin_a = sqrt(max(1.0 - cos_a * cos_a, 0.0));
+    float phi = 2.0 * PI * u.y;
+    vec3 z = to_c / sqrt(d2);
+    vec3 t, b;
+    onb(z, t, b);
+    p = c - r * (sin_a * cos(phi) * t + sin_a * sin(phi) * b + cos_a * z);
+    return 2.0 * PI * one_minus_cos_max;
+}
+
 // A point on primitive i for the uniform numbers u, as a hit record, and 1/pdf of such points
 // by area (see the twin): triangles (Turk 1990) and spheres uniformly, so 1/pdf is their area.
 Hit shape_sample(uint i, vec2 u, out float inv_pdf) {
@@ -652,4 +685,24 @@ Hit shape_sample(uint i, vec2 u, out float inv_pdf) {
     Hit h;
     shape_surface(i, x, h);
     return h;
+}
+
+// shape_sample as seen from x: a sphere seen from outside by the solid angle of the cap x sees
+// (`solid_angle` that cap's solid angle, 1/pdf by solid angle; inv_pdf unset), any other shape,
+// or a sphere from inside, by shape_sample (`solid_angle` 0, inv_pdf by area).
+// CPU twin: src/cpu/shape.rs, shape_sample_from.
+Hit shape_sample_from(uint i, vec3 x, vec2 u, out float inv_pdf, out float solid_angle) {
+    solid_angle = 0.0;
+    inv_pdf = 0.0;
+    if ((primitive_kind(i) & PRIMITIVE_KIND_MASK) == PRIMITIVE_SPHERE) {
+        Primitive p = primitive_at(i);
+        vec3 cap;
+        solid_angle = sphere_cap_point(load3(p.p0), p.p1[0], x, u, cap);
+        if (solid_angle > 0.0) {
+            Hit h;
+            shape_surface(i, cap, h);
+            return h;
+        }
+    }
+    return shape_sample(i, u, inv_pdf);
 }

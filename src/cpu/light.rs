@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::bsdf::{material_emission, Bsdf};
 use super::sampling::{cone_direction, cosine_direction, disc_point, onb};
-use super::shape::{shape_sample, shape_surface};
+use super::shape::{shape_sample, shape_sample_from, SampleDensity};
 use super::SceneView;
 use crate::layout::constants::*;
 use crate::layout::Light;
@@ -357,39 +357,6 @@ pub fn environment_pdf(s: &SceneView, l: &Light, d: Vec3) -> f32 {
     (w * h) as f32 * pm * pc / (2.0 * PI * PI * sin_theta)
 }
 
-/// A point of the cap of the sphere (centre `c`, radius `r`) that `x` sees, drawn uniformly in
-/// the cap's solid angle (pbrt-v4's `Sphere::Sample`, after Shirley's cone sampling), and the
-/// cap's solid angle, 1/pdf; `None` where `x` is inside the sphere (the caller then samples by
-/// area). Every sample from outside lands on a face `x` sees, where by area half of them fall
-/// behind.
-pub fn sphere_cap_point(c: Vec3, r: f32, x: Vec3, u: [f32; 2]) -> Option<(Vec3, f32)> {
-    let to_c = c - x;
-    let d2 = to_c.dot(to_c);
-    if d2 <= 1.0001 * r * r {
-        return None;
-    }
-    let sin2_max = r * r / d2;
-    let sin_max = sin2_max.sqrt();
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    let mut one_minus_cos_max = 1.0 - cos_max;
-    let mut cos_t = (cos_max - 1.0) * u[0] + 1.0;
-    let mut sin2_t = 1.0 - cos_t * cos_t;
-    // A far, small sphere: 1 - cos_max cancels in single precision; its series instead.
-    if sin2_max < 0.00068523 {
-        sin2_t = sin2_max * u[0];
-        cos_t = (1.0 - sin2_t).sqrt();
-        one_minus_cos_max = 0.5 * sin2_max;
-    }
-    // The angle at the centre between x and the point whose direction from x makes angle t.
-    let cos_a = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
-    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    let z = to_c / d2.sqrt();
-    let (t, b) = onb(z);
-    let p = c - r * (sin_a * phi.cos() * t + sin_a * phi.sin() * b + cos_a * z);
-    Some((p, 2.0 * PI * one_minus_cos_max))
-}
-
 pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSample {
     match l.kind {
         LIGHT_ENVIRONMENT => {
@@ -399,29 +366,20 @@ pub fn light_sample(s: &SceneView, l: &Light, x: Vec3, u: [f32; 2]) -> LightSamp
             LightSample { p: x + wi * beyond, wi, weight, eps: s.frame.ray_epsilon, pdf, cos_l: 1.0 }
         }
         LIGHT_AREA => {
-            // A sphere seen from outside by its cap's solid angle: L over the pdf by solid
-            // angle. Else by area (see `shape_sample` for the density): L cos' / d^2 over the
+            // `shape_sample_from`: a sphere seen from outside by its cap's solid angle, L over
+            // the pdf by solid angle. Else by area (see `shape_sample` for the density): L cos' / d^2 over the
             // pdf by area. The MIS density stays `light_pdf`'s by area either way: the two
             // strategies weigh a path by the same function, and both reach exactly the faces x
             // sees.
-            let prim = &s.primitives[l.primitive as usize];
-            let cap = if prim.kind & PRIMITIVE_KIND_MASK == PRIMITIVE_SPHERE {
-                sphere_cap_point(Vec3::from(prim.p0), prim.p1[0], x, u)
-            } else {
-                None
-            };
-            let (h, inv_pdf) = match cap {
-                Some((p, _)) => (shape_surface(s, l.primitive, p), 0.0),
-                None => shape_sample(s, l.primitive, u),
-            };
+            let (h, density) = shape_sample_from(s, l.primitive, x, u);
             let to_light = h.p - x;
             let dist2 = to_light.dot(to_light);
             let wi = to_light / dist2.sqrt();
             let m = &s.materials[h.material as usize];
             let cos_l = emitter_cosine(m.flags, h.ng, -wi);
-            let jacobian = match cap {
-                Some((_, solid_angle)) => solid_angle,
-                None => cos_l * inv_pdf / dist2,
+            let jacobian = match density {
+                SampleDensity::SolidAngle(solid_angle) => solid_angle,
+                SampleDensity::Area(inv_pdf) => cos_l * inv_pdf / dist2,
             };
             let weight = if cos_l > 0.0 { material_emission(s, m, &h) * jacobian } else { Vec3::ZERO };
             // The shadow ray stops short of the point by its offset over the cosine there: a hit on

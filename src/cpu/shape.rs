@@ -725,3 +725,58 @@ pub fn shape_sample(s: &SceneView, i: u32, u: [f32; 2]) -> (Hit, f32) {
     };
     (shape_surface(s, i, x), inv_pdf)
 }
+
+/// What 1/pdf a point of `shape_sample_from` carries.
+#[derive(Clone, Copy, Debug)]
+pub enum SampleDensity {
+    /// 1/pdf by area (`shape_sample`).
+    Area(f32),
+    /// 1/pdf by solid angle seen from the point asked for: the solid angle sampled.
+    SolidAngle(f32),
+}
+
+/// `shape_sample` as seen from `x`: a sphere seen from outside by the solid angle of the cap `x`
+/// sees, any other shape, or a sphere from inside, by `shape_sample`.
+pub fn shape_sample_from(s: &SceneView, i: u32, x: Vec3, u: [f32; 2]) -> (Hit, SampleDensity) {
+    let p = &s.primitives[i as usize];
+    if p.kind & PRIMITIVE_KIND_MASK == PRIMITIVE_SPHERE {
+        if let Some((point, solid_angle)) = sphere_cap_point(Vec3::from(p.p0), p.p1[0], x, u) {
+            return (shape_surface(s, i, point), SampleDensity::SolidAngle(solid_angle));
+        }
+    }
+    let (h, inv_pdf) = shape_sample(s, i, u);
+    (h, SampleDensity::Area(inv_pdf))
+}
+
+/// A point of the cap of the sphere (centre `c`, radius `r`) that `x` sees, drawn uniformly in
+/// the cap's solid angle (pbrt-v4's `Sphere::Sample`, after Shirley's cone sampling), and the
+/// cap's solid angle, 1/pdf; `None` where `x` is inside the sphere (the caller then samples by
+/// area). Every sample from outside lands on a face `x` sees, where by area half of them fall
+/// behind.
+pub fn sphere_cap_point(c: Vec3, r: f32, x: Vec3, u: [f32; 2]) -> Option<(Vec3, f32)> {
+    let to_c = c - x;
+    let d2 = to_c.dot(to_c);
+    if d2 <= 1.0001 * r * r {
+        return None;
+    }
+    let sin2_max = r * r / d2;
+    let sin_max = sin2_max.sqrt();
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    let mut one_minus_cos_max = 1.0 - cos_max;
+    let mut cos_t = (cos_max - 1.0) * u[0] + 1.0;
+    let mut sin2_t = 1.0 - cos_t * cos_t;
+    // A far, small sphere: 1 - cos_max cancels in single precision; its series instead.
+    if sin2_max < 0.00068523 {
+        sin2_t = sin2_max * u[0];
+        cos_t = (1.0 - sin2_t).sqrt();
+        one_minus_cos_max = 0.5 * sin2_max;
+    }
+    // The angle at the centre between x and the point whose direction from x makes angle t.
+    let cos_a = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    let z = to_c / d2.sqrt();
+    let (t, b) = onb(z);
+    let p = c - r * (sin_a * phi.cos() * t + sin_a * phi.sin() * b + cos_a * z);
+    Some((p, 2.0 * PI * one_minus_cos_max))
+}
