@@ -131,6 +131,8 @@ struct DispatchRange {
     uint row_count;
     uint sample_index;
     uint part;
+    uint pixel_list;
+    uint pixel_count;
 };
 
 struct Photon {

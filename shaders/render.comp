@@ -7,7 +7,7 @@
 // CPU twin: src/cpu/render.rs. Bindings: the scene (scene_bindings.glsl), then the
 // accumulation (LAYER_COUNT vec4 per pixel of the band; rgb = sum of samples; w of the direct
 // layer = rays cast), grids, global photons, global starts, caustic photons, caustic starts,
-// volume photons, volume starts. The `media` variant adds participating media: free flights
+// volume photons, volume starts, the pixel list (pixel_list.glsl). The `media` variant adds participating media: free flights
 // of camera and gather rays (a scattering point is an estimate vertex whose BSDF is the phase
 // function), transmittance of shadow rays, null boundaries, and the volume photon map.
 // variant: textured
@@ -50,9 +50,11 @@ layout(binding = SCENE_BINDINGS + 4) uniform usamplerBuffer caustic_photons;
 layout(binding = SCENE_BINDINGS + 5) uniform usamplerBuffer caustic_starts;
 layout(binding = SCENE_BINDINGS + 6) uniform usamplerBuffer volume_photons;
 layout(binding = SCENE_BINDINGS + 7) uniform usamplerBuffer volume_starts;
+layout(std430, binding = SCENE_BINDINGS + 8) readonly buffer PixelList { uint pixel_list[]; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
+#include "pixel_list.glsl"
 #include "photon.glsl"
 #include "grid.glsl"
 #include "gather.glsl"
@@ -438,9 +440,8 @@ void radiance(uint px, uint py, uint sample_index, uint part, uint penumbra_sinc
 }
 
 void main() {
-    uint band_pixels = range.row_count * frame.width;
-    uint i = GLOBAL_INDEX;
-    if (i >= band_pixels) return;
+    if (GLOBAL_INDEX >= dispatch_pixels()) return;
+    uint i = dispatch_pixel(GLOBAL_INDEX);
     uint px = i % frame.width;
     uint py = range.row_begin + i / frame.width;
     vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));

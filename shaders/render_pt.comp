@@ -37,9 +37,12 @@ layout(local_size_x = WORKGROUP_SIZE) in;
 
 #include "scene_bindings.glsl"
 layout(std430, binding = SCENE_BINDINGS + 0) buffer Accumulation { vec4 accumulation[]; };
+// The photon maps' bindings (SCENE_BINDINGS + 1 to + 7) are render.comp's, unused here.
+layout(std430, binding = SCENE_BINDINGS + 8) readonly buffer PixelList { uint pixel_list[]; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
+#include "pixel_list.glsl"
 
 // Loop steps of one camera path: a path ray and a shadow ray per vertex, plus the crossings of
 // null boundaries where there are media. Contract: src/cpu/render_pt.rs, pt_steps.
@@ -293,9 +296,8 @@ void radiance_pt(uint px, uint py, uint sample_index, inout vec3 terms[4], inout
 }
 
 void main() {
-    uint band_pixels = range.row_count * frame.width;
-    uint i = GLOBAL_INDEX;
-    if (i >= band_pixels) return;
+    if (GLOBAL_INDEX >= dispatch_pixels()) return;
+    uint i = dispatch_pixel(GLOBAL_INDEX);
     uint px = i % frame.width;
     uint py = range.row_begin + i / frame.width;
     vec3 terms[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));

@@ -8,7 +8,7 @@
 // src/cpu/vcm.rs (radiance_vcm). Bindings: the scene, then the accumulation (the whole image:
 // LAYER_COUNT vec4 per pixel), the sample's VcmParams, the grid's GridParams, the vertex slots,
 // the sorted points, the bucket starts, the splats, the light paths' ends and the light
-// vertices' materials, and the count of invocations the driver broke off.
+// vertices' materials, the count of invocations the driver broke off, the runs, and the pixel list.
 // variant: textured
 // variant: textured alpha
 // variant: analytic
@@ -60,9 +60,11 @@ layout(std430, binding = SCENE_BINDINGS + 9) buffer BrokenOff { uint broken_off;
 // resuming, until none does).
 layout(std430, binding = SCENE_BINDINGS + 10) buffer RunStates { uint run_states[]; };
 layout(std430, binding = SCENE_BINDINGS + 11) buffer Suspended { uint suspended; };
+layout(std430, binding = SCENE_BINDINGS + 12) readonly buffer PixelList { uint pixel_list[]; };
 layout(push_constant) uniform Push { DispatchRange range; };
 
 #include "scene.glsl"
+#include "pixel_list.glsl"
 #include "grid.glsl"
 #include "vcm_fetch.glsl"
 #include "vcm.glsl"
@@ -491,7 +493,7 @@ uint load_run(uint i, out CameraPath c) {
 // mean on cornell-glossy); a run of paths evens the lanes out. A real GPU wants the invocations
 // instead: there it is 1.
 void main() {
-    uint band_pixels = range.row_count * frame.width;
+    uint band_pixels = dispatch_pixels();
     uint per = max(params.paths_per_invocation, 1u);
     uint lanes = (band_pixels + per - 1u) / per;
     uint i = GLOBAL_INDEX;
@@ -503,7 +505,8 @@ void main() {
         job = load_run(i, c);
         if (job >= jobs) return;  // finished in an earlier dispatch
     } else {
-        c = camera_path_start(i % frame.width, range.row_begin + i / frame.width);
+        uint p = dispatch_pixel(i);
+        c = camera_path_start(p % frame.width, range.row_begin + p / frame.width);
     }
     // Bounded: each turn is a vertex of one of `jobs` paths of at most max_depth + 1 vertices,
     // and at most params.steps_per_dispatch turns (when not 0) before the run is stored for the
@@ -521,7 +524,7 @@ void main() {
         camera_path_finish(c);
         job++;
         if (job >= jobs) break;
-        uint p = i + job * lanes;
+        uint p = dispatch_pixel(i + job * lanes);
         c = camera_path_start(p % frame.width, range.row_begin + p / frame.width);
     }
     // Ended by the driver's loop limit (lavapipe's 65535 iterations per invocation) with paths

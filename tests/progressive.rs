@@ -240,7 +240,7 @@ fn a_group_of_passes_is_the_mean_of_its_passes() {
         let buffers = common::buffers(&scene, 24, 16);
         let mut renderer = GpuRenderer::new(&ctx, &buffers, Some(&photons)).unwrap();
         let (first, passes) = (5, 3);
-        let group: RenderOutput = renderer.render_passes(1, first, passes, &mut |_, _| {}).unwrap();
+        let group: RenderOutput = renderer.render_passes(1, first, passes, None, &mut |_, _| {}).unwrap();
         assert_eq!(group.passes, passes, "{name}");
         assert!(group.complete);
         let mut mean = Layers::new(24, 16);
@@ -271,7 +271,7 @@ fn a_group_of_passes_is_the_mean_of_its_passes() {
 fn the_driver_doubles_groups_up_to_the_limit() {
     use photonix::render::progressive::{render_progressive, Budget, StopReason};
     use photonix::render::{Layers, RenderOutput, RenderStats};
-    let budget = Budget { first: 3, end: 40, time: None, target_error: None };
+    let budget = Budget { first: 3, end: 40, time: None, target_error: None, adaptive: false };
     let mut asked = Vec::new();
     let constant = |value: f32, passes: u32| {
         let mut layers = Layers::new(2, 2);
@@ -283,6 +283,7 @@ fn the_driver_doubles_groups_up_to_the_limit() {
             stats: RenderStats::default(),
             complete: true,
             passes,
+            pixels: None,
         }
     };
     let (acc, reason) = render_progressive(
@@ -290,7 +291,7 @@ fn the_driver_doubles_groups_up_to_the_limit() {
         2,
         &budget,
         8,
-        |first, most| {
+        |first, most, _| {
             asked.push((first, most));
             Ok::<_, ()>(constant(first as f32, most))
         },
@@ -305,13 +306,13 @@ fn the_driver_doubles_groups_up_to_the_limit() {
     assert!((acc.mean().direct.pixels[0][0] - expected).abs() < 1e-4);
     // A renderer that renders fewer than asked (one at a time) is followed pass by pass.
     let mut firsts = Vec::new();
-    let budget = Budget { first: 0, end: 5, time: None, target_error: None };
+    let budget = Budget { first: 0, end: 5, time: None, target_error: None, adaptive: false };
     let (acc, _) = render_progressive(
         2,
         2,
         &budget,
         64,
-        |first, _| {
+        |first, _, _| {
             firsts.push(first);
             Ok::<_, ()>(constant(1.0, 1))
         },
@@ -337,6 +338,7 @@ fn the_error_estimate_weighs_unequal_halves() {
             stats: RenderStats::default(),
             complete: true,
             passes,
+            pixels: None,
         }
     };
     let mut acc = Accumulator::new(2, 2);
@@ -366,7 +368,7 @@ fn the_staging_path_renders_the_same() {
             let ctx = common::gpu();
             ctx.set_force_staging(staging);
             let mut renderer = GpuRenderer::new(&ctx, &buffers, Some(&photons)).unwrap();
-            let group = renderer.render_passes(1, 0, 2, &mut |_, _| {}).unwrap();
+            let group = renderer.render_passes(1, 0, 2, None, &mut |_, _| {}).unwrap();
             let one = renderer.render_pass(1, 2, &mut |_, _| {}).unwrap();
             images.push((group.layers, one.layers));
         }

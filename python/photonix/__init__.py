@@ -310,6 +310,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: Literal[False] = False,
+    adaptive: bool = False,
 ) -> _np.ndarray: ...
 
 
@@ -342,6 +343,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
+    adaptive: bool = False,
 ) -> Dict[str, _np.ndarray]: ...
 
 
@@ -374,6 +376,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
+    adaptive: bool = False,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]: ...
 
 
@@ -405,6 +408,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
+    adaptive: bool = False,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
     """Renders `scene` (a Scene, or a path to a scene file) progressively and returns the mean
     of the passes: a float32 numpy array of shape (height, width, 3) holding linear radiance, or
@@ -441,6 +445,9 @@ def render(
                     kept as "noisy". Needs the library: see docs/denoising.md
       aovs          also return the feature layers albedo, normal, depth, position in the
                     dict (implies the dict, as layers=True)
+      adaptive      adaptive sampling: after 8 uniform passes, later passes render the half
+                    of the pixels where one more pass lowers the error most (every 8th pass
+                    all of them); see docs/progressive.md
 
     Raises SceneError (a scene the renderer cannot prepare), RenderError (refused before
     starting: memory, radii, device; or a device failure), ValueError (an option out of range)
@@ -479,6 +486,7 @@ def render(
         renderer=_renderer,
         denoise=denoise,
         aovs=aovs,
+        adaptive=adaptive,
     )
 
 

@@ -832,12 +832,13 @@ fn run_on<'a>(
         job.height,
         &job.budget,
         max_group,
-        |pass, most| {
+        |pass, most, pixels| {
             let mut progress = |done: u64, total: u64| {
                 // The waiting thread may be gone (an exception there); the render then stops
                 // by its flag.
                 let _ = events.send(Event::Progress(pass, passes_done.get(), done, total));
             };
+            renderer.set_pixels(pixels.cloned());
             let out = renderer.render_passes(job.spp, pass, most, &mut progress).map_err(render_failure)?;
             device.clone_from(&out.stats.device);
             Ok(out)
@@ -1062,7 +1063,7 @@ fn layers_to_dict<'py>(py: Python<'py>, layers: &Layers) -> PyResult<Bound<'py, 
     resolution=None, pass_range=None, layers=false, spp=None, max_depth=None, photons=None,
     caustic_photons=None, radius=None, caustic_radius=None, gather_rays=None, photon_depth=None,
     no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None,
-    renderer=None, denoise=None, aovs=false))]
+    renderer=None, denoise=None, aovs=false, adaptive=false))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -1092,6 +1093,7 @@ fn render<'py>(
     renderer: Option<Py<RendererCore>>,
     denoise: Option<bool>,
     aovs: bool,
+    adaptive: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     // Check every argument before any work, with the command line's ranges.
     let backend = parse_backend(backend)?;
@@ -1236,7 +1238,7 @@ fn render<'py>(
         seed: seed.unwrap_or(s.render.seed),
         max_depth: max_depth.unwrap_or(s.render.max_depth),
         photons: photon_settings,
-        budget: Budget { first, end, time, target_error },
+        budget: Budget { first, end, time, target_error, adaptive },
         backend,
         device,
         features: denoise || aovs,

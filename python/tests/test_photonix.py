@@ -241,6 +241,19 @@ def test_the_render_releases_the_gil():
     assert during > 1000, during
 
 
+def test_adaptive_sampling_leaves_pixels_out_and_is_deterministic():
+    # The path-traced box at 32x24 as tests/adaptive.rs renders it: after the warm-up some
+    # passes render half of the pixels.
+    opts = dict(passes=48, spp=1, integrator="pt", resolution=(32, 24), backend="cpu")
+    uniform = photonix.render(BOX, **opts)
+    adaptive = photonix.render(BOX, adaptive=True, **opts)
+    again = photonix.render(BOX, adaptive=True, **opts)
+    assert np.array_equal(adaptive, again)
+    assert not np.array_equal(adaptive, uniform)
+    ratio = adaptive.mean(axis=(0, 1)) / uniform.mean(axis=(0, 1))
+    assert np.all(np.abs(ratio - 1.0) < 0.05), ratio
+
+
 def test_time_and_target_error_budgets_stop_the_render():
     info = {}
     photonix.render(BOX, time=0.3, info=info, **SMALL)

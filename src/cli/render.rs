@@ -185,6 +185,10 @@ struct ProgressiveArgs {
     /// Stop when the estimated relMSE (from odd and even passes) falls below this (0 to 1000)
     #[arg(long, value_parser = parse_target_error, allow_hyphen_values = true)]
     target_error: Option<f64>,
+    /// Adaptive sampling: after 8 uniform passes, later passes render the half of the pixels
+    /// where one more pass lowers the error most, every 8th pass all of them (docs/progressive.md)
+    #[arg(long)]
+    adaptive: bool,
     /// Rewrite the output with the passes so far this often (e.g. 30s; 1ms to 365 days)
     #[arg(long, value_parser = parse_duration, allow_hyphen_values = true)]
     checkpoint_every: Option<std::time::Duration>,
@@ -209,7 +213,7 @@ impl ProgressiveArgs {
             (None, None) if self.time.is_some() || self.target_error.is_some() => (0, MAX_PASSES),
             (None, None) => (0, scene_passes),
         };
-        Ok(Budget { first, end, time: self.time, target_error: self.target_error })
+        Ok(Budget { first, end, time: self.time, target_error: self.target_error, adaptive: self.adaptive })
     }
 }
 
@@ -481,7 +485,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         start,
         &budget,
         max_group,
-        |first, most| -> Result<RenderOutput> {
+        |first, most, pixels| -> Result<RenderOutput> {
             let mut progress = |done: u64, total: u64| {
                 if let Some(bar) = &bar {
                     let (length, position) = match budget.time {
@@ -494,6 +498,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     bar.set_position(position.min(length));
                 }
             };
+            renderer.set_pixels(pixels.cloned());
             let out = renderer
                 .render_passes(spp, first, most, &mut progress)
                 .with_context(|| failure_message(&args, passes_done.get(), &output))?;

@@ -16,6 +16,7 @@ pub mod pattern;
 pub mod phase;
 pub mod photon;
 pub mod photon_index;
+pub mod pixel_list;
 pub mod render;
 pub mod render_features;
 pub mod render_pt;
@@ -48,6 +49,9 @@ pub struct SceneView<'a> {
     /// The CPU backend's four-wide form of `nodes` (`accel::wide`), which `trace_ray` walks
     /// where it is present; `None` walks `nodes` as the kernels do.
     pub wide: Option<&'a WideBvh>,
+    /// The pixel list that dispatches with a `pixel_list` index (`cpu::pixel_list`); empty
+    /// where every dispatch renders its whole band.
+    pub pixel_list: &'a [u32],
 }
 
 /// The photon maps (`MAP_*`: global, caustic, volume) as the CPU backend reads them: the kernels
@@ -82,6 +86,7 @@ impl<'a> SceneView<'a> {
             media: &[],
             maps: NO_MAPS,
             wide: None,
+            pixel_list: &[],
         }
     }
 }

@@ -2,7 +2,6 @@
 //! `shaders/render.comp` (with participating media: its `media` variant).
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use super::bsdf::Bsdf;
 use super::bsdf::{bsdf_flags, bsdf_path_probability, bsdf_sample, facing, material_bsdf, material_emission};
@@ -471,29 +470,25 @@ pub fn radiance(
 /// shadow rays toward adaptive lights in this pass, blocked and not, w of the specular layer 1 +
 /// the sample at which both were first seen), exactly as one dispatch of the kernel does.
 pub fn render(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]]) {
-    let row_len = (s.frame.width * LAYER_COUNT) as usize;
-    accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
-        let py = range.row_begin + row as u32;
-        for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
-            let mut terms = [Vec3::ZERO; 4];
-            let mut rays = 0;
-            let mut visibility = [0; 2];
-            let (blocked, lit, since) = (LAYER_INDIRECT as usize, LAYER_CAUSTICS as usize, LAYER_SPECULAR as usize);
-            let mut penumbra_since = if acc[since][3] > 0.0 { acc[since][3] as u32 - 1 } else { NO_SAMPLE };
-            if range.part == 0 && penumbra_since == NO_SAMPLE && acc[blocked][3] > 0.0 && acc[lit][3] > 0.0 {
-                penumbra_since = range.sample_index;
-                acc[since][3] = (range.sample_index + 1) as f32;
-            }
-            let sample = range.sample_index;
-            radiance(s, px as u32, py, sample, range.part, penumbra_since, &mut terms, &mut rays, &mut visibility);
-            acc[blocked][3] += visibility[0] as f32;
-            acc[lit][3] += visibility[1] as f32;
-            for (layer, term) in acc.iter_mut().zip(terms) {
-                layer[0] += term.x;
-                layer[1] += term.y;
-                layer[2] += term.z;
-            }
-            acc[LAYER_DIRECT as usize][3] += rays as f32;
+    super::pixel_list::for_each_pixel(s.frame.width, range, s.pixel_list, accumulation, |px, py, acc| {
+        let mut terms = [Vec3::ZERO; 4];
+        let mut rays = 0;
+        let mut visibility = [0; 2];
+        let (blocked, lit, since) = (LAYER_INDIRECT as usize, LAYER_CAUSTICS as usize, LAYER_SPECULAR as usize);
+        let mut penumbra_since = if acc[since][3] > 0.0 { acc[since][3] as u32 - 1 } else { NO_SAMPLE };
+        if range.part == 0 && penumbra_since == NO_SAMPLE && acc[blocked][3] > 0.0 && acc[lit][3] > 0.0 {
+            penumbra_since = range.sample_index;
+            acc[since][3] = (range.sample_index + 1) as f32;
         }
+        let sample = range.sample_index;
+        radiance(s, px, py, sample, range.part, penumbra_since, &mut terms, &mut rays, &mut visibility);
+        acc[blocked][3] += visibility[0] as f32;
+        acc[lit][3] += visibility[1] as f32;
+        for (layer, term) in acc.iter_mut().zip(terms) {
+            layer[0] += term.x;
+            layer[1] += term.y;
+            layer[2] += term.z;
+        }
+        acc[LAYER_DIRECT as usize][3] += rays as f32;
     });
 }

@@ -10,7 +10,6 @@
 //! indirect; the four sum to the image.
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use super::bsdf::{
     bsdf_eval, bsdf_flags, bsdf_path_probability, bsdf_pdf, bsdf_sample, material_bsdf, material_emission,
@@ -321,19 +320,15 @@ pub fn radiance_pt(s: &SceneView, px: u32, py: u32, sample: u32, terms: &mut [Ve
 /// Adds the sample of `range` to `accumulation` (`LAYER_COUNT` `[r, g, b, w]` per pixel of the
 /// band; w of the direct layer counts rays), exactly as one dispatch of the kernel does.
 pub fn render_pt(s: &SceneView, range: &DispatchRange, accumulation: &mut [[f32; 4]]) {
-    let row_len = (s.frame.width * LAYER_COUNT) as usize;
-    accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
-        let py = range.row_begin + row as u32;
-        for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
-            let mut terms = [Vec3::ZERO; 4];
-            let mut rays = 0;
-            radiance_pt(s, px as u32, py, range.sample_index, &mut terms, &mut rays);
-            for (layer, term) in acc.iter_mut().zip(terms) {
-                layer[0] += term.x;
-                layer[1] += term.y;
-                layer[2] += term.z;
-            }
-            acc[LAYER_DIRECT as usize][3] += rays as f32;
+    super::pixel_list::for_each_pixel(s.frame.width, range, s.pixel_list, accumulation, |px, py, acc| {
+        let mut terms = [Vec3::ZERO; 4];
+        let mut rays = 0;
+        radiance_pt(s, px, py, range.sample_index, &mut terms, &mut rays);
+        for (layer, term) in acc.iter_mut().zip(terms) {
+            layer[0] += term.x;
+            layer[1] += term.y;
+            layer[2] += term.z;
         }
+        acc[LAYER_DIRECT as usize][3] += rays as f32;
     });
 }

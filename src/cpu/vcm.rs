@@ -1445,20 +1445,16 @@ pub fn render_vcm(
     range: &DispatchRange,
     accumulation: &mut [[f32; 4]],
 ) {
-    let row_len = (s.frame.width * LAYER_COUNT) as usize;
-    accumulation.par_chunks_mut(row_len).take(range.row_count as usize).enumerate().for_each(|(row, pixels)| {
-        let py = range.row_begin + row as u32;
-        for (px, acc) in pixels.chunks_exact_mut(LAYER_COUNT as usize).enumerate() {
-            let mut terms = [Vec3::ZERO; 4];
-            let mut rays = 0;
-            radiance_vcm(s, p, stage, px as u32, py, &mut terms, &mut rays);
-            for (layer, term) in acc.iter_mut().zip(terms) {
-                layer[0] += term.x;
-                layer[1] += term.y;
-                layer[2] += term.z;
-            }
-            acc[LAYER_DIRECT as usize][3] += rays as f32;
+    super::pixel_list::for_each_pixel(s.frame.width, range, s.pixel_list, accumulation, |px, py, acc| {
+        let mut terms = [Vec3::ZERO; 4];
+        let mut rays = 0;
+        radiance_vcm(s, p, stage, px, py, &mut terms, &mut rays);
+        for (layer, term) in acc.iter_mut().zip(terms) {
+            layer[0] += term.x;
+            layer[1] += term.y;
+            layer[2] += term.z;
         }
+        acc[LAYER_DIRECT as usize][3] += rays as f32;
     });
 }
 

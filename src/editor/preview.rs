@@ -741,8 +741,13 @@ fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, 
     } else {
         scene.render.passes
     });
-    let budget =
-        Budget { first: 0, end: passes, time: request.seconds.map(Duration::from_secs_f64), target_error: None };
+    let budget = Budget {
+        first: 0,
+        end: passes,
+        time: request.seconds.map(Duration::from_secs_f64),
+        target_error: None,
+        adaptive: false,
+    };
     let settings = FrameSettings {
         width: scene.camera.width,
         height: scene.camera.height,
@@ -795,7 +800,7 @@ fn final_render(shared: &Shared, backend: &mut Backend, request: &FinalRequest, 
         &budget,
         // One pass per output: the editor shows each as it lands.
         1,
-        |pass, _| {
+        |pass, _, _| {
             backend
                 .render(scene, None, &settings, scene.photons.as_ref(), scene.render.spp, pass, false)
                 .map(|(out, _)| out)

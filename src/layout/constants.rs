@@ -268,6 +268,8 @@ shared_constants! {
     ADAPTIVE_MAX_RAYS: u32 = 256;
     /// No sample: a pixel not (yet) found in a penumbra (see `LIGHT_GRID_ADAPTIVE`).
     NO_SAMPLE: u32 = 0xffff_ffff;
+    /// `DispatchRange::pixel_list` of a dispatch that renders every pixel of its band.
+    NO_PIXEL_LIST: u32 = 0xffff_ffff;
     /// A point light: `Light::intensity` (W/sr) at `position`. It is a spot light whose cone is
     /// the whole sphere (`cos_outer` = -1), so point and spot share one code path.
     LIGHT_POINT: u32 = 2;

@@ -240,6 +240,11 @@ gpu_structs! {
         pub row_count: u32,
         pub sample_index: u32,
         pub part: u32,
+        /// `NO_PIXEL_LIST`: every pixel of the band. Else the dispatch renders only the pixels
+        /// at entries `pixel_list..pixel_list + pixel_count` of the pixel list (absolute pixel
+        /// indices, ascending, all in the band's rows): adaptive sampling's later passes.
+        pub pixel_list: u32,
+        pub pixel_count: u32,
     }
 
     /// A stored photon: 20 bytes, std430 array stride 20 (Jensen's compact photon is 20 too).

@@ -10,7 +10,11 @@
 //! attributes by hash, which would make the bytes of two identical renders differ.) The image is
 //! the sum divided by the pass count. A render with feature layers (`--layers` or `--denoise`)
 //! also holds their sums in layers `albedo`, `normal`, `depth` and `position`; merge sums them
-//! where every part has them, so a merged render can be denoised.
+//! where every part has them, so a merged render can be denoised. A render with adaptive
+//! sampling (`--adaptive`), whose pixels hold different pass counts, also holds layer `samples`:
+//! each pixel's pass count in all three channels (exact in float32 up to 2^24, beyond
+//! `MAX_PASSES`); its image is the sum divided by that, and merge adds the counts. A file
+//! without it counts every pass in every pixel.
 
 use std::path::{Path, PathBuf};
 
@@ -164,6 +168,14 @@ pub fn write_accumulation(path: &Path, acc: &Accumulator, provenance: &Provenanc
     if let Some(features) = &acc.features {
         named.extend(features.named());
     }
+    // Uniform renders write no count layer, so their files stay as they were.
+    let samples = (!acc.uniform()).then(|| Image {
+        pixels: acc.counts.iter().map(|&n| [n as f32; 3]).collect(),
+        ..Image::new(combined.width, combined.height)
+    });
+    if let Some(samples) = &samples {
+        named.push(("samples", samples));
+    }
     let mark = format!("passes={};ranges={};{}", acc.passes, format_ranges(&acc.ranges), provenance.text());
     let attributes = vec![(MARK, AttributeValue::Text(Text::from(mark.as_str())))];
     Ok(write_layers_exr_with(path, &named, attributes)?)
@@ -240,6 +252,21 @@ pub fn read_accumulation(path: &Path) -> Result<(Accumulator, Option<Provenance>
     }
     acc.passes = passes;
     acc.ranges = ranges;
+    acc.counts = vec![passes; (w * h) as usize];
+    if find("samples").is_some() {
+        let mut samples = Image::new(w, h);
+        read_layer("samples", &mut samples)?;
+        for (count, p) in acc.counts.iter_mut().zip(&samples.pixels) {
+            // A count is a whole number of passes, at most the file's.
+            if !(p[0] >= 0.0 && p[0] <= passes as f32 && p[0].fract() == 0.0) {
+                return Err(damaged(format!(
+                    "layer `samples` holds {} where a pass count of 0..={passes} belongs",
+                    p[0]
+                )));
+            }
+            *count = p[0] as u32;
+        }
+    }
     Ok((acc, provenance))
 }
 
@@ -282,6 +309,9 @@ pub fn merge(paths: &[PathBuf]) -> Result<(Accumulator, Provenance), Accumulatio
             }
             _ => None,
         };
+        for (d, s) in total.counts.iter_mut().zip(&next.counts) {
+            *d += s;
+        }
         total.passes += next.passes;
         total.ranges.extend(next.ranges);
         total.ranges.sort_unstable();

@@ -3,6 +3,7 @@
 //! no GPU dispatch runs long enough to trip a driver watchdog.
 
 pub mod accumulation;
+pub mod adaptive;
 pub mod bench;
 pub mod denoise;
 pub mod gpu;
@@ -20,7 +21,10 @@ pub mod progressive;
 pub mod renderer;
 
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+use adaptive::PixelList;
 
 pub use photons::PhotonSettings;
 pub use prepare::{prepare, FrameSettings, KernelVariant, PrepareError, SceneBuffers};
@@ -30,7 +34,7 @@ use crate::gpu::{DeviceInfo, GpuError};
 use crate::io::Image;
 use crate::layout::constants::{
     FEATURE_ALBEDO, FEATURE_COUNT, FEATURE_NORMAL, FEATURE_POSITION, INTEGRATOR_BPT, INTEGRATOR_PPM, INTEGRATOR_PT,
-    INTEGRATOR_VCM, LAYER_COUNT, LAYER_DIRECT,
+    INTEGRATOR_VCM, LAYER_COUNT, LAYER_DIRECT, NO_PIXEL_LIST,
 };
 use crate::layout::{DispatchRange, FrameParams};
 
@@ -252,6 +256,8 @@ pub struct RenderOutput {
     /// The consecutive passes the layers are the mean of (1 but where a device rendered several
     /// into one accumulation: see [`Renderer::render_passes`](renderer::Renderer::render_passes)).
     pub passes: u32,
+    /// The pixels the passes rendered (`None`: all); the others are zero in the layers.
+    pub pixels: Option<Arc<PixelList>>,
 }
 
 /// The dispatches of pass `pass`, in the order both backends accumulate them: per band of rows,
@@ -294,7 +300,14 @@ impl Iterator for WorkUnits {
         let row_count = self.band_rows.min(self.height - self.row);
         // The sample ranges make this fit: pass * spp + sample < MAX_PASSES * MAX_SPP < 2^32.
         let sample_index = self.pass * self.spp + self.sample;
-        let unit = DispatchRange { row_begin: self.row, row_count, sample_index, part: self.part };
+        let unit = DispatchRange {
+            row_begin: self.row,
+            row_count,
+            sample_index,
+            part: self.part,
+            pixel_list: NO_PIXEL_LIST,
+            pixel_count: 0,
+        };
         self.part += 1;
         if self.part == self.parts {
             self.part = 0;
@@ -404,16 +417,17 @@ pub fn render_cpu(
     pass: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> RenderOutput {
-    render_cpu_keeping(buffers, spp, photons, pass, &mut Default::default(), progress)
+    render_cpu_keeping(buffers, spp, photons, pass, None, &mut Default::default(), progress)
 }
 
-/// `render_cpu` keeping the bidirectional integrators' light-stage buffers in `stage` between
-/// passes (a `Renderer` holds one).
+/// `render_cpu` of the pixels of `pixels` (all with `None`), keeping the bidirectional
+/// integrators' light-stage buffers in `stage` between passes (a `Renderer` holds one).
 pub fn render_cpu_keeping(
     buffers: &SceneBuffers,
     spp: u32,
     photons: Option<&PhotonSettings>,
     pass: u32,
+    pixels: Option<&Arc<PixelList>>,
     stage: &mut crate::cpu::vcm::LightStage,
     progress: &mut dyn FnMut(u64, u64),
 ) -> RenderOutput {
@@ -430,9 +444,14 @@ pub fn render_cpu_keeping(
     if let Some(maps) = &maps {
         view.maps = maps.view();
     }
+    if let Some(list) = pixels {
+        view.pixel_list = &list.pixels;
+    }
 
     if frame.integrator == INTEGRATOR_BPT || frame.integrator == INTEGRATOR_VCM {
-        return render_vcm_cpu(buffers, &view, spp, pass, stage, stages, progress);
+        let mut out = render_vcm_cpu(buffers, &view, spp, pass, pixels.map(|l| &**l), stage, stages, progress);
+        out.pixels = pixels.cloned();
+        return out;
     }
     let t = Instant::now();
     let mut layers = Layers::new(frame.width, frame.height);
@@ -447,6 +466,7 @@ pub fn render_cpu_keeping(
             complete = false;
             break;
         }
+        let unit = adaptive::restrict(unit, pixels.map(|l| &**l));
         let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
         if frame.integrator == INTEGRATOR_PT {
             crate::cpu::render_pt::render_pt(&view, &unit, band);
@@ -459,16 +479,27 @@ pub fn render_cpu_keeping(
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1 }
+    RenderOutput {
+        image: layers.combined(),
+        layers,
+        features: None,
+        stats,
+        complete,
+        passes: 1,
+        pixels: pixels.cloned(),
+    }
 }
 
 /// A pass of the bidirectional integrators on the CPU: per sample, the light stage, then the
-/// camera stage band by band (a sample's bands all read its light sub-paths).
+/// camera stage band by band (a sample's bands all read its light sub-paths), of the pixels of
+/// `pixels` (`view.pixel_list`) or all.
+#[allow(clippy::too_many_arguments)]
 fn render_vcm_cpu(
     buffers: &SceneBuffers,
     view: &crate::cpu::SceneView,
     spp: u32,
     pass: u32,
+    pixels: Option<&PixelList>,
     stage: &mut crate::cpu::vcm::LightStage,
     mut stages: Vec<(String, Duration)>,
     progress: &mut dyn FnMut(u64, u64),
@@ -495,6 +526,7 @@ fn render_vcm_cpu(
                 complete = false;
                 break 'samples;
             }
+            let unit = adaptive::restrict(unit, pixels);
             let band = &mut accumulation[(unit.row_begin * frame.width * LAYER_COUNT) as usize..];
             crate::cpu::vcm::render_vcm(view, &params, stage, &unit, band);
             done += unit_paths(&unit);
@@ -506,7 +538,7 @@ fn render_vcm_cpu(
     stages.push(("light paths".to_string(), light_time));
     stages.push(("render".to_string(), camera_time));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1 }
+    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1, pixels: None }
 }
 
 /// The feature layers of passes `first..first + passes` (`spp` samples each) on the CPU backend,
@@ -596,6 +628,8 @@ mod tests {
                         row_count: rows,
                         sample_index: pass * spp + sample,
                         part,
+                        pixel_list: NO_PIXEL_LIST,
+                        pixel_count: 0,
                     });
                 }
             }

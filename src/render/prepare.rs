@@ -218,6 +218,7 @@ impl SceneBuffers {
             wide: Some(
                 self.wide.get_or_init(|| WideBvh::build(&self.frame, &self.nodes, &self.primitives, &self.shape_data)),
             ),
+            pixel_list: &[],
         }
     }
 }

@@ -6,6 +6,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 use std::time::Duration;
 
+use super::adaptive::PixelList;
 use super::gpu::GpuRenderer;
 use super::{effective_photons, render_cpu_keeping, set_thread_stop_flag, PhotonSettings, RenderOutput, SceneBuffers};
 use crate::cpu::vcm::LightStage;
@@ -26,6 +27,8 @@ pub struct Renderer<'a> {
     stop: Option<Arc<AtomicBool>>,
     /// Render the feature layers too (`set_features`).
     features: bool,
+    /// The pixels the next passes render (`set_pixels`; `None`: all).
+    pixels: Option<Arc<PixelList>>,
 }
 
 impl<'a> Renderer<'a> {
@@ -45,6 +48,7 @@ impl<'a> Renderer<'a> {
             light_stage: LightStage::default(),
             stop: None,
             features: false,
+            pixels: None,
         })
     }
 
@@ -59,6 +63,13 @@ impl<'a> Renderer<'a> {
     /// so the image is the same bits with or without them.
     pub fn set_features(&mut self, on: bool) {
         self.features = on;
+    }
+
+    /// Makes the next passes render only the pixels of `pixels` (adaptive sampling; `None`:
+    /// every pixel). Their outputs say which (`RenderOutput::pixels`); the feature layers still
+    /// cover every pixel.
+    pub fn set_pixels(&mut self, pixels: Option<Arc<PixelList>>) {
+        self.pixels = pixels;
     }
 
     /// Renders pass `pass` with `spp` samples per pixel; `progress(done, total)` is called as work
@@ -87,12 +98,13 @@ impl<'a> Renderer<'a> {
             set_thread_stop_flag(self.stop.clone());
         }
         let mut out = match &mut self.gpu {
-            Some(gpu) => gpu.render_passes(spp, first, passes, progress),
+            Some(gpu) => gpu.render_passes(spp, first, passes, self.pixels.as_ref(), progress),
             None => Ok(render_cpu_keeping(
                 &self.buffers,
                 spp,
                 self.photons.as_ref(),
                 first,
+                self.pixels.as_ref(),
                 &mut self.light_stage,
                 progress,
             )),

@@ -13,6 +13,7 @@ use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{Buffer, GpuContext, GpuError};
 use crate::layout::constants::{LAYER_COUNT, VCM_CAMERA_STATE_WORDS, VCM_LIGHT_STATE_WORDS, VCM_PICK_BLOCK};
 use crate::layout::{DispatchRange, GridParams, LightMaterial, LightVertex, Photon, VcmParams};
+use crate::render::adaptive::{restrict, PixelList};
 use crate::render::{resolve_band, stop_band_rows, unit_paths, work_units, Layers, RenderOutput, RenderStats};
 use crate::render::{stop_requested, SceneBuffers};
 
@@ -102,6 +103,9 @@ pub(super) struct On<'a> {
     pub kernels: &'a GpuKernels,
     pub scene: &'a DeviceScene,
     pub buffers: &'a SceneBuffers,
+    /// The pixels the passes render (`None`: all) and the buffer the camera kernel reads them from.
+    pub pixels: Option<&'a PixelList>,
+    pub pixel_buffer: &'a Buffer,
 }
 
 /// Renders passes `first .. first + passes` (`spp` samples each) of a bidirectional integrator on
@@ -185,7 +189,7 @@ fn render_samples(
     passes: u32,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<Samples, GpuError> {
-    let On { ctx, kernels, scene, buffers } = on;
+    let On { ctx, kernels, scene, buffers, pixels: list, pixel_buffer } = on;
     let f = buffers.frame;
     let pixels = f.width as u64 * f.height as u64;
     let light_kernel = kernels.vcm_light(ctx)?;
@@ -292,7 +296,7 @@ fn render_samples(
                 complete = false;
                 break 'samples;
             }
-            let unit = DispatchRange { part: 0, ..unit };
+            let unit = restrict(DispatchRange { part: 0, ..unit }, list);
             // Dispatched again, resuming the runs that stopped, until none stops.
             params.resume = 0;
             loop {
@@ -321,9 +325,14 @@ fn render_samples(
                             &b.broken_off,
                             &camera_states,
                             &b.suspended,
+                            pixel_buffer,
                         ]),
                         bytemuck::bytes_of(&unit),
-                        groups((unit.row_count * f.width).div_ceil(params.paths_per_invocation)),
+                        groups(
+                            (if list.is_some() { unit.pixel_count } else { unit.row_count * f.width })
+                                .div_ceil(params.paths_per_invocation)
+                                .max(1),
+                        ),
                     )
                 })?;
                 first = false;
@@ -355,6 +364,7 @@ fn render_samples(
             stats,
             complete,
             passes,
+            pixels: None,
         }))),
         broken_off => Ok(Samples::BrokenOff(broken_off)),
     }

@@ -1,5 +1,6 @@
 //! The camera stage, and the renderer that keeps its state from pass to pass.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::kernels::{groups, GpuKernels};
@@ -8,6 +9,7 @@ use super::scene::DeviceScene;
 use crate::gpu::{Buffer, GpuContext, GpuError};
 use crate::layout::constants::LAYER_COUNT;
 use crate::layout::DispatchRange;
+use crate::render::adaptive::{restrict, PixelList};
 use crate::render::photons::PhotonSettings;
 use crate::render::prepare::KernelVariant;
 use crate::render::{
@@ -36,6 +38,10 @@ pub struct GpuRenderer<'a> {
     features: Option<(Buffer, u32)>,
     /// The bidirectional integrators' buffers, likewise.
     bidirectional: Option<super::bidirectional::BidirectionalBuffers>,
+    /// The pixel list of adaptive sampling's passes on the device, while it stays the same.
+    pixel_list: Option<(Arc<PixelList>, Buffer)>,
+    /// What the pixel list's binding holds when every pixel is rendered.
+    no_pixel_list: Buffer,
     /// Light and camera paths per invocation of vcm_light and render_vcm
     /// (`set_paths_per_invocation`).
     paths_per_invocation: u32,
@@ -81,6 +87,8 @@ impl<'a> GpuRenderer<'a> {
             accumulation: None,
             features: None,
             bidirectional: None,
+            pixel_list: None,
+            no_pixel_list: ctx.upload("no_pixel_list", &[0u32])?,
             paths_per_invocation: super::bidirectional::default_paths_per_invocation(ctx),
             steps_per_dispatch: 0,
             photon_capacity: [0; 3],
@@ -183,7 +191,7 @@ impl<'a> GpuRenderer<'a> {
         pass: u32,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<RenderOutput, GpuError> {
-        self.render_passes(spp, pass, 1, progress)
+        self.render_passes(spp, pass, 1, None, progress)
     }
 
     /// Renders up to `passes` consecutive passes from `first` into one accumulation on the
@@ -196,17 +204,36 @@ impl<'a> GpuRenderer<'a> {
         spp: u32,
         first: u32,
         passes: u32,
+        pixels: Option<&Arc<PixelList>>,
         progress: &mut dyn FnMut(u64, u64),
     ) -> Result<RenderOutput, GpuError> {
         let ctx = self.ctx;
         let passes = passes.max(1);
+        if let Some(list) = pixels.filter(|l| self.pixel_list.as_ref().is_none_or(|(kept, _)| !Arc::ptr_eq(kept, l))) {
+            self.pixel_list = None;
+            self.pixel_list = Some((list.clone(), ctx.upload("pixel_list", &list.pixels)?));
+        }
+        let pixel_buffer = match (&self.pixel_list, pixels) {
+            (Some((_, buffer)), Some(_)) => buffer,
+            _ => &self.no_pixel_list,
+        };
+        let list = pixels.map(|l| &**l);
         if self.kernels.variant().bidirectional {
-            let on =
-                super::bidirectional::On { ctx, kernels: &self.kernels, scene: &self.scene, buffers: &self.buffers };
+            let on = super::bidirectional::On {
+                ctx,
+                kernels: &self.kernels,
+                scene: &self.scene,
+                buffers: &self.buffers,
+                pixels: list,
+                pixel_buffer,
+            };
             let kept = &mut self.bidirectional;
             let runs =
                 super::bidirectional::Runs { per: &mut self.paths_per_invocation, steps: &mut self.steps_per_dispatch };
-            return super::bidirectional::render_pass_bidirectional(on, kept, runs, spp, first, passes, progress);
+            let mut out =
+                super::bidirectional::render_pass_bidirectional(on, kept, runs, spp, first, passes, progress)?;
+            out.pixels = pixels.cloned();
+            return Ok(out);
         }
         let f = photon_frame(&self.buffers, self.photons.as_ref());
         let mut stages = Vec::new();
@@ -262,6 +289,7 @@ impl<'a> GpuRenderer<'a> {
             // paths: few submissions, yet none long enough to trip a GPU watchdog.
             let mut batch: Vec<DispatchRange> = Vec::new();
             while let Some(first_unit) = units.next() {
+                let first_unit = restrict(first_unit, list);
                 let band = first_unit.row_begin;
                 let mut paths = first_unit.row_count as u64 * f.width as u64;
                 batch.clear();
@@ -269,7 +297,7 @@ impl<'a> GpuRenderer<'a> {
                 while paths < crate::render::thread_stop_paths().unwrap_or(PATHS_PER_SUBMIT) {
                     let Some(unit) = units.next_if(|u| u.row_begin == band) else { break };
                     paths += unit.row_count as u64 * f.width as u64;
-                    batch.push(unit);
+                    batch.push(restrict(unit, list));
                 }
                 if crate::render::stop_requested() {
                     complete = false;
@@ -279,6 +307,7 @@ impl<'a> GpuRenderer<'a> {
                 // back after its last unit of the last pass (with one band when passes > 1).
                 let clear = pass == first && batch[0].sample_index == pass * spp && batch[0].part == 0;
                 let invocations = batch[0].row_count * f.width;
+                let dispatched = if list.is_some() { batch[0].pixel_count } else { invocations };
                 ctx.run("render", |rec| {
                     if clear {
                         rec.fill_zero(accumulation)?;
@@ -295,9 +324,10 @@ impl<'a> GpuRenderer<'a> {
                                 &maps.caustic.starts,
                                 &maps.volume.photons,
                                 &maps.volume.starts,
+                                pixel_buffer,
                             ]),
                             bytemuck::bytes_of(unit),
-                            groups(invocations),
+                            groups(dispatched.max(1)),
                         )?;
                     }
                     Ok(())
@@ -320,7 +350,15 @@ impl<'a> GpuRenderer<'a> {
         stages.push(("render".to_string(), render_time));
         stages.push(("download".to_string(), download_time));
         let stats = RenderStats::device(ctx, stages, rays, spp * passes);
-        Ok(RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes })
+        Ok(RenderOutput {
+            image: layers.combined(),
+            layers,
+            features: None,
+            stats,
+            complete,
+            passes,
+            pixels: pixels.cloned(),
+        })
     }
 }
 
@@ -360,7 +398,14 @@ impl GpuRenderer<'_> {
             // Every sample of every pass of this band, one submission per band of samples.
             let units: Vec<DispatchRange> = (first..first + passes)
                 .flat_map(|pass| (0..spp).map(move |s| pass * spp + s))
-                .map(|sample_index| DispatchRange { row_begin: band, row_count: rows, sample_index, part: 0 })
+                .map(|sample_index| DispatchRange {
+                    row_begin: band,
+                    row_count: rows,
+                    sample_index,
+                    part: 0,
+                    pixel_list: crate::layout::constants::NO_PIXEL_LIST,
+                    pixel_count: 0,
+                })
                 .collect();
             let per_submit = (PATHS_PER_SUBMIT / (rows as u64 * f.width as u64)).max(1) as usize;
             for (k, chunk) in units.chunks(per_submit).enumerate() {

@@ -161,7 +161,7 @@ impl GpuKernels {
                 &self.render,
                 Spec {
                     name: scene(if self.variant.path_traced { "render_pt" } else { "render" }),
-                    bindings: SCENE_BINDINGS + 8,
+                    bindings: SCENE_BINDINGS + 9,
                     types: RENDER_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,
@@ -183,7 +183,7 @@ impl GpuKernels {
                 &self.render_vcm,
                 Spec {
                     name: scene("render_vcm"),
-                    bindings: SCENE_BINDINGS + 12,
+                    bindings: SCENE_BINDINGS + 13,
                     types: RENDER_VCM_BINDING_TYPES,
                     push: size_of::<DispatchRange>(),
                     constants,
