@@ -260,6 +260,20 @@ pub struct RenderOutput {
     pub pixels: Option<Arc<PixelList>>,
 }
 
+impl RenderOutput {
+    /// The output of `passes` passes with `layers` their mean, of the pixels of `pixels` (all
+    /// with `None`), and no feature layers yet.
+    pub fn new(
+        layers: Layers,
+        stats: RenderStats,
+        complete: bool,
+        passes: u32,
+        pixels: Option<Arc<PixelList>>,
+    ) -> Self {
+        RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes, pixels }
+    }
+}
+
 /// The dispatches of pass `pass`, in the order both backends accumulate them: per band of rows,
 /// per sample, per part (part 0 plus one part per final-gather ray; see `DispatchRange`). Pass p
 /// draws samples p * spp .. (p + 1) * spp, so passes are independent. An iterator, never a list:
@@ -479,15 +493,7 @@ pub fn render_cpu_keeping(
     let rays = resolve_band(&mut layers, 0, &accumulation, spp);
     stages.push(("render".to_string(), t.elapsed()));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput {
-        image: layers.combined(),
-        layers,
-        features: None,
-        stats,
-        complete,
-        passes: 1,
-        pixels: pixels.cloned(),
-    }
+    RenderOutput::new(layers, stats, complete, 1, pixels.cloned())
 }
 
 /// A pass of the bidirectional integrators on the CPU: per sample, the light stage, then the
@@ -538,7 +544,7 @@ fn render_vcm_cpu(
     stages.push(("light paths".to_string(), light_time));
     stages.push(("render".to_string(), camera_time));
     let stats = RenderStats::cpu(stages, rays, spp);
-    RenderOutput { image: layers.combined(), layers, features: None, stats, complete, passes: 1, pixels: None }
+    RenderOutput::new(layers, stats, complete, 1, None)
 }
 
 /// The feature layers of passes `first..first + passes` (`spp` samples each) on the CPU backend,

@@ -357,15 +357,7 @@ fn render_samples(
     ];
     let stats = RenderStats::device(ctx, stages, rays, spp * passes);
     match ctx.download::<u32>(&b.broken_off)?[0] {
-        0 => Ok(Samples::Rendered(Box::new(RenderOutput {
-            image: layers.combined(),
-            layers,
-            features: None,
-            stats,
-            complete,
-            passes,
-            pixels: None,
-        }))),
+        0 => Ok(Samples::Rendered(Box::new(RenderOutput::new(layers, stats, complete, passes, None)))),
         broken_off => Ok(Samples::BrokenOff(broken_off)),
     }
 }

@@ -350,15 +350,7 @@ impl<'a> GpuRenderer<'a> {
         stages.push(("render".to_string(), render_time));
         stages.push(("download".to_string(), download_time));
         let stats = RenderStats::device(ctx, stages, rays, spp * passes);
-        Ok(RenderOutput {
-            image: layers.combined(),
-            layers,
-            features: None,
-            stats,
-            complete,
-            passes,
-            pixels: pixels.cloned(),
-        })
+        Ok(RenderOutput::new(layers, stats, complete, passes, pixels.cloned()))
     }
 }
 
