@@ -161,3 +161,18 @@ fn accumulation_files_keep_each_pixel_s_passes() {
     let e = read_accumulation(&bad_path).unwrap_err().to_string();
     assert!(e.contains("damaged") && e.contains("samples"), "{e}");
 }
+
+/// `[render] adaptive = true` asks for it as `--adaptive` does (the command line and Python read
+/// `Scene::render.adaptive`); it is off by default.
+#[test]
+fn the_scene_file_asks_for_adaptive_sampling() {
+    use photonix::scene::parse_scene;
+    let path = common::repo_path("scenes/cornell-box.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(!parse_scene(&text, &path).unwrap().render.adaptive);
+    let asked = text.replacen("[render]", "[render]\nadaptive = true", 1);
+    assert!(parse_scene(&asked, &path).unwrap().render.adaptive);
+    let wrong = text.replacen("[render]", "[render]\nadaptive = 1", 1);
+    let e = parse_scene(&wrong, &path).unwrap_err().to_string();
+    assert!(e.contains("adaptive") && e.contains("boolean"), "{e}");
+}

@@ -112,6 +112,7 @@ fn closed_box(rho: f32) -> Scene {
             filter_radius: None,
             denoise: false,
             light_sampler: Default::default(),
+            adaptive: false,
         },
         photons: None,
         materials: vec![common::diffuse(rho, 0.0)],

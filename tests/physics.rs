@@ -60,6 +60,7 @@ fn light_over_plane() -> Scene {
             filter_radius: None,
             denoise: false,
             light_sampler: Default::default(),
+            adaptive: false,
         },
         photons: None,
         materials: vec![common::diffuse(ALBEDO, 0.0), common::diffuse(0.0, RADIANCE)],

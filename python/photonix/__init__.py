@@ -310,7 +310,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: Literal[False] = False,
-    adaptive: bool = False,
+    adaptive: Optional[bool] = None,
 ) -> _np.ndarray: ...
 
 
@@ -343,7 +343,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
-    adaptive: bool = False,
+    adaptive: Optional[bool] = None,
 ) -> Dict[str, _np.ndarray]: ...
 
 
@@ -376,7 +376,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
-    adaptive: bool = False,
+    adaptive: Optional[bool] = None,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]: ...
 
 
@@ -408,7 +408,7 @@ def render(
     _renderer: Optional[object] = None,
     denoise: Optional[bool] = None,
     aovs: bool = False,
-    adaptive: bool = False,
+    adaptive: Optional[bool] = None,
 ) -> Union[_np.ndarray, Dict[str, _np.ndarray]]:
     """Renders `scene` (a Scene, or a path to a scene file) progressively and returns the mean
     of the passes: a float32 numpy array of shape (height, width, 3) holding linear radiance, or
@@ -447,7 +447,7 @@ def render(
                     dict (implies the dict, as layers=True)
       adaptive      adaptive sampling: after 8 uniform passes, later passes render the half
                     of the pixels where one more pass lowers the error most (every 8th pass
-                    all of them); see docs/progressive.md
+                    all of them; None: the scene's [render] adaptive); see docs/progressive.md
 
     Raises SceneError (a scene the renderer cannot prepare), RenderError (refused before
     starting: memory, radii, device; or a device failure), ValueError (an option out of range)

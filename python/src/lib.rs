@@ -1063,7 +1063,7 @@ fn layers_to_dict<'py>(py: Python<'py>, layers: &Layers) -> PyResult<Bound<'py, 
     resolution=None, pass_range=None, layers=false, spp=None, max_depth=None, photons=None,
     caustic_photons=None, radius=None, caustic_radius=None, gather_rays=None, photon_depth=None,
     no_photons=false, device=None, accumulation=None, progress=None, info=None, integrator=None,
-    renderer=None, denoise=None, aovs=false, adaptive=false))]
+    renderer=None, denoise=None, aovs=false, adaptive=None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -1093,7 +1093,7 @@ fn render<'py>(
     renderer: Option<Py<RendererCore>>,
     denoise: Option<bool>,
     aovs: bool,
-    adaptive: bool,
+    adaptive: Option<bool>,
 ) -> PyResult<Bound<'py, PyAny>> {
     // Check every argument before any work, with the command line's ranges.
     let backend = parse_backend(backend)?;
@@ -1238,7 +1238,7 @@ fn render<'py>(
         seed: seed.unwrap_or(s.render.seed),
         max_depth: max_depth.unwrap_or(s.render.max_depth),
         photons: photon_settings,
-        budget: Budget { first, end, time, target_error, adaptive },
+        budget: Budget { first, end, time, target_error, adaptive: adaptive.unwrap_or(s.render.adaptive) },
         backend,
         device,
         features: denoise || aovs,

@@ -187,6 +187,7 @@ struct ProgressiveArgs {
     target_error: Option<f64>,
     /// Adaptive sampling: after 8 uniform passes, later passes render the half of the pixels
     /// where one more pass lowers the error most, every 8th pass all of them (docs/progressive.md)
+    /// [default: the scene's [render] adaptive]
     #[arg(long)]
     adaptive: bool,
     /// Rewrite the output with the passes so far this often (e.g. 30s; 1ms to 365 days)
@@ -339,7 +340,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Every number was checked against its range when parsed (flags) or loaded (the scene).
     let photons = args.photons.apply(scene.photons, scene.render.integrator)?;
     let spp = args.spp.unwrap_or(scene.render.spp);
-    let budget = args.progressive.budget(scene.render.passes)?;
+    let mut budget = args.progressive.budget(scene.render.passes)?;
+    budget.adaptive |= scene.render.adaptive;
     let exposure = args.exposure.unwrap_or(0.0);
     // Read (and check) PHOTONIX_VALIDATION whatever the backend: a bad value is refused alike.
     let options = GpuOptions::from_env(args.device.clone())?;
@@ -366,7 +368,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let provenance = Provenance::new(&buffers, spp, photons.as_ref());
     // --resume: start from the passes the output holds (read before any device is opened)
-    let mut budget = budget;
     let mut start = Accumulator::new(width, height);
     if let (true, Some(range)) = (args.progressive.resume, args.progressive.pass_range) {
         if let Some(acc) = resume_from(&output, range, &provenance, width, height)? {

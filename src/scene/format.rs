@@ -173,6 +173,7 @@ pub(crate) struct RenderDef {
     pub filter_radius: Option<Spanned<f64>>,
     pub denoise: Option<Spanned<bool>>,
     pub light_sampler: Option<Spanned<String>>,
+    pub adaptive: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]

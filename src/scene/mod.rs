@@ -231,6 +231,8 @@ pub struct RenderSettings {
     pub denoise: bool,
     /// How light sampling at a shading point picks its light (`[render] light_sampler`).
     pub light_sampler: LightSampler,
+    /// Adaptive sampling in progressive renders (`[render] adaptive`, `--adaptive`).
+    pub adaptive: bool,
 }
 
 /// How light sampling at a shading point picks the light (`[render] light_sampler`).

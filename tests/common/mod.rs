@@ -186,6 +186,7 @@ pub fn furnace() -> photonix::scene::Scene {
             filter_radius: None,
             denoise: false,
             light_sampler: Default::default(),
+            adaptive: false,
         },
         photons: None,
         materials: vec![diffuse(rho, emission)],

@@ -30,6 +30,7 @@ impl Builder<'_> {
             filter_radius: None,
             denoise: false,
             light_sampler: LightSampler::default(),
+            adaptive: false,
         };
         let mut auto = true;
         let Some(def) = def else {
@@ -81,6 +82,9 @@ impl Builder<'_> {
         }
         if let Some(denoise) = &r.denoise {
             settings.denoise = *denoise.get_ref();
+        }
+        if let Some(adaptive) = &r.adaptive {
+            settings.adaptive = *adaptive.get_ref();
         }
         if let Some(name) = &r.light_sampler {
             let names: Vec<&str> = LightSampler::NAMES.iter().map(|(n, _)| *n).collect();
