@@ -6,6 +6,16 @@ use rayon::prelude::*;
 use crate::layout::constants::{LAYER_COUNT, NO_PIXEL_LIST};
 use crate::layout::DispatchRange;
 
+/// How many pixels `range` renders in an image `width` pixels wide (`dispatch_pixels` in the
+/// shader): the invocations its dispatch needs.
+pub fn dispatch_pixels(width: u32, range: &DispatchRange) -> u32 {
+    if range.pixel_list == NO_PIXEL_LIST {
+        range.row_count * width
+    } else {
+        range.pixel_count
+    }
+}
+
 /// Calls `shade(px, py, pixel)` for each pixel that `range` renders, with `pixel` its
 /// `LAYER_COUNT` sums in `accumulation` (the band's, from its first row), rows in parallel.
 /// `list` is the pixel list the dispatch's `pixel_list` entries index.

@@ -77,42 +77,40 @@ impl Accumulator {
     /// pixels it rendered.
     pub fn add(&mut self, pass: u32, out: &RenderOutput) {
         let n = out.passes.max(1);
-        let all: Vec<u32>;
-        let pixels: &[u32] = match &out.pixels {
-            Some(list) => &list.pixels,
-            None => {
-                all = (0..self.counts.len() as u32).collect();
-                &all
-            }
-        };
+        let listed = out.pixels.as_ref().map(|l| l.pixels.as_slice());
         for ((_, dst), (_, src)) in self.sum.named_mut().into_iter().zip(out.layers.named()) {
-            add_into(dst, src, n, pixels);
+            add_into(dst, src, n, listed);
         }
         if let Some(features) = &out.features {
             let (w, h) = (features.albedo.width, features.albedo.height);
             let sum = self.features.get_or_insert_with(|| Features::new(w, h));
             for ((_, dst), (_, src)) in sum.named_mut().into_iter().zip(features.named()) {
-                add_into(dst, src, n, &all_pixels(dst));
+                add_into(dst, src, n, None);
             }
         }
-        // The half with fewer passes takes it, so each pixel's halves stay even when outputs
-        // hold different pass counts (one pass each: even and odd passes from an even first).
-        for &p in pixels {
-            let p = p as usize;
-            let (half, count) = if self.even_counts[p] <= self.odd_counts[p] {
-                (&mut self.even, &mut self.even_counts[p])
-            } else {
-                (&mut self.odd, &mut self.odd_counts[p])
-            };
-            add_pixel(&mut half.pixels[p], &out.image.pixels[p], n);
-            *count += n;
-            self.counts[p] += n;
+        match listed {
+            Some(list) => list.iter().for_each(|&p| self.add_to_half(p as usize, &out.image, n)),
+            None => (0..self.counts.len()).for_each(|p| self.add_to_half(p, &out.image, n)),
         }
         self.passes += n;
         match self.ranges.last_mut() {
             Some(r) if r.1 == pass => r.1 = pass + n,
             _ => self.ranges.push((pass, pass + n)),
         }
+    }
+
+    /// Adds pixel `p` of `image`, `n` passes, to the half of the pixel's passes with fewer, so
+    /// each pixel's halves stay even when outputs hold different pass counts (one pass each:
+    /// even and odd passes from an even first).
+    fn add_to_half(&mut self, p: usize, image: &Image, n: u32) {
+        let (half, count) = if self.even_counts[p] <= self.odd_counts[p] {
+            (&mut self.even, &mut self.even_counts[p])
+        } else {
+            (&mut self.odd, &mut self.odd_counts[p])
+        };
+        add_pixel(&mut half.pixels[p], &image.pixels[p], n);
+        *count += n;
+        self.counts[p] += n;
     }
 
     /// Whether every pixel holds every pass (no adaptive sampling left one out).
@@ -205,26 +203,18 @@ impl Accumulator {
     }
 }
 
-fn all_pixels(image: &Image) -> Vec<u32> {
-    (0..image.pixels.len() as u32).collect()
-}
-
+/// `d += n * s` (exactly `d += s` for one pass: a product by 1 is exact).
 fn add_pixel(d: &mut [f32; 3], s: &[f32; 3], n: u32) {
-    if n == 1 {
-        for c in 0..3 {
-            d[c] += s[c];
-        }
-    } else {
-        for c in 0..3 {
-            d[c] += s[c] * n as f32;
-        }
+    for c in 0..3 {
+        d[c] += s[c] * n as f32;
     }
 }
 
-/// `dst += n * src` at `pixels` (exactly `dst += src` for one pass).
-fn add_into(dst: &mut Image, src: &Image, n: u32, pixels: &[u32]) {
-    for &p in pixels {
-        add_pixel(&mut dst.pixels[p as usize], &src.pixels[p as usize], n);
+/// `dst += n * src` at the listed pixels, or at every pixel.
+fn add_into(dst: &mut Image, src: &Image, n: u32, pixels: Option<&[u32]>) {
+    match pixels {
+        Some(list) => list.iter().for_each(|&p| add_pixel(&mut dst.pixels[p as usize], &src.pixels[p as usize], n)),
+        None => dst.pixels.iter_mut().zip(&src.pixels).for_each(|(d, s)| add_pixel(d, s, n)),
     }
 }
 

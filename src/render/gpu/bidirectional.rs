@@ -9,6 +9,7 @@ use super::camera::ACCUMULATION_BYTES_PER_PIXEL;
 use super::kernels::{groups, GpuKernels};
 use super::maps::build_map;
 use super::scene::DeviceScene;
+use crate::cpu::pixel_list::dispatch_pixels;
 use crate::cpu::vcm::{light_path_count, vcm_params, vertex_grid};
 use crate::gpu::{Buffer, GpuContext, GpuError};
 use crate::layout::constants::{LAYER_COUNT, VCM_CAMERA_STATE_WORDS, VCM_LIGHT_STATE_WORDS, VCM_PICK_BLOCK};
@@ -328,11 +329,7 @@ fn render_samples(
                             pixel_buffer,
                         ]),
                         bytemuck::bytes_of(&unit),
-                        groups(
-                            (if list.is_some() { unit.pixel_count } else { unit.row_count * f.width })
-                                .div_ceil(params.paths_per_invocation)
-                                .max(1),
-                        ),
+                        groups(dispatch_pixels(f.width, &unit).div_ceil(params.paths_per_invocation).max(1)),
                     )
                 })?;
                 first = false;

@@ -306,8 +306,8 @@ impl<'a> GpuRenderer<'a> {
                 // A band's accumulation is cleared at its first unit of the first pass and read
                 // back after its last unit of the last pass (with one band when passes > 1).
                 let clear = pass == first && batch[0].sample_index == pass * spp && batch[0].part == 0;
-                let invocations = batch[0].row_count * f.width;
-                let dispatched = if list.is_some() { batch[0].pixel_count } else { invocations };
+                let band_pixels = batch[0].row_count * f.width;
+                let dispatched = crate::cpu::pixel_list::dispatch_pixels(f.width, &batch[0]);
                 ctx.run("render", |rec| {
                     if clear {
                         rec.fill_zero(accumulation)?;
@@ -337,7 +337,7 @@ impl<'a> GpuRenderer<'a> {
                 if pass + 1 == first + passes && units.peek().is_none_or(|next| next.row_begin != band) {
                     let td = Instant::now();
                     let sums: Vec<[f32; 4]> = ctx.download(accumulation)?;
-                    let len = (invocations * LAYER_COUNT) as usize;
+                    let len = (band_pixels * LAYER_COUNT) as usize;
                     rays += resolve_band(&mut layers, band, &sums[..len], spp * passes);
                     download_time += td.elapsed();
                 }
